@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages the project needs (build, tests, post-processing).
+# Idempotent: packages already present are skipped by apt-get.
+set -euo pipefail
+PKGS=(build-essential cmake pkg-config
+      libeigen3-dev libopenmpi-dev openmpi-bin libhdf5-dev
+      libsundials-dev catch2 libtomlplusplus-dev libcli11-dev libfmt-dev
+      python3-numpy python3-h5py python3-matplotlib python3-scipy)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -qq
+  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi

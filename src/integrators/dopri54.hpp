@@ -1,0 +1,24 @@
+// Dormand-Prince 5(4) embedded Runge-Kutta pair (Dormand & Prince 1980; coefficients, error
+// estimate and 4th-order dense output as in Hairer, Norsett & Wanner, Solving ODEs I, DOPRI5),
+// FSAL, step control on the RMS of the error scaled by atol + rtol |y|. Events are located on
+// the dense output by the Illinois method to IntegratorOptions::event_time_tol.
+#pragma once
+#include <vector>
+
+#include "integrators/ode.hpp"
+
+namespace truss::integrators {
+
+class DormandPrince54 : public Integrator {
+ public:
+  explicit DormandPrince54(const IntegratorOptions& opts) : opts_(opts) {}
+  IntegratorSummary integrate(OdeSystem& sys, double t0, double t_end, double* y,
+                              StepObserver* observer) override;
+
+ private:
+  IntegratorOptions opts_;
+  std::vector<double> k_[7], ytmp_, ynew_, err_, rc_[5], g0_, g1_, gt_, yev_;
+  double h_last_ = 0.0;  // last accepted step, reused to start the next call
+};
+
+}  // namespace truss::integrators

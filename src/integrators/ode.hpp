@@ -1,0 +1,67 @@
+// The narrow interface between the integrators and whatever they integrate (after Project
+// Chrono's ChIntegrable and Boost.Odeint's system / stepper / observer split): a system gives
+// y' = f(t, y) and event functions; an observer sees every accepted step through its dense output.
+#pragma once
+#include <limits>
+#include <string>
+
+namespace truss::integrators {
+
+class OdeSystem {
+ public:
+  virtual ~OdeSystem() = default;
+  virtual int size() const = 0;
+  virtual void calc_rhs(double t, const double* y, double* dydt) = 0;
+  virtual int num_events() const { return 0; }
+  virtual void calc_events(double /*t*/, const double* /*y*/, double* /*g*/) {}
+  // +1: only rising zero crossings trigger, -1: only falling, 0: both.
+  virtual int event_direction(int /*k*/) const { return 0; }
+};
+
+// Continuous solution over the last accepted step [t_begin, t_end].
+class DenseOutput {
+ public:
+  virtual ~DenseOutput() = default;
+  virtual void calc_state(double t, double* y) const = 0;
+  double t_begin = 0, t_end = 0;
+};
+
+class StepObserver {
+ public:
+  virtual ~StepObserver() = default;
+  // Called after every accepted step (truncated at an event). Return false to stop.
+  virtual bool on_step(const DenseOutput& step) = 0;
+};
+
+struct IntegratorOptions {
+  double rtol = 1e-8;         // relative error per step
+  double atol = 1e-10;        // absolute error per step, same units as the state
+  double initial_step = 0.0;  // 0: chosen by the integrator
+  double max_step = std::numeric_limits<double>::infinity();  // cap on the step size
+  double fixed_step = 0.0;    // > 0: no error control, constant step (convergence studies)
+  long max_steps = 1'000'000; // per call; the run fails with step_limit beyond it
+  double event_time_tol = 1e-13;  // absolute tolerance (s) of located event times
+  std::string validate() const;   // empty or "field: reason"
+};
+
+enum class IntegratorStatus { reached_end, event, step_limit, stopped_by_observer, failure };
+const char* to_string(IntegratorStatus);
+
+struct IntegratorSummary {
+  IntegratorStatus status = IntegratorStatus::failure;
+  std::string message;
+  int event_index = -1;   // which event stopped the integration
+  double t = 0;           // time reached
+  long steps = 0, rejected_steps = 0, rhs_evals = 0;
+  std::string to_string() const;
+};
+
+class Integrator {
+ public:
+  virtual ~Integrator() = default;
+  // Integrates from t0 towards t_end; y holds the initial state and receives the final one.
+  virtual IntegratorSummary integrate(OdeSystem& sys, double t0, double t_end, double* y,
+                                      StepObserver* observer) = 0;
+};
+
+}  // namespace truss::integrators

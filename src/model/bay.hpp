@@ -1,0 +1,99 @@
+// One bay of the mast as pure functions of its opening D = y_i - y_{i-1} (MODEL.md sections 1, 3).
+//
+// Kinetic energy of bay i (paper eq. 1, MODEL.md 3), u = dy_i/dt, w = dy_{i-1}/dt:
+//   T_i = G(D) (u - w)^2 + (3/32) m_s (10 u^2 + 12 u w + 10 w^2) + (1/2) m_f,i u^2
+//   G(D)  = (3/16 m_s D^2 + 3 J_c) / (4 l_s^2 - D^2)
+//   G'(D) = D (3/2 m_s l_s^2 + 6 J_c) / (4 l_s^2 - D^2)^2   (MODEL.md misprint 1: not 2 m_s l_s^2)
+// Hinge offset x = (1/2) sqrt(4 l_s^2 - D^2) (paper eq. 18). Near the lock G blows up like 1/x^2,
+// but G dD/dt^2 is regular in x: with s = sqrt(l_s^2 - x^2), D = 2 s, dD/dt = -(2x/s) dx/dt,
+//   G (dD/dt)^2 = g(x) (dx/dt)^2,   g(x) = 3/4 m_s + 3 J_c / s^2,   g'(x) = 6 J_c x / s^4,
+// and g(0) (dx/dt)^2 is the latch energy of MODEL.md section 2.
+// Diagonals (MODEL.md 1): six per bay, tension only, length L = sqrt(b^2 + D^2) with
+//   b^2 = (b_lo^2 + b_lo b_up + b_up^2) / 3,
+// the horizontal distance between a vertex of the lower frame and the next vertex of the upper
+// frame (exactly b_f^2 when both frames have side b_f; the project's reading for frames of
+// different sides, docs/model-notes.md). U = 3 K (L - l_0)^2 when L > l_0, else 0.
+#pragma once
+#include <algorithm>
+#include <cmath>
+
+#include "model/params.hpp"
+
+namespace truss::model {
+
+// Mass-matrix constants of one bay (MODEL.md 3): its regular part on the upper and lower frame
+// and their coupling; a locked bay moves rigidly with 6 m_s + m_f.
+inline double calc_regular_upper_mass_kg(const BayParams& b) { return 15.0 / 8.0 * b.strut_mass_kg; }
+inline double calc_regular_lower_mass_kg(const BayParams& b) { return 15.0 / 8.0 * b.strut_mass_kg; }
+inline double calc_regular_coupling_mass_kg(const BayParams& b) { return 9.0 / 8.0 * b.strut_mass_kg; }
+inline double calc_rigid_bay_mass_kg(const BayParams& b, const FrameParams& upper) {
+  return 6.0 * b.strut_mass_kg + upper.mass_kg;
+}
+
+inline double calc_G(const BayParams& b, double D) {
+  const double l = b.strut_length_m;
+  return (3.0 / 16.0 * b.strut_mass_kg * D * D + 3.0 * b.strut_inertia_kg_m2) / (4.0 * l * l - D * D);
+}
+
+inline double calc_dG_dD(const BayParams& b, double D) {
+  const double l = b.strut_length_m;
+  const double den = 4.0 * l * l - D * D;
+  return D * (1.5 * b.strut_mass_kg * l * l + 6.0 * b.strut_inertia_kg_m2) / (den * den);
+}
+
+// g(x): coefficient of (dx/dt)^2 in the strut kinetic energy, regular at the lock x = 0.
+inline double calc_g_hinge(const BayParams& b, double x) {
+  const double s2 = b.strut_length_m * b.strut_length_m - x * x;
+  return 0.75 * b.strut_mass_kg + 3.0 * b.strut_inertia_kg_m2 / s2;
+}
+
+inline double calc_dg_hinge_dx(const BayParams& b, double x) {
+  const double s2 = b.strut_length_m * b.strut_length_m - x * x;
+  return 6.0 * b.strut_inertia_kg_m2 * x / (s2 * s2);
+}
+
+// Latch energy per unit (dx/dt)^2 at the lock: (3/4 m_s + 3 J_c / l_s^2).
+inline double calc_latch_energy_J(const BayParams& b, double hinge_speed_m_per_s) {
+  return calc_g_hinge(b, 0.0) * hinge_speed_m_per_s * hinge_speed_m_per_s;
+}
+
+inline double calc_hinge_offset_m(const BayParams& b, double D) {
+  const double l = b.strut_length_m;
+  return 0.5 * std::sqrt(std::max(0.0, 4.0 * l * l - D * D));
+}
+
+inline double calc_diagonal_offset_sq_m2(const FrameParams& lower, const FrameParams& upper) {
+  return (lower.side_m * lower.side_m + lower.side_m * upper.side_m + upper.side_m * upper.side_m) / 3.0;
+}
+
+inline double calc_diagonal_length_m(double offset_sq_m2, double D) {
+  return std::sqrt(offset_sq_m2 + D * D);
+}
+
+// Tension in one diagonal (N); zero when slack.
+inline double calc_diagonal_tension_N(const BayParams& b, double offset_sq_m2, double D) {
+  const double stretch = calc_diagonal_length_m(offset_sq_m2, D) - b.diagonal_free_length_m;
+  return stretch > 0.0 ? b.diagonal_stiffness_N_per_m * stretch : 0.0;
+}
+
+// Potential of the six diagonals of the bay (J).
+inline double calc_bay_potential_J(const BayParams& b, double offset_sq_m2, double D) {
+  const double stretch = calc_diagonal_length_m(offset_sq_m2, D) - b.diagonal_free_length_m;
+  return stretch > 0.0 ? 3.0 * b.diagonal_stiffness_N_per_m * stretch * stretch : 0.0;
+}
+
+// dU/dD of the bay (N): the force with which the diagonals pull the two frames together.
+inline double calc_bay_dU_dD_N(const BayParams& b, double offset_sq_m2, double D) {
+  const double L = calc_diagonal_length_m(offset_sq_m2, D);
+  const double stretch = L - b.diagonal_free_length_m;
+  return stretch > 0.0 ? 6.0 * b.diagonal_stiffness_N_per_m * stretch * D / L : 0.0;
+}
+
+// Opening at which the diagonals become taut (a kink of the forces); negative if taut at D = 0.
+inline double calc_taut_opening_m(const BayParams& b, double offset_sq_m2) {
+  const double l0 = b.diagonal_free_length_m;
+  const double d2 = l0 * l0 - offset_sq_m2;
+  return d2 > 0.0 ? std::sqrt(d2) : -1.0;
+}
+
+}  // namespace truss::model

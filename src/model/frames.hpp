@@ -1,0 +1,111 @@
+// Equations of motion of the moving frames in frame heights (MODEL.md section 3, paper eqs. 6-16
+// corrected), written as M y'' = r + Q:
+//   bay i adds 2G + 15/8 m_s + m_f,i to M[i,i], 2G + 15/8 m_s to M[i-1,i-1], -2G + 9/8 m_s to
+//   M[i,i-1]; -G'(D) (dD/dt)^2 to r[i] and +G'(D) (dD/dt)^2 to r[i-1];
+//   diagonals: -dU/dD on Q[i], +dU/dD on Q[i-1];
+//   frame 0 moving: + m_f,0 on M[0,0];
+//   driven frame m: + locked bays and tip (rigid, MODEL.md 1) + panel mass M_p(H) on M[m,m],
+//   -(1/2) M_p'(H) (dH/dt)^2 on r[m].
+// Frames below `lo` are held at rest (the held stack, or y_0 before the rail takes it). Bay m may
+// be excluded from the G terms when the caller writes it in its hinge coordinate x (bay.hpp).
+// Cost is linear in the number of moving frames; nothing else of the mast is touched.
+#pragma once
+#include <Eigen/Core>
+
+#include "model/bay.hpp"
+#include "model/panels.hpp"
+#include "model/params.hpp"
+
+namespace truss::model {
+
+struct ActiveFrames {
+  int lo = 0;                          // lowest moving frame
+  int m = 0;                           // driven frame (top of the moving part)
+  bool bay_m_in_hinge_coordinate = false;  // omit bay m's G terms (caller adds g(x) dx/dt^2)
+  double locked_mass_kg = 0;           // locked bays above m and the tip, rigid with frame m
+  double panel_height_offset_m = 0;    // H = y_m + offset (used only if panels are enabled)
+  int size() const { return m - lo + 1; }
+};
+
+struct FrameSystem {
+  Eigen::VectorXd diag;            // M[k,k], k = frame - lo
+  Eigen::VectorXd sub;             // M[k,k-1] (sub[0] unused)
+  Eigen::VectorXd velocity_terms;  // r
+  Eigen::VectorXd spring_forces;   // Q of the diagonals
+  void resize(int n) {
+    if (diag.size() != n) {
+      diag.resize(n); sub.resize(n); velocity_terms.resize(n); spring_forces.resize(n);
+    }
+  }
+};
+
+// y, v: heights and velocities of frames first_frame.. (y[0] is frame first_frame); they must
+// cover frames max(lo-1, 0)..m, and frames below lo must have v = 0.
+inline void calc_frame_system(const MastParams& mast, const ActiveFrames& a, const double* y_in,
+                              const double* v_in, int first_frame, FrameSystem& out) {
+  auto y = [&](int k) { return y_in[k - first_frame]; };
+  auto v = [&](int k) { return v_in[k - first_frame]; };
+  const int N = a.size();
+  out.resize(N);
+  out.diag.setZero(); out.sub.setZero(); out.velocity_terms.setZero(); out.spring_forces.setZero();
+  const int first_bay = a.lo > 0 ? a.lo : 1;
+  for (int i = first_bay; i <= a.m; ++i) {
+    const BayParams& b = mast.bay(i);
+    const int k = i - a.lo;        // local index of the upper frame
+    const bool lower_moves = (i - 1) >= a.lo;
+    const double D = y(i) - y(i - 1);
+    const double dD = v(i) - v(i - 1);
+    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    const double dU = calc_bay_dU_dD_N(b, b2, D);
+    out.diag[k] += calc_regular_upper_mass_kg(b) + mast.frame(i).mass_kg;
+    out.spring_forces[k] -= dU;
+    if (lower_moves) {
+      out.diag[k - 1] += calc_regular_lower_mass_kg(b);
+      out.sub[k] += calc_regular_coupling_mass_kg(b);
+      out.spring_forces[k - 1] += dU;
+    }
+    if (!(i == a.m && a.bay_m_in_hinge_coordinate)) {
+      const double G = calc_G(b, D);
+      const double vt = calc_dG_dD(b, D) * dD * dD;
+      out.diag[k] += 2.0 * G;
+      out.velocity_terms[k] -= vt;
+      if (lower_moves) {
+        out.diag[k - 1] += 2.0 * G;
+        out.sub[k] -= 2.0 * G;
+        out.velocity_terms[k - 1] += vt;
+      }
+    }
+  }
+  if (a.lo == 0) out.diag[0] += mast.frame(0).mass_kg;
+  const int top = N - 1;
+  out.diag[top] += a.locked_mass_kg;
+  if (mast.panels.enabled()) {
+    const double H = y(a.m) + a.panel_height_offset_m;
+    const double u = v(a.m);
+    out.diag[top] += calc_panel_mass_kg(mast.panels, H);
+    out.velocity_terms[top] -= calc_half_panel_mass_slope_kg_per_m(mast.panels, H) * u * u;
+  }
+}
+
+// Kinetic energy (1/2) v^T M v of the moving frames with the system above (J).
+inline double calc_kinetic_energy_J(const FrameSystem& s, const ActiveFrames& a, const double* v) {
+  double T = 0.0;
+  for (int k = 0; k < a.size(); ++k) {
+    const double vk = v[a.lo + k];
+    T += 0.5 * s.diag[k] * vk * vk;
+    if (k > 0) T += s.sub[k] * vk * v[a.lo + k - 1];
+  }
+  return T;
+}
+
+// Potential energy of all diagonals of the mast for frame heights y[0..n] (J).
+inline double calc_potential_energy_J(const MastParams& mast, const double* y) {
+  double U = 0.0;
+  for (int i = 1; i <= mast.n_bays(); ++i) {
+    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    U += calc_bay_potential_J(mast.bay(i), b2, y[i] - y[i - 1]);
+  }
+  return U;
+}
+
+}  // namespace truss::model

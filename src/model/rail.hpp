@@ -1,0 +1,102 @@
+// Guide rail and the hinge on it (paper eqs. 17-18, MODEL.md sections 1-3).
+//   f(x_h, y_h) = y_h - y_l + cot(beta) (x_h - x_l)          (rail function, eq. 17)
+// with c = cot(beta) and y_r = y_l + c x_l (rail height on the longeron line), f = 0 reads
+//   y_h = y_r - c x_h.
+// A bay of strut length l with the hinge at offset x has its frames at y_h +- s, s = sqrt(l^2 - x^2).
+// On the rail the deploying bay is parametrised by x (regular at the lock x = 0, MODEL.md 3):
+//   Y(x) = y_r - c x + s   (upper, driven frame)      Y' = -c - x/s,  Y'' = -l^2/s^3
+//   Z(x) = y_r - c x - s   (lower frame)              Z' = -c + x/s,  Z'' =  l^2/s^3
+// In coordinates (y_m, x) the rail function is f = y_m - s(x) - y_r + c x, with gradient
+//   (1, c + x/s): regular at the lock, unlike df/dy in frame heights (MODEL.md misprint 4).
+// Rail normal force on one of the three pins: |lambda| / (3 sin beta).
+#pragma once
+#include <cmath>
+
+#include "model/params.hpp"
+
+namespace truss::model {
+
+inline double calc_rail_function_m(const RailParams& r, double hinge_x_m, double hinge_y_m) {
+  return hinge_y_m - r.y_m + r.cot_beta() * (hinge_x_m - r.x_m);
+}
+
+inline double calc_pin_force_N(const RailParams& r, double lambda_N) {
+  return std::abs(lambda_N) / (3.0 * std::sin(r.beta_rad));
+}
+
+struct OnRailKinematics {
+  double x = 0, s = 0;          // hinge offset and half-opening sqrt(l^2 - x^2)
+  double Y = 0, dY = 0, d2Y = 0;  // upper (driven) frame height and derivatives in x
+  double Z = 0, dZ = 0, d2Z = 0;  // lower frame height and derivatives in x
+};
+
+inline OnRailKinematics calc_on_rail(const RailParams& r, double strut_length_m, double x) {
+  const double c = r.cot_beta();
+  const double l = strut_length_m;
+  OnRailKinematics k;
+  k.x = x;
+  k.s = std::sqrt(l * l - x * x);
+  const double yh = r.axis_height_m() - c * x;
+  const double xs = x / k.s;
+  const double curv = l * l / (k.s * k.s * k.s);
+  k.Y = yh + k.s;
+  k.dY = -c - xs;
+  k.d2Y = -curv;
+  k.Z = yh - k.s;
+  k.dZ = -c + xs;
+  k.d2Z = curv;
+  return k;
+}
+
+// Hinge offset x on the rail for a driven-frame height y = Y(x), written without cancellation
+// near the lock: with d = y - y_r and remaining travel to the lock e = (y_r + l) - y,
+//   x = (l^2 - d^2) / (c d + sqrt((1 + c^2) l^2 - d^2)),  l^2 - d^2 = e (2 l - e).
+// Pass e directly (e.g. v (t_lock - t)) so that no digits are lost as x -> 0.
+inline double calc_x_on_rail_from_travel(const RailParams& r, double strut_length_m, double travel_to_lock_m) {
+  const double c = r.cot_beta();
+  const double l = strut_length_m;
+  const double e = travel_to_lock_m;
+  const double d = l - e;
+  const double num = e * (2.0 * l - e);
+  return num / (c * d + std::sqrt((1.0 + c * c) * l * l - d * d));
+}
+
+// Rail entry of a bay whose lower frame is held at height z0 (MODEL.md 2, held stack).
+// The hinge runs on the quarter circle (l cos th, z0 + l sin th), th in [0, pi/2], and
+//   f(th) = R sin(th + phi) - (y_r - z0),  R = l sqrt(1 + c^2),  phi = atan(c),
+// which rises then falls on that arc; the pin meets the rail once, from f > 0, iff
+//   f(0) = c l - (y_r - z0) > 0   and   f(pi/2) = l - (y_r - z0) < 0.
+struct HeldRailEntry {
+  bool reachable = false;     // false: the held lower frame never meets the rail
+  double theta_rad = 0;       // strut angle from the radial direction at entry
+  double hinge_x_m = 0;
+  double hinge_y_m = 0;
+  double opening_m = 0;       // D at entry
+  double upper_height_m = 0;  // driven frame height at entry, z0 + D
+};
+
+inline HeldRailEntry calc_held_rail_entry(const RailParams& r, double strut_length_m, double z0) {
+  const double c = r.cot_beta();
+  const double l = strut_length_m;
+  const double h = r.axis_height_m() - z0;
+  HeldRailEntry e;
+  if (!(c * l - h > 0.0) || !(l - h < 0.0)) return e;
+  const double R = l * std::sqrt(1.0 + c * c);
+  e.theta_rad = M_PI - std::atan(c) - std::asin(h / R);
+  e.reachable = true;
+  e.hinge_x_m = l * std::cos(e.theta_rad);
+  e.opening_m = 2.0 * l * std::sin(e.theta_rad);
+  e.hinge_y_m = z0 + 0.5 * e.opening_m;
+  e.upper_height_m = z0 + e.opening_m;
+  return e;
+}
+
+// Lock: x = 0, upper frame at y_r + l, lower frame lifted to y_r - l.
+inline double calc_lock_upper_height_m(const RailParams& r, double strut_length_m) {
+  return r.axis_height_m() + strut_length_m;
+}
+inline double calc_lock_lower_height_m(const RailParams& r, double strut_length_m) {
+  return r.axis_height_m() - strut_length_m;
+}
+
+}  // namespace truss::model

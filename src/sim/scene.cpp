@@ -1,0 +1,133 @@
+#include "sim/scene.hpp"
+
+#include <cmath>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "model/bay.hpp"
+#include "stages/stage_plan.hpp"
+
+namespace truss::sim {
+
+const char* to_string(DriveMode m) {
+  switch (m) {
+    case DriveMode::velocity: return "velocity";
+    case DriveMode::torque: return "torque";
+    case DriveMode::motor: return "motor";
+  }
+  return "?";
+}
+const char* to_string(StackMode m) { return m == StackMode::held ? "held" : "free"; }
+const char* to_string(Direction d) { return d == Direction::deploy ? "deploy" : "retract"; }
+const char* to_string(IntegratorKind k) { return k == IntegratorKind::dopri54 ? "dopri54" : "cvode"; }
+
+namespace {
+std::string positive(const char* key, double v) {
+  if (!(std::isfinite(v) && v > 0.0)) return fmt::format("{}: must be a positive number, got {}", key, v);
+  return {};
+}
+std::string finite(const char* key, double v) {
+  if (!std::isfinite(v)) return fmt::format("{}: must be a finite number, got {}", key, v);
+  return {};
+}
+}  // namespace
+
+std::string SceneOptions::validate() const {
+  std::string e;
+#define CHECK(expr) if (!(e = (expr)).empty()) return e
+  if (mast.n_bays < 1 || mast.n_bays > 100000)
+    return fmt::format("mast.n_bays: must lie in [1, 100000], got {}", mast.n_bays);
+  CHECK(positive("mast.strut_length_m", mast.strut_length_m));
+  CHECK(positive("mast.strut_mass_kg", mast.strut_mass_kg));
+  if (mast.strut_inertia_kg_m2) CHECK(positive("mast.strut_inertia_kg_m2", *mast.strut_inertia_kg_m2));
+  CHECK(positive("mast.frame_side_m", mast.frame_side_m));
+  CHECK(positive("mast.frame_mass_kg", mast.frame_mass_kg));
+  CHECK(positive("mast.diagonal_stiffness_N_per_m", mast.diagonal_stiffness_N_per_m));
+  CHECK(positive("mast.diagonal_free_length_m", mast.diagonal_free_length_m));
+  if (mast.tip_mass_kg && !(std::isfinite(*mast.tip_mass_kg) && *mast.tip_mass_kg >= 0.0))
+    return fmt::format("mast.tip_mass_kg: must be a finite number >= 0, got {}", *mast.tip_mass_kg);
+  CHECK(finite("rail.x_m", rail.x_m));
+  CHECK(finite("rail.y_m", rail.y_m));
+  if (!(rail.beta_deg > 0.0 && rail.beta_deg < 90.0))
+    return fmt::format("rail.beta_deg: must lie in (0, 90) degrees, got {}", rail.beta_deg);
+  CHECK(positive("drive.speed_m_per_s", drive.speed_m_per_s));
+  CHECK(positive("drive.screw_lead_m", drive.screw_lead_m));
+  CHECK(positive("drive.torque_Nm", drive.torque_Nm));
+  CHECK(positive("drive.stall_torque_Nm", drive.stall_torque_Nm));
+  CHECK(positive("drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s));
+  if (stack.mode == StackMode::free)
+    return "stack.mode: \"free\" is not available yet (only \"held\"); see docs/model-notes.md";
+  if (panels.count < 0 || panels.count % 2 != 0)
+    return fmt::format("panels.count: must be 0 (no panels) or a positive even number, got {}", panels.count);
+  if (panels.count > 0) {
+    CHECK(positive("panels.length_m", panels.length_m));
+    CHECK(positive("panels.mass_kg", panels.mass_kg));
+    if (panels.tip_height_m) CHECK(positive("panels.tip_height_m", *panels.tip_height_m));
+  }
+  if (!(std::isfinite(run.output_step_s) && run.output_step_s >= 0.0))
+    return fmt::format("run.output_step_s: must be >= 0 (0 = no time histories), got {}", run.output_step_s);
+  if (!(run.rtol > 0.0 && run.rtol < 1.0)) return fmt::format("run.rtol: must lie in (0, 1), got {}", run.rtol);
+  CHECK(positive("run.atol", run.atol));
+  if (run.max_steps < 1) return fmt::format("run.max_steps: must be positive, got {}", run.max_steps);
+  CHECK(positive("run.max_wall_time_s", run.max_wall_time_s));
+#undef CHECK
+  return {};
+}
+
+model::MastParams build_mast(const SceneOptions& s) {
+  model::MastParams m;
+  const auto& o = s.mast;
+  const int n = std::max(o.n_bays, 0);
+  model::BayParams b;
+  b.strut_length_m = o.strut_length_m;
+  b.strut_mass_kg = o.strut_mass_kg;
+  b.strut_inertia_kg_m2 = o.strut_inertia_kg_m2.value_or(o.strut_mass_kg * o.strut_length_m * o.strut_length_m / 12.0);
+  b.diagonal_stiffness_N_per_m = o.diagonal_stiffness_N_per_m;
+  b.diagonal_free_length_m = o.diagonal_free_length_m;
+  m.bays.assign(static_cast<std::size_t>(n), b);
+  m.frames.assign(static_cast<std::size_t>(n + 1), model::FrameParams{o.frame_side_m, o.frame_mass_kg});
+  m.tip_mass_kg = o.tip_mass_kg.value_or(6.0 * o.strut_mass_kg + o.frame_mass_kg);
+  m.rail.x_m = s.rail.x_m;
+  m.rail.y_m = s.rail.y_m;
+  m.rail.beta_rad = s.rail.beta_deg * M_PI / 180.0;
+  m.panels.count = s.panels.count;
+  m.panels.length_m = s.panels.length_m;
+  m.panels.mass_kg = s.panels.mass_kg;
+  m.panels.tip_height_m = s.panels.tip_height_m.value_or(2.0 * o.strut_length_m);
+  return m;
+}
+
+std::string validate_mast(const model::MastParams& mast, const SceneOptions& scene) {
+  const int n = mast.n_bays();
+  if (n < 1 || static_cast<int>(mast.frames.size()) != n + 1) return "mast.n_bays: inconsistent bay and frame counts";
+  for (int i = 1; i <= n; ++i) {
+    const auto& b = mast.bay(i);
+    if (!(b.strut_length_m > 0.0)) return fmt::format("mast.strut_length_m: bay {} has a non-positive strut length {}", i, b.strut_length_m);
+    if (!(b.strut_mass_kg > 0.0)) return fmt::format("mast.strut_mass_kg: bay {} has a non-positive strut mass {}", i, b.strut_mass_kg);
+    if (!(b.strut_inertia_kg_m2 > 0.0)) return fmt::format("mast.strut_inertia_kg_m2: bay {} has a non-positive inertia {}", i, b.strut_inertia_kg_m2);
+    if (!(b.diagonal_stiffness_N_per_m > 0.0)) return fmt::format("mast.diagonal_stiffness_N_per_m: bay {} has {}", i, b.diagonal_stiffness_N_per_m);
+    if (!(b.diagonal_free_length_m > 0.0)) return fmt::format("mast.diagonal_free_length_m: bay {} has {}", i, b.diagonal_free_length_m);
+  }
+  for (int k = 0; k <= n; ++k) {
+    if (!(mast.frame(k).side_m > 0.0)) return fmt::format("mast.frame_side_m: frame {} has {}", k, mast.frame(k).side_m);
+    if (!(mast.frame(k).mass_kg > 0.0)) return fmt::format("mast.frame_mass_kg: frame {} has {}", k, mast.frame(k).mass_kg);
+  }
+  std::vector<stages::StageSpec> plan;
+  std::string e = stages::plan_held_stages(mast, 1.0, plan);
+  if (!e.empty()) return e;
+  if (mast.panels.enabled()) {
+    // H is largest with the mast fully deployed: y_0 = y_r - l_1 plus every bay and the tip.
+    double H = mast.rail.axis_height_m() - mast.bay(1).strut_length_m + mast.panels.tip_height_m;
+    for (int i = 1; i <= n; ++i) H += 2.0 * mast.bay(i).strut_length_m;
+    const double reach = mast.panels.count * mast.panels.length_m;
+    if (!(H < reach))
+      return fmt::format("panels.length_m: the blanket ({} panels x {} m = {} m) must stay longer than the mast "
+                         "height H, which reaches {:.6g} m (MODEL.md 1: H < n_p l_p)",
+                         mast.panels.count, mast.panels.length_m, reach, H);
+  }
+  (void)scene;
+  return {};
+}
+
+}  // namespace truss::sim

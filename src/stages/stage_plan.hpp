@@ -1,0 +1,44 @@
+// Stages are data (MODEL.md section 2): a stage has a start event, phases, and an end.
+// The held-stack deployment of bay m (stage j = n - m): driven frame m starts at 0 (m = n) or at
+// y_r - l_{m+1} (its bay already open to that height), phase `open` until the pin meets the rail
+// (rail entry, an impact), phase `on_rail` until x = 0 (the latch). Retraction is the exact
+// reverse, bays 1..n: unlock (an impact), on_rail until the pin leaves the rail where it entered
+// (the lower frame lands on the stack), open until frame m is back where its deployment began;
+// the last one ends with frame n landing on the stack.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "model/params.hpp"
+#include "stages/held_phase.hpp"
+
+namespace truss::stages {
+
+enum class StageStart { from_rest_or_kick, continue_motion, unlock };
+enum class PhaseEnd { rail_entry, lock, rail_exit, reach_height };
+
+struct PhaseSpec {
+  PhaseKind kind = PhaseKind::open;
+  double q_start = 0;               // y_m (open) or x (on_rail) at phase start
+  double q_end = 0;                 // ... at the phase's end event
+  PhaseEnd end = PhaseEnd::rail_entry;
+  double lower_held_height_m = 0;   // open: frame m-1; on_rail: frame m-2
+};
+
+struct StageSpec {
+  int bay = 0;                      // bay m; driven frame m
+  double direction = 1.0;           // +1 deploy, -1 retract
+  StageStart start = StageStart::continue_motion;
+  std::vector<PhaseSpec> phases;
+  bool final_landing = false;       // retraction: frame n lands on the stack at the end
+  double locked_mass_kg = 0;        // rigid mass above frame m (locked bays and tip)
+  double panel_height_offset_m = 0; // H = y_m + offset
+  // Rail-entry geometry of this bay (held lower frame at 0).
+  double entry_hinge_x_m = 0, entry_upper_height_m = 0;
+};
+
+// Builds the stages of a held-stack run. Returns an empty string, or "key: reason" if the
+// geometry makes the held stack impossible (rail never met, next bay already past the rail).
+std::string plan_held_stages(const model::MastParams& mast, double direction, std::vector<StageSpec>& out);
+
+}  // namespace truss::stages
