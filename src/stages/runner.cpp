@@ -111,45 +111,118 @@ double integrate_gk15(F&& f, double a, double b, double abs_tol, int depth = 0) 
 // Quantities whose extremes a run reports.
 enum Q { kForce, kNegForce, kPin, kTension, kSpeed, kQCount };
 
+struct Sample {
+  double t = 0;
+  PhasePoint p;
+};
+
+// State between two samples of a phase: quintic Hermite interpolation of q from (q, q', q'')
+// at both ends, error O(h^6) in q and O(h^5) in q', below the integrator's own error.
+struct HermiteSpan {
+  const Sample* a;
+  const Sample* b;
+  void calc(double t, double& q, double& qd) const {
+    const double h = b->t - a->t, s = (t - a->t) / h, s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
+    const double qa = a->p.q, va = h * a->p.qdot, aa = h * h * a->p.qddot;
+    const double qb = b->p.q, vb = h * b->p.qdot, ab = h * h * b->p.qddot;
+    q = (1 - 10 * s3 + 15 * s4 - 6 * s5) * qa + (s - 6 * s3 + 8 * s4 - 3 * s5) * va +
+        (0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5) * aa + (10 * s3 - 15 * s4 + 6 * s5) * qb +
+        (-4 * s3 + 7 * s4 - 3 * s5) * vb + (0.5 * s3 - s4 + 0.5 * s5) * ab;
+    qd = ((-30 * s2 + 60 * s3 - 30 * s4) * qa + (1 - 18 * s2 + 32 * s3 - 15 * s4) * va +
+          (s - 4.5 * s2 + 6 * s3 - 2.5 * s4) * aa + (30 * s2 - 60 * s3 + 30 * s4) * qb +
+          (-12 * s2 + 28 * s3 - 15 * s4) * vb + (1.5 * s2 - 4 * s3 + 2.5 * s4) * ab) / h;
+  }
+};
+
+double quantity(int q, const PhasePoint& p, double direction) {
+  switch (q) {
+    case kForce: return p.drive_force_N;
+    case kNegForce: return -p.drive_force_N;
+    case kPin: return p.pin_force_N;
+    case kTension: return p.diagonal_tension_N;
+    default: return direction * p.u_m_per_s;
+  }
+}
+
+// Follows the samples of one phase in time order and keeps, for each quantity, its best sample
+// with the neighbours that bracket it; refine() then maximises between the neighbours.
+class PhaseBrackets {
+ public:
+  explicit PhaseBrackets(double direction) : direction_(direction) {}
+  void feed(double t, const PhasePoint& p) {
+    for (int q = 0; q < kQCount; ++q) {
+      B& b = b_[static_cast<std::size_t>(q)];
+      const double v = quantity(q, p, direction_);
+      if (v > b.value) {
+        b.value = v;
+        b.prev = has_last_ ? last_ : Sample{t, p};
+        b.best = {t, p};
+        b.next = b.best;
+        b.want_next = true;
+      } else if (b.want_next) {
+        b.next = {t, p};
+        b.want_next = false;
+      }
+    }
+    last_ = {t, p};
+    has_last_ = true;
+    max_rail_residual = std::max(max_rail_residual, p.rail_residual_m);
+  }
+  // eval(t, span) gives the phase point at t inside the span [a, b] of two consecutive samples.
+  template <class Eval>
+  void refine(int q, Eval&& eval, double xtol, double& value, double& time) const {
+    const B& b = b_[static_cast<std::size_t>(q)];
+    value = b.value;
+    time = b.best.t;
+    if (!std::isfinite(b.value)) return;
+    for (const HermiteSpan span : {HermiteSpan{&b.prev, &b.best}, HermiteSpan{&b.best, &b.next}}) {
+      const double len = span.b->t - span.a->t;
+      if (!(len > 0.0)) continue;
+      // A best sample at a kink or at the phase end is often the maximum itself: if the quantity
+      // falls just inside the span, the span holds nothing higher (it is bracketed by the grid).
+      const bool best_is_a = span.a == &b.best;
+      const double probe_t = best_is_a ? span.a->t + 1e-6 * len : span.b->t - 1e-6 * len;
+      if (quantity(q, eval(probe_t, span), direction_) < b.value) continue;
+      auto [tm, vm] = maximize_brent([&](double t) { return quantity(q, eval(t, span), direction_); },
+                                     span.a->t, span.b->t, std::max(xtol, 1e-9 * len));
+      if (vm > value) { value = vm; time = tm; }
+    }
+  }
+  double best(int q) const { return b_[static_cast<std::size_t>(q)].value; }
+  double max_rail_residual = 0.0;
+
+ private:
+  struct B {
+    double value = -kInf;
+    Sample prev, best, next;
+    bool want_next = false;
+  };
+  std::array<B, kQCount> b_;
+  Sample last_;
+  bool has_last_ = false;
+  double direction_;
+};
+
 struct Trackers {
   std::array<Extremum, kQCount> run;   // run-wide
   Extremum stage_force, stage_pin;     // per stage
   double max_rail_residual = 0.0;
-  double direction = 1.0;
   int bay = 0;
   Extremum& target(int q) {
     if (q == kForce) return stage_force;
     if (q == kPin) return stage_pin;
     return run[static_cast<std::size_t>(q)];
   }
-  double value(int q, const PhasePoint& p) const {
-    switch (q) {
-      case kForce: return p.drive_force_N;
-      case kNegForce: return -p.drive_force_N;
-      case kPin: return p.pin_force_N;
-      case kTension: return p.diagonal_tension_N;
-      default: return direction * p.u_m_per_s;
-    }
-  }
-  // Samples ts[0..n) with points ps of one smooth piece: bracket each quantity's best sample by
-  // its neighbours and refine it by Brent's method on the evaluator when it could beat the record.
+  // Refines each quantity of a finished phase whose best sample could beat the record.
   template <class Eval>
-  void scan(Eval&& eval, const double* ts, const PhasePoint* ps, int n, double xtol) {
-    for (int i = 0; i < n; ++i) max_rail_residual = std::max(max_rail_residual, ps[i].rail_residual_m);
+  void absorb(const PhaseBrackets& pb, Eval&& eval, double xtol) {
+    max_rail_residual = std::max(max_rail_residual, pb.max_rail_residual);
     for (int q = 0; q < kQCount; ++q) {
-      int best = 0;
-      for (int i = 1; i < n; ++i)
-        if (value(q, ps[i]) > value(q, ps[best])) best = i;
-      const double vbest = value(q, ps[best]);
       Extremum& tr = target(q);
-      if (!(vbest > tr.value) && std::isfinite(tr.value)) continue;
-      const double a = ts[std::max(best - 1, 0)], b = ts[std::min(best + 1, n - 1)];
-      double t_star = ts[best], v_star = vbest;
-      if (b > a) {
-        auto [tm, vm] = maximize_brent([&](double t) { return value(q, eval(t)); }, a, b, xtol);
-        if (vm > v_star) { t_star = tm; v_star = vm; }
-      }
-      tr.offer(v_star, t_star, bay);
+      if (!(pb.best(q) > tr.value) && std::isfinite(tr.value)) continue;
+      double v, t;
+      pb.refine(q, eval, xtol, v, t);
+      tr.offer(v, t, bay);
     }
   }
 };
@@ -215,10 +288,9 @@ class PhaseOde : public integrators::OdeSystem {
 
 class PhaseObserver : public integrators::StepObserver {
  public:
-  PhaseObserver(const HeldPhase& ph, Trackers& tr, History& hist, int bay, double rel_tol,
+  PhaseObserver(const HeldPhase& ph, PhaseBrackets& br, History& hist, int bay,
                 std::chrono::steady_clock::time_point deadline)
-      : ph_(ph), tr_(tr), hist_(hist), bay_(bay), xtol_(rel_tol), deadline_(deadline) {}
-  PhasePoint first;     // point at the phase start (set by the caller)
+      : ph_(ph), br_(br), hist_(hist), bay_(bay), deadline_(deadline) {}
   bool timed_out = false;
   long point_evals = 0;
   bool on_step(const integrators::DenseOutput& d) override {
@@ -228,22 +300,18 @@ class PhaseObserver : public integrators::StepObserver {
       ++point_evals;
       return ph_.calc_point(state[0], state[1]);
     };
-    const double t0 = d.t_begin, t1 = d.t_end;
-    const double ts[3] = {t0, 0.5 * (t0 + t1), t1};
-    const PhasePoint ps[3] = {first, eval(ts[1]), eval(ts[2])};
-    if (t1 > t0) tr_.scan(eval, ts, ps, 3, xtol_ * std::max(1e-9, t1 - t0));
-    hist_.sample(eval, t0, t1, false, bay_);
-    first = ps[2];
+    const double t1 = d.t_end;
+    if (t1 > d.t_begin) br_.feed(t1, eval(t1));
+    hist_.sample(eval, d.t_begin, t1, false, bay_);
     if (std::chrono::steady_clock::now() > deadline_) { timed_out = true; return false; }
     return true;
   }
 
  private:
   const HeldPhase& ph_;
-  Trackers& tr_;
+  PhaseBrackets& br_;
   History& hist_;
   int bay_;
-  double xtol_;
   std::chrono::steady_clock::time_point deadline_;
 };
 
@@ -303,7 +371,6 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
   r.potential_energy_start_J = dir > 0 ? U_stowed_prefix[n] : U_locked_suffix[1];
 
   Trackers tr;
-  tr.direction = dir;
   History hist;
   hist.out = opts.output_step_s > 0.0 ? &r.history : nullptr;
   hist.step = opts.output_step_s;
@@ -393,6 +460,7 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
       const double sign_q = ph.q_end > ph.q_start ? 1.0 : -1.0;
       double t_end_phase = t;
       PhasePoint p_end;
+      PhaseBrackets brackets(dir);
 
       if (kinematic) {
         // Closed-form kinematics: the driven frame moves at dir * v; y_m is linear in time.
@@ -433,20 +501,21 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
           }
         }
         const int ns = std::max(3, opts.peak_samples_per_piece);
-        std::vector<double> ts(static_cast<std::size_t>(ns));
-        std::vector<PhasePoint> ps(static_cast<std::size_t>(ns));
         double work = 0.0;
         for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
           const double a = cuts[k], b = cuts[k + 1];
-          for (int i = 0; i < ns; ++i) {
-            ts[static_cast<std::size_t>(i)] = a + (b - a) * i / (ns - 1);
-            ps[static_cast<std::size_t>(i)] = eval(ts[static_cast<std::size_t>(i)]);
+          double f_scale = 1.0;
+          for (int i = (k == 0 ? 0 : 1); i < ns; ++i) {
+            const double ti = a + (b - a) * i / (ns - 1);
+            const PhasePoint pi = eval(ti);
+            brackets.feed(ti, pi);
+            f_scale = std::max(f_scale, std::abs(pi.drive_force_N));
           }
-          tr.scan(eval, ts.data(), ps.data(), ns, 1e-12 * std::max(1.0, b));
           // Drive work of the smooth motion: integral of F u dt, F from inverse dynamics.
-          const double scale = 1e-14 * (std::abs(ps.front().drive_force_N) + std::abs(ps.back().drive_force_N) + 1.0) * v * (b - a);
-          work += integrate_gk15([&](double tt) { const PhasePoint p = eval(tt); return p.drive_force_N * p.u_m_per_s; }, a, b, scale);
+          work += integrate_gk15([&](double tt) { const PhasePoint p = eval(tt); return p.drive_force_N * p.u_m_per_s; },
+                                 a, b, 1e-11 * f_scale * v * (b - a));  // |K15 - G7| bound: K15 is far better
         }
+        tr.absorb(brackets, [&](double tt, const HermiteSpan&) { return eval(tt); }, 1e-12 * std::max(1.0, t1));
         r.drive_work_smooth_J += work;
         hist.sample(eval, t0, t1, false, m);
         t_end_phase = t1;
@@ -455,14 +524,15 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
       } else {
         // Time stepping with events: the phase end (rising g0) and a stall (falling g1).
         PhaseOde ode(phase, ph.q_end, sign_q, dir);
-        PhaseObserver obs(phase, tr, hist, m, 1e-10, deadline);
+        PhaseObserver obs(phase, brackets, hist, m, deadline);
         double y[3] = {q0, qdot0, 0.0};
-        obs.first = phase.calc_point(q0, qdot0);
+        const PhasePoint p_start = phase.calc_point(q0, qdot0);
         ++evals;
-        if (std::abs(dir * ode.calc_u(q0, qdot0)) <= 0.0 && !(sign_q * obs.first.qddot > 0.0)) {
+        brackets.feed(t, p_start);
+        if (std::abs(dir * ode.calc_u(q0, qdot0)) <= 0.0 && !(sign_q * p_start.qddot > 0.0)) {
           fail(RunStatus::stall, fmt::format("stall: the drive cannot move the mast at t = {:.9g} s in the stage of bay {} "
-                                             "(drive force {:.6g} N)", t, m, obs.first.drive_force_N));
-          last = obs.first; last_stage = &s; last_phase = &ph;
+                                             "(drive force {:.6g} N)", t, m, p_start.drive_force_N));
+          last = p_start; last_stage = &s; last_phase = &ph;
           break;
         }
         integrators::IntegratorOptions io = opts.integration;
@@ -480,11 +550,17 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
           y[0] = ph.q_end;  // snap the coordinate onto the event surface (|error| < event tolerance)
           p_end = phase.calc_point(y[0], y[1]);
           ++evals;
-          obs.first = p_end;
-          // close the phase with its end point in the trackers
-          const double te[1] = {t_end_phase};
-          tr.scan([&](double) { return p_end; }, te, &p_end, 1, 1.0);
-        } else {
+        }
+        // Peaks of the phase: best step-end samples refined on the Hermite interpolant.
+        long refine_evals = 0;
+        tr.absorb(brackets, [&](double tt, const HermiteSpan& span) {
+          double q, qd;
+          span.calc(tt, q, qd);
+          ++refine_evals;
+          return phase.calc_point(q, qd);
+        }, 1e-10 * std::max(1.0, t_end_phase));
+        evals += refine_evals;
+        if (!(sum.status == integrators::IntegratorStatus::event && sum.event_index == 0)) {
           p_end = phase.calc_point(y[0], y[1]);
           last = p_end; last_stage = &s; last_phase = &ph;
           t = t_end_phase;

@@ -25,7 +25,7 @@ struct RunnerOptions {
   double output_step_s = 0.0;                  // time-history step; 0 = none
   long max_steps = 2'000'000;                  // total step cap of the run
   double max_wall_time_s = 600.0;              // wall-time cap of the run
-  int peak_samples_per_piece = 16;             // velocity mode: bracketing grid per smooth piece
+  int peak_samples_per_piece = 9;              // velocity mode: bracketing grid per smooth piece
 };
 
 sim::RunResult run_held_stages(const model::MastParams& mast, const std::vector<StageSpec>& stages,

@@ -1,0 +1,54 @@
+// Run summaries as JSON, and the field tables (names, units, accessors) of RunResult, BayResult and
+// TimeHistory that the JSON and HDF5 writers share, so both always write the same fields.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+#include "sim/result.hpp"
+
+namespace truss::io {
+
+// The run summary as a JSON object (pretty-printed, ends with a newline): "status" (the
+// to_string(RunStatus) name), "message", every other scalar field of RunResult under its own
+// name, "history_samples" (length of the time history) and "bays" (one object per BayResult, with
+// every field). Non-finite doubles are written as null; doubles round-trip exactly.
+std::string to_json(const sim::RunResult& r);
+
+// --- field tables ----------------------------------------------------------------------------
+using FieldValue = std::variant<double, std::int64_t, std::string>;
+
+// Units: "s", "N", "Nm", "J", "Ns", "m", "m/s"; "1" for counts, indices and other dimensionless
+// values (never empty).
+struct RunField {
+  const char* name;
+  const char* units;
+  FieldValue (*get)(const sim::RunResult&);
+};
+struct BayField {
+  const char* name;
+  const char* units;
+  FieldValue (*get)(const sim::BayResult&);  // double or int64 only
+};
+struct HistoryField {
+  const char* name;
+  const char* units;
+  const std::vector<double>* (*get_double)(const sim::TimeHistory&);  // null for int fields
+  const std::vector<int>* (*get_int)(const sim::TimeHistory&);        // null for double fields
+};
+
+// Every scalar field of RunResult except status and message (which each writer handles itself),
+// in declaration order.
+const std::vector<RunField>& run_result_fields();
+// Every field of BayResult, in declaration order.
+const std::vector<BayField>& bay_result_fields();
+// Every vector of TimeHistory, in declaration order.
+const std::vector<HistoryField>& history_fields();
+
+// JSON helpers (exposed for tests and other writers).
+std::string json_string(std::string_view s);  // quoted and escaped; invalid UTF-8 -> U+FFFD
+std::string json_number(double v);            // shortest round-trip, or null if not finite
+
+}  // namespace truss::io

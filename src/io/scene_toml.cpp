@@ -1,0 +1,577 @@
+// Scene TOML parsing and writing. See scene_toml.hpp.
+#include "io/scene_toml.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <tuple>
+#include <toml++/toml.h>
+
+namespace truss::io {
+namespace {
+
+using sim::SceneOptions;
+
+// ---------------------------------------------------------------------------------------------
+// The key table: every scene key, its type, how to set and get it, and the comment written by
+// resolved_scene_toml.
+
+enum class Kind { real, opt_real, integer, enumeration };
+
+struct KeyDesc {
+  std::string_view table;
+  std::string_view key;
+  Kind kind;
+  std::string_view comment;                       // unit and meaning, for the resolved TOML
+  std::vector<std::string_view> allowed;          // enumeration: values, in enum order
+  std::int64_t int_min = 0;                       // integer: range of the C++ field
+  std::int64_t int_max = 0;
+  void (*set_real)(SceneOptions&, double) = nullptr;          // real, opt_real
+  double (*get_real)(const SceneOptions&) = nullptr;          // real
+  std::optional<double> (*get_opt)(const SceneOptions&) = nullptr;  // opt_real
+  void (*set_int)(SceneOptions&, std::int64_t) = nullptr;     // integer
+  std::int64_t (*get_int)(const SceneOptions&) = nullptr;     // integer
+  void (*set_enum)(SceneOptions&, std::size_t) = nullptr;     // enumeration (index in allowed)
+  std::size_t (*get_enum)(const SceneOptions&) = nullptr;     // enumeration
+
+  std::string dotted() const { return fmt::format("{}.{}", table, key); }
+};
+
+// The table and key names are the member names of SceneOptions.
+#define TRUSS_REAL(T, K, C)                                               \
+  KeyDesc {                                                               \
+    #T, #K, Kind::real, C, {}, 0, 0,                                      \
+        [](SceneOptions& s, double v) { s.T.K = v; },                     \
+        [](const SceneOptions& s) -> double { return s.T.K; }, nullptr,   \
+        nullptr, nullptr, nullptr, nullptr                                \
+  }
+#define TRUSS_OPT_REAL(T, K, C)                                                          \
+  KeyDesc {                                                                              \
+    #T, #K, Kind::opt_real, C, {}, 0, 0,                                                 \
+        [](SceneOptions& s, double v) { s.T.K = v; }, nullptr,                           \
+        [](const SceneOptions& s) -> std::optional<double> { return s.T.K; }, nullptr,   \
+        nullptr, nullptr, nullptr                                                        \
+  }
+#define TRUSS_INT(T, K, C)                                                                    \
+  KeyDesc {                                                                                   \
+    #T, #K, Kind::integer, C, {},                                                             \
+        static_cast<std::int64_t>(std::numeric_limits<decltype(SceneOptions{}.T.K)>::min()),  \
+        static_cast<std::int64_t>(std::numeric_limits<decltype(SceneOptions{}.T.K)>::max()),  \
+        nullptr, nullptr, nullptr,                                                            \
+        [](SceneOptions& s, std::int64_t v) { s.T.K = static_cast<decltype(s.T.K)>(v); },     \
+        [](const SceneOptions& s) -> std::int64_t { return s.T.K; }, nullptr, nullptr         \
+  }
+#define TRUSS_ENUM(T, K, C, ...)                                                             \
+  KeyDesc {                                                                                  \
+    #T, #K, Kind::enumeration, C, {__VA_ARGS__}, 0, 0, nullptr, nullptr, nullptr, nullptr,   \
+        nullptr, [](SceneOptions& s, std::size_t i) { s.T.K = static_cast<decltype(s.T.K)>(i); }, \
+        [](const SceneOptions& s) -> std::size_t { return static_cast<std::size_t>(s.T.K); }  \
+  }
+
+const std::vector<KeyDesc>& keys() {
+  // Enumeration values are listed in the order of the enumerators in sim/scene.hpp.
+  static const std::vector<KeyDesc> k = {
+      TRUSS_INT(mast, n_bays, "number of bays"),
+      TRUSS_REAL(mast, strut_length_m, "m, l_s, length of each of the two struts of a longeron"),
+      TRUSS_REAL(mast, strut_mass_kg, "kg, m_s, mass of one strut"),
+      TRUSS_OPT_REAL(mast, strut_inertia_kg_m2,
+                     "kg m^2, J_c, centroidal strut inertia; unset = m_s l_s^2 / 12"),
+      TRUSS_REAL(mast, frame_side_m, "m, b_f, side of the triangular frame"),
+      TRUSS_REAL(mast, frame_mass_kg, "kg, m_f, mass of one frame"),
+      TRUSS_REAL(mast, diagonal_stiffness_N_per_m, "N/m, K, stiffness of one diagonal"),
+      TRUSS_REAL(mast, diagonal_free_length_m, "m, l_0, free length of one diagonal"),
+      TRUSS_OPT_REAL(mast, tip_mass_kg, "kg, tip fitting; unset = 6 m_s + m_f"),
+      TRUSS_REAL(rail, x_m, "m, x_l, rail foot offset from the longeron line"),
+      TRUSS_REAL(rail, y_m, "m, y_l, rail foot height"),
+      TRUSS_REAL(rail, beta_deg, "deg, rail inclination to the mast axis, in (0, 90)"),
+      TRUSS_ENUM(drive, mode, "\"velocity\" | \"torque\" | \"motor\"", "velocity", "torque",
+                 "motor"),
+      TRUSS_REAL(drive, speed_m_per_s, "m/s, v_dep, driven frame speed (velocity mode)"),
+      TRUSS_REAL(drive, screw_lead_m, "m, h, lead of the drive screw"),
+      TRUSS_REAL(drive, torque_Nm, "N m, constant screw torque (torque mode)"),
+      TRUSS_REAL(drive, stall_torque_Nm, "N m, motor stall torque (motor mode)"),
+      TRUSS_REAL(drive, no_load_speed_rad_per_s, "rad/s, motor no-load speed (motor mode)"),
+      TRUSS_ENUM(stack, mode, "\"held\" | \"free\"", "held", "free"),
+      TRUSS_INT(panels, count, "number of solar panels, 0 = none, else even"),
+      TRUSS_REAL(panels, length_m, "m, l_p, panel length"),
+      TRUSS_REAL(panels, mass_kg, "kg, m_p, mass of one panel"),
+      TRUSS_OPT_REAL(panels, tip_height_m,
+                     "m, h_tip, blanket attachment above the top frame; unset = 2 l_s"),
+      TRUSS_ENUM(run, direction, "\"deploy\" | \"retract\"", "deploy", "retract"),
+      TRUSS_REAL(run, output_step_s, "s, time-history sample step, 0 = no histories"),
+      TRUSS_REAL(run, rtol, "1, relative tolerance of the ODE integrators"),
+      TRUSS_REAL(run, atol, "absolute tolerance (m, m/s, J) of the ODE integrators"),
+      TRUSS_ENUM(run, integrator, "\"dopri54\" | \"cvode\"", "dopri54", "cvode"),
+      TRUSS_INT(run, max_steps, "cap on accepted integrator steps over the run"),
+      TRUSS_REAL(run, max_wall_time_s, "s, wall-time cap for one run"),
+  };
+  return k;
+}
+
+#undef TRUSS_REAL
+#undef TRUSS_OPT_REAL
+#undef TRUSS_INT
+#undef TRUSS_ENUM
+
+std::vector<std::string_view> table_names() {
+  std::vector<std::string_view> t;
+  for (const auto& d : keys())
+    if (std::find(t.begin(), t.end(), d.table) == t.end()) t.push_back(d.table);
+  return t;
+}
+
+const KeyDesc* find_key(std::string_view table, std::string_view key) {
+  for (const auto& d : keys())
+    if (d.table == table && d.key == key) return &d;
+  return nullptr;
+}
+
+bool is_table(std::string_view table) {
+  for (const auto& d : keys())
+    if (d.table == table) return true;
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------------
+// "Did you mean" suggestions.
+
+std::string lower(std::string_view s) {
+  std::string r(s);
+  for (auto& c : r) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return r;
+}
+
+std::size_t edit_distance(std::string_view a, std::string_view b) {
+  std::vector<std::size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t sub = prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, sub});
+    }
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+// Distance between a typed name and a known one, with prefixes counted as close
+// ("beta" ~ "beta_deg", "speed" ~ "speed_m_per_s").
+std::size_t name_distance(std::string_view typed, std::string_view known) {
+  const std::string a = lower(typed), b = lower(known);
+  std::size_t d = edit_distance(a, b);
+  const std::size_t shorter = std::min(a.size(), b.size());
+  if (shorter >= 3 && (a.rfind(b, 0) == 0 || b.rfind(a, 0) == 0)) d = std::min<std::size_t>(d, 1);
+  return d;
+}
+
+std::size_t close_enough(std::string_view typed) {
+  return std::max<std::size_t>(2, typed.size() / 3);
+}
+
+// Closest known "table.key" to a key typed in `table` (empty table: typed at the top level).
+std::optional<std::string> suggest_key(std::string_view table, std::string_view key) {
+  std::optional<std::string> best;
+  std::size_t best_d = std::numeric_limits<std::size_t>::max();
+  for (const auto& d : keys()) {
+    std::size_t dist = name_distance(key, d.key);
+    if (!table.empty() && d.table != table) dist += 1;  // prefer the table the user wrote
+    if (dist < best_d) {
+      best_d = dist;
+      best = d.dotted();
+    }
+  }
+  if (best && best_d <= close_enough(key)) return best;
+  return std::nullopt;
+}
+
+std::optional<std::string> suggest_table(std::string_view table) {
+  std::optional<std::string> best;
+  std::size_t best_d = std::numeric_limits<std::size_t>::max();
+  for (auto t : table_names()) {
+    const std::size_t dist = name_distance(table, t);
+    if (dist < best_d) {
+      best_d = dist;
+      best = std::string(t);
+    }
+  }
+  if (best && best_d <= std::max<std::size_t>(1, table.size() / 3)) return best;
+  return std::nullopt;
+}
+
+std::optional<std::string> suggest_value(std::string_view value,
+                                         const std::vector<std::string_view>& allowed) {
+  std::optional<std::string> best;
+  std::size_t best_d = std::numeric_limits<std::size_t>::max();
+  for (auto a : allowed) {
+    const std::size_t dist = name_distance(value, a);
+    if (dist < best_d) {
+      best_d = dist;
+      best = std::string(a);
+    }
+  }
+  if (best && best_d <= close_enough(value)) return best;
+  return std::nullopt;
+}
+
+std::string known_tables_text() {
+  std::string s;
+  for (auto t : table_names()) s += fmt::format("{}[{}]", s.empty() ? "" : ", ", t);
+  return s;
+}
+
+std::string known_keys_text(std::string_view table) {
+  std::string s;
+  for (const auto& d : keys())
+    if (d.table == table) s += fmt::format("{}{}", s.empty() ? "" : ", ", d.key);
+  return s;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Values.
+
+// A TOML string literal for s (basic string, escaped).
+std::string quote(std::string_view s) {
+  std::string r = "\"";
+  for (char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
+    switch (ch) {
+      case '"': r += "\\\""; break;
+      case '\\': r += "\\\\"; break;
+      case '\n': r += "\\n"; break;
+      case '\t': r += "\\t"; break;
+      case '\r': r += "\\r"; break;
+      default:
+        if (c < 0x20 || c == 0x7f)
+          r += fmt::format("\\u{:04X}", static_cast<unsigned>(c));
+        else
+          r += ch;
+    }
+  }
+  return r + "\"";
+}
+
+// A TOML float that reads back to exactly v.
+std::string toml_double(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  std::string s = fmt::format("{}", v);  // shortest round-trip representation
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
+}
+
+std::string describe(const toml::node& v) {
+  switch (v.type()) {
+    case toml::node_type::string: {
+      std::string s = *v.value<std::string>();
+      if (s.size() > 40) s = s.substr(0, 37) + "...";
+      return "a string " + quote(s);
+    }
+    case toml::node_type::integer: return fmt::format("an integer {}", *v.value<std::int64_t>());
+    case toml::node_type::floating_point:
+      return fmt::format("a floating-point number {}", toml_double(*v.value<double>()));
+    case toml::node_type::boolean:
+      return fmt::format("a boolean {}", *v.value<bool>() ? "true" : "false");
+    case toml::node_type::array: return "an array";
+    case toml::node_type::table: return "a table";
+    case toml::node_type::date: return "a date";
+    case toml::node_type::time: return "a time";
+    case toml::node_type::date_time: return "a date-time";
+    default: return "an unknown value";
+  }
+}
+
+std::string allowed_text(const std::vector<std::string_view>& allowed) {
+  std::string s;
+  for (auto a : allowed) s += fmt::format("{}{}", s.empty() ? "" : ", ", quote(a));
+  return s;
+}
+
+// Sets one key from a TOML value. Returns "" on success, else the reason, starting with the
+// dotted key name.
+std::string apply_value(SceneOptions& s, const KeyDesc& d, const toml::node& v) {
+  const std::string name = d.dotted();
+  switch (d.kind) {
+    case Kind::real:
+    case Kind::opt_real: {
+      if (auto f = v.value_exact<double>()) {
+        d.set_real(s, *f);
+        return {};
+      }
+      if (auto i = v.value_exact<std::int64_t>()) {
+        d.set_real(s, static_cast<double>(*i));
+        return {};
+      }
+      return fmt::format("{}: expected a number (float or integer), got {}", name, describe(v));
+    }
+    case Kind::integer: {
+      if (auto i = v.value_exact<std::int64_t>()) {
+        if (*i < d.int_min || *i > d.int_max)
+          return fmt::format("{}: integer {} is out of range [{}, {}]", name, *i, d.int_min,
+                             d.int_max);
+        d.set_int(s, *i);
+        return {};
+      }
+      return fmt::format("{}: expected an integer, got {}", name, describe(v));
+    }
+    case Kind::enumeration: {
+      if (auto str = v.value_exact<std::string>()) {
+        for (std::size_t i = 0; i < d.allowed.size(); ++i) {
+          if (d.allowed[i] == *str) {
+            d.set_enum(s, i);
+            return {};
+          }
+        }
+        std::string msg = fmt::format("{}: unknown value {}; allowed values: {}", name,
+                                      quote(*str), allowed_text(d.allowed));
+        if (auto sug = suggest_value(*str, d.allowed)) msg += fmt::format(" (did you mean {}?)", quote(*sug));
+        return msg;
+      }
+      return fmt::format("{}: expected a string, one of {}; got {}", name, allowed_text(d.allowed),
+                         describe(v));
+    }
+  }
+  return fmt::format("{}: internal error: unknown key kind", name);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parsing.
+
+struct Diag {
+  std::size_t order_major;  // file line, or a large number + override index for --set
+  std::size_t order_minor;  // column
+  std::string text;         // complete message line
+};
+
+// Where the value of a key came from, for validate() messages.
+struct Origin {
+  std::size_t line = 0;     // > 0: the key's line in the file
+  std::string set_text;     // non-empty: the --set argument that set it last
+};
+
+std::string trim(std::string_view s) {
+  const auto b = s.find_first_not_of(" \t\r\n");
+  if (b == std::string_view::npos) return {};
+  const auto e = s.find_last_not_of(" \t\r\n");
+  return std::string(s.substr(b, e - b + 1));
+}
+
+std::string unknown_key_text(std::string_view table, std::string_view key) {
+  const auto sug = suggest_key(table, key);
+  if (table.empty()) {
+    if (sug) return fmt::format("unknown key '{}' at the top level (did you mean '{}'?)", key, *sug);
+    return fmt::format("unknown key '{}' at the top level; keys belong in a table: {}", key,
+                       known_tables_text());
+  }
+  if (sug) return fmt::format("unknown key '{}.{}' (did you mean '{}'?)", table, key, *sug);
+  return fmt::format("unknown key '{}.{}'; known keys in [{}]: {}", table, key, table,
+                     known_keys_text(table));
+}
+
+std::string unknown_table_text(std::string_view table) {
+  std::string msg = fmt::format("unknown table [{}]", table);
+  if (auto sug = suggest_table(table))
+    msg += fmt::format(" (did you mean [{}]?)", *sug);
+  else
+    msg += fmt::format("; known tables: {}", known_tables_text());
+  return msg;
+}
+
+void parse_table_contents(SceneOptions& s, const std::string& source, std::string_view tname,
+                          const toml::table& tbl, std::vector<Diag>& diags,
+                          std::map<std::string, Origin>& origins) {
+  for (auto&& [k, v] : tbl) {
+    const std::size_t line = v.source().begin.line ? v.source().begin.line : k.source().begin.line;
+    const std::size_t col = v.source().begin.column;
+    const KeyDesc* d = find_key(tname, k.str());
+    if (!d) {
+      diags.push_back({line, col,
+                       fmt::format("error: {}:{}: {}", source, line, unknown_key_text(tname, k.str()))});
+      continue;
+    }
+    const std::string err = apply_value(s, *d, v);
+    if (!err.empty()) {
+      diags.push_back({line, col, fmt::format("error: {}:{}: {}", source, line, err)});
+      continue;
+    }
+    origins[d->dotted()] = Origin{line, {}};
+  }
+}
+
+void apply_override(SceneOptions& s, const std::string& arg, std::size_t index,
+                    std::vector<Diag>& diags, std::map<std::string, Origin>& origins) {
+  const std::size_t order = std::numeric_limits<std::size_t>::max() / 2 + index;
+  auto fail = [&](const std::string& why) {
+    diags.push_back({order, 0, fmt::format("error: --set {}: {}", arg, why)});
+  };
+  const auto eq = arg.find('=');
+  if (eq == std::string::npos) return fail("expected table.key=value (e.g. --set mast.n_bays=12)");
+  const std::string key = trim(std::string_view(arg).substr(0, eq));
+  const std::string value = trim(std::string_view(arg).substr(eq + 1));
+  const auto dot = key.find('.');
+  if (key.empty()) return fail("missing key before '='");
+  if (dot == std::string::npos) {
+    if (is_table(key)) return fail(fmt::format("'{}' is a table; give table.key=value", key));
+    return fail(unknown_key_text("", key));
+  }
+  const std::string tname = key.substr(0, dot);
+  const std::string kname = key.substr(dot + 1);
+  if (!is_table(tname)) return fail(unknown_table_text(tname));
+  const KeyDesc* d = find_key(tname, kname);
+  if (!d) return fail(unknown_key_text(tname, kname));
+  if (value.empty()) return fail(fmt::format("{}: missing value after '='", key));
+
+  // The value is read as a TOML value; anything that is not one (a bare word such as motor) is
+  // taken as a string.
+  std::optional<toml::table> parsed;
+  try {
+    const std::string doc = "v = " + value + "\n";
+    parsed = toml::parse(std::string_view(doc), std::string_view("--set"));
+  } catch (const toml::parse_error&) {
+    parsed.reset();
+  }
+  const toml::node* node = nullptr;
+  toml::value<std::string> as_string{value};
+  if (parsed && parsed->size() == 1 && parsed->contains("v"))
+    node = parsed->get("v");
+  else
+    node = &as_string;
+  const std::string err = apply_value(s, *d, *node);
+  if (!err.empty()) return fail(err);
+  origins[d->dotted()] = Origin{0, arg};
+}
+
+std::string join_diags(std::vector<Diag> diags) {
+  std::stable_sort(diags.begin(), diags.end(), [](const Diag& a, const Diag& b) {
+    return std::tie(a.order_major, a.order_minor) < std::tie(b.order_major, b.order_minor);
+  });
+  std::string msg;
+  for (const auto& d : diags) {
+    if (!msg.empty()) msg += '\n';
+    msg += d.text;
+  }
+  return msg;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+sim::SceneOptions parse_scene_text(std::string_view text, const std::string& source_name,
+                                   const std::vector<std::string>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    const auto& b = e.source().begin;
+    throw InputError(fmt::format("error: {}:{}:{}: TOML syntax error: {}", source_name, b.line,
+                                 b.column, e.description()));
+  }
+
+  SceneOptions s;
+  std::vector<Diag> diags;
+  std::map<std::string, Origin> origins;
+  for (auto&& [k, v] : root) {
+    const std::string tname(k.str());
+    const std::size_t line = k.source().begin.line ? k.source().begin.line : v.source().begin.line;
+    const std::size_t col = k.source().begin.column;
+    if (!is_table(tname)) {
+      const std::string why = v.is_table() ? unknown_table_text(tname) : unknown_key_text("", tname);
+      diags.push_back({line, col, fmt::format("error: {}:{}: {}", source_name, line, why)});
+      continue;
+    }
+    const toml::table* tbl = v.as_table();
+    if (!tbl) {
+      diags.push_back({line, col,
+                       fmt::format("error: {}:{}: {}: expected a table ([{}]), got {}", source_name,
+                                   line, tname, tname, describe(v))});
+      continue;
+    }
+    parse_table_contents(s, source_name, tname, *tbl, diags, origins);
+  }
+  for (std::size_t i = 0; i < overrides.size(); ++i) apply_override(s, overrides[i], i, diags, origins);
+  if (!diags.empty()) throw InputError(join_diags(std::move(diags)));
+
+  const std::string bad = s.validate();
+  if (!bad.empty()) {
+    // validate() names the key first: "table.key: reason".
+    const std::string key = bad.substr(0, bad.find(':'));
+    const auto it = origins.find(key);
+    if (it != origins.end() && it->second.line > 0)
+      throw InputError(fmt::format("error: {}:{}: {}", source_name, it->second.line, bad));
+    if (it != origins.end() && !it->second.set_text.empty())
+      throw InputError(
+          fmt::format("error: {}: {} (set by --set {})", source_name, bad, it->second.set_text));
+    throw InputError(fmt::format("error: {}: {}", source_name, bad));
+  }
+  return s;
+}
+
+sim::SceneOptions parse_scene_file(const std::string& path,
+                                   const std::vector<std::string>& overrides) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(fmt::format("error: {}: cannot read scene file: is a directory", path));
+  errno = 0;
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    const int err = errno;
+    throw InputError(fmt::format("error: {}: cannot read scene file: {}", path,
+                                 err ? std::strerror(err) : "cannot open"));
+  }
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  if (in.bad())
+    throw InputError(fmt::format("error: {}: cannot read scene file: read error", path));
+  return parse_scene_text(ss.str(), path, overrides);
+}
+
+std::vector<std::string> known_scene_keys() {
+  std::vector<std::string> r;
+  for (const auto& d : keys()) r.push_back(d.dotted());
+  return r;
+}
+
+std::string resolved_scene_toml(const sim::SceneOptions& s) {
+  std::string out =
+      "# Resolved scene: every key with the value used, defaults included.\n"
+      "# Units are in the key names; see campaigns/scenes/table1.toml for the meaning of each.\n";
+  std::string_view current;
+  for (const auto& d : keys()) {
+    if (d.table != current) {
+      out += fmt::format("\n[{}]\n", d.table);
+      current = d.table;
+    }
+    std::string value;
+    switch (d.kind) {
+      case Kind::real: value = toml_double(d.get_real(s)); break;
+      case Kind::opt_real:
+        if (auto v = d.get_opt(s)) value = toml_double(*v);
+        break;
+      case Kind::integer: value = fmt::format("{}", d.get_int(s)); break;
+      case Kind::enumeration: {
+        const std::size_t i = d.get_enum(s);
+        value = i < d.allowed.size() ? quote(d.allowed[i]) : quote(fmt::format("<bad enum {}>", i));
+        break;
+      }
+    }
+    std::string line = value.empty() ? fmt::format("# {} unset", d.key)
+                                     : fmt::format("{} = {}", d.key, value);
+    if (line.size() < 40) line.resize(40, ' ');
+    out += fmt::format("{}  # {}\n", line, d.comment);
+  }
+  return out;
+}
+
+}  // namespace truss::io

@@ -1,0 +1,41 @@
+// Scene files: TOML text -> SceneOptions, with user-facing error messages, and the way back
+// (resolved_scene_toml) so that every output file can carry the exact scene it was run with.
+//
+// Tables and keys: see the table in scene_toml.cpp (kKeys) and campaigns/scenes/table1.toml.
+// Every error is an InputError whose what() is complete and ready to print, e.g.
+//   error: scene.toml:7: rail.beta_deg: must lie in (0, 90) degrees, got 95
+//   error: --set mast.n_bays=12.5: mast.n_bays: expected an integer, got a floating-point number 12.5
+#pragma once
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "sim/scene.hpp"
+
+namespace truss::io {
+
+// Bad user input (scene file, --set override, output path). what() is the complete message,
+// starting with "error: ".
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// Reads and parses a scene file, then applies the overrides ("table.key=value", as given to
+// --set, in order) and SceneOptions::validate(). Throws InputError.
+sim::SceneOptions parse_scene_file(const std::string& path,
+                                   const std::vector<std::string>& overrides = {});
+
+// Same, for scene text already in memory; source_name is used in messages (e.g. the file name).
+sim::SceneOptions parse_scene_text(std::string_view text, const std::string& source_name,
+                                   const std::vector<std::string>& overrides = {});
+
+// The full scene as TOML: every table and key, defaults included, doubles written so that they
+// read back bit-exactly; optional keys that are unset appear only as comments. Parsing the text
+// again gives the same options.
+std::string resolved_scene_toml(const sim::SceneOptions& scene);
+
+// All known keys, "table.key", in the order resolved_scene_toml writes them.
+std::vector<std::string> known_scene_keys();
+
+}  // namespace truss::io

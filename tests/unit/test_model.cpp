@@ -1,0 +1,195 @@
+// Unit tests of src/model: each function alone, against independent transcriptions of the
+// paper's equations (tests/test_helpers.hpp) and against Table 1 geometry (MODEL.md 2 and 4).
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "model/bay.hpp"
+#include "model/frames.hpp"
+#include "model/panels.hpp"
+#include "model/rail.hpp"
+#include "test_helpers.hpp"
+
+using namespace truss::model;
+using truss::testing::make_uneven_mast;
+using truss::testing::paper_bay_T;
+using truss::testing::paper_panel_T;
+
+namespace {
+
+// Total kinetic energy of moving frames lo..m (frames below lo at rest), from the paper's eq. 1
+// and 2, with the locked part rigid (eq. 3).
+double paper_T(const MastParams& mast, const ActiveFrames& a, const std::vector<double>& y, const std::vector<double>& v) {
+  double T = 0;
+  for (int i = std::max(a.lo, 1); i <= a.m; ++i)
+    T += paper_bay_T(mast.bay(i), mast.frame(i).mass_kg, y[i], y[i - 1], v[i], v[i - 1]);
+  if (a.lo == 0) T += 0.5 * mast.frame(0).mass_kg * v[0] * v[0];
+  T += 0.5 * a.locked_mass_kg * v[a.m] * v[a.m];
+  if (mast.panels.enabled()) T += paper_panel_T(mast.panels, y[a.m] + a.panel_height_offset_m, v[a.m]);
+  return T;
+}
+
+// Potential of bays 1..top (the bays above are locked, their potential constant).
+double paper_U(const MastParams& mast, const std::vector<double>& y, int top) {
+  double U = 0;
+  for (int i = 1; i <= top; ++i) {
+    const double b2 = (mast.frame(i - 1).side_m * mast.frame(i - 1).side_m + mast.frame(i - 1).side_m * mast.frame(i).side_m +
+                       mast.frame(i).side_m * mast.frame(i).side_m) / 3.0;
+    const double L = std::sqrt(b2 + (y[i] - y[i - 1]) * (y[i] - y[i - 1]));
+    const auto& b = mast.bay(i);
+    if (L > b.diagonal_free_length_m) U += 3 * b.diagonal_stiffness_N_per_m * (L - b.diagonal_free_length_m) * (L - b.diagonal_free_length_m);
+  }
+  return U;
+}
+
+}  // namespace
+
+TEST_CASE("mass matrix, velocity terms and spring forces match finite differences of the paper's energies", "[model]") {
+  // J_c = 2.7 m_s l_s^2/12 (make_uneven_mast): misprint 1 of MODEL.md would show here.
+  for (bool panels : {false, true}) {
+    MastParams mast = make_uneven_mast(6);
+    if (panels) mast.panels = PanelParams{12, 0.9, 0.3, 0.36};
+    ActiveFrames a;
+    a.lo = 1; a.m = 4; a.locked_mass_kg = 2.2; a.panel_height_offset_m = 0.8;
+    std::vector<double> y = {0.0, 0.05, 0.21, 0.40, 0.62, 0.0, 0.0};
+    std::vector<double> v = {0.0, 0.03, -0.07, 0.11, 0.09, 0.0, 0.0};
+    FrameSystem sys;
+    calc_frame_system(mast, a, y.data(), v.data(), 0, sys);
+    const int N = a.size();
+    // M_jk = d2T / dv_j dv_k: T is quadratic in v, so a central difference is exact up to rounding.
+    const double hv = 1e-3;
+    for (int j = 0; j < N; ++j)
+      for (int k = 0; k < N; ++k) {
+        auto Tv = [&](double dj, double dk) {
+          auto vv = v; vv[a.lo + j] += dj; vv[a.lo + k] += dk;
+          return paper_T(mast, a, y, vv);
+        };
+        const double Mjk = (Tv(hv, hv) - Tv(hv, -hv) - Tv(-hv, hv) + Tv(-hv, -hv)) / (4 * hv * hv);
+        double model = 0;
+        if (j == k) model = sys.diag[j];
+        else if (j == k + 1) model = sys.sub[j];
+        else if (k == j + 1) model = sys.sub[k];
+        INFO("panels " << panels << " M[" << j << "," << k << "]");
+        CHECK(model == Approx(Mjk).margin(1e-8).epsilon(1e-8));
+      }
+    // r_k = dT/dy_k - sum_j d(dT/dv_k)/dy_j v_j (Lagrange: M y'' = r + Q). Central differences in
+    // y with h = 1e-5 m: truncation ~ h^2 T''' ~ 1e-10 relative, so 1e-7 is safe.
+    const double hy = 1e-5;
+    auto dT_dvk = [&](const std::vector<double>& yy, int k) {
+      auto vp = v, vm = v; vp[a.lo + k] += hv; vm[a.lo + k] -= hv;
+      return (paper_T(mast, a, yy, vp) - paper_T(mast, a, yy, vm)) / (2 * hv);
+    };
+    for (int k = 0; k < N; ++k) {
+      auto yp = y, ym = y; yp[a.lo + k] += hy; ym[a.lo + k] -= hy;
+      double r = (paper_T(mast, a, yp, v) - paper_T(mast, a, ym, v)) / (2 * hy);
+      for (int j = 0; j < N; ++j) {
+        auto yjp = y, yjm = y; yjp[a.lo + j] += hy; yjm[a.lo + j] -= hy;
+        r -= (dT_dvk(yjp, k) - dT_dvk(yjm, k)) / (2 * hy) * v[a.lo + j];
+      }
+      INFO("panels " << panels << " r[" << k << "]");
+      CHECK(sys.velocity_terms[k] == Approx(r).margin(1e-9).epsilon(1e-6));
+      const double Q = -(paper_U(mast, yp, a.m) - paper_U(mast, ym, a.m)) / (2 * hy);
+      CHECK(sys.spring_forces[k] == Approx(Q).margin(1e-8).epsilon(1e-7));
+    }
+    // Kinetic energy: the model's (1/2) v^T M v equals the paper's T.
+    CHECK(calc_kinetic_energy_J(sys, a, v.data()) == Approx(paper_T(mast, a, y, v)).epsilon(1e-13));
+  }
+}
+
+TEST_CASE("frame 0 adds its own mass when it moves", "[model]") {
+  MastParams mast = make_uneven_mast(2);
+  ActiveFrames a; a.lo = 0; a.m = 1; a.locked_mass_kg = 1.0;
+  std::vector<double> y = {0.1, 0.3, 0.0}, v = {0.02, 0.05, 0.0};
+  FrameSystem sys;
+  calc_frame_system(mast, a, y.data(), v.data(), 0, sys);
+  CHECK(calc_kinetic_energy_J(sys, a, v.data()) == Approx(paper_T(mast, a, y, v)).epsilon(1e-13));
+}
+
+TEST_CASE("the hinge-coordinate strut energy g(x) equals G(D) (dD/dx)^2 and stays finite at the lock", "[model]") {
+  const MastParams mast = make_uneven_mast(1);
+  const BayParams& b = mast.bay(1);
+  const double l = b.strut_length_m;
+  // In frame heights G(D) loses digits as x -> 0 (4 l^2 - D^2 = 4 x^2 by cancellation): the
+  // identity is checked where that form is still accurate, g itself everywhere.
+  for (double x : {0.15, 0.08, 1e-2, 1e-3, 1e-6}) {
+    const double s = std::sqrt(l * l - x * x), D = 2 * s, dDdx = -2 * x / s;
+    if (x >= 1e-3) CHECK(calc_g_hinge(b, x) == Approx(calc_G(b, D) * dDdx * dDdx).epsilon(1e-9));
+    CHECK(std::isfinite(calc_g_hinge(b, x)));
+    const double h = 1e-7;
+    CHECK(calc_dg_hinge_dx(b, x) == Approx((calc_g_hinge(b, x + h) - calc_g_hinge(b, x - h)) / (2 * h)).epsilon(1e-5).margin(1e-9));
+  }
+  // at x = 0: (3/4 m_s + 3 J_c / l_s^2), the latch energy factor of MODEL.md 2
+  CHECK(calc_g_hinge(b, 0.0) == Approx(0.75 * b.strut_mass_kg + 3 * b.strut_inertia_kg_m2 / (l * l)).epsilon(1e-15));
+  CHECK(calc_dg_hinge_dx(b, 0.0) == 0.0);
+}
+
+TEST_CASE("Table 1 rail geometry: entry and lock heights (MODEL.md 2)", "[model][table1]") {
+  RailParams rail;  // Table 1 defaults
+  const double l = 0.18;
+  const HeldRailEntry e = calc_held_rail_entry(rail, l, 0.0);
+  REQUIRE(e.reachable);
+  CHECK(std::abs(e.upper_height_m - 0.327473474) < 1e-9);
+  CHECK(std::abs(e.hinge_x_m - 0.0747682) < 1e-7);   // MODEL.md gives 7 digits
+  CHECK(std::abs(e.hinge_y_m - 0.1637367) < 1e-7);
+  CHECK(std::abs(calc_rail_function_m(rail, e.hinge_x_m, e.hinge_y_m)) < 1e-15);
+  CHECK(std::abs(calc_lock_upper_height_m(rail, l) - 0.540049126) < 1e-9);
+  CHECK(std::abs(calc_lock_lower_height_m(rail, l) - 0.180049126) < 1e-9);
+  // the held hinge is outside the rail (f > 0) before entry, all along the quarter circle
+  for (double th = 0; th < e.theta_rad; th += 0.01)
+    CHECK(calc_rail_function_m(rail, l * std::cos(th), l * std::sin(th)) > 0.0);
+}
+
+TEST_CASE("rails that a held lower frame can never meet are detected", "[model]") {
+  RailParams far;  far.y_m = 0.5;    // rail above the reach of the hinge: f(pi/2) > 0
+  CHECK_FALSE(calc_held_rail_entry(far, 0.18, 0.0).reachable);
+  RailParams low; low.x_m = -0.2; low.y_m = 0.3;  // hinge starts already past the rail: f(0) < 0
+  CHECK_FALSE(calc_held_rail_entry(low, 0.18, 0.0).reachable);
+}
+
+TEST_CASE("on-rail kinematics: derivatives, rail function and inverse without cancellation", "[model]") {
+  RailParams rail;
+  const double l = 0.18;
+  for (double x : {0.07, 0.03, 1e-4}) {
+    const OnRailKinematics k = calc_on_rail(rail, l, x);
+    const double h = 1e-6;
+    const OnRailKinematics kp = calc_on_rail(rail, l, x + h), km = calc_on_rail(rail, l, x - h);
+    CHECK(k.dY == Approx((kp.Y - km.Y) / (2 * h)).epsilon(1e-8));
+    CHECK(k.dZ == Approx((kp.Z - km.Z) / (2 * h)).epsilon(1e-8));
+    CHECK(k.d2Y == Approx((kp.dY - km.dY) / (2 * h)).epsilon(1e-6));
+    CHECK(k.d2Z == Approx((kp.dZ - km.dZ) / (2 * h)).epsilon(1e-6));
+    CHECK(std::abs(calc_rail_function_m(rail, x, 0.5 * (k.Y + k.Z))) < 1e-15);
+    CHECK(k.Y - k.Z == Approx(2 * std::sqrt(l * l - x * x)).epsilon(1e-14));
+  }
+  // inverse: x from the remaining travel e to the lock, relative accuracy kept as x -> 0
+  for (double x : {0.07, 1e-3, 1e-6, 1e-9}) {
+    const double e = calc_lock_upper_height_m(rail, l) - calc_on_rail(rail, l, x).Y;  // ~ c x: exact enough
+    const double x_back = calc_x_on_rail_from_travel(rail, l, e);
+    CHECK(x_back == Approx(x).epsilon(x > 1e-7 ? 1e-9 : 1e-6));
+  }
+  CHECK(calc_x_on_rail_from_travel(rail, l, 0.0) == 0.0);
+}
+
+TEST_CASE("panel mass and slope (MODEL.md 3)", "[model]") {
+  PanelParams p{8, 0.6, 0.25, 0.36};
+  const double H = 2.1, h = 1e-6;
+  // T = 1/2 M_p u^2 equals the independent transcription
+  CHECK(0.5 * calc_panel_mass_kg(p, H) * 0.3 * 0.3 == Approx(paper_panel_T(p, H, 0.3)).epsilon(1e-14));
+  CHECK(calc_half_panel_mass_slope_kg_per_m(p, H) ==
+        Approx(0.5 * (calc_panel_mass_kg(p, H + h) - calc_panel_mass_kg(p, H - h)) / (2 * h)).epsilon(1e-7));
+}
+
+TEST_CASE("diagonals: tension only, tension and potential consistent", "[model]") {
+  const MastParams mast = make_uneven_mast(1);
+  const BayParams& b = mast.bay(1);
+  const double b2 = calc_diagonal_offset_sq_m2(mast.frame(0), mast.frame(1));
+  const double Dt = calc_taut_opening_m(b, b2);
+  REQUIRE(Dt > 0);
+  CHECK(calc_diagonal_tension_N(b, b2, 0.9 * Dt) == 0.0);
+  CHECK(calc_bay_potential_J(b, b2, 0.9 * Dt) == 0.0);
+  CHECK(calc_bay_dU_dD_N(b, b2, 0.9 * Dt) == 0.0);
+  const double D = 1.1 * Dt, h = 1e-7;
+  CHECK(calc_bay_dU_dD_N(b, b2, D) == Approx((calc_bay_potential_J(b, b2, D + h) - calc_bay_potential_J(b, b2, D - h)) / (2 * h)).epsilon(1e-6));
+  // dU/dD = 6 T D / L: six diagonals, each pulling along its length
+  CHECK(calc_bay_dU_dD_N(b, b2, D) == Approx(6 * calc_diagonal_tension_N(b, b2, D) * D / calc_diagonal_length_m(b2, D)).epsilon(1e-13));
+  // equal frames: the offset is the frame side
+  CHECK(calc_diagonal_offset_sq_m2({0.36, 0.5}, {0.36, 0.5}) == Approx(0.36 * 0.36).epsilon(1e-15));
+}
