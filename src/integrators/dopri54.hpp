@@ -14,6 +14,8 @@ class DormandPrince54 : public Integrator {
   explicit DormandPrince54(const IntegratorOptions& opts) : opts_(opts) {}
   IntegratorSummary integrate(OdeSystem& sys, double t0, double t_end, double* y,
                               StepObserver* observer) override;
+  // New options for the next calls; the last step size is kept to start the next phase.
+  void set_options(const IntegratorOptions& opts) { opts_ = opts; }
 
  private:
   IntegratorOptions opts_;

@@ -233,15 +233,19 @@ struct History {
   long next = 0;
   const DriveParams* drive = nullptr;
   double next_time() const { return static_cast<double>(next) * step; }
-  // Samples the grid times in [t0, t1) (and t1 itself when `closing`).
+  // Samples the grid times in [t0, t1).
   template <class Eval>
-  void sample(Eval&& eval, double t0, double t1, bool closing, int bay) {
+  void sample(Eval&& eval, double t0, double t1, int bay) {
     if (!out || step <= 0.0) return;
     while (true) {
       const double t = next_time();
       if (t < t0 - 1e-12 * std::max(1.0, t0)) { ++next; continue; }
-      if (t > t1 || (!closing && t >= t1)) break;
-      const PhasePoint p = eval(std::clamp(t, t0, t1));
+      if (t >= t1) break;
+      push(t, eval(std::clamp(t, t0, t1)), bay);
+      ++next;
+    }
+  }
+  void push(double t, const PhasePoint& p, int bay) {
       out->t_s.push_back(t);
       out->bay.push_back(bay);
       out->y_driven_m.push_back(p.y_driven_m);
@@ -253,8 +257,6 @@ struct History {
       out->pin_force_N.push_back(p.pin_force_N);
       out->diagonal_tension_N.push_back(p.diagonal_tension_N);
       out->driven_speed_m_per_s.push_back(p.u_m_per_s);
-      ++next;
-    }
   }
 };
 
@@ -302,7 +304,7 @@ class PhaseObserver : public integrators::StepObserver {
     };
     const double t1 = d.t_end;
     if (t1 > d.t_begin) br_.feed(t1, eval(t1));
-    hist_.sample(eval, d.t_begin, t1, false, bay_);
+    hist_.sample(eval, d.t_begin, t1, bay_);
     if (std::chrono::steady_clock::now() > deadline_) { timed_out = true; return false; }
     return true;
   }
@@ -517,7 +519,7 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
         }
         tr.absorb(brackets, [&](double tt, const HermiteSpan&) { return eval(tt); }, 1e-12 * std::max(1.0, t1));
         r.drive_work_smooth_J += work;
-        hist.sample(eval, t0, t1, false, m);
+        hist.sample(eval, t0, t1, m);
         t_end_phase = t1;
         p_end = eval(t1);
         p_end.q = ph.q_end;  // the event is exact in closed form
@@ -539,7 +541,11 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
         io.max_steps = std::max(1L, steps_left);
         integrators::IntegratorSummary sum;
         if (opts.integrator == IntegratorChoice::cvode) sum = integrators::CvodeIntegrator(io).integrate(ode, t, t + 1e7, y, &obs);
-        else sum = static_cast<integrators::DormandPrince54&>(*integ).integrate(ode, t, t + 1e7, y, &obs);
+        else {
+          auto& dp = static_cast<integrators::DormandPrince54&>(*integ);
+          dp.set_options(io);
+          sum = dp.integrate(ode, t, t + 1e7, y, &obs);
+        }
         steps_left -= sum.steps;
         r.steps += sum.steps;
         r.rejected_steps += sum.rejected_steps;
@@ -682,7 +688,8 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
   } else {
     r.deploy_time_s = t;
   }
-  if (hist.out) hist.sample([&](double) { return last; }, t, t, true, last_stage ? last_stage->bay : 0);
+  // The last row of a history is the end of the run (on the grid or not).
+  if (hist.out && (r.history.t_s.empty() || r.history.t_s.back() < t)) hist.push(t, last, last_stage ? last_stage->bay : 0);
 
   auto fin = [](double v) { return std::isfinite(v) ? v : kNaN; };
   r.peak_drive_force_N = fin(tr.run[kForce].value);
