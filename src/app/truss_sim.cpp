@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
                  "(repeatable; the value is read as a TOML value, a bare word as a string)")
       ->type_name("KEY=VALUE")
       ->expected(1)
+      ->allow_extra_args(false)  // one value per --set: a scene path after it stays positional
       ->take_all();
   app.add_flag("--json", json, "Print the run summary as JSON on stdout");
   app.add_flag("--force", force, "Overwrite the output file if it exists");

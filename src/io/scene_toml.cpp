@@ -468,8 +468,10 @@ std::string join_diags(std::vector<Diag> diags) {
 
 // ---------------------------------------------------------------------------------------------
 
-sim::SceneOptions parse_scene_text(std::string_view text, const std::string& source_name,
-                                   const std::vector<std::string>& overrides) {
+namespace {
+
+sim::SceneOptions parse_scene(std::string_view text, const std::string& source_name,
+                              const std::vector<std::string>& overrides, bool validate) {
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -502,6 +504,7 @@ sim::SceneOptions parse_scene_text(std::string_view text, const std::string& sou
   }
   for (std::size_t i = 0; i < overrides.size(); ++i) apply_override(s, overrides[i], i, diags, origins);
   if (!diags.empty()) throw InputError(join_diags(std::move(diags)));
+  if (!validate) return s;
 
   const std::string bad = s.validate();
   if (!bad.empty()) {
@@ -516,6 +519,19 @@ sim::SceneOptions parse_scene_text(std::string_view text, const std::string& sou
     throw InputError(fmt::format("error: {}: {}", source_name, bad));
   }
   return s;
+}
+
+}  // namespace
+
+sim::SceneOptions parse_scene_text(std::string_view text, const std::string& source_name,
+                                   const std::vector<std::string>& overrides) {
+  return parse_scene(text, source_name, overrides, true);
+}
+
+sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
+                                               const std::string& source_name,
+                                               const std::vector<std::string>& overrides) {
+  return parse_scene(text, source_name, overrides, false);
 }
 
 sim::SceneOptions parse_scene_file(const std::string& path,

@@ -30,6 +30,12 @@ sim::SceneOptions parse_scene_file(const std::string& path,
 sim::SceneOptions parse_scene_text(std::string_view text, const std::string& source_name,
                                    const std::vector<std::string>& overrides = {});
 
+// As parse_scene_text but without SceneOptions::validate(): checks syntax, keys, types and
+// enumeration values only. For tools that change the options further and validate afterwards.
+sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
+                                               const std::string& source_name,
+                                               const std::vector<std::string>& overrides = {});
+
 // The full scene as TOML: every table and key, defaults included, doubles written so that they
 // read back bit-exactly; optional keys that are unset appear only as comments. Parsing the text
 // again gives the same options.

@@ -1,6 +1,7 @@
 // Run summary: what one simulated deployment or retraction reports (MODEL.md section 5).
 // Units are in the field names. Times are seconds from the start of the run.
 #pragma once
+#include <cstddef>
 #include <string>
 #include <vector>
 

@@ -1,0 +1,153 @@
+#!/usr/bin/env bash
+# Command-line checks of truss-sim: bad input exits 2 and writes nothing; the Table 1 scene runs
+# (exit 0) and prints valid JSON; an existing output file is kept unless --force.
+# Usage: test_cli.sh PATH/TO/truss-sim SCRATCH_DIR
+set -u
+SIM=${1:?usage: test_cli.sh TRUSS_SIM SCRATCH_DIR}
+SCRATCH=${2:?usage: test_cli.sh TRUSS_SIM SCRATCH_DIR}
+HERE=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+TABLE1="$HERE/../../campaigns/scenes/table1.toml"
+PY=/usr/bin/python3
+
+case "$SIM" in */*) SIM="$(cd "$(dirname "$SIM")" && pwd)/$(basename "$SIM")" ;; esac
+[ -x "$SIM" ] || { echo "not an executable: $SIM"; exit 1; }
+mkdir -p "$SCRATCH" && SCRATCH=$(cd "$SCRATCH" && pwd) || exit 1
+WORK=$(mktemp -d "$SCRATCH/run.XXXXXX") || exit 1  # fresh for every run; kept if a check fails
+cd "$WORK" || exit 1
+
+passed=0
+failed=0
+ok() { passed=$((passed + 1)); echo "ok   $1"; }
+bad() { failed=$((failed + 1)); echo "FAIL $1"; }
+
+# run NAME EXPECTED_RC ARGS...: runs truss-sim, keeps stdout/stderr in NAME.out/NAME.err
+run() {
+  local name=$1 want=$2
+  shift 2
+  "$SIM" "$@" >"$name.out" 2>"$name.err"
+  local rc=$?
+  if [ "$rc" -eq "$want" ]; then
+    ok "$name: exit $rc"
+  else
+    bad "$name: exit $rc, expected $want"
+    sed 's/^/     | /' "$name.err" | head -20
+  fi
+}
+
+# expect_in FILE TEXT NAME: FILE contains TEXT (fixed string)
+expect_in() {
+  if grep -qF -- "$2" "$1"; then ok "$3"; else bad "$3: '$2' not in $1"; sed 's/^/     | /' "$1" | head -10; fi
+}
+
+# nothing_written NAME: no .h5 file and no temporary file in the scratch dir
+nothing_written() {
+  local stray
+  if ! stray=$(find . -maxdepth 1 \( -name '*.h5' -o -name '.*.tmp.*' \) -newer "$WORK/.start"); then
+    bad "$1: cannot list the scratch dir"
+  elif [ -z "$stray" ]; then ok "$1: nothing written"; else bad "$1: wrote $stray"; fi
+  if [ ! -s "$1.out" ]; then ok "$1: nothing on stdout"; else bad "$1: printed on stdout"; fi
+}
+
+scene() { printf '%b' "$2" >"$1"; }
+
+touch "$WORK/.start"
+sleep 1  # the -newer test above compares modification times
+
+# --- bad input: exit 2, nothing written ----------------------------------------------------
+scene unknown_key.toml '[mast]\nn_bays = 4\nn_bay = 5\n'
+run unknown_key 2 unknown_key.toml -o unknown_key.h5 --json
+expect_in unknown_key.err "unknown_key.toml:3:" "unknown_key: message has the line"
+expect_in unknown_key.err "mast.n_bay" "unknown_key: message names the key"
+nothing_written unknown_key
+
+scene wrong_type.toml '[mast]\nn_bays = "four"\n'
+run wrong_type 2 wrong_type.toml -o wrong_type.h5
+expect_in wrong_type.err "wrong_type.toml:2: mast.n_bays" "wrong_type: message names key and line"
+nothing_written wrong_type
+
+scene beta95.toml '[rail]\nx_m = 0.08\nbeta_deg = 95\n'
+run beta95 2 beta95.toml -o beta95.h5
+expect_in beta95.err "beta95.toml:3: rail.beta_deg" "beta95: message names key and line"
+nothing_written beta95
+
+run beta95_set 2 "$TABLE1" --set rail.beta_deg=95 -o beta95_set.h5
+expect_in beta95_set.err "rail.beta_deg" "beta95_set: message names the key"
+nothing_written beta95_set
+
+run set_unknown 2 "$TABLE1" --set mast.n_bay=3 -o set_unknown.h5
+expect_in set_unknown.err "--set mast.n_bay=3" "set_unknown: message quotes the --set"
+nothing_written set_unknown
+
+run missing_file 2 does_not_exist.toml -o missing_file.h5
+expect_in missing_file.err "does_not_exist.toml" "missing_file: message names the file"
+nothing_written missing_file
+
+scene syntax.toml '[mast]\nn_bays = = 3\n'
+run syntax 2 syntax.toml
+expect_in syntax.err "syntax.toml:2:" "syntax: message has line and column"
+
+run no_args 2
+run bad_option 2 "$TABLE1" --no-such-option
+
+# --- existing output: refused before simulating, content kept ------------------------------
+echo "precious" >existing.h5
+run existing 2 "$TABLE1" -o existing.h5 --json
+expect_in existing.err "output file exists: existing.h5" "existing: message"
+if [ "$(cat existing.h5)" = "precious" ]; then ok "existing: file unchanged"; else bad "existing: file changed"; fi
+if [ ! -s existing.out ]; then ok "existing: nothing on stdout"; else bad "existing: printed on stdout"; fi
+
+# --- the Table 1 scene: exit 0, valid JSON, an HDF5 file -------------------------------------
+run table1 0 "$TABLE1" --json -o table1.h5
+if "$PY" -c 'import json,sys; d=json.load(sys.stdin); assert d["status"] == "ok", d["status"]; assert len(d["bays"]) == d["n_bays"]' <table1.out 2>table1.json.err; then
+  ok "table1: valid JSON, status ok, one entry per bay"
+else
+  bad "table1: stdout is not the expected JSON"
+  sed 's/^/     | /' table1.json.err | tail -3
+fi
+if [ -f table1.h5 ] && [ "$(head -c 8 table1.h5 | od -An -c | tr -d ' ')" = '211HDF\r\n032\n' ]; then
+  ok "table1: HDF5 file written"
+else
+  bad "table1: table1.h5 is not an HDF5 file"
+fi
+
+run table1_text 0 "$TABLE1"
+if [ -s table1_text.out ]; then ok "table1_text: summary printed"; else bad "table1_text: nothing printed"; fi
+
+# --set before the scene path: each --set takes one value, the scene stays positional
+run set_first 0 --set mast.n_bays=3 --set rail.beta_deg=25 "$TABLE1" --json
+if "$PY" -c 'import json,sys; d=json.load(sys.stdin); assert d["n_bays"] == 3 and len(d["bays"]) == 3' <set_first.out 2>set_first.json.err; then
+  ok "set_first: overrides applied"
+else
+  bad "set_first: overrides not applied"
+fi
+
+# A physical failure (a screw torque far too small to open a bay): exit 1, the file is still written
+run failed_run 1 "$TABLE1" --set drive.mode=torque --set drive.torque_Nm=1e-6 --json -o failed_run.h5
+if "$PY" -c 'import json,sys; d=json.load(sys.stdin); assert d["status"] != "ok" and d["message"]' <failed_run.out 2>failed_run.json.err; then
+  ok "failed_run: JSON with a failure status and a message"
+else
+  bad "failed_run: stdout is not the expected JSON"
+fi
+if [ -f failed_run.h5 ] && [ "$(head -c 8 failed_run.h5 | od -An -c | tr -d ' ')" = '211HDF\r\n032\n' ]; then
+  ok "failed_run: HDF5 file written"
+else
+  bad "failed_run: no HDF5 file"
+fi
+
+# --force replaces the file
+run force 0 "$TABLE1" -o existing.h5 --force
+if [ "$(head -c 8 existing.h5 | od -An -c | tr -d ' ')" = '211HDF\r\n032\n' ]; then
+  ok "force: file replaced by HDF5 output"
+else
+  bad "force: file not replaced"
+fi
+stray=$(find . -maxdepth 1 -name '.*.tmp.*' | head -5)
+if [ -z "$stray" ]; then ok "no temporary files left"; else bad "temporary files left: $stray"; fi
+
+echo "$passed passed, $failed failed"
+if [ "$failed" -eq 0 ]; then
+  cd / && rm -rf "$WORK"
+  exit 0
+fi
+echo "outputs kept in $WORK"
+exit 1
