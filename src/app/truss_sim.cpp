@@ -17,12 +17,6 @@
 #include "io/scene_toml.hpp"
 #include "sim/simulate.hpp"
 
-#ifndef TRUSS_VERSION
-#define TRUSS_VERSION "unknown"
-#endif
-#ifndef TRUSS_GIT_REV
-#define TRUSS_GIT_REV "unknown"
-#endif
 
 namespace {
 constexpr int kExitOk = 0;

@@ -19,12 +19,6 @@
 #include "io/json_summary.hpp"
 #include "io/scene_toml.hpp"
 
-#ifndef TRUSS_VERSION
-#define TRUSS_VERSION "unknown"
-#endif
-#ifndef TRUSS_GIT_REV
-#define TRUSS_GIT_REV "unknown"
-#endif
 
 namespace truss::io {
 namespace {
