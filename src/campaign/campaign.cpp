@@ -1,0 +1,270 @@
+#include "campaign/campaign.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <toml++/toml.h>
+
+#include "io/scene_toml.hpp"
+
+namespace truss::campaign {
+
+using io::InputError;
+
+namespace {
+
+const std::set<std::string> kBayKeys = {"mast.strut_length_m", "mast.strut_mass_kg", "mast.strut_inertia_kg_m2",
+                                        "mast.diagonal_stiffness_N_per_m", "mast.diagonal_free_length_m"};
+const std::set<std::string> kFrameKeys = {"mast.frame_side_m", "mast.frame_mass_kg"};
+const std::set<std::string> kRunKeys = {"mast.n_bays", "mast.tip_mass_kg", "rail.x_m", "rail.y_m", "rail.beta_deg",
+                                        "drive.speed_m_per_s", "drive.screw_lead_m", "drive.torque_Nm",
+                                        "drive.stall_torque_Nm", "drive.no_load_speed_rad_per_s",
+                                        "panels.length_m", "panels.mass_kg", "panels.tip_height_m"};
+const std::vector<std::string> kDistributions = {"normal", "truncated_normal", "uniform", "lognormal", "discrete"};
+const std::vector<std::string> kSampling = {"monte_carlo", "latin_hypercube", "sobol", "saltelli"};
+
+struct Ctx {
+  std::string file;
+  [[noreturn]] void fail(const toml::node* at, const std::string& what) const {
+    if (at && at->source().begin.line > 0) throw InputError(fmt::format("error: {}:{}: {}", file, at->source().begin.line, what));
+    throw InputError(fmt::format("error: {}: {}", file, what));
+  }
+};
+
+std::string join(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "\"" : ", \"") + x + "\"";
+  return s;
+}
+
+double get_number(const Ctx& c, const toml::node& n, const std::string& key) {
+  if (auto i = n.value_exact<std::int64_t>()) return static_cast<double>(*i);
+  if (auto d = n.value_exact<double>()) return *d;
+  c.fail(&n, fmt::format("{}: expected a number", key));
+}
+
+std::string get_string(const Ctx& c, const toml::node& n, const std::string& key, const std::vector<std::string>& allowed = {}) {
+  auto s = n.value_exact<std::string>();
+  if (!s) c.fail(&n, fmt::format("{}: expected a string", key));
+  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), *s) == allowed.end())
+    c.fail(&n, fmt::format("{}: \"{}\" is not one of {}", key, *s, join(allowed)));
+  return *s;
+}
+
+std::vector<double> get_numbers(const Ctx& c, const toml::node& n, const std::string& key) {
+  const toml::array* a = n.as_array();
+  if (!a) c.fail(&n, fmt::format("{}: expected an array of numbers", key));
+  std::vector<double> v;
+  for (const auto& e : *a) v.push_back(get_number(c, e, key));
+  return v;
+}
+
+// TOML text of a value given on the command line: numbers, booleans, quoted strings, arrays;
+// a bare word is taken as a string (e.g. --set ensemble.sampling=sobol).
+toml::table parse_override_value(const std::string& value) {
+  try {
+    return toml::parse("v = " + value);
+  } catch (const toml::parse_error&) {
+    toml::table t;
+    t.insert("v", value);
+    return t;
+  }
+}
+
+void parse_campaign_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
+  for (const auto& [k, v] : t) {
+    const std::string key = "campaign." + std::string(k.str());
+    if (k == "name") o.name = get_string(c, v, key);
+    else if (k == "description") o.description = get_string(c, v, key);
+    else c.fail(&v, fmt::format("unknown key '{}' (known: campaign.name, campaign.description)", key));
+  }
+}
+
+void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
+  for (const auto& [k, v] : t) {
+    const std::string key = "ensemble." + std::string(k.str());
+    if (k == "n_runs") {
+      auto i = v.value_exact<std::int64_t>();
+      if (!i) c.fail(&v, key + ": expected an integer");
+      if (*i < 1) c.fail(&v, fmt::format("{}: must be a positive number of runs, got {}", key, *i));
+      o.ensemble.n_runs = *i;
+    } else if (k == "master_seed") {
+      auto i = v.value_exact<std::int64_t>();
+      if (!i) c.fail(&v, key + ": expected an integer");
+      if (*i < 0) c.fail(&v, fmt::format("{}: must not be negative, got {}", key, *i));
+      o.ensemble.master_seed = static_cast<std::uint64_t>(*i);
+    } else if (k == "sampling") {
+      o.ensemble.sampling = get_string(c, v, key, kSampling);
+    } else if (k == "max_run_wall_time_s") {
+      const double w = get_number(c, v, key);
+      if (!(w > 0.0 && std::isfinite(w))) c.fail(&v, fmt::format("{}: must be positive, got {}", key, w));
+      o.ensemble.max_run_wall_time_s = w;
+    } else {
+      c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
+                             "ensemble.max_run_wall_time_s)", key));
+    }
+  }
+}
+
+std::string toml_value_text(const toml::node& v) {
+  std::ostringstream ss;
+  v.visit([&](const auto& x) { ss << toml::toml_formatter{x}; });
+  return ss.str();
+}
+
+void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
+  for (const auto& [k, v] : t) {
+    const std::string key = "scene." + std::string(k.str());
+    if (k == "file") {
+      o.scene_file = get_string(c, v, key);
+    } else if (k == "overrides") {
+      const toml::table* ov = v.as_table();
+      if (!ov) c.fail(&v, key + ": expected a table of \"table.key\" = value");
+      for (const auto& [ok, ovv] : *ov) o.scene_overrides.push_back(std::string(ok.str()) + "=" + toml_value_text(ovv));
+    } else {
+      c.fail(&v, fmt::format("unknown key '{}' (known: scene.file, scene.overrides)", key));
+    }
+  }
+}
+
+DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size_t index) {
+  DispersionOptions d;
+  d.line = static_cast<int>(t.source().begin.line);
+  const std::string where = fmt::format("dispersion[{}]", index + 1);
+  bool has_key = false, has_dist = false;
+  for (const auto& [k, v] : t) {
+    const std::string key = where + "." + std::string(k.str());
+    if (k == "key") { d.key = get_string(c, v, key); has_key = true; }
+    else if (k == "per") {
+      const std::string p = get_string(c, v, key, {"run", "bay", "frame"});
+      d.per = p == "run" ? Per::run : p == "bay" ? Per::bay : Per::frame;
+    } else if (k == "apply") {
+      const std::string a = get_string(c, v, key, {"absolute", "relative", "offset"});
+      d.apply = a == "absolute" ? Apply::absolute : a == "relative" ? Apply::relative : Apply::offset;
+    } else if (k == "distribution") { d.distribution = get_string(c, v, key, kDistributions); has_dist = true; }
+    else if (k == "mean") d.mean = get_number(c, v, key);
+    else if (k == "std") d.std = get_number(c, v, key);
+    else if (k == "lower") d.lower = get_number(c, v, key);
+    else if (k == "upper") d.upper = get_number(c, v, key);
+    else if (k == "mu") d.mu = get_number(c, v, key);
+    else if (k == "sigma") d.sigma = get_number(c, v, key);
+    else if (k == "values") d.values = get_numbers(c, v, key);
+    else if (k == "weights") d.weights = get_numbers(c, v, key);
+    else c.fail(&v, fmt::format("unknown key '{}' (known: key, per, apply, distribution, mean, std, lower, upper, mu, "
+                                "sigma, values, weights)", key));
+  }
+  if (!has_key) c.fail(&t, where + ": missing 'key' (the scene key to disperse, e.g. \"mast.strut_mass_kg\")");
+  if (!has_dist) c.fail(&t, where + ": missing 'distribution' (one of " + join(kDistributions) + ")");
+  // The key and the distribution's parameters.
+  const std::string& K = d.key;
+  if (!is_dispersible_key(K))
+    c.fail(&t, fmt::format("{}.key: \"{}\" is not a scene key that can be dispersed (per bay: {}; per frame: {}; "
+                           "per run: the other numeric keys)", where, K, "mast.strut_*, mast.diagonal_*",
+                           "mast.frame_side_m, mast.frame_mass_kg"));
+  if (d.per == Per::bay && !is_bay_key(K)) c.fail(&t, fmt::format("{}.per: \"{}\" is not a per-bay key", where, K));
+  if (d.per == Per::frame && !is_frame_key(K)) c.fail(&t, fmt::format("{}.per: \"{}\" is not a per-frame key", where, K));
+  auto bad = [&](const std::string& what) { c.fail(&t, fmt::format("{}: {} distribution: {}", where, d.distribution, what)); };
+  auto Phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
+  if (d.distribution == "normal" || d.distribution == "truncated_normal") {
+    if (!(d.std > 0.0 && std::isfinite(d.std))) bad(fmt::format("std must be positive, got {}", d.std));
+    if (d.distribution == "truncated_normal") {
+      if (!(d.lower < d.upper)) bad(fmt::format("lower ({}) must be below upper ({})", d.lower, d.upper));
+      const double mass = Phi((d.upper - d.mean) / d.std) - Phi((d.lower - d.mean) / d.std);
+      if (!(mass > 1e-12))
+        bad(fmt::format("the truncation [{}, {}] excludes all probability mass of N({}, {}^2) (mass {:.3g})", d.lower,
+                        d.upper, d.mean, d.std, mass));
+    }
+  } else if (d.distribution == "uniform") {
+    if (!(d.lower < d.upper)) bad(fmt::format("lower ({}) must be below upper ({})", d.lower, d.upper));
+  } else if (d.distribution == "lognormal") {
+    if (!(d.sigma > 0.0 && std::isfinite(d.sigma))) bad(fmt::format("sigma must be positive, got {}", d.sigma));
+  } else if (d.distribution == "discrete") {
+    if (d.values.empty()) bad("needs a non-empty 'values' table");
+    if (!d.weights.empty() && d.weights.size() != d.values.size())
+      bad(fmt::format("'weights' has {} entries for {} values", d.weights.size(), d.values.size()));
+    for (double w : d.weights) if (!(w > 0.0 && std::isfinite(w))) bad(fmt::format("weights must be positive, got {}", w));
+  }
+  if (K == "mast.n_bays") {
+    if (d.distribution != "discrete" || d.apply != Apply::absolute || d.per != Per::run)
+      c.fail(&t, where + ": mast.n_bays is an integer: disperse it with distribution = \"discrete\", apply = \"absolute\", per = \"run\"");
+    for (double v : d.values)
+      if (!(v >= 1.0 && v <= 100000.0 && v == std::floor(v))) bad(fmt::format("bay counts must be integers >= 1, got {}", v));
+  }
+  return d;
+}
+
+}  // namespace
+
+bool is_bay_key(const std::string& key) { return kBayKeys.count(key) > 0; }
+bool is_frame_key(const std::string& key) { return kFrameKeys.count(key) > 0; }
+bool is_dispersible_key(const std::string& key) { return is_bay_key(key) || is_frame_key(key) || kRunKeys.count(key) > 0; }
+
+CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides) {
+  Ctx c{path};
+  toml::table root;
+  try {
+    root = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    const auto& b = e.source().begin;
+    if (b.line == 0) throw InputError(fmt::format("error: {}: cannot read the campaign file: {}", path, e.description()));
+    throw InputError(fmt::format("error: {}:{}:{}: {}", path, b.line, b.column, e.description()));
+  }
+  // --set overrides: campaign keys go into the TOML tree (so they are checked like file keys),
+  // scene keys ("scene.table.key=v") go to the scene parser.
+  std::vector<std::string> scene_sets;
+  for (const std::string& arg : overrides) {
+    const auto eq = arg.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("error: --set {}: expected table.key=value", arg));
+    const std::string key = arg.substr(0, eq), value = arg.substr(eq + 1);
+    if (key.rfind("scene.", 0) == 0) { scene_sets.push_back(key.substr(6) + "=" + value); continue; }
+    const auto dot = key.find('.');
+    if (dot == std::string::npos || (key.substr(0, dot) != "ensemble" && key.substr(0, dot) != "campaign"))
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.* and scene.<table>.<key> can be set", arg));
+    toml::table v = parse_override_value(value);
+    const std::string tname = key.substr(0, dot), kname = key.substr(dot + 1);
+    if (!root.contains(tname)) root.insert(tname, toml::table{});
+    toml::table* t = root[tname].as_table();
+    if (!t) throw InputError(fmt::format("error: --set {}: '{}' is not a table in {}", arg, tname, path));
+    t->insert_or_assign(kname, *v.get("v"));
+  }
+
+  CampaignOptions o;
+  for (const auto& [k, v] : root) {
+    if (k == "campaign" || k == "ensemble" || k == "scene") {
+      const toml::table* t = v.as_table();
+      if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
+      if (k == "campaign") parse_campaign_table(c, *t, o);
+      else if (k == "ensemble") parse_ensemble_table(c, *t, o);
+      else parse_scene_table(c, *t, o);
+    } else if (k == "dispersion") {
+      const toml::array* a = v.as_array();
+      if (!a || !a->is_array_of_tables()) c.fail(&v, "'dispersion' must be an array of tables: [[dispersion]]");
+      for (std::size_t i = 0; i < a->size(); ++i) o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
+    } else {
+      c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, scene, [[dispersion]])", k.str()));
+    }
+  }
+  // Base scene: file relative to the campaign file, then its overrides, then --set scene.*.
+  std::vector<std::string> sets = o.scene_overrides;
+  sets.insert(sets.end(), scene_sets.begin(), scene_sets.end());
+  if (!o.scene_file.empty()) {
+    std::filesystem::path p(o.scene_file);
+    if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
+    o.base = io::parse_scene_file(p.string(), sets);
+  } else {
+    o.base = io::parse_scene_text("", path + " [scene]", sets);
+  }
+  // Two dispersions of one key would silently overwrite each other.
+  for (std::size_t i = 0; i < o.dispersions.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (o.dispersions[i].key == o.dispersions[j].key)
+        throw InputError(fmt::format("error: {}:{}: dispersion[{}].key: \"{}\" is already dispersed at line {}", path,
+                                     o.dispersions[i].line, i + 1, o.dispersions[i].key, o.dispersions[j].line));
+  return o;
+}
+
+}  // namespace truss::campaign

@@ -1,0 +1,64 @@
+// Campaign files (TOML): a base scene, an ensemble (run count, master seed, sampling method) and
+// dispersions of scene keys, parsed once into plain option structs and validated before any MPI
+// work. Unknown tables and keys are errors (file:line), as in scene files.
+//
+//   [campaign]   name, description
+//   [ensemble]   n_runs, master_seed, sampling ("monte_carlo" | "latin_hypercube" | "sobol" |
+//                "saltelli"), max_run_wall_time_s
+//   [scene]      file (path relative to the campaign file; default: Table 1 defaults),
+//                overrides = { "drive.mode" = "motor", ... }
+//   [[dispersion]] key, per ("run" | "bay" | "frame"), apply ("absolute" | "relative" | "offset"),
+//                distribution ("normal" | "truncated_normal" | "uniform" | "lognormal" | "discrete")
+//                and its parameters: mean, std, lower, upper, mu, sigma, values, weights.
+// apply: absolute = the drawn value; relative = nominal * (1 + drawn); offset = nominal + drawn.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "sim/scene.hpp"
+
+namespace truss::campaign {
+
+enum class Per { run, bay, frame };
+enum class Apply { absolute, relative, offset };
+
+struct DispersionOptions {
+  std::string key;                  // scene key, "table.key"
+  Per per = Per::run;               // one draw per run, or one per bay / per frame
+  Apply apply = Apply::relative;    // how the draw changes the nominal value
+  std::string distribution;         // normal | truncated_normal | uniform | lognormal | discrete
+  double mean = 0, std = 0, lower = 0, upper = 0, mu = 0, sigma = 0;
+  std::vector<double> values, weights;  // discrete table
+  int line = 0;                     // line of the [[dispersion]] entry, for messages
+};
+
+struct EnsembleOptions {
+  std::int64_t n_runs = 100;                 // number of deployments
+  std::uint64_t master_seed = 1;             // with the run index, the only source of randomness
+  std::string sampling = "monte_carlo";      // monte_carlo | latin_hypercube | sobol | saltelli
+  double max_run_wall_time_s = 60.0;         // a run longer than this is stopped and recorded
+};
+
+struct CampaignOptions {
+  std::string name = "campaign";
+  std::string description;
+  EnsembleOptions ensemble;
+  std::string scene_file;                     // as written (may be empty: Table 1 defaults)
+  std::vector<std::string> scene_overrides;   // "table.key=value", applied to the base scene
+  sim::SceneOptions base;                     // the resolved base scene
+  std::vector<DispersionOptions> dispersions;
+};
+
+// Reads, parses and validates a campaign file; `overrides` are --set arguments ("table.key=value"
+// for campaign keys such as ensemble.n_runs, or "scene.<table>.<key>=value" for the base scene).
+// Throws io::InputError with a message naming the file, key and line.
+CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// Keys that can be dispersed, and how: per-bay keys (strut and diagonal parameters), per-frame
+// keys (frame side and mass), or once per run (everything numeric).
+bool is_bay_key(const std::string& key);
+bool is_frame_key(const std::string& key);
+bool is_dispersible_key(const std::string& key);
+
+}  // namespace truss::campaign

@@ -1,0 +1,90 @@
+// Campaign files: the shipped campaigns parse; every class of bad campaign file is an InputError
+// naming the file, the key and the line.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+
+#include "campaign/campaign.hpp"
+#include "io/scene_toml.hpp"
+
+using namespace truss::campaign;
+namespace fs = std::filesystem;
+
+namespace {
+std::string write_tmp(const std::string& name, const std::string& text) {
+  const fs::path dir = fs::temp_directory_path() / "truss_campaign_tests";
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  std::ofstream(p) << text;
+  return p.string();
+}
+std::string error_of(const std::string& path, const std::vector<std::string>& sets = {}) {
+  try {
+    parse_campaign_file(path, sets);
+  } catch (const truss::io::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST_CASE("the shipped campaigns parse", "[campaign]") {
+  const std::string root = TRUSS_SOURCE_DIR;
+  const CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
+  CHECK(t1.ensemble.n_runs == 10000);
+  CHECK(t1.ensemble.sampling == "latin_hypercube");
+  CHECK(t1.base.mast.n_bays == 30);
+  CHECK(t1.base.run.output_step_s == 0.0);
+  CHECK(t1.dispersions.size() == 8);
+  CHECK(t1.dispersions[0].per == Per::bay);
+  const CampaignOptions m = parse_campaign_file(root + "/campaigns/motor_torque.toml");
+  CHECK(m.base.drive.mode == truss::sim::DriveMode::motor);
+  CHECK(m.base.drive.stall_torque_Nm == 0.012);
+  const CampaignOptions b = parse_campaign_file(root + "/campaigns/bay_count.toml", {"ensemble.n_runs=40"});
+  CHECK(b.ensemble.n_runs == 40);
+  CHECK(b.dispersions[0].values.front() == 10);
+  CHECK(b.dispersions[0].values.back() == 60);
+  // --set of a scene key
+  const CampaignOptions s = parse_campaign_file(root + "/campaigns/bay_count.toml", {"scene.drive.mode=torque"});
+  CHECK(s.base.drive.mode == truss::sim::DriveMode::torque);
+}
+
+TEST_CASE("bad campaign files name the key and the line", "[campaign][input]") {
+  const std::string head = "[ensemble]\nn_runs = 10\nmaster_seed = 1\n";
+  struct Bad { std::string text; std::string key; int line; };
+  const Bad cases[] = {
+      {head + "colour = 3\n", "ensemble.colour", 4},                                   // unknown key
+      {head + "[extra]\nx = 1\n", "extra", 4},                                          // unknown table
+      {"[ensemble]\nn_runs = -5\n", "ensemble.n_runs", 2},                              // negative count
+      {"[ensemble]\nn_runs = 0\n", "ensemble.n_runs", 2},
+      {"[ensemble]\nsampling = \"quasi\"\n", "ensemble.sampling", 2},                  // bad enum
+      {head + "[[dispersion]]\nkey = \"mast.wing_span_m\"\ndistribution = \"normal\"\nstd = 0.1\n", "mast.wing_span_m", 4},
+      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"normal\"\nstd = -0.1\n", "std must be positive", 4},
+      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"uniform\"\nlower = 0.1\nupper = 0.0\n", "lower", 4},
+      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"truncated_normal\"\nmean = 0\nstd = 0.01\nlower = 1\nupper = 2\n",
+       "excludes all probability mass", 4},
+      {head + "[[dispersion]]\nkey = \"rail.x_m\"\nper = \"bay\"\ndistribution = \"normal\"\nstd = 0.1\n", "not a per-bay key", 4},
+      {head + "[[dispersion]]\nkey = \"mast.n_bays\"\napply = \"absolute\"\ndistribution = \"discrete\"\nvalues = [10, 12.5]\n", "integers", 4},
+      {head + "[[dispersion]]\nkey = \"mast.n_bays\"\ndistribution = \"normal\"\nstd = 1\n", "discrete", 4},
+      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"discrete\"\nvalues = [1, 2]\nweights = [1]\n", "weights", 4},
+      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"normal\"\nstd = 0.1\nmean = \"zero\"\n", "expected a number", 8},
+      {head + "[scene]\noverrides = { \"rail.beta_deg\" = 95 }\n", "rail.beta_deg", 0},
+      {head + "[ensemble\n", "", 4},                                                    // syntax error
+  };
+  int i = 0;
+  for (const Bad& b : cases) {
+    const std::string path = write_tmp("bad" + std::to_string(i++) + ".toml", b.text);
+    const std::string e = error_of(path);
+    INFO(b.text << "\n-> " << e);
+    REQUIRE(!e.empty());
+    CHECK(e.rfind("error: ", 0) == 0);
+    CHECK(e.find(path) != std::string::npos);
+    CHECK(e.find(b.key) != std::string::npos);
+    if (b.line > 0) CHECK(e.find(":" + std::to_string(b.line) + ":") != std::string::npos);
+  }
+  CHECK(error_of("/nonexistent/campaign.toml").find("cannot read") != std::string::npos);
+  const std::string ok = write_tmp("ok.toml", head);
+  CHECK(error_of(ok, {"ensemble.n_runs=-3"}).find("ensemble.n_runs") != std::string::npos);
+  CHECK(error_of(ok, {"mast.n_bays=3"}).find("--set mast.n_bays=3") != std::string::npos);
+  CHECK(error_of(ok).empty());
+}
