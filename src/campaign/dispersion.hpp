@@ -1,0 +1,39 @@
+// From a run's uniforms to its dispersed scene and mast. Each dispersion owns a fixed block of
+// sampling dimensions: 1 (per run), n_max (per bay) or n_max + 1 (per frame), n_max the largest
+// bay count the campaign can draw, so that a run's draws depend only on (seed, run index) and
+// never on the bay count drawn for it: bay k gets the same draw in a 10-bay and a 60-bay run.
+#pragma once
+#include <vector>
+
+#include "campaign/campaign.hpp"
+#include "campaign/sampling.hpp"
+#include "model/params.hpp"
+
+namespace truss::campaign {
+
+struct DimensionLayout {
+  std::vector<int> offset;  // first dimension of each dispersion
+  std::vector<int> count;   // its number of dimensions
+  int total = 0;            // dimensions per run
+  int n_bays_max = 0;       // largest bay count a run can have
+  std::vector<Distribution> distributions;  // one per dispersion, built once
+};
+
+// Throws std::invalid_argument naming the dispersion if a distribution is unusable (the campaign
+// parser has already rejected such files with file:line messages).
+DimensionLayout calc_layout(const CampaignOptions& c);
+
+Distribution make_distribution(const DispersionOptions& d);
+
+struct RunInputs {
+  sim::SceneOptions scene;               // base scene with the per-run draws applied
+  model::MastParams mast;                // per-bay and per-frame values applied
+  // Sampled values per dispersion: 1 entry (per run) or n_max / n_max + 1 entries (per bay /
+  // frame), NaN for bays or frames beyond the run's bay count. In the key's own units.
+  std::vector<std::vector<double>> values;
+};
+
+// u: layout.total uniforms of one run.
+RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& layout, const double* u);
+
+}  // namespace truss::campaign

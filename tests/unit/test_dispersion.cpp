@@ -1,0 +1,90 @@
+// Dispersions: the dimension layout, the mapping from uniforms to a run's scene and mast, and
+// that dispersed runs simulate (every run of a small Table-1 campaign ends ok, energy balanced).
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <vector>
+
+#include "campaign/dispersion.hpp"
+#include "campaign/sampling.hpp"
+#include "sim/simulate.hpp"
+
+using namespace truss::campaign;
+
+TEST_CASE("dimension layout: per-bay and per-frame keys own n_max and n_max + 1 dimensions", "[dispersion]") {
+  const std::string root = TRUSS_SOURCE_DIR;
+  const CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
+  const DimensionLayout L = calc_layout(t1);
+  CHECK(L.n_bays_max == 30);
+  // bay keys: mass, stiffness, strut length, free length (4 x 30); frame keys: mass, side (2 x 31); rail x, y
+  CHECK(L.total == 4 * 30 + 2 * 31 + 2);
+  const CampaignOptions bc = parse_campaign_file(root + "/campaigns/bay_count.toml");
+  const DimensionLayout Lb = calc_layout(bc);
+  CHECK(Lb.n_bays_max == 60);
+  CHECK(Lb.total == 1 + 60);
+}
+
+TEST_CASE("uniforms map to the dispersed values through the inverse CDFs", "[dispersion]") {
+  const std::string root = TRUSS_SOURCE_DIR;
+  const CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
+  const DimensionLayout L = calc_layout(t1);
+  std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);  // medians: every draw at its nominal
+  RunInputs in = calc_run_inputs(t1, L, u.data());
+  CHECK(in.mast.bay(7).strut_mass_kg == Approx(0.1).epsilon(1e-15));
+  CHECK(in.mast.bay(7).strut_length_m == Approx(0.18).epsilon(1e-15));
+  CHECK(in.scene.rail.x_m == Approx(0.08).epsilon(1e-15));
+  // one sigma up on the strut mass of bay 3 only: 0.1 (1 + 0.05 / 3)
+  const double one_sigma = 0.5 * std::erfc(-1.0 / std::sqrt(2.0));
+  u[static_cast<std::size_t>(L.offset[0] + 2)] = one_sigma;
+  in = calc_run_inputs(t1, L, u.data());
+  CHECK(in.mast.bay(3).strut_mass_kg == Approx(0.1 * (1 + 0.05 / 3)).epsilon(1e-12));
+  CHECK(in.mast.bay(4).strut_mass_kg == Approx(0.1).epsilon(1e-15));
+  CHECK(in.values[0][2] == in.mast.bay(3).strut_mass_kg);
+  // J_c follows the dispersed strut (slender rod) when it is not given
+  CHECK(in.mast.bay(3).strut_inertia_kg_m2 == Approx(in.mast.bay(3).strut_mass_kg * 0.18 * 0.18 / 12).epsilon(1e-12));
+  // uniform tolerance at u -> 1: +0.5 mm on the strut length of bay 5
+  u[static_cast<std::size_t>(L.offset[3] + 4)] = 1.0 - 1e-12;
+  in = calc_run_inputs(t1, L, u.data());
+  CHECK(in.mast.bay(5).strut_length_m == Approx(0.1805).epsilon(1e-9));
+}
+
+TEST_CASE("a drawn bay count sizes the mast; bays beyond it are NaN in the inputs", "[dispersion]") {
+  const std::string root = TRUSS_SOURCE_DIR;
+  const CampaignOptions bc = parse_campaign_file(root + "/campaigns/bay_count.toml");
+  const DimensionLayout L = calc_layout(bc);
+  std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);
+  u[0] = 0.01;  // first of 11 equally weighted values
+  RunInputs in = calc_run_inputs(bc, L, u.data());
+  CHECK(in.mast.n_bays() == 10);
+  CHECK(in.values[0][0] == 10);
+  CHECK(std::isfinite(in.values[1][9]));
+  CHECK(std::isnan(in.values[1][10]));
+  u[0] = 0.99;
+  in = calc_run_inputs(bc, L, u.data());
+  CHECK(in.mast.n_bays() == 60);
+}
+
+TEST_CASE("dispersed Table-1 runs simulate and balance energy; draws depend on the run index only", "[dispersion]") {
+  const std::string root = TRUSS_SOURCE_DIR;
+  CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml", {"ensemble.n_runs=24"});
+  const DimensionLayout L = calc_layout(t1);
+  const SamplePlan plan(SamplingMethod::latin_hypercube, t1.ensemble.n_runs, L.total, t1.ensemble.master_seed);
+  REQUIRE(plan.validate().empty());
+  std::vector<double> u(static_cast<std::size_t>(L.total)), u2(u.size());
+  double min_mass = 1e9, max_mass = 0;
+  for (std::int64_t i = t1.ensemble.n_runs - 1; i >= 0; --i) {  // any order gives the same draws
+    plan.calc_uniforms(i, u.data());
+    plan.calc_uniforms(i, u2.data());
+    REQUIRE(u == u2);
+    const RunInputs in = calc_run_inputs(t1, L, u.data());
+    const auto r = truss::sim::simulate(in.scene, in.mast);
+    INFO("run " << i << ": " << r.message);
+    REQUIRE(r.status == truss::sim::RunStatus::ok);
+    CHECK(std::abs(r.energy_residual_J) < 1e-12 * r.drive_work_J);
+    for (const auto& b : in.mast.bays) { min_mass = std::min(min_mass, b.strut_mass_kg); max_mass = std::max(max_mass, b.strut_mass_kg); }
+  }
+  // +-5 % at 3 sigma: 24 x 30 draws spread over a few sigma, never beyond ~ +-10 %
+  CHECK(min_mass < 0.1 * (1 - 0.02));
+  CHECK(max_mass > 0.1 * (1 + 0.02));
+  CHECK(min_mass > 0.09);
+  CHECK(max_mass < 0.11);
+}
