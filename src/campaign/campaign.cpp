@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "campaign/dispersion.hpp"
 #include "io/scene_toml.hpp"
 
 namespace truss::campaign {
@@ -188,6 +189,9 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
       bad(fmt::format("'weights' has {} entries for {} values", d.weights.size(), d.values.size()));
     for (double w : d.weights) if (!(w > 0.0 && std::isfinite(w))) bad(fmt::format("weights must be positive, got {}", w));
   }
+  // The sampling library's own checks (non-finite parameters, repeated discrete values, ...):
+  // whatever the messages above do not cover still gets the file and line.
+  if (const std::string e = make_distribution(d).validate(); !e.empty()) bad(e);
   if (K == "mast.n_bays") {
     if (d.distribution != "discrete" || d.apply != Apply::absolute || d.per != Per::run)
       c.fail(&t, where + ": mast.n_bays is an integer: disperse it with distribution = \"discrete\", apply = \"absolute\", per = \"run\"");
