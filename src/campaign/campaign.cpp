@@ -11,6 +11,7 @@
 
 #include "campaign/dispersion.hpp"
 #include "io/scene_toml.hpp"
+#include "campaign/sampling.hpp"
 
 namespace truss::campaign {
 
@@ -117,7 +118,18 @@ std::string toml_value_text(const toml::node& v) {
   return ss.str();
 }
 
+std::string where_of(const Ctx& c, const toml::node& n) {
+  return n.source().begin.line > 0 ? fmt::format("{}:{}", c.file, n.source().begin.line) : c.file;
+}
+
+// [scene]: file, overrides, and the scene inline as [scene.<table>] tables. Inline keys and
+// overrides become settings that carry their file:line, so the scene parser's messages name them.
 void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
+  const auto tables = io::known_scene_keys();
+  auto is_scene_table = [&](std::string_view name) {
+    return std::any_of(tables.begin(), tables.end(), [&](const std::string& k) { return k.substr(0, k.find('.')) == name; });
+  };
+  std::vector<io::SceneSetting> inline_settings, override_settings;
   for (const auto& [k, v] : t) {
     const std::string key = "scene." + std::string(k.str());
     if (k == "file") {
@@ -125,9 +137,40 @@ void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
     } else if (k == "overrides") {
       const toml::table* ov = v.as_table();
       if (!ov) c.fail(&v, key + ": expected a table of \"table.key\" = value");
-      for (const auto& [ok, ovv] : *ov) o.scene_overrides.push_back(std::string(ok.str()) + "=" + toml_value_text(ovv));
+      for (const auto& [ok, ovv] : *ov)
+        override_settings.push_back({std::string(ok.str()) + "=" + toml_value_text(ovv), where_of(c, ovv)});
+    } else if (is_scene_table(k.str())) {
+      const toml::table* st = v.as_table();
+      if (!st) c.fail(&v, fmt::format("{}: expected a table ([{}])", key, key));
+      for (const auto& [sk, sv] : *st)
+        inline_settings.push_back({std::string(k.str()) + "." + std::string(sk.str()) + "=" + toml_value_text(sv), where_of(c, sv)});
     } else {
-      c.fail(&v, fmt::format("unknown key '{}' (known: scene.file, scene.overrides)", key));
+      c.fail(&v, fmt::format("unknown key '{}' (known: scene.file, scene.overrides, and scene tables [scene.mast], "
+                             "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run])", key));
+    }
+  }
+  o.scene_settings = inline_settings;
+  o.scene_settings.insert(o.scene_settings.end(), override_settings.begin(), override_settings.end());
+}
+
+void parse_output_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
+  for (const auto& [k, v] : t) {
+    const std::string key = "output." + std::string(k.str());
+    if (k == "history_runs") {
+      const toml::array* a = v.as_array();
+      if (!a) c.fail(&v, key + ": expected an array of run indices");
+      o.output.history_runs.clear();
+      for (const auto& e : *a) {
+        auto i = e.value_exact<std::int64_t>();
+        if (!i || *i < 0) c.fail(&e, key + ": run indices are integers >= 0");
+        o.output.history_runs.push_back(*i);
+      }
+    } else if (k == "history_step_s") {
+      const double h = get_number(c, v, key);
+      if (!(h > 0.0 && std::isfinite(h))) c.fail(&v, fmt::format("{}: must be positive, got {}", key, h));
+      o.output.history_step_s = h;
+    } else {
+      c.fail(&v, fmt::format("unknown key '{}' (known: output.history_runs, output.history_step_s)", key));
     }
   }
 }
@@ -207,6 +250,104 @@ bool is_bay_key(const std::string& key) { return kBayKeys.count(key) > 0; }
 bool is_frame_key(const std::string& key) { return kFrameKeys.count(key) > 0; }
 bool is_dispersible_key(const std::string& key) { return is_bay_key(key) || is_frame_key(key) || kRunKeys.count(key) > 0; }
 
+namespace {
+
+CampaignOptions parse_campaign_root(toml::table root, const Ctx& c, const std::string& base_dir,
+                                    const std::vector<std::string>& overrides) {
+  const std::string& path = c.file;
+  // --set overrides: campaign keys go into the TOML tree (so they are checked like file keys),
+  // scene keys ("scene.table.key=v") go to the scene parser.
+  std::vector<io::SceneSetting> scene_sets;
+  for (const std::string& arg : overrides) {
+    const auto eq = arg.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("error: --set {}: expected table.key=value", arg));
+    const std::string key = arg.substr(0, eq), value = arg.substr(eq + 1);
+    if (key.rfind("scene.", 0) == 0) { scene_sets.push_back({key.substr(6) + "=" + value, {}}); continue; }
+    const auto dot = key.find('.');
+    const std::string tname = dot == std::string::npos ? key : key.substr(0, dot);
+    if (dot == std::string::npos || (tname != "ensemble" && tname != "campaign" && tname != "output"))
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.* and scene.<table>.<key> can be set", arg));
+    toml::table v = parse_override_value(value);
+    const std::string kname = key.substr(dot + 1);
+    if (!root.contains(tname)) root.insert(tname, toml::table{});
+    toml::table* t = root[tname].as_table();
+    if (!t) throw InputError(fmt::format("error: --set {}: '{}' is not a table in {}", arg, tname, path));
+    t->insert_or_assign(kname, *v.get("v"));
+  }
+
+  CampaignOptions o;
+  for (const auto& [k, v] : root) {
+    if (k == "campaign" || k == "ensemble" || k == "scene" || k == "output") {
+      const toml::table* t = v.as_table();
+      if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
+      if (k == "campaign") parse_campaign_table(c, *t, o);
+      else if (k == "ensemble") parse_ensemble_table(c, *t, o);
+      else if (k == "output") parse_output_table(c, *t, o);
+      else parse_scene_table(c, *t, o);
+    } else if (k == "dispersion") {
+      const toml::array* a = v.as_array();
+      if (!a || !a->is_array_of_tables()) c.fail(&v, "'dispersion' must be an array of tables: [[dispersion]]");
+      for (std::size_t i = 0; i < a->size(); ++i) o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
+    } else {
+      c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, output, scene, [[dispersion]])", k.str()));
+    }
+  }
+  // Base scene: file relative to the campaign file, then inline tables, overrides, --set scene.*.
+  std::vector<io::SceneSetting> sets = o.scene_settings;
+  sets.insert(sets.end(), scene_sets.begin(), scene_sets.end());
+  if (!o.scene_file.empty()) {
+    std::filesystem::path p(o.scene_file);
+    if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
+    o.base = io::parse_scene_file_with(p.string(), sets);
+  } else {
+    o.base = io::parse_scene_text_with("", path + " [scene]", sets);
+  }
+  // Campaign runs never record histories (only [output] history_runs do): work nobody reads.
+  o.base.run.output_step_s = 0.0;
+  // Two dispersions of one key would silently overwrite each other.
+  for (std::size_t i = 0; i < o.dispersions.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (o.dispersions[i].key == o.dispersions[j].key)
+        throw InputError(fmt::format("error: {}:{}: dispersion[{}].key: \"{}\" is already dispersed at line {}", path,
+                                     o.dispersions[i].line, i + 1, o.dispersions[i].key, o.dispersions[j].line));
+  const toml::node* n_runs_node = root["ensemble"]["n_runs"].node();
+  if (o.ensemble.sampling == "saltelli") {
+    if (o.dispersions.empty()) c.fail(root["ensemble"]["sampling"].node(), "ensemble.sampling: saltelli needs at least one [[dispersion]]");
+    const std::int64_t b = saltelli_block_runs(o);
+    if (o.ensemble.n_runs % b != 0 || o.ensemble.n_runs < 2 * b)
+      c.fail(n_runs_node, fmt::format("ensemble.n_runs: saltelli sampling runs blocks of {} runs (A, B and one per dispersion); "
+                                      "n_runs must be a multiple of {} and at least {}, got {} (e.g. {})",
+                                      b, b, 2 * b, o.ensemble.n_runs, std::max<std::int64_t>(2, o.ensemble.n_runs / b) * b));
+  }
+  if (o.ensemble.sampling == "sobol" || o.ensemble.sampling == "latin_hypercube" || o.ensemble.sampling == "monte_carlo") {
+    const SamplePlan plan(o.ensemble.sampling == "sobol" ? SamplingMethod::sobol
+                          : o.ensemble.sampling == "latin_hypercube" ? SamplingMethod::latin_hypercube
+                                                                    : SamplingMethod::monte_carlo,
+                          o.ensemble.n_runs, std::max(1, calc_layout(o).total), o.ensemble.master_seed);
+    if (const std::string e = plan.validate(); !e.empty()) c.fail(n_runs_node, "ensemble: " + e);
+  }
+  for (std::int64_t r : o.output.history_runs)
+    if (r >= o.ensemble.n_runs)
+      c.fail(root["output"]["history_runs"].node(),
+             fmt::format("output.history_runs: run {} does not exist (n_runs = {})", r, o.ensemble.n_runs));
+  return o;
+}
+
+}  // namespace
+
+CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name, const std::string& base_dir,
+                                    const std::vector<std::string>& overrides) {
+  Ctx c{source_name};
+  toml::table root;
+  try {
+    root = toml::parse(text, source_name);
+  } catch (const toml::parse_error& e) {
+    const auto& b = e.source().begin;
+    throw InputError(fmt::format("error: {}:{}:{}: {}", source_name, b.line, b.column, e.description()));
+  }
+  return parse_campaign_root(std::move(root), c, base_dir, overrides);
+}
+
 CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides) {
   Ctx c{path};
   toml::table root;
@@ -217,58 +358,63 @@ CampaignOptions parse_campaign_file(const std::string& path, const std::vector<s
     if (b.line == 0) throw InputError(fmt::format("error: {}: cannot read the campaign file: {}", path, e.description()));
     throw InputError(fmt::format("error: {}:{}:{}: {}", path, b.line, b.column, e.description()));
   }
-  // --set overrides: campaign keys go into the TOML tree (so they are checked like file keys),
-  // scene keys ("scene.table.key=v") go to the scene parser.
-  std::vector<std::string> scene_sets;
-  for (const std::string& arg : overrides) {
-    const auto eq = arg.find('=');
-    if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("error: --set {}: expected table.key=value", arg));
-    const std::string key = arg.substr(0, eq), value = arg.substr(eq + 1);
-    if (key.rfind("scene.", 0) == 0) { scene_sets.push_back(key.substr(6) + "=" + value); continue; }
-    const auto dot = key.find('.');
-    if (dot == std::string::npos || (key.substr(0, dot) != "ensemble" && key.substr(0, dot) != "campaign"))
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.* and scene.<table>.<key> can be set", arg));
-    toml::table v = parse_override_value(value);
-    const std::string tname = key.substr(0, dot), kname = key.substr(dot + 1);
-    if (!root.contains(tname)) root.insert(tname, toml::table{});
-    toml::table* t = root[tname].as_table();
-    if (!t) throw InputError(fmt::format("error: --set {}: '{}' is not a table in {}", arg, tname, path));
-    t->insert_or_assign(kname, *v.get("v"));
-  }
+  return parse_campaign_root(std::move(root), c, std::filesystem::path(path).parent_path().string(), overrides);
+}
 
-  CampaignOptions o;
-  for (const auto& [k, v] : root) {
-    if (k == "campaign" || k == "ensemble" || k == "scene") {
-      const toml::table* t = v.as_table();
-      if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
-      if (k == "campaign") parse_campaign_table(c, *t, o);
-      else if (k == "ensemble") parse_ensemble_table(c, *t, o);
-      else parse_scene_table(c, *t, o);
-    } else if (k == "dispersion") {
-      const toml::array* a = v.as_array();
-      if (!a || !a->is_array_of_tables()) c.fail(&v, "'dispersion' must be an array of tables: [[dispersion]]");
-      for (std::size_t i = 0; i < a->size(); ++i) o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
-    } else {
-      c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, scene, [[dispersion]])", k.str()));
+namespace {
+
+std::string toml_str(const std::string& s) {
+  std::ostringstream ss;
+  ss << toml::value<std::string>(s);
+  return ss.str();
+}
+
+// Shortest text that reads back to the same double, always with a '.' or an exponent.
+std::string toml_num(double v) {
+  std::string t = fmt::format("{}", v);
+  if (t.find_first_of(".eEni") == std::string::npos) t += ".0";
+  return t;
+}
+
+std::string toml_nums(const std::vector<double>& v) {
+  std::string t = "[";
+  for (std::size_t i = 0; i < v.size(); ++i) t += (i ? ", " : "") + toml_num(v[i]);
+  return t + "]";
+}
+
+const char* per_name(Per p) { return p == Per::run ? "run" : p == Per::bay ? "bay" : "frame"; }
+const char* apply_name(Apply a) { return a == Apply::absolute ? "absolute" : a == Apply::relative ? "relative" : "offset"; }
+
+}  // namespace
+
+std::string resolved_campaign_toml(const CampaignOptions& c) {
+  std::string t = "# Resolved campaign: every value used, the base scene inline.\n[campaign]\n";
+  t += fmt::format("name = {}\ndescription = {}\n\n[ensemble]\n", toml_str(c.name), toml_str(c.description));
+  t += fmt::format("n_runs = {}\nmaster_seed = {}\nsampling = {}\nmax_run_wall_time_s = {}\n\n", c.ensemble.n_runs,
+                   c.ensemble.master_seed, toml_str(c.ensemble.sampling), toml_num(c.ensemble.max_run_wall_time_s));
+  t += "[output]\nhistory_runs = [";
+  for (std::size_t i = 0; i < c.output.history_runs.size(); ++i) t += fmt::format("{}{}", i ? ", " : "", c.output.history_runs[i]);
+  t += fmt::format("]\nhistory_step_s = {}\n\n", toml_num(c.output.history_step_s));
+  // The scene in the single-run format, its tables moved under [scene.].
+  std::istringstream scene(io::resolved_scene_toml(c.base));
+  for (std::string line; std::getline(scene, line);) {
+    if (!line.empty() && line[0] == '[') line = "[scene." + line.substr(1);
+    t += line + "\n";
+  }
+  for (const auto& d : c.dispersions) {
+    t += fmt::format("\n[[dispersion]]\nkey = {}\nper = \"{}\"\napply = \"{}\"\ndistribution = {}\n", toml_str(d.key),
+                     per_name(d.per), apply_name(d.apply), toml_str(d.distribution));
+    if (d.distribution == "normal" || d.distribution == "truncated_normal")
+      t += fmt::format("mean = {}\nstd = {}\n", toml_num(d.mean), toml_num(d.std));
+    if (d.distribution == "truncated_normal" || d.distribution == "uniform")
+      t += fmt::format("lower = {}\nupper = {}\n", toml_num(d.lower), toml_num(d.upper));
+    if (d.distribution == "lognormal") t += fmt::format("mu = {}\nsigma = {}\n", toml_num(d.mu), toml_num(d.sigma));
+    if (d.distribution == "discrete") {
+      t += "values = " + toml_nums(d.values) + "\n";
+      if (!d.weights.empty()) t += "weights = " + toml_nums(d.weights) + "\n";
     }
   }
-  // Base scene: file relative to the campaign file, then its overrides, then --set scene.*.
-  std::vector<std::string> sets = o.scene_overrides;
-  sets.insert(sets.end(), scene_sets.begin(), scene_sets.end());
-  if (!o.scene_file.empty()) {
-    std::filesystem::path p(o.scene_file);
-    if (p.is_relative()) p = std::filesystem::path(path).parent_path() / p;
-    o.base = io::parse_scene_file(p.string(), sets);
-  } else {
-    o.base = io::parse_scene_text("", path + " [scene]", sets);
-  }
-  // Two dispersions of one key would silently overwrite each other.
-  for (std::size_t i = 0; i < o.dispersions.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j)
-      if (o.dispersions[i].key == o.dispersions[j].key)
-        throw InputError(fmt::format("error: {}:{}: dispersion[{}].key: \"{}\" is already dispersed at line {}", path,
-                                     o.dispersions[i].line, i + 1, o.dispersions[i].key, o.dispersions[j].line));
-  return o;
+  return t;
 }
 
 }  // namespace truss::campaign

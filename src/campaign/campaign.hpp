@@ -5,8 +5,10 @@
 //   [campaign]   name, description
 //   [ensemble]   n_runs, master_seed, sampling ("monte_carlo" | "latin_hypercube" | "sobol" |
 //                "saltelli"), max_run_wall_time_s
+//   [output]     history_runs = [run indices], history_step_s (decimated histories stored)
 //   [scene]      file (path relative to the campaign file; default: Table 1 defaults),
-//                overrides = { "drive.mode" = "motor", ... }
+//                overrides = { "drive.mode" = "motor", ... }, and/or the scene inline as
+//                [scene.mast], [scene.drive], ... tables (applied after the file, before overrides)
 //   [[dispersion]] key, per ("run" | "bay" | "frame"), apply ("absolute" | "relative" | "offset"),
 //                distribution ("normal" | "truncated_normal" | "uniform" | "lognormal" | "discrete")
 //                and its parameters: mean, std, lower, upper, mu, sigma, values, weights.
@@ -16,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "io/scene_toml.hpp"
 #include "sim/scene.hpp"
 
 namespace truss::campaign {
@@ -40,12 +43,18 @@ struct EnsembleOptions {
   double max_run_wall_time_s = 60.0;         // a run longer than this is stopped and recorded
 };
 
+struct OutputOptions {
+  std::vector<std::int64_t> history_runs;    // runs whose time histories are stored; none by default
+  double history_step_s = 0.01;              // their sample step: 100 Hz resolves the lock transients
+};
+
 struct CampaignOptions {
   std::string name = "campaign";
   std::string description;
   EnsembleOptions ensemble;
   std::string scene_file;                     // as written (may be empty: Table 1 defaults)
-  std::vector<std::string> scene_overrides;   // "table.key=value", applied to the base scene
+  OutputOptions output;
+  std::vector<io::SceneSetting> scene_settings;  // inline tables, overrides and --set, in order
   sim::SceneOptions base;                     // the resolved base scene
   std::vector<DispersionOptions> dispersions;
 };
@@ -54,6 +63,18 @@ struct CampaignOptions {
 // for campaign keys such as ensemble.n_runs, or "scene.<table>.<key>=value" for the base scene).
 // Throws io::InputError with a message naming the file, key and line.
 CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides = {});
+
+// Same, for campaign text in memory; source_name names it in messages, and a relative scene.file is
+// resolved against base_dir.
+CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name, const std::string& base_dir,
+                                    const std::vector<std::string>& overrides = {});
+
+// The campaign with everything resolved, as TOML that parse_campaign_text reads back to the same
+// options: the base scene inline (every key), every dispersion with all its parameters.
+std::string resolved_campaign_toml(const CampaignOptions& c);
+
+// Runs per Saltelli block: A, B and one AB matrix per dispersion (a dispersion is one factor).
+inline std::int64_t saltelli_block_runs(const CampaignOptions& c) { return static_cast<std::int64_t>(c.dispersions.size()) + 2; }
 
 // Keys that can be dispersed, and how: per-bay keys (strut and diagonal parameters), per-frame
 // keys (frame side and mass), or once per run (everything numeric).

@@ -7,10 +7,7 @@
 
 namespace truss::campaign {
 
-namespace {
-
-// Nominal value of a scene key in the base scene (per-bay keys use the scene's single value).
-double nominal(const sim::SceneOptions& s, const std::string& k) {
+double find_nominal(const sim::SceneOptions& s, const std::string& k) {
   const auto& m = s.mast;
   if (k == "mast.n_bays") return m.n_bays;
   if (k == "mast.strut_length_m") return m.strut_length_m;
@@ -34,6 +31,19 @@ double nominal(const sim::SceneOptions& s, const std::string& k) {
   if (k == "panels.tip_height_m") return s.panels.tip_height_m.value_or(2.0 * s.mast.strut_length_m);
   return std::numeric_limits<double>::quiet_NaN();
 }
+
+std::string find_key_units(const std::string& key) {
+  static const std::pair<const char*, const char*> suffixes[] = {
+      {"_N_per_m", "N/m"}, {"_kg_m2", "kg m^2"}, {"_m_per_s", "m/s"}, {"_rad_per_s", "rad/s"}, {"_Nm", "Nm"},
+      {"_kg", "kg"}, {"_deg", "deg"}, {"_m", "m"}, {"_s", "s"}, {"_N", "N"}};
+  for (const auto& [suffix, units] : suffixes) {
+    const std::string s(suffix);
+    if (key.size() > s.size() && key.compare(key.size() - s.size(), s.size(), s) == 0) return units;
+  }
+  return "1";
+}
+
+namespace {
 
 void set_run_key(sim::SceneOptions& s, const std::string& k, double v) {
   auto& m = s.mast;
@@ -119,7 +129,7 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
   for (std::size_t i = 0; i < c.dispersions.size(); ++i) {
     const auto& d = c.dispersions[i];
     if (d.per != Per::run) continue;
-    const double v = applied(d, nominal(c.base, d.key), L.distributions[i].calc_quantile(u[L.offset[i]]));
+    const double v = applied(d, find_nominal(c.base, d.key), L.distributions[i].calc_quantile(u[L.offset[i]]));
     in.values[i] = {v};
     set_run_key(in.scene, d.key, v);
   }

@@ -25,6 +25,12 @@ DimensionLayout calc_layout(const CampaignOptions& c);
 
 Distribution make_distribution(const DispersionOptions& d);
 
+// Nominal value of a dispersible scene key in the base scene (per-bay and per-frame keys: the
+// scene's single value). NaN for a key that is not dispersible.
+double find_nominal(const sim::SceneOptions& s, const std::string& key);
+// Units of a scene key, from its name's suffix ("_kg" -> "kg", "_N_per_m" -> "N/m"); "1" if none.
+std::string find_key_units(const std::string& key);
+
 struct RunInputs {
   sim::SceneOptions scene;               // base scene with the per-run draws applied
   model::MastParams mast;                // per-bay and per-frame values applied

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "io/h5_util.hpp"
 #include "io/json_summary.hpp"
 #include "io/scene_toml.hpp"
 
@@ -24,98 +25,8 @@ namespace truss::io {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace h5;
 constexpr std::int64_t kSchemaVersion = 1;
-
-// ---------------------------------------------------------------------------------------------
-// Errors
-
-herr_t collect_error(unsigned, const H5E_error2_t* err, void* data) {
-  auto* out = static_cast<std::vector<std::string>*>(data);
-  if (err && err->desc && *err->desc) out->emplace_back(err->desc);
-  return 0;
-}
-
-// The current HDF5 error stack as one line: the outermost and innermost descriptions.
-std::string hdf5_error_text() {
-  std::vector<std::string> descs;
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collect_error, &descs);
-  H5Eclear2(H5E_DEFAULT);
-  if (descs.empty()) return "unknown HDF5 error";
-  if (descs.size() == 1 || descs.front() == descs.back()) return descs.front();
-  return descs.front() + " (" + descs.back() + ")";
-}
-
-[[noreturn]] void throw_h5(const std::string& what) {
-  throw std::runtime_error(fmt::format("HDF5 error: {}: {}", what, hdf5_error_text()));
-}
-
-void check(herr_t status, const std::string& what) {
-  if (status < 0) throw_h5(what);
-}
-
-// Owns one HDF5 identifier.
-class Handle {
- public:
-  Handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(id), close_(close) {
-    if (id_ < 0) throw_h5(what);
-  }
-  Handle(const Handle&) = delete;
-  Handle& operator=(const Handle&) = delete;
-  Handle(Handle&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
-  Handle& operator=(Handle&&) = delete;
-  ~Handle() {
-    if (id_ >= 0) close_(id_);
-  }
-  hid_t get() const { return id_; }
-  void close(const std::string& what) {
-    const herr_t s = close_(id_);
-    id_ = -1;
-    check(s, what);
-  }
-
- private:
-  hid_t id_;
-  herr_t (*close_)(hid_t);
-};
-
-// ---------------------------------------------------------------------------------------------
-// Writers
-
-Handle scalar_space() { return Handle(H5Screate(H5S_SCALAR), H5Sclose, "create scalar dataspace"); }
-
-Handle vector_space(std::size_t n) {
-  const hsize_t dims[1] = {static_cast<hsize_t>(n)};
-  return Handle(H5Screate_simple(1, dims, nullptr), H5Sclose, "create 1-D dataspace");
-}
-
-Handle string_type() {
-  Handle t(H5Tcopy(H5T_C_S1), H5Tclose, "copy string type");
-  check(H5Tset_size(t.get(), H5T_VARIABLE), "set string size");
-  check(H5Tset_cset(t.get(), H5T_CSET_UTF8), "set string character set");
-  return t;
-}
-
-void write_string_attribute(hid_t obj, const char* name, const std::string& value) {
-  Handle type = string_type();
-  Handle space = scalar_space();
-  Handle attr(H5Acreate2(obj, name, type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
-              fmt::format("create attribute {}", name));
-  const char* p = value.c_str();
-  check(H5Awrite(attr.get(), type.get(), &p), fmt::format("write attribute {}", name));
-}
-
-void write_int_attribute(hid_t obj, const char* name, std::int64_t value) {
-  Handle space = scalar_space();
-  Handle attr(H5Acreate2(obj, name, H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT),
-              H5Aclose, fmt::format("create attribute {}", name));
-  check(H5Awrite(attr.get(), H5T_NATIVE_INT64, &value), fmt::format("write attribute {}", name));
-}
-
-Handle create_dataset(hid_t loc, const std::string& path, hid_t file_type, hid_t space) {
-  return Handle(H5Dcreate2(loc, path.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT,
-                           H5P_DEFAULT),
-                H5Dclose, fmt::format("create dataset {}", path));
-}
 
 void write_scalar(hid_t group, const std::string& gname, const char* name, const char* units,
                   const FieldValue& value) {
@@ -162,27 +73,13 @@ void write_vector(hid_t group, const std::string& gname, const char* name, const
 }
 
 void write_status(hid_t summary, const sim::RunResult& r) {
-  Handle type(H5Tenum_create(H5T_NATIVE_INT8), H5Tclose, "create status enum type");
-  for (int i = 0; i < sim::kRunStatusCount; ++i) {
-    const std::int8_t v = static_cast<std::int8_t>(i);
-    const char* name = sim::to_string(static_cast<sim::RunStatus>(i));
-    check(H5Tenum_insert(type.get(), name, &v), fmt::format("add status name '{}'", name));
-  }
+  Handle type = status_enum_type();
   Handle space = scalar_space();
   Handle ds = create_dataset(summary, "status", type.get(), space.get());
   const std::int8_t v = static_cast<std::int8_t>(r.status);
   check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, &v), "write /summary/status");
   write_string_attribute(ds.get(), "units", "1");
   write_string_attribute(ds.get(), "message", r.message);
-}
-
-std::string utc_now_iso8601() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
 }
 
 void write_contents(hid_t file, const sim::RunResult& r, const std::string& scene_toml) {
@@ -232,49 +129,6 @@ void write_contents(hid_t file, const sim::RunResult& r, const std::string& scen
       }
     }
   }
-}
-
-[[noreturn]] void throw_exists(const std::string& path) {
-  throw InputError(fmt::format("error: output file exists: {} (use --force to overwrite)", path));
-}
-
-// Flushes a finished file to disk before it is renamed into place.
-void sync_file(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw std::runtime_error(fmt::format("cannot reopen {}: {}", path, std::strerror(errno)));
-  const int rc = ::fsync(fd);
-  const int err = errno;
-  ::close(fd);
-  if (rc != 0) throw std::runtime_error(fmt::format("cannot sync {}: {}", path, std::strerror(err)));
-}
-
-// Renames tmp onto path; without force never replaces an existing path.
-void commit(const std::string& tmp, const std::string& path, bool force) {
-  if (force) {
-    if (std::rename(tmp.c_str(), path.c_str()) != 0)
-      throw std::runtime_error(
-          fmt::format("cannot rename {} to {}: {}", tmp, path, std::strerror(errno)));
-    return;
-  }
-#ifdef RENAME_NOREPLACE
-  if (::renameat2(AT_FDCWD, tmp.c_str(), AT_FDCWD, path.c_str(), RENAME_NOREPLACE) == 0) return;
-  if (errno == EEXIST) throw_exists(path);
-  if (errno != EINVAL && errno != ENOSYS && errno != ENOTSUP)
-    throw std::runtime_error(
-        fmt::format("cannot rename {} to {}: {}", tmp, path, std::strerror(errno)));
-#endif
-  // No renameat2 here: a hard link fails when the target exists.
-  if (::link(tmp.c_str(), path.c_str()) == 0) {
-    ::unlink(tmp.c_str());
-    return;
-  }
-  if (errno == EEXIST) throw_exists(path);
-  // No hard links on this file system either: check, then rename (small race window).
-  std::error_code ec;
-  if (fs::exists(fs::symlink_status(path, ec))) throw_exists(path);
-  if (std::rename(tmp.c_str(), path.c_str()) != 0)
-    throw std::runtime_error(
-        fmt::format("cannot rename {} to {}: {}", tmp, path, std::strerror(errno)));
 }
 
 }  // namespace

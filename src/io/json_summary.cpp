@@ -44,6 +44,7 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_F64(peak_pin_force_time_s, "s"),
       TRUSS_RUN_I64(peak_pin_force_bay),
       TRUSS_RUN_F64(peak_diagonal_tension_N, "N"),
+      TRUSS_RUN_F64(peak_latch_energy_J, "J"),
       TRUSS_RUN_F64(peak_driven_speed_m_per_s, "m/s"),
       TRUSS_RUN_F64(drive_work_J, "J"),
       TRUSS_RUN_F64(drive_work_smooth_J, "J"),

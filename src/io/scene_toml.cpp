@@ -357,7 +357,7 @@ struct Diag {
 // Where the value of a key came from, for validate() messages.
 struct Origin {
   std::size_t line = 0;     // > 0: the key's line in the file
-  std::string set_text;     // non-empty: the --set argument that set it last
+  std::string set_text;     // non-empty: where it was set last ("by --set k=v", "at FILE:LINE")
 };
 
 std::string trim(std::string_view s) {
@@ -409,11 +409,13 @@ void parse_table_contents(SceneOptions& s, const std::string& source, std::strin
   }
 }
 
-void apply_override(SceneOptions& s, const std::string& arg, std::size_t index,
+void apply_override(SceneOptions& s, const SceneSetting& setting, std::size_t index,
                     std::vector<Diag>& diags, std::map<std::string, Origin>& origins) {
+  const std::string& arg = setting.assignment;
   const std::size_t order = std::numeric_limits<std::size_t>::max() / 2 + index;
   auto fail = [&](const std::string& why) {
-    diags.push_back({order, 0, fmt::format("error: --set {}: {}", arg, why)});
+    if (setting.where.empty()) diags.push_back({order, 0, fmt::format("error: --set {}: {}", arg, why)});
+    else diags.push_back({order, 0, fmt::format("error: {}: {}", setting.where, why)});
   };
   const auto eq = arg.find('=');
   if (eq == std::string::npos) return fail("expected table.key=value (e.g. --set mast.n_bays=12)");
@@ -449,7 +451,7 @@ void apply_override(SceneOptions& s, const std::string& arg, std::size_t index,
     node = &as_string;
   const std::string err = apply_value(s, *d, *node);
   if (!err.empty()) return fail(err);
-  origins[d->dotted()] = Origin{0, arg};
+  origins[d->dotted()] = Origin{0, setting.where.empty() ? "by --set " + arg : "at " + setting.where};
 }
 
 std::string join_diags(std::vector<Diag> diags) {
@@ -471,7 +473,7 @@ std::string join_diags(std::vector<Diag> diags) {
 namespace {
 
 sim::SceneOptions parse_scene(std::string_view text, const std::string& source_name,
-                              const std::vector<std::string>& overrides, bool validate) {
+                              const std::vector<SceneSetting>& overrides, bool validate) {
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -515,7 +517,7 @@ sim::SceneOptions parse_scene(std::string_view text, const std::string& source_n
       throw InputError(fmt::format("error: {}:{}: {}", source_name, it->second.line, bad));
     if (it != origins.end() && !it->second.set_text.empty())
       throw InputError(
-          fmt::format("error: {}: {} (set by --set {})", source_name, bad, it->second.set_text));
+          fmt::format("error: {}: {} (set {})", source_name, bad, it->second.set_text));
     throw InputError(fmt::format("error: {}: {}", source_name, bad));
   }
   return s;
@@ -523,19 +525,37 @@ sim::SceneOptions parse_scene(std::string_view text, const std::string& source_n
 
 }  // namespace
 
+namespace {
+std::vector<SceneSetting> as_settings(const std::vector<std::string>& overrides) {
+  std::vector<SceneSetting> v;
+  for (const auto& o : overrides) v.push_back({o, {}});
+  return v;
+}
+}  // namespace
+
 sim::SceneOptions parse_scene_text(std::string_view text, const std::string& source_name,
                                    const std::vector<std::string>& overrides) {
-  return parse_scene(text, source_name, overrides, true);
+  return parse_scene(text, source_name, as_settings(overrides), true);
+}
+
+sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string& source_name,
+                                        const std::vector<SceneSetting>& settings) {
+  return parse_scene(text, source_name, settings, true);
 }
 
 sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
                                                const std::string& source_name,
                                                const std::vector<std::string>& overrides) {
-  return parse_scene(text, source_name, overrides, false);
+  return parse_scene(text, source_name, as_settings(overrides), false);
 }
 
 sim::SceneOptions parse_scene_file(const std::string& path,
                                    const std::vector<std::string>& overrides) {
+  return parse_scene_file_with(path, as_settings(overrides));
+}
+
+sim::SceneOptions parse_scene_file_with(const std::string& path,
+                                        const std::vector<SceneSetting>& overrides) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
     throw InputError(fmt::format("error: {}: cannot read scene file: is a directory", path));
@@ -550,7 +570,7 @@ sim::SceneOptions parse_scene_file(const std::string& path,
   ss << in.rdbuf();
   if (in.bad())
     throw InputError(fmt::format("error: {}: cannot read scene file: read error", path));
-  return parse_scene_text(ss.str(), path, overrides);
+  return parse_scene(ss.str(), path, overrides, true);
 }
 
 std::vector<std::string> known_scene_keys() {

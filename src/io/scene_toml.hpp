@@ -30,6 +30,17 @@ sim::SceneOptions parse_scene_file(const std::string& path,
 sim::SceneOptions parse_scene_text(std::string_view text, const std::string& source_name,
                                    const std::vector<std::string>& overrides = {});
 
+// A scene key set outside the scene file: `assignment` is "table.key=value"; `where` names its
+// origin in messages ("FILE:LINE" of a campaign file), empty for a command-line --set.
+struct SceneSetting {
+  std::string assignment;
+  std::string where;
+};
+// As parse_scene_file / parse_scene_text, with settings that carry their origin.
+sim::SceneOptions parse_scene_file_with(const std::string& path, const std::vector<SceneSetting>& settings);
+sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string& source_name,
+                                        const std::vector<SceneSetting>& settings);
+
 // As parse_scene_text but without SceneOptions::validate(): checks syntax, keys, types and
 // enumeration values only. For tools that change the options further and validate afterwards.
 sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,

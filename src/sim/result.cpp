@@ -14,6 +14,7 @@ const char* to_string(RunStatus s) {
     case RunStatus::singular_configuration: return "singular configuration";
     case RunStatus::step_limit: return "step limit";
     case RunStatus::invalid_input: return "invalid input";
+    case RunStatus::wall_time_limit: return "wall-time limit";
   }
   return "?";
 }

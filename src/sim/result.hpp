@@ -7,9 +7,11 @@
 
 namespace truss::sim {
 
-enum class RunStatus { ok, rail_miss, stall, singular_configuration, step_limit, invalid_input };
+// wall_time_limit: the run was stopped by its wall-time cap (RunOptions::max_wall_time_s); unlike
+// the other statuses it depends on the machine, not only on the inputs.
+enum class RunStatus { ok, rail_miss, stall, singular_configuration, step_limit, invalid_input, wall_time_limit };
 const char* to_string(RunStatus);
-constexpr int kRunStatusCount = 6;
+constexpr int kRunStatusCount = 7;
 
 struct BayResult {
   int bay = 0;                         // bay index i = 1..n
@@ -64,6 +66,7 @@ struct RunResult {
   double peak_pin_force_time_s = NAN_INIT();
   int peak_pin_force_bay = 0;
   double peak_diagonal_tension_N = NAN_INIT();
+  double peak_latch_energy_J = NAN_INIT();  // largest latch energy of any bay (deploy) / unlock (retract)
   double peak_driven_speed_m_per_s = NAN_INIT();
 
   double drive_work_J = 0.0;              // smooth part + impulses

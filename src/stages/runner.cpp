@@ -575,7 +575,7 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
                                                "of bay {} before its {}", p_end.y_driven_m, t, m,
                                                dir > 0 ? "lock" : "end"));
           else if (obs.timed_out)
-            fail(RunStatus::step_limit, fmt::format("wall-time cap of {} s reached at t = {:.9g} s (bay {})", opts.max_wall_time_s, t, m));
+            fail(RunStatus::wall_time_limit, fmt::format("wall-time cap of {} s reached at t = {:.9g} s (bay {})", opts.max_wall_time_s, t, m));
           else if (sum.status == integrators::IntegratorStatus::step_limit || sum.status == integrators::IntegratorStatus::reached_end)
             fail(RunStatus::step_limit, fmt::format("step cap of {} steps reached at t = {:.9g} s (bay {})", opts.max_steps, t, m));
           else
@@ -704,6 +704,8 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
   r.peak_pin_force_time_s = tr.run[kPin].t;
   r.peak_pin_force_bay = tr.run[kPin].bay;
   r.peak_diagonal_tension_N = fin(tr.run[kTension].value);
+  for (const auto& b : r.bays)
+    if (std::isfinite(b.latch_energy_J) && !(b.latch_energy_J <= r.peak_latch_energy_J)) r.peak_latch_energy_J = b.latch_energy_J;
   r.peak_driven_speed_m_per_s = fin(tr.run[kSpeed].value);
   r.max_rail_residual_m = tr.max_rail_residual;
 

@@ -1,0 +1,11 @@
+// truss-campaign: MPI entry point. Everything else is in src/parallel/campaign_driver.cpp.
+#include <mpi.h>
+
+#include "parallel/campaign_driver.hpp"
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  const int status = truss::parallel::run_campaign_command(argc, argv, MPI_COMM_WORLD);
+  MPI_Finalize();
+  return status;
+}

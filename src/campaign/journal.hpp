@@ -1,0 +1,62 @@
+// The journal of a running campaign: an append-only file of framed records, each with its length
+// and a CRC-32, behind a header holding the resolved campaign text. Rank 0 appends every finished
+// run and flushes at least every few seconds. HDF5 1.10 files are not crash-safe while open for
+// writing; a journal is: after kill -9 or a power cut, every complete record is still valid and a
+// torn last record fails its CRC and is dropped. `truss-campaign --resume` reads it back.
+//
+// Layout (little-endian): "TRUSSJNL" u32 version, u32 text length, text, u32 CRC-32 of the text;
+// then frames: u8 kind, u32 payload length, u32 CRC-32 of kind + payload, payload.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <stdexcept>
+#include <string_view>
+#include <vector>
+
+namespace truss::campaign {
+
+enum class FrameKind : std::uint8_t {
+  run = 'R',       // a RunRecord
+  session = 'S',   // an invocation started: f64 unix time, i32 rank count
+  heartbeat = 'H'  // f64 wall time of the current invocation so far (s)
+};
+
+struct JournalFrame {
+  FrameKind kind;
+  std::string payload;
+};
+
+class Journal {
+ public:
+  // Creates a new journal (fails if `path` exists) holding `campaign_text`.
+  static Journal create(const std::string& path, const std::string& campaign_text);
+  // Opens an existing journal for appending after reading its frames into `frames`. A torn or
+  // corrupt tail is cut off (the file is truncated at the last good frame). Throws
+  // std::runtime_error if the header is unreadable, and JournalMismatch if it holds a different
+  // campaign text.
+  static Journal resume(const std::string& path, const std::string& campaign_text, std::vector<JournalFrame>& frames,
+                        std::size_t& dropped_bytes);
+  Journal(Journal&&) noexcept;
+  Journal& operator=(Journal&&) = delete;
+  Journal(const Journal&) = delete;
+  ~Journal();
+
+  void append(FrameKind kind, std::string_view payload);  // buffered
+  void flush();           // write() the buffer and fdatasync: on disk from now on
+  void close_and_remove();  // after the results file is in place
+  const std::string& path() const { return path_; }
+
+ private:
+  Journal(std::string path, int fd) : path_(std::move(path)), fd_(fd) {}
+  std::string path_;
+  int fd_ = -1;
+  std::string buffer_;
+};
+
+struct JournalMismatch : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+std::uint32_t crc32_of(std::string_view bytes);
+
+}  // namespace truss::campaign

@@ -1,0 +1,132 @@
+#include "campaign/results.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace truss::campaign {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::uint64_t kBootstrapTag = 0x53454e53495449ULL;  // "SENSITI": bootstrap seed offset
+}
+
+ResultTable::ResultTable(std::int64_t n_runs, const OutputColumns& cols) : n_(n_runs), cols_(cols) {
+  const auto n = static_cast<std::size_t>(n_runs);
+  status.assign(n, 0);
+  message.assign(n, {});
+  f64.assign(cols.f64.size(), std::vector<double>(n, kNaN));
+  i64.assign(cols.i64.size(), std::vector<std::int64_t>(n, 0));
+  bays.assign(cols.bay.size(), std::vector<double>(n * static_cast<std::size_t>(cols.n_bays_max), kNaN));
+  inputs.assign(n * static_cast<std::size_t>(cols.n_inputs), kNaN);
+  wall_time_s.assign(n, kNaN);
+  rank.assign(n, -1);
+  session.assign(n, -1);
+  done_.assign(n, 0);
+}
+
+void ResultTable::add(const RunRecord& r, int sess) {
+  if (r.run_index < 0 || r.run_index >= n_) throw std::runtime_error(fmt::format("run index {} out of range", r.run_index));
+  const auto i = static_cast<std::size_t>(r.run_index);
+  if (done_[i]) throw std::runtime_error(fmt::format("run {} received twice", r.run_index));
+  done_[i] = 1;
+  ++n_done_;
+  if (r.status != sim::RunStatus::ok) ++n_failed_;
+  status[i] = static_cast<std::int8_t>(r.status);
+  message[i] = r.message;
+  for (std::size_t c = 0; c < f64.size(); ++c) f64[c][i] = r.f64[c];
+  for (std::size_t c = 0; c < i64.size(); ++c) i64[c][i] = r.i64[c];
+  const auto nb = static_cast<std::size_t>(cols_.n_bays_max);
+  for (std::size_t c = 0; c < bays.size(); ++c) std::copy_n(r.bays.begin() + static_cast<std::ptrdiff_t>(c * nb), nb, bays[c].begin() + static_cast<std::ptrdiff_t>(i * nb));
+  std::copy(r.inputs.begin(), r.inputs.end(), inputs.begin() + static_cast<std::ptrdiff_t>(i * static_cast<std::size_t>(cols_.n_inputs)));
+  wall_time_s[i] = r.wall_time_s;
+  rank[i] = r.rank;
+  session[i] = sess;
+}
+
+double calc_percentile_sorted(const std::vector<double>& x, double q) {
+  if (x.empty()) return kNaN;
+  // numpy 1.22+ "linear": virtual index h = q/100 (n - 1), lerp(a, b, t) = a + t (b - a) for
+  // t < 0.5 and b - (1 - t) (b - a) otherwise (exact at both ends).
+  const double h = (q / 100.0) * static_cast<double>(x.size() - 1);
+  const double fl = std::floor(h);
+  const auto lo = static_cast<std::size_t>(fl);
+  const std::size_t hi = std::min(lo + 1, x.size() - 1);
+  const double t = h - fl;
+  const double a = x[lo], b = x[hi], d = b - a;
+  return t >= 0.5 ? b - d * (1.0 - t) : a + d * t;
+}
+
+Stats calc_stats(const std::vector<double>& values, const std::vector<std::uint8_t>& use) {
+  std::vector<double> x;
+  x.reserve(values.size());
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (use[i] && std::isfinite(values[i])) x.push_back(values[i]);
+  Stats s;
+  s.count = static_cast<std::int64_t>(x.size());
+  if (x.empty()) {
+    s.mean = s.std = s.min = s.max = kNaN;
+    s.percentiles.fill(kNaN);
+    return s;
+  }
+  double sum = 0.0;
+  for (double v : x) sum += v;
+  s.mean = sum / static_cast<double>(x.size());
+  double ss = 0.0;
+  for (double v : x) ss += (v - s.mean) * (v - s.mean);
+  s.std = x.size() > 1 ? std::sqrt(ss / static_cast<double>(x.size() - 1)) : kNaN;
+  std::sort(x.begin(), x.end());
+  s.min = x.front();
+  s.max = x.back();
+  for (std::size_t k = 0; k < kStatPercentiles.size(); ++k) s.percentiles[k] = calc_percentile_sorted(x, kStatPercentiles[k]);
+  return s;
+}
+
+const std::vector<std::string>& sensitivity_outputs() {
+  static const std::vector<std::string> o = {"peak_drive_force_N",      "peak_drive_torque_Nm", "peak_pin_force_N",
+                                             "peak_diagonal_tension_N", "peak_latch_energy_J",  "deploy_time_s"};
+  return o;
+}
+
+std::vector<OutputSensitivity> calc_sensitivity(const ResultTable& t, const CampaignOptions& c) {
+  std::vector<OutputSensitivity> out;
+  if (c.ensemble.sampling != "saltelli") return out;
+  const std::int64_t block = saltelli_block_runs(c);
+  const int G = static_cast<int>(c.dispersions.size());
+  const std::int64_t n_blocks = t.n_runs() / block;
+  for (const std::string& name : sensitivity_outputs()) {
+    std::size_t col = t.columns().f64.size();
+    for (std::size_t i = 0; i < t.columns().f64.size(); ++i)
+      if (name == t.columns().f64[i]->name) col = i;
+    if (col == t.columns().f64.size()) continue;
+    OutputSensitivity s;
+    s.output = name;
+    std::vector<double> y;
+    for (std::int64_t b = 0; b < n_blocks; ++b) {
+      bool usable = true;
+      for (std::int64_t k = b * block; k < (b + 1) * block && usable; ++k)
+        usable = t.status[static_cast<std::size_t>(k)] == 0 && std::isfinite(t.f64[col][static_cast<std::size_t>(k)]);
+      if (!usable) { ++s.n_blocks_dropped; continue; }
+      for (std::int64_t k = b * block; k < (b + 1) * block; ++k) y.push_back(t.f64[col][static_cast<std::size_t>(k)]);
+      ++s.n_blocks;
+    }
+    if (s.n_blocks >= 2) {
+      s.indices = calc_sobol_indices(y, G, c.ensemble.master_seed ^ kBootstrapTag, 1000, 0.95);
+    } else {
+      s.indices.d = G;
+      s.indices.n_base = s.n_blocks;
+      s.indices.n_resamples = 1000;
+      s.indices.confidence = 0.95;
+      for (auto* v : {&s.indices.first_order, &s.indices.total, &s.indices.first_order_lo, &s.indices.first_order_hi,
+                      &s.indices.total_lo, &s.indices.total_hi})
+        v->assign(static_cast<std::size_t>(G), kNaN);
+    }
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+}  // namespace truss::campaign

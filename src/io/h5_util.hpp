@@ -1,0 +1,58 @@
+// Small RAII and writing helpers over the HDF5 C API, shared by the single-run and campaign
+// writers, and the atomic, non-overwriting commit of a finished file.
+#pragma once
+#include <hdf5.h>
+
+#include <cstdint>
+#include <string>
+
+namespace truss::io::h5 {
+
+std::string hdf5_error_text();
+[[noreturn]] void throw_h5(const std::string& what);
+void check(herr_t status, const std::string& what);
+
+// Owns one HDF5 identifier.
+class Handle {
+ public:
+  Handle(hid_t id, herr_t (*close)(hid_t), const std::string& what) : id_(id), close_(close) {
+    if (id_ < 0) throw_h5(what);
+  }
+  Handle(const Handle&) = delete;
+  Handle& operator=(const Handle&) = delete;
+  Handle(Handle&& o) noexcept : id_(o.id_), close_(o.close_) { o.id_ = -1; }
+  Handle& operator=(Handle&&) = delete;
+  ~Handle() {
+    if (id_ >= 0) close_(id_);
+  }
+  hid_t get() const { return id_; }
+  void close(const std::string& what) {
+    const herr_t s = close_(id_);
+    id_ = -1;
+    check(s, what);
+  }
+
+ private:
+  hid_t id_;
+  herr_t (*close_)(hid_t);
+};
+
+Handle scalar_space();
+Handle vector_space(std::size_t n);
+Handle string_type();
+void write_string_attribute(hid_t obj, const char* name, const std::string& value);
+void write_int_attribute(hid_t obj, const char* name, std::int64_t value);
+// int8 enum whose members are the to_string(RunStatus) names with the RunStatus values.
+Handle status_enum_type();
+Handle create_dataset(hid_t loc, const std::string& path, hid_t file_type, hid_t space);
+
+std::string utc_now_iso8601();
+std::string utc_iso8601(double unix_time_s);
+
+[[noreturn]] void throw_exists(const std::string& path);
+// Flushes a finished file to disk before it is renamed into place.
+void sync_file(const std::string& path);
+// Renames tmp onto path; without force never replaces an existing path (InputError).
+void commit(const std::string& tmp, const std::string& path, bool force);
+
+}  // namespace truss::io::h5

@@ -1,0 +1,296 @@
+#include "parallel/campaign_driver.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "campaign/campaign.hpp"
+#include "campaign/campaign_h5.hpp"
+#include "campaign/journal.hpp"
+#include "campaign/progress.hpp"
+#include "campaign/results.hpp"
+#include "campaign/run_record.hpp"
+#include "io/h5_output.hpp"
+#include "io/h5_util.hpp"
+#include "io/scene_toml.hpp"
+#include "parallel/scheduler.hpp"
+
+namespace truss::parallel {
+
+namespace fs = std::filesystem;
+using campaign::FrameKind;
+
+namespace {
+
+struct CommandOptions {
+  std::string campaign_path;
+  std::string output_path;
+  std::vector<std::string> sets;
+  bool resume = false;
+  bool force = false;
+  bool dry_run = false;
+  double flush_interval_s = 2.0;
+  std::string progress = "auto";
+  double progress_interval_s = 10.0;
+  int max_batch = 32;
+};
+
+// The error state of all ranks: true on every rank if any rank failed.
+bool any_rank(MPI_Comm comm, bool mine) {
+  int in = mine ? 1 : 0, out = 0;
+  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, comm);
+  return out != 0;
+}
+
+int broadcast_int(MPI_Comm comm, int v) {
+  MPI_Bcast(&v, 1, MPI_INT, 0, comm);
+  return v;
+}
+
+double unix_now() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+template <class T>
+void put(std::string& s, T v) {
+  s.append(reinterpret_cast<const char*>(&v), sizeof(T));
+}
+template <class T>
+T get_at(const std::string& s, std::size_t at) {
+  T v{};
+  if (s.size() >= at + sizeof(T)) std::memcpy(&v, s.data() + at, sizeof(T));
+  return v;
+}
+
+// Rank 0's state between the checks and the end.
+struct Rank0 {
+  std::unique_ptr<campaign::Journal> journal;
+  std::vector<campaign::JournalFrame> frames;
+  std::size_t dropped_bytes = 0;
+};
+
+// Rank 0: output and journal checks; opens or creates the journal. Throws io::InputError for
+// anything the user must decide.
+void prepare_output(const CommandOptions& o, const std::string& campaign_text, Rank0& r0) {
+  if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
+  io::check_output_path(o.output_path, o.force);
+  if (o.resume && fs::exists(o.output_path))
+    throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
+  const std::string jpath = o.output_path + ".journal";
+  const bool has_journal = fs::exists(fs::symlink_status(jpath));
+  if (o.resume) {
+    if (!has_journal)
+      throw io::InputError(fmt::format("error: --resume: no journal {} to resume from (run without --resume to start)", jpath));
+    try {
+      r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::resume(jpath, campaign_text, r0.frames, r0.dropped_bytes));
+    } catch (const campaign::JournalMismatch& e) {
+      throw io::InputError(std::string("error: --resume: ") + e.what());
+    } catch (const std::runtime_error& e) {
+      throw io::InputError(std::string("error: --resume: ") + e.what());
+    }
+    return;
+  }
+  if (has_journal) {
+    if (!o.force)
+      throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
+                                       "(same campaign and --set options) or start over with --force", jpath));
+    fs::remove(jpath);
+  }
+  r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::create(jpath, campaign_text));
+}
+
+campaign::ProgressMode progress_mode(const std::string& s) {
+  if (s == "tty") return campaign::ProgressMode::terminal;
+  if (s == "lines") return campaign::ProgressMode::lines;
+  if (s == "none") return campaign::ProgressMode::none;
+  return campaign::ProgressMode::automatic;
+}
+
+}  // namespace
+
+int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  const bool root = rank == 0;
+  const double t_start = unix_now();
+  const auto wall0 = std::chrono::steady_clock::now();
+
+  // --- command line (identical on every rank) ---------------------------------------------------
+  CommandOptions o;
+  CLI::App app{"Runs an uncertainty campaign of folding truss mast deployments over MPI ranks.", "truss-campaign"};
+  app.add_option("campaign", o.campaign_path, "Campaign file (TOML), e.g. campaigns/table1_dispersed.toml")->required();
+  app.add_option("-o,--output", o.output_path, "Results file (HDF5, docs/hdf5-schema.md); required unless --dry-run");
+  app.add_option("--set", o.sets, "Override a campaign key (ensemble.n_runs=40) or a base-scene key (scene.drive.mode=motor); repeatable")
+      ->type_name("KEY=VALUE")->expected(1)->allow_extra_args(false)->take_all();
+  app.add_flag("--resume", o.resume, "Finish an interrupted campaign from its journal (OUTPUT.journal)");
+  app.add_flag("--force", o.force, "Overwrite an existing output file and discard an unfinished journal");
+  app.add_flag("--dry-run", o.dry_run, "Validate the campaign, print it resolved, run nothing");
+  app.add_option("--flush-interval", o.flush_interval_s, "Seconds between journal flushes to disk")->check(CLI::Range(0.01, 3600.0));
+  app.add_option("--progress", o.progress, "Progress display: auto (in place on a terminal, lines otherwise), tty, lines, none")
+      ->check(CLI::IsMember({"auto", "tty", "lines", "none"}));
+  app.add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines when not on a terminal")
+      ->check(CLI::Range(0.01, 1e6));
+  app.add_option("--max-batch", o.max_batch, "Largest batch of runs handed to a rank at once")->check(CLI::Range(1, 100000));
+  app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
+  app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
+             "3 I/O or internal error.");
+  try {
+    app.parse(argc, argv);
+    if (o.output_path.empty() && !o.dry_run) throw CLI::RequiredError("--output");
+  } catch (const CLI::ParseError& e) {
+    int rc = 0;
+    if (root) rc = app.exit(e);
+    else {
+      std::ostringstream sink;
+      rc = app.exit(e, sink, sink);
+    }
+    return rc == 0 ? kExitOk : kExitBadInput;
+  }
+
+  // --- the campaign, on every rank ----------------------------------------------------------------
+  std::optional<campaign::CampaignContext> ctx;
+  std::string campaign_text, error;
+  try {
+    ctx.emplace(campaign::parse_campaign_file(o.campaign_path, o.sets));
+    campaign_text = campaign::resolved_campaign_toml(ctx->options);
+  } catch (const io::InputError& e) {
+    error = e.what();
+  } catch (const std::exception& e) {
+    error = fmt::format("error: {}: {}", o.campaign_path, e.what());
+  }
+  if (any_rank(comm, !error.empty())) {
+    if (root) std::cerr << (error.empty() ? "error: the campaign could not be read on another rank" : error) << '\n';
+    return kExitBadInput;
+  }
+  if (o.dry_run) {
+    if (root) std::cout << campaign_text;
+    return kExitOk;
+  }
+
+  // --- output and journal (rank 0) ---------------------------------------------------------------
+  Rank0 r0;
+  int status = kExitOk;
+  if (root) {
+    try {
+      prepare_output(o, campaign_text, r0);
+    } catch (const io::InputError& e) {
+      std::cerr << e.what() << '\n';
+      status = kExitBadInput;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << '\n';
+      status = kExitIoError;
+    }
+  }
+  status = broadcast_int(comm, status);
+  if (status != kExitOk) return status;
+
+  // --- restore, schedule, journal -------------------------------------------------------------------
+  const campaign::CampaignOptions& c = ctx->options;
+  std::unique_ptr<campaign::ResultTable> table;
+  std::vector<std::int64_t> todo;
+  int session = 0;
+  double previous_wall_s = 0.0, first_start = t_start;
+  if (root) {
+    table = std::make_unique<campaign::ResultTable>(c.ensemble.n_runs, ctx->columns);
+    double session_wall = 0.0;
+    for (const auto& f : r0.frames) {
+      if (f.kind == FrameKind::session) {
+        if (session == 0) first_start = get_at<double>(f.payload, 0);
+        previous_wall_s += session_wall;
+        session_wall = 0.0;
+        ++session;
+      } else if (f.kind == FrameKind::heartbeat) {
+        session_wall = get_at<double>(f.payload, 0);
+      } else if (f.kind == FrameKind::run) {
+        table->add(campaign::RunRecord::from_bytes(f.payload, ctx->columns), std::max(0, session - 1));
+      }
+    }
+    previous_wall_s += session_wall;
+    if (!r0.frames.empty())
+      std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}{}\n", table->n_done(),
+                               c.ensemble.n_runs, r0.journal->path(),
+                               r0.dropped_bytes ? fmt::format(" ({} bytes of a torn last record dropped)", r0.dropped_bytes) : "");
+    std::string s;
+    put(s, t_start);
+    put(s, static_cast<std::int32_t>(size));
+    r0.journal->append(FrameKind::session, s);
+    r0.journal->flush();
+    for (std::int64_t i = 0; i < c.ensemble.n_runs; ++i)
+      if (!table->has(i)) todo.push_back(i);
+  }
+
+  const std::int64_t restored = root ? table->n_done() : 0;
+  campaign::Progress progress(c.ensemble.n_runs, restored, progress_mode(o.progress), o.progress_interval_s);
+  auto last_flush = std::chrono::steady_clock::now();
+  auto flush_journal = [&] {
+    std::string s;
+    put(s, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count());
+    r0.journal->append(FrameKind::heartbeat, s);
+    r0.journal->flush();
+    last_flush = std::chrono::steady_clock::now();
+  };
+  ScheduleOptions so;
+  so.max_batch = o.max_batch;
+  so.tick_interval_s = std::min(0.25, o.flush_interval_s);
+  try {
+    run_schedule(
+        comm, todo,
+        [&](std::int64_t run, std::string& out) { campaign::calc_run_record(*ctx, run, rank).append_bytes(out); },
+        [&](std::string_view bytes) {
+          table->add(campaign::RunRecord::from_bytes(bytes, ctx->columns), session);
+          r0.journal->append(FrameKind::run, bytes);
+        },
+        [&] {
+          if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= o.flush_interval_s)
+            flush_journal();
+          progress.update(table->n_done(), table->n_failed());
+        },
+        so);
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    MPI_Abort(comm, kExitIoError);
+  }
+
+  // --- the results file (rank 0) ---------------------------------------------------------------------
+  if (root) {
+    try {
+      flush_journal();
+      progress.finish(table->n_done(), table->n_failed());
+      std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
+      for (std::int64_t run : c.output.history_runs)
+        histories.emplace_back(run, campaign::calc_run_with_history(*ctx, run, c.output.history_step_s));
+      const auto sens = campaign::calc_sensitivity(*table, c);
+      campaign::CampaignFileInfo info;
+      info.campaign_toml = campaign_text;
+      info.base_scene_toml = io::resolved_scene_toml(c.base);
+      info.n_ranks = size;
+      info.n_sessions = session + 1;
+      info.start_utc = io::h5::utc_iso8601(first_start);
+      info.end_utc = io::h5::utc_now_iso8601();
+      info.wall_time_s = previous_wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+      campaign::write_campaign_h5(o.output_path, *ctx, *table, sens, histories, info, o.force);
+      r0.journal->close_and_remove();
+      std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs, {} ok, {} failed, {:.3g} s on {} rank{}\n", o.output_path,
+                               table->n_runs(), table->n_runs() - table->n_failed(), table->n_failed(), info.wall_time_s,
+                               size, size > 1 ? "s" : "");
+    } catch (const io::InputError& e) {
+      std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
+      status = kExitBadInput;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
+      status = kExitIoError;
+    }
+  }
+  return broadcast_int(comm, status);
+}
+
+}  // namespace truss::parallel

@@ -1,0 +1,41 @@
+// Dynamic scheduling of independent runs over MPI ranks. Rank 0 owns the list of runs to do and
+// hands out batches on request; every rank, rank 0 included, computes runs. A worker always holds
+// a second batch while it computes one (its result message is its request for the next), so it
+// never waits for rank 0. Rank 0 computes one run at a time and answers requests in between.
+// Results are opaque byte strings (one per run) that reach rank 0's on_result in completion order;
+// the caller stores them by run index, so nothing downstream depends on the order.
+#pragma once
+#include <mpi.h>
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace truss::parallel {
+
+struct ScheduleOptions {
+  int max_batch = 32;              // upper bound on runs per batch: keeps the end of the campaign balanced
+  int batches_per_rank = 4;        // guided scheduling: batch = remaining / (batches_per_rank * ranks)
+  double tick_interval_s = 0.25;   // how often rank 0 calls on_tick (progress, journal flushes)
+  std::string validate() const;
+};
+
+struct ScheduleSummary {
+  std::int64_t runs_by_rank0 = 0;  // runs rank 0 computed itself
+  std::int64_t batches_sent = 0;
+  std::int64_t bytes_received = 0;
+};
+
+using ComputeFn = std::function<void(std::int64_t run_index, std::string& out)>;  // writes one run's bytes
+using ResultFn = std::function<void(std::string_view bytes)>;                      // rank 0: one run's bytes
+using TickFn = std::function<void()>;                                               // rank 0
+
+// Collective over comm. On rank 0, `todo` lists the runs to compute (ignored elsewhere). Returns
+// when every run of `todo` has reached on_result. An exception in compute or on_result aborts the
+// job (MPI_Abort): compute is expected to turn run failures into data.
+ScheduleSummary run_schedule(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute,
+                             const ResultFn& on_result, const TickFn& on_tick, const ScheduleOptions& opts = {});
+
+}  // namespace truss::parallel
