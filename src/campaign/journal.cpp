@@ -1,6 +1,7 @@
 #include "campaign/journal.hpp"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -45,7 +46,26 @@ void write_all(int fd, std::string_view data, const std::string& path) {
   }
 }
 
+void lock_or_refuse(int fd, const std::string& path) {
+  if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return;
+  const int err = errno;
+  ::close(fd);
+  if (err == EWOULDBLOCK)
+    throw JournalRefused(fmt::format("{} is in use by another running truss-campaign (perhaps ranks of a killed "
+                                     "mpirun are still running: stop them first)", path));
+  errno = err;
+  fail_errno("cannot lock journal", path);
+}
+
 }  // namespace
+
+void Journal::remove_unused(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) fail_errno("cannot open journal", path);
+  lock_or_refuse(fd, path);
+  if (::unlink(path.c_str()) != 0) fail_errno("cannot remove journal", path);
+  ::close(fd);
+}
 
 std::uint32_t crc32_of(std::string_view bytes) {
   return static_cast<std::uint32_t>(
@@ -55,6 +75,7 @@ std::uint32_t crc32_of(std::string_view bytes) {
 Journal Journal::create(const std::string& path, const std::string& campaign_text) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) fail_errno("cannot create journal", path);
+  lock_or_refuse(fd, path);
   Journal j(path, fd);
   std::string h(kMagic, sizeof kMagic);
   put(h, kVersion);
@@ -70,6 +91,7 @@ Journal Journal::resume(const std::string& path, const std::string& campaign_tex
                         std::size_t& dropped_bytes) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd < 0) fail_errno("cannot open journal", path);
+  lock_or_refuse(fd, path);
   Journal j(path, fd);
   std::string all;
   char buf[1 << 16];
@@ -93,7 +115,7 @@ Journal Journal::resume(const std::string& path, const std::string& campaign_tex
   at += len;
   if (!get(all, at, crc) || crc != crc32_of(text)) throw std::runtime_error(fmt::format("{}: damaged journal header", path));
   if (text != campaign_text)
-    throw JournalMismatch(fmt::format("{} belongs to a different campaign (resolved campaign text differs); "
+    throw JournalRefused(fmt::format("{} belongs to a different campaign (resolved campaign text differs); "
                                       "finish it with the same campaign file and --set options, or start over with --force", path));
   frames.clear();
   std::size_t good = at;

@@ -26,20 +26,31 @@ struct JournalFrame {
   std::string payload;
 };
 
+// A journal that must not be used: it belongs to another campaign, or a live process holds it.
+struct JournalRefused : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// While open, a journal holds an exclusive flock(): a second truss-campaign on the same output
+// (for example --resume while ranks of a killed mpirun still run) is refused instead of
+// interleaving its writes. The lock dies with its process.
 class Journal {
  public:
   // Creates a new journal (fails if `path` exists) holding `campaign_text`.
   static Journal create(const std::string& path, const std::string& campaign_text);
   // Opens an existing journal for appending after reading its frames into `frames`. A torn or
   // corrupt tail is cut off (the file is truncated at the last good frame). Throws
-  // std::runtime_error if the header is unreadable, and JournalMismatch if it holds a different
-  // campaign text.
+  // std::runtime_error if the header is unreadable, and JournalRefused if it holds a different
+  // campaign text or another process has it open.
   static Journal resume(const std::string& path, const std::string& campaign_text, std::vector<JournalFrame>& frames,
                         std::size_t& dropped_bytes);
   Journal(Journal&&) noexcept;
   Journal& operator=(Journal&&) = delete;
   Journal(const Journal&) = delete;
   ~Journal();
+
+  // Removes an unfinished journal (--force); JournalRefused if a live process holds it.
+  static void remove_unused(const std::string& path);
 
   void append(FrameKind kind, std::string_view payload);  // buffered
   void flush();           // write() the buffer and fdatasync: on disk from now on
@@ -51,10 +62,6 @@ class Journal {
   std::string path_;
   int fd_ = -1;
   std::string buffer_;
-};
-
-struct JournalMismatch : std::runtime_error {
-  using std::runtime_error::runtime_error;
 };
 
 std::uint32_t crc32_of(std::string_view bytes);

@@ -357,7 +357,8 @@ struct Diag {
 // Where the value of a key came from, for validate() messages.
 struct Origin {
   std::size_t line = 0;     // > 0: the key's line in the file
-  std::string set_text;     // non-empty: where it was set last ("by --set k=v", "at FILE:LINE")
+  std::string set_text;     // non-empty: the --set argument that set it last
+  std::string where;        // non-empty: FILE:LINE of a setting from another file (a campaign)
 };
 
 std::string trim(std::string_view s) {
@@ -405,7 +406,7 @@ void parse_table_contents(SceneOptions& s, const std::string& source, std::strin
       diags.push_back({line, col, fmt::format("error: {}:{}: {}", source, line, err)});
       continue;
     }
-    origins[d->dotted()] = Origin{line, {}};
+    origins[d->dotted()] = Origin{line, {}, {}};
   }
 }
 
@@ -451,7 +452,7 @@ void apply_override(SceneOptions& s, const SceneSetting& setting, std::size_t in
     node = &as_string;
   const std::string err = apply_value(s, *d, *node);
   if (!err.empty()) return fail(err);
-  origins[d->dotted()] = Origin{0, setting.where.empty() ? "by --set " + arg : "at " + setting.where};
+  origins[d->dotted()] = setting.where.empty() ? Origin{0, arg, {}} : Origin{0, {}, setting.where};
 }
 
 std::string join_diags(std::vector<Diag> diags) {
@@ -517,7 +518,8 @@ sim::SceneOptions parse_scene(std::string_view text, const std::string& source_n
       throw InputError(fmt::format("error: {}:{}: {}", source_name, it->second.line, bad));
     if (it != origins.end() && !it->second.set_text.empty())
       throw InputError(
-          fmt::format("error: {}: {} (set {})", source_name, bad, it->second.set_text));
+          fmt::format("error: {}: {} (set by --set {})", source_name, bad, it->second.set_text));
+    if (it != origins.end() && !it->second.where.empty()) throw InputError(fmt::format("error: {}: {}", it->second.where, bad));
     throw InputError(fmt::format("error: {}: {}", source_name, bad));
   }
   return s;

@@ -81,9 +81,9 @@ struct Rank0 {
 // anything the user must decide.
 void prepare_output(const CommandOptions& o, const std::string& campaign_text, Rank0& r0) {
   if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
-  io::check_output_path(o.output_path, o.force);
   if (o.resume && fs::exists(o.output_path))
     throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
+  io::check_output_path(o.output_path, o.force);
   const std::string jpath = o.output_path + ".journal";
   const bool has_journal = fs::exists(fs::symlink_status(jpath));
   if (o.resume) {
@@ -91,7 +91,7 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, R
       throw io::InputError(fmt::format("error: --resume: no journal {} to resume from (run without --resume to start)", jpath));
     try {
       r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::resume(jpath, campaign_text, r0.frames, r0.dropped_bytes));
-    } catch (const campaign::JournalMismatch& e) {
+    } catch (const campaign::JournalRefused& e) {
       throw io::InputError(std::string("error: --resume: ") + e.what());
     } catch (const std::runtime_error& e) {
       throw io::InputError(std::string("error: --resume: ") + e.what());
@@ -102,9 +102,13 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, R
     if (!o.force)
       throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
                                        "(same campaign and --set options) or start over with --force", jpath));
-    fs::remove(jpath);
+    campaign::Journal::remove_unused(jpath);
   }
-  r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::create(jpath, campaign_text));
+  try {
+    r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::create(jpath, campaign_text));
+  } catch (const campaign::JournalRefused& e) {
+    throw io::InputError(std::string("error: ") + e.what());
+  }
 }
 
 campaign::ProgressMode progress_mode(const std::string& s) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <numbers>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -272,12 +273,23 @@ class PhaseOde : public integrators::OdeSystem {
     dy[1] = p.qddot;
     dy[2] = p.drive_force_N * p.u_m_per_s;
   }
-  int num_events() const override { return 2; }
+  // Motor mode adds a creep stall: the speed-torque line damps the motion, so a drive that is too
+  // weak brings the mast to rest asymptotically at an equilibrium short of the lock, and the speed
+  // never crosses zero. Below kCreepSpeedFraction of the no-load screw speed the mast has stopped
+  // for any engineering purpose (the rest of the stage would take ~1e6 times its nominal time).
+  static constexpr double kCreepSpeedFraction = 1e-6;
+  int num_events() const override { return ph_.context().drive.law == DriveLaw::motor ? 3 : 2; }
   void calc_events(double, const double* y, double* g) override {
     g[0] = sign_q_ * (y[0] - q_end_);
-    g[1] = direction_ * calc_u(y[0], y[1]);
+    const double u = direction_ * calc_u(y[0], y[1]);
+    g[1] = u;
+    if (ph_.context().drive.law == DriveLaw::motor) g[2] = u - creep_speed_m_per_s();
   }
   int event_direction(int k) const override { return k == 0 ? +1 : -1; }
+  double creep_speed_m_per_s() const {
+    const DriveParams& d = ph_.context().drive;
+    return kCreepSpeedFraction * d.no_load_speed_rad_per_s * d.screw_lead_m / (2.0 * std::numbers::pi);
+  }
   double calc_u(double q, double qdot) const {
     if (ph_.context().kind == PhaseKind::open) return qdot;
     return calc_on_rail(ph_.context().mast->rail, ph_.strut_length_m(), q).dY * qdot;
@@ -570,7 +582,12 @@ sim::RunResult run_held_stages(const MastParams& mast, const std::vector<StageSp
           p_end = phase.calc_point(y[0], y[1]);
           last = p_end; last_stage = &s; last_phase = &ph;
           t = t_end_phase;
-          if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 1)
+          if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 2)
+            fail(RunStatus::stall, fmt::format("stall: the driven frame crept to rest (speed below {:.3g} m/s) at y = {:.9g} m, "
+                                               "t = {:.9g} s, in the stage of bay {} before its {}: the motor's stall torque "
+                                               "balances the mast short of the {}", ode.creep_speed_m_per_s(), p_end.y_driven_m,
+                                               t, m, dir > 0 ? "lock" : "end", dir > 0 ? "lock" : "end"));
+          else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 1)
             fail(RunStatus::stall, fmt::format("stall: the driven frame stopped at y = {:.9g} m, t = {:.9g} s, in the stage "
                                                "of bay {} before its {}", p_end.y_driven_m, t, m,
                                                dir > 0 ? "lock" : "end"));

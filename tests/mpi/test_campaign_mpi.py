@@ -1,0 +1,391 @@
+#!/usr/bin/python3
+"""truss-campaign under a real mpirun: reproducibility across rank counts, kill -9 and --resume,
+statistics against an independent computation, failed runs, Saltelli indices and bad input.
+
+  test_campaign_mpi.py --case NAME --driver truss-campaign --sim truss-sim --repo SRC --scratch DIR
+
+Cases: ranks, resume, failures, saltelli, bad_input. Each case prints what it checked; any failed
+check raises (exit 1).
+"""
+import argparse
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1")
+
+
+def mpirun(args, ranks, extra=(), **kw):
+    cmd = ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, *extra]
+    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600, **kw)
+
+
+def check(cond, what):
+    if not cond:
+        raise AssertionError(what)
+    print("  ok:", what)
+
+
+def datasets(path, skip=("timing",)):
+    """Every dataset of the file outside `skip`, by path, as numpy values."""
+    out = {}
+    with h5py.File(path, "r") as f:
+        def visit(name, obj):
+            if isinstance(obj, h5py.Dataset) and name.split("/")[0] not in skip:
+                out[name] = obj[()]
+        f.visititems(visit)
+    return out
+
+
+def same_values(a, b):
+    if set(a) != set(b):
+        return False, f"dataset sets differ: {sorted(set(a) ^ set(b))}"
+    for k in a:
+        x, y = np.asarray(a[k]), np.asarray(b[k])
+        if x.dtype.kind == "f":
+            # Bit for bit: compare the bytes, so that -0.0 / 0.0 and NaN payloads count too.
+            eq = x.shape == y.shape and x.tobytes() == y.tobytes()
+        else:
+            eq = x.shape == y.shape and np.array_equal(x, y)
+        if not eq:
+            return False, f"{k} differs"
+    return True, ""
+
+
+def descendants(pid):
+    children = {}
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                stat = open(f"/proc/{d}/stat").read()
+            except OSError:
+                continue
+            ppid = int(stat[stat.rindex(")") + 2:].split()[1])
+            children.setdefault(ppid, []).append(int(d))
+    out, todo = [], [pid]
+    while todo:
+        for c in children.get(todo.pop(), []):
+            out.append(c)
+            todo.append(c)
+    return out
+
+
+def alive(pid):
+    try:
+        state = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0]
+        return state != "Z"
+    except OSError:
+        return False
+
+
+def fresh(args, name):
+    d = os.path.join(args.scratch, name)
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+    return d
+
+
+TABLE1 = "campaigns/table1_dispersed.toml"
+
+
+# ----------------------------------------------------------------------------------------------
+def case_ranks(args):
+    """Same /runs, /stats, /histories with 1 and 3 (oversubscribed) ranks; stats recomputed."""
+    d = fresh(args, "ranks")
+    camp = os.path.join(args.repo, TABLE1)
+    sets = ["--set", "ensemble.n_runs=90", "--set", "output.history_runs=[0, 7]", "--set", "output.history_step_s=0.05"]
+    outs = {}
+    for n in (1, 3):
+        outs[n] = os.path.join(d, f"r{n}.h5")
+        p = mpirun(args, n, [camp, "-o", outs[n], *sets, "--progress", "lines", "--progress-interval", "0.01"])
+        check(p.returncode == 0, f"{n} rank(s): exit 0 ({p.stderr.strip()[-300:]})")
+        check("runs/s" in p.stderr, f"{n} rank(s): progress lines with a rate on stderr")
+        check(not os.path.exists(outs[n] + ".journal"), f"{n} rank(s): journal removed after the file is written")
+    a, b = datasets(outs[1]), datasets(outs[3])
+    same, why = same_values(a, b)
+    check(same, f"1 and 3 ranks give identical datasets outside /timing ({len(a)} datasets) {why}")
+    with h5py.File(outs[3], "r") as f:
+        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 1 and f.attrs["kind"] == "campaign",
+              "root attributes: n_ranks, schema_version, kind")
+        check(set(np.unique(f["timing/rank"][:])) == {0, 1, 2}, "all 3 ranks computed runs (dynamic scheduling)")
+        missing = []
+        f.visititems(lambda n, o: missing.append(n) if isinstance(o, h5py.Dataset) and not o.attrs.get("units") else None)
+        check(not missing, f"every dataset has a units attribute (missing: {missing[:5]})")
+        check("histories/run_7/t_s" in f and np.all(np.diff(f["histories/run_7/t_s"][:]) > 0),
+              "history of run 7 stored, time increasing")
+        check_stats(f)
+
+
+def check_stats(f):
+    """Every /stats entry against numpy on the ok runs of /runs."""
+    status = f["runs/status"][:]
+    ok = status == 0
+    names = [s.decode() for s in f["stats/status_names"][:]]
+    counts = f["stats/status_counts"][:]
+    for i, nm in enumerate(names):
+        assert counts[i] == np.count_nonzero(status == i), nm
+    check(f["stats"].attrs["n_failed"] == np.count_nonzero(~ok), "status counts and n_failed match /runs/status")
+    pct = {"p1": 1, "p5": 5, "p50": 50, "p95": 95, "p99": 99, "p99_865": 99.865}
+    n_checked = 0
+
+    def compare(stats_group, x):
+        nonlocal n_checked
+        x = x[np.isfinite(x)]
+        g = stats_group
+        assert g["count"][()] == x.size, g.name
+        if x.size == 0:
+            assert np.isnan(g["mean"][()]), g.name
+            return
+        # Percentiles, min and max pick or interpolate the same order statistics with the same
+        # formula as numpy: equal to the last bit. Mean and std differ only by summation order
+        # (numpy sums pairwise): a relative 1e-12 is thousands of times that rounding for n < 1e5.
+        for k, q in pct.items():
+            assert g[k][()] == np.percentile(x, q), (g.name, k, g[k][()], np.percentile(x, q))
+        assert g["min"][()] == x.min() and g["max"][()] == x.max(), g.name
+        # For the std, rounding of the mean leaves ~eps |mean| of noise: an absolute floor of
+        # 1e-12 |mean| covers constant columns (std 0 up to that noise).
+        assert np.isclose(g["mean"][()], x.mean(), rtol=1e-12, atol=0), g.name
+        if x.size > 1:
+            assert np.isclose(g["std"][()], x.std(ddof=1), rtol=1e-10, atol=1e-12 * abs(x.mean())), g.name
+        n_checked += 1
+
+    for k, ds in f["runs"].items():
+        if isinstance(ds, h5py.Dataset) and ds.dtype.kind == "f":
+            compare(f["stats"][k], ds[:][ok])
+    nb = f.attrs["n_bays_max"]
+    for k, ds in f["runs/bays"].items():
+        allv = ds[:][ok]
+        for j in range(nb):
+            class Row:  # the j-th entry of each per-bay statistic
+                name = f"/stats/bays/{k}[{j}]"
+                def __getitem__(self, key, k=k, j=j):
+                    return f["stats/bays"][k][key][j:j + 1].reshape(())
+            compare(Row(), allv[:, j])
+    check(n_checked > 50, f"{n_checked} statistics equal numpy's on the ok runs (percentiles exactly)")
+
+
+# ----------------------------------------------------------------------------------------------
+def case_resume(args):
+    """kill -9 of the whole job mid-campaign, a torn record, then --resume: same file as an
+    uninterrupted campaign, finished runs not recomputed."""
+    d = fresh(args, "resume")
+    camp = os.path.join(args.repo, TABLE1)
+    sets = ["--set", "ensemble.n_runs=5000"]
+    ref = os.path.join(d, "ref.h5")
+    p = mpirun(args, 2, [camp, "-o", ref, *sets, "--progress", "none"])
+    check(p.returncode == 0, "uninterrupted campaign on 2 ranks")
+
+    out = os.path.join(d, "killed.h5")
+    journal = out + ".journal"
+    cmd = ["mpirun", "--oversubscribe", "-np", "2", args.driver, camp, "-o", out, *sets,
+           "--flush-interval", "0.05", "--progress", "none"]
+    proc = subprocess.Popen(cmd, env=ENV, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    t0 = time.time()
+    # Kill once at least ~100 runs are on disk (a record is ~4.5 kB), well before the end.
+    while time.time() - t0 < 120:
+        if os.path.exists(journal) and os.path.getsize(journal) > 500_000:
+            break
+        time.sleep(0.01)
+    # kill -9 of the whole job: mpirun and every rank (Open MPI puts the ranks in their own
+    # process groups, and a SIGKILLed mpirun cannot take them down).
+    job = [proc.pid] + descendants(proc.pid)
+    for pid in job:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    proc.wait()
+    while any(alive(pid) for pid in job[1:]):
+        time.sleep(0.01)
+    check(not os.path.exists(out), "killed job left no results file")
+    check(os.path.exists(journal), "killed job left its journal")
+    with open(journal, "ab") as j:
+        j.write(b"R\x10\x00\x00\x00torn")  # a frame cut short by the crash
+    size = os.path.getsize(journal)
+
+    p = mpirun(args, 3, [camp, "-o", out, "--resume"])
+    check(p.returncode == 2 and "different campaign" in p.stderr and os.path.getsize(journal) == size,
+          f"exit {p.returncode}, journal {size} -> {os.path.getsize(journal)} bytes; "
+
+          f"--resume with another campaign (n_runs differs) refused with exit 2, journal untouched ({p.stderr.strip()[:200]})")
+    p = mpirun(args, 3, [camp, "-o", out, *sets])
+    check(p.returncode == 2 and "--resume" in p.stderr, "a new start over an unfinished journal refused with exit 2")
+
+    p = mpirun(args, 3, [camp, "-o", out, *sets, "--resume", "--progress", "none"])
+    check(p.returncode == 0, f"--resume on 3 ranks finishes ({p.stderr.strip()[-300:]})")
+    check("torn last record dropped" in p.stderr, "the torn record was detected and dropped")
+    same, why = same_values(datasets(ref), datasets(out))
+    check(same, f"resumed file equals the uninterrupted one, value for value {why}")
+    with h5py.File(out, "r") as f:
+        sess = f["timing/session"][:]
+        restored = np.count_nonzero(sess == 0)
+        check(f.attrs["n_sessions"] == 2 and 0 < restored < 5000 and np.count_nonzero(sess == 1) == 5000 - restored,
+              f"{restored} runs kept from the first session, {5000 - restored} computed after the resume")
+        check(f"{restored} of 5000 runs restored" in p.stderr, "the resume reports how many runs it restored")
+    p = mpirun(args, 2, [camp, "-o", out, *sets, "--resume"])
+    check(p.returncode == 2 and "finished" in p.stderr, "--resume of a finished campaign refused with exit 2")
+    before = open(out, "rb").read()
+    p = mpirun(args, 2, [camp, "-o", out, *sets])
+    check(p.returncode == 2 and "exists" in p.stderr and open(out, "rb").read() == before,
+          "existing results file kept without --force (exit 2)")
+
+
+# ----------------------------------------------------------------------------------------------
+def case_failures(args):
+    """Motor campaign with stalls: failed runs are rows with status and reason, statistics count
+    ok runs only, and a stalled row's recorded inputs stall truss-sim too."""
+    d = fresh(args, "failures")
+    camp = os.path.join(args.repo, "campaigns/motor_torque.toml")
+    out = os.path.join(d, "motor.h5")
+    p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=400", "--progress", "none"])
+    check(p.returncode == 0, "motor campaign with stalls exits 0 (failed runs are data)")
+    with h5py.File(out, "r") as f:
+        status = f["runs/status"][:]
+        names = {v: k for k, v in h5py.check_enum_dtype(f["runs/status"].dtype).items()}
+        n_stall = np.count_nonzero(status == [k for k, v in names.items() if v == "stall"][0])
+        check(0 < n_stall < 400 and np.count_nonzero(status != 0) == n_stall, f"{n_stall} of 400 runs stalled, the rest ok")
+        msgs = f["runs/message"].asstr()[:]
+        check(all(m.startswith("stall:") for m in msgs[status != 0]) and all(m == "" for m in msgs[status == 0]),
+              "every failed row has its reason, ok rows none")
+        check(np.all(np.isnan(f["runs/deploy_time_s"][:][status != 0])), "stalled rows have no deployment time (NaN)")
+        check(f["stats/deploy_time_s/count"][()] == 400 - n_stall, "statistics count the ok runs only")
+        check(f"{n_stall} failed" in p.stderr, "the final line reports the failures")
+        stall_torque = f["runs/inputs/drive.stall_torque_Nm"][:]
+        speed = f["runs/inputs/drive.no_load_speed_rad_per_s"][:]
+        check(stall_torque[status != 0].max() < stall_torque[status == 0].min(),
+              "every stalled run had a weaker motor than every ok run (the stall is physical)")
+        check_stats(f)
+        i = int(np.flatnonzero(status != 0)[0])
+        j = int(np.flatnonzero(status == 0)[0])
+    scene = os.path.join(args.repo, "campaigns/scenes/table1.toml")
+    for run, expect in ((i, "stall"), (j, "ok")):
+        r = subprocess.run([args.sim, scene, "--json", "--set", "drive.mode=motor",
+                            "--set", f"drive.stall_torque_Nm={stall_torque[run]!r}",
+                            "--set", f"drive.no_load_speed_rad_per_s={speed[run]!r}"], capture_output=True, text=True)
+        check(f'"status": "{expect}"' in r.stdout, f"run {run} rerun alone with truss-sim from its recorded inputs: {expect}")
+
+
+# ----------------------------------------------------------------------------------------------
+SALTELLI = """
+[campaign]
+name = "saltelli-test"
+[ensemble]
+n_runs = 160
+master_seed = 3
+sampling = "saltelli"
+[scene.mast]
+n_bays = 6
+[[dispersion]]
+key = "mast.strut_mass_kg"
+per = "bay"
+distribution = "normal"
+std = 0.05
+[[dispersion]]
+key = "drive.speed_m_per_s"
+apply = "relative"
+distribution = "uniform"
+lower = -0.2
+upper = 0.2
+"""
+
+
+def case_saltelli(args):
+    """Saltelli design (one factor per dispersion) and Sobol' indices against the estimators."""
+    d = fresh(args, "saltelli")
+    camp = os.path.join(d, "saltelli.toml")
+    open(camp, "w").write(SALTELLI)
+    out = os.path.join(d, "s.h5")
+    p = mpirun(args, 2, [camp, "-o", out, "--progress", "none"])
+    check(p.returncode == 0, f"saltelli campaign runs ({p.stderr.strip()[-300:]})")
+    with h5py.File(out, "r") as f:
+        G, block = 2, 4
+        m = f["runs/inputs/mast.strut_mass_kg"][:]
+        v = f["runs/inputs/drive.speed_m_per_s"][:]
+        A, B = slice(0, None, block), slice(1, None, block)
+        check(np.array_equal(m[2::block], m[B]) and np.array_equal(v[2::block], v[A]),
+              "AB_1 rows: strut masses (all bays) from B, speed from A")
+        check(np.array_equal(m[3::block], m[A]) and np.array_equal(v[3::block], v[B]),
+              "AB_2 rows: strut masses from A, speed from B")
+        factors = [s.decode() for s in f["sensitivity/factor"][:]]
+        check(factors == ["mast.strut_mass_kg", "drive.speed_m_per_s"], "factors are the dispersions")
+        y = f["runs/peak_drive_force_N"][:].reshape(-1, block)
+        fa, fb = y[:, 0], y[:, 1]
+        V = np.var(np.concatenate([fa, fb]))
+        s1 = [np.mean(fb * (y[:, 2 + i] - fa)) / V for i in range(G)]
+        st = [np.mean((fa - y[:, 2 + i]) ** 2) / 2 / V for i in range(G)]
+        g = f["sensitivity/peak_drive_force_N"]
+        # Same estimators on the same numbers; only the summation order differs.
+        check(np.allclose(g["first_order"][:], s1, rtol=1e-9, atol=1e-12) and np.allclose(g["total"][:], st, rtol=1e-9, atol=1e-12),
+              f"first-order {np.round(s1, 3)} and total {np.round(st, 3)} indices match the Saltelli/Jansen estimators")
+        check(np.all(g["first_order_lo"][:] <= g["first_order"][:] + 1e-12) and np.all(g["total_hi"][:] >= g["total"][:] - 1e-12),
+              "bootstrap intervals bracket the estimates")
+        check(st[1] > st[0], "the drive speed matters more than the strut masses for the peak drive force")
+    p = mpirun(args, 1, [camp, "-o", os.path.join(d, "bad.h5"), "--set", "ensemble.n_runs=150"])
+    check(p.returncode == 2 and "multiple of 4" in p.stderr, "saltelli n_runs not a multiple of the block: exit 2")
+
+
+# ----------------------------------------------------------------------------------------------
+BAD = {
+    "unknown_key": ("[ensemble]\nn_runs = 10\nrepeats = 3\n", ":3:", "unknown key"),
+    "unknown_table": ("[ensemble]\nn_runs = 10\n[montecarlo]\nx = 1\n", ":3:", "unknown table"),
+    "unknown_scene_key": ("[ensemble]\nn_runs = 10\n[[dispersion]]\nkey = \"mast.strut_colour\"\ndistribution = \"normal\"\nstd = 0.1\n",
+                          ":3:", "mast.strut_colour"),
+    "impossible_distribution": ("[ensemble]\nn_runs = 10\n[[dispersion]]\nkey = \"mast.strut_mass_kg\"\nper = \"bay\"\n"
+                                "distribution = \"normal\"\nstd = -0.1\n", ":3:", "std must be positive"),
+    "negative_count": ("[ensemble]\nn_runs = -5\n", ":2:", "n_runs"),
+    "empty_truncation": ("[ensemble]\nn_runs = 10\n[[dispersion]]\nkey = \"rail.x_m\"\napply = \"offset\"\n"
+                         "distribution = \"truncated_normal\"\nstd = 0.001\nlower = 1.0\nupper = 2.0\n", ":3:", "excludes all"),
+    "inline_scene_key": ("[ensemble]\nn_runs = 10\n[scene.mast]\nn_bays = 6\nstrut_lenght_m = 0.2\n", ":5:", "strut_lenght_m"),
+    "inline_scene_value": ("[ensemble]\nn_runs = 10\n[scene.mast]\nn_bays = -6\n", ":4:", "n_bays"),
+    "toml_syntax": ("[ensemble\nn_runs = 10\n", ":1:", ""),
+}
+
+
+def case_bad_input(args):
+    """Each class of bad campaign file: exit 2 on every rank, file:line and key, reported once,
+    nothing written."""
+    d = fresh(args, "bad")
+    for name, (text, line, words) in BAD.items():
+        camp = os.path.join(d, f"{name}.toml")
+        open(camp, "w").write(text)
+        out = os.path.join(d, f"{name}.h5")
+        p = mpirun(args, 3, [camp, "-o", out])
+        msg = p.stderr.strip()
+        check(p.returncode == 2 and f"{camp}{line}" in msg and words in msg and msg.count("error:") == 1
+              and not os.path.exists(out) and not os.path.exists(out + ".journal"),
+              f"{name}: exit 2, '{msg.splitlines()[0][:150]}', nothing written")
+    p = mpirun(args, 2, [os.path.join(args.repo, TABLE1), "-o", os.path.join(d, "x.h5"), "--set", "ensemble.n_runz=3"])
+    check(p.returncode == 2 and "n_runz" in p.stderr, "unknown --set key: exit 2")
+    p = mpirun(args, 2, [os.path.join(d, "missing.toml"), "-o", os.path.join(d, "x.h5")])
+    check(p.returncode == 2 and "missing.toml" in p.stderr, "missing campaign file: exit 2")
+    p = mpirun(args, 2, [os.path.join(args.repo, TABLE1), "-o", os.path.join(d, "no_dir", "x.h5")])
+    check(p.returncode == 2 and "does not exist" in p.stderr, "output directory missing: exit 2")
+    p = mpirun(args, 2, [os.path.join(args.repo, TABLE1), "-o", os.path.join(d, "x.h5"), "--resume"])
+    check(p.returncode == 2 and "no journal" in p.stderr, "--resume without a journal: exit 2")
+    written = [f for f in os.listdir(d) if not f.endswith(".toml")]
+    check(written == [], f"nothing written by any refused run ({written})")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--case", required=True, choices=["ranks", "resume", "failures", "saltelli", "bad_input"])
+    ap.add_argument("--driver", required=True)
+    ap.add_argument("--sim", required=True)
+    ap.add_argument("--repo", required=True)
+    ap.add_argument("--scratch", required=True)
+    args = ap.parse_args()
+    os.makedirs(args.scratch, exist_ok=True)
+    print(f"case {args.case}:")
+    globals()[f"case_{args.case}"](args)
+    print("passed")
+
+
+if __name__ == "__main__":
+    main()
