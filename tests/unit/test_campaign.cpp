@@ -39,7 +39,7 @@ TEST_CASE("the shipped campaigns parse", "[campaign]") {
   CHECK(t1.dispersions[0].per == Per::bay);
   const CampaignOptions m = parse_campaign_file(root + "/campaigns/motor_torque.toml");
   CHECK(m.base.drive.mode == truss::sim::DriveMode::motor);
-  CHECK(m.base.drive.stall_torque_Nm == 0.012);
+  CHECK(m.base.drive.stall_torque_Nm == 0.0052);
   const CampaignOptions b = parse_campaign_file(root + "/campaigns/bay_count.toml", {"ensemble.n_runs=40"});
   CHECK(b.ensemble.n_runs == 40);
   CHECK(b.dispersions[0].values.front() == 10);
