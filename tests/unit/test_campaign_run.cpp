@@ -1,0 +1,250 @@
+// The campaign engine without MPI: run records and their bytes, the journal (torn tails, damage,
+// another campaign, a second writer), statistics against hand-computed order statistics, the
+// Saltelli design with one factor per dispersion, and the resolved campaign text.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "campaign/campaign.hpp"
+#include "campaign/journal.hpp"
+#include "campaign/results.hpp"
+#include "campaign/run_record.hpp"
+#include "io/scene_toml.hpp"
+
+using namespace truss::campaign;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scratch(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / "truss_campaign_run_tests";
+  fs::create_directories(dir);
+  const fs::path p = dir / name;
+  fs::remove(p);
+  return p;
+}
+
+CampaignOptions small_campaign(const std::string& sampling = "latin_hypercube", std::int64_t n_runs = 24) {
+  const std::string text = fmt::format(R"(
+[ensemble]
+n_runs = {}
+master_seed = 11
+sampling = "{}"
+[scene.mast]
+n_bays = 5
+[[dispersion]]
+key = "mast.strut_mass_kg"
+per = "bay"
+distribution = "normal"
+std = 0.02
+[[dispersion]]
+key = "mast.frame_side_m"
+per = "frame"
+apply = "offset"
+distribution = "uniform"
+lower = -0.0005
+upper = 0.0005
+[[dispersion]]
+key = "drive.speed_m_per_s"
+apply = "relative"
+distribution = "uniform"
+lower = -0.1
+upper = 0.1
+)", n_runs, sampling);
+  return parse_campaign_text(text, "small.toml", ".");
+}
+
+std::string bytes_of(RunRecord r) {
+  r.wall_time_s = 0.0;
+  std::string s;
+  r.append_bytes(s);
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("a run record is a pure function of (campaign, run index) and survives its bytes", "[campaign][record]") {
+  const CampaignContext ctx(small_campaign());
+  const RunRecord a = calc_run_record(ctx, 5, 0);
+  const RunRecord b = calc_run_record(ctx, 5, 3);
+  REQUIRE(a.status == truss::sim::RunStatus::ok);
+  CHECK(a.inputs.size() == 5 + 6 + 1);        // per bay, per frame (n + 1), per run
+  CHECK(bytes_of(a).size() == bytes_of(b).size());
+  RunRecord b0 = b;
+  b0.rank = 0;
+  CHECK(bytes_of(a) == bytes_of(b0));          // only rank and wall time depend on where it ran
+  std::string bytes;
+  a.append_bytes(bytes);
+  const RunRecord c = RunRecord::from_bytes(bytes, ctx.columns);
+  CHECK(bytes_of(c) == bytes_of(a));
+  CHECK(c.wall_time_s == a.wall_time_s);
+  CHECK_THROWS_AS(RunRecord::from_bytes(std::string_view(bytes).substr(0, bytes.size() - 1), ctx.columns), std::runtime_error);
+  // Different runs draw different inputs.
+  CHECK(calc_run_record(ctx, 6, 0).inputs != a.inputs);
+}
+
+TEST_CASE("the journal keeps every complete frame and drops a torn or damaged tail", "[campaign][journal]") {
+  const std::string path = scratch("j1.journal").string();
+  {
+    Journal j = Journal::create(path, "campaign A");
+    for (int i = 0; i < 5; ++i) j.append(FrameKind::run, std::string(100 + i, static_cast<char>('a' + i)));
+    j.flush();
+    CHECK_THROWS_AS(Journal::create(path, "campaign A"), std::runtime_error);  // exists
+  }
+  std::vector<JournalFrame> frames;
+  std::size_t dropped = 1;
+  { Journal::resume(path, "campaign A", frames, dropped); }
+  REQUIRE(frames.size() == 5);
+  CHECK(dropped == 0);
+  CHECK(frames[3].payload == std::string(103, 'd'));
+
+  // A frame cut short by a crash: dropped, the file truncated, appending continues after frame 5.
+  const auto good_size = fs::file_size(path);
+  { std::ofstream(path, std::ios::app | std::ios::binary) << std::string("R\x40\x00\x00\x00partial", 12); }
+  {
+    Journal j = Journal::resume(path, "campaign A", frames, dropped);
+    CHECK(frames.size() == 5);
+    CHECK(dropped == 12);
+    CHECK(fs::file_size(path) == good_size);
+    j.append(FrameKind::heartbeat, "hb");
+  }
+  Journal::resume(path, "campaign A", frames, dropped);
+  CHECK(frames.size() == 6);
+  CHECK(frames.back().kind == FrameKind::heartbeat);
+
+  // One flipped byte inside frame 3: frames 1-2 survive, the rest is recomputed on resume.
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    const auto header = 8 + 4 + 4 + std::string("campaign A").size() + 4;
+    f.seekp(static_cast<std::streamoff>(header + 2 * (9 + 100) + 9 + 50 + 2));
+    f.put('#');
+  }
+  Journal::resume(path, "campaign A", frames, dropped);
+  CHECK(frames.size() == 2);
+  CHECK(dropped > 0);
+
+  // Another campaign's journal, or one that a live process holds, is refused.
+  CHECK_THROWS_AS(Journal::resume(path, "campaign B", frames, dropped), JournalRefused);
+  {
+    Journal held = Journal::resume(path, "campaign A", frames, dropped);
+    CHECK_THROWS_AS(Journal::resume(path, "campaign A", frames, dropped), JournalRefused);
+    CHECK_THROWS_AS(Journal::remove_unused(path), JournalRefused);
+  }
+  Journal::remove_unused(path);
+  CHECK(!fs::exists(path));
+}
+
+TEST_CASE("statistics: ok runs with finite values, numpy's linear percentiles", "[campaign][stats]") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // Sorted 1, 2, 4, 10 (ok and finite); the 100 is a failed run, the NaN an ok run without value.
+  const std::vector<double> v = {4.0, 100.0, 1.0, nan, 10.0, 2.0};
+  const std::vector<std::uint8_t> ok = {1, 0, 1, 1, 1, 1};
+  const Stats s = calc_stats(v, ok);
+  CHECK(s.count == 4);
+  CHECK(s.min == 1.0);
+  CHECK(s.max == 10.0);
+  CHECK(s.mean == 4.25);
+  CHECK(s.std == Approx(std::sqrt((3.25 * 3.25 + 2.25 * 2.25 + 0.25 * 0.25 + 5.75 * 5.75) / 3.0)).epsilon(1e-15));
+  // Index h = q/100 * 3. p50: h = 1.5 -> 2 + 0.5 * 2 = 3. p5: h = 0.15 -> 1 + 0.15. p99.865:
+  // h = 2.99595, lerp from the upper end: 10 - 6 * (1 - 0.99595).
+  CHECK(s.percentiles[2] == 3.0);
+  CHECK(s.percentiles[1] == Approx(1.15).epsilon(1e-15));
+  CHECK(s.percentiles[5] == Approx(10.0 - 6.0 * (1.0 - 0.99595)).epsilon(1e-15));
+  const std::vector<double> sorted = {1, 2, 4, 10};
+  CHECK(calc_percentile_sorted(sorted, 0.0) == 1.0);
+  CHECK(calc_percentile_sorted(sorted, 100.0) == 10.0);
+  const Stats none = calc_stats({nan, 3.0}, {1, 0});
+  CHECK(none.count == 0);
+  CHECK(std::isnan(none.mean));
+  CHECK(std::isnan(none.percentiles[0]));
+  CHECK(std::isnan(calc_stats({3.0}, {1}).std));  // one value: no sample deviation
+}
+
+TEST_CASE("Saltelli design: AB_g takes every dimension of dispersion g from B", "[campaign][saltelli]") {
+  const CampaignOptions c = small_campaign("saltelli", 5 * 8);
+  REQUIRE(saltelli_block_runs(c) == 5);
+  const RunSampler s(c);
+  const DimensionLayout& L = s.layout();
+  const auto d = static_cast<std::size_t>(L.total);
+  for (std::int64_t block = 0; block < 8; ++block) {
+    std::vector<std::vector<double>> u(5, std::vector<double>(d));
+    for (int k = 0; k < 5; ++k) s.calc_uniforms(block * 5 + k, u[static_cast<std::size_t>(k)].data());
+    for (int g = 0; g < 3; ++g)
+      for (std::size_t j = 0; j < d; ++j) {
+        const bool in_g = static_cast<int>(j) >= L.offset[static_cast<std::size_t>(g)] &&
+                          static_cast<int>(j) < L.offset[static_cast<std::size_t>(g)] + L.count[static_cast<std::size_t>(g)];
+        CHECK(u[static_cast<std::size_t>(2 + g)][j] == (in_g ? u[1][j] : u[0][j]));
+        CHECK((u[0][j] > 0.0 && u[0][j] < 1.0));
+      }
+    CHECK(u[0] != u[1]);
+  }
+  // Every block has its own A and B.
+  std::vector<double> a0(d), a1(d);
+  s.calc_uniforms(0, a0.data());
+  s.calc_uniforms(5, a1.data());
+  CHECK(a0 != a1);
+  // A run count that is not whole blocks is a campaign error naming ensemble.n_runs.
+  try {
+    small_campaign("saltelli", 42);
+    FAIL("no error");
+  } catch (const truss::io::InputError& e) {
+    CHECK_THAT(e.what(), Catch::Contains("ensemble.n_runs") && Catch::Contains("multiple of 5"));
+  }
+}
+
+TEST_CASE("a ResultTable refuses a run twice or out of range", "[campaign][results]") {
+  const CampaignContext ctx(small_campaign());
+  ResultTable t(ctx.options.ensemble.n_runs, ctx.columns);
+  t.add(calc_run_record(ctx, 3, 0), 0);
+  CHECK(t.has(3));
+  CHECK(!t.has(2));
+  CHECK(t.n_done() == 1);
+  CHECK_THROWS_AS(t.add(calc_run_record(ctx, 3, 1), 0), std::runtime_error);
+  RunRecord r = calc_run_record(ctx, 4, 0);
+  r.run_index = 24;
+  CHECK_THROWS_AS(t.add(r, 0), std::runtime_error);
+}
+
+TEST_CASE("the resolved campaign reads back to itself, scene inline", "[campaign][resolved]") {
+  const std::string root = TRUSS_SOURCE_DIR;
+  for (const char* file : {"table1_dispersed.toml", "motor_torque.toml", "bay_count.toml"}) {
+    INFO(file);
+    const CampaignOptions c = parse_campaign_file(root + "/campaigns/" + file, {"output.history_runs=[1, 2]"});
+    const std::string text = resolved_campaign_toml(c);
+    const CampaignOptions back = parse_campaign_text(text, "resolved.toml", "/nonexistent");
+    CHECK(resolved_campaign_toml(back) == text);
+    CHECK(truss::io::resolved_scene_toml(back.base) == truss::io::resolved_scene_toml(c.base));
+    CHECK(back.output.history_runs == std::vector<std::int64_t>{1, 2});
+    REQUIRE(back.dispersions.size() == c.dispersions.size());
+    for (std::size_t i = 0; i < c.dispersions.size(); ++i) {
+      CHECK(back.dispersions[i].std == c.dispersions[i].std);
+      CHECK(back.dispersions[i].values == c.dispersions[i].values);
+    }
+  }
+}
+
+TEST_CASE("an inline scene: applied after the file, errors at the campaign file's line", "[campaign][inline]") {
+  const CampaignOptions c = parse_campaign_text("[ensemble]\nn_runs = 3\n[scene.mast]\nn_bays = 7\n[scene.drive]\nmode = \"motor\"\n",
+                                                "inline.toml", ".");
+  CHECK(c.base.mast.n_bays == 7);
+  CHECK(c.base.drive.mode == truss::sim::DriveMode::motor);
+  auto error = [](const std::string& text) {
+    try {
+      parse_campaign_text(text, "inline.toml", ".");
+    } catch (const truss::io::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  CHECK_THAT(error("[ensemble]\nn_runs = 3\n[scene.mast]\nn_bays = 7\nstrut_mas_kg = 1.0\n"),
+             Catch::StartsWith("error: inline.toml:5: unknown key 'mast.strut_mas_kg'"));
+  CHECK_THAT(error("[ensemble]\nn_runs = 3\n[scene.mast]\nn_bays = 0\n"), Catch::StartsWith("error: inline.toml:4: mast.n_bays"));
+  CHECK_THAT(error("[scene.masts]\nn_bays = 3\n"), Catch::StartsWith("error: inline.toml:1: unknown key 'scene.masts'"));
+  CHECK_THAT(error("[output]\nhistory_runs = [3]\n[ensemble]\nn_runs = 3\n"),
+             Catch::StartsWith("error: inline.toml:2: output.history_runs: run 3 does not exist"));
+}
