@@ -264,6 +264,17 @@ def case_failures(args):
         check_stats(f)
         i = int(np.flatnonzero(status != 0)[0])
         j = int(np.flatnonzero(status == 0)[0])
+    # A wall-time cap far below a motor run's cost: runs are stopped and recorded, the campaign goes on.
+    capped = os.path.join(d, "capped.h5")
+    p = mpirun(args, 2, [camp, "-o", capped, "--set", "ensemble.n_runs=12", "--set", "ensemble.max_run_wall_time_s=0.0002",
+                         "--progress", "none"])
+    check(p.returncode == 0, "campaign whose runs exceed the wall-time cap completes")
+    with h5py.File(capped, "r") as f:
+        names = [s.decode() for s in f["stats/status_names"][:]]
+        counts = dict(zip(names, f["stats/status_counts"][:]))
+        msgs = f["runs/message"].asstr()[:][f["runs/status"][:] == names.index("wall-time limit")]
+        check(counts["wall-time limit"] > 0 and all("wall-time cap of 0.0002 s" in m for m in msgs),
+              f"runs stopped by the cap are recorded as 'wall-time limit' with the reason ({counts['wall-time limit']} of 12)")
     scene = os.path.join(args.repo, "campaigns/scenes/table1.toml")
     for run, expect in ((i, "stall"), (j, "ok")):
         r = subprocess.run([args.sim, scene, "--json", "--set", "drive.mode=motor",
