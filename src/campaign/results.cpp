@@ -47,17 +47,41 @@ void ResultTable::add(const RunRecord& r, int sess) {
   session[i] = sess;
 }
 
-double calc_percentile_sorted(const std::vector<double>& x, double q) {
-  if (x.empty()) return kNaN;
-  // numpy 1.22+ "linear": virtual index h = q/100 (n - 1), lerp(a, b, t) = a + t (b - a) for
-  // t < 0.5 and b - (1 - t) (b - a) otherwise (exact at both ends).
-  const double h = (q / 100.0) * static_cast<double>(x.size() - 1);
+namespace {
+
+// numpy 1.22+ "linear": virtual index h = q/100 (n - 1) between order statistics lo and hi,
+// lerp(a, b, t) = a + t (b - a) for t < 0.5 and b - (1 - t) (b - a) otherwise (exact at both ends).
+struct PercentileIndex {
+  std::size_t lo, hi;
+  double t;
+};
+PercentileIndex percentile_index(std::size_t n, double q) {
+  const double h = (q / 100.0) * static_cast<double>(n - 1);
   const double fl = std::floor(h);
   const auto lo = static_cast<std::size_t>(fl);
-  const std::size_t hi = std::min(lo + 1, x.size() - 1);
-  const double t = h - fl;
-  const double a = x[lo], b = x[hi], d = b - a;
+  return {lo, std::min(lo + 1, n - 1), h - fl};
+}
+// Puts the order statistics ks[k] (sorted, all in [lo, hi)) of x[lo, hi) in place.
+void multi_select(std::vector<double>& x, std::size_t lo, std::size_t hi, const std::size_t* k0, const std::size_t* k1) {
+  if (k0 == k1 || hi - lo < 2) return;
+  const std::size_t* mid = k0 + (k1 - k0) / 2;
+  std::nth_element(x.begin() + static_cast<std::ptrdiff_t>(lo), x.begin() + static_cast<std::ptrdiff_t>(*mid),
+                   x.begin() + static_cast<std::ptrdiff_t>(hi));
+  multi_select(x, lo, *mid, k0, mid);
+  multi_select(x, *mid + 1, hi, mid + 1, k1);
+}
+
+double lerp_numpy(double a, double b, double t) {
+  const double d = b - a;
   return t >= 0.5 ? b - d * (1.0 - t) : a + d * t;
+}
+
+}  // namespace
+
+double calc_percentile_sorted(const std::vector<double>& x, double q) {
+  if (x.empty()) return kNaN;
+  const PercentileIndex p = percentile_index(x.size(), q);
+  return lerp_numpy(x[p.lo], x[p.hi], p.t);
 }
 
 Stats calc_stats(const std::vector<double>& values, const std::vector<std::uint8_t>& use) {
@@ -78,10 +102,22 @@ Stats calc_stats(const std::vector<double>& values, const std::vector<std::uint8
   double ss = 0.0;
   for (double v : x) ss += (v - s.mean) * (v - s.mean);
   s.std = x.size() > 1 ? std::sqrt(ss / static_cast<double>(x.size() - 1)) : kNaN;
-  std::sort(x.begin(), x.end());
+  // Only a dozen order statistics are needed: multi-select them (select the middle one, then
+  // recurse on both sides), O(n log k) instead of a full O(n log n) sort.
+  const std::size_t n = x.size();
+  std::array<PercentileIndex, kStatPercentiles.size()> idx{};
+  std::vector<std::size_t> ks = {0, n - 1};
+  for (std::size_t k = 0; k < kStatPercentiles.size(); ++k) {
+    idx[k] = percentile_index(n, kStatPercentiles[k]);
+    ks.push_back(idx[k].lo);
+    ks.push_back(idx[k].hi);
+  }
+  std::sort(ks.begin(), ks.end());
+  ks.erase(std::unique(ks.begin(), ks.end()), ks.end());
+  multi_select(x, 0, n, ks.data(), ks.data() + ks.size());
   s.min = x.front();
   s.max = x.back();
-  for (std::size_t k = 0; k < kStatPercentiles.size(); ++k) s.percentiles[k] = calc_percentile_sorted(x, kStatPercentiles[k]);
+  for (std::size_t k = 0; k < kStatPercentiles.size(); ++k) s.percentiles[k] = lerp_numpy(x[idx[k].lo], x[idx[k].hi], idx[k].t);
   return s;
 }
 

@@ -269,6 +269,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
     try {
       flush_journal();
       progress.finish(table->n_done(), table->n_failed());
+      const auto t_finish = std::chrono::steady_clock::now();
       std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
       for (std::int64_t run : c.output.history_runs)
         histories.emplace_back(run, campaign::calc_run_with_history(*ctx, run, c.output.history_step_s));
@@ -283,9 +284,11 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
       info.wall_time_s = previous_wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
       campaign::write_campaign_h5(o.output_path, *ctx, *table, sens, histories, info, o.force);
       r0.journal->close_and_remove();
-      std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs, {} ok, {} failed, {:.3g} s on {} rank{}\n", o.output_path,
-                               table->n_runs(), table->n_runs() - table->n_failed(), table->n_failed(), info.wall_time_s,
-                               size, size > 1 ? "s" : "");
+      std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs, {} ok, {} failed, {:.3g} s on {} rank{} "
+                               "(statistics and file: {:.3g} s)\n", o.output_path, table->n_runs(),
+                               table->n_runs() - table->n_failed(), table->n_failed(), info.wall_time_s, size,
+                               size > 1 ? "s" : "",
+                               std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count());
     } catch (const io::InputError& e) {
       std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
       status = kExitBadInput;
