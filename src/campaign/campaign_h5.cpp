@@ -1,9 +1,5 @@
 #include "campaign/campaign_h5.hpp"
 
-#include <unistd.h>
-
-#include <filesystem>
-
 #include <fmt/format.h>
 
 #include "io/h5_util.hpp"
@@ -272,25 +268,7 @@ void write_campaign_h5(const std::string& path, const CampaignContext& ctx, cons
                        const std::vector<OutputSensitivity>& sensitivity,
                        const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,
                        const CampaignFileInfo& info, bool force) {
-  namespace fs = std::filesystem;
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-  const fs::path p(path);
-  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path();
-  const std::string tmp = (dir / fmt::format(".{}.tmp.{}", p.filename().string(), static_cast<long>(::getpid()))).string();
-  try {
-    {
-      Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create " + tmp);
-      write_contents(file.get(), ctx, table, sensitivity, histories, info);
-      check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), "flush " + tmp);
-      file.close("close " + tmp);
-    }
-    sync_file(tmp);
-    commit(tmp, path, force);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw;
-  }
+  write_file_atomically(path, force, [&](hid_t file) { write_contents(file, ctx, table, sensitivity, histories, info); });
 }
 
 }  // namespace truss::campaign

@@ -152,28 +152,7 @@ void check_output_path(const std::string& path, bool force) {
 void write_run_h5(const std::string& path, const sim::RunResult& result,
                   const std::string& resolved_scene_toml, bool force) {
   check_output_path(path, force);
-  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through exceptions
-
-  const fs::path p(path);
-  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path();
-  const std::string tmp =
-      (dir / fmt::format(".{}.tmp.{}", p.filename().string(), static_cast<long>(::getpid())))
-          .string();
-  try {
-    {
-      Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose,
-                  fmt::format("create {}", tmp));
-      write_contents(file.get(), result, resolved_scene_toml);
-      check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), fmt::format("flush {}", tmp));
-      file.close(fmt::format("close {}", tmp));
-    }
-    sync_file(tmp);
-    commit(tmp, path, force);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove(tmp, ec);
-    throw;
-  }
+  write_file_atomically(path, force, [&](hid_t file) { write_contents(file, result, resolved_scene_toml); });
 }
 
 }  // namespace truss::io

@@ -13,6 +13,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include <unistd.h>
+
 #include "io/scene_toml.hpp"
 #include "sim/result.hpp"
 
@@ -159,6 +161,27 @@ void commit(const std::string& tmp, const std::string& path, bool force) {
   if (std::rename(tmp.c_str(), path.c_str()) != 0)
     throw std::runtime_error(
         fmt::format("cannot rename {} to {}: {}", tmp, path, std::strerror(errno)));
+}
+
+void write_file_atomically(const std::string& path, bool force, const std::function<void(hid_t file)>& write) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through exceptions
+  const fs::path p(path);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path();
+  const std::string tmp = (dir / fmt::format(".{}.tmp.{}", p.filename().string(), static_cast<long>(::getpid()))).string();
+  try {
+    {
+      Handle file(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, "create " + tmp);
+      write(file.get());
+      check(H5Fflush(file.get(), H5F_SCOPE_GLOBAL), "flush " + tmp);
+      file.close("close " + tmp);
+    }
+    sync_file(tmp);
+    commit(tmp, path, force);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(tmp, ec);
+    throw;
+  }
 }
 
 }  // namespace truss::io::h5

@@ -4,6 +4,7 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 
 namespace truss::io::h5 {
@@ -54,5 +55,10 @@ std::string utc_iso8601(double unix_time_s);
 void sync_file(const std::string& path);
 // Renames tmp onto path; without force never replaces an existing path (InputError).
 void commit(const std::string& tmp, const std::string& path, bool force);
+
+// Creates `path` atomically: `write` fills a new HDF5 file .NAME.tmp.PID in the same directory,
+// which is flushed, closed, synced and renamed onto `path` (commit()); on any error the temporary
+// file is removed and the exception propagates.
+void write_file_atomically(const std::string& path, bool force, const std::function<void(hid_t file)>& write);
 
 }  // namespace truss::io::h5
