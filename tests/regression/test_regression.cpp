@@ -163,6 +163,28 @@ TEST_CASE("step and wall-time caps end a run with a status, never a hang", "[reg
   CHECK(r.status == RunStatus::step_limit);
   CHECK(r.steps <= 50 + 1);
   CHECK(r.bays_completed < 30);
+  s.run.max_steps = 2'000'000;
+  s.run.max_wall_time_s = 1e-5;  // far below one motor deployment (milliseconds)
+  const RunResult w = simulate(s);
+  CHECK(w.status == RunStatus::wall_time_limit);
+  CHECK(w.message.find("wall-time cap") != std::string::npos);
+}
+
+TEST_CASE("a motor too weak for the lock creeps to rest: a stall, found in a few hundred steps", "[regression][stall]") {
+  // Table 1, motor drive: 4.4 mN m brings the mast to an equilibrium short of bay 30's lock that it
+  // approaches asymptotically (the speed never crosses zero; before the creep event this ran into
+  // the 2e6 step cap at t = 8.5e5 s); 4.8 mN m deploys.
+  SceneOptions s;
+  s.mast.n_bays = 30;
+  s.drive.mode = DriveMode::motor;
+  s.drive.stall_torque_Nm = 0.0044;
+  const RunResult r = simulate(s);
+  CHECK(r.status == RunStatus::stall);
+  CHECK(r.message.find("crept to rest") != std::string::npos);
+  CHECK(r.steps < 5000);
+  CHECK(r.bays_completed == 0);
+  s.drive.stall_torque_Nm = 0.0048;
+  CHECK(simulate(s).status == RunStatus::ok);
 }
 
 TEST_CASE("non-physical scenes are invalid input before anything runs", "[regression][input]") {
