@@ -96,11 +96,15 @@ Stats calc_stats(const std::vector<double>& values, const std::vector<std::uint8
     s.percentiles.fill(kNaN);
     return s;
   }
+  // Shifted by the first value: exact for a constant column (std 0, not rounding noise) and
+  // free of cancellation when the spread is tiny against the mean.
+  const double x0 = x.front();
   double sum = 0.0;
-  for (double v : x) sum += v;
-  s.mean = sum / static_cast<double>(x.size());
+  for (double v : x) sum += v - x0;
+  const double dm = sum / static_cast<double>(x.size());
+  s.mean = x0 + dm;
   double ss = 0.0;
-  for (double v : x) ss += (v - s.mean) * (v - s.mean);
+  for (double v : x) ss += (v - x0 - dm) * (v - x0 - dm);
   s.std = x.size() > 1 ? std::sqrt(ss / static_cast<double>(x.size() - 1)) : kNaN;
   // Only a dozen order statistics are needed: multi-select them (select the middle one, then
   // recurse on both sides), O(n log k) instead of a full O(n log n) sort.

@@ -327,6 +327,7 @@ def case_saltelli(args):
         factors = [s.decode() for s in f["sensitivity/factor"][:]]
         check(factors == ["mast.strut_mass_kg", "drive.speed_m_per_s"], "factors are the dispersions")
         y = f["runs/peak_drive_force_N"][:].reshape(-1, block)
+        y = y - np.mean(y[:, :2])  # outputs centred by the mean of f(A) and f(B), as SALib does
         fa, fb = y[:, 0], y[:, 1]
         V = np.var(np.concatenate([fa, fb]))
         s1 = [np.mean(fb * (y[:, 2 + i] - fa)) / V for i in range(G)]

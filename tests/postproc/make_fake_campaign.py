@@ -210,7 +210,8 @@ def simulate(a, rng, inputs, n_bays):
         required = 0.0108 * (1 + 0.02 * noise[:, 4])
         for i in np.nonzero(inputs["drive.stall_torque_Nm"] < required)[0]:
             status[i] = STATUS["stall"]
-            message[i] = (f"stall: the driven frame stopped at y = {0.3 + 0.01 * noise[i, 5]:.9g} m, "
+            y = 0.3 + 0.01 * noise[i, 5]
+            message[i] = (f"stall: the driven frame stopped at y = {y:.9g} m, "
                           f"t = {3.0 + noise[i, 5] ** 2:.9g} s, in the stage of bay {n_bays[i]} "
                           "before its lock")
     forced = [("rail miss", "rail miss: the hinge of bay {b} passed below the rail foot"),

@@ -29,6 +29,7 @@ import struct
 import subprocess
 import sys
 import tomllib
+from concurrent.futures import ThreadPoolExecutor
 
 import h5py
 import numpy as np
@@ -95,15 +96,20 @@ def order_ci(x_sorted, p, conf=0.95):
         res["ci_lo"], res["ci_r"] = float(x_sorted[r - 1]), r
     else:
         res["ci_lo"] = float("nan")
-        res["ci_lo.n_needed"] = next(m for m in range(1, 10**7)
-                                     if stats.binom.cdf(0, m, p) < a)
+        res["ci_lo.n_needed"] = first_n(lambda m: stats.binom.cdf(0, m, p) < a)
     if s <= n:
         res["ci_hi"], res["ci_s"] = float(x_sorted[s - 1]), s
     else:
         res["ci_hi"] = float("nan")
-        res["ci_hi.n_needed"] = next(m for m in range(1, 10**7)
-                                     if stats.binom.cdf(m - 1, m, p) >= 1 - a)
+        res["ci_hi.n_needed"] = first_n(lambda m: stats.binom.cdf(m - 1, m, p) >= 1 - a)
     return res
+
+
+def first_n(condition, limit=10**6):
+    """The smallest sample size m >= 1 for which condition(m) holds (vectorised search)."""
+    m = np.arange(1, limit + 1)
+    hit = np.nonzero(condition(m))[0]
+    return int(m[hit[0]])
 
 
 def clopper_pearson_bisect(k, n, side, conf=0.95):
@@ -190,13 +196,13 @@ def expected_campaign(path):
                     E[f"base_scene.{tab}.{k}"] = v
 
         # Section 2: distributions.
-        worst = 0.0
+        cmp_stats = Comparison()
         for out in OUTPUTS:
             y = f[f"runs/{out}"][()]
             x = np.sort(y[ok & np.isfinite(y)])
             mine = col_stats(x)
             stored = {k: f[f"stats/{out}/{k}"][()] for k in mine}
-            worst = max(worst, max(reldiff(mine[k], float(stored[k])) for k in mine))
+            cmp_stats.add(mine, stored, x)
             E[f"{out}.count"] = len(x)
             required.add(f"{out}.count")
             if len(x) == 0:
@@ -208,7 +214,9 @@ def expected_campaign(path):
                 for k, v in order_ci(x, p).items():
                     E[f"{out}.{lev}.{k}"] = v
                 required |= {f"{out}.{lev}", f"{out}.{lev}.ci_lo", f"{out}.{lev}.ci_hi"}
-        E["check.stats.max_rel_diff"] = worst
+        E["check.stats.count_mismatches"] = cmp_stats.counts
+        E["check.stats.order_max_diff"] = cmp_stats.order
+        E["check.stats.moments_max_diff"] = cmp_stats.moments
 
         # Section 3: lock timing.
         lock = f["runs/bays/lock_time_s"][()][ok]
@@ -223,20 +231,20 @@ def expected_campaign(path):
             dt[:, 1:] = lock[:, 1:] - lock[:, :-1]
         else:
             dt[:, :-1] = lock[:, 1:] - lock[:, :-1]
-        worst = 0.0
+        cmp_lock = Comparison()
         for j in range(lock.shape[1]):
             for name, arr in (("lock_time_s", lock), ("lock_interval_s", dt)):
                 v = np.sort(arr[:, j][np.isfinite(arr[:, j])])
                 E[f"{name}.bay{j + 1}.count"] = len(v)
                 for k, p in (("p5", 0.05), ("p50", 0.5), ("p95", 0.95)):
                     E[f"{name}.bay{j + 1}.{k}"] = hf7(v, p) if len(v) else float("nan")
-                    if name == "lock_time_s":
-                        worst = max(worst, reldiff(E[f"{name}.bay{j + 1}.{k}"],
-                                                   float(f[f"stats/bays/lock_time_s/{k}"][j])))
-            worst = max(worst, reldiff(E[f"lock_time_s.bay{j + 1}.count"],
-                                       float(f["stats/bays/lock_time_s/count"][j])))
+                if name == "lock_time_s":
+                    fields = ("count", "p5", "p50", "p95")
+                    cmp_lock.add({k: E[f"{name}.bay{j + 1}.{k}"] for k in fields},
+                                 {k: f[f"stats/bays/lock_time_s/{k}"][j] for k in fields}, v)
             required.add(f"lock_time_s.bay{j + 1}.p50")
-        E["check.lock.max_rel_diff"] = worst
+        E["check.lock.count_mismatches"] = cmp_lock.counts
+        E["check.lock.order_max_diff"] = cmp_lock.order
         E["_lock_order"] = order
 
         # Section 4: motor margin.
@@ -253,6 +261,7 @@ def expected_campaign(path):
             E.update({"motor.stall_torque_nominal": float(scene["drive"]["stall_torque_Nm"]),
                       "motor.n_considered": n_cons, "motor.n_stall": int(stalled.sum()),
                       "motor.n_ok_exceed": int(ok_ex.sum()), "motor.n_exceed": k,
+                      "motor.n_other_failures": int(np.sum(~ok & ~stalled)),
                       "motor.p_exceed": k / n_cons,
                       "motor.p_exceed.ci_lo": clopper_pearson_bisect(k, n_cons, "lo"),
                       "motor.p_exceed.ci_hi": clopper_pearson_bisect(k, n_cons, "hi"),
@@ -268,7 +277,8 @@ def expected_campaign(path):
                 cols.append((d["key"], v))
             else:
                 start = 1 if d["per"] == "bay" else 0
-                cols += [(f"{d['key']}[{d['per']} {j + start}]", v[:, j]) for j in range(v.shape[1])]
+                cols += [(f"{d['key']}[{d['per']} {j + start}]", v[:, j])
+                         for j in range(v.shape[1])]
                 dev = (v - d["nominal"]) / (d["nominal"] if d["nominal"] != 0 else 1.0)
                 with np.errstate(invalid="ignore"):
                     agg = np.array([np.mean(r[np.isfinite(r)]) if np.isfinite(r).any()
@@ -298,12 +308,31 @@ def expected_campaign(path):
     return E, required
 
 
-def reldiff(a, b):
-    if (math.isnan(a) and math.isnan(b)) or a == b:
-        return 0.0
-    if math.isnan(a) or math.isnan(b):
-        return float("inf")
-    return abs(a - b) / max(abs(b), np.finfo(float).tiny)
+class Comparison:
+    """The report's consistency check of recomputed statistics against /stats: counts that
+    differ; largest |difference| / largest |value| of the column, for order statistics and
+    for mean/std separately."""
+
+    def __init__(self):
+        self.counts, self.order, self.moments = 0, 0.0, 0.0
+
+    def add(self, mine, stored, x):
+        scale = float(np.max(np.abs(x))) if len(x) else 0.0
+        for k, v in mine.items():
+            w = float(stored[k])
+            if k == "count":
+                self.counts += int(v != w)
+                continue
+            if (math.isnan(v) and math.isnan(w)) or v == w:
+                d = 0.0
+            elif math.isnan(v) or math.isnan(w):
+                d = float("inf")
+            else:
+                d = abs(v - w) / max(scale, np.finfo(float).tiny)
+            if k in ("mean", "std"):
+                self.moments = max(self.moments, d)
+            else:
+                self.order = max(self.order, d)
 
 
 def expected_single_run(path):
@@ -468,10 +497,18 @@ def check_failure_groups(name, parsed, E):
           + (f": {problems}" if problems else ""))
 
 
-def check_campaign(repo, scratch, name, h5, expect_imgs=()):
-    outdir = os.path.join(scratch, f"report_{name}")
-    shutil.rmtree(outdir, ignore_errors=True)
-    r = run_report(repo, h5, outdir)
+def build_reports(repo, scratch, jobs):
+    """Run report.py on every (name, h5) job, two at a time; {name: (outdir, result)}."""
+    def one(job):
+        name, h5 = job
+        outdir = os.path.join(scratch, f"report_{name}")
+        return name, (outdir, run_report(repo, h5, outdir))
+    with ThreadPoolExecutor(max_workers=2) as ex:
+        return dict(ex.map(one, jobs))
+
+
+def check_campaign(name, h5, built, expect_imgs=()):
+    outdir, r = built
     if not check(r.returncode == 0, f"{name}: report.py exit 0 ({r.stderr.strip()[:300]})"):
         return None
     parsed = parse_report(os.path.join(outdir, "report.html"))
@@ -526,55 +563,56 @@ def main():
     os.makedirs(scratch)
     S = lambda name: os.path.join(scratch, name)  # noqa: E731
 
-    # Synthetic campaigns: failures of three kinds, motor stalls, Saltelli, variable bay count.
-    f1 = fake(repo, S("failures.h5"), "--n-runs", "300", "--n-fail", "6", "--histories", "0,7")
-    p = check_campaign(repo, scratch, "failures", f1,
-                       ["dist_peak_drive_force_N.png", "dist_deploy_time_s.png"])
-    if p is not None:    # counts known by construction (make_fake_campaign --n-fail 6)
-        got = {k: int(v) for k, v, _ in p.values if k.startswith(("status_count.", "runs.n_"))}
-        want = {"status_count.ok": 294, "status_count.rail miss": 2, "status_count.stall": 2,
-                "status_count.wall-time limit": 2, "runs.n_failed": 6, "runs.n_ok": 294}
-        check(all(got.get(k) == v for k, v in want.items()),
-              f"failures: counts by status as constructed: {want}")
-    f2 = fake(repo, S("motor.h5"), "--n-runs", "400", "--drive-mode", "motor")
-    p = check_campaign(repo, scratch, "motor", f2, ["motor_torque_margin.png"])
-    if p is not None:
-        got = {k: v for k, v, _ in p.values}
-        with h5py.File(f2, "r") as f:
+    # Synthetic campaigns: a motor campaign with stalls and failures of three more kinds, with
+    # histories; Saltelli with a variable bay count and an output without finite values; five
+    # runs (every CI bound "n too small"). Then the real files, and the single runs.
+    subprocess.run([PY, os.path.join(repo, "tests", "postproc", "make_fake_run.py"),
+                    S("run.h5"), "--n-bays", "4"], check=True)
+    campaigns = {
+        "motor": fake(repo, S("motor.h5"), "--n-runs", "400", "--drive-mode", "motor",
+                      "--n-fail", "6", "--histories", "0,7"),
+        "saltelli": fake(repo, S("saltelli.h5"), "--n-runs", "252", "--sampling", "saltelli",
+                         "--variable-bays", "--no-torque"),
+        "five_runs": fake(repo, S("small.h5"), "--n-runs", "5", "--n-bays-max", "3"),
+        **{f"real_campaign_{i}": os.path.abspath(h) for i, h in enumerate(a.campaign_h5)}}
+    runs = {"single_run": S("run.h5"),
+            **{f"real_run_{i}": os.path.abspath(h) for i, h in enumerate(a.run_h5)}}
+    built = build_reports(repo, scratch, list(campaigns.items()) + list(runs.items()))
+
+    imgs = {"motor": ["motor_torque_margin.png", "dist_peak_drive_force_N.png",
+                      "dist_deploy_time_s.png"], "saltelli": ["sobol_indices.png"]}
+    parsed = {name: check_campaign(name, h5, built[name], imgs.get(name, ()))
+              for name, h5 in campaigns.items()}
+    if parsed["motor"] is not None:
+        # Counts known by construction (make_fake_campaign --n-fail 6: two runs each of rail
+        # miss, wall-time limit and stall, on top of the motor's own stalls).
+        got = {k: v for k, v, _ in parsed["motor"].values}
+        with h5py.File(campaigns["motor"], "r") as f:
             n_stall = int(np.sum(f["runs/status"][()] == 2))
-        check(n_stall > 0 and int(got.get("motor.n_stall", -1)) == n_stall
-              and int(got.get("motor.n_exceed", -1)) >= n_stall,
-              f"motor: {n_stall} stalled runs counted as exceedances")
-    f3 = fake(repo, S("saltelli.h5"), "--n-runs", "252", "--sampling", "saltelli",
-              "--variable-bays", "--no-torque")
-    p = check_campaign(repo, scratch, "saltelli", f3, ["sobol_indices.png"])
-    if p is not None:
+        want = {"status_count.rail miss": 2, "status_count.wall-time limit": 2,
+                "status_count.stall": n_stall, "runs.n_failed": n_stall + 4,
+                "runs.n_ok": 400 - n_stall - 4, "motor.n_stall": n_stall}
+        check(n_stall > 2 and all(int(got.get(k, -1)) == v for k, v in want.items()),
+              f"motor: counts by status as constructed: {want}")
+        check(int(got.get("motor.n_exceed", -1)) >= n_stall,
+              f"motor: the {n_stall} stalled runs count as exceedances of the stall torque")
+    if parsed["saltelli"] is not None:
         with open(S("report_saltelli/report.html"), encoding="utf-8") as fh:
             page = fh.read()
         check("No ok run has a finite value of <code>peak_drive_torque_Nm</code>" in page
               and "dist_peak_drive_torque_Nm.png" not in page,
               "saltelli: an output without a finite value is skipped with a note")
-    f4 = fake(repo, S("small.h5"), "--n-runs", "5", "--n-bays-max", "3")
-    check_campaign(repo, scratch, "five_runs", f4)
 
-    for i, h5 in enumerate(a.campaign_h5):
-        check_campaign(repo, scratch, f"real_campaign_{i}", os.path.abspath(h5))
-
-    # Single runs: the synthetic one and any real ones.
-    subprocess.run([PY, os.path.join(repo, "tests", "postproc", "make_fake_run.py"),
-                    S("run.h5"), "--n-bays", "4"], check=True)
-    for name, h5 in [("single_run", S("run.h5"))] + [
-            (f"real_run_{i}", os.path.abspath(h)) for i, h in enumerate(a.run_h5)]:
-        outdir = S(f"report_{name}")
-        r = run_report(repo, h5, outdir)
+    for name, h5 in runs.items():
+        outdir, r = built[name]
         if check(r.returncode == 0, f"{name}: report.py exit 0 ({r.stderr.strip()[:300]})"):
-            parsed = parse_report(os.path.join(outdir, "report.html"))
+            p = parse_report(os.path.join(outdir, "report.html"))
             E, required = expected_single_run(h5)
-            check_numbers(name, parsed, E, required)
+            check_numbers(name, p, E, required)
             with h5py.File(h5, "r") as f:
                 nb = int(tomllib.loads(text(f.attrs["scene_toml"]))["mast"]["n_bays"])
                 has_history = "history" in f
-            check_images(name, outdir, parsed,
+            check_images(name, outdir, p,
                          [f"fig4_hinge_trajectory_bay{nb}.png", "fig5_drive_and_pin_force.png",
                           f"fig5_bay{nb}_zoom.png"] if has_history else [])
 
@@ -595,8 +633,9 @@ def main():
     os.makedirs(busy)
     with open(os.path.join(busy, "notes.txt"), "w") as fh:
         fh.write("user file\n")
-    expect_error(repo, scratch, "non_empty_outdir", f1, "--force", outdir=busy)
-    r = run_report(repo, f1, busy, "--force")
+    expect_error(repo, scratch, "non_empty_outdir", campaigns["five_runs"], "--force",
+                 outdir=busy)
+    r = run_report(repo, campaigns["five_runs"], busy, "--force")
     check(r.returncode == 0 and os.path.exists(os.path.join(busy, "notes.txt"))
           and os.path.exists(os.path.join(busy, "report.html")),
           "--force writes into a non-empty directory and leaves other files alone")
