@@ -11,6 +11,7 @@ parallel efficiency E(p) = T(1) / (p T(p)), and the driver's overhead against th
   bench/bench_campaign.py BUILD_DIR [--campaign campaigns/table1_dispersed.toml] [--runs N] [--repeats R]
 """
 import argparse
+import resource
 import os
 import statistics
 import subprocess
@@ -24,6 +25,11 @@ ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIR
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
+def children_cpu_s():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def run_campaign(build, campaign, runs, ranks, out):
     if os.path.exists(out):
         os.remove(out)
@@ -31,21 +37,23 @@ def run_campaign(build, campaign, runs, ranks, out):
            "--progress", "none"]
     if runs:
         cmd += ["--set", f"ensemble.n_runs={runs}"]
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), children_cpu_s()
     subprocess.run(cmd, env=ENV, check=True, stdout=subprocess.DEVNULL)
-    wall = time.perf_counter() - t0
+    wall, cpu = time.perf_counter() - t0, children_cpu_s() - c0
     with h5py.File(out, "r") as f:
         inner = float(f.attrs["wall_time_s"])
         n = int(f.attrs["n_runs"])
         sim = float(f["timing/run_wall_time_s"][:].sum())
-    return {"cmd": wall, "inner": inner, "n": n, "sim_sum": sim}
+    return {"cmd": wall, "inner": inner, "n": n, "sim_sum": sim, "cpu": cpu}
 
 
 def run_bare(build, campaign, runs):
     cmd = [os.path.join(build, "bench", "bench_campaign_bare"), campaign] + ([str(runs)] if runs else [])
+    c0 = children_cpu_s()
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
-    kv = dict(x.split("=") for x in out.split())
-    return {k: float(v) for k, v in kv.items()}
+    kv = {k: float(v) for k, v in (x.split("=") for x in out.split())}
+    kv["cpu"] = children_cpu_s() - c0  # includes the record-path pass: compare with time fields only
+    return kv
 
 
 def main():
@@ -87,6 +95,13 @@ def main():
               f"({100 * (t1 / bare_total - 1):+.1f} %); against simulate alone {100 * (t1 / bare_sim - 1):+.1f} %")
         print("per-repeat ratios (1-rank campaign / bare, same repeat): "
               + ", ".join(f"{x['inner'] / b['total_s']:.3f}" for x, b in zip(res[1], res["bare"])))
+        rec = med(x["record_path_s"] / x["total_s"] for x in res["bare"])
+        print(f"same process, same runs: the driver's per-run path (record, bytes, table) / bare sample+simulate = "
+              f"{rec:.3f} (median of per-repeat ratios)")
+        # CPU time is less sensitive than wall time to other load on a shared machine.
+        cpu1 = med(x["cpu"] for x in res[1])
+        print(f"1-rank campaign CPU time (mpirun and rank, user + sys): {cpu1:.3f} s; "
+              f"against bare sample+simulate wall {bare_total:.3f} s: {100 * (cpu1 / bare_total - 1):+.1f} %")
 
 
 if __name__ == "__main__":
