@@ -966,9 +966,11 @@ def fig_lock_timing(plt, bays, lt, it, u, words, dt_text):
 
 def section_margins(page, c):
     head = '<section id="margins"><h2>4. Margins: drive torque against the motor stall torque</h2>'
+    if c.attrs["drive_mode"] == "velocity":
+        return section_margins_velocity(page, c, head)
     if c.attrs["drive_mode"] != "motor":
-        return (head + f"<p>The drive mode is <b>{esc(c.attrs['drive_mode'])}</b>: the scene "
-                "defines no motor, so there is no stall torque to compare with.</p></section>")
+        return (head + f"<p>The drive mode is <b>{esc(c.attrs['drive_mode'])}</b>: the drive "
+                "applies a prescribed torque, there is no motor to compare with.</p></section>")
     stall_code = [k for k, v in c.status_name.items() if v == "stall"]
     stalled = np.isin(c.status, stall_code)
     torque = c.outputs["peak_drive_torque_Nm"]
@@ -1012,6 +1014,71 @@ def section_margins(page, c):
             + page.figure(fig, "motor_torque_margin.png",
                           "stall torque of the ok and stalled runs, and peak drive torque against "
                           "stall torque")
+            + table(["", "value"], rows, "narrow") + "</section>")
+
+
+def drive_parameter(c, key):
+    """Per-run values of a drive.* scene key: the dispersed values, else the base scene's."""
+    for d in c.dispersions:
+        if d.key == f"drive.{key}" and d.per == "run":
+            return d.values
+    return np.full(c.n, float((c.base_scene.get("drive") or {})[key]))
+
+
+def calc_available_torque(c):
+    """The scene's motor at the prescribed speed: T_s (1 - omega / omega_0), omega = 2 pi v / h."""
+    omega = 2.0 * np.pi * drive_parameter(c, "speed_m_per_s") / drive_parameter(c, "screw_lead_m")
+    return drive_parameter(c, "stall_torque_Nm") * (1.0 - omega / drive_parameter(c, "no_load_speed_rad_per_s"))
+
+
+def section_margins_velocity(page, c, head):
+    torque = c.outputs["peak_drive_torque_Nm"]
+    u = c.units["peak_drive_torque_Nm"]
+    avail = calc_available_torque(c)
+    considered = c.ok & np.isfinite(torque) & np.isfinite(avail)
+    n_cons = int(considered.sum())
+    if n_cons == 0:
+        return head + "<p>No ok run with a finite peak torque: nothing to compare.</p></section>"
+    exceed = considered & (torque > avail)
+    k = int(exceed.sum())
+    lo, hi = clopper_pearson(k, n_cons)
+    drive = c.base_scene.get("drive") or {}
+    omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
+    ratio = avail[considered] / torque[considered]
+    fig, ax = page.plt.subplots(figsize=(10.0, 4.0))
+    ax.hist(torque[considered], bins=60, color="C0", label=f"peak drive torque, {n_cons} ok runs")
+    for v, lab in ((float(np.min(avail[considered])), "available torque at the prescribed speed (min over runs)"),
+                   (float(np.max(avail[considered])), "(max over runs)")):
+        ax.axvline(v, color="C3", ls="--", lw=1, label=f"{lab}: {v:.5g} {u}")
+    ax.set_xlabel(f"torque ({u})")
+    ax.set_ylabel("runs")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    rows = [
+        ["motor stall torque of the scene", num("velmargin.stall_torque", float(drive["stall_torque_Nm"]), u)],
+        ["motor no-load speed of the scene", num("velmargin.no_load_speed", float(drive["no_load_speed_rad_per_s"]), "rad/s")],
+        ["screw speed the prescribed drive speed needs", num("velmargin.required_speed", omega, "rad/s")],
+        ["runs considered (ok, finite peak torque)", num("velmargin.n_considered", n_cons)],
+        ["runs whose peak torque exceeds the available torque", num("velmargin.n_exceed", k)],
+        ["probability of exceeding", num("velmargin.p_exceed", k / n_cons, digits=4)],
+        ["95 % Clopper-Pearson interval, low", num("velmargin.p_exceed.ci_lo", lo, digits=4)],
+        ["95 % Clopper-Pearson interval, high", num("velmargin.p_exceed.ci_hi", hi, digits=4)],
+        ["smallest available / peak torque", num("velmargin.ratio_min", float(np.min(ratio)), digits=6)],
+        ["median available / peak torque", num("velmargin.ratio_p50", float(np.percentile(ratio, 50)), digits=6)],
+    ]
+    return (head + "<p>Velocity drive: the driven frame follows the prescribed speed whatever torque that "
+            "takes, so the campaign gives the <b>torque a motor must deliver</b>. It is compared with "
+            "the scene's motor (<code>drive.stall_torque_Nm</code>, "
+            "<code>drive.no_load_speed_rad_per_s</code>: project defaults unless the scene sets them) "
+            "on its linear speed-torque line: at the screw speed &omega; = 2&pi; v / h the motor gives "
+            "T<sub>s</sub> (1 &minus; &omega; / &omega;<sub>0</sub>), per run when any of these is "
+            "dispersed. A run exceeds when its peak drive torque is above that; the probability has an "
+            "exact (Clopper-Pearson) 95 % interval. A result of 1 means this motor cannot hold the "
+            "prescribed speed: choose a stronger motor, or rerun the campaign in motor mode.</p>"
+            + page.figure(fig, "velocity_torque_margin.png",
+                          "peak drive torque of the ok runs against the torque the scene's motor gives at the "
+                          "prescribed speed")
             + table(["", "value"], rows, "narrow") + "</section>")
 
 

@@ -269,6 +269,31 @@ def expected_campaign(path):
             required |= {"motor.p_exceed", "motor.p_exceed.ci_lo", "motor.p_exceed.ci_hi",
                          "motor.n_stall"}
 
+        # Section 4, velocity drive: peak torque against the scene's motor at the prescribed speed,
+        # T_s (1 - omega / omega_0) with omega = 2 pi v / h (per run when dispersed).
+        if text(at["drive_mode"]) == "velocity":
+            def drive(key):
+                name = f"runs/inputs/drive.{key}"
+                return f[name][()] if name in f else np.full(n, float(scene["drive"][key]))
+            torque = f["runs/peak_drive_torque_Nm"][()]
+            omega = 2 * np.pi * drive("speed_m_per_s") / drive("screw_lead_m")
+            avail = drive("stall_torque_Nm") * (1 - omega / drive("no_load_speed_rad_per_s"))
+            cons = ok & np.isfinite(torque) & np.isfinite(avail)
+            n_cons, k = int(cons.sum()), int((cons & (torque > avail)).sum())
+            if n_cons:
+                ratio = np.sort(avail[cons] / torque[cons])
+                E.update({"velmargin.stall_torque": float(scene["drive"]["stall_torque_Nm"]),
+                          "velmargin.no_load_speed": float(scene["drive"]["no_load_speed_rad_per_s"]),
+                          "velmargin.required_speed": 2 * np.pi * float(scene["drive"]["speed_m_per_s"])
+                          / float(scene["drive"]["screw_lead_m"]),
+                          "velmargin.n_considered": n_cons, "velmargin.n_exceed": k,
+                          "velmargin.p_exceed": k / n_cons,
+                          "velmargin.p_exceed.ci_lo": clopper_pearson_bisect(k, n_cons, "lo"),
+                          "velmargin.p_exceed.ci_hi": clopper_pearson_bisect(k, n_cons, "hi"),
+                          "velmargin.ratio_min": float(ratio[0]),
+                          "velmargin.ratio_p50": hf7(ratio, 0.5)})
+                required |= {"velmargin.p_exceed", "velmargin.n_exceed"}
+
         # Section 5: rank correlations.
         for d in disps:
             v = d["values"]
