@@ -265,8 +265,17 @@ CampaignOptions parse_campaign_root(toml::table root, const Ctx& c, const std::s
     if (key.rfind("scene.", 0) == 0) { scene_sets.push_back({key.substr(6) + "=" + value, {}}); continue; }
     const auto dot = key.find('.');
     const std::string tname = dot == std::string::npos ? key : key.substr(0, dot);
+    // A scene table (mast, drive, ...) names a base-scene key, as truss-sim's --set does.
+    const auto scene_keys = io::known_scene_keys();
+    if (dot != std::string::npos && std::any_of(scene_keys.begin(), scene_keys.end(), [&](const std::string& k) {
+          return k.compare(0, k.find('.'), tname) == 0 && k.find('.') == tname.size();
+        })) {
+      scene_sets.push_back({arg, {}});
+      continue;
+    }
     if (dot == std::string::npos || (tname != "ensemble" && tname != "campaign" && tname != "output"))
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.* and scene.<table>.<key> can be set", arg));
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.* and base-scene keys "
+                                   "(mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg));
     toml::table v = parse_override_value(value);
     const std::string kname = key.substr(dot + 1);
     if (!root.contains(tname)) root.insert(tname, toml::table{});

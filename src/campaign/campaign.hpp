@@ -60,7 +60,8 @@ struct CampaignOptions {
 };
 
 // Reads, parses and validates a campaign file; `overrides` are --set arguments ("table.key=value"
-// for campaign keys such as ensemble.n_runs, or "scene.<table>.<key>=value" for the base scene).
+// for campaign keys such as ensemble.n_runs, or a base-scene key as truss-sim takes it,
+// "mast.n_bays=12", also written "scene.mast.n_bays=12").
 // Throws io::InputError with a message naming the file, key and line.
 CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides = {});
 

@@ -233,6 +233,12 @@ TEST_CASE("an inline scene: applied after the file, errors at the campaign file'
                                                 "inline.toml", ".");
   CHECK(c.base.mast.n_bays == 7);
   CHECK(c.base.drive.mode == truss::sim::DriveMode::motor);
+  // --set takes base-scene keys as truss-sim does, with or without "scene.", after the file.
+  const CampaignOptions s = parse_campaign_text("[scene.mast]\nn_bays = 7\n", "inline.toml", ".",
+                                                {"mast.n_bays=9", "scene.drive.mode=torque", "ensemble.n_runs=5"});
+  CHECK(s.base.mast.n_bays == 9);
+  CHECK(s.base.drive.mode == truss::sim::DriveMode::torque);
+  CHECK(s.ensemble.n_runs == 5);
   auto error = [](const std::string& text) {
     try {
       parse_campaign_text(text, "inline.toml", ".");
