@@ -133,7 +133,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   CLI::App app{"Runs an uncertainty campaign of folding truss mast deployments over MPI ranks.", "truss-campaign"};
   app.add_option("campaign", o.campaign_path, "Campaign file (TOML), e.g. campaigns/table1_dispersed.toml")->required();
   app.add_option("-o,--output", o.output_path, "Results file (HDF5, docs/hdf5-schema.md); required unless --dry-run");
-  app.add_option("--set", o.sets, "Override a campaign key (ensemble.n_runs=40) or a base-scene key (scene.drive.mode=motor); repeatable")
+  app.add_option("--set", o.sets, "Override a campaign key (ensemble.n_runs=40) or a base-scene key (drive.mode=motor, also scene.drive.mode=motor); repeatable")
       ->type_name("KEY=VALUE")->expected(1)->allow_extra_args(false)->take_all();
   app.add_flag("--resume", o.resume, "Finish an interrupted campaign from its journal (OUTPUT.journal)");
   app.add_flag("--force", o.force, "Overwrite an existing output file and discard an unfinished journal");
