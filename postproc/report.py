@@ -137,25 +137,6 @@ class H5:
         return self.attr(ds, "units", str, f"attribute of /{name}:")
 
 
-def open_h5(path):
-    """Open PATH read-only; InputError when it is missing, not HDF5, or damaged."""
-    import h5py
-    if not os.path.exists(path):
-        raise InputError(f"{path}: no such file")
-    if os.path.isdir(path):
-        raise InputError(f"{path}: is a directory, not an HDF5 file")
-    try:
-        is_h5 = h5py.is_hdf5(path)
-    except OSError as e:
-        raise InputError(f"{path}: cannot read ({e})") from None
-    if not is_h5:
-        raise InputError(f"{path}: not an HDF5 file")
-    try:
-        return h5py.File(path, "r")
-    except OSError as e:
-        raise InputError(f"{path}: damaged or truncated HDF5 file ({e})") from None
-
-
 def read_kind(h5):
     if "schema_version" not in h5.f.attrs:
         raise h5.error("no root attribute schema_version: not a truss-sim/truss-campaign file")
@@ -1486,7 +1467,7 @@ def build(path, outdir, force):
     """Validate, then render into a staging directory beside OUTDIR and move the files in."""
     check_outdir(outdir, force)
     sha256 = file_sha256(path) if os.path.isfile(path) else ""
-    with open_h5(path) as f:
+    with rf.open_h5(path) as f:
         h5 = H5(f, path)
         try:
             kind = read_kind(h5)

@@ -101,26 +101,30 @@ def _scene_value(scene, table, key, kind):
     raise InputError(f"scene_toml {table}.{key} has the wrong type: {v!r}")
 
 
+def open_h5(path):
+    """Open PATH read-only; InputError when it is missing, not HDF5, or damaged."""
+    import h5py  # imported here so that --help works without h5py
+    if not os.path.exists(path):
+        raise InputError(f"{path}: no such file")
+    if os.path.isdir(path):
+        raise InputError(f"{path}: is a directory, not an HDF5 file")
+    try:
+        is_h5 = h5py.is_hdf5(path)
+    except OSError as e:
+        raise InputError(f"{path}: cannot read ({e})") from None
+    if not is_h5:
+        raise InputError(f"{path}: not an HDF5 file")
+    try:
+        return h5py.File(path, "r")
+    except OSError as e:
+        raise InputError(f"{path}: damaged or truncated HDF5 file ({e})") from None
+
+
 def load_run(path):
     """Read what the figures need from RUN.h5; raise InputError on any layout problem."""
     import h5py  # imported here so that --help works without h5py
 
-    if not os.path.exists(path):
-        raise InputError(f"no such file: {path}")
-    if os.path.isdir(path):
-        raise InputError(f"{path} is a directory, not an HDF5 file")
-    try:
-        is_h5 = h5py.is_hdf5(path)
-    except OSError as e:
-        raise InputError(f"cannot read {path}: {e}") from None
-    if not is_h5:
-        raise InputError(f"{path} is not an HDF5 file")
-    try:
-        f = h5py.File(path, "r")
-    except OSError as e:
-        raise InputError(f"cannot open {path} as HDF5: {e}") from None
-
-    with f:
+    with open_h5(path) as f:
         attrs = f.attrs
         if "schema_version" not in attrs:
             raise InputError(f"{path} has no root attribute schema_version: not a truss-sim file")

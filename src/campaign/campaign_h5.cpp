@@ -30,19 +30,6 @@ void write_doubles_attribute(hid_t obj, const char* name, const std::vector<doub
   if (!v.empty()) check(H5Awrite(a.get(), H5T_NATIVE_DOUBLE, v.data()), fmt::format("write attribute {}", name));
 }
 
-// A dataset of rows x cols (cols == 0: 1-D of length rows) with its units.
-template <class T>
-void write_array(hid_t loc, const std::string& name, const char* units, const T* data, std::size_t rows, std::size_t cols = 0) {
-  const hsize_t dims[2] = {rows, cols};
-  Handle space(H5Screate_simple(cols ? 2 : 1, dims, nullptr), H5Sclose, "create dataspace for " + name);
-  const hid_t file_type = std::is_same_v<T, double> ? H5T_IEEE_F64LE : H5T_STD_I64LE;
-  const hid_t mem_type = std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64;
-  Handle ds = create_dataset(loc, name, file_type, space.get());
-  if (rows > 0)
-    check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
-  write_string_attribute(ds.get(), "units", units);
-}
-
 void write_scalar_double(hid_t loc, const char* name, const std::string& units, double v) {
   Handle space = scalar_space();
   Handle ds = create_dataset(loc, name, H5T_IEEE_F64LE, space.get());
@@ -239,16 +226,7 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
     for (const auto& [run, r] : histories) {
       Handle h = make_group(g.get(), fmt::format("run_{}", run));
       write_string_attribute(h.get(), "status", sim::to_string(r.status));
-      for (const auto& f : io::history_fields()) {
-        if (f.get_double) {
-          const auto& v = *f.get_double(r.history);
-          write_array(h.get(), f.name, f.units, v.data(), v.size());
-        } else {
-          const auto& v = *f.get_int(r.history);
-          const std::vector<std::int64_t> w(v.begin(), v.end());
-          write_array(h.get(), f.name, f.units, w.data(), w.size());
-        }
-      }
+      write_history(h.get(), r.history);
     }
   }
 

@@ -52,26 +52,6 @@ void write_scalar(hid_t group, const std::string& gname, const char* name, const
   }
 }
 
-void write_vector(hid_t group, const std::string& gname, const char* name, const char* units,
-                  const double* data, std::size_t n) {
-  Handle space = vector_space(n);
-  Handle ds = create_dataset(group, name, H5T_IEEE_F64LE, space.get());
-  if (n > 0)
-    check(H5Dwrite(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, data),
-          fmt::format("write {}/{}", gname, name));
-  write_string_attribute(ds.get(), "units", units);
-}
-
-void write_vector(hid_t group, const std::string& gname, const char* name, const char* units,
-                  const std::int64_t* data, std::size_t n) {
-  Handle space = vector_space(n);
-  Handle ds = create_dataset(group, name, H5T_STD_I64LE, space.get());
-  if (n > 0)
-    check(H5Dwrite(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, data),
-          fmt::format("write {}/{}", gname, name));
-  write_string_attribute(ds.get(), "units", units);
-}
-
 void write_status(hid_t summary, const sim::RunResult& r) {
   Handle type = status_enum_type();
   Handle space = scalar_space();
@@ -103,11 +83,11 @@ void write_contents(hid_t file, const sim::RunResult& r, const std::string& scen
       if (std::holds_alternative<std::int64_t>(f.get(sim::BayResult{}))) {
         std::vector<std::int64_t> v;
         for (const auto& b : r.bays) v.push_back(std::get<std::int64_t>(f.get(b)));
-        write_vector(g.get(), "/bays", f.name, f.units, v.data(), v.size());
+        write_array(g.get(), f.name, f.units, v.data(), v.size());
       } else {
         std::vector<double> v;
         for (const auto& b : r.bays) v.push_back(std::get<double>(f.get(b)));
-        write_vector(g.get(), "/bays", f.name, f.units, v.data(), v.size());
+        write_array(g.get(), f.name, f.units, v.data(), v.size());
       }
     }
   }
@@ -118,16 +98,7 @@ void write_contents(hid_t file, const sim::RunResult& r, const std::string& scen
   if (history) {
     Handle g(H5Gcreate2(file, "history", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose,
              "create group /history");
-    for (const auto& f : history_fields()) {
-      if (f.get_double) {
-        const auto& v = *f.get_double(r.history);
-        write_vector(g.get(), "/history", f.name, f.units, v.data(), v.size());
-      } else {
-        const auto& v = *f.get_int(r.history);
-        const std::vector<std::int64_t> w(v.begin(), v.end());
-        write_vector(g.get(), "/history", f.name, f.units, w.data(), w.size());
-      }
-    }
+    write_history(g.get(), r.history);
   }
 }
 

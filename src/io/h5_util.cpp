@@ -16,6 +16,7 @@
 #include <unistd.h>
 
 #include "io/scene_toml.hpp"
+#include "io/json_summary.hpp"
 #include "sim/result.hpp"
 
 namespace truss::io::h5 {
@@ -90,6 +91,40 @@ Handle create_dataset(hid_t loc, const std::string& path, hid_t file_type, hid_t
   return Handle(H5Dcreate2(loc, path.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT,
                            H5P_DEFAULT),
                 H5Dclose, fmt::format("create dataset {}", path));
+}
+
+namespace {
+void write_array_of(hid_t loc, const std::string& name, const char* units, const void* data, hid_t file_type,
+                    hid_t mem_type, std::size_t rows, std::size_t cols) {
+  const hsize_t dims[2] = {rows, cols};
+  Handle space(H5Screate_simple(cols ? 2 : 1, dims, nullptr), H5Sclose, "create dataspace for " + name);
+  Handle ds = create_dataset(loc, name, file_type, space.get());
+  if (rows > 0) check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), "write " + name);
+  write_string_attribute(ds.get(), "units", units);
+}
+}  // namespace
+
+void write_array(hid_t loc, const std::string& name, const char* units, const double* data, std::size_t rows,
+                 std::size_t cols) {
+  write_array_of(loc, name, units, data, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, rows, cols);
+}
+
+void write_array(hid_t loc, const std::string& name, const char* units, const std::int64_t* data, std::size_t rows,
+                 std::size_t cols) {
+  write_array_of(loc, name, units, data, H5T_STD_I64LE, H5T_NATIVE_INT64, rows, cols);
+}
+
+void write_history(hid_t group, const sim::TimeHistory& h) {
+  for (const auto& f : history_fields()) {
+    if (f.get_double) {
+      const auto& v = *f.get_double(h);
+      write_array(group, f.name, f.units, v.data(), v.size());
+    } else {
+      const auto& v = *f.get_int(h);
+      const std::vector<std::int64_t> w(v.begin(), v.end());
+      write_array(group, f.name, f.units, w.data(), w.size());
+    }
+  }
 }
 
 Handle status_enum_type() {

@@ -7,6 +7,10 @@
 #include <functional>
 #include <string>
 
+namespace truss::sim {
+struct TimeHistory;
+}
+
 namespace truss::io::h5 {
 
 std::string hdf5_error_text();
@@ -43,6 +47,14 @@ Handle vector_space(std::size_t n);
 Handle string_type();
 void write_string_attribute(hid_t obj, const char* name, const std::string& value);
 void write_int_attribute(hid_t obj, const char* name, std::int64_t value);
+// A float64 / int64 dataset of rows (cols == 0) or rows x cols values, with its units.
+void write_array(hid_t loc, const std::string& name, const char* units, const double* data, std::size_t rows,
+                 std::size_t cols = 0);
+void write_array(hid_t loc, const std::string& name, const char* units, const std::int64_t* data, std::size_t rows,
+                 std::size_t cols = 0);
+// One 1-D dataset per TimeHistory vector (json_summary.hpp's history_fields()) in `group`.
+void write_history(hid_t group, const sim::TimeHistory& h);
+
 // int8 enum whose members are the to_string(RunStatus) names with the RunStatus values.
 Handle status_enum_type();
 Handle create_dataset(hid_t loc, const std::string& path, hid_t file_type, hid_t space);
