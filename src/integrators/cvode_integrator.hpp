@@ -10,6 +10,7 @@ class CvodeIntegrator : public Integrator {
   explicit CvodeIntegrator(const IntegratorOptions& opts) : opts_(opts) {}
   IntegratorSummary integrate(OdeSystem& sys, double t0, double t_end, double* y,
                               StepObserver* observer) override;
+  void set_options(const IntegratorOptions& opts) override { opts_ = opts; }
 
  private:
   IntegratorOptions opts_;

@@ -15,7 +15,7 @@ class DormandPrince54 : public Integrator {
   IntegratorSummary integrate(OdeSystem& sys, double t0, double t_end, double* y,
                               StepObserver* observer) override;
   // New options for the next calls; the last step size is kept to start the next phase.
-  void set_options(const IntegratorOptions& opts) { opts_ = opts; }
+  void set_options(const IntegratorOptions& opts) override { opts_ = opts; }
 
  private:
   IntegratorOptions opts_;

@@ -62,6 +62,9 @@ class Integrator {
   // Integrates from t0 towards t_end; y holds the initial state and receives the final one.
   virtual IntegratorSummary integrate(OdeSystem& sys, double t0, double t_end, double* y,
                                       StepObserver* observer) = 0;
+  // New options for the next calls (a run changes the step budget between phases); an
+  // integrator keeps what it can reuse (last step size, solver memory) across calls.
+  virtual void set_options(const IntegratorOptions& opts) = 0;
 };
 
 }  // namespace truss::integrators
