@@ -7,6 +7,10 @@
 
 namespace truss::integrators {
 
+// The integrators a run can use (scene key run.integrator).
+enum class IntegratorKind { dopri54, cvode };
+inline const char* to_string(IntegratorKind k) { return k == IntegratorKind::dopri54 ? "dopri54" : "cvode"; }
+
 class OdeSystem {
  public:
   virtual ~OdeSystem() = default;

@@ -7,8 +7,11 @@
 #include <functional>
 #include <string>
 
-namespace truss::sim {
+namespace truss::stages {
 struct TimeHistory;
+}
+namespace truss::sim {
+using stages::TimeHistory;
 }
 
 namespace truss::io::h5 {

@@ -10,17 +10,7 @@
 
 namespace truss::sim {
 
-const char* to_string(DriveMode m) {
-  switch (m) {
-    case DriveMode::velocity: return "velocity";
-    case DriveMode::torque: return "torque";
-    case DriveMode::motor: return "motor";
-  }
-  return "?";
-}
 const char* to_string(StackMode m) { return m == StackMode::held ? "held" : "free"; }
-const char* to_string(Direction d) { return d == Direction::deploy ? "deploy" : "retract"; }
-const char* to_string(IntegratorKind k) { return k == IntegratorKind::dopri54 ? "dopri54" : "cvode"; }
 
 namespace {
 std::string positive(const char* key, double v) {
@@ -65,12 +55,7 @@ std::string SceneOptions::validate() const {
     CHECK(positive("panels.mass_kg", panels.mass_kg));
     if (panels.tip_height_m) CHECK(positive("panels.tip_height_m", *panels.tip_height_m));
   }
-  if (!(std::isfinite(run.output_step_s) && run.output_step_s >= 0.0))
-    return fmt::format("run.output_step_s: must be >= 0 (0 = no time histories), got {}", run.output_step_s);
-  if (!(run.rtol > 0.0 && run.rtol < 1.0)) return fmt::format("run.rtol: must lie in (0, 1), got {}", run.rtol);
-  CHECK(positive("run.atol", run.atol));
-  if (run.max_steps < 1) return fmt::format("run.max_steps: must be positive, got {}", run.max_steps);
-  CHECK(positive("run.max_wall_time_s", run.max_wall_time_s));
+  CHECK(run.validate());
 #undef CHECK
   return {};
 }
@@ -82,23 +67,23 @@ model::MastParams build_mast(const SceneOptions& s) {
   model::BayParams b;
   b.strut_length_m = o.strut_length_m;
   b.strut_mass_kg = o.strut_mass_kg;
-  b.strut_inertia_kg_m2 = o.strut_inertia_kg_m2.value_or(o.strut_mass_kg * o.strut_length_m * o.strut_length_m / 12.0);
+  b.strut_inertia_kg_m2 = o.calc_strut_inertia_kg_m2();
   b.diagonal_stiffness_N_per_m = o.diagonal_stiffness_N_per_m;
   b.diagonal_free_length_m = o.diagonal_free_length_m;
   m.bays.assign(static_cast<std::size_t>(n), b);
   m.frames.assign(static_cast<std::size_t>(n + 1), model::FrameParams{o.frame_side_m, o.frame_mass_kg});
-  m.tip_mass_kg = o.tip_mass_kg.value_or(6.0 * o.strut_mass_kg + o.frame_mass_kg);
+  m.tip_mass_kg = o.calc_tip_mass_kg();
   m.rail.x_m = s.rail.x_m;
   m.rail.y_m = s.rail.y_m;
   m.rail.beta_rad = s.rail.beta_deg * M_PI / 180.0;
   m.panels.count = s.panels.count;
   m.panels.length_m = s.panels.length_m;
   m.panels.mass_kg = s.panels.mass_kg;
-  m.panels.tip_height_m = s.panels.tip_height_m.value_or(2.0 * o.strut_length_m);
+  m.panels.tip_height_m = s.panels.calc_tip_height_m(o.strut_length_m);
   return m;
 }
 
-std::string validate_mast(const model::MastParams& mast, const SceneOptions& scene) {
+std::string validate_mast_params(const model::MastParams& mast) {
   const int n = mast.n_bays();
   if (n < 1 || static_cast<int>(mast.frames.size()) != n + 1) return "mast.n_bays: inconsistent bay and frame counts";
   for (int i = 1; i <= n; ++i) {
@@ -113,21 +98,29 @@ std::string validate_mast(const model::MastParams& mast, const SceneOptions& sce
     if (!(mast.frame(k).side_m > 0.0)) return fmt::format("mast.frame_side_m: frame {} has {}", k, mast.frame(k).side_m);
     if (!(mast.frame(k).mass_kg > 0.0)) return fmt::format("mast.frame_mass_kg: frame {} has {}", k, mast.frame(k).mass_kg);
   }
-  std::vector<stages::StageSpec> plan;
-  std::string e = stages::plan_held_stages(mast, 1.0, plan);
-  if (!e.empty()) return e;
-  if (mast.panels.enabled()) {
-    // H is largest with the mast fully deployed: y_0 = y_r - l_1 plus every bay and the tip.
-    double H = mast.rail.axis_height_m() - mast.bay(1).strut_length_m + mast.panels.tip_height_m;
-    for (int i = 1; i <= n; ++i) H += 2.0 * mast.bay(i).strut_length_m;
-    const double reach = mast.panels.count * mast.panels.length_m;
-    if (!(H < reach))
-      return fmt::format("panels.length_m: the blanket ({} panels x {} m = {} m) must stay longer than the mast "
-                         "height H, which reaches {:.6g} m (MODEL.md 1: H < n_p l_p)",
-                         mast.panels.count, mast.panels.length_m, reach, H);
-  }
-  (void)scene;
   return {};
+}
+
+std::string validate_panels(const model::MastParams& mast) {
+  if (!mast.panels.enabled()) return {};
+  // H is largest with the mast fully deployed: y_0 = y_r - l_1 plus every bay and the tip.
+  const int n = mast.n_bays();
+  double H = mast.rail.axis_height_m() - mast.bay(1).strut_length_m + mast.panels.tip_height_m;
+  for (int i = 1; i <= n; ++i) H += 2.0 * mast.bay(i).strut_length_m;
+  const double reach = mast.panels.count * mast.panels.length_m;
+  if (!(H < reach))
+    return fmt::format("panels.length_m: the blanket ({} panels x {} m = {} m) must stay longer than the mast "
+                       "height H, which reaches {:.6g} m (MODEL.md 1: H < n_p l_p)",
+                       mast.panels.count, mast.panels.length_m, reach, H);
+  return {};
+}
+
+std::string validate_mast(const model::MastParams& mast, const SceneOptions& /*scene*/) {
+  std::string e = validate_mast_params(mast);
+  std::vector<stages::StageSpec> plan;
+  if (e.empty()) e = stages::plan_held_stages(mast, 1.0, plan);
+  if (e.empty()) e = validate_panels(mast);
+  return e;
 }
 
 }  // namespace truss::sim

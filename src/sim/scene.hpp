@@ -8,46 +8,49 @@
 #include <string>
 #include <vector>
 
+#include "integrators/ode.hpp"
+#include "model/drive.hpp"
 #include "model/params.hpp"
+#include "stages/run_options.hpp"
 
 namespace truss::sim {
 
-enum class DriveMode { velocity, torque, motor };
+using model::Direction;
+using model::DriveMode;
+using integrators::IntegratorKind;
 enum class StackMode { held, free };
-enum class Direction { deploy, retract };
-enum class IntegratorKind { dopri54, cvode };
 
-const char* to_string(DriveMode);
+using model::to_string;
+using integrators::to_string;
 const char* to_string(StackMode);
-const char* to_string(Direction);
-const char* to_string(IntegratorKind);
 
 struct MastOptions {
-  int n_bays = 30;                               // Table 1: 30 bays
-  double strut_length_m = 0.18;                  // Table 1: l_s
-  double strut_mass_kg = 0.1;                    // Table 1: m_s
-  std::optional<double> strut_inertia_kg_m2;     // J_c; unset = m_s l_s^2/12 (slender rod, MODEL.md 4)
-  double frame_side_m = 0.36;                    // Table 1: b_f
-  double frame_mass_kg = 0.5;                    // Table 1: m_f
-  double diagonal_stiffness_N_per_m = 20.0;      // Table 1: K
-  double diagonal_free_length_m = 0.45;          // Table 1: l_0
-  std::optional<double> tip_mass_kg;             // unset = 6 m_s + m_f (reproduces paper eq. 3)
+  int n_bays = model::table1::n_bays;                          // Table 1: 30 bays
+  double strut_length_m = model::table1::strut_length_m;      // Table 1: l_s
+  double strut_mass_kg = model::table1::strut_mass_kg;        // Table 1: m_s
+  std::optional<double> strut_inertia_kg_m2;  // J_c; unset = model::calc_default_strut_inertia_kg_m2
+  double frame_side_m = model::table1::frame_side_m;          // Table 1: b_f
+  double frame_mass_kg = model::table1::frame_mass_kg;        // Table 1: m_f
+  double diagonal_stiffness_N_per_m = model::table1::diagonal_stiffness_N_per_m;  // Table 1: K
+  double diagonal_free_length_m = model::table1::diagonal_free_length_m;          // Table 1: l_0
+  std::optional<double> tip_mass_kg;          // unset = model::calc_default_tip_mass_kg (paper eq. 3)
+  // Resolved defaults (MODEL.md 1, 4), the one place the optional keys are filled in.
+  double calc_strut_inertia_kg_m2() const {
+    return strut_inertia_kg_m2.value_or(model::calc_default_strut_inertia_kg_m2(strut_mass_kg, strut_length_m));
+  }
+  double calc_tip_mass_kg() const {
+    return tip_mass_kg.value_or(model::calc_default_tip_mass_kg(strut_mass_kg, frame_mass_kg));
+  }
 };
 
 struct RailOptions {
-  double x_m = 0.08;        // Table 1: x_l, rail foot offset from the longeron line
-  double y_m = 0.15;        // Table 1: y_l, rail foot height
-  double beta_deg = 20.85;  // Table 1: rail inclination to the mast axis
+  double x_m = model::table1::rail_x_m;             // Table 1: x_l, rail foot offset from the longeron line
+  double y_m = model::table1::rail_y_m;             // Table 1: y_l, rail foot height
+  double beta_deg = model::table1::rail_beta_deg;   // Table 1: rail inclination to the mast axis
 };
 
-struct DriveOptions {
-  DriveMode mode = DriveMode::velocity;   // the paper's constant-speed drive
-  double speed_m_per_s = 0.1;             // Table 1: v_dep (velocity mode)
-  double screw_lead_m = 0.01;             // project default h (paper leaves it open)
-  double torque_Nm = 0.01;                // project default: 6.3 N of screw force, above the ~3 N spring peak
-  double stall_torque_Nm = 0.02;          // project default motor: 12.6 N stall force
-  double no_load_speed_rad_per_s = 75.0;  // project default: 0.119 m/s free-running screw speed
-};
+// The drive options are the model's drive parameters (model/drive.hpp): one type, one default.
+using DriveOptions = model::DriveParams;
 
 struct StackOptions {
   StackMode mode = StackMode::held;  // MODEL.md 2: the canister holds stowed frames
@@ -57,18 +60,14 @@ struct PanelOptions {
   int count = 0;                            // 0 = no solar blanket (Table 1 has none); else even
   double length_m = 0.5;                    // project default panel length l_p (used if count > 0)
   double mass_kg = 0.2;                     // project default panel mass m_p (used if count > 0)
-  std::optional<double> tip_height_m;       // h_tip; unset = 2 l_s (the paper's 2(j+1) l_s)
+  std::optional<double> tip_height_m;       // h_tip; unset = model::calc_default_tip_height_m
+  double calc_tip_height_m(double strut_length_m) const {
+    return tip_height_m.value_or(model::calc_default_tip_height_m(strut_length_m));
+  }
 };
 
-struct RunOptions {
-  Direction direction = Direction::deploy;  // deploy from the stowed stack, or retract into it
-  double output_step_s = 0.0;               // time-history sample step; 0 = no histories (fastest)
-  double rtol = 1e-8;                       // relative tolerance of the ODE integrators
-  double atol = 1e-10;                      // absolute tolerance (m, m/s, J) of the ODE integrators
-  IntegratorKind integrator = IntegratorKind::dopri54;  // own DP5(4) pair; cvode = SUNDIALS Adams
-  long max_steps = 2'000'000;               // step cap over the whole run: a run never hangs
-  double max_wall_time_s = 600.0;           // wall-time cap for one run
-};
+// The [run] table is the stage loop's run options (stages/run_options.hpp): one type, one default.
+using RunOptions = stages::RunOptions;
 
 struct SceneOptions {
   MastOptions mast;
@@ -90,5 +89,8 @@ model::MastParams build_mast(const SceneOptions& scene);
 // every held lower frame, the next bay starts outside the rail, panels stay folded.
 // Empty string when valid, else "key: reason".
 std::string validate_mast(const model::MastParams& mast, const SceneOptions& scene);
+// Its parts: per-bay and per-frame parameters positive; the blanket longer than the mast.
+std::string validate_mast_params(const model::MastParams& mast);
+std::string validate_panels(const model::MastParams& mast);
 
 }  // namespace truss::sim

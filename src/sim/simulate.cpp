@@ -3,7 +3,7 @@
 #include <chrono>
 #include <limits>
 
-#include "stages/runner.hpp"
+#include "stages/stage_loop.hpp"
 #include "stages/stage_plan.hpp"
 
 namespace truss::sim {
@@ -20,33 +20,16 @@ RunResult simulate(const SceneOptions& scene, const model::MastParams& mast) {
     r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return r;
   };
+  // Each check once, in the order validate_mast gives them; the stage plan is built once.
   std::string e = scene.validate();
-  if (e.empty()) e = validate_mast(mast, scene);
-  if (!e.empty()) return invalid(e);
-
-  const double direction = scene.run.direction == Direction::deploy ? 1.0 : -1.0;
+  if (e.empty()) e = validate_mast_params(mast);
   std::vector<stages::StageSpec> plan;
-  e = stages::plan_held_stages(mast, direction, plan);
+  if (e.empty()) e = stages::plan_held_stages(mast, model::calc_direction_sign(scene.run.direction), plan);
+  if (e.empty()) e = validate_panels(mast);
   if (!e.empty()) return invalid(e);
 
-  stages::RunnerOptions ro;
-  ro.drive.law = scene.drive.mode == DriveMode::velocity ? stages::DriveLaw::velocity
-               : scene.drive.mode == DriveMode::torque   ? stages::DriveLaw::torque
-                                                          : stages::DriveLaw::motor;
-  ro.drive.direction = direction;
-  ro.drive.speed_m_per_s = scene.drive.speed_m_per_s;
-  ro.drive.screw_lead_m = scene.drive.screw_lead_m;
-  ro.drive.torque_Nm = scene.drive.torque_Nm;
-  ro.drive.stall_torque_Nm = scene.drive.stall_torque_Nm;
-  ro.drive.no_load_speed_rad_per_s = scene.drive.no_load_speed_rad_per_s;
-  ro.integrator = scene.run.integrator == IntegratorKind::cvode ? stages::IntegratorChoice::cvode
-                                                                : stages::IntegratorChoice::dopri54;
-  ro.integration.rtol = scene.run.rtol;
-  ro.integration.atol = scene.run.atol;
-  ro.output_step_s = scene.run.output_step_s;
-  ro.max_steps = scene.run.max_steps;
-  ro.max_wall_time_s = scene.run.max_wall_time_s;
-  RunResult r = stages::run_held_stages(mast, plan, ro);
+  const stages::RunnerOptions ro{scene.drive, scene.run};
+  RunResult r = stages::run_stages(mast, plan, ro);
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }

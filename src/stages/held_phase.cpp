@@ -7,21 +7,6 @@ namespace truss::stages {
 
 using namespace truss::model;
 
-double DriveParams::calc_force_N(double u) const {
-  const double to_force = 2.0 * M_PI / screw_lead_m;
-  switch (law) {
-    case DriveLaw::torque: return direction * to_force * torque_Nm;
-    case DriveLaw::motor: {
-      const double omega = to_force * direction * u;  // screw speed along the run direction
-      return direction * to_force * stall_torque_Nm * (1.0 - omega / no_load_speed_rad_per_s);
-    }
-    case DriveLaw::velocity: break;
-  }
-  return 0.0;
-}
-
-double DriveParams::calc_torque_Nm(double force_N) const { return force_N * screw_lead_m / (2.0 * M_PI); }
-
 HeldPhase::HeldPhase(const PhaseContext& ctx) : ctx_(ctx) {
   const MastParams& mast = *ctx_.mast;
   const int m = ctx_.bay;
@@ -37,20 +22,28 @@ HeldPhase::HeldPhase(const PhaseContext& ctx) : ctx_(ctx) {
     active_.bay_m_in_hinge_coordinate = true;
     if (m >= 2) b2_lower_ = calc_diagonal_offset_sq_m2(mast.frame(m - 2), mast.frame(m - 1));
   }
-  sys_.resize(active_.size());
+}
+
+PhasePoint HeldPhase::calc_point(double q, double qdot, PhaseScratch& scratch) const {
+  return ctx_.kind == PhaseKind::open ? calc_open(q, qdot, scratch) : calc_on_rail(q, qdot, scratch);
 }
 
 PhasePoint HeldPhase::calc_point(double q, double qdot) const {
-  return ctx_.kind == PhaseKind::open ? calc_open(q, qdot) : calc_on_rail(q, qdot);
+  PhaseScratch scratch;
+  return calc_point(q, qdot, scratch);
 }
 
-PhasePoint HeldPhase::calc_open(double y, double u) const {
+double HeldPhase::calc_driven_speed_m_per_s(double q, double qdot) const {
+  if (ctx_.kind == PhaseKind::open) return qdot;
+  return model::calc_on_rail(ctx_.mast->rail, strut_length_m(), q).dY * qdot;
+}
+
+PhasePoint HeldPhase::calc_open(double y, double u, PhaseScratch& sys) const {
   const MastParams& mast = *ctx_.mast;
   const int m = ctx_.bay;
   const BayParams& bay = mast.bay(m);
-  y_[1] = ctx_.lower_held_height_m; y_[2] = y;
-  v_[1] = 0.0; v_[2] = u;
-  calc_frame_system(mast, active_, y_ + 1, v_ + 1, m - 1, sys_);
+  const double ys[2] = {ctx_.lower_held_height_m, y}, vs[2] = {0.0, u};  // frames m-1, m
+  calc_frame_system(mast, active_, ys, vs, m - 1, sys);
   PhasePoint p;
   p.q = y; p.qdot = u;
   p.y_driven_m = y; p.y_lower_m = ctx_.lower_held_height_m;
@@ -58,13 +51,13 @@ PhasePoint HeldPhase::calc_open(double y, double u) const {
   const double D = y - ctx_.lower_held_height_m;
   p.hinge_x_m = calc_hinge_offset_m(bay, D);
   p.hinge_y_m = ctx_.lower_held_height_m + 0.5 * D;
-  const double M = sys_.diag[0];
-  const double R = sys_.velocity_terms[0] + sys_.spring_forces[0];
-  if (ctx_.drive.law == DriveLaw::velocity) {
+  const double M = sys.diag[0];
+  const double R = sys.velocity_terms[0] + sys.spring_forces[0];
+  if (ctx_.drive.mode == model::DriveMode::velocity) {
     p.qddot = 0.0;
     p.drive_force_N = -R;
   } else {
-    p.drive_force_N = ctx_.drive.calc_force_N(u);
+    p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
     p.qddot = (R + p.drive_force_N) / M;
   }
   p.diagonal_tension_N = calc_diagonal_tension_N(bay, b2_m_, D);
@@ -74,7 +67,7 @@ PhasePoint HeldPhase::calc_open(double y, double u) const {
   return p;
 }
 
-PhasePoint HeldPhase::calc_on_rail(double x, double xi) const {
+PhasePoint HeldPhase::calc_on_rail(double x, double xi, PhaseScratch& sys) const {
   const MastParams& mast = *ctx_.mast;
   const int m = ctx_.bay;
   const BayParams& bay = mast.bay(m);
@@ -83,13 +76,12 @@ PhasePoint HeldPhase::calc_on_rail(double x, double xi) const {
   const OnRailKinematics kin = model::calc_on_rail(mast.rail, l, x);
   const double u = kin.dY * xi;
   const double w = kin.dZ * xi;
-  y_[0] = ctx_.lower_held_height_m; y_[1] = kin.Z; y_[2] = kin.Y;
-  v_[0] = 0.0; v_[1] = w; v_[2] = u;
-  // y_[0] is frame m-2, read only when m >= 2 (frame 0 has no bay below it).
-  calc_frame_system(mast, active_, m >= 2 ? y_ : y_ + 1, m >= 2 ? v_ : v_ + 1, m >= 2 ? m - 2 : m - 1, sys_);
-  const double A_ll = sys_.diag[0], A_mm = sys_.diag[1], A_ml = sys_.sub[1];
-  const double r_l = sys_.velocity_terms[0] + sys_.spring_forces[0];
-  const double r_m = sys_.velocity_terms[1] + sys_.spring_forces[1];
+  const double ys[3] = {ctx_.lower_held_height_m, kin.Z, kin.Y}, vs[3] = {0.0, w, u};  // frames m-2, m-1, m
+  // ys[0] is frame m-2, read only when m >= 2 (frame 0 has no bay below it).
+  calc_frame_system(mast, active_, m >= 2 ? ys : ys + 1, m >= 2 ? vs : vs + 1, m >= 2 ? m - 2 : m - 1, sys);
+  const double A_ll = sys.diag[0], A_mm = sys.diag[1], A_ml = sys.sub[1];
+  const double r_l = sys.velocity_terms[0] + sys.spring_forces[0];
+  const double r_m = sys.velocity_terms[1] + sys.spring_forces[1];
   const double k = 2.0 * x / kin.s;
   const double dk = 2.0 * l * l / (kin.s * kin.s * kin.s);
   const double g = calc_g_hinge(bay, x);
@@ -108,13 +100,13 @@ PhasePoint HeldPhase::calc_on_rail(double x, double xi) const {
   p.u_m_per_s = u; p.w_m_per_s = w;
   p.hinge_x_m = x; p.hinge_y_m = mast.rail.axis_height_m() - c * x;
   double yddot;
-  if (ctx_.drive.law == DriveLaw::velocity) {
+  if (ctx_.drive.mode == model::DriveMode::velocity) {
     p.qddot = kin.d2Y * xi2 / gamma;
     yddot = 0.0;
     p.lambda_N = (M_yx * yddot + M_xx * p.qddot - R_x) / gamma;
     p.drive_force_N = M_yy * yddot + M_yx * p.qddot - R_y0 - p.lambda_N;
   } else {
-    p.drive_force_N = ctx_.drive.calc_force_N(u);
+    p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
     const double R_y = R_y0 + p.drive_force_N;
     const double mu = M_xx - 2.0 * gamma * M_yx + gamma * gamma * M_yy;
     p.qddot = (R_x - gamma * R_y - (M_yx - gamma * M_yy) * kin.d2Y * xi2) / mu;

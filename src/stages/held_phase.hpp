@@ -13,76 +13,46 @@
 // Velocity mode prescribes y_m'' = 0, so x'' = Y'' xi^2 / gamma and the two rows give lambda and the
 // drive force F (inverse dynamics). Every term is regular at x = 0.
 #pragma once
-#include <vector>
-
 #include "model/frames.hpp"
 #include "model/params.hpp"
 #include "model/rail.hpp"
+#include "stages/phase.hpp"
 
 namespace truss::stages {
 
-enum class PhaseKind { open, on_rail };
-enum class DriveLaw { velocity, torque, motor };
-
-struct DriveParams {
-  DriveLaw law = DriveLaw::velocity;
-  double direction = 1.0;             // +1 deploy (driven frame up), -1 retract
-  double speed_m_per_s = 0.1;         // velocity mode
-  double screw_lead_m = 0.01;
-  double torque_Nm = 0.01;            // torque mode, along the run direction
-  double stall_torque_Nm = 0.02;      // motor mode
-  double no_load_speed_rad_per_s = 75.0;
-  // Screw force (N, along +y) for a driven-frame velocity u (torque and motor modes).
-  double calc_force_N(double u) const;
-  double calc_torque_Nm(double force_N) const;  // M = F h / (2 pi)
-};
-
-// Everything a phase needs, fixed for the phase.
-struct PhaseContext {
-  const model::MastParams* mast = nullptr;
-  PhaseKind kind = PhaseKind::open;
-  int bay = 0;                        // deploying bay m; driven frame m, lower frame m-1
-  double lower_held_height_m = 0;     // open: height of frame m-1 (held); on_rail: of frame m-2
-  double locked_mass_kg = 0;          // locked bays above m + tip
-  double panel_height_offset_m = 0;   // H = y_m + offset
-  DriveParams drive;
-};
-
-// Everything one evaluation of a phase gives: state in frame heights, accelerations, loads.
-struct PhasePoint {
-  double q = 0, qdot = 0, qddot = 0;  // phase coordinate (y_m or x) and its derivatives
-  double y_driven_m = 0, y_lower_m = 0;
-  double u_m_per_s = 0, w_m_per_s = 0;  // velocities of driven and lower frame
-  double hinge_x_m = 0, hinge_y_m = 0;
-  double drive_force_N = 0;
-  double lambda_N = 0;                // rail multiplier (0 off the rail)
-  double pin_force_N = 0;
-  double diagonal_tension_N = 0;      // largest tension of one diagonal in the moving bays
-  double kinetic_energy_J = 0;
-  double potential_energy_J = 0;      // diagonals of the moving bays (m and, on the rail, m-1)
-  double rail_residual_m = 0;
-  // Mass matrix in the phase's coordinates: open: mass_yy only; on_rail: (y_m, x) entries.
-  double mass_yy = 0, mass_yx = 0, mass_xx = 0;
-  double rail_slope = 0;              // on_rail: gamma = c + x/s = df/dx = -Y'(x)
-};
-
 // Evaluates the phase at (q, qdot). In velocity mode qdot must be the prescribed kinematics
 // (y_m' = direction * v) and q'' is computed from it; otherwise the drive law gives F.
-class HeldPhase {
+// Pure: the frame-system work space is the caller's.
+class HeldPhase final : public PhaseModel {
  public:
   explicit HeldPhase(const PhaseContext& ctx);
+  PhasePoint calc_point(double q, double qdot, PhaseScratch& scratch) const;
+  // Convenience for tests and one-off evaluations: allocates its own work space.
   PhasePoint calc_point(double q, double qdot) const;
-  const PhaseContext& context() const { return ctx_; }
   double strut_length_m() const { return ctx_.mast->bay(ctx_.bay).strut_length_m; }
+  // Driven-frame velocity for the phase coordinate's rate (open: q' itself; on the rail Y'(x) x').
+  double calc_driven_speed_m_per_s(double q, double qdot) const;
+
+  // PhaseModel: one coordinate.
+  int dof() const override { return 1; }
+  const PhaseContext& context() const override { return ctx_; }
+  PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override {
+    const PhasePoint p = calc_point(q[0], qdot[0], scratch);
+    qddot[0] = p.qddot;
+    return p;
+  }
+  double calc_driven_speed_m_per_s(const double* q, const double* qdot) const override {
+    return calc_driven_speed_m_per_s(q[0], qdot[0]);
+  }
+  double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[0] - ctx_.q_end); }
+  double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[0]; }
+  void snap_to_end(double* q) const override { q[0] = ctx_.q_end; }
 
  private:
-  PhasePoint calc_open(double y, double u) const;
-  PhasePoint calc_on_rail(double x, double xi) const;
+  PhasePoint calc_open(double y, double u, PhaseScratch& scratch) const;
+  PhasePoint calc_on_rail(double x, double xi, PhaseScratch& scratch) const;
   PhaseContext ctx_;
   model::ActiveFrames active_;
-  mutable model::FrameSystem sys_;
-  mutable double y_[3] = {0, 0, 0};   // frames m-2, m-1, m (local scratch)
-  mutable double v_[3] = {0, 0, 0};
   double b2_m_ = 0, b2_lower_ = 0;    // diagonal offsets^2 of bays m and m-1
 };
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "model/params.hpp"
-#include "stages/held_phase.hpp"
+#include "stages/phase.hpp"
 
 namespace truss::stages {
 

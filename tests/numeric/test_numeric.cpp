@@ -82,7 +82,7 @@ TEST_CASE("Dormand-Prince pair converges with order 5", "[numeric][rk]") {
     const model::MastParams mast = build_mast(s);
     stages::PhaseContext ctx;
     ctx.mast = &mast; ctx.kind = stages::PhaseKind::on_rail; ctx.bay = 30; ctx.locked_mass_kg = mast.tip_mass_kg;
-    ctx.drive.law = stages::DriveLaw::torque;
+    ctx.drive.mode = model::DriveMode::torque;
     const stages::HeldPhase ph(ctx);
     OpenPhaseOde ode(ph);  // (q, q') -> (q', q'') of any phase
     const double T = 0.06;
@@ -213,10 +213,10 @@ TEST_CASE("DP5(4) and CVODE agree on the motor-mode lock times", "[numeric][cvod
 TEST_CASE("rail formulation in (y_m, x) equals the frame-height formulation away from the lock, and is regular at it",
           "[numeric][rail]") {
   const model::MastParams mast = make_uneven_mast(5);
-  for (auto law : {stages::DriveLaw::velocity, stages::DriveLaw::torque}) {
+  for (auto law : {model::DriveMode::velocity, model::DriveMode::torque}) {
     stages::PhaseContext ctx;
     ctx.mast = &mast; ctx.kind = stages::PhaseKind::on_rail; ctx.bay = 3; ctx.locked_mass_kg = 3.0;
-    ctx.drive.law = law;
+    ctx.drive.mode = law;
     const stages::HeldPhase ph(ctx);
     const auto& b = mast.bay(3);
     const double c = mast.rail.cot_beta();

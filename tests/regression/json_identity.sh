@@ -44,7 +44,7 @@ for c in "table1|" "table1_motor|--set drive.mode=motor" "table1_torque_retract|
   rm -f "$out/$name.h5"
   # shellcheck disable=SC2086
   "$sim" "$repo/campaigns/scenes/table1.toml" $args --set run.output_step_s=0.05 -o "$out/$name.h5" >/dev/null 2>&1 || true
-  h5dump -m '%.17g' -g /history "$out/$name.h5" > "$out/$name.history.txt" 2>&1 || true
+  h5dump -m '%.17g' -g /history "$out/$name.h5" 2>&1 | tail -n +2 > "$out/$name.history.txt" || true
   rm -f "$out/$name.h5"
 done
 echo "recorded ${#cases[@]} cases in $out"

@@ -1,10 +1,10 @@
-#include "sim/result.hpp"
+#include "stages/result.hpp"
 
 #include <cmath>
 
 #include <fmt/format.h>
 
-namespace truss::sim {
+namespace truss::stages {
 
 const char* to_string(RunStatus s) {
   switch (s) {
@@ -20,10 +20,10 @@ const char* to_string(RunStatus s) {
 }
 
 std::string RunResult::to_string() const {
-  std::string s = fmt::format("status: {}{}{}\n", sim::to_string(status), message.empty() ? "" : " - ", message);
+  std::string s = fmt::format("status: {}{}{}\n", stages::to_string(status), message.empty() ? "" : " - ", message);
   s += fmt::format("{} of {} bays, {} drive: {} bays completed\n", direction, n_bays, drive_mode, bays_completed);
   if (std::isfinite(deploy_time_s)) s += fmt::format("  {} time            {:.9g} s\n", direction, deploy_time_s);
-  else s += fmt::format("  {} time            not reached (status {})\n", direction, sim::to_string(status));
+  else s += fmt::format("  {} time            not reached (status {})\n", direction, stages::to_string(status));
   s += fmt::format("  peak drive force       {:.6g} N at t = {:.6g} s (bay {})\n", peak_drive_force_N, peak_drive_force_time_s, peak_drive_force_bay);
   s += fmt::format("  min drive force        {:.6g} N at t = {:.6g} s (bay {})\n", min_drive_force_N, min_drive_force_time_s, min_drive_force_bay);
   s += fmt::format("  peak drive torque      {:.6g} N m\n", peak_drive_torque_Nm);
@@ -36,4 +36,4 @@ std::string RunResult::to_string() const {
   return s;
 }
 
-}  // namespace truss::sim
+}  // namespace truss::stages

@@ -1,0 +1,35 @@
+#include "stages/energy.hpp"
+
+#include "model/bay.hpp"
+
+namespace truss::stages {
+
+EnergyLedger::EnergyLedger(const model::MastParams& mast) {
+  const int n = mast.n_bays();
+  U_stowed_prefix_.assign(static_cast<std::size_t>(n + 1), 0.0);
+  U_locked_suffix_.assign(static_cast<std::size_t>(n + 2), 0.0);
+  for (int i = 1; i <= n; ++i) {
+    const double b2 = model::calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    U_stowed_prefix_[i] = U_stowed_prefix_[i - 1] + model::calc_bay_potential_J(mast.bay(i), b2, 0.0);
+  }
+  for (int i = n; i >= 1; --i) {
+    const double b2 = model::calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    U_locked_suffix_[i] = U_locked_suffix_[i + 1] +
+                          model::calc_bay_potential_J(mast.bay(i), b2, 2.0 * mast.bay(i).strut_length_m);
+  }
+}
+
+void EnergyLedger::fill(RunResult& r) const {
+  r.drive_work_smooth_J = smooth_J_;
+  r.drive_work_impulses_J = impulses_J_;
+  r.energy_lost_J = lost_J_;
+  r.kinetic_energy_start_J = T0_;
+  r.kinetic_energy_end_J = T1_;
+  r.potential_energy_start_J = U0_;
+  r.potential_energy_end_J = U1_;
+  r.drive_work_J = r.drive_work_smooth_J + r.drive_work_impulses_J;
+  r.energy_residual_J = r.drive_work_J - (r.kinetic_energy_end_J - r.kinetic_energy_start_J) -
+                        (r.potential_energy_end_J - r.potential_energy_start_J) - r.energy_lost_J;
+}
+
+}  // namespace truss::stages

@@ -1,0 +1,41 @@
+// Energy ledger of a run (MODEL.md 5): drive work (smooth part and impulses), the energy lost in
+// every impact, the kinetic and potential energies at start and end, and the residual
+//   W - (T_end - T_start) - (U_end - U_start) - E_lost,
+// which closes to the integration error. The potential of the bays that do not move in a stage
+// (stowed at D = 0 below, locked at D = 2 l_s above) comes from prefix / suffix sums: O(1) per
+// look-up after an O(n) set-up.
+#pragma once
+#include <vector>
+
+#include "model/params.hpp"
+#include "stages/result.hpp"
+
+namespace truss::stages {
+
+class EnergyLedger {
+ public:
+  explicit EnergyLedger(const model::MastParams& mast);
+  // Whole-mast potential in the stage of `bay`: locked bays above it, the moving bays'
+  // `moving_J`, and the stowed bays below `first_moving_frame` (J).
+  double calc_total_potential_J(int bay, int first_moving_frame, double moving_J) const {
+    return U_locked_suffix_[static_cast<std::size_t>(bay + 1)] + moving_J +
+           U_stowed_prefix_[static_cast<std::size_t>(first_moving_frame - 1)];
+  }
+  double get_stowed_potential_J() const { return U_stowed_prefix_.back(); }
+  double get_deployed_potential_J() const { return U_locked_suffix_[1]; }
+
+  void add_smooth_work(double J) { smooth_J_ += J; }
+  void add_impulse_work(double J) { impulses_J_ += J; }
+  void add_loss(double J) { lost_J_ += J; }
+  void set_start(double kinetic_J, double potential_J) { T0_ = kinetic_J; U0_ = potential_J; }
+  void set_end(double kinetic_J, double potential_J) { T1_ = kinetic_J; U1_ = potential_J; }
+  // Writes every energy field of the result, the residual last.
+  void fill(RunResult& r) const;
+
+ private:
+  std::vector<double> U_stowed_prefix_, U_locked_suffix_;
+  double smooth_J_ = 0, impulses_J_ = 0, lost_J_ = 0;
+  double T0_ = 0, U0_ = 0, T1_ = 0, U1_ = 0;
+};
+
+}  // namespace truss::stages

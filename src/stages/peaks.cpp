@@ -1,0 +1,60 @@
+#include "stages/peaks.hpp"
+
+#include <algorithm>
+
+namespace truss::stages {
+
+double calc_peak_quantity(int q, const PhasePoint& p, double direction) {
+  switch (q) {
+    case kForce: return p.drive_force_N;
+    case kNegForce: return -p.drive_force_N;
+    case kPin: return p.pin_force_N;
+    case kTension: return p.diagonal_tension_N;
+    default: return direction * p.u_m_per_s;
+  }
+}
+
+void HermiteSpan::calc(double t, double* q, double* qd) const {
+  const int n = dof();
+  const double h = b->t - a->t, s = (t - a->t) / h, s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
+  for (int i = 0; i < n; ++i) {
+    const double qa = a->state[i], va = h * a->state[n + i], aa = h * h * a->state[2 * n + i];
+    const double qb = b->state[i], vb = h * b->state[n + i], ab = h * h * b->state[2 * n + i];
+    q[i] = (1 - 10 * s3 + 15 * s4 - 6 * s5) * qa + (s - 6 * s3 + 8 * s4 - 3 * s5) * va +
+           (0.5 * s2 - 1.5 * s3 + 1.5 * s4 - 0.5 * s5) * aa + (10 * s3 - 15 * s4 + 6 * s5) * qb +
+           (-4 * s3 + 7 * s4 - 3 * s5) * vb + (0.5 * s3 - s4 + 0.5 * s5) * ab;
+    qd[i] = ((-30 * s2 + 60 * s3 - 30 * s4) * qa + (1 - 18 * s2 + 32 * s3 - 15 * s4) * va +
+             (s - 4.5 * s2 + 6 * s3 - 2.5 * s4) * aa + (30 * s2 - 60 * s3 + 30 * s4) * qb +
+             (-12 * s2 + 28 * s3 - 15 * s4) * vb + (1.5 * s2 - 4 * s3 + 2.5 * s4) * ab) / h;
+  }
+}
+
+void PhasePeaks::reset(double direction) {
+  for (Bracket& b : b_) { b.value = -kInf; b.want_next = false; }
+  has_last_ = false;
+  direction_ = direction;
+  max_rail_residual = 0.0;
+}
+
+void PhasePeaks::feed(double t, const PhasePoint& p, const double* state, int n) {
+  for (int q = 0; q < kQuantityCount; ++q) {
+    Bracket& b = b_[static_cast<std::size_t>(q)];
+    const double v = calc_peak_quantity(q, p, direction_);
+    if (v > b.value) {
+      b.value = v;
+      if (has_last_) b.prev = last_;
+      else b.prev.assign(t, p, state, n);
+      b.best.assign(t, p, state, n);
+      b.next = b.best;
+      b.want_next = true;
+    } else if (b.want_next) {
+      b.next.assign(t, p, state, n);
+      b.want_next = false;
+    }
+  }
+  last_.assign(t, p, state, n);
+  has_last_ = true;
+  max_rail_residual = std::max(max_rail_residual, p.rail_residual_m);
+}
+
+}  // namespace truss::stages

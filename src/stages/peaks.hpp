@@ -1,0 +1,129 @@
+// Peak tracking (MODEL.md 5: peaks with their time and bay; the earliest where one repeats).
+// A phase's samples (step ends, or a grid in closed form) are fed in time order; for each tracked
+// quantity PhasePeaks keeps its best sample and the two neighbours that bracket it, and refine()
+// maximises between them, on the exact closed form or on a quintic Hermite interpolant of the
+// state. PeakTracker keeps the records of the run and of the current stage. Neither knows the
+// size or layout of a phase's state: a sample carries it as (q, q', q'') of any length.
+#pragma once
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "numerics/brent.hpp"
+#include "stages/phase.hpp"
+
+namespace truss::stages {
+
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+struct Extremum {
+  double value = -kInf;
+  double t = kNaN;
+  int bay = 0;
+  bool offer(double v, double time, int b) {
+    if (v > value) { value = v; t = time; bay = b; return true; }
+    return false;
+  }
+};
+
+// Quantities whose extremes a run reports.
+enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kQuantityCount };
+double calc_peak_quantity(int q, const PhasePoint& p, double direction);
+
+struct Sample {
+  double t = 0;
+  PhasePoint p;
+  std::vector<double> state;  // (q, q', q'') of the phase, 3 dof values; empty in closed form
+  void assign(double time, const PhasePoint& point, const double* s, int n) {
+    t = time;
+    p = point;
+    state.assign(s, s + n);  // keeps its capacity: no allocation per sample
+  }
+};
+
+// State between two samples: quintic Hermite interpolation of each coordinate from (q, q', q'')
+// at both ends, error O(h^6) in q and O(h^5) in q', below the integrator's own error.
+struct HermiteSpan {
+  const Sample* a;
+  const Sample* b;
+  int dof() const { return static_cast<int>(a->state.size() / 3); }
+  void calc(double t, double* q, double* qd) const;
+};
+
+class PhasePeaks {
+ public:
+  void reset(double direction);
+  // state: (q, q', q'') of the sample, 3 dof values (nullptr, 0 in closed form).
+  void feed(double t, const PhasePoint& p, const double* state = nullptr, int n = 0);
+  // eval(t, span) gives the phase point at t inside the span [a, b] of two consecutive samples.
+  template <class Eval>
+  void refine(int q, Eval&& eval, double xtol, double& value, double& time) const;
+  double best(int q) const { return b_[static_cast<std::size_t>(q)].value; }
+  double max_rail_residual = 0.0;
+
+ private:
+  struct Bracket {
+    double value = -kInf;
+    Sample prev, best, next;
+    bool want_next = false;
+  };
+  std::array<Bracket, kQuantityCount> b_;
+  Sample last_;
+  bool has_last_ = false;
+  double direction_ = 1.0;
+};
+
+class PeakTracker {
+ public:
+  std::array<Extremum, kQuantityCount> run;  // run-wide
+  Extremum stage_force, stage_pin;           // per stage
+  double max_rail_residual = 0.0;
+  int bay = 0;
+  void start_stage(int b) { bay = b; stage_force = Extremum{}; stage_pin = Extremum{}; }
+  // The stage's force and pin records join the run's.
+  void close_stage() {
+    run[kForce].offer(stage_force.value, stage_force.t, stage_force.bay);
+    run[kPin].offer(stage_pin.value, stage_pin.t, stage_pin.bay);
+  }
+  Extremum& target(int q) {
+    if (q == kForce) return stage_force;
+    if (q == kPin) return stage_pin;
+    return run[static_cast<std::size_t>(q)];
+  }
+  // Refines each quantity of a finished phase whose best sample could beat the record.
+  template <class Eval>
+  void absorb(const PhasePeaks& pp, Eval&& eval, double xtol) {
+    max_rail_residual = std::max(max_rail_residual, pp.max_rail_residual);
+    for (int q = 0; q < kQuantityCount; ++q) {
+      Extremum& tr = target(q);
+      if (!(pp.best(q) > tr.value) && std::isfinite(tr.value)) continue;
+      double v, t;
+      pp.refine(q, eval, xtol, v, t);
+      tr.offer(v, t, bay);
+    }
+  }
+};
+
+template <class Eval>
+void PhasePeaks::refine(int q, Eval&& eval, double xtol, double& value, double& time) const {
+  const Bracket& b = b_[static_cast<std::size_t>(q)];
+  value = b.value;
+  time = b.best.t;
+  if (!std::isfinite(b.value)) return;
+  for (const HermiteSpan span : {HermiteSpan{&b.prev, &b.best}, HermiteSpan{&b.best, &b.next}}) {
+    const double len = span.b->t - span.a->t;
+    if (!(len > 0.0)) continue;
+    // A best sample at a kink or at the phase end is often the maximum itself: if the quantity
+    // falls just inside the span, the span holds nothing higher (it is bracketed by the grid).
+    const bool best_is_a = span.a == &b.best;
+    const double probe_t = best_is_a ? span.a->t + 1e-6 * len : span.b->t - 1e-6 * len;
+    if (calc_peak_quantity(q, eval(probe_t, span), direction_) < b.value) continue;
+    auto [tm, vm] = numerics::maximize_brent([&](double t) { return calc_peak_quantity(q, eval(t, span), direction_); },
+                                             span.a->t, span.b->t, std::max(xtol, 1e-9 * len));
+    if (vm > value) { value = vm; time = tm; }
+  }
+}
+
+}  // namespace truss::stages

@@ -1,0 +1,66 @@
+// A phase of a stage as the solvers see it (MODEL.md 2: phase A open, phase B on the rail).
+// PhaseModel is the narrow interface between a phase's equations and the time-stepping solver:
+// any number of generalized coordinates q (the held stack has one, the free stack n - j),
+// accelerations and the reported loads at (q, q'), and the scalar functions the events need.
+// Nothing outside a model knows the layout of its state.
+#pragma once
+#include "model/drive.hpp"
+#include "model/frames.hpp"
+#include "model/params.hpp"
+
+namespace truss::stages {
+
+enum class PhaseKind { open, on_rail };
+
+// Everything a phase needs, fixed for the phase.
+struct PhaseContext {
+  const model::MastParams* mast = nullptr;
+  PhaseKind kind = PhaseKind::open;
+  int bay = 0;                        // deploying bay m; driven frame m, lower frame m-1
+  double lower_held_height_m = 0;     // open: height of frame m-1 (held); on_rail: of frame m-2
+  double locked_mass_kg = 0;          // locked bays above m + tip
+  double panel_height_offset_m = 0;   // H = y_m + offset
+  model::DriveParams drive;           // drive law
+  double direction = 1.0;             // +1 deploy (driven frame up), -1 retract
+  double q_end = 0;                   // phase coordinate at the phase's end event
+  double sign_q = 1.0;                // +1 if q increases towards q_end
+};
+
+// Everything one evaluation of a phase gives: the reported frames, accelerations, loads.
+struct PhasePoint {
+  double q = 0, qdot = 0, qddot = 0;  // held phase: its coordinate (y_m or x) and derivatives
+  double y_driven_m = 0, y_lower_m = 0;
+  double u_m_per_s = 0, w_m_per_s = 0;  // velocities of driven and lower frame
+  double hinge_x_m = 0, hinge_y_m = 0;
+  double drive_force_N = 0;
+  double lambda_N = 0;                // rail multiplier (0 off the rail)
+  double pin_force_N = 0;
+  double diagonal_tension_N = 0;      // largest tension of one diagonal in the moving bays
+  double kinetic_energy_J = 0;
+  double potential_energy_J = 0;      // diagonals of the moving bays (m and, on the rail, m-1)
+  double rail_residual_m = 0;
+  // Mass matrix in the phase's coordinates: open: mass_yy only; on_rail: (y_m, x) entries.
+  double mass_yy = 0, mass_yx = 0, mass_xx = 0;
+  double rail_slope = 0;              // on_rail: gamma = c + x/s = df/dx = -Y'(x)
+};
+
+// Work space of a model evaluation, owned by the caller (the model functions stay pure).
+using PhaseScratch = model::FrameSystem;
+
+class PhaseModel {
+ public:
+  virtual ~PhaseModel() = default;
+  virtual int dof() const = 0;
+  virtual const PhaseContext& context() const = 0;
+  // Accelerations (dof values into qddot) and the reported point at (q, q').
+  virtual PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const = 0;
+  // Driven-frame velocity dy_m/dt (m/s).
+  virtual double calc_driven_speed_m_per_s(const double* q, const double* qdot) const = 0;
+  // Rises through zero at the phase's end event; and its second time derivative (from q'').
+  virtual double calc_end_gap(const double* q) const = 0;
+  virtual double calc_end_gap_acceleration(const double* qddot) const = 0;
+  // Puts q exactly on the end surface once the event is located.
+  virtual void snap_to_end(double* q) const = 0;
+};
+
+}  // namespace truss::stages

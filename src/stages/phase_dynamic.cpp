@@ -1,0 +1,132 @@
+#include "stages/phase_dynamic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace truss::stages {
+
+namespace {
+
+// The phase as an ODE: state (q, q', W), dof values each and the drive work.
+class PhaseOde final : public integrators::OdeSystem {
+ public:
+  explicit PhaseOde(const PhaseModel& m) : m_(m), n_(m.dof()) {}
+  int size() const override { return 2 * n_ + 1; }
+  void calc_rhs(double, const double* y, double* dy) override {
+    const PhasePoint p = m_.calc_point(y, y + n_, dy + n_, scratch_);
+    std::copy(y + n_, y + 2 * n_, dy);
+    dy[2 * n_] = p.drive_force_N * p.u_m_per_s;
+  }
+  int num_events() const override { return m_.context().drive.mode == model::DriveMode::motor ? 3 : 2; }
+  void calc_events(double, const double* y, double* g) override {
+    g[0] = m_.calc_end_gap(y);
+    const double u = m_.context().direction * m_.calc_driven_speed_m_per_s(y, y + n_);
+    g[1] = u;
+    if (num_events() == 3) g[2] = u - DynamicPhaseSolver::calc_creep_speed_m_per_s(m_.context().drive);
+  }
+  int event_direction(int k) const override { return k == 0 ? +1 : -1; }
+
+ private:
+  const PhaseModel& m_;
+  int n_;
+  PhaseScratch scratch_;
+};
+
+// Feeds the peak brackets with every step end and the history with its grid times; enforces
+// the wall-time cap.
+class PhaseObserver final : public integrators::StepObserver {
+ public:
+  PhaseObserver(const PhaseModel& m, PhaseSinks& sinks, PhaseScratch& scratch)
+      : m_(m), sinks_(sinks), scratch_(scratch), n_(m.dof()),
+        state_(static_cast<std::size_t>(2 * n_ + 1)), sample_(static_cast<std::size_t>(3 * n_)) {}
+  bool timed_out = false;
+  long point_evals = 0;
+  bool on_step(const integrators::DenseOutput& d) override {
+    auto eval = [&](double t) {
+      d.calc_state(t, state_.data());
+      ++point_evals;
+      std::copy(state_.begin(), state_.begin() + 2 * n_, sample_.begin());
+      return m_.calc_point(state_.data(), state_.data() + n_, sample_.data() + 2 * n_, scratch_);
+    };
+    const double t1 = d.t_end;
+    if (t1 > d.t_begin) {
+      const PhasePoint p = eval(t1);
+      sinks_.phase_peaks.feed(t1, p, sample_.data(), 3 * n_);
+    }
+    sinks_.history.sample(eval, d.t_begin, t1, m_.context().bay);
+    if (std::chrono::steady_clock::now() > sinks_.deadline) { timed_out = true; return false; }
+    return true;
+  }
+
+ private:
+  const PhaseModel& m_;
+  PhaseSinks& sinks_;
+  PhaseScratch& scratch_;
+  int n_;
+  std::vector<double> state_, sample_;
+};
+
+}  // namespace
+
+double DynamicPhaseSolver::calc_creep_speed_m_per_s(const model::DriveParams& d) {
+  return kCreepSpeedFraction * d.no_load_speed_rad_per_s * d.screw_lead_m / (2.0 * std::numbers::pi);
+}
+
+PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sinks) {
+  const int n = model_.dof();
+  const double t = start.t_s;
+  PhaseOutcome out;
+  PhaseScratch scratch;
+  std::vector<double> y(static_cast<std::size_t>(2 * n + 1), 0.0), s0(static_cast<std::size_t>(3 * n));
+  std::copy(start.q, start.q + n, y.begin());
+  std::copy(start.qdot, start.qdot + n, y.begin() + n);
+  std::copy(y.begin(), y.begin() + 2 * n, s0.begin());
+  const PhasePoint p_start = model_.calc_point(start.q, start.qdot, s0.data() + 2 * n, scratch);
+  ++out.evals;
+  sinks.phase_peaks.reset(model_.context().direction);
+  sinks.phase_peaks.feed(t, p_start, s0.data(), 3 * n);
+  const double u0 = model_.context().direction * model_.calc_driven_speed_m_per_s(start.q, start.qdot);
+  if (std::abs(u0) <= 0.0 && !(model_.calc_end_gap_acceleration(s0.data() + 2 * n) > 0.0)) {
+    out.reason = PhaseEndReason::cannot_start;
+    out.t_end_s = t;
+    out.end = p_start;
+    return out;
+  }
+  PhaseOde ode(model_);
+  PhaseObserver obs(model_, sinks, scratch);
+  integrator_.set_options(options_);
+  const integrators::IntegratorSummary sum = integrator_.integrate(ode, t, t + 1e7, y.data(), &obs);
+  out.steps = sum.steps;
+  out.rejected_steps = sum.rejected_steps;
+  out.evals += sum.rhs_evals + obs.point_evals;
+  out.drive_work_J = y[static_cast<std::size_t>(2 * n)];
+  out.t_end_s = sum.t;
+  const bool reached = sum.status == integrators::IntegratorStatus::event && sum.event_index == 0;
+  std::vector<double> qddot(static_cast<std::size_t>(n));
+  if (reached) {
+    model_.snap_to_end(y.data());  // onto the event surface (|error| < event tolerance)
+    out.end = model_.calc_point(y.data(), y.data() + n, qddot.data(), scratch);
+    ++out.evals;
+  }
+  // Peaks of the phase: best step-end samples refined on the Hermite interpolant.
+  std::vector<double> q(static_cast<std::size_t>(n)), qd(static_cast<std::size_t>(n));
+  sinks.peaks.absorb(sinks.phase_peaks, [&](double tt, const HermiteSpan& span) {
+    span.calc(tt, q.data(), qd.data());
+    ++out.evals;
+    return model_.calc_point(q.data(), qd.data(), qddot.data(), scratch);
+  }, 1e-10 * std::max(1.0, out.t_end_s));
+  if (reached) return out;
+  out.end = model_.calc_point(y.data(), y.data() + n, qddot.data(), scratch);
+  out.message = sum.message;
+  if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 2) out.reason = PhaseEndReason::crept_to_rest;
+  else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 1) out.reason = PhaseEndReason::stopped;
+  else if (obs.timed_out) out.reason = PhaseEndReason::wall_time;
+  else if (sum.status == integrators::IntegratorStatus::step_limit || sum.status == integrators::IntegratorStatus::reached_end)
+    out.reason = PhaseEndReason::step_limit;
+  else out.reason = PhaseEndReason::failure;
+  return out;
+}
+
+}  // namespace truss::stages

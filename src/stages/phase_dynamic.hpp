@@ -1,0 +1,28 @@
+// Time-stepping solver of a phase (torque and motor drives): the PhaseModel's coordinates as a
+// first-order ODE (q, q', W), W the drive work, through the run's Integrator; events are the
+// phase end (rising end gap), a stop of the driven frame (falling speed) and, in motor mode, the
+// creep stall. Peaks are refined on the Hermite interpolant of the step ends.
+#pragma once
+#include "integrators/ode.hpp"
+#include "stages/phase_solver.hpp"
+
+namespace truss::stages {
+
+class DynamicPhaseSolver final : public PhaseSolver {
+ public:
+  DynamicPhaseSolver(const PhaseModel& model, integrators::Integrator& integrator,
+                     const integrators::IntegratorOptions& options)
+      : model_(model), integrator_(integrator), options_(options) {}
+  PhaseOutcome solve(const PhaseStart& start, PhaseSinks& sinks) override;
+  // Motor mode: below this fraction of the no-load screw speed the mast has stopped for any
+  // engineering purpose (the rest of the stage would take ~1e6 times its nominal time).
+  static constexpr double kCreepSpeedFraction = 1e-6;
+  static double calc_creep_speed_m_per_s(const model::DriveParams& d);
+
+ private:
+  const PhaseModel& model_;
+  integrators::Integrator& integrator_;
+  integrators::IntegratorOptions options_;  // with the run's remaining step budget
+};
+
+}  // namespace truss::stages

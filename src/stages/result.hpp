@@ -1,0 +1,96 @@
+// Run result (a layer below sim/, so that the stages fill it without a cycle): what one simulated deployment or retraction reports (MODEL.md section 5).
+// Units are in the field names. Times are seconds from the start of the run.
+#pragma once
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace truss::stages {
+
+// wall_time_limit: the run was stopped by its wall-time cap (stages::RunOptions::max_wall_time_s); unlike
+// the other statuses it depends on the machine, not only on the inputs.
+enum class RunStatus { ok, rail_miss, stall, singular_configuration, step_limit, invalid_input, wall_time_limit };
+const char* to_string(RunStatus);
+constexpr int kRunStatusCount = 7;
+
+struct BayResult {
+  int bay = 0;                         // bay index i = 1..n
+  // Deployment: rail entry / lock. Retraction: rail exit (landing of the lower frame) / unlock.
+  double entry_time_s = NAN_INIT();
+  double lock_time_s = NAN_INIT();
+  double latch_energy_J = NAN_INIT();       // strut radial KE lost at the latch (or paid at unlock)
+  double entry_impulse_Ns = NAN_INIT();     // rail impulse per pin at rail entry (deploy)
+  double landing_impulse_Ns = NAN_INIT();   // stack impulse on the lower frame at rail exit (retract)
+  double entry_drive_impulse_Ns = NAN_INIT();  // drive impulse at rail entry / exit (velocity mode)
+  double entry_energy_loss_J = NAN_INIT();  // energy lost in the rail-entry (or landing) impact
+  double peak_drive_force_N = NAN_INIT();   // peak of the smooth drive force in this bay's stage
+  double peak_drive_force_time_s = NAN_INIT();
+  double peak_pin_force_N = NAN_INIT();     // peak rail normal force on one pin in this stage
+  double peak_pin_force_time_s = NAN_INIT();
+  static constexpr double NAN_INIT() { return __builtin_nan(""); }
+};
+
+struct TimeHistory {
+  std::vector<double> t_s;
+  std::vector<int> bay;                  // the bay whose stage is running
+  std::vector<double> y_driven_m;        // driven frame height
+  std::vector<double> y_lower_m;         // lower frame height (frame below the deploying bay)
+  std::vector<double> hinge_x_m;         // hinge radial offset of the deploying bay
+  std::vector<double> hinge_y_m;         // hinge height of the deploying bay
+  std::vector<double> drive_force_N;
+  std::vector<double> drive_torque_Nm;
+  std::vector<double> pin_force_N;       // rail normal force on one pin (0 off the rail)
+  std::vector<double> diagonal_tension_N;  // tension in one diagonal of the deploying bay
+  std::vector<double> driven_speed_m_per_s;
+  std::size_t size() const { return t_s.size(); }
+};
+
+struct RunResult {
+  RunStatus status = RunStatus::ok;
+  std::string message;                    // human-readable reason; empty when ok
+  std::string direction = "deploy";
+  std::string drive_mode = "velocity";
+  int n_bays = 0;
+  int bays_completed = 0;                 // locked (deploy) or stowed (retract) bays
+
+  double deploy_time_s = NAN_INIT();      // time of the last lock (or end of retraction)
+  double peak_drive_force_N = NAN_INIT();
+  double peak_drive_force_time_s = NAN_INIT();
+  int peak_drive_force_bay = 0;
+  double min_drive_force_N = NAN_INIT();
+  double min_drive_force_time_s = NAN_INIT();
+  int min_drive_force_bay = 0;
+  double peak_drive_torque_Nm = NAN_INIT();
+  double min_drive_torque_Nm = NAN_INIT();
+  double peak_pin_force_N = NAN_INIT();
+  double peak_pin_force_time_s = NAN_INIT();
+  int peak_pin_force_bay = 0;
+  double peak_diagonal_tension_N = NAN_INIT();
+  double peak_latch_energy_J = NAN_INIT();  // largest latch energy of any bay (deploy) / unlock (retract)
+  double peak_driven_speed_m_per_s = NAN_INIT();
+
+  double drive_work_J = 0.0;              // smooth part + impulses
+  double drive_work_smooth_J = 0.0;       // integral of F dy over the smooth motion
+  double drive_work_impulses_J = 0.0;     // work of the start, rail-entry and unlock drive impulses
+  double start_drive_impulse_Ns = 0.0;    // velocity mode: impulse that starts the driven part
+  double energy_lost_J = 0.0;             // all impacts: entries, exits, latches, unlocks, landings
+  double kinetic_energy_start_J = 0.0;
+  double kinetic_energy_end_J = 0.0;
+  double potential_energy_start_J = 0.0;
+  double potential_energy_end_J = 0.0;
+  double energy_residual_J = NAN_INIT();  // W - dT - dU - E_lost
+  double max_rail_residual_m = 0.0;       // largest |f| on the rail (0 by construction when exact)
+
+  long steps = 0;                         // accepted integrator steps (0 in closed-form mode)
+  long rejected_steps = 0;
+  long rhs_evals = 0;                     // model evaluations (right-hand sides or closed forms)
+  double wall_time_s = 0.0;
+
+  std::vector<BayResult> bays;            // bays[0] is bay 1
+  TimeHistory history;                    // empty unless output_step_s > 0
+
+  static constexpr double NAN_INIT() { return __builtin_nan(""); }
+  std::string to_string() const;          // short human-readable report
+};
+
+}  // namespace truss::stages

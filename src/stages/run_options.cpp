@@ -1,0 +1,42 @@
+#include "stages/run_options.hpp"
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+namespace truss::stages {
+
+namespace {
+std::string positive(const char* key, double v) {
+  if (!(std::isfinite(v) && v > 0.0)) return fmt::format("{}: must be a positive number, got {}", key, v);
+  return {};
+}
+}  // namespace
+
+std::string RunOptions::validate() const {
+  if (!(std::isfinite(output_step_s) && output_step_s >= 0.0))
+    return fmt::format("run.output_step_s: must be >= 0 (0 = no time histories), got {}", output_step_s);
+  if (!(rtol > 0.0 && rtol < 1.0)) return fmt::format("run.rtol: must lie in (0, 1), got {}", rtol);
+  if (std::string e = positive("run.atol", atol); !e.empty()) return e;
+  if (max_steps < 1) return fmt::format("run.max_steps: must be positive, got {}", max_steps);
+  return positive("run.max_wall_time_s", max_wall_time_s);
+}
+
+std::string RunnerOptions::validate() const {
+  for (auto [key, v] : {std::pair{"drive.speed_m_per_s", drive.speed_m_per_s}, {"drive.screw_lead_m", drive.screw_lead_m},
+                        {"drive.torque_Nm", drive.torque_Nm}, {"drive.stall_torque_Nm", drive.stall_torque_Nm},
+                        {"drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s}})
+    if (std::string e = positive(key, v); !e.empty()) return e;
+  if (peak_samples_per_piece < 3)
+    return fmt::format("peak_samples_per_piece: must be >= 3, got {}", peak_samples_per_piece);
+  return run.validate();
+}
+
+integrators::IntegratorOptions RunnerOptions::calc_integrator_options() const {
+  integrators::IntegratorOptions io;
+  io.rtol = run.rtol;
+  io.atol = run.atol;
+  return io;
+}
+
+}  // namespace truss::stages

@@ -1,0 +1,32 @@
+// Options of one run: the scene's [run] table (sim::RunOptions is this struct) and what the stage
+// loop needs besides. Plain structs with a default and a reason per field; validate() names the
+// first bad field and is called where the options are used (SceneOptions::validate, run_stages).
+#pragma once
+#include <string>
+
+#include "integrators/ode.hpp"
+#include "model/drive.hpp"
+
+namespace truss::stages {
+
+struct RunOptions {
+  model::Direction direction = model::Direction::deploy;  // deploy from the stowed stack, or retract into it
+  double output_step_s = 0.0;               // time-history sample step; 0 = no histories (fastest)
+  double rtol = 1e-8;                       // relative tolerance of the ODE integrators
+  double atol = 1e-10;                      // absolute tolerance (m, m/s, J) of the ODE integrators
+  integrators::IntegratorKind integrator = integrators::IntegratorKind::dopri54;  // own DP5(4) pair; cvode = SUNDIALS Adams
+  long max_steps = 2'000'000;               // step cap over the whole run: a run never hangs
+  double max_wall_time_s = 600.0;           // wall-time cap for one run
+  std::string validate() const;             // empty, or "run.key: reason"
+};
+
+struct RunnerOptions {
+  model::DriveParams drive;                  // the scene's [drive] table
+  RunOptions run;                            // the scene's [run] table
+  int peak_samples_per_piece = 9;            // velocity mode: bracketing grid per smooth piece
+  std::string validate() const;              // run.validate() and the drive's ranges
+  // Integrator options of the run (tolerances; the step budget is set per phase).
+  integrators::IntegratorOptions calc_integrator_options() const;
+};
+
+}  // namespace truss::stages

@@ -1,0 +1,330 @@
+#include "stages/stage_loop.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include <fmt/format.h>
+
+#include "integrators/cvode_integrator.hpp"
+#include "integrators/dopri54.hpp"
+#include "model/impacts.hpp"
+#include "model/rail.hpp"
+#include "stages/energy.hpp"
+#include "stages/held_phase.hpp"
+#include "stages/phase_dynamic.hpp"
+#include "stages/phase_kinematic.hpp"
+
+namespace truss::stages {
+
+using namespace truss::model;
+
+namespace {
+
+// y-space mass matrix of frames (m-1, m) with bay m written in frame heights (regular off the
+// lock): the rail-entry and rail-exit impacts.
+TwoFrameMass calc_two_frame_mass(const MastParams& mast, const StageSpec& s, double y_lower, double y_driven) {
+  ActiveFrames a;
+  a.lo = s.bay - 1;
+  a.m = s.bay;
+  a.locked_mass_kg = s.locked_mass_kg;
+  a.panel_height_offset_m = s.panel_height_offset_m;
+  FrameSystem sys;
+  const double y[3] = {0.0, y_lower, y_driven};
+  const double v[3] = {0.0, 0.0, 0.0};
+  if (s.bay >= 2) calc_frame_system(mast, a, y, v, s.bay - 2, sys);
+  else calc_frame_system(mast, a, y + 1, v + 1, s.bay - 1, sys);
+  return {sys.diag[0], sys.sub[1], sys.diag[1]};
+}
+
+std::unique_ptr<integrators::Integrator> make_integrator(integrators::IntegratorKind kind,
+                                                         const integrators::IntegratorOptions& io) {
+  if (kind == integrators::IntegratorKind::cvode) return std::make_unique<integrators::CvodeIntegrator>(io);
+  return std::make_unique<integrators::DormandPrince54>(io);
+}
+
+class StageLoop {
+ public:
+  StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts);
+  RunResult run();
+
+ private:
+  PhaseContext make_context(const StageSpec& s, PhaseKind kind, double lower_held_height_m) const {
+    return {&mast_, kind, s.bay, lower_held_height_m, s.locked_mass_kg, s.panel_height_offset_m, opts_.drive, dir_, 0.0, 1.0};
+  }
+  void start_stage(const StageSpec& s, BayResult& br);
+  void run_phase(const StageSpec& s, const PhaseSpec& ph);
+  void fail_phase(const PhaseOutcome& o, int m);
+  void end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePoint& p_end, BayResult& br);
+  void close_stage(BayResult& br);
+  void finish();
+  void fail(RunStatus st, std::string msg) { r_.status = st; r_.message = std::move(msg); failed_ = true; }
+
+  const MastParams& mast_;
+  const std::vector<StageSpec>& stages_;
+  const RunnerOptions& opts_;
+  const double dir_;
+  const bool kinematic_;
+  const std::chrono::steady_clock::time_point wall_start_;
+  RunResult r_;
+  EnergyLedger ledger_;
+  PeakTracker tracker_;
+  PhasePeaks phase_peaks_;
+  HistoryRecorder history_;
+  std::unique_ptr<integrators::Integrator> integrator_;  // the run's one integrator (time stepping)
+  double t_ = 0.0;
+  double u_ = 0.0;           // driven-frame velocity carried between stages
+  double xi_ = 0.0;          // hinge speed carried between phases
+  long evals_ = 0;
+  long steps_left_ = 0;
+  PhasePoint last_;          // last evaluated point of the run
+  const StageSpec* last_stage_ = nullptr;
+  const PhaseSpec* last_phase_ = nullptr;
+  bool failed_ = false;
+  double ke_end_ = 0.0;
+};
+
+StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts)
+    : mast_(mast), stages_(stages), opts_(opts), dir_(calc_direction_sign(opts.run.direction)),
+      kinematic_(opts.drive.mode == DriveMode::velocity), wall_start_(std::chrono::steady_clock::now()),
+      ledger_(mast), history_(&r_.history, opts.run.output_step_s, opts_.drive), steps_left_(opts.run.max_steps) {
+  const int n = mast.n_bays();
+  r_.n_bays = n;
+  r_.direction = to_string(opts.run.direction);
+  r_.drive_mode = to_string(opts.drive.mode);
+  r_.bays.resize(static_cast<std::size_t>(n));
+  for (int i = 1; i <= n; ++i) r_.bays[static_cast<std::size_t>(i - 1)].bay = i;
+  if (!kinematic_) integrator_ = make_integrator(opts.run.integrator, opts.calc_integrator_options());
+}
+
+void StageLoop::start_stage(const StageSpec& s, BayResult& br) {
+  const int m = s.bay;
+  const double v = opts_.drive.speed_m_per_s;
+  if (s.start == StageStart::from_rest_or_kick && kinematic_) {
+    // Impulsive start of the driven part from rest (MODEL.md 4): a lossless ramp of the drive.
+    const PhasePoint p0 = HeldPhase(make_context(s, PhaseKind::open, 0.0)).calc_point(s.phases[0].q_start, dir_ * v);
+    ++evals_;
+    u_ = dir_ * v;
+    const DriveRamp ramp = calc_drive_ramp(p0.mass_yy, u_);
+    r_.start_drive_impulse_Ns = ramp.impulse_Ns;
+    ledger_.add_impulse_work(ramp.work_J);
+  }
+  if (s.start != StageStart::unlock) return;
+  const PhasePoint p0 = HeldPhase(make_context(s, PhaseKind::on_rail, 0.0)).calc_point(0.0, 0.0);
+  ++evals_;
+  if (kinematic_ && m == stages_.front().bay) {  // the whole mast starts moving: lossless drive ramp
+    u_ = dir_ * v;
+    const DriveRamp ramp = calc_drive_ramp(p0.mass_yy, u_);
+    r_.start_drive_impulse_Ns = ramp.impulse_Ns;
+    ledger_.add_impulse_work(ramp.work_J);
+  }
+  const UnlockImpact imp = calc_unlock_impact(p0.mass_yy, p0.mass_xx, mast_.rail.cot_beta(), u_, kinematic_);
+  if (kinematic_) ledger_.add_impulse_work(imp.drive_work_J);
+  else u_ += imp.du_m_per_s;
+  xi_ = imp.hinge_speed_m_per_s;
+  br.latch_energy_J = imp.energy_loss_J;
+  br.lock_time_s = t_;
+  ledger_.add_loss(imp.energy_loss_J);
+}
+
+void StageLoop::fail_phase(const PhaseOutcome& o, int m) {
+  const char* goal = dir_ > 0 ? "lock" : "end";
+  switch (o.reason) {
+    case PhaseEndReason::reached_end: return;
+    case PhaseEndReason::cannot_start:
+      return fail(RunStatus::stall, fmt::format("stall: the drive cannot move the mast at t = {:.9g} s in the stage of bay {} "
+                                                "(drive force {:.6g} N)", t_, m, o.end.drive_force_N));
+    case PhaseEndReason::crept_to_rest:
+      return fail(RunStatus::stall, fmt::format("stall: the driven frame crept to rest (speed below {:.3g} m/s) at y = {:.9g} m, "
+                                                "t = {:.9g} s, in the stage of bay {} before its {}: the motor's stall torque "
+                                                "balances the mast short of the {}",
+                                                DynamicPhaseSolver::calc_creep_speed_m_per_s(opts_.drive), o.end.y_driven_m,
+                                                t_, m, goal, goal));
+    case PhaseEndReason::stopped:
+      return fail(RunStatus::stall, fmt::format("stall: the driven frame stopped at y = {:.9g} m, t = {:.9g} s, in the stage "
+                                                "of bay {} before its {}", o.end.y_driven_m, t_, m, goal));
+    case PhaseEndReason::wall_time:
+      return fail(RunStatus::wall_time_limit, fmt::format("wall-time cap of {} s reached at t = {:.9g} s (bay {})",
+                                                          opts_.run.max_wall_time_s, t_, m));
+    case PhaseEndReason::step_limit:
+      return fail(RunStatus::step_limit, fmt::format("step cap of {} steps reached at t = {:.9g} s (bay {})",
+                                                     opts_.run.max_steps, t_, m));
+    case PhaseEndReason::failure:
+      return fail(RunStatus::step_limit, fmt::format("integrator failure at t = {:.9g} s (bay {}): {}", t_, m, o.message));
+  }
+}
+
+void StageLoop::run_phase(const StageSpec& s, const PhaseSpec& ph) {
+  PhaseContext ctx = make_context(s, ph.kind, ph.lower_held_height_m);
+  ctx.q_end = ph.q_end;
+  ctx.sign_q = ph.q_end > ph.q_start ? 1.0 : -1.0;
+  const HeldPhase phase(ctx);
+  const double q0 = ph.q_start, qdot0 = ph.kind == PhaseKind::open ? u_ : xi_;
+  PhaseSinks sinks{tracker_, phase_peaks_, history_,
+                   wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                     std::chrono::duration<double>(opts_.run.max_wall_time_s))};
+  PhaseOutcome o;
+  if (kinematic_) {
+    o = KinematicPhaseSolver(phase, ph, opts_.peak_samples_per_piece).solve({t_, &q0, &qdot0}, sinks);
+  } else {
+    integrators::IntegratorOptions io = opts_.calc_integrator_options();
+    io.max_steps = std::max(1L, steps_left_);
+    o = DynamicPhaseSolver(phase, *integrator_, io).solve({t_, &q0, &qdot0}, sinks);
+  }
+  steps_left_ -= o.steps;
+  r_.steps += o.steps;
+  r_.rejected_steps += o.rejected_steps;
+  evals_ += o.evals;
+  if (o.reason != PhaseEndReason::cannot_start) ledger_.add_smooth_work(o.drive_work_J);
+  t_ = o.t_end_s;
+  last_ = o.end; last_stage_ = &s; last_phase_ = &ph;
+  fail_phase(o, s.bay);
+}
+
+void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePoint& p_end, BayResult& br) {
+  const double u_end = p_end.u_m_per_s;
+  switch (ph.end) {
+    case PhaseEnd::rail_entry: {
+      // Plastic impact of the held lower frame with the rail (MODEL.md 2), in frame heights.
+      const TwoFrameMass M = calc_two_frame_mass(mast_, s, ph.lower_held_height_m, p_end.y_driven_m);
+      const double x = s.entry_hinge_x_m, D = p_end.y_driven_m - ph.lower_held_height_m;
+      const FrameImpact imp = calc_rail_entry_impact(M, calc_rail_gradient(mast_.rail.cot_beta(), D, x), u_end, kinematic_);
+      u_ = u_end + imp.du_m_per_s;
+      xi_ = u_ / calc_on_rail(mast_.rail, mast_.bay(s.bay).strut_length_m, x).dY;
+      br.entry_time_s = t_;
+      br.entry_impulse_Ns = calc_pin_force_N(mast_.rail, imp.rail_impulse_Ns);  // per pin, as the force
+      br.entry_drive_impulse_Ns = imp.drive_impulse_Ns;
+      br.entry_energy_loss_J = imp.energy_loss_J;
+      ledger_.add_loss(imp.energy_loss_J);
+      ledger_.add_impulse_work(imp.drive_work_J);
+      break;
+    }
+    case PhaseEnd::lock: {
+      // The latch stops the struts' radial motion: g(0) xi^2 is lost; y_m' is continuous.
+      const double loss = calc_latch_loss_J(p_end.mass_xx, p_end.qdot);
+      br.lock_time_s = t_;
+      br.latch_energy_J = loss;
+      ledger_.add_loss(loss);
+      u_ = u_end;
+      ke_end_ = p_end.kinetic_energy_J - loss;
+      ++r_.bays_completed;
+      break;
+    }
+    case PhaseEnd::rail_exit: {
+      // The lower frame lands on the stack: plastic, its velocity w -> 0.
+      const TwoFrameMass M = calc_two_frame_mass(mast_, s, p_end.y_lower_m, p_end.y_driven_m);
+      const FrameImpact imp = calc_rail_exit_impact(M, p_end.w_m_per_s, u_end, kinematic_);
+      u_ = u_end + imp.du_m_per_s;
+      br.entry_time_s = t_;
+      br.landing_impulse_Ns = std::abs(imp.stack_impulse_Ns);
+      br.entry_impulse_Ns = 0.0;  // the pin leaves the rail: no rail impulse
+      br.entry_drive_impulse_Ns = imp.drive_impulse_Ns;
+      br.entry_energy_loss_J = imp.energy_loss_J;
+      ledger_.add_loss(imp.energy_loss_J);
+      ledger_.add_impulse_work(imp.drive_work_J);
+      break;
+    }
+    case PhaseEnd::reach_height: {
+      u_ = u_end;
+      ++r_.bays_completed;
+      if (s.final_landing) {
+        // Frame n lands on the stack: the whole (stowed) mast stops, plastic.
+        ledger_.add_loss(p_end.kinetic_energy_J);
+        ke_end_ = 0.0;
+        u_ = 0.0;
+      } else {
+        ke_end_ = p_end.kinetic_energy_J;
+      }
+      break;
+    }
+  }
+}
+
+void StageLoop::close_stage(BayResult& br) {
+  br.peak_drive_force_N = std::isfinite(tracker_.stage_force.value) ? tracker_.stage_force.value : kNaN;
+  br.peak_drive_force_time_s = tracker_.stage_force.t;
+  br.peak_pin_force_N = std::isfinite(tracker_.stage_pin.value) ? tracker_.stage_pin.value : kNaN;
+  br.peak_pin_force_time_s = tracker_.stage_pin.t;
+  tracker_.close_stage();
+}
+
+void StageLoop::finish() {
+  if (failed_) {
+    ke_end_ = last_.kinetic_energy_J;
+  } else {
+    r_.deploy_time_s = t_;
+  }
+  history_.finish(t_, last_, last_stage_ ? last_stage_->bay : 0);
+  auto fin = [](double v) { return std::isfinite(v) ? v : kNaN; };
+  const auto& run = tracker_.run;
+  r_.peak_drive_force_N = fin(run[kForce].value);
+  r_.peak_drive_force_time_s = run[kForce].t;
+  r_.peak_drive_force_bay = run[kForce].bay;
+  r_.min_drive_force_N = fin(-run[kNegForce].value);
+  r_.min_drive_force_time_s = run[kNegForce].t;
+  r_.min_drive_force_bay = run[kNegForce].bay;
+  r_.peak_drive_torque_Nm = opts_.drive.calc_torque_Nm(r_.peak_drive_force_N);
+  r_.min_drive_torque_Nm = opts_.drive.calc_torque_Nm(r_.min_drive_force_N);
+  r_.peak_pin_force_N = fin(run[kPin].value);
+  r_.peak_pin_force_time_s = run[kPin].t;
+  r_.peak_pin_force_bay = run[kPin].bay;
+  r_.peak_diagonal_tension_N = fin(run[kTension].value);
+  for (const auto& b : r_.bays)
+    if (std::isfinite(b.latch_energy_J) && !(b.latch_energy_J <= r_.peak_latch_energy_J)) r_.peak_latch_energy_J = b.latch_energy_J;
+  r_.peak_driven_speed_m_per_s = fin(run[kSpeed].value);
+  r_.max_rail_residual_m = tracker_.max_rail_residual;
+
+  const double U_start = dir_ > 0 ? ledger_.get_stowed_potential_J() : ledger_.get_deployed_potential_J();
+  double U_end = 0.0;
+  if (last_stage_ && last_phase_) {
+    const int first_moving = last_phase_->kind == PhaseKind::on_rail ? std::max(last_stage_->bay - 1, 1) : last_stage_->bay;
+    if (failed_) U_end = ledger_.calc_total_potential_J(last_stage_->bay, first_moving, last_.potential_energy_J);
+    else U_end = dir_ > 0 ? ledger_.get_deployed_potential_J() : ledger_.get_stowed_potential_J();
+  }
+  ledger_.set_start(0.0, U_start);
+  ledger_.set_end(ke_end_, U_end);
+  ledger_.fill(r_);
+  r_.rhs_evals = evals_;
+  r_.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count();
+}
+
+RunResult StageLoop::run() {
+  for (const StageSpec& s : stages_) {
+    if (failed_) break;
+    BayResult& br = r_.bays[static_cast<std::size_t>(s.bay - 1)];
+    tracker_.start_stage(s.bay);
+    start_stage(s, br);
+    for (std::size_t ip = 0; ip < s.phases.size() && !failed_; ++ip) {
+      run_phase(s, s.phases[ip]);
+      if (!failed_) end_phase(s, s.phases[ip], last_, br);
+    }
+    close_stage(br);
+  }
+  if (failed_) {
+    // partial stage: its peaks so far still count
+    tracker_.close_stage();
+    if (tracker_.bay > 0) {
+      BayResult& br = r_.bays[static_cast<std::size_t>(tracker_.bay - 1)];
+      if (std::isfinite(tracker_.stage_force.value)) { br.peak_drive_force_N = tracker_.stage_force.value; br.peak_drive_force_time_s = tracker_.stage_force.t; }
+      if (std::isfinite(tracker_.stage_pin.value)) { br.peak_pin_force_N = tracker_.stage_pin.value; br.peak_pin_force_time_s = tracker_.stage_pin.t; }
+    }
+  }
+  finish();
+  return std::move(r_);
+}
+
+}  // namespace
+
+RunResult run_stages(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts) {
+  if (std::string e = opts.validate(); !e.empty()) {
+    RunResult r;
+    r.status = RunStatus::invalid_input;
+    r.message = std::move(e);
+    r.n_bays = mast.n_bays();
+    return r;
+  }
+  return StageLoop(mast, stages, opts).run();
+}
+
+}  // namespace truss::stages
