@@ -23,6 +23,7 @@
 // Start of the driven part from rest in velocity mode: a lossless drive ramp, impulse M u, work
 //   (1/2) M u^2 (MODEL.md 4). Final landing of the stowed mast: all its kinetic energy is lost.
 #pragma once
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 
 namespace truss::model {
@@ -60,12 +61,10 @@ inline FrameImpact calc_rail_entry_impact(const TwoFrameMass& M, const Eigen::Ve
     r.rail_impulse_Ns = M.ll * r.dw_m_per_s / Jl;
     r.drive_impulse_Ns = M.ml * r.dw_m_per_s - Jm * r.rail_impulse_Ns;
   } else {
-    const double det = M.ll * M.mm - M.ml * M.ml;
-    const double iLL = M.mm / det, iLM = -M.ml / det, iMM = M.ll / det;
-    const double JMJ = Jl * Jl * iLL + 2.0 * Jl * Jm * iLM + Jm * Jm * iMM;
-    r.rail_impulse_Ns = -(Jm * u) / JMJ;
-    r.dw_m_per_s = (iLL * Jl + iLM * Jm) * r.rail_impulse_Ns;
-    r.du_m_per_s = (iLM * Jl + iMM * Jm) * r.rail_impulse_Ns;
+    const Eigen::Vector2d MinvJ = M.matrix().ldlt().solve(J);  // M > 0: LDL^T
+    r.rail_impulse_Ns = -(Jm * u) / J.dot(MinvJ);
+    r.dw_m_per_s = MinvJ[0] * r.rail_impulse_Ns;
+    r.du_m_per_s = MinvJ[1] * r.rail_impulse_Ns;
   }
   r.energy_loss_J = calc_impact_loss_J(M, r.dw_m_per_s, r.du_m_per_s);
   r.drive_work_J = r.drive_impulse_Ns * u;
