@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <fmt/format.h>
 
@@ -73,6 +74,130 @@ bool crosses(double g0, double g1, int dir) {
 
 }  // namespace
 
+// Initial step: Hairer's heuristic with one explicit Euler probe (k_[0] holds f(t, y)).
+double DormandPrince54::calc_initial_step(OdeSystem& sys, double t, const double* y, double span,
+                                          IntegratorSummary& sum) {
+  const int n = sys.size();
+  double h;
+  if (opts_.fixed_step > 0.0) {
+    h = opts_.fixed_step;
+  } else if (opts_.initial_step > 0.0) {
+    h = opts_.initial_step;
+  } else if (h_last_ > 0.0) {
+    h = h_last_;
+  } else {
+    double d0 = 0, d1n = 0;
+    for (int i = 0; i < n; ++i) {
+      const double sc = calc_scale(y[i], y[i]);
+      d0 += (y[i] / sc) * (y[i] / sc);
+      d1n += (k_[0][i] / sc) * (k_[0][i] / sc);
+    }
+    d0 = std::sqrt(d0 / n); d1n = std::sqrt(d1n / n);
+    double h0 = (d0 < 1e-5 || d1n < 1e-5) ? 1e-6 : 0.01 * d0 / d1n;
+    h0 = std::min(h0, span);
+    for (int i = 0; i < n; ++i) ytmp_[i] = y[i] + h0 * k_[0][i];
+    sys.calc_rhs(t + h0, ytmp_.data(), k_[1].data());
+    ++sum.rhs_evals;
+    double d2 = 0;
+    for (int i = 0; i < n; ++i) {
+      const double sc = calc_scale(y[i], y[i]);
+      const double v = (k_[1][i] - k_[0][i]) / sc;
+      d2 += v * v;
+    }
+    d2 = std::sqrt(d2 / n) / h0;
+    const double dm = std::max(d1n, d2);
+    const double h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, 1.0 / 5.0);
+    h = std::min(100.0 * h0, h1);
+  }
+  return std::min({h, opts_.max_step, span});
+}
+
+// One Dormand-Prince step of size h from (t, y) into ynew_; returns the scaled RMS error
+// estimate (NaN if the state is not finite).
+double DormandPrince54::attempt_step(OdeSystem& sys, double t, double h, const double* y, IntegratorSummary& sum) {
+  const int n = sys.size();
+  auto& k1 = k_[0]; auto& k2 = k_[1]; auto& k3 = k_[2]; auto& k4 = k_[3];
+  auto& k5 = k_[4]; auto& k6 = k_[5]; auto& k7 = k_[6];
+  for (int i = 0; i < n; ++i) ytmp_[i] = y[i] + h * a21 * k1[i];
+  sys.calc_rhs(t + c2 * h, ytmp_.data(), k2.data());
+  for (int i = 0; i < n; ++i) ytmp_[i] = y[i] + h * (a31 * k1[i] + a32 * k2[i]);
+  sys.calc_rhs(t + c3 * h, ytmp_.data(), k3.data());
+  for (int i = 0; i < n; ++i) ytmp_[i] = y[i] + h * (a41 * k1[i] + a42 * k2[i] + a43 * k3[i]);
+  sys.calc_rhs(t + c4 * h, ytmp_.data(), k4.data());
+  for (int i = 0; i < n; ++i)
+    ytmp_[i] = y[i] + h * (a51 * k1[i] + a52 * k2[i] + a53 * k3[i] + a54 * k4[i]);
+  sys.calc_rhs(t + c5 * h, ytmp_.data(), k5.data());
+  for (int i = 0; i < n; ++i)
+    ytmp_[i] = y[i] + h * (a61 * k1[i] + a62 * k2[i] + a63 * k3[i] + a64 * k4[i] + a65 * k5[i]);
+  sys.calc_rhs(t + h, ytmp_.data(), k6.data());
+  for (int i = 0; i < n; ++i)
+    ynew_[i] = y[i] + h * (a71 * k1[i] + a73 * k3[i] + a74 * k4[i] + a75 * k5[i] + a76 * k6[i]);
+  sys.calc_rhs(t + h, ynew_.data(), k7.data());
+  sum.rhs_evals += 6;
+  double err = 0.0;
+  bool finite = true;
+  for (int i = 0; i < n; ++i) {
+    const double e = h * (e1 * k1[i] + e3 * k3[i] + e4 * k4[i] + e5 * k5[i] + e6 * k6[i] + e7 * k7[i]);
+    const double v = e / calc_scale(y[i], ynew_[i]);
+    err += v * v;
+    finite = finite && std::isfinite(ynew_[i]);
+  }
+  err = std::sqrt(err / n);
+  return finite ? err : std::numeric_limits<double>::quiet_NaN();
+}
+
+// Dense output coefficients of the accepted step on [t, t + h].
+void DormandPrince54::fill_dense(int n, double h, const double* y) {
+  const auto& k1 = k_[0]; const auto& k3 = k_[2]; const auto& k4 = k_[3];
+  const auto& k5 = k_[4]; const auto& k6 = k_[5]; const auto& k7 = k_[6];
+  for (int i = 0; i < n; ++i) {
+    const double ydiff = ynew_[i] - y[i];
+    const double bspl = h * k1[i] - ydiff;
+    rc_[0][i] = y[i];
+    rc_[1][i] = ydiff;
+    rc_[2][i] = bspl;
+    rc_[3][i] = ydiff - h * k7[i] - bspl;
+    rc_[4][i] = h * (d1 * k1[i] + d3 * k3[i] + d4 * k4[i] + d5 * k5[i] + d6 * k6[i] + d7 * k7[i]);
+  }
+}
+
+// Events: the earliest sign change in the allowed direction over [t, t_new], refined by the
+// Illinois method on the dense output. Returns the event index (or -1) and its time in t_ev.
+int DormandPrince54::find_event(OdeSystem& sys, double t, double t_new, const DenseOutput& dense, double& t_ev) {
+  const int ne = sys.num_events();
+  int ev = -1;
+  t_ev = t_new;
+  if (ne == 0) return ev;
+  sys.calc_events(t_new, ynew_.data(), g1_.data());
+  for (int e = 0; e < ne; ++e) {
+    if (!crosses(g0_[e], g1_[e], sys.event_direction(e))) continue;
+    double ta = t, tb = t_new, ga = g0_[e], gb = g1_[e];
+    int side = 0;
+    double tc = tb;
+    for (int it = 0; it < 200 && (tb - ta) > opts_.event_time_tol; ++it) {
+      tc = (ta * gb - tb * ga) / (gb - ga);
+      if (!(tc > ta && tc < tb)) tc = 0.5 * (ta + tb);
+      dense.calc_state(tc, yev_.data());
+      sys.calc_events(tc, yev_.data(), gt_.data());
+      const double gc = gt_[e];
+      if ((gc > 0.0) == (gb > 0.0) && gc != 0.0) {
+        tb = tc; gb = gc;
+        if (side == -1) ga *= 0.5;
+        side = -1;
+      } else if (gc == 0.0) {
+        ta = tb = tc; break;
+      } else {
+        ta = tc; ga = gc;
+        if (side == 1) gb *= 0.5;
+        side = 1;
+      }
+    }
+    const double root = tb;  // the side on which the event has happened
+    if (root < t_ev || ev < 0) { t_ev = root; ev = e; }
+  }
+  return ev;
+}
+
 IntegratorSummary DormandPrince54::integrate(OdeSystem& sys, double t0, double t_end, double* y,
                                              StepObserver* observer) {
   IntegratorSummary sum;
@@ -88,187 +213,66 @@ IntegratorSummary DormandPrince54::integrate(OdeSystem& sys, double t0, double t
   sum.t = t;
   if (!(span > 0.0)) { sum.status = IntegratorStatus::reached_end; return sum; }
   const bool fixed = opts_.fixed_step > 0.0;
-
   sys.calc_rhs(t, y, k_[0].data());
   ++sum.rhs_evals;
   if (ne > 0) sys.calc_events(t, y, g0_.data());
-
-  auto scale = [&](int, double a, double b) { return opts_.atol + opts_.rtol * std::max(std::abs(a), std::abs(b)); };
-
-  // Initial step (Hairer's heuristic, one explicit Euler probe).
-  double h;
-  if (fixed) {
-    h = opts_.fixed_step;
-  } else if (opts_.initial_step > 0.0) {
-    h = opts_.initial_step;
-  } else if (h_last_ > 0.0) {
-    h = h_last_;
-  } else {
-    double d0 = 0, d1n = 0;
-    for (int i = 0; i < n; ++i) {
-      const double sc = scale(i, y[i], y[i]);
-      d0 += (y[i] / sc) * (y[i] / sc);
-      d1n += (k_[0][i] / sc) * (k_[0][i] / sc);
-    }
-    d0 = std::sqrt(d0 / n); d1n = std::sqrt(d1n / n);
-    double h0 = (d0 < 1e-5 || d1n < 1e-5) ? 1e-6 : 0.01 * d0 / d1n;
-    h0 = std::min(h0, span);
-    for (int i = 0; i < n; ++i) ytmp_[i] = y[i] + h0 * k_[0][i];
-    sys.calc_rhs(t + h0, ytmp_.data(), k_[1].data());
-    ++sum.rhs_evals;
-    double d2 = 0;
-    for (int i = 0; i < n; ++i) {
-      const double sc = scale(i, y[i], y[i]);
-      const double v = (k_[1][i] - k_[0][i]) / sc;
-      d2 += v * v;
-    }
-    d2 = std::sqrt(d2 / n) / h0;
-    const double dm = std::max(d1n, d2);
-    const double h1 = dm <= 1e-15 ? std::max(1e-6, h0 * 1e-3) : std::pow(0.01 / dm, 1.0 / 5.0);
-    h = std::min(100.0 * h0, h1);
-  }
-  h = std::min({h, opts_.max_step, span});
+  double h = calc_initial_step(sys, t, y, span, sum);
 
   double err_prev = 1e-4;  // PI controller memory (Gustafsson)
   bool last_rejected = false;
   Dopri5Dense dense;
   dense.rc = rc_;
   dense.n = n;
-
+  auto finish = [&](IntegratorStatus st, double t_at, std::string msg = {}) {
+    sum.status = st;
+    sum.t = t_at;
+    sum.message = std::move(msg);
+    return sum;
+  };
   while (true) {
-    if (sum.steps >= opts_.max_steps) {
-      sum.status = IntegratorStatus::step_limit;
-      sum.message = fmt::format("step limit of {} reached", opts_.max_steps);
-      sum.t = t;
-      return sum;
-    }
+    if (sum.steps >= opts_.max_steps)
+      return finish(IntegratorStatus::step_limit, t, fmt::format("step limit of {} reached", opts_.max_steps));
     bool last = false;
     if (t + h >= t_end || (t_end - (t + h)) < 1e-12 * std::abs(t_end)) { h = t_end - t; last = true; }
-
-    auto& k1 = k_[0]; auto& k2 = k_[1]; auto& k3 = k_[2]; auto& k4 = k_[3];
-    auto& k5 = k_[4]; auto& k6 = k_[5]; auto& k7 = k_[6];
-    for (int i = 0; i < n; ++i) ytmp_[i] = y[i] + h * a21 * k1[i];
-    sys.calc_rhs(t + c2 * h, ytmp_.data(), k2.data());
-    for (int i = 0; i < n; ++i) ytmp_[i] = y[i] + h * (a31 * k1[i] + a32 * k2[i]);
-    sys.calc_rhs(t + c3 * h, ytmp_.data(), k3.data());
-    for (int i = 0; i < n; ++i) ytmp_[i] = y[i] + h * (a41 * k1[i] + a42 * k2[i] + a43 * k3[i]);
-    sys.calc_rhs(t + c4 * h, ytmp_.data(), k4.data());
-    for (int i = 0; i < n; ++i)
-      ytmp_[i] = y[i] + h * (a51 * k1[i] + a52 * k2[i] + a53 * k3[i] + a54 * k4[i]);
-    sys.calc_rhs(t + c5 * h, ytmp_.data(), k5.data());
-    for (int i = 0; i < n; ++i)
-      ytmp_[i] = y[i] + h * (a61 * k1[i] + a62 * k2[i] + a63 * k3[i] + a64 * k4[i] + a65 * k5[i]);
-    sys.calc_rhs(t + h, ytmp_.data(), k6.data());
-    for (int i = 0; i < n; ++i)
-      ynew_[i] = y[i] + h * (a71 * k1[i] + a73 * k3[i] + a74 * k4[i] + a75 * k5[i] + a76 * k6[i]);
-    sys.calc_rhs(t + h, ynew_.data(), k7.data());
-    sum.rhs_evals += 6;
-
-    double err = 0.0;
-    bool finite = true;
-    for (int i = 0; i < n; ++i) {
-      const double e = h * (e1 * k1[i] + e3 * k3[i] + e4 * k4[i] + e5 * k5[i] + e6 * k6[i] + e7 * k7[i]);
-      const double v = e / scale(i, y[i], ynew_[i]);
-      err += v * v;
-      finite = finite && std::isfinite(ynew_[i]);
-    }
-    err = std::sqrt(err / n);
-    if (!finite || !std::isfinite(err)) {
-      if (fixed || h < 1e-14 * std::max(1.0, std::abs(t))) {
-        sum.status = IntegratorStatus::failure;
-        sum.message = fmt::format("non-finite state at t = {:.9g} s", t);
-        sum.t = t;
-        return sum;
-      }
+    const double err = attempt_step(sys, t, h, y, sum);
+    if (!std::isfinite(err)) {
+      if (fixed || h < 1e-14 * std::max(1.0, std::abs(t)))
+        return finish(IntegratorStatus::failure, t, fmt::format("non-finite state at t = {:.9g} s", t));
       h *= 0.25; last_rejected = true; ++sum.rejected_steps;
       continue;
     }
-
     if (!fixed && err > 1.0) {
       const double fac = std::max(0.2, 0.9 * std::pow(err, -0.2));
       h *= fac;
       last_rejected = true;
       ++sum.rejected_steps;
-      if (h < 1e-14 * std::max(1.0, std::abs(t))) {
-        sum.status = IntegratorStatus::failure;
-        sum.message = fmt::format("step size underflow at t = {:.9g} s", t);
-        sum.t = t;
-        return sum;
-      }
+      if (h < 1e-14 * std::max(1.0, std::abs(t)))
+        return finish(IntegratorStatus::failure, t, fmt::format("step size underflow at t = {:.9g} s", t));
       continue;
     }
-
-    // Accepted: dense output coefficients on [t, t + h].
-    for (int i = 0; i < n; ++i) {
-      const double ydiff = ynew_[i] - y[i];
-      const double bspl = h * k1[i] - ydiff;
-      rc_[0][i] = y[i];
-      rc_[1][i] = ydiff;
-      rc_[2][i] = bspl;
-      rc_[3][i] = ydiff - h * k7[i] - bspl;
-      rc_[4][i] = h * (d1 * k1[i] + d3 * k3[i] + d4 * k4[i] + d5 * k5[i] + d6 * k6[i] + d7 * k7[i]);
-    }
+    fill_dense(n, h, y);
     dense.t0 = t; dense.h = h; dense.t_begin = t; dense.t_end = t + h;
     ++sum.steps;
     const double t_new = t + h;
-
-    // Events: earliest sign change in the allowed direction, refined by Illinois on the dense output.
-    int ev = -1;
-    double t_ev = t_new;
-    if (ne > 0) {
-      sys.calc_events(t_new, ynew_.data(), g1_.data());
-      for (int e = 0; e < ne; ++e) {
-        if (!crosses(g0_[e], g1_[e], sys.event_direction(e))) continue;
-        double ta = t, tb = t_new, ga = g0_[e], gb = g1_[e];
-        int side = 0;
-        double tc = tb;
-        for (int it = 0; it < 200 && (tb - ta) > opts_.event_time_tol; ++it) {
-          tc = (ta * gb - tb * ga) / (gb - ga);
-          if (!(tc > ta && tc < tb)) tc = 0.5 * (ta + tb);
-          dense.calc_state(tc, yev_.data());
-          sys.calc_events(tc, yev_.data(), gt_.data());
-          const double gc = gt_[e];
-          if ((gc > 0.0) == (gb > 0.0) && gc != 0.0) {
-            tb = tc; gb = gc;
-            if (side == -1) ga *= 0.5;
-            side = -1;
-          } else if (gc == 0.0) {
-            ta = tb = tc; break;
-          } else {
-            ta = tc; ga = gc;
-            if (side == 1) gb *= 0.5;
-            side = 1;
-          }
-        }
-        const double root = tb;  // the side on which the event has happened
-        if (root < t_ev || ev < 0) { t_ev = root; ev = e; }
-      }
-    }
+    double t_ev;
+    const int ev = find_event(sys, t, t_new, dense, t_ev);
     if (ev >= 0) {
       dense.t_end = t_ev;
       dense.calc_state(t_ev, y);
       if (observer) observer->on_step(dense);
-      sum.status = IntegratorStatus::event;
       sum.event_index = ev;
-      sum.t = t_ev;
       h_last_ = h;
-      return sum;
+      return finish(IntegratorStatus::event, t_ev);
     }
     if (observer && !observer->on_step(dense)) {
       std::copy(ynew_.begin(), ynew_.end(), y);
-      sum.status = IntegratorStatus::stopped_by_observer;
-      sum.t = t_new;
-      return sum;
+      return finish(IntegratorStatus::stopped_by_observer, t_new);
     }
     std::copy(ynew_.begin(), ynew_.end(), y);
     std::swap(k_[0], k_[6]);  // FSAL
     if (ne > 0) std::swap(g0_, g1_);
     t = t_new;
-    if (last) {
-      sum.status = IntegratorStatus::reached_end;
-      sum.t = t;
-      return sum;
-    }
+    if (last) return finish(IntegratorStatus::reached_end, t);
     if (!fixed) {
       // PI step control (Hairer's DOPRI5: beta = 0.04), no growth right after a rejection.
       const double e = std::max(err, 1e-10);

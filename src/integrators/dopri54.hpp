@@ -3,6 +3,8 @@
 // FSAL, step control on the RMS of the error scaled by atol + rtol |y|. Events are located on
 // the dense output by the Illinois method to IntegratorOptions::event_time_tol.
 #pragma once
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "integrators/ode.hpp"
@@ -18,6 +20,11 @@ class DormandPrince54 : public Integrator {
   void set_options(const IntegratorOptions& opts) override { opts_ = opts; }
 
  private:
+  double calc_scale(double a, double b) const { return opts_.atol + opts_.rtol * std::max(std::abs(a), std::abs(b)); }
+  double calc_initial_step(OdeSystem& sys, double t, const double* y, double span, IntegratorSummary& sum);
+  double attempt_step(OdeSystem& sys, double t, double h, const double* y, IntegratorSummary& sum);
+  void fill_dense(int n, double h, const double* y);
+  int find_event(OdeSystem& sys, double t, double t_new, const DenseOutput& dense, double& t_ev);
   IntegratorOptions opts_;
   std::vector<double> k_[7], ytmp_, ynew_, err_, rc_[5], g0_, g1_, gt_, yev_;
   double h_last_ = 0.0;  // last accepted step, reused to start the next call

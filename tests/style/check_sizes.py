@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""Size limits of the C++ sources (issue 8): no function in src/ over 120 lines, no source file
+over 500 lines (generated tables, *.inc, aside). Functions are found by brace matching on the
+source with comments and string literals removed: a top-level or namespace/class-level block
+opened by a line that looks like a definition (ends with ')' [const/override/...] '{').
+Usage: check_sizes.py SRC_DIR [--max-function 120] [--max-file 500]; exit 1 on a violation."""
+import argparse
+import pathlib
+import re
+import sys
+
+
+def strip(text):
+    text = re.sub(r"/\*.*?\*/", lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
+    text = re.sub(r"//[^\n]*", "", text)
+    text = re.sub(r'R"\((.*?)\)"', lambda m: '""' + "\n" * m.group(0).count("\n"), text, flags=re.S)
+    text = re.sub(r'"(\\.|[^"\\\n])*"', '""', text)
+    return re.sub(r"'(\\.|[^'\\\n])'", "''", text)
+
+
+HEAD = re.compile(r"\)\s*(const|override|final|noexcept|mutable|->\s*[\w:<>,\s*&]+|\s)*\{\s*$")
+SCOPE = re.compile(r"^\s*(namespace|class|struct|enum|union|extern)\b")
+
+
+def functions(text):
+    """Yields (name line, start line, length) of function bodies."""
+    lines = strip(text).split("\n")
+    depth, stack = 0, []  # stack of (depth at open, start line, is_function)
+    for i, line in enumerate(lines, 1):
+        for j, ch in enumerate(line):
+            if ch == "{":
+                head = line[: j + 1]
+                k = i - 1
+                while k > 0 and head.strip() in ("{",) and not lines[k - 1].strip().endswith(";"):
+                    head = lines[k - 1] + head
+                    k -= 1
+                is_fn = bool(HEAD.search(head)) and not SCOPE.match(head) and not any(f for _, _, f in stack)
+                stack.append((depth, i, is_fn))
+                depth += 1
+            elif ch == "}":
+                depth -= 1
+                if stack:
+                    _, start, is_fn = stack.pop()
+                    if is_fn:
+                        yield lines[start - 1].strip()[:80], start, i - start + 1
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("src")
+    ap.add_argument("--max-function", type=int, default=120)
+    ap.add_argument("--max-file", type=int, default=500)
+    a = ap.parse_args()
+    bad = 0
+    files = sorted(p for p in pathlib.Path(a.src).rglob("*") if p.suffix in (".cpp", ".hpp"))
+    longest = (0, "")
+    for p in files:
+        text = p.read_text()
+        n = text.count("\n")
+        if n > a.max_file:
+            print(f"{p}: {n} lines (limit {a.max_file})")
+            bad += 1
+        for head, start, length in functions(text):
+            if length > longest[0]:
+                longest = (length, f"{p}:{start}")
+            if length > a.max_function:
+                print(f"{p}:{start}: function of {length} lines (limit {a.max_function}): {head}")
+                bad += 1
+    print(f"{len(files)} files checked; longest function {longest[0]} lines at {longest[1]}; {bad} over the limits")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
