@@ -198,3 +198,44 @@ TEST_CASE("energy ledger: stowed and locked potentials against a direct sum; the
   CHECK(r.energy_lost_J == 0.5);
   CHECK(r.energy_residual_J == Approx(5.5 - 2.0 - 2.5 - 0.5).margin(1e-15));
 }
+
+#include <Eigen/Dense>
+
+#include "model/tridiagonal.hpp"
+
+TEST_CASE("tridiagonal and bordered solves agree with a dense LU of the same system", "[unit][tridiagonal]") {
+  // An SPD tridiagonal matrix like the mast's (diagonally dominant), n = 7, and one border row.
+  const int n = 7;
+  Eigen::VectorXd diag(n), sub(n), a(n), r(n);
+  for (int k = 0; k < n; ++k) {
+    diag[k] = 3.0 + 0.3 * k;
+    sub[k] = k > 0 ? -0.9 + 0.1 * k : 0.0;
+    a[k] = k == n - 1 ? 0.35 : (k == n - 2 ? 0.65 : 0.0);  // the rail row touches frames m-1, m
+    r[k] = std::sin(1.0 + k);
+  }
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 0; k < n; ++k) {
+    M(k, k) = diag[k];
+    if (k > 0) M(k, k - 1) = M(k - 1, k) = sub[k];
+  }
+  model::TridiagonalWork w;
+  Eigen::VectorXd x;
+  REQUIRE(model::solve_tridiagonal(diag, sub, r, x, w));
+  const Eigen::VectorXd xd = M.partialPivLu().solve(r);
+  CHECK((x - xd).norm() < 1e-14 * xd.norm());  // both backward stable on a well-conditioned M
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(n + 1, n + 1);
+  B.topLeftCorner(n, n) = M;
+  B.block(0, n, n, 1) = a;
+  B.block(n, 0, 1, n) = a.transpose();
+  Eigen::VectorXd rb(n + 1);
+  rb << r, 0.02;
+  const Eigen::VectorXd xb = B.partialPivLu().solve(rb);
+  double lambda = 0;
+  REQUIRE(model::solve_bordered(diag, sub, a, r, 0.02, x, lambda, w));
+  CHECK((x - xb.head(n)).norm() < 1e-13 * xb.norm());
+  CHECK(lambda == Approx(xb[n]).epsilon(1e-12));
+  CHECK(a.dot(x) == Approx(0.02).epsilon(1e-13));
+  Eigen::VectorXd bad = diag;
+  bad[3] = -1.0;
+  CHECK_FALSE(model::solve_tridiagonal(bad, sub, r, x, w));
+}
