@@ -1,0 +1,84 @@
+#include "stages/free_phase.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "model/bay.hpp"
+#include "model/rail.hpp"
+
+namespace truss::stages {
+
+using namespace truss::model;
+
+FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m)
+    : ctx_(ctx), lo_(lo), held_height_m_(held_height_m) {
+  active_.lo = lo;
+  active_.m = ctx.bay;
+  active_.locked_mass_kg = ctx.locked_mass_kg;
+  active_.panel_height_offset_m = ctx.panel_height_offset_m;
+}
+
+double FreePhaseA::calc_rail_function_m(const double* q) const {
+  const int n = dof();
+  const double y_m = q[n - 1], y_l = n >= 2 ? q[n - 2] : held_height_m_;
+  const double x = calc_hinge_offset_m(ctx_.mast->bay(ctx_.bay), y_m - y_l);
+  return model::calc_rail_function_m(ctx_.mast->rail, x, 0.5 * (y_m + y_l));
+}
+
+PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  const MastParams& mast = *ctx_.mast;
+  const int n = dof(), m = ctx_.bay;
+  // Heights and velocities from frame lo - 1 (held) when it exists, so that bay lo sees it.
+  const int first = std::max(lo_ - 1, 0);
+  thread_local std::vector<double> ys, vs;  // work space of the heights only; M, r, Q live in sys
+  ys.assign(static_cast<std::size_t>(m - first + 1), held_height_m_);
+  vs.assign(ys.size(), 0.0);
+  for (int k = 0; k < n; ++k) { ys[static_cast<std::size_t>(lo_ - first + k)] = q[k]; vs[static_cast<std::size_t>(lo_ - first + k)] = qdot[k]; }
+  calc_frame_system(mast, active_, ys.data(), vs.data(), first, sys);
+  Eigen::VectorXd rhs = sys.velocity_terms + sys.spring_forces;
+  PhasePoint p;
+  const double u = qdot[n - 1];
+  TridiagonalWork w;
+  Eigen::VectorXd acc(n);
+  if (ctx_.drive.mode == DriveMode::velocity) {
+    acc.setZero();
+    if (n > 1) {
+      Eigen::VectorXd a;
+      solve_tridiagonal(sys.diag.head(n - 1), sys.sub.head(n - 1), rhs.head(n - 1), a, w);
+      acc.head(n - 1) = a;
+    }
+    p.drive_force_N = (n > 1 ? sys.sub[n - 1] * acc[n - 2] : 0.0) - rhs[n - 1];
+  } else {
+    p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
+    rhs[n - 1] += p.drive_force_N;
+    solve_tridiagonal(sys.diag, sys.sub, rhs, acc, w);
+  }
+  for (int k = 0; k < n; ++k) qddot[k] = acc[k];
+  p.q = q[n - 1]; p.qdot = u; p.qddot = acc[n - 1];
+  p.y_driven_m = q[n - 1];
+  p.y_lower_m = n >= 2 ? q[n - 2] : held_height_m_;
+  p.u_m_per_s = u;
+  p.w_m_per_s = n >= 2 ? qdot[n - 2] : 0.0;
+  const double D = p.y_driven_m - p.y_lower_m;
+  p.hinge_x_m = calc_hinge_offset_m(mast.bay(m), D);
+  p.hinge_y_m = 0.5 * (p.y_driven_m + p.y_lower_m);
+  double T = 0.0, U = 0.0, tension = 0.0;
+  for (int k = 0; k < n; ++k) {
+    T += 0.5 * sys.diag[k] * qdot[k] * qdot[k];
+    if (k > 0) T += sys.sub[k] * qdot[k] * qdot[k - 1];
+  }
+  for (int i = std::max(lo_, 1); i <= m; ++i) {
+    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    const double Di = ys[static_cast<std::size_t>(i - first)] - ys[static_cast<std::size_t>(i - 1 - first)];
+    U += calc_bay_potential_J(mast.bay(i), b2, Di);
+    tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
+  }
+  p.kinetic_energy_J = T;
+  p.potential_energy_J = U;
+  p.diagonal_tension_N = tension;
+  p.mass_yy = sys.diag[n - 1];
+  return p;
+}
+
+}  // namespace truss::stages

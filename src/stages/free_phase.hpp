@@ -1,0 +1,41 @@
+// Phase A of the free stack (MODEL.md 2 "free", paper eq. 6 corrected in MODEL.md 3): every
+// frame below the driven frame m is a generalized coordinate, frame 0 is held at its height until
+// bay 1's rail takes it. Coordinates q = (y_lo, .., y_m), lo = 1 (or the lowest frame the
+// stage moves); the tridiagonal system
+//   M(y) y'' = r(y, y') + Q(y) + F e_m        (model/frames.hpp: M, r, Q for frames lo..m)
+// is solved in O(n) per right-hand side (model/tridiagonal.hpp; no dense matrix).
+//   torque / motor drive: F from the drive law, all m - lo + 1 accelerations from the solve;
+//   velocity drive: y_m'' = 0 (the driven frame keeps the prescribed speed), the free block
+//     lo..m-1 is solved with y_m'' = 0, and F = M[m,m-1] y''_{m-1} - r_m - Q_m (inverse dynamics).
+// The phase ends when the hinge of bay m meets the rail: f = y_h - y_l + cot(beta)(x_h - x_l)
+// falls through 0 (end gap -f rises), with x_h = (1/2) sqrt(4 l^2 - D_m^2), y_h = (y_m + y_{m-1})/2.
+#pragma once
+#include "model/frames.hpp"
+#include "model/tridiagonal.hpp"
+#include "stages/phase.hpp"
+
+namespace truss::stages {
+
+class FreePhaseA final : public PhaseModel {
+ public:
+  // ctx.bay = m; frames lo..m move; frames below lo are held at height held_height_m.
+  FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m);
+  int dof() const override { return ctx_.bay - lo_ + 1; }
+  const PhaseContext& context() const override { return ctx_; }
+  PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
+  double calc_driven_speed_m_per_s(const double*, const double* qdot) const override { return qdot[dof() - 1]; }
+  double calc_end_gap(const double* q) const override { return -calc_rail_function_m(q); }
+  double calc_end_gap_acceleration(const double*) const override { return 0.0; }  // not used: the frame moves
+  void snap_to_end(double*) const override {}  // the event is located to the event tolerance
+  // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
+  double calc_rail_function_m(const double* q) const;
+  int get_lowest_frame() const { return lo_; }
+
+ private:
+  PhaseContext ctx_;
+  model::ActiveFrames active_;
+  int lo_;
+  double held_height_m_;
+};
+
+}  // namespace truss::stages
