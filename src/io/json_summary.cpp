@@ -40,6 +40,7 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_I64(min_drive_force_bay),
       TRUSS_RUN_F64(peak_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(min_drive_torque_Nm, "Nm"),
+      TRUSS_RUN_F64(motor_torque_at_speed_Nm, "Nm"),
       TRUSS_RUN_F64(peak_pin_force_N, "N"),
       TRUSS_RUN_F64(peak_pin_force_time_s, "s"),
       TRUSS_RUN_I64(peak_pin_force_bay),

@@ -62,6 +62,9 @@ struct RunResult {
   int min_drive_force_bay = 0;
   double peak_drive_torque_Nm = NAN_INIT();
   double min_drive_torque_Nm = NAN_INIT();
+  // Velocity mode: the torque the scene's motor (drive.stall_torque_Nm, no_load_speed) gives at
+  // the prescribed speed, from the one motor law (model/drive.hpp); NaN in torque and motor modes.
+  double motor_torque_at_speed_Nm = NAN_INIT();
   double peak_pin_force_N = NAN_INIT();
   double peak_pin_force_time_s = NAN_INIT();
   int peak_pin_force_bay = 0;

@@ -96,6 +96,7 @@ StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stage
   r_.bays.resize(static_cast<std::size_t>(n));
   for (int i = 1; i <= n; ++i) r_.bays[static_cast<std::size_t>(i - 1)].bay = i;
   if (!kinematic_) integrator_ = make_integrator(opts.run.integrator, opts.calc_integrator_options());
+  else r_.motor_torque_at_speed_Nm = opts.drive.calc_motor_torque_Nm(opts.drive.speed_m_per_s);
 }
 
 void StageLoop::start_stage(const StageSpec& s, BayResult& br) {

@@ -239,3 +239,20 @@ TEST_CASE("tridiagonal and bordered solves agree with a dense LU of the same sys
   bad[3] = -1.0;
   CHECK_FALSE(model::solve_tridiagonal(bad, sub, r, x, w));
 }
+
+#include "sim/simulate.hpp"
+
+TEST_CASE("velocity mode reports the scene's motor torque at the prescribed speed; other modes NaN", "[unit][drive]") {
+  sim::SceneOptions s;
+  s.mast.n_bays = 3;
+  s.drive.speed_m_per_s = 0.05;
+  s.drive.stall_torque_Nm = 0.03;
+  s.drive.no_load_speed_rad_per_s = 60.0;
+  s.drive.screw_lead_m = 0.008;
+  const sim::RunResult r = sim::simulate(s);
+  REQUIRE(r.status == sim::RunStatus::ok);
+  // omega = 2 pi 0.05 / 0.008 = 39.2699 rad/s; 0.03 (1 - 39.2699 / 60) = 0.0103650 N m
+  CHECK(r.motor_torque_at_speed_Nm == Approx(0.03 * (1.0 - 2.0 * M_PI * 0.05 / 0.008 / 60.0)).epsilon(1e-14));
+  s.drive.mode = model::DriveMode::torque;
+  CHECK(std::isnan(sim::simulate(s).motor_torque_at_speed_Nm));
+}
