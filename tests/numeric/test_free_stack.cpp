@@ -18,7 +18,7 @@ namespace {
 
 class FreeOde : public integrators::OdeSystem {
  public:
-  explicit FreeOde(const stages::FreePhaseA& p) : p_(p), n_(p.dof()) {}
+  explicit FreeOde(const stages::PhaseModel& p) : p_(p), n_(p.dof()) {}
   int size() const override { return 2 * n_ + 1; }
   void calc_rhs(double, const double* y, double* dy) override {
     const stages::PhasePoint pt = p_.calc_point(y, y + n_, dy + n_, scratch_);
@@ -32,7 +32,7 @@ class FreeOde : public integrators::OdeSystem {
   }
 
  private:
-  const stages::FreePhaseA& p_;
+  const stages::PhaseModel& p_;
   int n_;
   stages::PhaseScratch scratch_;
 };
@@ -109,4 +109,84 @@ TEST_CASE("free phase A in velocity mode: the driven frame keeps its speed, the 
   const double drift = (p1.kinetic_energy_J + p1.potential_energy_J - y[12]) - (p0.kinetic_energy_J + p0.potential_energy_J);
   CHECK(std::abs(y[12]) > 1e-3);
   CHECK(std::abs(drift) < 1e-9 * std::max(1.0, std::abs(y[12])));
+}
+
+#include "model/rail.hpp"
+#include "stages/free_phase_b.hpp"
+#include "stages/held_phase.hpp"
+
+TEST_CASE("free phase B with the frames below held equals the held stack's rail phase (independent elimination)",
+          "[numeric][free]") {
+  // HeldPhase eliminates the multiplier in (y_m, x); FreePhaseB solves the bordered system in
+  // (y_{m-1}, x). On a consistent state (f = 0, f' = 0) they must give the same x'', lambda and
+  // drive force, down to the lock; 1e-10 relative covers the rounding of two formulations.
+  const model::MastParams mast = make_mast();
+  for (auto mode : {model::DriveMode::torque, model::DriveMode::velocity}) {
+    stages::PhaseContext ctx;
+    ctx.mast = &mast;
+    ctx.kind = stages::PhaseKind::on_rail;
+    ctx.bay = 4;
+    ctx.lower_held_height_m = 0.02;  // frame 2, held
+    ctx.locked_mass_kg = 2.3;
+    ctx.drive.mode = mode;
+    ctx.drive.torque_Nm = 0.01;
+    const stages::HeldPhase held(ctx);
+    const stages::FreePhaseB free(ctx, 3, 0.02, 10.0);
+    const double l = mast.bay(4).strut_length_m;
+    for (double x : {0.07, 0.03, 0.004, 1e-7, 0.0}) {
+      const auto k = model::calc_on_rail(mast.rail, l, x);
+      const double xi = mode == model::DriveMode::velocity ? 0.1 / k.dY : -0.7;
+      const stages::PhasePoint ph = held.calc_point(x, xi);
+      const double q[2] = {k.Z, x}, qd[2] = {k.dZ * xi, xi};
+      double acc[2];
+      stages::PhaseScratch scratch;
+      const stages::PhasePoint pf = free.calc_point(q, qd, acc, scratch);
+      INFO("mode " << model::to_string(mode) << " x " << x);
+      CHECK(pf.rail_residual_m < 1e-15);
+      CHECK(acc[1] == Approx(ph.qddot).epsilon(1e-10).margin(1e-12));
+      CHECK(pf.lambda_N == Approx(ph.lambda_N).epsilon(1e-10).margin(1e-12));
+      CHECK(pf.drive_force_N == Approx(ph.drive_force_N).epsilon(1e-10).margin(1e-12));
+      CHECK(pf.kinetic_energy_J == Approx(ph.kinetic_energy_J).epsilon(1e-12));
+      CHECK(pf.u_m_per_s == Approx(ph.u_m_per_s).epsilon(1e-13).margin(1e-15));
+      // y_{m-1}'' from the free solve equals Z'(x) x'' + Z''(x) x'^2 of the held kinematics
+      CHECK(acc[0] == Approx(k.dZ * acc[1] + k.d2Z * xi * xi).epsilon(1e-10).margin(1e-12));
+    }
+  }
+}
+
+TEST_CASE("free phase B: energy balance and rail residual of the n-DOF DAE under a torque drive", "[numeric][free]") {
+  const model::MastParams mast = make_mast();
+  stages::PhaseContext ctx;
+  ctx.mast = &mast;
+  ctx.bay = 6;
+  ctx.locked_mass_kg = mast.tip_mass_kg;
+  ctx.drive.mode = model::DriveMode::torque;
+  ctx.drive.torque_Nm = 0.01;
+  const stages::FreePhaseB phase(ctx, 1, 0.0, 10.0);
+  REQUIRE(phase.dof() == 6);
+  FreeOde ode(phase);
+  const double l = mast.bay(6).strut_length_m, x0 = 0.06, c = mast.rail.cot_beta();
+  const auto k = model::calc_on_rail(mast.rail, l, x0);
+  const double xi0 = -0.3;
+  // Free frames 1..4 anywhere (opened, moving); frame 5 on the rail with f' = 0.
+  std::vector<double> y = {0.01, 0.03, 0.05, 0.08, k.Z, x0, 0.0, 0.01, -0.02, 0.05, k.dZ * xi0, xi0, 0.0};
+  REQUIRE(std::abs(phase.calc_rail_function_m(y.data())) < 1e-15);
+  (void)c;
+  const stages::PhasePoint p0 = ode.point(y.data());
+  integrators::IntegratorOptions o;
+  o.rtol = 1e-12;
+  o.atol = 1e-14;
+  integrators::DormandPrince54 dp(o);
+  double max_f = 0.0;
+  for (int i = 1; i <= 10; ++i) {
+    REQUIRE(dp.integrate(ode, 0.01 * (i - 1), 0.01 * i, y.data(), nullptr).status == integrators::IntegratorStatus::reached_end);
+    max_f = std::max(max_f, std::abs(phase.calc_rail_function_m(y.data())));
+  }
+  REQUIRE(y[5] > 0.0);  // still short of the lock
+  const stages::PhasePoint p1 = ode.point(y.data());
+  const double drift = (p1.kinetic_energy_J + p1.potential_energy_J - y[12]) - (p0.kinetic_energy_J + p0.potential_energy_J);
+  INFO("W " << y[12] << " drift " << drift << " max |f| " << max_f);
+  CHECK(std::abs(y[12]) > 1e-3);
+  CHECK(std::abs(drift) < 1e-9 * std::max(1.0, std::abs(y[12])));
+  CHECK(max_f < 1e-11);  // Baumgarte-stabilised: the residual stays at the integration error
 }

@@ -1,0 +1,126 @@
+#include "stages/free_phase_b.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <Eigen/LU>
+
+#include "model/bay.hpp"
+#include "model/rail.hpp"
+
+namespace truss::stages {
+
+using namespace truss::model;
+
+FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s)
+    : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), alpha_(alpha_per_s) {
+  active_.lo = lo;
+  active_.m = ctx.bay;
+  active_.bay_m_in_hinge_coordinate = true;
+  active_.locked_mass_kg = ctx.locked_mass_kg;
+  active_.panel_height_offset_m = ctx.panel_height_offset_m;
+}
+
+double FreePhaseB::calc_rail_function_m(const double* q) const {
+  const int n = dof();
+  const double x = q[n - 1];
+  const double l = ctx_.mast->bay(ctx_.bay).strut_length_m;
+  const double s = std::sqrt(l * l - x * x);
+  const RailParams& r = ctx_.mast->rail;
+  return q[n - 2 >= 0 ? n - 2 : 0] + s - r.axis_height_m() + r.cot_beta() * x;
+}
+
+double FreePhaseB::calc_driven_speed_m_per_s(const double* q, const double* qdot) const {
+  const int n = dof();
+  const double x = q[n - 1], l = ctx_.mast->bay(ctx_.bay).strut_length_m;
+  return qdot[n - 2] - 2.0 * x / std::sqrt(l * l - x * x) * qdot[n - 1];
+}
+
+PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  const MastParams& mast = *ctx_.mast;
+  const int n = dof(), m = ctx_.bay;
+  const BayParams& bay = mast.bay(m);
+  const double l = bay.strut_length_m, c = mast.rail.cot_beta();
+  const double x = q[n - 1], xi = qdot[n - 1], xi2 = xi * xi;
+  const double s = std::sqrt(l * l - x * x), k = 2.0 * x / s, kx = 2.0 * l * l / (s * s * s);
+  // Frame heights first..m (frame lo - 1 held when it exists).
+  const int first = std::max(lo_ - 1, 0);
+  thread_local std::vector<double> ys, vs;
+  ys.assign(static_cast<std::size_t>(m - first + 1), held_height_m_);
+  vs.assign(ys.size(), 0.0);
+  const int off = lo_ - first;
+  for (int k2 = 0; k2 < n - 1; ++k2) { ys[static_cast<std::size_t>(off + k2)] = q[k2]; vs[static_cast<std::size_t>(off + k2)] = qdot[k2]; }
+  const double y_l = q[n - 2], w = qdot[n - 2];
+  const double y_m = y_l + 2.0 * s, u = w - k * xi;
+  ys.back() = y_m;
+  vs.back() = u;
+  calc_frame_system(mast, active_, ys.data(), vs.data(), first, sys);
+  const double A_ll = sys.diag[n - 2], A_ml = sys.sub[n - 1], A_mm = sys.diag[n - 1];
+  const double R_l = sys.velocity_terms[n - 2] + sys.spring_forces[n - 2];
+  const double R_m = sys.velocity_terms[n - 1] + sys.spring_forces[n - 1];
+  const double g = calc_g_hinge(bay, x), dg = calc_dg_hinge_dx(bay, x), h = -kx * xi2;
+  Eigen::VectorXd diag = sys.diag, sub = sys.sub;
+  Eigen::VectorXd rhs = sys.velocity_terms + sys.spring_forces;
+  diag[n - 2] = A_ll + 2.0 * A_ml + A_mm;
+  sub[n - 1] = -k * (A_ml + A_mm);
+  diag[n - 1] = k * k * A_mm + 2.0 * g;
+  rhs[n - 2] = R_l + R_m - (A_ml + A_mm) * h;
+  rhs[n - 1] = -k * (R_m - A_mm * h) - dg * xi2;
+  Eigen::VectorXd a = Eigen::VectorXd::Zero(n), b = Eigen::VectorXd::Zero(n);
+  a[n - 2] = 1.0; a[n - 1] = c - x / s;
+  b[n - 2] = 1.0; b[n - 1] = -k;
+  const double f = y_l + s - mast.rail.axis_height_m() + c * x, fdot = a.dot(Eigen::Map<const Eigen::VectorXd>(qdot, n));
+  const double s_a = l * l / (s * s * s) * xi2 - 2.0 * alpha_ * fdot - alpha_ * alpha_ * f;
+  PhasePoint p;
+  TridiagonalWork wk;
+  Eigen::VectorXd acc;
+  double lambda = 0.0;
+  if (ctx_.drive.mode == DriveMode::velocity) {
+    // Two rows: the rail and y_m'' = 0 (drive force as the multiplier): three solves and a 2x2.
+    const double s_b = kx * xi2 - alpha_ * (u - ctx_.direction * ctx_.drive.speed_m_per_s);
+    Eigen::VectorXd y0, za, zb;
+    solve_tridiagonal(diag, sub, rhs, y0, wk);
+    solve_tridiagonal(diag, sub, a, za, wk);
+    solve_tridiagonal(diag, sub, b, zb, wk);
+    Eigen::Matrix2d S;
+    S << a.dot(za), a.dot(zb), b.dot(za), b.dot(zb);
+    const Eigen::Vector2d mult = S.partialPivLu().solve(Eigen::Vector2d(s_a - a.dot(y0), s_b - b.dot(y0)));
+    lambda = mult[0];
+    p.drive_force_N = mult[1];
+    acc = y0 + lambda * za + p.drive_force_N * zb;
+  } else {
+    p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
+    rhs += p.drive_force_N * b;
+    double lam_neg = 0.0;
+    solve_bordered(diag, sub, a, rhs, s_a, acc, lam_neg, wk);
+    lambda = -lam_neg;
+  }
+  for (int i = 0; i < n; ++i) qddot[i] = acc[i];
+  p.q = x; p.qdot = xi; p.qddot = acc[n - 1];
+  p.y_driven_m = y_m; p.y_lower_m = y_l;
+  p.u_m_per_s = u; p.w_m_per_s = w;
+  p.hinge_x_m = x; p.hinge_y_m = y_l + s;
+  p.lambda_N = lambda;
+  p.pin_force_N = calc_pin_force_N(mast.rail, lambda);
+  p.rail_residual_m = std::abs(f);
+  double T = 0.0, U = 0.0, tension = 0.0;
+  for (int i = 0; i < n; ++i) {
+    T += 0.5 * diag[i] * qdot[i] * qdot[i];
+    if (i > 0) T += sub[i] * qdot[i] * qdot[i - 1];
+  }
+  for (int i = std::max(lo_, 1); i <= m; ++i) {
+    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    const double Di = ys[static_cast<std::size_t>(i - first)] - ys[static_cast<std::size_t>(i - 1 - first)];
+    U += calc_bay_potential_J(mast.bay(i), b2, Di);
+    tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
+  }
+  p.kinetic_energy_J = T;
+  p.potential_energy_J = U;
+  p.diagonal_tension_N = tension;
+  p.mass_yy = diag[n - 2]; p.mass_yx = sub[n - 1]; p.mass_xx = diag[n - 1];
+  p.rail_slope = c - x / s;
+  return p;
+}
+
+}  // namespace truss::stages

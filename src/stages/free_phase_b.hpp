@@ -1,0 +1,47 @@
+// Phase B of the free stack (MODEL.md 2-3; paper eqs. 19-20, corrected): the pin of bay m slides
+// in the rail. Coordinates p = (y_lo, .., y_{m-1}, x): the frame heights below the deploying bay
+// and its hinge offset x, regular at the lock (MODEL.md 3, numerical trap). With
+//   y_m = y_{m-1} + 2 s(x),  s = sqrt(l^2 - x^2),  y_m' = y_{m-1}' - k x',  k = 2x/s,
+//   y_m'' = y_{m-1}'' - k x'' - k_x x'^2,  k_x = 2 l^2 / s^3,
+// the frame-height system A y'' = R (model/frames.hpp, bay m's strut term written as g(x) x'^2,
+// model/bay.hpp) becomes, with T the Jacobian of y(p), M_p = T' A T + 2 g e_x e_x':
+//   M_p[m-1,m-1] = A_ll + 2 A_ml + A_mm,  M_p[x,m-1] = -k (A_ml + A_mm),  M_p[x,x] = k^2 A_mm + 2 g,
+//   rhs[m-1] = R_l + R_m - (A_ml + A_mm) h,  rhs[x] = -k (R_m - A_mm h) - g' x'^2,  h = -k_x x'^2,
+// which is still tridiagonal (x couples with y_{m-1} only). The rail f = y_{m-1} + s(x) - y_r + c x
+// (c = cot beta) has the regular gradient a = (.., 1, c - x/s), and the paper's bordered system
+//   [M_p  a] [p''    ]   [rhs + F b]
+//   [a'   0] [-lambda] = [s_a      ],   s_a = (l^2/s^3) x'^2 - 2 alpha f' - alpha^2 f,
+// (Baumgarte stabilisation at rate alpha against drift; b = dy_m/dp = (.., 1, -k) carries the
+// drive) is solved directly: two tridiagonal solves and a scalar (model/tridiagonal.hpp). In
+// velocity mode y_m'' = 0 is a second row b' p'' = k_x x'^2 - alpha (y_m' - v) with the drive force
+// as its multiplier: three solves and a 2x2 system. Pin force |lambda| / (3 sin beta).
+#pragma once
+#include "model/frames.hpp"
+#include "model/tridiagonal.hpp"
+#include "stages/phase.hpp"
+
+namespace truss::stages {
+
+class FreePhaseB final : public PhaseModel {
+ public:
+  // ctx.bay = m; frames lo..m-1 and x move; frames below lo are held at held_height_m.
+  // alpha: Baumgarte rate (1/s) of the rail and drive-speed constraints.
+  FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s);
+  int dof() const override { return ctx_.bay - lo_ + 1; }
+  const PhaseContext& context() const override { return ctx_; }
+  PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
+  double calc_driven_speed_m_per_s(const double* q, const double* qdot) const override;
+  double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[dof() - 1] - ctx_.q_end); }
+  double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[dof() - 1]; }
+  void snap_to_end(double* q) const override { q[dof() - 1] = ctx_.q_end; }
+  // Rail function f (m) at p: 0 on the rail.
+  double calc_rail_function_m(const double* q) const;
+
+ private:
+  PhaseContext ctx_;
+  model::ActiveFrames active_;
+  int lo_;
+  double held_height_m_, alpha_;
+};
+
+}  // namespace truss::stages
