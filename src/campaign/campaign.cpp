@@ -12,6 +12,7 @@
 #include "campaign/dispersion.hpp"
 #include "io/scene_toml.hpp"
 #include "campaign/sampling.hpp"
+#include "sim/scene_keys.hpp"
 
 namespace truss::campaign {
 
@@ -19,15 +20,13 @@ using io::InputError;
 
 namespace {
 
-const std::set<std::string> kBayKeys = {"mast.strut_length_m", "mast.strut_mass_kg", "mast.strut_inertia_kg_m2",
-                                        "mast.diagonal_stiffness_N_per_m", "mast.diagonal_free_length_m"};
-const std::set<std::string> kFrameKeys = {"mast.frame_side_m", "mast.frame_mass_kg"};
-const std::set<std::string> kRunKeys = {"mast.n_bays", "mast.tip_mass_kg", "rail.x_m", "rail.y_m", "rail.beta_deg",
-                                        "drive.speed_m_per_s", "drive.screw_lead_m", "drive.torque_Nm",
-                                        "drive.stall_torque_Nm", "drive.no_load_speed_rad_per_s",
-                                        "panels.length_m", "panels.mass_kg", "panels.tip_height_m"};
-const std::vector<std::string> kDistributions = {"normal", "truncated_normal", "uniform", "lognormal", "discrete"};
-const std::vector<std::string> kSampling = {"monte_carlo", "latin_hypercube", "sobol", "saltelli"};
+const std::vector<std::string> kDistributions(std::begin(kDistributionNames), std::end(kDistributionNames));
+const std::vector<std::string> kSampling(std::begin(kSamplingNames), std::end(kSamplingNames));
+
+// Index of a name already checked against `names`.
+int index_of(const std::vector<std::string>& names, const std::string& s) {
+  return static_cast<int>(std::find(names.begin(), names.end(), s) - names.begin());
+}
 
 struct Ctx {
   std::string file;
@@ -100,7 +99,7 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
       if (*i < 0) c.fail(&v, fmt::format("{}: must not be negative, got {}", key, *i));
       o.ensemble.master_seed = static_cast<std::uint64_t>(*i);
     } else if (k == "sampling") {
-      o.ensemble.sampling = get_string(c, v, key, kSampling);
+      o.ensemble.sampling = static_cast<SamplingMethod>(index_of(kSampling, get_string(c, v, key, kSampling)));
     } else if (k == "max_run_wall_time_s") {
       const double w = get_number(c, v, key);
       if (!(w > 0.0 && std::isfinite(w))) c.fail(&v, fmt::format("{}: must be positive, got {}", key, w));
@@ -189,7 +188,7 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
     } else if (k == "apply") {
       const std::string a = get_string(c, v, key, {"absolute", "relative", "offset"});
       d.apply = a == "absolute" ? Apply::absolute : a == "relative" ? Apply::relative : Apply::offset;
-    } else if (k == "distribution") { d.distribution = get_string(c, v, key, kDistributions); has_dist = true; }
+    } else if (k == "distribution") { d.distribution = static_cast<DistributionKind>(index_of(kDistributions, get_string(c, v, key, kDistributions))); has_dist = true; }
     else if (k == "mean") d.mean = get_number(c, v, key);
     else if (k == "std") d.std = get_number(c, v, key);
     else if (k == "lower") d.lower = get_number(c, v, key);
@@ -211,22 +210,22 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
                            "mast.frame_side_m, mast.frame_mass_kg"));
   if (d.per == Per::bay && !is_bay_key(K)) c.fail(&t, fmt::format("{}.per: \"{}\" is not a per-bay key", where, K));
   if (d.per == Per::frame && !is_frame_key(K)) c.fail(&t, fmt::format("{}.per: \"{}\" is not a per-frame key", where, K));
-  auto bad = [&](const std::string& what) { c.fail(&t, fmt::format("{}: {} distribution: {}", where, d.distribution, what)); };
+  auto bad = [&](const std::string& what) { c.fail(&t, fmt::format("{}: {} distribution: {}", where, to_string(d.distribution), what)); };
   auto Phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
-  if (d.distribution == "normal" || d.distribution == "truncated_normal") {
+  if (d.distribution == DistributionKind::normal || d.distribution == DistributionKind::truncated_normal) {
     if (!(d.std > 0.0 && std::isfinite(d.std))) bad(fmt::format("std must be positive, got {}", d.std));
-    if (d.distribution == "truncated_normal") {
+    if (d.distribution == DistributionKind::truncated_normal) {
       if (!(d.lower < d.upper)) bad(fmt::format("lower ({}) must be below upper ({})", d.lower, d.upper));
       const double mass = Phi((d.upper - d.mean) / d.std) - Phi((d.lower - d.mean) / d.std);
       if (!(mass > 1e-12))
         bad(fmt::format("the truncation [{}, {}] excludes all probability mass of N({}, {}^2) (mass {:.3g})", d.lower,
                         d.upper, d.mean, d.std, mass));
     }
-  } else if (d.distribution == "uniform") {
+  } else if (d.distribution == DistributionKind::uniform) {
     if (!(d.lower < d.upper)) bad(fmt::format("lower ({}) must be below upper ({})", d.lower, d.upper));
-  } else if (d.distribution == "lognormal") {
+  } else if (d.distribution == DistributionKind::lognormal) {
     if (!(d.sigma > 0.0 && std::isfinite(d.sigma))) bad(fmt::format("sigma must be positive, got {}", d.sigma));
-  } else if (d.distribution == "discrete") {
+  } else if (d.distribution == DistributionKind::discrete) {
     if (d.values.empty()) bad("needs a non-empty 'values' table");
     if (!d.weights.empty() && d.weights.size() != d.values.size())
       bad(fmt::format("'weights' has {} entries for {} values", d.weights.size(), d.values.size()));
@@ -236,7 +235,7 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
   // whatever the messages above do not cover still gets the file and line.
   if (const std::string e = make_distribution(d).validate(); !e.empty()) bad(e);
   if (K == "mast.n_bays") {
-    if (d.distribution != "discrete" || d.apply != Apply::absolute || d.per != Per::run)
+    if (d.distribution != DistributionKind::discrete || d.apply != Apply::absolute || d.per != Per::run)
       c.fail(&t, where + ": mast.n_bays is an integer: disperse it with distribution = \"discrete\", apply = \"absolute\", per = \"run\"");
     for (double v : d.values)
       if (!(v >= 1.0 && v <= 100000.0 && v == std::floor(v))) bad(fmt::format("bay counts must be integers >= 1, got {}", v));
@@ -246,9 +245,19 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
 
 }  // namespace
 
-bool is_bay_key(const std::string& key) { return kBayKeys.count(key) > 0; }
-bool is_frame_key(const std::string& key) { return kFrameKeys.count(key) > 0; }
-bool is_dispersible_key(const std::string& key) { return is_bay_key(key) || is_frame_key(key) || kRunKeys.count(key) > 0; }
+// Which keys may be dispersed, and how: the scene key table (sim/scene_keys.hpp).
+bool is_bay_key(const std::string& key) {
+  const sim::SceneKey* k = sim::find_scene_key(key);
+  return k && k->scope == sim::KeyScope::bay;
+}
+bool is_frame_key(const std::string& key) {
+  const sim::SceneKey* k = sim::find_scene_key(key);
+  return k && k->scope == sim::KeyScope::frame;
+}
+bool is_dispersible_key(const std::string& key) {
+  const sim::SceneKey* k = sim::find_scene_key(key);
+  return k && k->is_dispersible();
+}
 
 namespace {
 
@@ -320,7 +329,7 @@ CampaignOptions parse_campaign_root(toml::table root, const Ctx& c, const std::s
         throw InputError(fmt::format("error: {}:{}: dispersion[{}].key: \"{}\" is already dispersed at line {}", path,
                                      o.dispersions[i].line, i + 1, o.dispersions[i].key, o.dispersions[j].line));
   const toml::node* n_runs_node = root["ensemble"]["n_runs"].node();
-  if (o.ensemble.sampling == "saltelli") {
+  if (o.ensemble.sampling == SamplingMethod::saltelli) {
     if (o.dispersions.empty()) c.fail(root["ensemble"]["sampling"].node(), "ensemble.sampling: saltelli needs at least one [[dispersion]]");
     const std::int64_t b = saltelli_block_runs(o);
     if (o.ensemble.n_runs % b != 0 || o.ensemble.n_runs < 2 * b)
@@ -328,11 +337,8 @@ CampaignOptions parse_campaign_root(toml::table root, const Ctx& c, const std::s
                                       "n_runs must be a multiple of {} and at least {}, got {} (e.g. {})",
                                       b, b, 2 * b, o.ensemble.n_runs, std::max<std::int64_t>(2, o.ensemble.n_runs / b) * b));
   }
-  if (o.ensemble.sampling == "sobol" || o.ensemble.sampling == "latin_hypercube" || o.ensemble.sampling == "monte_carlo") {
-    const SamplePlan plan(o.ensemble.sampling == "sobol" ? SamplingMethod::sobol
-                          : o.ensemble.sampling == "latin_hypercube" ? SamplingMethod::latin_hypercube
-                                                                    : SamplingMethod::monte_carlo,
-                          o.ensemble.n_runs, std::max(1, calc_layout(o).total), o.ensemble.master_seed);
+  if (o.ensemble.sampling != SamplingMethod::saltelli) {
+    const SamplePlan plan(o.ensemble.sampling, o.ensemble.n_runs, std::max(1, calc_layout(o).total), o.ensemble.master_seed);
     if (const std::string e = plan.validate(); !e.empty()) c.fail(n_runs_node, "ensemble: " + e);
   }
   for (std::int64_t r : o.output.history_runs)
@@ -400,7 +406,7 @@ std::string resolved_campaign_toml(const CampaignOptions& c) {
   std::string t = "# Resolved campaign: every value used, the base scene inline.\n[campaign]\n";
   t += fmt::format("name = {}\ndescription = {}\n\n[ensemble]\n", toml_str(c.name), toml_str(c.description));
   t += fmt::format("n_runs = {}\nmaster_seed = {}\nsampling = {}\nmax_run_wall_time_s = {}\n\n", c.ensemble.n_runs,
-                   c.ensemble.master_seed, toml_str(c.ensemble.sampling), toml_num(c.ensemble.max_run_wall_time_s));
+                   c.ensemble.master_seed, toml_str(to_string(c.ensemble.sampling)), toml_num(c.ensemble.max_run_wall_time_s));
   t += "[output]\nhistory_runs = [";
   for (std::size_t i = 0; i < c.output.history_runs.size(); ++i) t += fmt::format("{}{}", i ? ", " : "", c.output.history_runs[i]);
   t += fmt::format("]\nhistory_step_s = {}\n\n", toml_num(c.output.history_step_s));
@@ -412,13 +418,13 @@ std::string resolved_campaign_toml(const CampaignOptions& c) {
   }
   for (const auto& d : c.dispersions) {
     t += fmt::format("\n[[dispersion]]\nkey = {}\nper = \"{}\"\napply = \"{}\"\ndistribution = {}\n", toml_str(d.key),
-                     per_name(d.per), apply_name(d.apply), toml_str(d.distribution));
-    if (d.distribution == "normal" || d.distribution == "truncated_normal")
+                     per_name(d.per), apply_name(d.apply), toml_str(to_string(d.distribution)));
+    if (d.distribution == DistributionKind::normal || d.distribution == DistributionKind::truncated_normal)
       t += fmt::format("mean = {}\nstd = {}\n", toml_num(d.mean), toml_num(d.std));
-    if (d.distribution == "truncated_normal" || d.distribution == "uniform")
+    if (d.distribution == DistributionKind::truncated_normal || d.distribution == DistributionKind::uniform)
       t += fmt::format("lower = {}\nupper = {}\n", toml_num(d.lower), toml_num(d.upper));
-    if (d.distribution == "lognormal") t += fmt::format("mu = {}\nsigma = {}\n", toml_num(d.mu), toml_num(d.sigma));
-    if (d.distribution == "discrete") {
+    if (d.distribution == DistributionKind::lognormal) t += fmt::format("mu = {}\nsigma = {}\n", toml_num(d.mu), toml_num(d.sigma));
+    if (d.distribution == DistributionKind::discrete) {
       t += "values = " + toml_nums(d.values) + "\n";
       if (!d.weights.empty()) t += "weights = " + toml_nums(d.weights) + "\n";
     }

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "io/scene_toml.hpp"
+#include "campaign/sampling.hpp"
 #include "sim/scene.hpp"
 
 namespace truss::campaign {
@@ -30,7 +31,7 @@ struct DispersionOptions {
   std::string key;                  // scene key, "table.key"
   Per per = Per::run;               // one draw per run, or one per bay / per frame
   Apply apply = Apply::relative;    // how the draw changes the nominal value
-  std::string distribution;         // normal | truncated_normal | uniform | lognormal | discrete
+  DistributionKind distribution = DistributionKind::normal;  // parsed from its name (kDistributionNames)
   double mean = 0, std = 0, lower = 0, upper = 0, mu = 0, sigma = 0;
   std::vector<double> values, weights;  // discrete table
   int line = 0;                     // line of the [[dispersion]] entry, for messages
@@ -39,7 +40,7 @@ struct DispersionOptions {
 struct EnsembleOptions {
   std::int64_t n_runs = 100;                 // number of deployments
   std::uint64_t master_seed = 1;             // with the run index, the only source of randomness
-  std::string sampling = "monte_carlo";      // monte_carlo | latin_hypercube | sobol | saltelli
+  SamplingMethod sampling = SamplingMethod::monte_carlo;  // parsed from its name (kSamplingNames)
   double max_run_wall_time_s = 60.0;         // a run longer than this is stopped and recorded
 };
 

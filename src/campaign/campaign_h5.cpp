@@ -94,7 +94,7 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
   write_string_attribute(file, "base_scene_toml", info.base_scene_toml);
   write_int_attribute(file, "n_runs", t.n_runs());
   write_int_attribute(file, "master_seed", static_cast<std::int64_t>(c.ensemble.master_seed));
-  write_string_attribute(file, "sampling", c.ensemble.sampling);
+  write_string_attribute(file, "sampling", to_string(c.ensemble.sampling));
   write_int_attribute(file, "n_bays_max", cols.n_bays_max);
   write_string_attribute(file, "direction", sim::to_string(c.base.run.direction));
   write_string_attribute(file, "drive_mode", sim::to_string(c.base.drive.mode));
@@ -143,20 +143,20 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
       Handle ds(H5Dopen2(g.get(), disp.key.c_str(), H5P_DEFAULT), H5Dclose, "open " + disp.key);
       write_string_attribute(ds.get(), "per", per_name(disp.per));
       write_string_attribute(ds.get(), "apply", apply_name(disp.apply));
-      write_string_attribute(ds.get(), "distribution", disp.distribution);
-      if (disp.distribution == "normal" || disp.distribution == "truncated_normal") {
+      write_string_attribute(ds.get(), "distribution", to_string(disp.distribution));
+      if (disp.distribution == DistributionKind::normal || disp.distribution == DistributionKind::truncated_normal) {
         write_double_attribute(ds.get(), "mean", disp.mean);
         write_double_attribute(ds.get(), "std", disp.std);
       }
-      if (disp.distribution == "truncated_normal" || disp.distribution == "uniform") {
+      if (disp.distribution == DistributionKind::truncated_normal || disp.distribution == DistributionKind::uniform) {
         write_double_attribute(ds.get(), "lower", disp.lower);
         write_double_attribute(ds.get(), "upper", disp.upper);
       }
-      if (disp.distribution == "lognormal") {
+      if (disp.distribution == DistributionKind::lognormal) {
         write_double_attribute(ds.get(), "mu", disp.mu);
         write_double_attribute(ds.get(), "sigma", disp.sigma);
       }
-      if (disp.distribution == "discrete") {
+      if (disp.distribution == DistributionKind::discrete) {
         write_doubles_attribute(ds.get(), "values", disp.values);
         write_doubles_attribute(ds.get(), "weights", disp.weights.empty() ? std::vector<double>(disp.values.size(), 1.0) : disp.weights);
       }
@@ -195,7 +195,7 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
   }
 
   // /sensitivity
-  if (c.ensemble.sampling == "saltelli") {
+  if (c.ensemble.sampling == SamplingMethod::saltelli) {
     Handle g = make_group(file, "sensitivity");
     std::vector<std::string> factors;
     for (const auto& d : c.dispersions) factors.push_back(d.key);

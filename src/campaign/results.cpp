@@ -133,7 +133,7 @@ const std::vector<std::string>& sensitivity_outputs() {
 
 std::vector<OutputSensitivity> calc_sensitivity(const ResultTable& t, const CampaignOptions& c) {
   std::vector<OutputSensitivity> out;
-  if (c.ensemble.sampling != "saltelli") return out;
+  if (c.ensemble.sampling != SamplingMethod::saltelli) return out;
   const std::int64_t block = saltelli_block_runs(c);
   const int G = static_cast<int>(c.dispersions.size());
   const std::int64_t n_blocks = t.n_runs() / block;

@@ -16,16 +16,9 @@ static_assert(std::endian::native == std::endian::little, "records and journals 
 
 namespace {
 
-SamplingMethod method_of(const std::string& s) {
-  if (s == "latin_hypercube") return SamplingMethod::latin_hypercube;
-  if (s == "sobol") return SamplingMethod::sobol;
-  if (s == "saltelli") return SamplingMethod::saltelli;
-  return SamplingMethod::monte_carlo;
-}
-
 SamplePlan make_plan(const CampaignOptions& c, const DimensionLayout& L) {
   const int d = std::max(1, L.total);
-  if (c.ensemble.sampling != "saltelli") return SamplePlan(method_of(c.ensemble.sampling), c.ensemble.n_runs, d, c.ensemble.master_seed);
+  if (c.ensemble.sampling != SamplingMethod::saltelli) return SamplePlan(c.ensemble.sampling, c.ensemble.n_runs, d, c.ensemble.master_seed);
   const std::int64_t blocks = c.ensemble.n_runs / saltelli_block_runs(c);
   return SamplePlan(2 * d <= kSobolMaxDims ? SamplingMethod::sobol : SamplingMethod::monte_carlo, blocks, 2 * d,
                     c.ensemble.master_seed);
@@ -71,7 +64,7 @@ struct Reader {
 
 RunSampler::RunSampler(const CampaignOptions& c)
     : layout_(calc_layout(c)),
-      saltelli_(c.ensemble.sampling == "saltelli"),
+      saltelli_(c.ensemble.sampling == SamplingMethod::saltelli),
       block_(saltelli_ ? saltelli_block_runs(c) : 1),
       plan_(make_plan(c, layout_)) {
   if (const std::string e = plan_.validate(); !e.empty()) throw std::invalid_argument("sampling plan: " + e);

@@ -133,6 +133,9 @@ double normal_quantile(double p);
 // ---------------------------------------------------------------------------
 
 enum class DistributionKind { normal, truncated_normal, uniform, lognormal, discrete };
+// Names as campaign files write them, in enum order.
+inline constexpr const char* kDistributionNames[] = {"normal", "truncated_normal", "uniform", "lognormal", "discrete"};
+inline const char* to_string(DistributionKind k) { return kDistributionNames[static_cast<int>(k)]; }
 
 // One uncertain input. Fields that a kind does not use are ignored; build with
 // the static factories. calc_quantile() requires validate() to be empty.
@@ -201,6 +204,8 @@ struct Distribution {
 //                    counter-based generator): A = first d coordinates, B =
 //                    last d, AB_i = A with column i from B.
 enum class SamplingMethod { monte_carlo, latin_hypercube, sobol, saltelli };
+inline constexpr const char* kSamplingNames[] = {"monte_carlo", "latin_hypercube", "sobol", "saltelli"};
+inline const char* to_string(SamplingMethod m) { return kSamplingNames[static_cast<int>(m)]; }
 
 // Largest Sobol' dimension embedded (Joe-Kuo new-joe-kuo-6.21201 dimensions
 // 1..kSobolMaxDims). Beyond it a sobol plan fails validation, and a saltelli

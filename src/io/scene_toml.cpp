@@ -18,125 +18,19 @@
 #include <tuple>
 #include <toml++/toml.h>
 
+#include "sim/scene_keys.hpp"
+
 namespace truss::io {
 namespace {
 
 using sim::SceneOptions;
 
-// ---------------------------------------------------------------------------------------------
-// The key table: every scene key, its type, how to set and get it, and the comment written by
-// resolved_scene_toml.
-
-enum class Kind { real, opt_real, integer, enumeration };
-
-struct KeyDesc {
-  std::string_view table;
-  std::string_view key;
-  Kind kind;
-  std::string_view comment;                       // unit and meaning, for the resolved TOML
-  std::vector<std::string_view> allowed;          // enumeration: values, in enum order
-  std::int64_t int_min = 0;                       // integer: range of the C++ field
-  std::int64_t int_max = 0;
-  void (*set_real)(SceneOptions&, double) = nullptr;          // real, opt_real
-  double (*get_real)(const SceneOptions&) = nullptr;          // real
-  std::optional<double> (*get_opt)(const SceneOptions&) = nullptr;  // opt_real
-  void (*set_int)(SceneOptions&, std::int64_t) = nullptr;     // integer
-  std::int64_t (*get_int)(const SceneOptions&) = nullptr;     // integer
-  void (*set_enum)(SceneOptions&, std::size_t) = nullptr;     // enumeration (index in allowed)
-  std::size_t (*get_enum)(const SceneOptions&) = nullptr;     // enumeration
-
-  std::string dotted() const { return fmt::format("{}.{}", table, key); }
-};
-
-// The table and key names are the member names of SceneOptions.
-#define TRUSS_REAL(T, K, C)                                               \
-  KeyDesc {                                                               \
-    #T, #K, Kind::real, C, {}, 0, 0,                                      \
-        [](SceneOptions& s, double v) { s.T.K = v; },                     \
-        [](const SceneOptions& s) -> double { return s.T.K; }, nullptr,   \
-        nullptr, nullptr, nullptr, nullptr                                \
-  }
-#define TRUSS_OPT_REAL(T, K, C)                                                          \
-  KeyDesc {                                                                              \
-    #T, #K, Kind::opt_real, C, {}, 0, 0,                                                 \
-        [](SceneOptions& s, double v) { s.T.K = v; }, nullptr,                           \
-        [](const SceneOptions& s) -> std::optional<double> { return s.T.K; }, nullptr,   \
-        nullptr, nullptr, nullptr                                                        \
-  }
-#define TRUSS_INT(T, K, C)                                                                    \
-  KeyDesc {                                                                                   \
-    #T, #K, Kind::integer, C, {},                                                             \
-        static_cast<std::int64_t>(std::numeric_limits<decltype(SceneOptions{}.T.K)>::min()),  \
-        static_cast<std::int64_t>(std::numeric_limits<decltype(SceneOptions{}.T.K)>::max()),  \
-        nullptr, nullptr, nullptr,                                                            \
-        [](SceneOptions& s, std::int64_t v) { s.T.K = static_cast<decltype(s.T.K)>(v); },     \
-        [](const SceneOptions& s) -> std::int64_t { return s.T.K; }, nullptr, nullptr         \
-  }
-#define TRUSS_ENUM(T, K, C, ...)                                                             \
-  KeyDesc {                                                                                  \
-    #T, #K, Kind::enumeration, C, {__VA_ARGS__}, 0, 0, nullptr, nullptr, nullptr, nullptr,   \
-        nullptr, [](SceneOptions& s, std::size_t i) { s.T.K = static_cast<decltype(s.T.K)>(i); }, \
-        [](const SceneOptions& s) -> std::size_t { return static_cast<std::size_t>(s.T.K); }  \
-  }
-
-const std::vector<KeyDesc>& keys() {
-  // Enumeration values are listed in the order of the enumerators in sim/scene.hpp.
-  static const std::vector<KeyDesc> k = {
-      TRUSS_INT(mast, n_bays, "number of bays"),
-      TRUSS_REAL(mast, strut_length_m, "m, l_s, length of each of the two struts of a longeron"),
-      TRUSS_REAL(mast, strut_mass_kg, "kg, m_s, mass of one strut"),
-      TRUSS_OPT_REAL(mast, strut_inertia_kg_m2,
-                     "kg m^2, J_c, centroidal strut inertia; unset = m_s l_s^2 / 12"),
-      TRUSS_REAL(mast, frame_side_m, "m, b_f, side of the triangular frame"),
-      TRUSS_REAL(mast, frame_mass_kg, "kg, m_f, mass of one frame"),
-      TRUSS_REAL(mast, diagonal_stiffness_N_per_m, "N/m, K, stiffness of one diagonal"),
-      TRUSS_REAL(mast, diagonal_free_length_m, "m, l_0, free length of one diagonal"),
-      TRUSS_OPT_REAL(mast, tip_mass_kg, "kg, tip fitting; unset = 6 m_s + m_f"),
-      TRUSS_REAL(rail, x_m, "m, x_l, rail foot offset from the longeron line"),
-      TRUSS_REAL(rail, y_m, "m, y_l, rail foot height"),
-      TRUSS_REAL(rail, beta_deg, "deg, rail inclination to the mast axis, in (0, 90)"),
-      TRUSS_ENUM(drive, mode, "\"velocity\" | \"torque\" | \"motor\"", "velocity", "torque",
-                 "motor"),
-      TRUSS_REAL(drive, speed_m_per_s, "m/s, v_dep, driven frame speed (velocity mode)"),
-      TRUSS_REAL(drive, screw_lead_m, "m, h, lead of the drive screw"),
-      TRUSS_REAL(drive, torque_Nm, "N m, constant screw torque (torque mode)"),
-      TRUSS_REAL(drive, stall_torque_Nm, "N m, motor stall torque (motor mode)"),
-      TRUSS_REAL(drive, no_load_speed_rad_per_s, "rad/s, motor no-load speed (motor mode)"),
-      TRUSS_ENUM(stack, mode, "\"held\" | \"free\"", "held", "free"),
-      TRUSS_INT(panels, count, "number of solar panels, 0 = none, else even"),
-      TRUSS_REAL(panels, length_m, "m, l_p, panel length"),
-      TRUSS_REAL(panels, mass_kg, "kg, m_p, mass of one panel"),
-      TRUSS_OPT_REAL(panels, tip_height_m,
-                     "m, h_tip, blanket attachment above the top frame; unset = 2 l_s"),
-      TRUSS_ENUM(run, direction, "\"deploy\" | \"retract\"", "deploy", "retract"),
-      TRUSS_REAL(run, output_step_s, "s, time-history sample step, 0 = no histories"),
-      TRUSS_REAL(run, rtol, "1, relative tolerance of the ODE integrators"),
-      TRUSS_REAL(run, atol, "absolute tolerance (m, m/s, J) of the ODE integrators"),
-      TRUSS_ENUM(run, integrator, "\"dopri54\" | \"cvode\"", "dopri54", "cvode"),
-      TRUSS_INT(run, max_steps, "cap on accepted integrator steps over the run"),
-      TRUSS_REAL(run, max_wall_time_s, "s, wall-time cap for one run"),
-  };
-  return k;
-}
-
-#undef TRUSS_REAL
-#undef TRUSS_OPT_REAL
-#undef TRUSS_INT
-#undef TRUSS_ENUM
-
-std::vector<std::string_view> table_names() {
-  std::vector<std::string_view> t;
-  for (const auto& d : keys())
-    if (std::find(t.begin(), t.end(), d.table) == t.end()) t.push_back(d.table);
-  return t;
-}
-
-const KeyDesc* find_key(std::string_view table, std::string_view key) {
-  for (const auto& d : keys())
-    if (d.table == table && d.key == key) return &d;
-  return nullptr;
-}
-
+// The key table lives in sim/scene_keys.hpp: this file parses and writes scenes through it.
+using KeyDesc = sim::SceneKey;
+using Kind = sim::KeyKind;
+const std::vector<KeyDesc>& keys() { return sim::scene_keys(); }
+std::vector<std::string_view> table_names() { return sim::find_scene_tables(); }
+const KeyDesc* find_key(std::string_view table, std::string_view key) { return sim::find_scene_key(table, key); }
 bool is_table(std::string_view table) {
   for (const auto& d : keys())
     if (d.table == table) return true;

@@ -32,7 +32,7 @@ TEST_CASE("the shipped campaigns parse", "[campaign]") {
   const std::string root = TRUSS_SOURCE_DIR;
   const CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
   CHECK(t1.ensemble.n_runs == 10000);
-  CHECK(t1.ensemble.sampling == "latin_hypercube");
+  CHECK(t1.ensemble.sampling == truss::campaign::SamplingMethod::latin_hypercube);
   CHECK(t1.base.mast.n_bays == 30);
   CHECK(t1.base.run.output_step_s == 0.0);
   CHECK(t1.dispersions.size() == 8);
