@@ -245,6 +245,27 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
 
 }  // namespace
 
+std::string CampaignOptions::validate() const {
+  if (ensemble.n_runs < 1) return fmt::format("ensemble.n_runs: must be >= 1, got {}", ensemble.n_runs);
+  if (!(ensemble.max_run_wall_time_s > 0.0))
+    return fmt::format("ensemble.max_run_wall_time_s: must be positive, got {}", ensemble.max_run_wall_time_s);
+  if (!(output.history_step_s > 0.0)) return fmt::format("output.history_step_s: must be positive, got {}", output.history_step_s);
+  for (std::int64_t r : output.history_runs)
+    if (r < 0 || r >= ensemble.n_runs) return fmt::format("output.history_runs: run {} is not in [0, {})", r, ensemble.n_runs);
+  if (std::string e = base.validate(); !e.empty()) return "scene." + e;
+  if (ensemble.sampling == SamplingMethod::saltelli &&
+      (dispersions.empty() || ensemble.n_runs % saltelli_block_runs(*this) != 0))
+    return fmt::format("ensemble.n_runs: saltelli needs dispersions and a multiple of {} runs", saltelli_block_runs(*this));
+  for (std::size_t i = 0; i < dispersions.size(); ++i) {
+    const DispersionOptions& d = dispersions[i];
+    if (!is_dispersible_key(d.key)) return fmt::format("dispersion[{}].key: \"{}\" cannot be dispersed", i + 1, d.key);
+    if ((d.per == Per::bay && !is_bay_key(d.key)) || (d.per == Per::frame && !is_frame_key(d.key)))
+      return fmt::format("dispersion[{}].per: \"{}\" is not dispersible per {}", i + 1, d.key, d.per == Per::bay ? "bay" : "frame");
+    if (std::string e = make_distribution(d).validate(); !e.empty()) return fmt::format("dispersion[{}]: {}", i + 1, e);
+  }
+  return {};
+}
+
 // Which keys may be dispersed, and how: the scene key table (sim/scene_keys.hpp).
 bool is_bay_key(const std::string& key) {
   const sim::SceneKey* k = sim::find_scene_key(key);

@@ -139,8 +139,16 @@ RunRecord RunRecord::from_bytes(std::string_view bytes, const OutputColumns& col
   return rec;
 }
 
+namespace {
+// The options are checked where they are used, before anything is built from them.
+CampaignOptions checked(CampaignOptions c) {
+  if (std::string e = c.validate(); !e.empty()) throw std::invalid_argument("campaign options: " + e);
+  return c;
+}
+}  // namespace
+
 CampaignContext::CampaignContext(CampaignOptions c)
-    : options(std::move(c)), sampler(options), columns(OutputColumns::make(sampler.layout())) {}
+    : options(checked(std::move(c))), sampler(options), columns(OutputColumns::make(sampler.layout())) {}
 
 namespace {
 

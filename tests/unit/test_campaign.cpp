@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "campaign/campaign.hpp"
+#include "campaign/run_record.hpp"
 #include "io/scene_toml.hpp"
 
 using namespace truss::campaign;
@@ -89,4 +90,23 @@ TEST_CASE("bad campaign files name the key and the line", "[campaign][input]") {
   CHECK(error_of(ok, {"mast.n_bayz=3"}).find("--set mast.n_bayz=3") != std::string::npos);
   CHECK(error_of(ok, {"foo.bar=3"}).find("only ensemble.*") != std::string::npos);
   CHECK(error_of(ok).empty());
+}
+
+TEST_CASE("CampaignOptions::validate names the inconsistent field of options built in code", "[campaign][input]") {
+  using namespace truss::campaign;
+  CampaignOptions c = parse_campaign_file(TRUSS_SOURCE_DIR "/campaigns/table1_dispersed.toml");
+  CHECK(c.validate().empty());
+  CampaignOptions bad = c;
+  bad.ensemble.n_runs = 0;
+  CHECK(bad.validate().rfind("ensemble.n_runs", 0) == 0);
+  bad = c;
+  bad.dispersions[0].key = "run.rtol";
+  CHECK(bad.validate().find("cannot be dispersed") != std::string::npos);
+  bad = c;
+  bad.dispersions[0].std = -1.0;
+  CHECK(bad.validate().rfind("dispersion[1]", 0) == 0);
+  bad = c;
+  bad.base.rail.beta_deg = 95.0;
+  CHECK(bad.validate().rfind("scene.rail.beta_deg", 0) == 0);
+  CHECK_THROWS_AS(CampaignContext(bad), std::invalid_argument);  // checked where it is used
 }
