@@ -1,0 +1,21 @@
+"""truss_report: the statistical load report of a truss-campaign results file, and the report of
+a single run (postproc/report.py is its command line).
+
+Modules:
+    constants          reported outputs, percentile levels, limits
+    h5read             reading and checking the HDF5 files (campaign and single run)
+    stats              percentiles, order-statistic intervals, Clopper-Pearson, Spearman, checks
+    page               HTML building: numbers with data-key, tables, the page, CSS
+    figures            matplotlib figures
+    sections_campaign  campaign, status, failures, dispersions, loads, lock timing sections
+    sections_margins   margins, sensitivity, histories, consistency checks; the campaign report
+    single_run         the single-run report (paper Fig. 4 and 5)
+    cli                output directory handling, build(), main()
+"""
+import os
+import sys
+
+# run_figures.py (paper figures, HDF5 text helpers) lives beside this package.
+_HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+if _HERE not in sys.path:
+    sys.path.insert(0, _HERE)

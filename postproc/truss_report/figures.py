@@ -1,0 +1,139 @@
+"""truss_report.figures: see the package docstring (postproc/truss_report/__init__.py)."""
+import numpy as np
+
+from .constants import LEVELS
+
+
+def fig_distribution(plt, x, title, u, est, cis):
+    n = len(x)
+    fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(15.0, 4.3))
+    edges = np.histogram_bin_edges(x, bins="auto")
+    if len(edges) > 81:
+        edges = np.linspace(x[0], x[-1], 81)
+    a1.hist(x, bins=edges, color="C0", alpha=0.8)
+    a1.set_ylabel("runs")
+    a2.step(x, np.arange(1, n + 1) / n, where="post", color="C0")
+    a2.set_ylabel("empirical CDF")
+    surv = 1.0 - np.arange(1, n + 1) / n
+    a3.step(x[:-1], surv[:-1], where="post", color="C0")
+    a3.set_yscale("log")
+    a3.set_ylim(min(0.5 / n, 5e-4), 1.5)
+    a3.set_ylabel("exceedance probability 1 − ECDF")
+    colors = {"p50": "C2", "p95": "C1", "p99": "C3", "p99_865": "C4"}
+    for q, name, lab in LEVELS:
+        style = dict(color=colors[name], lw=1.1, ls="--")
+        a1.axvline(est[name], label=f"{lab} = {est[name]:.5g} {u}", **style)
+        a2.axvline(est[name], **style)
+        # The CI as a segment (it need not contain the estimate for very small n); a bound
+        # the sample cannot give is drawn to the sample's extreme.
+        ci, level = cis[name], 1.0 - q / 100.0
+        lo = ci.lo if np.isfinite(ci.lo) else x[0]
+        hi = ci.hi if np.isfinite(ci.hi) else x[-1]
+        a3.plot([lo, hi], [level, level], "|-", color=colors[name], lw=1.6, ms=8)
+        a3.plot([est[name]], [level], "o", color=colors[name], ms=4,
+                label=f"{lab} and 95 % CI" + ("" if np.isfinite(ci.lo) and np.isfinite(ci.hi)
+                                             else " (a bound beyond the sample)"))
+    for ax in (a1, a2, a3):
+        ax.set_xlabel(f"{title} ({u})" if u != "1" else title)
+        ax.grid(True, alpha=0.3)
+    a1.legend(fontsize=7, loc="best")
+    a3.legend(fontsize=7, loc="lower left")
+    fig.suptitle(f"{title}: {n} ok runs with a finite value", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def fig_lock_timing(plt, bays, lt, it, u, words, dt_text):
+    from matplotlib.ticker import MaxNLocator
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(15.0, 4.5))
+    for ax, s, what in ((a1, lt, f"{words[0]} time"),
+                        (a2, it, f"time between successive {words[1]}")):
+        ax.fill_between(bays, s["p5"], s["p95"], color="C0", alpha=0.25, step=None,
+                        label="5–95 % band")
+        ax.plot(bays, s["p50"], "o-", color="C0", ms=3, lw=1.2, label="median")
+        ax.set_xlabel("bay index")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.set_ylabel(f"{what} ({u})")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    a1.set_title(f"{words[0]} time per bay", fontsize=10)
+    a2.set_title(f"time between successive {words[1]}\n({dt_text})", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def fig_motor(plt, torque, stall_t, ok_t, stalled, nominal, u):
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(15.0, 4.5))
+    both = stall_t[ok_t | stalled]
+    edges = np.histogram_bin_edges(both[np.isfinite(both)], bins="auto")
+    edges = edges if len(edges) <= 61 else np.linspace(edges[0], edges[-1], 61)
+    a1.hist([stall_t[ok_t], stall_t[stalled]], bins=edges, stacked=True, color=["C0", "C3"],
+            label=[f"ok runs ({int(ok_t.sum())})", f"stalled runs ({int(stalled.sum())})"])
+    a1.axvline(nominal, color="k", ls="--", lw=1, label=f"base scene {nominal:.5g} {u}")
+    a1.set_xlabel(f"stall torque of the run ({u})")
+    a1.set_ylabel("runs")
+    a1.legend(fontsize=8)
+    a2.plot(stall_t[ok_t], torque[ok_t], ".", ms=3, color="C0", label="ok runs")
+    a2.plot(stall_t[stalled], torque[stalled], "x", ms=4, color="C3",
+            label="stalled runs (peak before the stall)")
+    lim = np.array([np.nanmin(both), np.nanmax(both)])
+    a2.plot(lim, lim, "k--", lw=1, label="peak torque = stall torque")
+    a2.set_xlabel(f"stall torque of the run ({u})")
+    a2.set_ylabel(f"peak drive torque ({u})")
+    a2.legend(fontsize=8)
+    for ax in (a1, a2):
+        ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def fig_tornado(plt, ranked, aggregate, title, band):
+    labels = [lab for lab, _, _ in ranked][::-1]
+    vals = np.array([r for _, r, _ in ranked][::-1])
+    fig, ax = plt.subplots(figsize=(7.4, 0.32 * len(labels) + 1.4))
+    colors = ["C3" if v > 0 else "C0" for v in vals]
+    bars = ax.barh(range(len(vals)), vals, color=colors, alpha=0.85)
+    for bar, lab in zip(bars, labels):
+        if lab in aggregate:
+            bar.set_hatch("///")
+            bar.set_edgecolor("k")
+    ax.axvspan(-band, band, color="0.8", alpha=0.6, zorder=0)
+    ax.axvline(0, color="k", lw=0.8)
+    ax.set_yticks(range(len(vals)))
+    ax.set_yticklabels(labels, fontsize=7)
+    ax.set_xlim(-1.05, 1.05)
+    ax.set_xlabel("Spearman ρ (1)")
+    for i, v in enumerate(vals):
+        ax.text(v, i, f" {v:+.3f} ", va="center", ha="left" if v > 0 else "right", fontsize=6)
+    ax.set_title(f"{title}: top {len(vals)} inputs by |ρ|", fontsize=9)
+    ax.grid(True, axis="x", alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def fig_sobol(plt, factors, outs):
+    G = len(factors)
+    ncol = 3
+    nrow = -(-len(outs) // ncol)
+    fig, axes = plt.subplots(nrow, ncol, figsize=(15.0, 3.2 + 0.25 * G + 3.0 * (nrow - 1)),
+                             squeeze=False)
+    y = np.arange(G)
+    for ax, (key, o) in zip(axes.ravel(), outs.items()):
+        for k, dy, color, label in (("first_order", 0.2, "C0", "first order S1"),
+                                    ("total", -0.2, "C1", "total ST")):
+            ok = np.isfinite(o[k])            # NaN: undefined (e.g. an output that never varies)
+            ax.barh(y[ok] + dy, o[k][ok], 0.4, color=color, label=label)
+            ok &= np.isfinite(o[k + "_lo"]) & np.isfinite(o[k + "_hi"])
+            ax.hlines(y[ok] + dy, o[k + "_lo"][ok], o[k + "_hi"][ok], color="k", lw=1.2)
+        ax.set_yticks(y)
+        ax.set_yticklabels(factors, fontsize=7)
+        ax.set_ylim(G - 0.5, -0.5)
+        undefined = not np.all(np.isfinite(o["first_order"]) & np.isfinite(o["total"]))
+        ax.set_title(key + (" (some indices undefined: NaN)" if undefined else ""), fontsize=9)
+        ax.set_xlabel("Sobol' index (1); black: CI")
+        ax.grid(True, axis="x", alpha=0.3)
+    axes.ravel()[0].legend(fontsize=7)
+    for ax in axes.ravel()[len(outs):]:
+        ax.set_visible(False)
+    fig.tight_layout()
+    return fig

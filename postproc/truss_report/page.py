@@ -1,0 +1,102 @@
+"""truss_report.page: see the package docstring (postproc/truss_report/__init__.py)."""
+import datetime
+import html
+import os
+
+import numpy as np
+
+
+
+def esc(s):
+    return html.escape(str(s), quote=True)
+
+
+def fmt(v, digits=5):
+    """Rounded text of a number (integers exact)."""
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    v = float(v)
+    if np.isnan(v):
+        return "NaN"
+    return f"{v:.{digits}g}".replace("inf", "∞")
+
+
+def data_value(v):
+    return str(int(v)) if isinstance(v, (int, np.integer)) else repr(float(v))
+
+
+def num(key, v, unit="", digits=5, tag="td"):
+    """A table cell (or span) holding one number, with its data-key and full-precision value."""
+    text = fmt(v, digits) + (f" {esc(unit)}" if unit and unit != "1" else "")
+    cls = ' class="num"' if tag == "td" else ""
+    return f'<{tag}{cls} data-key="{esc(key)}" data-value="{data_value(v)}">{text}</{tag}>'
+
+
+def table(headers, rows, cls="", attrs=None):
+    """headers: header HTML (no header row when all are empty); rows: lists of cells, each a
+    <td>/<th> string or text to wrap in <td>."""
+    body = []
+    for i, row in enumerate(rows):
+        cells = "".join(c if c.startswith(("<td", "<th")) else f"<td>{c}</td>" for c in row)
+        extra = f" {attrs[i]}" if attrs else ""
+        body.append(f"<tr{extra}>{cells}</tr>")
+    head = ("<thead><tr>" + "".join(f"<th>{h}</th>" for h in headers) + "</tr></thead>"
+            if any(headers) else "")
+    return f'<table class="{cls}">{head}<tbody>{"".join(body)}</tbody></table>'
+
+
+def unit_label(u):
+    return "" if u == "1" else f" ({u})"
+
+
+class Page:
+    """The report being built: HTML parts, figures saved into the staging directory, and the
+    results of the consistency checks against the file's own /stats."""
+
+    def __init__(self, outdir, plt):
+        self.dir, self.plt = outdir, plt
+        self.files = []
+        self.checks = []          # (what, passed, detail html)
+
+    def figure(self, fig, name, caption, cls="wide"):
+        fig.savefig(os.path.join(self.dir, name), format="png", dpi=100)
+        self.plt.close(fig)
+        self.files.append(name)
+        return (f'<figure class="{cls}"><img src="{esc(name)}" alt="{esc(caption)}">'
+                f"<figcaption>{esc(caption)}</figcaption></figure>")
+
+    def check(self, what, passed, detail):
+        self.checks.append((what, passed, detail))
+
+
+CSS = """
+body { font-family: "DejaVu Sans", Arial, sans-serif; font-size: 14px; margin: 24px auto;
+       max-width: 1400px; color: #222; padding: 0 16px; }
+h1 { font-size: 24px; margin-bottom: 4px; } h2 { border-bottom: 2px solid #345; margin-top: 36px; }
+h3 { margin-top: 24px; } .meta { color: #555; font-size: 12px; }
+nav { background: #eef2f6; padding: 6px 10px; margin: 12px 0; }
+table { border-collapse: collapse; margin: 8px 0 14px 0; font-size: 13px; }
+th, td { border: 1px solid #c8cdd3; padding: 3px 8px; text-align: left; vertical-align: top; }
+thead th { background: #e6ebf0; } table.kv th { background: #f3f5f7; width: 220px; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+td.toosmall { color: #8a5a00; } table.corr td.num { min-width: 70px; }
+figure { margin: 8px 0 16px 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+figure.half img { max-width: 100%; } figcaption { font-size: 12px; color: #555; }
+.flex { display: flex; flex-wrap: wrap; gap: 0 18px; align-items: flex-start; }
+.grid { display: grid; grid-template-columns: 1fr 1fr; gap: 12px 24px; }
+.note { color: #555; font-style: italic; }
+.warn { background: #fde8e8; border: 1px solid #d33; padding: 8px; }
+.okc { color: #176b17; font-weight: bold; } .bad { color: #c00; font-weight: bold; }
+pre { background: #f6f8fa; padding: 8px; font-size: 12px; overflow-x: auto; }
+details { margin: 6px 0 12px 0; } summary { cursor: pointer; color: #234; }
+"""
+
+
+def html_page(title, path, sha256, body):
+    now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+            f"<title>{esc(title)}</title><style>{CSS}</style></head><body>\n"
+            f"<h1>{esc(title)}</h1>\n<p class='meta'>Built {now} by "
+            "<code>postproc/report.py</code> "
+            f"from <code>{esc(os.path.abspath(path))}</code> (SHA-256 <code>{sha256}</code>).</p>\n"
+            f"{body}\n</body></html>\n")

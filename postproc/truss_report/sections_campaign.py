@@ -1,0 +1,299 @@
+"""truss_report.sections_campaign: see the package docstring (postproc/truss_report/__init__.py)."""
+import os
+import re
+
+import numpy as np
+
+from .constants import CONFIDENCE, LEVELS, MAX_FAILED_LISTED, OUTPUTS, STATS_FIELDS
+from .figures import fig_distribution, fig_lock_timing
+from .page import esc, num, table, unit_label
+from .stats import StatsComparison, band_stats, column_stats, lock_intervals, lock_order, percentile, quantile_ci
+
+
+def section_campaign(page, c):
+    a = c.attrs
+    out = ['<section id="campaign"><h2>1. Campaign</h2>']
+    rows = [
+        ("name", esc(a["campaign_name"])),
+        ("description", esc(a["campaign_description"])),
+        ("date (end, UTC)", esc(a["end_utc"]) + f" (started {esc(a['start_utc'])})"),
+        ("software", f"truss {esc(a['software_version'])}, git revision "
+                     f"<code>{esc(a['git_revision'])}</code>"),
+        ("MPI ranks", num("campaign.n_ranks", a["n_ranks"], tag="span")
+         + " (invocation that finished the file); sessions: "
+         + num("campaign.n_sessions", a["n_sessions"], tag="span")),
+        ("wall time", num("campaign.wall_time_s", c.wall_time_s, "s", tag="span")
+         + " (summed over the sessions)"),
+        ("sampling", esc(a["sampling"])),
+        ("runs", num("campaign.n_runs", a["n_runs"], tag="span")),
+        ("master seed", num("campaign.master_seed", a["master_seed"], tag="span")),
+        ("largest bay count", num("campaign.n_bays_max", a["n_bays_max"], tag="span")),
+        ("direction, drive mode", f"{esc(a['direction'])}, {esc(a['drive_mode'])}"),
+        ("results file", f"<code>{esc(os.path.abspath(c.path))}</code>"),
+        ("SHA-256 of the file", f"<code>{c.sha256}</code>"),
+    ]
+    out.append(table(["", ""], [[f"<th>{k}</th>", v] for k, v in rows], "kv"))
+    out.append(subsection_status(page, c))
+    out.append(subsection_failures(c))
+    out.append(subsection_dispersions(c))
+    out.append(subsection_base_scene(c))
+    out.append("</section>")
+    return "\n".join(out)
+
+
+def subsection_status(page, c):
+    codes = sorted(c.status_name)
+    counted = {k: int(np.sum(c.status == k)) for k in codes}
+    rows = []
+    for k in codes:
+        name = c.status_name[k]
+        from_stats = (int(c.stats_status_counts[k]) if k < len(c.stats_status_counts)
+                      else float("nan"))
+        rows.append([esc(name), num(f"status_count.{name}", counted[k]),
+                     num(f"status_count.{name}.stats", from_stats)])
+    n_ok = counted[0]
+    rows.append(["<b>all runs</b>", num("runs.n_total", c.n), num("runs.n_total.stats",
+                                                                 c.stats_attrs["n_runs"])])
+    names_agree = all(k < len(c.stats_status_names) and c.stats_status_names[k] == c.status_name[k]
+                      for k in codes)
+    counts_agree = (names_agree and len(c.stats_status_counts) == len(codes)
+                    and all(int(c.stats_status_counts[k]) == counted[k] for k in codes))
+    page.check("status counts: /runs/status recounted vs /stats/status_counts and status_names",
+               counts_agree, "agree" if counts_agree else "DIFFER: see the status table")
+    attrs_agree = (c.stats_attrs["n_ok"] == n_ok and c.stats_attrs["n_failed"] == c.n - n_ok
+                   and c.stats_attrs["n_runs"] == c.n)
+    page.check("/stats attributes n_runs, n_ok, n_failed vs /runs/status", attrs_agree,
+               "agree" if attrs_agree else
+               f"DIFFER: file says n_ok = {c.stats_attrs['n_ok']}, n_failed = "
+               f"{c.stats_attrs['n_failed']}")
+    return ("<h3>Outcome of the runs</h3>"
+            f"<p>{num('runs.n_ok', n_ok, tag='span')} runs ok, "
+            f"{num('runs.n_failed', c.n - n_ok, tag='span')} failed, of "
+            f"{c.n} runs. Counts by status, from <code>/runs/status</code> and as stored in "
+            "<code>/stats/status_counts</code>:</p>"
+            + table(["status", "runs (counted in /runs/status)", "runs (/stats/status_counts)"],
+                    rows, "narrow"))
+
+
+def message_template(msg):
+    """A failure message with its numbers replaced by #, to group messages that differ only
+    in the numbers (times, heights, bay indices)."""
+    return re.sub(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?", "#", msg)
+
+
+def subsection_failures(c):
+    failed = np.nonzero(~c.ok)[0]
+    if len(failed) == 0:
+        return "<h3>Failed runs</h3><p>No run failed.</p>"
+    groups = {}
+    for i in failed:
+        groups.setdefault((c.status_name[int(c.status[i])], message_template(c.messages[i])),
+                          []).append(int(i))
+    rows, attrs = [], []
+    for g, ((status, tmpl), runs) in enumerate(sorted(groups.items(), key=lambda kv: -len(kv[1]))):
+        shown = ", ".join(map(str, runs[:30])) + (f", … (+{len(runs) - 30} more)"
+                                                  if len(runs) > 30 else "")
+        rows.append([esc(status), num(f"failure_group.{g}.count", len(runs)),
+                     f"<code>{esc(tmpl)}</code>", shown,
+                     f"<small>run {runs[0]}: {esc(c.messages[runs[0]])}</small>"])
+        attrs.append(f'data-status="{esc(status)}" data-runs="{" ".join(map(str, runs))}"')
+    listed = failed[:MAX_FAILED_LISTED]
+    full = table(["run", "status", "message"],
+                 [[str(i), esc(c.status_name[int(c.status[i])]), esc(c.messages[i])]
+                  for i in listed], "narrow")
+    more = (f"<p>(first {MAX_FAILED_LISTED} of {len(failed)} failed runs listed)</p>"
+            if len(failed) > MAX_FAILED_LISTED else "")
+    return ("<h3>Failed runs</h3><p>Failure reasons from <code>/runs/message</code>, grouped by "
+            "status and by the message with its numbers replaced by <code>#</code>; run indices "
+            "are 0-based rows of <code>/runs</code>.</p>"
+            + table(["status", "runs", "reason (numbers as #)", "run indices", "example"],
+                    rows, "", attrs)
+            + f"<details><summary>every failed run and its message ({len(failed)})</summary>"
+            + full + more + "</details>")
+
+
+def param_units(d):
+    """Units of a dispersion's distribution parameters (the draw x, before it is applied)."""
+    if d.distribution == "lognormal":
+        return "1 (of ln X)"
+    return "1 (relative)" if d.apply == "relative" else d.units
+
+
+def subsection_dispersions(c):
+    if not c.dispersions:
+        return "<h3>Dispersions</h3><p>The campaign disperses no key.</p>"
+    rows = []
+    for d in c.dispersions:
+        pu = param_units(d)
+        parts = []
+        for p, v in d.params.items():
+            if d.distribution == "discrete":
+                vals = ", ".join(num(f"dispersion.{d.key}.{p}.{i}", float(x), tag="span")
+                                 for i, x in enumerate(np.atleast_1d(v)))
+                parts.append(f"{p} = [{vals}]")
+            else:
+                parts.append(f"{p} = " + num(f"dispersion.{d.key}.{p}", v,
+                                             "" if pu.startswith("1") else pu, tag="span"))
+        rows.append([f"<code>{esc(d.key)}</code>", num(f"dispersion.{d.key}.factor", d.factor),
+                     esc(d.distribution), "<br>".join(parts), esc(pu), esc(d.per), esc(d.apply),
+                     num(f"dispersion.{d.key}.nominal", d.nominal, d.units)])
+    return ("<h3>Dispersions</h3><p>From the attributes of <code>/runs/inputs/&lt;key&gt;</code>. "
+            "A draw x is applied as: absolute = x, relative = nominal (1 + x), "
+            "offset = nominal + x; "
+            "per bay / per frame draws are independent for each bay / frame.</p>"
+            + table(["key", "factor", "distribution", "parameters", "parameter units", "per",
+                     "apply", "nominal"], rows))
+
+
+def subsection_base_scene(c):
+    tables = []
+    for tab, entries in c.base_scene.items():
+        if not isinstance(entries, dict):      # a top-level key outside any table
+            entries, tab = {tab: entries}, ""
+        rows = []
+        for k, v in entries.items():
+            key = f"{tab}.{k}" if tab else k
+            if isinstance(v, bool) or not isinstance(v, (int, float)):
+                rows.append([f"<code>{esc(k)}</code>", esc(v)])
+            else:
+                rows.append([f"<code>{esc(k)}</code>", num(f"base_scene.{key}", v)])
+        tables.append(table([f"<code>[{esc(tab)}]</code>" if tab else "key", "value"], rows))
+    return ("<h3>Base scene</h3><p>From the root attribute <code>base_scene_toml</code> "
+            "(units are in the key names; keys left unset are not listed). The complete "
+            "resolved campaign, which <code>truss-campaign</code> reads back, is "
+            "<code>campaign_toml</code> below.</p>"
+            + "<div class='flex'>" + "".join(tables) + "</div>"
+            + "<details><summary>base_scene_toml</summary><pre>"
+            + esc(c.attrs["base_scene_toml"]) + "</pre></details>"
+            + "<details><summary>campaign_toml</summary><pre>"
+            + esc(c.attrs["campaign_toml"]) + "</pre></details>")
+
+
+def ci_note(sampling):
+    note = ("Confidence intervals of the percentiles are distribution-free order-statistic "
+            f"intervals at {CONFIDENCE:.0%}: for the q-quantile, the number of runs below the "
+            "true quantile is Binomial(n, q), and the interval is [x<sub>(r)</sub>, "
+            "x<sub>(s)</sub>] with r, s from that binomial's 2.5 % and 97.5 % quantiles "
+            "(r = binom.ppf(0.025, n, q), s = binom.ppf(0.975, n, q) + 1; ranks 1-based). "
+            "Coverage is the exact probability that the interval holds the true quantile "
+            "(≥ 95 %). When n is too small for a bound at this level, the table says "
+            "“n too small” and gives the number of runs that bound needs. The intervals assume "
+            "independent runs")
+    if sampling == "monte_carlo":
+        return note + ", which Monte Carlo sampling gives."
+    if sampling == "saltelli":
+        return note + (". <b>This campaign used Saltelli sampling: the runs of one block share "
+                       "coordinates, so they are not independent and these intervals are not "
+                       "valid; use a Monte Carlo campaign for the load percentiles.</b>")
+    return note + (f". With {esc(sampling)} sampling the runs are stratified rather than "
+                   "independent; the intervals are then usually conservative, but this is not "
+                   "guaranteed.")
+
+
+def section_loads(page, c):
+    out = ['<section id="loads"><h2>2. Peak loads and deployment time</h2>',
+           "<p>Statistics over the ok runs with a finite value only (the runs that "
+           "<code>/stats/&lt;output&gt;/count</code> counts). Percentiles are linear "
+           "interpolation between order statistics (Hyndman-Fan type 7, "
+           "<code>numpy.percentile</code>'s default), the definition of <code>/stats</code>; "
+           "each is shown next to the value stored in <code>/stats</code>. Standard deviations "
+           "use ddof = 1.</p>", f"<p>{ci_note(c.attrs['sampling'])}</p>"]
+    comparison = StatsComparison()
+    for key, label in OUTPUTS.items():
+        out.append(output_block(page, c, key, label, comparison))
+    comparison.report(page, "the six outputs recomputed vs /stats/<output>", "stats")
+    out.append("</section>")
+    return "\n".join(out)
+
+
+def output_block(page, c, key, label, comparison):
+    """Histogram, ECDF, exceedance and tables of one output (its /stats compared into
+    `comparison`)."""
+    u = c.units[key]
+    word = label if not (key == "deploy_time_s" and c.attrs["direction"] == "retract") \
+        else "retraction time"
+    x = np.sort(c.outputs[key][c.ok & np.isfinite(c.outputs[key])])
+    mine = column_stats(x)
+    stored = c.stats[key]
+    comparison.add(mine, stored, float(np.max(np.abs(x))) if len(x) else 0.0, STATS_FIELDS)
+    head = (f'<h3 id="{key}">{esc(word[0].upper() + word[1:])} <code>{key}</code>'
+            f"{unit_label(u)}</h3>")
+    n_ok = int(c.ok.sum())
+    if len(x) == 0:
+        return (head + f"<p class='note'>No ok run has a finite value of <code>{key}</code> "
+                f"({num(f'{key}.count', 0, tag='span')} values from {n_ok} ok runs): nothing to "
+                f"show (the {esc(c.attrs['drive_mode'])} drive mode may not define it).</p>")
+    cis = {name: quantile_ci(x, q / 100.0) for q, name, _ in LEVELS}
+    est = {name: percentile(x, q) for q, name, _ in LEVELS}
+    fig = fig_distribution(page.plt, x, f"{word} ({key})", u, est, cis)
+    parts = [head,
+             f"<p>{num(f'{key}.count', len(x), tag='span')} ok runs with a finite value "
+             f"(of {n_ok} ok runs and {c.n} runs).</p>",
+             page.figure(fig, f"dist_{key}.png",
+                         f"{word}: histogram, empirical CDF and exceedance probability "
+                         "(1 − ECDF, log scale) with P50, P95, P99, P99.865 and their 95 % CIs")]
+    summary = [[num(f"{key}.{s}", mine[s], u) for s in ("mean", "std", "min", "max")],
+               [num(f"{key}.{s}.stats", stored[s], u) for s in ("mean", "std", "min", "max")]]
+    summary[0].insert(0, "recomputed")
+    summary[1].insert(0, "<code>/stats</code>")
+    parts.append(table(["", "mean", "std (ddof 1)", "min", "max"], summary, "narrow"))
+    rows = []
+    for q, name, lab in LEVELS:
+        ci = cis[name]
+        rows.append([
+            lab, num(f"{key}.{name}", est[name], u), num(f"{key}.{name}.stats", stored[name], u),
+            ci_cell(f"{key}.{name}.ci_lo", ci.lo, ci.n_needed_lo, u),
+            ci_cell(f"{key}.{name}.ci_hi", ci.hi, ci.n_needed_hi, u),
+            (num(f"{key}.{name}.ci_r", ci.r) if ci.r is not None else "<td>—</td>"),
+            (num(f"{key}.{name}.ci_s", ci.s) if ci.s is not None else "<td>—</td>"),
+            num(f"{key}.{name}.ci_coverage", ci.coverage, digits=4)])
+    parts.append(table(["percentile", "estimate", "<code>/stats</code>", "95 % CI low",
+                        "95 % CI high", "rank r", "rank s", "coverage"], rows))
+    return "\n".join(parts)
+
+
+def ci_cell(key, v, n_needed, unit):
+    if n_needed is None:
+        return num(key, v, unit)
+    return (f'<td class="num toosmall" data-key="{esc(key)}" data-value="nan">n too small '
+            f'(needs n ≥ {num(key + ".n_needed", n_needed, tag="span")})</td>')
+
+
+def section_lock_timing(page, c):
+    words = ("unlock", "unlocks") if c.attrs["direction"] == "retract" else ("lock", "locks")
+    lock_ok = c.lock[c.ok]
+    u = c.units["lock_time_s"]
+    order = lock_order(lock_ok)
+    dt, dt_text = lock_intervals(lock_ok, order)
+    lt, it = band_stats(lock_ok), band_stats(dt)
+    nb = c.lock.shape[1]
+    comparison = StatsComparison()
+    for j in range(nb):
+        col = lock_ok[:, j][np.isfinite(lock_ok[:, j])]
+        comparison.add({s: lt[s][j] for s in lt}, {s: c.stats_lock[s][j] for s in lt},
+                       float(np.max(np.abs(col))) if len(col) else 0.0, list(lt))
+    comparison.report(page, "per-bay lock times recomputed vs /stats/bays/lock_time_s "
+                      "(count, P5, P50, P95)", "lock")
+    bays = np.arange(1, nb + 1)
+    fig = fig_lock_timing(page.plt, bays, lt, it, u, words, dt_text)
+    rows = []
+    for j in range(nb):
+        b = j + 1
+        rows.append([str(b), num(f"lock_time_s.bay{b}.count", int(lt["count"][j]))]
+                    + [num(f"lock_time_s.bay{b}.{s}", lt[s][j], u) for s in ("p5", "p50", "p95")]
+                    + [num(f"lock_interval_s.bay{b}.count", int(it["count"][j]))]
+                    + [num(f"lock_interval_s.bay{b}.{s}", it[s][j], u)
+                       for s in ("p5", "p50", "p95")])
+    return (f'<section id="locks"><h2>3. {words[0].capitalize()} timing</h2>'
+            f"<p>Per bay, over the ok runs that have that bay with a finite {words[0]} time "
+            f"(<code>/runs/bays/lock_time_s</code>): median and the 5–95 % band of the "
+            f"{words[0]} time, and of the time between successive {words[1]}. Bay order in the "
+            f"data: <b>{order}</b>; interval at {esc(dt_text)}. Percentiles as in section 2.</p>"
+            + page.figure(fig, "lock_timing.png",
+                          f"{words[0]} time and time between successive {words[1]} per bay: "
+                          "median and 5–95 % band")
+            + "<details><summary>per-bay table</summary>"
+            + table(["bay", "runs", f"{words[0]} time P5", "P50", "P95", "runs",
+                     "interval P5", "P50", "P95"], rows, "narrow",
+                    [f'data-order="{order}"'] * len(rows))
+            + "</details></section>")

@@ -1,0 +1,307 @@
+"""truss_report.sections_margins: see the package docstring (postproc/truss_report/__init__.py)."""
+from dataclasses import dataclass
+
+import numpy as np
+
+import run_figures as rf
+from .constants import AGREE_RTOL, MAX_HISTORY_FIGURES, OUTPUTS, TORNADO_TOP, TORQUE_RTOL
+from .figures import fig_motor, fig_sobol, fig_tornado
+from .page import esc, fmt, html_page, num, table
+from .sections_campaign import section_campaign, section_loads, section_lock_timing
+from .stats import clopper_pearson, spearman
+
+
+def section_margins(page, c):
+    head = '<section id="margins"><h2>4. Margins: drive torque against the motor stall torque</h2>'
+    if c.attrs["drive_mode"] == "velocity":
+        return section_margins_velocity(page, c, head)
+    if c.attrs["drive_mode"] != "motor":
+        return (head + f"<p>The drive mode is <b>{esc(c.attrs['drive_mode'])}</b>: the drive "
+                "applies a prescribed torque, there is no motor to compare with.</p></section>")
+    stall_code = [k for k, v in c.status_name.items() if v == "stall"]
+    stalled = np.isin(c.status, stall_code)
+    torque = c.outputs["peak_drive_torque_Nm"]
+    u = c.units["peak_drive_torque_Nm"]
+    stall_t, source = c.stall_torque, c.stall_torque_source
+    ok_t = c.ok & np.isfinite(torque) & np.isfinite(stall_t)
+    ok_exceed = ok_t & (torque > stall_t * (1.0 + TORQUE_RTOL))
+    n_cons = int(ok_t.sum() + stalled.sum())
+    k = int(ok_exceed.sum() + stalled.sum())
+    if n_cons == 0:
+        return head + "<p>No ok or stalled run: nothing to compare.</p></section>"
+    p = k / n_cons
+    lo, hi = clopper_pearson(k, n_cons)
+    util = torque[ok_t] / stall_t[ok_t]
+    nominal = float((c.base_scene.get("drive") or {}).get("stall_torque_Nm", float("nan")))
+    fig = fig_motor(page.plt, torque, stall_t, ok_t, stalled, nominal, u)
+    rows = [
+        ["stall torque of the base scene", num("motor.stall_torque_nominal", nominal, u)],
+        ["runs considered (ok with a finite peak torque, + stalled)", num("motor.n_considered",
+                                                                         n_cons)],
+        ["stalled runs (status stall)", num("motor.n_stall", int(stalled.sum()))],
+        ["ok runs with peak torque > stall torque", num("motor.n_ok_exceed", int(ok_exceed.sum()))],
+        ["exceedances", num("motor.n_exceed", k)],
+        ["probability of exceeding the stall torque", num("motor.p_exceed", p, digits=4)],
+        ["95 % Clopper-Pearson interval, low", num("motor.p_exceed.ci_lo", lo, digits=4)],
+        ["95 % Clopper-Pearson interval, high", num("motor.p_exceed.ci_hi", hi, digits=4)],
+        ["largest peak torque / stall torque of an ok run",
+         num("motor.utilisation_max", float(np.max(util)) if len(util) else float("nan"),
+             digits=10)],
+    ]
+    excluded = int(np.sum(~c.ok & ~stalled))
+    return (head + f"<p>Stall torque: {source}. A run exceeds the stall torque when it stalled "
+            "(status <code>stall</code>: the motor could not drive the mast, so the torque the "
+            "mast needed exceeded what the motor gives; <b>stalled runs count as exceedances</b>) "
+            f"or when its peak torque is above its stall torque × (1 + {TORQUE_RTOL:g}). "
+            "The motor gives its stall torque at zero speed, at the start, so in an ok run the "
+            "peak torque equals the stall torque up to rounding. The probability is exceedances / "
+            "runs considered, with an exact (Clopper-Pearson) 95 % interval; the "
+            + num("motor.n_other_failures", excluded, tag="span")
+            + " runs that failed for another reason are not counted.</p>"
+            + page.figure(fig, "motor_torque_margin.png",
+                          "stall torque of the ok and stalled runs, and peak drive torque against "
+                          "stall torque")
+            + table(["", "value"], rows, "narrow") + "</section>")
+
+
+def drive_parameter(c, key):
+    """Per-run values of a drive.* scene key: the dispersed values, else the base scene's."""
+    for d in c.dispersions:
+        if d.key == f"drive.{key}" and d.per == "run":
+            return d.values
+    return np.full(c.n, float((c.base_scene.get("drive") or {})[key]))
+
+
+def calc_available_torque(c):
+    """The scene's motor at the prescribed speed: T_s (1 - omega / omega_0), omega = 2 pi v / h."""
+    omega = 2.0 * np.pi * drive_parameter(c, "speed_m_per_s") / drive_parameter(c, "screw_lead_m")
+    return drive_parameter(c, "stall_torque_Nm") * (1.0 - omega / drive_parameter(c, "no_load_speed_rad_per_s"))
+
+
+def section_margins_velocity(page, c, head):
+    torque = c.outputs["peak_drive_torque_Nm"]
+    u = c.units["peak_drive_torque_Nm"]
+    avail = calc_available_torque(c)
+    considered = c.ok & np.isfinite(torque) & np.isfinite(avail)
+    n_cons = int(considered.sum())
+    if n_cons == 0:
+        return head + "<p>No ok run with a finite peak torque: nothing to compare.</p></section>"
+    exceed = considered & (torque > avail)
+    k = int(exceed.sum())
+    lo, hi = clopper_pearson(k, n_cons)
+    drive = c.base_scene.get("drive") or {}
+    omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
+    ratio = avail[considered] / torque[considered]
+    fig, ax = page.plt.subplots(figsize=(10.0, 4.0))
+    ax.hist(torque[considered], bins=60, color="C0", label=f"peak drive torque, {n_cons} ok runs")
+    for v, lab in ((float(np.min(avail[considered])), "available torque at the prescribed speed (min over runs)"),
+                   (float(np.max(avail[considered])), "(max over runs)")):
+        ax.axvline(v, color="C3", ls="--", lw=1, label=f"{lab}: {v:.5g} {u}")
+    ax.set_xlabel(f"torque ({u})")
+    ax.set_ylabel("runs")
+    ax.legend(fontsize=8)
+    ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    rows = [
+        ["motor stall torque of the scene", num("velmargin.stall_torque", float(drive["stall_torque_Nm"]), u)],
+        ["motor no-load speed of the scene", num("velmargin.no_load_speed", float(drive["no_load_speed_rad_per_s"]), "rad/s")],
+        ["screw speed the prescribed drive speed needs", num("velmargin.required_speed", omega, "rad/s")],
+        ["runs considered (ok, finite peak torque)", num("velmargin.n_considered", n_cons)],
+        ["runs whose peak torque exceeds the available torque", num("velmargin.n_exceed", k)],
+        ["probability of exceeding", num("velmargin.p_exceed", k / n_cons, digits=4)],
+        ["95 % Clopper-Pearson interval, low", num("velmargin.p_exceed.ci_lo", lo, digits=4)],
+        ["95 % Clopper-Pearson interval, high", num("velmargin.p_exceed.ci_hi", hi, digits=4)],
+        ["smallest available / peak torque", num("velmargin.ratio_min", float(np.min(ratio)), digits=6)],
+        ["median available / peak torque", num("velmargin.ratio_p50", float(np.percentile(ratio, 50)), digits=6)],
+    ]
+    return (head + "<p>Velocity drive: the driven frame follows the prescribed speed whatever torque that "
+            "takes, so the campaign gives the <b>torque a motor must deliver</b>. It is compared with "
+            "the scene's motor (<code>drive.stall_torque_Nm</code>, "
+            "<code>drive.no_load_speed_rad_per_s</code>: project defaults unless the scene sets them) "
+            "on its linear speed-torque line: at the screw speed &omega; = 2&pi; v / h the motor gives "
+            "T<sub>s</sub> (1 &minus; &omega; / &omega;<sub>0</sub>), per run when any of these is "
+            "dispersed. A run exceeds when its peak drive torque is above that; the probability has an "
+            "exact (Clopper-Pearson) 95 % interval. A result of 1 means this motor cannot hold the "
+            "prescribed speed: choose a stronger motor, or rerun the campaign in motor mode.</p>"
+            + page.figure(fig, "velocity_torque_margin.png",
+                          "peak drive torque of the ok runs against the torque the scene's motor gives at the "
+                          "prescribed speed")
+            + table(["", "value"], rows, "narrow") + "</section>")
+
+
+@dataclass
+class InputColumn:
+    label: str
+    values: np.ndarray
+    aggregate: bool       # the per-dispersion aggregate (or a per-run dispersion itself)
+
+
+def input_columns(c):
+    """Every sampled input column and one aggregate per dispersion (see aggregate_input)."""
+    cols = []
+    for d in c.dispersions:
+        if d.per == "run":
+            cols.append(InputColumn(d.key, d.values, True))
+            continue
+        start = 1 if d.per == "bay" else 0
+        for j in range(d.values.shape[1]):
+            cols.append(InputColumn(f"{d.key}[{d.per} {j + start}]", d.values[:, j], False))
+        cols.append(InputColumn(aggregate_label(d), aggregate_input(d), True))
+    return cols
+
+
+def aggregate_label(d):
+    return f"{d.key} (mean over {d.per}s)"
+
+
+def aggregate_input(d):
+    """Per run: the mean over the run's bays (frames) of (value - nominal) / nominal
+    ((value - nominal) when the nominal is 0)."""
+    dev = d.values - d.nominal
+    if d.nominal != 0:
+        dev = dev / d.nominal
+    finite = np.isfinite(dev)
+    count = finite.sum(axis=1)
+    total = np.where(finite, dev, 0.0).sum(axis=1)
+    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
+
+
+def section_sensitivity(page, c):
+    out = ['<section id="sensitivity"><h2>5. What drives the loads</h2>']
+    if not c.dispersions:
+        return out[0] + "<p>No dispersed input.</p></section>"
+    cols = input_columns(c)
+    rho = {}
+    for key in OUTPUTS:
+        y = np.where(c.ok, c.outputs[key], np.nan)
+        rho[key] = {col.label: spearman(col.values, y) for col in cols}
+    out.append("<p>Spearman rank correlation ρ (<code>scipy.stats.spearmanr</code>) of each "
+               "sampled input with each output, over the ok runs where both are finite. A per-bay "
+               "(per-frame) dispersion contributes one input per bay (frame), "
+               "<code>key[bay j]</code> (<code>key[frame k]</code>, frame 0 = base), and an "
+               "aggregate: the mean over the run's bays (frames) of the relative deviation from "
+               "the nominal. Each tornado shows the "
+               f"{TORNADO_TOP} inputs with the largest |ρ|; aggregates are hatched. The grey band "
+               "is ±1.96/√(n−1), n = the ok runs with a finite output: |ρ| inside it is what "
+               "independent inputs give 95 % of the time, for one input taken alone. ρ is "
+               "dimensionless.</p>")
+    agg_labels = [col.label for col in cols if col.aggregate]
+    rows = [[f"<code>{esc(lab)}</code>"] + [num(f"spearman.{k}.{lab}", rho[k][lab][0], digits=3)
+                                            for k in OUTPUTS] for lab in agg_labels]
+    out.append("<h3>Rank correlation of every dispersion (aggregates)</h3>"
+               + table(["input"] + [f"<code>{k}</code>" for k in OUTPUTS], rows, "corr"))
+    figs = []
+    aggregate = {col.label for col in cols if col.aggregate}
+    for key in OUTPUTS:
+        ranked = sorted(((lab, r, n) for lab, (r, n) in rho[key].items() if np.isfinite(r)),
+                        key=lambda t: -abs(t[1]))[:TORNADO_TOP]
+        if not ranked:
+            figs.append(f"<div class='cell'><p class='note'><code>{key}</code>: no input "
+                        "correlation defined (no finite ok value, or a constant output).</p></div>")
+            continue
+        n_y = int(np.sum(c.ok & np.isfinite(c.outputs[key])))
+        fig = fig_tornado(page.plt, ranked, aggregate, f"{key} (n = {n_y})",
+                          1.96 / np.sqrt(max(n_y - 1, 1)))
+        detail = table(["input", "ρ", "runs"],
+                       [[f"<code>{esc(lab)}</code>", num(f"spearman.{key}.{lab}", r, digits=3),
+                         num(f"spearman.{key}.{lab}.n", n)] for lab, r, n in ranked], "narrow")
+        figs.append("<div class='cell'>" + page.figure(fig, f"tornado_{key}.png",
+                                                         f"Spearman ρ with {key}", "half")
+                    + f"<details><summary>values</summary>{detail}</details></div>")
+    out.append("<h3>Tornado charts</h3><div class='grid'>" + "".join(figs) + "</div>")
+    if c.sensitivity is not None:
+        out.append(subsection_sobol(page, c))
+    elif c.attrs["sampling"] == "saltelli":
+        out.append("<p class='warn'>Saltelli sampling, but the file has no /sensitivity.</p>")
+    out.append("</section>")
+    return "\n".join(out)
+
+
+def subsection_sobol(page, c):
+    s = c.sensitivity
+    factors = s["factor"]
+    outs = s["outputs"]
+    meth = outs[next(iter(outs))]
+    parts = ["<h3>Sobol' indices (Saltelli sampling)</h3>",
+             "<p>From <code>/sensitivity</code>, as the campaign computed them: method "
+             f"“{esc(meth['method'])}”, {fmt(meth['confidence'], 3)} confidence intervals from "
+             f"{meth['n_resamples']} bootstrap resamples. A factor is a whole dispersion "
+             "(a per-bay "
+             "dispersion moves all its bays together). Indices are dimensionless.</p>",
+             out_of_range_note(outs),
+             page.figure(fig_sobol(page.plt, factors, outs), "sobol_indices.png",
+                         "first-order and total Sobol' indices with their confidence intervals")]
+    cells = []
+    for key, o in outs.items():
+        rows = [[f"<code>{esc(fac)}</code>"]
+                + [num(f"sobol.{key}.{fac}.{k}", float(o[k][g]), digits=3)
+                   for k in ("first_order", "first_order_lo", "first_order_hi",
+                             "total", "total_lo", "total_hi")] for g, fac in enumerate(factors)]
+        cells.append(f"<div class='cell'><h4><code>{key}</code></h4><p>blocks used "
+                     f"{num(f'sobol.{key}.n_blocks', o['n_blocks'], tag='span')}, dropped "
+                     f"{num(f'sobol.{key}.n_blocks_dropped', o['n_blocks_dropped'], tag='span')}"
+                     "</p>" + table(["factor", "S1", "S1 low", "S1 high", "ST", "ST low",
+                                     "ST high"], rows, "narrow") + "</div>")
+    parts.append("<div class='grid'>" + "".join(cells) + "</div>")
+    return "\n".join(parts)
+
+
+def out_of_range_note(outs):
+    """A warning when point estimates fall outside [0, 1]: the estimators are unbiased, not
+    bounded, and such values mean too few blocks for that output."""
+    bad = [key for key, o in outs.items()
+           if np.any((o["first_order"] < 0) | (o["first_order"] > 1)
+                     | (o["total"] < 0) | (o["total"] > 1))]
+    if not bad:
+        return ""
+    return ("<p class='warn'>Some estimates lie outside [0, 1] ("
+            + ", ".join(f"<code>{k}</code>" for k in bad)
+            + "): the estimators are unbiased but not bounded, so such values mean that the "
+              "blocks are too few for that output. Read the confidence intervals, or run more "
+              "blocks.</p>")
+
+
+def section_histories(page, c):
+    if not c.histories:
+        return ""
+    shown = list(c.histories)[:MAX_HISTORY_FIGURES]
+    parts = ['<section id="histories"><h2>6. Time histories of selected runs</h2>',
+             "<p>From <code>/histories/run_&lt;i&gt;</code> (the campaign's "
+             "<code>[output] history_runs</code>): drive force and rail pin force against time, "
+             "lock times dashed (as paper Fig. 5).</p>"]
+    if len(c.histories) > len(shown):
+        parts.append(f"<p>(the first {len(shown)} of {len(c.histories)} histories)</p>")
+    for i in shown:
+        parts.append(page.figure(rf.fig5(page.plt, c.histories[i]), f"history_run_{i}.png",
+                                 f"run {i}: drive force and rail pin force against time"))
+    parts.append("</section>")
+    return "\n".join(parts)
+
+
+def section_checks(page, number):
+    rows = [[esc(what), ("<span class='okc'>pass</span>" if passed
+                         else "<span class='bad'>FAIL</span>"), detail]
+            for what, passed, detail in page.checks]
+    return (f'<section id="checks"><h2>{number}. Consistency of the file</h2>'
+            "<p>The report recomputes from <code>/runs</code> what the file also stores in "
+            "<code>/stats</code>, and compares: counts exactly, other statistics to "
+            f"{AGREE_RTOL:g} of the largest |value| of the column.</p>"
+            + table(["check", "result", "detail"], rows) + "</section>")
+
+
+def campaign_report(page, c):
+    body = [section_campaign(page, c), section_loads(page, c), section_lock_timing(page, c),
+            section_margins(page, c), section_sensitivity(page, c), section_histories(page, c)]
+    n_checks = 7 if c.histories else 6
+    body.append(section_checks(page, n_checks))
+    failed = [what for what, passed, _ in page.checks if not passed]
+    banner = ("<p class='warn'>The file is not consistent with itself: "
+              + "; ".join(esc(w) for w in failed)
+              + f". See section {n_checks}.</p>") if failed else ""
+    toc = ("<nav>1. <a href='#campaign'>Campaign</a> · 2. <a href='#loads'>Peak loads</a> · "
+           "3. <a href='#locks'>Lock timing</a> · 4. <a href='#margins'>Margins</a> · "
+           "5. <a href='#sensitivity'>What drives the loads</a>"
+           + (" · 6. <a href='#histories'>Histories</a>" if c.histories else "")
+           + f" · {n_checks}. <a href='#checks'>Consistency</a></nav>")
+    title = f"Statistical load report: campaign “{c.attrs['campaign_name']}”"
+    return html_page(title, c.path, c.sha256, banner + toc + "\n".join(body))

@@ -1,0 +1,169 @@
+"""truss_report.stats: see the package docstring (postproc/truss_report/__init__.py)."""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .constants import AGREE_RTOL, CONFIDENCE, STATS_PERCENTILES
+from .page import num
+
+
+def percentile(x, q):
+    """Hyndman-Fan type 7 (numpy.percentile's default, linear), as /stats defines it."""
+    return float(np.percentile(x, q))
+
+
+@dataclass
+class QuantileCI:
+    """Distribution-free CI [x_(r), x_(s)] of a quantile (1-based ranks; None: no such bound)."""
+    lo: float
+    hi: float
+    r: int
+    s: int
+    coverage: float       # P(x_(r) <= true quantile < x_(s)), missing bounds taken as -+inf
+    n_needed_lo: int      # smallest n giving a lower bound (reported when r is None)
+    n_needed_hi: int
+
+
+def quantile_ci(x_sorted, p, confidence=CONFIDENCE):
+    """Order-statistic confidence interval of the p-quantile (0 < p < 1) of sorted data.
+
+    B = #{X_i <= true quantile} is Binomial(n, p). With F its CDF and a = (1 - confidence)/2:
+    r = the smallest k with F(k) >= a (so F(r - 1) < a), s = 1 + the smallest k with
+    F(k) >= 1 - a; then P(x_(r) <= quantile < x_(s)) = F(s - 1) - F(r - 1) >= confidence.
+    r = 0 or s = n + 1 means the sample is too small for that bound.
+    """
+    from scipy.stats import binom
+    n = len(x_sorted)
+    a = (1.0 - confidence) / 2.0
+    r = int(binom.ppf(a, n, p))
+    s = int(binom.ppf(1.0 - a, n, p)) + 1
+    cov = float(binom.cdf(min(s, n + 1) - 1, n, p) - (binom.cdf(r - 1, n, p) if r >= 1 else 0.0))
+    has_lo, has_hi = r >= 1, s <= n
+    return QuantileCI(lo=float(x_sorted[r - 1]) if has_lo else float("nan"),
+                      hi=float(x_sorted[s - 1]) if has_hi else float("nan"),
+                      r=r if has_lo else None, s=s if has_hi else None, coverage=cov,
+                      n_needed_lo=None if has_lo else min_runs_for_bound(p, a, "lo"),
+                      n_needed_hi=None if has_hi else min_runs_for_bound(p, a, "hi"))
+
+
+def min_runs_for_bound(p, a, side):
+    """Smallest n for which quantile_ci has that bound: (1-p)^n < a (lower), p^n <= a (upper)."""
+    base = 1.0 - p if side == "lo" else p
+    n = max(1, int(np.floor(np.log(a) / np.log(base))))
+    while not (base ** n < a if side == "lo" else base ** n <= a):
+        n += 1
+    while n > 1 and (base ** (n - 1) < a if side == "lo" else base ** (n - 1) <= a):
+        n -= 1
+    return n
+
+
+def clopper_pearson(k, n, confidence=CONFIDENCE):
+    """Exact (Clopper-Pearson) interval of a binomial proportion k/n."""
+    from scipy.stats import beta
+    a = (1.0 - confidence) / 2.0
+    lo = 0.0 if k == 0 else float(beta.ppf(a, k, n - k + 1))
+    hi = 1.0 if k == n else float(beta.ppf(1.0 - a, k + 1, n - k))
+    return lo, hi
+
+
+def spearman(x, y):
+    """Spearman's rho over the pairs where both are finite; (rho, n), rho NaN if undefined."""
+    from scipy.stats import spearmanr
+    m = np.isfinite(x) & np.isfinite(y)
+    n = int(m.sum())
+    if n < 3 or np.ptp(x[m]) == 0 or np.ptp(y[m]) == 0:
+        return float("nan"), n
+    return float(spearmanr(x[m], y[m])[0]), n
+
+
+def scaled_diff(a, b, scale):
+    """|a - b| / scale (scale: the largest |value| of the column); 0 when both are NaN or equal,
+    inf when only one is NaN."""
+    if np.isnan(a) and np.isnan(b) or a == b:
+        return 0.0
+    if np.isnan(a) or np.isnan(b):
+        return float("inf")
+    return abs(a - b) / max(scale, np.finfo(float).tiny)
+
+
+@dataclass
+class StatsComparison:
+    """Recomputed statistics against /stats: counts that differ, and the largest scaled
+    difference of the order statistics (min, max, percentiles) and of the moments (mean, std;
+    None when none was compared)."""
+    count_mismatches: int = 0
+    order: float = 0.0
+    moments: float = None
+
+    def add(self, mine, stored, scale, fields):
+        for f in fields:
+            if f == "count":
+                self.count_mismatches += int(mine[f] != stored[f])
+            elif f in ("mean", "std"):
+                self.moments = max(self.moments or 0.0, scaled_diff(mine[f], stored[f], scale))
+            else:
+                self.order = max(self.order, scaled_diff(mine[f], stored[f], scale))
+
+    def report(self, page, what, key):
+        page.check(f"{what}: counts", self.count_mismatches == 0,
+                   num(f"check.{key}.count_mismatches", self.count_mismatches, tag="span")
+                   + " counts differ")
+        page.check(f"{what}: order statistics", self.order <= AGREE_RTOL,
+                   "largest difference / largest |value| "
+                   + num(f"check.{key}.order_max_diff", self.order, tag="span"))
+        if self.moments is not None:
+            page.check(f"{what}: mean and std", self.moments <= AGREE_RTOL,
+                       "largest difference / largest |value| "
+                       + num(f"check.{key}.moments_max_diff", self.moments, tag="span")
+                       + " (sums in another order round differently)")
+
+
+def column_stats(x):
+    """The /stats fields of one column of finite values (NaN where undefined)."""
+    nan = float("nan")
+    res = {"count": len(x), "mean": float(np.mean(x)) if len(x) else nan,
+           "std": float(np.std(x, ddof=1)) if len(x) >= 2 else nan,
+           "min": float(np.min(x)) if len(x) else nan, "max": float(np.max(x)) if len(x) else nan}
+    for name, q in STATS_PERCENTILES.items():
+        res[name] = percentile(x, q) if len(x) else nan
+    return res
+
+
+def lock_order(lock_ok):
+    """'descending' when every run locks bay j+1 before bay j (the top bay first),
+    'ascending' for the reverse, 'mixed' otherwise (from the finite consecutive differences)."""
+    d = np.diff(lock_ok, axis=1)
+    d = d[np.isfinite(d)]
+    if len(d) and np.all(d < 0):
+        return "descending"
+    if len(d) and np.all(d > 0):
+        return "ascending"
+    return "mixed"
+
+
+def lock_intervals(lock, order):
+    """Per run, per bay k (1-based): the time from the previous lock to the lock of bay k
+    (descending: lock(k) - lock(k+1); ascending: lock(k) - lock(k-1); mixed: lock(k+1) - lock(k),
+    signed). Returns (n x n_bays_max array, NaN where undefined, and a description)."""
+    dt = np.full(lock.shape, np.nan)
+    if order == "descending":
+        dt[:, :-1] = lock[:, :-1] - lock[:, 1:]
+        return dt, ("bay k: lock of bay k minus lock of bay k+1 (bays lock from the top, "
+                    "bay n first)")
+    if order == "ascending":
+        dt[:, 1:] = lock[:, 1:] - lock[:, :-1]
+        return dt, "bay k: lock of bay k minus lock of bay k−1 (bays lock from bay 1 upwards)"
+    dt[:, :-1] = lock[:, 1:] - lock[:, :-1]
+    return dt, ("bay k: lock of bay k+1 minus lock of bay k, signed (the bays do not lock in one "
+                "monotonic order)")
+
+
+def band_stats(cols):
+    """count, P5, P50, P95 of each column's finite values (NaN where no value)."""
+    res = {"count": [], "p5": [], "p50": [], "p95": []}
+    for col in cols.T:
+        v = col[np.isfinite(col)]
+        res["count"].append(len(v))
+        for name, q in (("p5", 5.0), ("p50", 50.0), ("p95", 95.0)):
+            res[name].append(percentile(v, q) if len(v) else float("nan"))
+    return {k: np.array(v) for k, v in res.items()}
