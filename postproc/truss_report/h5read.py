@@ -123,6 +123,9 @@ class Campaign:
     stats_status_names: list
     stats_status_counts: np.ndarray
     stall_torque: np.ndarray = None   # motor drive: stall torque of every run (Nm)
+    # velocity drive: the scene's motor torque at the prescribed speed, per run, as the simulator
+    # computed it from its motor law (/runs/motor_torque_at_speed_Nm); None in older files
+    motor_torque_at_speed: np.ndarray = None
     stall_torque_source: str = ""
     sensitivity: dict = None
     histories: dict = field(default_factory=dict)
@@ -193,6 +196,8 @@ def load_campaign(h5, sha256):
         stats_status_counts=h5.array("stats/status_counts", (n_status,)).astype(np.int64))
     if a["drive_mode"] == "motor":
         c.stall_torque, c.stall_torque_source = stall_torque_per_run(h5, c)
+    if h5.has("runs/motor_torque_at_speed_Nm"):
+        c.motor_torque_at_speed = h5.array("runs/motor_torque_at_speed_Nm", (n,))
     if h5.has("sensitivity"):
         c.sensitivity = read_sensitivity(h5)
     if h5.has("histories"):

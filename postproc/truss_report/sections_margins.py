@@ -64,24 +64,14 @@ def section_margins(page, c):
             + table(["", "value"], rows, "narrow") + "</section>")
 
 
-def drive_parameter(c, key):
-    """Per-run values of a drive.* scene key: the dispersed values, else the base scene's."""
-    for d in c.dispersions:
-        if d.key == f"drive.{key}" and d.per == "run":
-            return d.values
-    return np.full(c.n, float((c.base_scene.get("drive") or {})[key]))
-
-
-def calc_available_torque(c):
-    """The scene's motor at the prescribed speed: T_s (1 - omega / omega_0), omega = 2 pi v / h."""
-    omega = 2.0 * np.pi * drive_parameter(c, "speed_m_per_s") / drive_parameter(c, "screw_lead_m")
-    return drive_parameter(c, "stall_torque_Nm") * (1.0 - omega / drive_parameter(c, "no_load_speed_rad_per_s"))
-
-
 def section_margins_velocity(page, c, head):
     torque = c.outputs["peak_drive_torque_Nm"]
     u = c.units["peak_drive_torque_Nm"]
-    avail = calc_available_torque(c)
+    if c.motor_torque_at_speed is None:
+        return (head + "<p>This file has no <code>/runs/motor_torque_at_speed_Nm</code> (it was "
+                "written before the simulator stored the motor's torque at the prescribed speed): "
+                "the available torque is not in the file, so this margin is not computed.</p></section>")
+    avail = c.motor_torque_at_speed  # the simulator's motor law, never written again here
     considered = c.ok & np.isfinite(torque) & np.isfinite(avail)
     n_cons = int(considered.sum())
     if n_cons == 0:

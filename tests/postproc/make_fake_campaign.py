@@ -39,7 +39,7 @@ RUN_FIELDS = [
     ("peak_drive_force_N", "N", "f"), ("peak_drive_force_time_s", "s", "f"),
     ("peak_drive_force_bay", "1", "i"), ("min_drive_force_N", "N", "f"),
     ("min_drive_force_time_s", "s", "f"), ("min_drive_force_bay", "1", "i"),
-    ("peak_drive_torque_Nm", "Nm", "f"), ("min_drive_torque_Nm", "Nm", "f"),
+    ("peak_drive_torque_Nm", "Nm", "f"), ("min_drive_torque_Nm", "Nm", "f"), ("motor_torque_at_speed_Nm", "Nm", "f"),
     ("peak_pin_force_N", "N", "f"), ("peak_pin_force_time_s", "s", "f"),
     ("peak_pin_force_bay", "1", "i"), ("peak_diagonal_tension_N", "N", "f"),
     ("peak_latch_energy_J", "J", "f"), ("peak_driven_speed_m_per_s", "m/s", "f"),
@@ -204,6 +204,12 @@ def simulate(a, rng, inputs, n_bays):
     else:
         out["peak_drive_torque_Nm"] = out["peak_drive_force_N"] * LEAD_M / (2 * np.pi)
 
+    # The scene's motor at the prescribed speed (velocity mode; the base scene's drive, which is
+    # not dispersed here): T_s (1 - omega / omega_0), omega = 2 pi v / h. NaN in other modes.
+    if a.drive_mode == "velocity":
+        out["motor_torque_at_speed_Nm"] = np.full(n, 0.012 * (1.0 - 2.0 * np.pi * 0.1 / LEAD_M / 75.0))
+    else:
+        out["motor_torque_at_speed_Nm"] = np.full(n, np.nan)
     status = np.zeros(n, dtype=np.int8)
     message = [""] * n
     if a.drive_mode == "motor":   # weak motors stall in the first stage
