@@ -20,6 +20,7 @@ namespace {
 struct UserData {
   OdeSystem* sys = nullptr;
   long rhs_evals = 0;
+  long nonfinite_rhs = 0;    // evaluations that returned NaN or inf (CVODE retried smaller steps)
   std::exception_ptr error;  // thrown by the system inside a callback, rethrown after CVode returns
 };
 
@@ -33,7 +34,10 @@ int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
   }
   ++d->rhs_evals;
   for (sunindextype i = 0; i < N_VGetLength(ydot); ++i)
-    if (!std::isfinite(N_VGetArrayPointer(ydot)[i])) return 1;  // recoverable: CVODE cuts the step
+    if (!std::isfinite(N_VGetArrayPointer(ydot)[i])) {
+      ++d->nonfinite_rhs;
+      return 1;  // recoverable: CVODE cuts the step
+    }
   return 0;
 }
 
@@ -151,6 +155,7 @@ struct CvodeIntegrator::Solver {
     if (n_sys != n && !create(n_sys, t0, sum)) return false;
     ud.sys = &sys;
     ud.rhs_evals = 0;
+    ud.nonfinite_rhs = 0;
     ud.error = nullptr;
     double* p = N_VGetArrayPointer(y);
     for (int i = 0; i < n; ++i) p[i] = y0[i];
@@ -221,6 +226,13 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
   double t = t0;
   std::vector<int> roots(ne);
   while (true) {
+    // The step budget of the call. CVodeSetMaxNumSteps alone does not enforce it: CVODE counts
+    // steps per CVode() call, and in CV_ONE_STEP mode every call takes one step.
+    if (sum.steps >= opts_.max_steps) {
+      sum.status = IntegratorStatus::step_limit;
+      sum.message = fmt::format("step limit of {} reached", opts_.max_steps);
+      return sum;
+    }
     double t_prev = t;
     const int flag = CVode(cv.mem, t_end, cv.y, &t, CV_ONE_STEP);
     if (cv.ud.error) {
@@ -239,6 +251,15 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
       copy_state();
       sum.status = flag == CV_TOO_MUCH_WORK ? IntegratorStatus::step_limit : IntegratorStatus::failure;
       sum.message = fmt::format("CVODE flag {} ({}) at t = {:.9g} s", flag, flag_name(flag), t);
+      return failed();
+    }
+    // A step that left t unchanged (t + h == t: the step size fell below the resolution of t,
+    // typically at the edge of a region where the right-hand side is NaN) cannot make progress.
+    if (flag == CV_SUCCESS && t == t_prev) {
+      copy_state();
+      sum.status = IntegratorStatus::failure;
+      sum.message = fmt::format("CVODE: no progress at t = {:.9g} s (step size below the resolution of t; "
+                                "{} right-hand side evaluations returned NaN or inf)", t, cv.ud.nonfinite_rhs);
       return failed();
     }
     dense.t_begin = t_prev;

@@ -265,6 +265,22 @@ TEST_CASE("invalid options end with failure naming the field", "[integrators][op
   }
 }
 
+TEST_CASE("max_steps bounds the accepted steps of a call, for both integrators", "[integrators][options]") {
+  TestSystem osc(2, 0.0, {});
+  IntegratorOptions o;
+  o.max_steps = 50;
+  CvodeIntegrator cv(o);
+  DormandPrince54 dp(o);
+  for (Integrator* integ : {static_cast<Integrator*>(&cv), static_cast<Integrator*>(&dp)}) {
+    double y[2] = {1.0, 0.0};
+    const IntegratorSummary s = integ->integrate(osc, 0.0, 1000.0, y, nullptr);
+    CHECK(s.status == IntegratorStatus::step_limit);
+    CHECK(s.steps == 50);
+    CHECK(s.t > 0.0);
+    CHECK(s.t < 1000.0);
+  }
+}
+
 TEST_CASE("a NaN right-hand side ends CVODE with failure and its flag", "[integrators][cvode]") {
   TestSystem osc(2, 0.0, {});
   CvodeIntegrator cv(IntegratorOptions{});
@@ -288,6 +304,20 @@ TEST_CASE("a NaN right-hand side ends CVODE with failure and its flag", "[integr
     CHECK(s.t < 10.0);
     CHECK(std::isfinite(y[0]));
     CHECK(std::isfinite(y[1]));
+  }
+  SECTION("NaN beyond t = 1: the steps shrink onto t = 1 until t + h == t") {
+    // Every step that ends at or before 1 succeeds, so CVODE never reports a failure of its own;
+    // without the no-progress check this spun until max_steps (or forever before max_steps was
+    // enforced).
+    NanRhs sys(1.0, 1'000'000);
+    double y[2] = {1.0, 0.0};
+    const IntegratorSummary s = cv.integrate(sys, 0.0, 2.0, y, nullptr);
+    CHECK(s.status == IntegratorStatus::failure);
+    CHECK_THAT(s.message, Contains("no progress"));
+    CHECK(s.t <= 1.0);
+    CHECK(s.t > 1.0 - 1e-12);
+    CHECK(s.steps < 1000);
+    CHECK(std::abs(y[0] - std::cos(1.0)) < 1e-6);
   }
   SECTION("an exception of the system reaches the caller") {
     Throws sys;
