@@ -1,6 +1,9 @@
 #include "integrators/cvode_integrator.hpp"
 
 #include <cmath>
+#include <cstdlib>
+#include <exception>
+#include <string>
 #include <vector>
 
 #include <cvode/cvode.h>
@@ -13,131 +16,275 @@ namespace truss::integrators {
 
 namespace {
 
+// What CVODE's callbacks need; the system changes with every integrate() call.
 struct UserData {
-  OdeSystem* sys;
+  OdeSystem* sys = nullptr;
   long rhs_evals = 0;
+  long nonfinite_rhs = 0;    // evaluations that returned NaN or inf (CVODE retried smaller steps)
+  std::exception_ptr error;  // thrown by the system inside a callback, rethrown after CVode returns
 };
 
 int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  d->sys->calc_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+  try {
+    d->sys->calc_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+  } catch (...) {
+    d->error = std::current_exception();
+    return -1;  // unrecoverable: CVode returns CV_RHSFUNC_FAIL, the exception is rethrown
+  }
   ++d->rhs_evals;
   for (sunindextype i = 0; i < N_VGetLength(ydot); ++i)
-    if (!std::isfinite(N_VGetArrayPointer(ydot)[i])) return 1;  // recoverable: CVODE cuts the step
+    if (!std::isfinite(N_VGetArrayPointer(ydot)[i])) {
+      ++d->nonfinite_rhs;
+      return 1;  // recoverable: CVODE cuts the step
+    }
   return 0;
 }
 
 int root_fn(realtype t, N_Vector y, realtype* g, void* ud) {
-  static_cast<UserData*>(ud)->sys->calc_events(t, N_VGetArrayPointer(y), g);
+  auto* d = static_cast<UserData*>(ud);
+  try {
+    d->sys->calc_events(t, N_VGetArrayPointer(y), g);
+  } catch (...) {
+    d->error = std::current_exception();
+    return -1;
+  }
   return 0;
 }
 
 void silent(int, const char*, const char*, char*, void*) {}
 
+// CVODE's name of a return flag ("CV_TOO_MUCH_WORK"); SUNDIALS allocates it with malloc.
+std::string flag_name(int flag) {
+  char* name = CVodeGetReturnFlagName(flag);
+  std::string s = name ? name : "?";
+  std::free(name);
+  return s;
+}
+
+// As check_flag in the SUNDIALS examples: a negative return flag of a CVODE function makes the
+// summary a failure naming the function and the flag. Returns false on failure.
+bool check_flag(int flag, const char* function, IntegratorSummary& sum) {
+  if (flag >= 0) return true;
+  sum.status = IntegratorStatus::failure;
+  sum.message = fmt::format("CVODE: {} failed with flag {} ({})", function, flag, flag_name(flag));
+  return false;
+}
+
+// The same for functions outside CVODE (SUNContext_Create: nonzero on failure) and for
+// constructors that return a null pointer.
+bool check_sundials(int flag, const char* function, IntegratorSummary& sum) {
+  if (flag == 0) return true;
+  sum.status = IntegratorStatus::failure;
+  sum.message = fmt::format("CVODE: {} failed with flag {}", function, flag);
+  return false;
+}
+
+bool check_null(const void* p, const char* function, IntegratorSummary& sum) {
+  if (p) return true;
+  sum.status = IntegratorStatus::failure;
+  sum.message = fmt::format("CVODE: {} returned NULL", function);
+  return false;
+}
+
 class CvodeDense : public DenseOutput {
  public:
   void* mem = nullptr;
   N_Vector tmp = nullptr;
+  mutable int flag = CV_SUCCESS;  // first failed CVodeGetDky of the step, checked after on_step
   void calc_state(double t, double* y) const override {
-    CVodeGetDky(mem, t, 0, tmp);
+    const int f = CVodeGetDky(mem, t, 0, tmp);
     const double* p = N_VGetArrayPointer(tmp);
-    for (sunindextype i = 0; i < N_VGetLength(tmp); ++i) y[i] = p[i];
-  }
-};
-
-// RAII holder for the SUNDIALS objects of one integration.
-struct Cvode {
-  SUNContext ctx = nullptr;
-  void* mem = nullptr;
-  N_Vector y = nullptr, tmp = nullptr;
-  SUNNonlinearSolver nls = nullptr;
-  ~Cvode() {
-    if (nls) SUNNonlinSolFree(nls);
-    if (y) N_VDestroy(y);
-    if (tmp) N_VDestroy(tmp);
-    if (mem) CVodeFree(&mem);
-    if (ctx) SUNContext_Free(&ctx);
+    for (sunindextype i = 0; i < N_VGetLength(tmp); ++i) y[i] = f < 0 ? std::nan("") : p[i];
+    if (f < 0 && flag >= 0) flag = f;
   }
 };
 
 }  // namespace
 
+// The SUNDIALS objects of one integrator, kept across integrate() calls.
+struct CvodeIntegrator::Solver {
+  SUNContext ctx = nullptr;
+  void* mem = nullptr;
+  N_Vector y = nullptr, tmp = nullptr;
+  SUNNonlinearSolver nls = nullptr;
+  int n = -1;  // size of y, tmp and the CVODE memory; -1: none
+  UserData ud;
+
+  ~Solver() {
+    free_problem();
+    if (ctx) SUNContext_Free(&ctx);
+  }
+  // Everything but the context (in the order of the SUNDIALS examples).
+  void free_problem() {
+    if (mem) CVodeFree(&mem);
+    if (nls) SUNNonlinSolFree(nls);
+    nls = nullptr;
+    if (y) N_VDestroy(y);
+    if (tmp) N_VDestroy(tmp);
+    y = tmp = nullptr;
+    n = -1;
+  }
+
+  // CVODE memory, vectors and fixed-point solver for systems of size n_new.
+  bool create(int n_new, double t0, IntegratorSummary& sum) {
+    free_problem();
+    if (!ctx && !check_sundials(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", sum)) return false;
+    y = N_VNew_Serial(n_new, ctx);
+    if (!check_null(y, "N_VNew_Serial", sum)) return false;
+    tmp = N_VNew_Serial(n_new, ctx);
+    if (!check_null(tmp, "N_VNew_Serial", sum)) return false;
+    N_VConst(0.0, y);
+    mem = CVodeCreate(CV_ADAMS, ctx);
+    if (!check_null(mem, "CVodeCreate", sum)) return false;
+    if (!check_flag(CVodeSetErrHandlerFn(mem, silent, nullptr), "CVodeSetErrHandlerFn", sum)) return false;
+    if (!check_flag(CVodeInit(mem, rhs_fn, t0, y), "CVodeInit", sum)) return false;
+    if (!check_flag(CVodeSetUserData(mem, &ud), "CVodeSetUserData", sum)) return false;
+    nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
+    if (!check_null(nls, "SUNNonlinSol_FixedPoint", sum)) return false;
+    if (!check_flag(CVodeSetNonlinearSolver(mem, nls), "CVodeSetNonlinearSolver", sum)) return false;
+    if (!check_flag(CVodeSetMaxOrd(mem, 12), "CVodeSetMaxOrd", sum)) return false;
+    n = n_new;
+    return true;
+  }
+
+  // Restart CVODE on sys from (t0, y0) with the options and events of this call.
+  bool prepare(OdeSystem& sys, double t0, double t_end, const double* y0,
+               const IntegratorOptions& o, IntegratorSummary& sum) {
+    const int n_sys = sys.size();
+    if (n_sys != n && !create(n_sys, t0, sum)) return false;
+    ud.sys = &sys;
+    ud.rhs_evals = 0;
+    ud.nonfinite_rhs = 0;
+    ud.error = nullptr;
+    double* p = N_VGetArrayPointer(y);
+    for (int i = 0; i < n; ++i) p[i] = y0[i];
+    // History, order, step counters and initial step choice start afresh.
+    if (!check_flag(CVodeReInit(mem, t0, y), "CVodeReInit", sum)) return false;
+    if (!check_flag(CVodeSStolerances(mem, o.rtol, o.atol), "CVodeSStolerances", sum)) return false;
+    if (!check_flag(CVodeSetMaxNumSteps(mem, o.max_steps), "CVodeSetMaxNumSteps", sum)) return false;
+    // After CVodeReInit (CVodeSetStopTime checks tstop against the current step once nst > 0).
+    if (!check_flag(CVodeSetStopTime(mem, t_end), "CVodeSetStopTime", sum)) return false;
+    // 0 restores CVODE's defaults: no cap, CVODE's own initial step estimate.
+    if (!check_flag(CVodeSetMaxStep(mem, std::isfinite(o.max_step) ? o.max_step : 0.0), "CVodeSetMaxStep", sum))
+      return false;
+    if (!check_flag(CVodeSetInitStep(mem, o.initial_step), "CVodeSetInitStep", sum)) return false;
+    // Root functions: dropped and allocated again, so that directions and the inactive-root
+    // flags of the last call do not carry over (CVodeRootInit with an unchanged count keeps them).
+    if (!check_flag(CVodeRootInit(mem, 0, nullptr), "CVodeRootInit", sum)) return false;
+    const int ne = sys.num_events();
+    if (ne > 0) {
+      if (!check_flag(CVodeRootInit(mem, ne, root_fn), "CVodeRootInit", sum)) return false;
+      std::vector<int> dirs(ne);
+      for (int e = 0; e < ne; ++e) dirs[e] = sys.event_direction(e);
+      if (!check_flag(CVodeSetRootDirection(mem, dirs.data()), "CVodeSetRootDirection", sum)) return false;
+      if (!check_flag(CVodeSetNoInactiveRootWarn(mem), "CVodeSetNoInactiveRootWarn", sum)) return false;
+    }
+    return true;
+  }
+};
+
+CvodeIntegrator::CvodeIntegrator(const IntegratorOptions& opts) : opts_(opts) {}
+CvodeIntegrator::~CvodeIntegrator() = default;
+
 IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t_end, double* y0,
                                              StepObserver* observer) {
   IntegratorSummary sum;
   sum.t = t0;
-  if (!(t_end > t0)) { sum.status = IntegratorStatus::reached_end; return sum; }
-  const int n = sys.size();
-  Cvode cv;
-  UserData ud{&sys};
-  auto fail = [&](const char* what) {
+  if (const std::string bad = opts_.validate(); !bad.empty()) {
     sum.status = IntegratorStatus::failure;
-    sum.message = fmt::format("CVODE: {} failed", what);
+    sum.message = "invalid integrator options: " + bad;
+    return sum;
+  }
+  if (!(t_end > t0)) { sum.status = IntegratorStatus::reached_end; return sum; }
+  if (sys.size() <= 0) {
+    sum.status = IntegratorStatus::failure;
+    sum.message = fmt::format("CVODE: system size must be positive, got {}", sys.size());
+    return sum;
+  }
+  if (!solver_) solver_ = std::make_unique<Solver>();
+  Solver& cv = *solver_;
+  if (!cv.prepare(sys, t0, t_end, y0, opts_, sum)) {
+    cv.free_problem();  // start from new SUNDIALS objects next time
+    return sum;
+  }
+  const int n = cv.n;
+  const int ne = sys.num_events();
+  auto copy_state = [&] {
+    const double* p = N_VGetArrayPointer(cv.y);
+    for (int i = 0; i < n; ++i) y0[i] = p[i];
+  };
+  // A CVODE failure after the start: the state reached is returned, and the objects are
+  // recreated on the next call rather than restarted from an unknown state.
+  auto failed = [&] {
+    cv.free_problem();
     return sum;
   };
-  if (SUNContext_Create(nullptr, &cv.ctx) != 0) return fail("SUNContext_Create");
-  cv.y = N_VNew_Serial(n, cv.ctx);
-  cv.tmp = N_VNew_Serial(n, cv.ctx);
-  for (int i = 0; i < n; ++i) N_VGetArrayPointer(cv.y)[i] = y0[i];
-  cv.mem = CVodeCreate(CV_ADAMS, cv.ctx);
-  if (!cv.mem) return fail("CVodeCreate");
-  CVodeSetErrHandlerFn(cv.mem, silent, nullptr);
-  if (CVodeInit(cv.mem, rhs_fn, t0, cv.y) != CV_SUCCESS) return fail("CVodeInit");
-  CVodeSStolerances(cv.mem, opts_.rtol, opts_.atol);
-  CVodeSetUserData(cv.mem, &ud);
-  cv.nls = SUNNonlinSol_FixedPoint(cv.y, 0, cv.ctx);
-  CVodeSetNonlinearSolver(cv.mem, cv.nls);
-  CVodeSetMaxNumSteps(cv.mem, opts_.max_steps);
-  CVodeSetStopTime(cv.mem, t_end);
-  CVodeSetMaxOrd(cv.mem, 12);
-  if (std::isfinite(opts_.max_step)) CVodeSetMaxStep(cv.mem, opts_.max_step);
-  if (opts_.initial_step > 0.0) CVodeSetInitStep(cv.mem, opts_.initial_step);
-  const int ne = sys.num_events();
-  std::vector<int> dirs(ne);
-  if (ne > 0) {
-    CVodeRootInit(cv.mem, ne, root_fn);
-    for (int e = 0; e < ne; ++e) dirs[e] = sys.event_direction(e);
-    CVodeSetRootDirection(cv.mem, dirs.data());
-    CVodeSetNoInactiveRootWarn(cv.mem);
-  }
   CvodeDense dense;
   dense.mem = cv.mem;
   dense.tmp = cv.tmp;
   double t = t0;
   std::vector<int> roots(ne);
   while (true) {
+    // The step budget of the call. CVodeSetMaxNumSteps alone does not enforce it: CVODE counts
+    // steps per CVode() call, and in CV_ONE_STEP mode every call takes one step.
+    if (sum.steps >= opts_.max_steps) {
+      sum.status = IntegratorStatus::step_limit;
+      sum.message = fmt::format("step limit of {} reached", opts_.max_steps);
+      return sum;
+    }
     double t_prev = t;
     const int flag = CVode(cv.mem, t_end, cv.y, &t, CV_ONE_STEP);
+    if (cv.ud.error) {
+      const std::exception_ptr e = cv.ud.error;
+      cv.free_problem();
+      std::rethrow_exception(e);
+    }
     long steps = 0, fails = 0;
-    CVodeGetNumSteps(cv.mem, &steps);
-    CVodeGetNumErrTestFails(cv.mem, &fails);
+    if (!check_flag(CVodeGetNumSteps(cv.mem, &steps), "CVodeGetNumSteps", sum)) return failed();
+    if (!check_flag(CVodeGetNumErrTestFails(cv.mem, &fails), "CVodeGetNumErrTestFails", sum)) return failed();
     sum.steps = steps;
     sum.rejected_steps = fails;
-    sum.rhs_evals = ud.rhs_evals;
+    sum.rhs_evals = cv.ud.rhs_evals;
     sum.t = t;
     if (flag < 0) {
-      const double* p = N_VGetArrayPointer(cv.y);
-      for (int i = 0; i < n; ++i) y0[i] = p[i];
+      copy_state();
       sum.status = flag == CV_TOO_MUCH_WORK ? IntegratorStatus::step_limit : IntegratorStatus::failure;
-      sum.message = fmt::format("CVODE flag {} ({}) at t = {:.9g} s", flag, CVodeGetReturnFlagName(flag), t);
-      return sum;
+      sum.message = fmt::format("CVODE flag {} ({}) at t = {:.9g} s", flag, flag_name(flag), t);
+      return failed();
+    }
+    // A step that left t unchanged (t + h == t: the step size fell below the resolution of t,
+    // typically at the edge of a region where the right-hand side is NaN) cannot make progress.
+    if (flag == CV_SUCCESS && t == t_prev) {
+      copy_state();
+      sum.status = IntegratorStatus::failure;
+      sum.message = fmt::format("CVODE: no progress at t = {:.9g} s (step size below the resolution of t; "
+                                "{} right-hand side evaluations returned NaN or inf)", t, cv.ud.nonfinite_rhs);
+      return failed();
     }
     dense.t_begin = t_prev;
     dense.t_end = t;
-    const double* p = N_VGetArrayPointer(cv.y);
-    for (int i = 0; i < n; ++i) y0[i] = p[i];
+    copy_state();
+    auto dense_failed = [&] {
+      if (dense.flag >= 0) return false;
+      check_flag(dense.flag, "CVodeGetDky", sum);
+      return true;
+    };
     if (flag == CV_ROOT_RETURN) {
-      CVodeGetRootInfo(cv.mem, roots.data());
+      if (!check_flag(CVodeGetRootInfo(cv.mem, roots.data()), "CVodeGetRootInfo", sum)) return failed();
       if (observer) observer->on_step(dense);
+      if (dense_failed()) return failed();
       sum.status = IntegratorStatus::event;
       for (int e = 0; e < ne; ++e)
         if (roots[e] != 0) { sum.event_index = e; break; }
       return sum;
     }
     if (observer && !observer->on_step(dense)) {
+      if (dense_failed()) return failed();
       sum.status = IntegratorStatus::stopped_by_observer;
       return sum;
     }
+    if (dense_failed()) return failed();
     if (flag == CV_TSTOP_RETURN || t >= t_end) {
       sum.status = IntegratorStatus::reached_end;
       return sum;

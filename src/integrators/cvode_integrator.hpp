@@ -1,19 +1,34 @@
 // SUNDIALS CVODE (Adams-Moulton, nonstiff, functional iteration) behind the same interface as
 // the own RK pair; CVODE's root finding locates the events, CVodeGetDky gives the dense output.
+// One object serves a whole run: the SUNDIALS context, CVODE memory, vectors and nonlinear solver
+// are created on the first integrate() and reused by the following calls through CVodeReInit
+// (which restarts CVODE at order 1 with a fresh initial step, as a new object would); they are
+// recreated only when the system size changes or after CVODE failed. Every SUNDIALS return flag
+// is checked: a failure ends the call with IntegratorStatus::failure and names the function and
+// the flag.
 #pragma once
+#include <memory>
+
 #include "integrators/ode.hpp"
 
 namespace truss::integrators {
 
 class CvodeIntegrator : public Integrator {
  public:
-  explicit CvodeIntegrator(const IntegratorOptions& opts) : opts_(opts) {}
+  explicit CvodeIntegrator(const IntegratorOptions& opts);
+  ~CvodeIntegrator() override;
+  CvodeIntegrator(const CvodeIntegrator&) = delete;             // owns SUNDIALS memory
+  CvodeIntegrator& operator=(const CvodeIntegrator&) = delete;
+  // Steps, rejected steps and right-hand side evaluations of the summary count this call only.
   IntegratorSummary integrate(OdeSystem& sys, double t0, double t_end, double* y,
                               StepObserver* observer) override;
+  // Applied (tolerances, step bounds, step budget) at the start of the next integrate().
   void set_options(const IntegratorOptions& opts) override { opts_ = opts; }
 
  private:
+  struct Solver;  // the SUNDIALS objects (cvode_integrator.cpp)
   IntegratorOptions opts_;
+  std::unique_ptr<Solver> solver_;  // created on first use
 };
 
 }  // namespace truss::integrators

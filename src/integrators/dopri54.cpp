@@ -201,6 +201,12 @@ int DormandPrince54::find_event(OdeSystem& sys, double t, double t_new, const De
 IntegratorSummary DormandPrince54::integrate(OdeSystem& sys, double t0, double t_end, double* y,
                                              StepObserver* observer) {
   IntegratorSummary sum;
+  if (const std::string bad = opts_.validate(); !bad.empty()) {
+    sum.t = t0;
+    sum.status = IntegratorStatus::failure;
+    sum.message = "invalid integrator options: " + bad;
+    return sum;
+  }
   const int n = sys.size();
   for (auto& k : k_) k.assign(n, 0.0);
   for (auto& r : rc_) r.assign(n, 0.0);
