@@ -79,13 +79,10 @@ void write_stats_group(hid_t loc, const std::string& name, const std::string& un
 const char* per_name(Per p) { return p == Per::run ? "run" : p == Per::bay ? "bay" : "frame"; }
 const char* apply_name(Apply a) { return a == Apply::absolute ? "absolute" : a == Apply::relative ? "relative" : "offset"; }
 
-void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t, const std::vector<OutputSensitivity>& sens,
-                    const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info) {
+// Root attributes: what the campaign was, and where and when it ran.
+void write_root_attributes(hid_t file, const CampaignContext& ctx, const ResultTable& t, const CampaignFileInfo& info) {
   const CampaignOptions& c = ctx.options;
   const OutputColumns& cols = ctx.columns;
-  const auto n = static_cast<std::size_t>(t.n_runs());
-  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
-
   write_int_attribute(file, "schema_version", kCampaignSchemaVersion);
   write_string_attribute(file, "kind", "campaign");
   write_string_attribute(file, "campaign_name", c.name);
@@ -105,96 +102,110 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
   write_string_attribute(file, "start_utc", info.start_utc);
   write_string_attribute(file, "end_utc", info.end_utc);
   write_double_attribute(file, "wall_time_s", info.wall_time_s);
+}
 
+// /runs/inputs: the applied value of every dispersion, with its distribution as attributes.
+void write_inputs(hid_t runs, const CampaignContext& ctx, const ResultTable& t) {
+  const CampaignOptions& c = ctx.options;
+  const OutputColumns& cols = ctx.columns;
+  const auto n = static_cast<std::size_t>(t.n_runs());
+  Handle g = make_group(runs, "inputs");
+  const DimensionLayout& L = ctx.sampler.layout();
+  std::vector<double> col;
+  for (std::size_t d = 0; d < c.dispersions.size(); ++d) {
+    const DispersionOptions& disp = c.dispersions[d];
+    const auto w = static_cast<std::size_t>(L.count[d]), off = static_cast<std::size_t>(L.offset[d]);
+    col.resize(n * w);
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < w; ++j) col[i * w + j] = t.inputs[i * static_cast<std::size_t>(cols.n_inputs) + off + j];
+    const std::string units = find_key_units(disp.key);
+    write_array(g.get(), disp.key, units.c_str(), col.data(), n, disp.per == Per::run ? 0 : w);
+    Handle ds(H5Dopen2(g.get(), disp.key.c_str(), H5P_DEFAULT), H5Dclose, "open " + disp.key);
+    write_string_attribute(ds.get(), "per", per_name(disp.per));
+    write_string_attribute(ds.get(), "apply", apply_name(disp.apply));
+    write_string_attribute(ds.get(), "distribution", to_string(disp.distribution));
+    if (disp.distribution == DistributionKind::normal || disp.distribution == DistributionKind::truncated_normal) {
+      write_double_attribute(ds.get(), "mean", disp.mean);
+      write_double_attribute(ds.get(), "std", disp.std);
+    }
+    if (disp.distribution == DistributionKind::truncated_normal || disp.distribution == DistributionKind::uniform) {
+      write_double_attribute(ds.get(), "lower", disp.lower);
+      write_double_attribute(ds.get(), "upper", disp.upper);
+    }
+    if (disp.distribution == DistributionKind::lognormal) {
+      write_double_attribute(ds.get(), "mu", disp.mu);
+      write_double_attribute(ds.get(), "sigma", disp.sigma);
+    }
+    if (disp.distribution == DistributionKind::discrete) {
+      write_doubles_attribute(ds.get(), "values", disp.values);
+      write_doubles_attribute(ds.get(), "weights", disp.weights.empty() ? std::vector<double>(disp.values.size(), 1.0) : disp.weights);
+    }
+    write_double_attribute(ds.get(), "nominal", find_nominal(c.base, disp.key));
+    write_int_attribute(ds.get(), "factor", static_cast<std::int64_t>(d));
+  }
+}
+
+// /runs: one column per output, per-bay outputs as runs x bays.
+void write_runs(hid_t file, const CampaignContext& ctx, const ResultTable& t) {
+  const OutputColumns& cols = ctx.columns;
+  const auto n = static_cast<std::size_t>(t.n_runs());
+  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
+    Handle runs = make_group(file, "runs");
+  std::vector<std::int64_t> index(n);
+  for (std::size_t i = 0; i < n; ++i) index[i] = static_cast<std::int64_t>(i);
+  write_array(runs.get(), "run_index", "1", index.data(), n);
+  {
+    Handle type = status_enum_type();
+    Handle space = vector_space(n);
+    Handle ds = create_dataset(runs.get(), "status", type.get(), space.get());
+    if (n) check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, t.status.data()), "write /runs/status");
+    write_string_attribute(ds.get(), "units", "1");
+  }
+  write_strings(runs.get(), "message", t.message);
+  for (std::size_t k = 0; k < cols.f64.size(); ++k) write_array(runs.get(), cols.f64[k]->name, cols.f64[k]->units, t.f64[k].data(), n);
+  for (std::size_t k = 0; k < cols.i64.size(); ++k) write_array(runs.get(), cols.i64[k]->name, cols.i64[k]->units, t.i64[k].data(), n);
+  {
+    Handle g = make_group(runs.get(), "bays");
+    for (std::size_t k = 0; k < cols.bay.size(); ++k) write_array(g.get(), cols.bay[k]->name, cols.bay[k]->units, t.bays[k].data(), n, nb);
+  }
+  write_inputs(runs.get(), ctx, t);
+}
+
+// /stats: statistics of the ok runs, per output and per bay; status counts.
+void write_stats(hid_t file, const CampaignContext& ctx, const ResultTable& t) {
+  const OutputColumns& cols = ctx.columns;
+  const auto n = static_cast<std::size_t>(t.n_runs());
+  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
   std::vector<std::uint8_t> ok(n);
   for (std::size_t i = 0; i < n; ++i) ok[i] = t.status[i] == 0;
-
-  // /runs
-  {
-    Handle runs = make_group(file, "runs");
-    std::vector<std::int64_t> index(n);
-    for (std::size_t i = 0; i < n; ++i) index[i] = static_cast<std::int64_t>(i);
-    write_array(runs.get(), "run_index", "1", index.data(), n);
-    {
-      Handle type = status_enum_type();
-      Handle space = vector_space(n);
-      Handle ds = create_dataset(runs.get(), "status", type.get(), space.get());
-      if (n) check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, t.status.data()), "write /runs/status");
-      write_string_attribute(ds.get(), "units", "1");
-    }
-    write_strings(runs.get(), "message", t.message);
-    for (std::size_t k = 0; k < cols.f64.size(); ++k) write_array(runs.get(), cols.f64[k]->name, cols.f64[k]->units, t.f64[k].data(), n);
-    for (std::size_t k = 0; k < cols.i64.size(); ++k) write_array(runs.get(), cols.i64[k]->name, cols.i64[k]->units, t.i64[k].data(), n);
-    {
-      Handle g = make_group(runs.get(), "bays");
-      for (std::size_t k = 0; k < cols.bay.size(); ++k) write_array(g.get(), cols.bay[k]->name, cols.bay[k]->units, t.bays[k].data(), n, nb);
-    }
-    Handle g = make_group(runs.get(), "inputs");
-    const DimensionLayout& L = ctx.sampler.layout();
-    std::vector<double> col;
-    for (std::size_t d = 0; d < c.dispersions.size(); ++d) {
-      const DispersionOptions& disp = c.dispersions[d];
-      const auto w = static_cast<std::size_t>(L.count[d]), off = static_cast<std::size_t>(L.offset[d]);
-      col.resize(n * w);
-      for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t j = 0; j < w; ++j) col[i * w + j] = t.inputs[i * static_cast<std::size_t>(cols.n_inputs) + off + j];
-      const std::string units = find_key_units(disp.key);
-      write_array(g.get(), disp.key, units.c_str(), col.data(), n, disp.per == Per::run ? 0 : w);
-      Handle ds(H5Dopen2(g.get(), disp.key.c_str(), H5P_DEFAULT), H5Dclose, "open " + disp.key);
-      write_string_attribute(ds.get(), "per", per_name(disp.per));
-      write_string_attribute(ds.get(), "apply", apply_name(disp.apply));
-      write_string_attribute(ds.get(), "distribution", to_string(disp.distribution));
-      if (disp.distribution == DistributionKind::normal || disp.distribution == DistributionKind::truncated_normal) {
-        write_double_attribute(ds.get(), "mean", disp.mean);
-        write_double_attribute(ds.get(), "std", disp.std);
-      }
-      if (disp.distribution == DistributionKind::truncated_normal || disp.distribution == DistributionKind::uniform) {
-        write_double_attribute(ds.get(), "lower", disp.lower);
-        write_double_attribute(ds.get(), "upper", disp.upper);
-      }
-      if (disp.distribution == DistributionKind::lognormal) {
-        write_double_attribute(ds.get(), "mu", disp.mu);
-        write_double_attribute(ds.get(), "sigma", disp.sigma);
-      }
-      if (disp.distribution == DistributionKind::discrete) {
-        write_doubles_attribute(ds.get(), "values", disp.values);
-        write_doubles_attribute(ds.get(), "weights", disp.weights.empty() ? std::vector<double>(disp.values.size(), 1.0) : disp.weights);
-      }
-      write_double_attribute(ds.get(), "nominal", find_nominal(c.base, disp.key));
-      write_int_attribute(ds.get(), "factor", static_cast<std::int64_t>(d));
-    }
-  }
-
-  // /stats
-  {
     Handle stats = make_group(file, "stats");
-    write_int_attribute(stats.get(), "n_runs", t.n_runs());
-    write_int_attribute(stats.get(), "n_ok", t.n_runs() - t.n_failed());
-    write_int_attribute(stats.get(), "n_failed", t.n_failed());
-    write_string_attribute(stats.get(), "percentile_method",
-                           "linear interpolation between order statistics (Hyndman-Fan type 7, numpy.percentile default)");
-    write_int_attribute(stats.get(), "std_ddof", 1);
-    std::vector<std::string> names;
-    std::vector<std::int64_t> counts(sim::kRunStatusCount, 0);
-    for (int s = 0; s < sim::kRunStatusCount; ++s) names.emplace_back(sim::to_string(static_cast<sim::RunStatus>(s)));
-    for (auto s : t.status) ++counts[static_cast<std::size_t>(s)];
-    write_strings(stats.get(), "status_names", names);
-    write_array(stats.get(), "status_counts", "1", counts.data(), counts.size());
-    for (std::size_t k = 0; k < cols.f64.size(); ++k)
-      write_stats_group(stats.get(), cols.f64[k]->name, cols.f64[k]->units, {calc_stats(t.f64[k], ok)}, false);
-    Handle bays = make_group(stats.get(), "bays");
-    std::vector<double> v(n);
-    std::vector<Stats> per_bay(nb);
-    for (std::size_t k = 0; k < cols.bay.size(); ++k) {
-      for (std::size_t b = 0; b < nb; ++b) {
-        for (std::size_t i = 0; i < n; ++i) v[i] = t.bays[k][i * nb + b];
-        per_bay[b] = calc_stats(v, ok);
-      }
-      write_stats_group(bays.get(), cols.bay[k]->name, cols.bay[k]->units, per_bay, true);
+  write_int_attribute(stats.get(), "n_runs", t.n_runs());
+  write_int_attribute(stats.get(), "n_ok", t.n_runs() - t.n_failed());
+  write_int_attribute(stats.get(), "n_failed", t.n_failed());
+  write_string_attribute(stats.get(), "percentile_method",
+                         "linear interpolation between order statistics (Hyndman-Fan type 7, numpy.percentile default)");
+  write_int_attribute(stats.get(), "std_ddof", 1);
+  std::vector<std::string> names;
+  std::vector<std::int64_t> counts(sim::kRunStatusCount, 0);
+  for (int s = 0; s < sim::kRunStatusCount; ++s) names.emplace_back(sim::to_string(static_cast<sim::RunStatus>(s)));
+  for (auto s : t.status) ++counts[static_cast<std::size_t>(s)];
+  write_strings(stats.get(), "status_names", names);
+  write_array(stats.get(), "status_counts", "1", counts.data(), counts.size());
+  for (std::size_t k = 0; k < cols.f64.size(); ++k)
+    write_stats_group(stats.get(), cols.f64[k]->name, cols.f64[k]->units, {calc_stats(t.f64[k], ok)}, false);
+  Handle bays = make_group(stats.get(), "bays");
+  std::vector<double> v(n);
+  std::vector<Stats> per_bay(nb);
+  for (std::size_t k = 0; k < cols.bay.size(); ++k) {
+    for (std::size_t b = 0; b < nb; ++b) {
+      for (std::size_t i = 0; i < n; ++i) v[i] = t.bays[k][i * nb + b];
+      per_bay[b] = calc_stats(v, ok);
     }
+    write_stats_group(bays.get(), cols.bay[k]->name, cols.bay[k]->units, per_bay, true);
   }
+}
 
-  // /sensitivity
+void write_sensitivity(hid_t file, const CampaignOptions& c, const std::vector<OutputSensitivity>& sens) {
   if (c.ensemble.sampling == SamplingMethod::saltelli) {
     Handle g = make_group(file, "sensitivity");
     std::vector<std::string> factors;
@@ -219,7 +230,9 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
     }
   }
 
-  // /histories
+}
+
+void write_histories(hid_t file, const CampaignOptions& c, const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories) {
   if (!histories.empty()) {
     Handle g = make_group(file, "histories");
     write_double_attribute(g.get(), "step_s", c.output.history_step_s);
@@ -230,14 +243,25 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
     }
   }
 
-  // /timing
-  {
+}
+
+void write_timing(hid_t file, const ResultTable& t) {
+  const auto n = static_cast<std::size_t>(t.n_runs());
     Handle g = make_group(file, "timing");
-    write_string_attribute(g.get(), "note", "not reproducible: depends on the machine, the ranks and the order of work");
-    write_array(g.get(), "run_wall_time_s", "s", t.wall_time_s.data(), n);
-    write_array(g.get(), "rank", "1", t.rank.data(), n);
-    write_array(g.get(), "session", "1", t.session.data(), n);
-  }
+  write_string_attribute(g.get(), "note", "not reproducible: depends on the machine, the ranks and the order of work");
+  write_array(g.get(), "run_wall_time_s", "s", t.wall_time_s.data(), n);
+  write_array(g.get(), "rank", "1", t.rank.data(), n);
+  write_array(g.get(), "session", "1", t.session.data(), n);
+}
+
+void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t, const std::vector<OutputSensitivity>& sens,
+                    const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info) {
+  write_root_attributes(file, ctx, t, info);
+  write_runs(file, ctx, t);
+  write_stats(file, ctx, t);
+  write_sensitivity(file, ctx.options, sens);
+  write_histories(file, ctx.options, histories);
+  write_timing(file, t);
 }
 
 }  // namespace

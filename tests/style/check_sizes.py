@@ -3,7 +3,9 @@
 over 500 lines (generated tables, *.inc, aside). Functions are found by brace matching on the
 source with comments and string literals removed: a top-level or namespace/class-level block
 opened by a line that looks like a definition (ends with ')' [const/override/...] '{').
-Usage: check_sizes.py SRC_DIR [--max-function 120] [--max-file 500]; exit 1 on a violation."""
+Python modules under --py-dir: at most 400 lines each.
+Usage: check_sizes.py SRC_DIR [--max-function 120] [--max-file 500] [--py-dir postproc]; exit 1 on a
+violation."""
 import argparse
 import pathlib
 import re
@@ -50,6 +52,8 @@ def main():
     ap.add_argument("src")
     ap.add_argument("--max-function", type=int, default=120)
     ap.add_argument("--max-file", type=int, default=500)
+    ap.add_argument("--py-dir", help="also check the Python modules under this folder")
+    ap.add_argument("--max-py-file", type=int, default=400)
     a = ap.parse_args()
     bad = 0
     files = sorted(p for p in pathlib.Path(a.src).rglob("*") if p.suffix in (".cpp", ".hpp"))
@@ -65,6 +69,12 @@ def main():
                 longest = (length, f"{p}:{start}")
             if length > a.max_function:
                 print(f"{p}:{start}: function of {length} lines (limit {a.max_function}): {head}")
+                bad += 1
+    if a.py_dir:
+        for p in sorted(pathlib.Path(a.py_dir).rglob("*.py")):
+            n = p.read_text().count("\n")
+            if n > a.max_py_file:
+                print(f"{p}: {n} lines (limit {a.max_py_file})")
                 bad += 1
     print(f"{len(files)} files checked; longest function {longest[0]} lines at {longest[1]}; {bad} over the limits")
     return 1 if bad else 0
