@@ -32,6 +32,7 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_I64(n_bays),
       TRUSS_RUN_I64(bays_completed),
       TRUSS_RUN_F64(deploy_time_s, "s"),
+      TRUSS_RUN_F64(end_time_s, "s"),
       TRUSS_RUN_F64(peak_drive_force_N, "N"),
       TRUSS_RUN_F64(peak_drive_force_time_s, "s"),
       TRUSS_RUN_I64(peak_drive_force_bay),

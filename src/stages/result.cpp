@@ -24,6 +24,7 @@ std::string RunResult::to_string() const {
   s += fmt::format("{} of {} bays, {} drive: {} bays completed\n", direction, n_bays, drive_mode, bays_completed);
   if (std::isfinite(deploy_time_s)) s += fmt::format("  {} time            {:.9g} s\n", direction, deploy_time_s);
   else s += fmt::format("  {} time            not reached (status {})\n", direction, stages::to_string(status));
+  s += fmt::format("  run ended at           {:.9g} s\n", end_time_s);
   s += fmt::format("  peak drive force       {:.6g} N at t = {:.6g} s (bay {})\n", peak_drive_force_N, peak_drive_force_time_s, peak_drive_force_bay);
   s += fmt::format("  min drive force        {:.6g} N at t = {:.6g} s (bay {})\n", min_drive_force_N, min_drive_force_time_s, min_drive_force_bay);
   s += fmt::format("  peak drive torque      {:.6g} N m\n", peak_drive_torque_Nm);

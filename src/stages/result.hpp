@@ -53,7 +53,8 @@ struct RunResult {
   int n_bays = 0;
   int bays_completed = 0;                 // locked (deploy) or stowed (retract) bays
 
-  double deploy_time_s = NAN_INIT();      // time of the last lock (or end of retraction)
+  double deploy_time_s = NAN_INIT();      // time of the last lock (or end of retraction); NaN if not reached
+  double end_time_s = NAN_INIT();         // time at which the run ended, whatever its status
   double peak_drive_force_N = NAN_INIT();
   double peak_drive_force_time_s = NAN_INIT();
   int peak_drive_force_bay = 0;

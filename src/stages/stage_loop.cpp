@@ -114,11 +114,20 @@ void StageLoop::start_stage(const StageSpec& s, BayResult& br) {
   if (s.start != StageStart::unlock) return;
   const PhasePoint p0 = HeldPhase(make_context(s, PhaseKind::on_rail, 0.0)).calc_point(0.0, 0.0);
   ++evals_;
-  if (kinematic_ && m == stages_.front().bay) {  // the whole mast starts moving: lossless drive ramp
+  if (kinematic_ && m == stages_.front().bay) {
+    // The mast starts from rest: the drive ramps the driven frame and, through the rail, the
+    // hinge (x' = -u / c) up together, lossless; no impact, so no latch energy (MODEL.md 2 charges
+    // it for the unlock of a moving mast only). Mass along the constrained motion, with
+    // M_yx = 0 at x = 0: M_yy + M_xx / c^2.
+    const double c = mast_.rail.cot_beta();
     u_ = dir_ * v;
-    const DriveRamp ramp = calc_drive_ramp(p0.mass_yy, u_);
+    xi_ = -u_ / c;
+    const DriveRamp ramp = calc_drive_ramp(p0.mass_yy + p0.mass_xx / (c * c), u_);
     r_.start_drive_impulse_Ns = ramp.impulse_Ns;
     ledger_.add_impulse_work(ramp.work_J);
+    br.latch_energy_J = 0.0;
+    br.lock_time_s = t_;
+    return;
   }
   const UnlockImpact imp = calc_unlock_impact(p0.mass_yy, p0.mass_xx, mast_.rail.cot_beta(), u_, kinematic_);
   if (kinematic_) ledger_.add_impulse_work(imp.drive_work_J);
@@ -251,6 +260,7 @@ void StageLoop::close_stage(BayResult& br) {
 }
 
 void StageLoop::finish() {
+  r_.end_time_s = t_;
   if (failed_) {
     ke_end_ = last_.kinetic_energy_J;
   } else {
