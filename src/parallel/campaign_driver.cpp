@@ -161,12 +161,13 @@ struct SessionState {
   double first_start = 0;      // unix time of the first session
 };
 
-// Rank 0: restores the journal's runs into the table, journals this session's start and returns
-// the runs still to do.
-std::vector<std::int64_t> restore_journal(Rank0& r0, campaign::ResultTable& table, const campaign::CampaignContext& ctx,
-                                          double t_start, int size, SessionState& st) {
+// Rank 0: reads the journal's sessions and which runs it holds, journals this session's start and
+// returns the runs still to do (the records themselves go into the table in restore_runs).
+std::vector<std::int64_t> scan_journal(Rank0& r0, std::int64_t n_runs, double t_start, int size, SessionState& st) {
   st.first_start = t_start;
   double session_wall = 0.0;
+  std::vector<std::uint8_t> done(static_cast<std::size_t>(n_runs), 0);
+  std::int64_t n_done = 0;
   for (const auto& f : r0.frames) {
     if (f.kind == FrameKind::session) {
       if (st.session == 0) st.first_start = get_at<double>(f.payload, 0);
@@ -176,15 +177,16 @@ std::vector<std::int64_t> restore_journal(Rank0& r0, campaign::ResultTable& tabl
     } else if (f.kind == FrameKind::heartbeat) {
       session_wall = get_at<double>(f.payload, 0);
     } else if (f.kind == FrameKind::run) {
-      table.add(campaign::RunRecord::from_bytes(f.payload, ctx.columns), std::max(0, st.session - 1));
+      const auto i = get_at<std::int64_t>(f.payload, 0);  // a record starts with its run index
+      if (i >= 0 && i < n_runs && !done[static_cast<std::size_t>(i)]) {
+        done[static_cast<std::size_t>(i)] = 1;
+        ++n_done;
+      }
     }
   }
   st.previous_wall_s += session_wall;
-  r0.frames.clear();
-  r0.frames.shrink_to_fit();
-  const std::int64_t n_runs = ctx.options.ensemble.n_runs;
   if (st.session > 0)
-    std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}{}\n", table.n_done(), n_runs,
+    std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}{}\n", n_done, n_runs,
                              r0.journal->path(),
                              r0.dropped_bytes ? fmt::format(" ({} bytes of a torn last record dropped)", r0.dropped_bytes) : "");
   std::string s;
@@ -194,8 +196,19 @@ std::vector<std::int64_t> restore_journal(Rank0& r0, campaign::ResultTable& tabl
   r0.journal->flush();
   std::vector<std::int64_t> todo;
   for (std::int64_t i = 0; i < n_runs; ++i)
-    if (!table.has(i)) todo.push_back(i);
+    if (!done[static_cast<std::size_t>(i)]) todo.push_back(i);
   return todo;
+}
+
+// Rank 0: the journal's records into the table (session numbers as they were), then frees them.
+void restore_runs(Rank0& r0, campaign::ResultTable& table, const campaign::OutputColumns& cols) {
+  int session = 0;
+  for (const auto& f : r0.frames) {
+    if (f.kind == FrameKind::session) ++session;
+    else if (f.kind == FrameKind::run) table.add(campaign::RunRecord::from_bytes(f.payload, cols), std::max(0, session - 1));
+  }
+  r0.frames.clear();
+  r0.frames.shrink_to_fit();
 }
 
 // Rank 0: histories, statistics and the results file; removes the journal. Returns the exit status.
@@ -301,11 +314,8 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   std::unique_ptr<campaign::ResultTable> table;
   std::vector<std::int64_t> todo;
   SessionState st;
-  if (root) {
-    table = std::make_unique<campaign::ResultTable>(c.ensemble.n_runs, ctx->columns);
-    todo = restore_journal(r0, *table, *ctx, t_start, size, st);
-  }
-  const std::int64_t restored = root ? table->n_done() : 0;
+  if (root) todo = scan_journal(r0, c.ensemble.n_runs, t_start, size, st);
+  const std::int64_t restored = root ? c.ensemble.n_runs - static_cast<std::int64_t>(todo.size()) : 0;
   campaign::Progress progress(c.ensemble.n_runs, restored, progress_mode(o.progress), o.progress_interval_s);
   auto last_flush = std::chrono::steady_clock::now();
   auto flush_journal = [&] {
@@ -322,6 +332,10 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   ScheduleOptions so;
   so.max_batch = o.max_batch;
   so.tick_interval_s = std::min(0.25, o.flush_interval_s);
+  so.on_started = [&] {  // workers are busy with their first batches meanwhile
+    table = std::make_unique<campaign::ResultTable>(c.ensemble.n_runs, ctx->columns);
+    restore_runs(r0, *table, ctx->columns);
+  };
   ScheduleSummary sched;
   try {
     sched = run_schedule(

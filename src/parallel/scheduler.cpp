@@ -194,6 +194,7 @@ ScheduleSummary Rank0::run() {
   for (int w = 1; w < size_; ++w) send_batch(w);
   for (int w = 1; w < size_; ++w)
     if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
+  if (opts_.on_started) opts_.on_started();
   Backoff backoff(200);  // rank 0 idles only at the very end, where latency matters
   while (received_ < total) {
     const bool progressed = poll();

@@ -27,6 +27,9 @@ struct ScheduleOptions {
   int max_batch = 32;              // upper bound on runs per batch: keeps the end of the campaign balanced
   int batches_per_rank = 4;        // guided scheduling: batch = remaining / (batches_per_rank * ranks)
   double tick_interval_s = 0.25;   // how often rank 0 calls on_tick (progress, journal flushes)
+  // Rank 0, once every worker holds its first two batches: set-up that need not keep them waiting
+  // (allocating the result store, restoring a journal). No result is delivered before it returns.
+  std::function<void()> on_started;
   std::string validate() const;
 };
 
