@@ -252,26 +252,44 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
   }
 }
 
-// Every rank parses the campaign; errors are agreed on and reported once. Returns an exit status
-// when the command is done (bad input, --dry-run).
+// Rank 0 reads the campaign file (and its scene file) and sends the resolved campaign text, which
+// holds everything inline, to the other ranks: only rank 0 needs the input files, as only it
+// needs the output and journal paths (a multi-host run needs them on rank 0's host alone). Errors
+// are agreed on and reported once. Returns an exit status when the command is done (bad input,
+// --dry-run).
 std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions& o,
                                  std::optional<campaign::CampaignContext>& ctx, std::string& campaign_text) {
   std::string error;
   try {
-    ctx.emplace(campaign::parse_campaign_file(o.campaign_path, o.sets));
-    campaign_text = campaign::resolved_campaign_toml(ctx->options);
+    if (root) {
+      ctx.emplace(campaign::parse_campaign_file(o.campaign_path, o.sets));
+      campaign_text = campaign::resolved_campaign_toml(ctx->options);
+    }
   } catch (const io::InputError& e) {
     error = e.what();
   } catch (const std::exception& e) {
     error = fmt::format("error: {}: {}", o.campaign_path, e.what());
   }
   if (any_rank(comm, !error.empty())) {
-    if (root) std::cerr << (error.empty() ? "error: the campaign could not be read on another rank" : error) << '\n';
+    if (root) std::cerr << error << '\n';
     return kExitBadInput;
   }
   if (o.dry_run) {
     if (root) std::cout << campaign_text;
     return kExitOk;
+  }
+  auto len = static_cast<long long>(campaign_text.size());
+  MPI_Bcast(&len, 1, MPI_LONG_LONG, 0, comm);
+  campaign_text.resize(static_cast<std::size_t>(len));
+  MPI_Bcast(campaign_text.data(), static_cast<int>(len), MPI_CHAR, 0, comm);
+  try {
+    if (!root) ctx.emplace(campaign::parse_campaign_text(campaign_text, "resolved campaign from rank 0", ".", {}));
+  } catch (const std::exception& e) {
+    error = fmt::format("error: the resolved campaign does not parse on rank {}: {}", root ? 0 : 1, e.what());
+  }
+  if (any_rank(comm, !error.empty())) {
+    std::cerr << error << '\n';  // an internal error: every rank that has one reports it
+    return kExitIoError;
   }
   return std::nullopt;
 }
