@@ -242,16 +242,24 @@ void write_histories(hid_t file, const CampaignOptions& c, const std::vector<std
       write_history(h.get(), r.history);
     }
   }
-
 }
 
-void write_timing(hid_t file, const ResultTable& t) {
+void write_timing(hid_t file, const ResultTable& t, const CampaignFileInfo& info) {
   const auto n = static_cast<std::size_t>(t.n_runs());
-    Handle g = make_group(file, "timing");
+  Handle g = make_group(file, "timing");
   write_string_attribute(g.get(), "note", "not reproducible: depends on the machine, the ranks and the order of work");
   write_array(g.get(), "run_wall_time_s", "s", t.wall_time_s.data(), n);
   write_array(g.get(), "rank", "1", t.rank.data(), n);
   write_array(g.get(), "session", "1", t.session.data(), n);
+  const ScheduleTiming& st = info.schedule;
+  write_double_attribute(g.get(), "schedule_wall_s", st.wall_s);
+  write_double_attribute(g.get(), "rank0_compute_s", st.rank0_compute_s);
+  write_double_attribute(g.get(), "rank0_poll_s", st.rank0_poll_s);
+  write_double_attribute(g.get(), "rank0_tick_s", st.rank0_tick_s);
+  write_double_attribute(g.get(), "rank0_idle_s", st.rank0_idle_s);
+  write_int_attribute(g.get(), "runs_by_rank0", st.runs_by_rank0);
+  write_int_attribute(g.get(), "runs_by_workers", st.runs_by_workers);
+  if (st.synthetic_run_cost_s >= 0) write_double_attribute(g.get(), "synthetic_run_cost_s", st.synthetic_run_cost_s);
 }
 
 void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t, const std::vector<OutputSensitivity>& sens,
@@ -261,7 +269,7 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
   write_stats(file, ctx, t);
   write_sensitivity(file, ctx.options, sens);
   write_histories(file, ctx.options, histories);
-  write_timing(file, t);
+  write_timing(file, t, info);
 }
 
 }  // namespace

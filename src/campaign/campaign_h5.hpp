@@ -13,6 +13,17 @@ namespace truss::campaign {
 
 inline constexpr std::int64_t kCampaignSchemaVersion = 1;
 
+// How the last session's schedule went (rank 0's view), for /timing: not reproducible.
+struct ScheduleTiming {
+  double wall_s = 0;            // first batch to last result
+  double rank0_compute_s = 0;   // rank 0 inside its own runs
+  double rank0_poll_s = 0;      // rank 0 matching, receiving, storing and journalling results, answering
+  double rank0_tick_s = 0;      // rank 0 flushing the journal and printing progress
+  double rank0_idle_s = 0;      // rank 0 waiting with nothing left to compute (the end)
+  std::int64_t runs_by_rank0 = 0, runs_by_workers = 0;
+  double synthetic_run_cost_s = -1;  // >= 0: a bench-only campaign of sleeping runs (no physics)
+};
+
 struct CampaignFileInfo {
   std::string campaign_toml;     // resolved campaign
   std::string base_scene_toml;   // resolved base scene (single-run format)
@@ -20,6 +31,7 @@ struct CampaignFileInfo {
   int n_sessions = 1;            // 1 + resumes
   std::string start_utc, end_utc;
   double wall_time_s = 0.0;      // summed over sessions
+  ScheduleTiming schedule;       // of this session
 };
 
 void write_campaign_h5(const std::string& path, const CampaignContext& ctx, const ResultTable& table,

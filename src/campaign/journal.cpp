@@ -150,12 +150,19 @@ Journal::~Journal() {
 }
 
 void Journal::append(FrameKind kind, std::string_view payload) {
-  std::string framed(1, static_cast<char>(kind));
-  framed.append(payload);
+  // CRC-32 of kind + payload, without building that string.
+  const auto k = static_cast<Bytef>(kind);
+  uLong crc = ::crc32(0L, &k, 1);
+  crc = ::crc32(crc, reinterpret_cast<const Bytef*>(payload.data()), static_cast<uInt>(payload.size()));
   put(buffer_, static_cast<std::uint8_t>(kind));
   put(buffer_, static_cast<std::uint32_t>(payload.size()));
-  put(buffer_, crc32_of(framed));
+  put(buffer_, static_cast<std::uint32_t>(crc));
   buffer_.append(payload);
+  // Bounded memory: hand full buffers to the kernel (no sync; flush() syncs).
+  if (buffer_.size() >= kWriteThrough) {
+    write_all(fd_, buffer_, path_);
+    buffer_.clear();
+  }
 }
 
 void Journal::flush() {

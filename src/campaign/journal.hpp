@@ -52,7 +52,10 @@ class Journal {
   // Removes an unfinished journal (--force); JournalRefused if a live process holds it.
   static void remove_unused(const std::string& path);
 
-  void append(FrameKind kind, std::string_view payload);  // buffered
+  // Buffered; a buffer of kWriteThrough bytes is written out (not synced) at once, so memory stays
+  // bounded however long the flush interval.
+  void append(FrameKind kind, std::string_view payload);
+  static constexpr std::size_t kWriteThrough = std::size_t{1} << 20;
   void flush();           // write() the buffer and fdatasync: on disk from now on
   void close_and_remove();  // after the results file is in place
   const std::string& path() const { return path_; }

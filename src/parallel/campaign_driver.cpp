@@ -22,6 +22,7 @@
 #include "io/h5_util.hpp"
 #include "io/scene_toml.hpp"
 #include "parallel/scheduler.hpp"
+#include "parallel/synthetic_run.hpp"
 
 namespace truss::parallel {
 
@@ -41,6 +42,7 @@ struct CommandOptions {
   std::string progress = "auto";
   double progress_interval_s = 10.0;
   int max_batch = 32;
+  double synthetic_run_cost_s = -1.0;  // bench only (hidden): runs sleep this long and simulate nothing
 };
 
 // The error state of all ranks: true on every rank if any rank failed.
@@ -50,10 +52,7 @@ bool any_rank(MPI_Comm comm, bool mine) {
   return out != 0;
 }
 
-int broadcast_int(MPI_Comm comm, int v) {
-  MPI_Bcast(&v, 1, MPI_INT, 0, comm);
-  return v;
-}
+int broadcast_int(MPI_Comm comm, int v) { return broadcast_int_idle(comm, v); }
 
 double unix_now() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
@@ -118,18 +117,9 @@ campaign::ProgressMode progress_mode(const std::string& s) {
   return campaign::ProgressMode::automatic;
 }
 
-}  // namespace
-
-int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
-  int rank = 0, size = 1;
-  MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  const bool root = rank == 0;
-  const double t_start = unix_now();
-  const auto wall0 = std::chrono::steady_clock::now();
-
-  // --- command line (identical on every rank) ---------------------------------------------------
-  CommandOptions o;
+// The command line (identical on every rank). Returns an exit status when the command is done
+// (--help, --version, a parse error), nothing when the campaign is to run.
+std::optional<int> parse_command(int argc, char** argv, bool root, CommandOptions& o) {
   CLI::App app{"Runs an uncertainty campaign of folding truss mast deployments over MPI ranks.", "truss-campaign"};
   app.add_option("campaign", o.campaign_path, "Campaign file (TOML), e.g. campaigns/table1_dispersed.toml")->required();
   app.add_option("-o,--output", o.output_path, "Results file (HDF5, docs/hdf5-schema.md); required unless --dry-run");
@@ -144,6 +134,8 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   app.add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines when not on a terminal")
       ->check(CLI::Range(0.01, 1e6));
   app.add_option("--max-batch", o.max_batch, "Largest batch of runs handed to a rank at once")->check(CLI::Range(1, 100000));
+  // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
+  app.add_option("--synthetic-run-cost-s", o.synthetic_run_cost_s, "")->check(CLI::Range(0.0, 60.0))->group("");
   app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
   app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
              "3 I/O or internal error.");
@@ -159,29 +151,151 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
     }
     return rc == 0 ? kExitOk : kExitBadInput;
   }
+  return std::nullopt;
+}
 
-  // --- the campaign, on every rank ----------------------------------------------------------------
-  std::optional<campaign::CampaignContext> ctx;
-  std::string campaign_text, error;
+// What rank 0 carries from the journal into this session.
+struct SessionState {
+  int session = 0;             // index of this invocation (0 unless resumed)
+  double previous_wall_s = 0;  // wall time of the earlier sessions
+  double first_start = 0;      // unix time of the first session
+};
+
+// Rank 0: reads the journal's sessions and which runs it holds, journals this session's start and
+// returns the runs still to do (the records themselves go into the table in restore_runs).
+std::vector<std::int64_t> scan_journal(Rank0& r0, std::int64_t n_runs, double t_start, int size, SessionState& st) {
+  st.first_start = t_start;
+  double session_wall = 0.0;
+  std::vector<std::uint8_t> done(static_cast<std::size_t>(n_runs), 0);
+  std::int64_t n_done = 0;
+  for (const auto& f : r0.frames) {
+    if (f.kind == FrameKind::session) {
+      if (st.session == 0) st.first_start = get_at<double>(f.payload, 0);
+      st.previous_wall_s += session_wall;
+      session_wall = 0.0;
+      ++st.session;
+    } else if (f.kind == FrameKind::heartbeat) {
+      session_wall = get_at<double>(f.payload, 0);
+    } else if (f.kind == FrameKind::run) {
+      const auto i = get_at<std::int64_t>(f.payload, 0);  // a record starts with its run index
+      if (i >= 0 && i < n_runs && !done[static_cast<std::size_t>(i)]) {
+        done[static_cast<std::size_t>(i)] = 1;
+        ++n_done;
+      }
+    }
+  }
+  st.previous_wall_s += session_wall;
+  if (st.session > 0)
+    std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}{}\n", n_done, n_runs,
+                             r0.journal->path(),
+                             r0.dropped_bytes ? fmt::format(" ({} bytes of a torn last record dropped)", r0.dropped_bytes) : "");
+  std::string s;
+  put(s, t_start);
+  put(s, static_cast<std::int32_t>(size));
+  r0.journal->append(FrameKind::session, s);
+  r0.journal->flush();
+  std::vector<std::int64_t> todo;
+  for (std::int64_t i = 0; i < n_runs; ++i)
+    if (!done[static_cast<std::size_t>(i)]) todo.push_back(i);
+  return todo;
+}
+
+// Rank 0: the journal's records into the table (session numbers as they were), then frees them.
+void restore_runs(Rank0& r0, campaign::ResultTable& table, const campaign::OutputColumns& cols) {
+  int session = 0;
+  for (const auto& f : r0.frames) {
+    if (f.kind == FrameKind::session) ++session;
+    else if (f.kind == FrameKind::run) table.add(campaign::RunRecord::from_bytes(f.payload, cols), std::max(0, session - 1));
+  }
+  r0.frames.clear();
+  r0.frames.shrink_to_fit();
+}
+
+// Rank 0: histories, statistics and the results file; removes the journal. Returns the exit status.
+int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx, const std::string& campaign_text,
+                  Rank0& r0, const campaign::ResultTable& table, const SessionState& st, int size,
+                  std::chrono::steady_clock::time_point wall0, const ScheduleSummary& sched) {
+  const campaign::CampaignOptions& c = ctx.options;
   try {
-    ctx.emplace(campaign::parse_campaign_file(o.campaign_path, o.sets));
-    campaign_text = campaign::resolved_campaign_toml(ctx->options);
+    const auto t_finish = std::chrono::steady_clock::now();
+    std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
+    for (std::int64_t run : c.output.history_runs)
+      histories.emplace_back(run, campaign::calc_run_with_history(ctx, run, c.output.history_step_s));
+    const auto sens = campaign::calc_sensitivity(table, c);
+    campaign::CampaignFileInfo info;
+    info.campaign_toml = campaign_text;
+    info.base_scene_toml = io::resolved_scene_toml(c.base);
+    info.n_ranks = size;
+    info.n_sessions = st.session + 1;
+    info.start_utc = io::h5::utc_iso8601(st.first_start);
+    info.end_utc = io::h5::utc_now_iso8601();
+    info.wall_time_s = st.previous_wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+    info.schedule = {sched.wall_s, sched.rank0_compute_s, sched.rank0_poll_s, sched.rank0_tick_s, sched.rank0_idle_s,
+                     sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s};
+    campaign::write_campaign_h5(o.output_path, ctx, table, sens, histories, info, o.force);
+    r0.journal->close_and_remove();
+    const std::int64_t results = sched.runs_by_rank0 + sched.runs_by_workers;
+    std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs, {} ok, {} failed, {:.3g} s on {} rank{} "
+                             "(statistics and file: {:.3g} s; rank 0: {} runs computed, {:.3g} us per result handled)\n",
+                             o.output_path, table.n_runs(), table.n_runs() - table.n_failed(), table.n_failed(),
+                             info.wall_time_s, size, size > 1 ? "s" : "",
+                             std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count(),
+                             sched.runs_by_rank0,
+                             results ? 1e6 * (sched.rank0_poll_s + sched.rank0_tick_s) / static_cast<double>(results) : 0.0);
+    return kExitOk;
+  } catch (const io::InputError& e) {
+    std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
+    return kExitIoError;
+  }
+}
+
+// Rank 0 reads the campaign file (and its scene file) and sends the resolved campaign text, which
+// holds everything inline, to the other ranks: only rank 0 needs the input files, as only it
+// needs the output and journal paths (a multi-host run needs them on rank 0's host alone). Errors
+// are agreed on and reported once. Returns an exit status when the command is done (bad input,
+// --dry-run).
+std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions& o,
+                                 std::optional<campaign::CampaignContext>& ctx, std::string& campaign_text) {
+  std::string error;
+  try {
+    if (root) {
+      ctx.emplace(campaign::parse_campaign_file(o.campaign_path, o.sets));
+      campaign_text = campaign::resolved_campaign_toml(ctx->options);
+    }
   } catch (const io::InputError& e) {
     error = e.what();
   } catch (const std::exception& e) {
     error = fmt::format("error: {}: {}", o.campaign_path, e.what());
   }
   if (any_rank(comm, !error.empty())) {
-    if (root) std::cerr << (error.empty() ? "error: the campaign could not be read on another rank" : error) << '\n';
+    if (root) std::cerr << error << '\n';
     return kExitBadInput;
   }
   if (o.dry_run) {
     if (root) std::cout << campaign_text;
     return kExitOk;
   }
+  auto len = static_cast<long long>(campaign_text.size());
+  MPI_Bcast(&len, 1, MPI_LONG_LONG, 0, comm);
+  campaign_text.resize(static_cast<std::size_t>(len));
+  MPI_Bcast(campaign_text.data(), static_cast<int>(len), MPI_CHAR, 0, comm);
+  try {
+    if (!root) ctx.emplace(campaign::parse_campaign_text(campaign_text, "resolved campaign from rank 0", ".", {}));
+  } catch (const std::exception& e) {
+    error = fmt::format("error: the resolved campaign does not parse on rank {}: {}", root ? 0 : 1, e.what());
+  }
+  if (any_rank(comm, !error.empty())) {
+    std::cerr << error << '\n';  // an internal error: every rank that has one reports it
+    return kExitIoError;
+  }
+  return std::nullopt;
+}
 
-  // --- output and journal (rank 0) ---------------------------------------------------------------
-  Rank0 r0;
+// Rank 0: the output and journal checks, agreed on by every rank.
+int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const std::string& campaign_text, Rank0& r0) {
   int status = kExitOk;
   if (root) {
     try {
@@ -194,45 +308,32 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
       status = kExitIoError;
     }
   }
-  status = broadcast_int(comm, status);
-  if (status != kExitOk) return status;
+  return broadcast_int(comm, status);
+}
 
-  // --- restore, schedule, journal -------------------------------------------------------------------
+}  // namespace
+
+int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  const bool root = rank == 0;
+  const double t_start = unix_now();
+  const auto wall0 = std::chrono::steady_clock::now();
+  CommandOptions o;
+  if (auto rc = parse_command(argc, argv, root, o)) return *rc;
+  std::optional<campaign::CampaignContext> ctx;
+  std::string campaign_text;
+  if (auto rc = load_campaign(comm, root, o, ctx, campaign_text)) return *rc;
+  Rank0 r0;
+  if (int rc = prepare_output_all(comm, root, o, campaign_text, r0); rc != kExitOk) return rc;
+
   const campaign::CampaignOptions& c = ctx->options;
   std::unique_ptr<campaign::ResultTable> table;
   std::vector<std::int64_t> todo;
-  int session = 0;
-  double previous_wall_s = 0.0, first_start = t_start;
-  if (root) {
-    table = std::make_unique<campaign::ResultTable>(c.ensemble.n_runs, ctx->columns);
-    double session_wall = 0.0;
-    for (const auto& f : r0.frames) {
-      if (f.kind == FrameKind::session) {
-        if (session == 0) first_start = get_at<double>(f.payload, 0);
-        previous_wall_s += session_wall;
-        session_wall = 0.0;
-        ++session;
-      } else if (f.kind == FrameKind::heartbeat) {
-        session_wall = get_at<double>(f.payload, 0);
-      } else if (f.kind == FrameKind::run) {
-        table->add(campaign::RunRecord::from_bytes(f.payload, ctx->columns), std::max(0, session - 1));
-      }
-    }
-    previous_wall_s += session_wall;
-    if (!r0.frames.empty())
-      std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}{}\n", table->n_done(),
-                               c.ensemble.n_runs, r0.journal->path(),
-                               r0.dropped_bytes ? fmt::format(" ({} bytes of a torn last record dropped)", r0.dropped_bytes) : "");
-    std::string s;
-    put(s, t_start);
-    put(s, static_cast<std::int32_t>(size));
-    r0.journal->append(FrameKind::session, s);
-    r0.journal->flush();
-    for (std::int64_t i = 0; i < c.ensemble.n_runs; ++i)
-      if (!table->has(i)) todo.push_back(i);
-  }
-
-  const std::int64_t restored = root ? table->n_done() : 0;
+  SessionState st;
+  if (root) todo = scan_journal(r0, c.ensemble.n_runs, t_start, size, st);
+  const std::int64_t restored = root ? c.ensemble.n_runs - static_cast<std::int64_t>(todo.size()) : 0;
   campaign::Progress progress(c.ensemble.n_runs, restored, progress_mode(o.progress), o.progress_interval_s);
   auto last_flush = std::chrono::steady_clock::now();
   auto flush_journal = [&] {
@@ -242,15 +343,23 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
     r0.journal->flush();
     last_flush = std::chrono::steady_clock::now();
   };
+  auto compute = [&](std::int64_t run, std::string& out) {
+    if (o.synthetic_run_cost_s >= 0.0) synthetic_run_record(*ctx, run, rank, o.synthetic_run_cost_s).append_bytes(out);
+    else campaign::calc_run_record(*ctx, run, rank).append_bytes(out);
+  };
   ScheduleOptions so;
   so.max_batch = o.max_batch;
   so.tick_interval_s = std::min(0.25, o.flush_interval_s);
+  so.on_started = [&] {  // workers are busy with their first batches meanwhile
+    table = std::make_unique<campaign::ResultTable>(c.ensemble.n_runs, ctx->columns);
+    restore_runs(r0, *table, ctx->columns);
+  };
+  ScheduleSummary sched;
   try {
-    run_schedule(
-        comm, todo,
-        [&](std::int64_t run, std::string& out) { campaign::calc_run_record(*ctx, run, rank).append_bytes(out); },
+    sched = run_schedule(
+        comm, todo, compute,
         [&](std::string_view bytes) {
-          table->add(campaign::RunRecord::from_bytes(bytes, ctx->columns), session);
+          table->add(campaign::RunRecord::from_bytes(bytes, ctx->columns), st.session);
           r0.journal->append(FrameKind::run, bytes);
         },
         [&] {
@@ -263,35 +372,12 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
     std::cerr << "error: " << e.what() << '\n';
     MPI_Abort(comm, kExitIoError);
   }
-
-  // --- the results file (rank 0) ---------------------------------------------------------------------
+  int status = kExitOk;
   if (root) {
     try {
       flush_journal();
       progress.finish(table->n_done(), table->n_failed());
-      const auto t_finish = std::chrono::steady_clock::now();
-      std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
-      for (std::int64_t run : c.output.history_runs)
-        histories.emplace_back(run, campaign::calc_run_with_history(*ctx, run, c.output.history_step_s));
-      const auto sens = campaign::calc_sensitivity(*table, c);
-      campaign::CampaignFileInfo info;
-      info.campaign_toml = campaign_text;
-      info.base_scene_toml = io::resolved_scene_toml(c.base);
-      info.n_ranks = size;
-      info.n_sessions = session + 1;
-      info.start_utc = io::h5::utc_iso8601(first_start);
-      info.end_utc = io::h5::utc_now_iso8601();
-      info.wall_time_s = previous_wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
-      campaign::write_campaign_h5(o.output_path, *ctx, *table, sens, histories, info, o.force);
-      r0.journal->close_and_remove();
-      std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs, {} ok, {} failed, {:.3g} s on {} rank{} "
-                               "(statistics and file: {:.3g} s)\n", o.output_path, table->n_runs(),
-                               table->n_runs() - table->n_failed(), table->n_failed(), info.wall_time_s, size,
-                               size > 1 ? "s" : "",
-                               std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count());
-    } catch (const io::InputError& e) {
-      std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
-      status = kExitBadInput;
+      status = write_results(o, *ctx, campaign_text, r0, *table, st, size, wall0, sched);
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
       status = kExitIoError;

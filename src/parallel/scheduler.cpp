@@ -1,84 +1,222 @@
+// Rank 0's side of the scheduler (the worker's is in scheduler_worker.cpp).
 #include "parallel/scheduler.hpp"
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
-#include <cstring>
-#include <deque>
-#include <ctime>
-#include <exception>
+#include <memory>
 
 #include <fmt/format.h>
 
+#include "parallel/scheduler_detail.hpp"
+
 namespace truss::parallel {
+
+using namespace detail;
 
 namespace {
 
-constexpr int kTagWork = 11;    // rank 0 -> worker: int64 run indices; empty = no more work
-constexpr int kTagResult = 12;  // worker -> rank 0: framed results of one batch (and a request)
-
 using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-// Results of a batch: for each run, u32 length then the bytes.
-void append_framed(std::string& msg, const std::string& one) {
-  const auto n = static_cast<std::uint32_t>(one.size());
-  msg.append(reinterpret_cast<const char*>(&n), sizeof n);
-  msg += one;
+struct Incoming {
+  int source = 0;
+  std::string bytes;
+};
+struct WorkOut {
+  std::vector<std::int64_t> runs;
+  MPI_Request req = MPI_REQUEST_NULL;
+};
+
+class Rank0 {
+ public:
+  Rank0(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute, const ResultFn& on_result,
+        const TickFn& on_tick, const ScheduleOptions& opts);
+  ScheduleSummary run();
+
+ private:
+  void send_batch(int w);
+  bool poll();              // matches, receives and answers; true if anything happened
+  bool match_new();         // MPI_Improbe every waiting result message, MPI_Imrecv it, answer its sender
+  bool complete_receives();
+  void test_sends();
+  void deliver(std::string_view one);
+  void compute_one();
+  void maybe_tick();
+
+  MPI_Comm comm_;
+  const std::vector<std::int64_t>& todo_;
+  const ComputeFn& compute_;
+  const ResultFn& on_result_;
+  const TickFn& on_tick_;
+  const ScheduleOptions& opts_;
+  int size_ = 1;
+  std::size_t next_run_ = 0;  // todo_[next_run_] is the next run to hand out
+  std::int64_t received_ = 0;
+  std::vector<std::uint8_t> stopped_;
+  std::vector<MPI_Request> recv_reqs_;              // parallel to incoming_
+  std::vector<std::unique_ptr<Incoming>> incoming_;  // buffers stay put while their receive is posted
+  std::vector<std::unique_ptr<WorkOut>> sends_;
+  std::vector<int> done_idx_;
+  std::string one_;
+  Clock::time_point last_tick_ = Clock::now();
+  ScheduleSummary sum_;
+};
+
+Rank0::Rank0(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute, const ResultFn& on_result,
+             const TickFn& on_tick, const ScheduleOptions& opts)
+    : comm_(comm), todo_(todo), compute_(compute), on_result_(on_result), on_tick_(on_tick), opts_(opts) {
+  MPI_Comm_size(comm, &size_);
+  stopped_.assign(static_cast<std::size_t>(size_), 0);
 }
 
-template <class F>
-void for_each_framed(std::string_view msg, F&& f) {
-  std::size_t at = 0;
-  while (at < msg.size()) {
-    std::uint32_t n = 0;
-    std::memcpy(&n, msg.data() + at, sizeof n);
-    at += sizeof n;
-    f(msg.substr(at, n));
-    at += n;
-  }
+// Guided batches: remaining / (batches_per_rank * ranks), at least 1, at most max_batch. An empty
+// batch is the stop message.
+void Rank0::send_batch(int w) {
+  auto out = std::make_unique<WorkOut>();
+  const std::size_t remaining = todo_.size() - next_run_;
+  std::size_t k = remaining / static_cast<std::size_t>(opts_.batches_per_rank * size_);
+  k = std::min(std::clamp<std::size_t>(k, 1, static_cast<std::size_t>(opts_.max_batch)), remaining);
+  const auto first = todo_.begin() + static_cast<std::ptrdiff_t>(next_run_);
+  out->runs.assign(first, first + static_cast<std::ptrdiff_t>(k));
+  next_run_ += k;
+  if (k == 0) stopped_[static_cast<std::size_t>(w)] = 1;
+  MPI_Isend(out->runs.data(), static_cast<int>(k), MPI_INT64_T, w, kTagWork, comm_, &out->req);
+  sends_.push_back(std::move(out));
+  ++sum_.batches_sent;
 }
 
-[[noreturn]] void abort_job(MPI_Comm comm, const char* where, const std::exception& e) {
-  std::fprintf(stderr, "truss-campaign: fatal error in %s: %s\n", where, e.what());
-  std::fflush(stderr);
-  MPI_Abort(comm, 3);
-  std::terminate();
-}
-
-void run_worker(MPI_Comm comm, const ComputeFn& compute) {
-  std::vector<std::int64_t> cur, next;
-  auto recv_work = [&](std::vector<std::int64_t>& into) {
+bool Rank0::match_new() {
+  bool any = false;
+  for (;;) {
+    int flag = 0;
+    MPI_Message m;
     MPI_Status st;
-    MPI_Probe(0, kTagWork, comm, &st);
+    MPI_Improbe(MPI_ANY_SOURCE, kTagResult, comm_, &flag, &m, &st);
+    if (!flag) return any;
+    any = true;
     int count = 0;
-    MPI_Get_count(&st, MPI_INT64_T, &count);
-    into.resize(static_cast<std::size_t>(count));
-    MPI_Recv(into.data(), count, MPI_INT64_T, 0, kTagWork, comm, MPI_STATUS_IGNORE);
-  };
-  // Rank 0 sends two batches up front; afterwards one per result message, so the second batch
-  // (or the stop message) is already on its way while this one is computed.
-  recv_work(cur);
-  std::string msg, one;
-  MPI_Request send_req = MPI_REQUEST_NULL;
-  std::string sending;
-  while (!cur.empty()) {
-    msg.clear();
-    for (std::int64_t run : cur) {
-      one.clear();
-      try {
-        compute(run, one);
-      } catch (const std::exception& e) {
-        abort_job(comm, "a run", e);
-      }
-      append_framed(msg, one);
-    }
-    MPI_Wait(&send_req, MPI_STATUS_IGNORE);
-    sending.swap(msg);
-    MPI_Isend(sending.data(), static_cast<int>(sending.size()), MPI_BYTE, 0, kTagResult, comm, &send_req);
-    recv_work(next);
-    cur.swap(next);
+    MPI_Get_count(&st, MPI_BYTE, &count);
+    auto in = std::make_unique<Incoming>();
+    in->source = st.MPI_SOURCE;
+    in->bytes.resize(static_cast<std::size_t>(count));
+    MPI_Request r;
+    MPI_Imrecv(in->bytes.data(), count, MPI_BYTE, &m, &r);
+    recv_reqs_.push_back(r);
+    incoming_.push_back(std::move(in));
+    sum_.bytes_received += count;
+    // The worker has finished a batch and started the one it held: send its next one now, not
+    // when the data has arrived.
+    if (!stopped_[static_cast<std::size_t>(st.MPI_SOURCE)]) send_batch(st.MPI_SOURCE);
   }
-  MPI_Wait(&send_req, MPI_STATUS_IGNORE);
+}
+
+bool Rank0::complete_receives() {
+  if (recv_reqs_.empty()) return false;
+  int n_done = 0;
+  done_idx_.resize(recv_reqs_.size());
+  MPI_Testsome(static_cast<int>(recv_reqs_.size()), recv_reqs_.data(), &n_done, done_idx_.data(), MPI_STATUSES_IGNORE);
+  if (n_done <= 0) return false;
+  for (int k = 0; k < n_done; ++k) {
+    const auto before = received_;
+    for_each_framed(incoming_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])]->bytes,
+                    [&](std::string_view one) { deliver(one); });
+    sum_.runs_by_workers += received_ - before;
+  }
+  // Drop the completed receives (MPI_Testsome set their requests to MPI_REQUEST_NULL).
+  std::size_t w = 0;
+  for (std::size_t i = 0; i < recv_reqs_.size(); ++i) {
+    if (recv_reqs_[i] == MPI_REQUEST_NULL) continue;
+    recv_reqs_[w] = recv_reqs_[i];
+    incoming_[w] = std::move(incoming_[i]);
+    ++w;
+  }
+  recv_reqs_.resize(w);
+  incoming_.resize(w);
+  return true;
+}
+
+void Rank0::test_sends() {
+  auto done = [](std::unique_ptr<WorkOut>& s) {
+    int flag = 0;
+    MPI_Test(&s->req, &flag, MPI_STATUS_IGNORE);
+    return flag != 0;
+  };
+  sends_.erase(std::remove_if(sends_.begin(), sends_.end(), done), sends_.end());
+}
+
+bool Rank0::poll() {
+  const auto t0 = Clock::now();
+  const bool matched = match_new();
+  const bool received = complete_receives();
+  test_sends();
+  sum_.rank0_poll_s += seconds_since(t0);
+  return matched || received;
+}
+
+void Rank0::deliver(std::string_view one) {
+  try {
+    on_result_(one);
+  } catch (const std::exception& e) {
+    abort_job(comm_, "storing a result", e);
+  }
+  ++received_;
+}
+
+// Rank 0 takes single runs from the same pool, so it is never more than one run late in
+// answering a worker.
+void Rank0::compute_one() {
+  const std::int64_t run = todo_[next_run_++];
+  one_.clear();
+  const auto t0 = Clock::now();
+  try {
+    compute_(run, one_);
+  } catch (const std::exception& e) {
+    abort_job(comm_, "a run", e);
+  }
+  sum_.rank0_compute_s += seconds_since(t0);
+  ++sum_.runs_by_rank0;
+  const auto t1 = Clock::now();
+  deliver(one_);
+  sum_.rank0_poll_s += seconds_since(t1);
+}
+
+void Rank0::maybe_tick() {
+  const auto now = Clock::now();
+  if (std::chrono::duration<double>(now - last_tick_).count() < opts_.tick_interval_s) return;
+  last_tick_ = now;
+  on_tick_();
+  sum_.rank0_tick_s += seconds_since(now);
+}
+
+ScheduleSummary Rank0::run() {
+  const auto t0 = Clock::now();
+  const auto total = static_cast<std::int64_t>(todo_.size());
+  for (int w = 1; w < size_; ++w) send_batch(w);
+  for (int w = 1; w < size_; ++w)
+    if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
+  if (opts_.on_started) opts_.on_started();
+  Backoff backoff(200);  // rank 0 idles only at the very end, where latency matters
+  while (received_ < total) {
+    const bool progressed = poll();
+    if (next_run_ < todo_.size()) {
+      compute_one();
+    } else if (received_ < total && !progressed) {
+      const auto ti = Clock::now();
+      backoff.sleep();
+      sum_.rank0_idle_s += seconds_since(ti);
+    } else {
+      backoff.reset();
+    }
+    maybe_tick();
+  }
+  // Workers still waiting for a batch get the stop message.
+  for (int w = 1; w < size_; ++w)
+    if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
+  for (auto& s : sends_) wait_idle(&s->req);
+  sends_.clear();
+  sum_.wall_s = seconds_since(t0);
+  on_tick_();
+  return sum_;
 }
 
 }  // namespace
@@ -92,109 +230,30 @@ std::string ScheduleOptions::validate() const {
 
 ScheduleSummary run_schedule(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute,
                              const ResultFn& on_result, const TickFn& on_tick, const ScheduleOptions& opts) {
-  int rank = 0, size = 1;
+  int rank = 0;
   MPI_Comm_rank(comm, &rank);
-  MPI_Comm_size(comm, &size);
-  ScheduleSummary sum;
   if (rank != 0) {
     run_worker(comm, compute);
-    return sum;
+    return {};
   }
-  std::size_t next_run = 0;                // todo[next_run] is the next run to hand out
-  std::int64_t received = 0;
-  const auto total = static_cast<std::int64_t>(todo.size());
-  std::vector<std::uint8_t> stopped(static_cast<std::size_t>(size), 0);
+  return Rank0(comm, todo, compute, on_result, on_tick, opts).run();
+}
 
-  auto take_batch = [&](std::vector<std::int64_t>& batch) {
-    batch.clear();
-    const std::size_t remaining = todo.size() - next_run;
-    std::size_t k = remaining / static_cast<std::size_t>(opts.batches_per_rank * size);
-    k = std::clamp<std::size_t>(k, 1, static_cast<std::size_t>(opts.max_batch));
-    k = std::min(k, remaining);
-    batch.assign(todo.begin() + static_cast<std::ptrdiff_t>(next_run), todo.begin() + static_cast<std::ptrdiff_t>(next_run + k));
-    next_run += k;
-  };
-  std::vector<std::int64_t> batch;
-  auto send_batch = [&](int w) {
-    take_batch(batch);
-    if (batch.empty()) stopped[static_cast<std::size_t>(w)] = 1;
-    MPI_Send(batch.data(), static_cast<int>(batch.size()), MPI_INT64_T, w, kTagWork, comm);
-    ++sum.batches_sent;
-  };
-  for (int w = 1; w < size; ++w) send_batch(w);
-  for (int w = 1; w < size; ++w)
-    if (!stopped[static_cast<std::size_t>(w)]) send_batch(w);
-
-  auto deliver = [&](std::string_view one) {
-    try {
-      on_result(one);
-    } catch (const std::exception& e) {
-      abort_job(comm, "storing a result", e);
-    }
-    ++received;
-  };
-  std::string msg;
-  auto serve_one = [&](const MPI_Status& st) {
-    int count = 0;
-    MPI_Get_count(&st, MPI_BYTE, &count);
-    msg.resize(static_cast<std::size_t>(count));
-    MPI_Recv(msg.data(), count, MPI_BYTE, st.MPI_SOURCE, kTagResult, comm, MPI_STATUS_IGNORE);
-    sum.bytes_received += count;
-    for_each_framed(msg, deliver);
-    if (!stopped[static_cast<std::size_t>(st.MPI_SOURCE)]) send_batch(st.MPI_SOURCE);
-  };
-  auto last_tick = Clock::now();
-  auto maybe_tick = [&] {
-    const auto now = Clock::now();
-    if (std::chrono::duration<double>(now - last_tick).count() >= opts.tick_interval_s) {
-      last_tick = now;
-      on_tick();
-    }
-  };
-
-  std::string one;
-  while (received < total) {
-    // Answer every waiting worker first: they must never wait for rank 0's own run.
-    for (;;) {
-      int flag = 0;
-      MPI_Status st;
-      MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, comm, &flag, &st);
-      if (!flag) break;
-      serve_one(st);
-    }
-    // Rank 0 takes single runs from the same pool, so it is never more than one run late in
-    // answering a worker.
-    if (next_run < todo.size()) {
-      const std::int64_t run = todo[next_run++];
-      one.clear();
-      try {
-        compute(run, one);
-      } catch (const std::exception& e) {
-        abort_job(comm, "a run", e);
-      }
-      ++sum.runs_by_rank0;
-      deliver(one);
-    } else if (received < total) {
-      MPI_Status st;
-      // Nothing left to compute here: wait for results, waking up for the ticks.
-      int flag = 0;
-      while (!flag) {
-        MPI_Iprobe(MPI_ANY_SOURCE, kTagResult, comm, &flag, &st);
-        if (!flag) {
-          maybe_tick();
-          struct timespec ts{0, 200000};  // 0.2 ms: rank 0 idles only at the very end
-          nanosleep(&ts, nullptr);
-        }
-      }
-      serve_one(st);
-    }
-    maybe_tick();
+void wait_idle(MPI_Request* req) {
+  Backoff backoff;
+  for (;;) {
+    int done = 0;
+    MPI_Test(req, &done, MPI_STATUS_IGNORE);
+    if (done) return;
+    backoff.sleep();
   }
-  // Workers still waiting for a batch get the stop message.
-  for (int w = 1; w < size; ++w)
-    if (!stopped[static_cast<std::size_t>(w)]) send_batch(w);
-  on_tick();
-  return sum;
+}
+
+int broadcast_int_idle(MPI_Comm comm, int v) {
+  MPI_Request r;
+  MPI_Ibcast(&v, 1, MPI_INT, 0, comm, &r);
+  wait_idle(&r);
+  return v;
 }
 
 }  // namespace truss::parallel

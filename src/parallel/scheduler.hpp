@@ -4,6 +4,14 @@
 // never waits for rank 0. Rank 0 computes one run at a time and answers requests in between.
 // Results are opaque byte strings (one per run) that reach rank 0's on_result in completion order;
 // the caller stores them by run index, so nothing downstream depends on the order.
+//
+// Progress without single-copy transports: no rank ever makes a blocking call for a message whose
+// sender may be computing. Rank 0 matches a worker's result message with MPI_Improbe, posts
+// MPI_Imrecv for it and tests it between its own runs; a worker tests its outstanding sends
+// between its runs. A rendezvous message (larger than the eager limit) therefore moves a few
+// fragments per run on both sides, over shared memory with or without CMA and over TCP alike,
+// and rank 0 never stalls for a whole batch of a peer. The next batch goes out as soon as the
+// result message is matched, before its data has arrived.
 #pragma once
 #include <mpi.h>
 
@@ -19,13 +27,23 @@ struct ScheduleOptions {
   int max_batch = 32;              // upper bound on runs per batch: keeps the end of the campaign balanced
   int batches_per_rank = 4;        // guided scheduling: batch = remaining / (batches_per_rank * ranks)
   double tick_interval_s = 0.25;   // how often rank 0 calls on_tick (progress, journal flushes)
+  // Rank 0, once every worker holds its first two batches: set-up that need not keep them waiting
+  // (allocating the result store, restoring a journal). No result is delivered before it returns.
+  std::function<void()> on_started;
   std::string validate() const;
 };
 
+// Rank 0's view (zeros elsewhere). Times are wall (steady clock) seconds on rank 0.
 struct ScheduleSummary {
-  std::int64_t runs_by_rank0 = 0;  // runs rank 0 computed itself
+  std::int64_t runs_by_rank0 = 0;     // runs rank 0 computed itself
+  std::int64_t runs_by_workers = 0;   // results received from other ranks
   std::int64_t batches_sent = 0;
   std::int64_t bytes_received = 0;
+  double wall_s = 0.0;                // the whole schedule, first batch to last result
+  double rank0_compute_s = 0.0;       // inside compute() on rank 0
+  double rank0_poll_s = 0.0;          // matching, receiving, on_result and answering (every poll, even empty)
+  double rank0_tick_s = 0.0;          // inside on_tick (journal flushes, progress)
+  double rank0_idle_s = 0.0;          // waiting for results with nothing left to compute
 };
 
 using ComputeFn = std::function<void(std::int64_t run_index, std::string& out)>;  // writes one run's bytes
@@ -37,5 +55,13 @@ using TickFn = std::function<void()>;                                           
 // job (MPI_Abort): compute is expected to turn run failures into data.
 ScheduleSummary run_schedule(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute,
                              const ResultFn& on_result, const TickFn& on_tick, const ScheduleOptions& opts = {});
+
+// Completes a request by testing it with sleeps in between (20 us doubling to 1 ms): a rank that
+// only waits leaves the core to the others (Open MPI's blocking calls spin, which starves
+// oversubscribed hosts).
+void wait_idle(MPI_Request* req);
+
+// MPI_Bcast of one int from rank 0, waiting with wait_idle.
+int broadcast_int_idle(MPI_Comm comm, int v);
 
 }  // namespace truss::parallel
