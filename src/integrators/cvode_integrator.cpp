@@ -10,6 +10,8 @@
 #include <fmt/format.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 namespace truss::integrators {
@@ -107,7 +109,10 @@ struct CvodeIntegrator::Solver {
   SUNContext ctx = nullptr;
   void* mem = nullptr;
   N_Vector y = nullptr, tmp = nullptr;
-  SUNNonlinearSolver nls = nullptr;
+  SUNNonlinearSolver nls = nullptr;  // adams: fixed point (bdf: CVODE's own Newton solver)
+  SUNMatrix A = nullptr;             // bdf: dense Newton matrix
+  SUNLinearSolver ls = nullptr;      // bdf: dense LU
+  CvodeMethod method = CvodeMethod::bdf;
   int n = -1;  // size of y, tmp and the CVODE memory; -1: none
   UserData ud;
 
@@ -120,13 +125,17 @@ struct CvodeIntegrator::Solver {
     if (mem) CVodeFree(&mem);
     if (nls) SUNNonlinSolFree(nls);
     nls = nullptr;
+    if (ls) SUNLinSolFree(ls);
+    ls = nullptr;
+    if (A) SUNMatDestroy(A);
+    A = nullptr;
     if (y) N_VDestroy(y);
     if (tmp) N_VDestroy(tmp);
     y = tmp = nullptr;
     n = -1;
   }
 
-  // CVODE memory, vectors and fixed-point solver for systems of size n_new.
+  // CVODE memory, vectors and the method's solvers for systems of size n_new.
   bool create(int n_new, double t0, IntegratorSummary& sum) {
     free_problem();
     if (!ctx && !check_sundials(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", sum)) return false;
@@ -135,15 +144,25 @@ struct CvodeIntegrator::Solver {
     tmp = N_VNew_Serial(n_new, ctx);
     if (!check_null(tmp, "N_VNew_Serial", sum)) return false;
     N_VConst(0.0, y);
-    mem = CVodeCreate(CV_ADAMS, ctx);
+    mem = CVodeCreate(method == CvodeMethod::bdf ? CV_BDF : CV_ADAMS, ctx);
     if (!check_null(mem, "CVodeCreate", sum)) return false;
     if (!check_flag(CVodeSetErrHandlerFn(mem, silent, nullptr), "CVodeSetErrHandlerFn", sum)) return false;
     if (!check_flag(CVodeInit(mem, rhs_fn, t0, y), "CVodeInit", sum)) return false;
     if (!check_flag(CVodeSetUserData(mem, &ud), "CVodeSetUserData", sum)) return false;
-    nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
-    if (!check_null(nls, "SUNNonlinSol_FixedPoint", sum)) return false;
-    if (!check_flag(CVodeSetNonlinearSolver(mem, nls), "CVodeSetNonlinearSolver", sum)) return false;
-    if (!check_flag(CVodeSetMaxOrd(mem, 12), "CVodeSetMaxOrd", sum)) return false;
+    if (method == CvodeMethod::bdf) {
+      // Newton (CVODE's default nonlinear solver) on a dense matrix; no Jacobian function given:
+      // CVODE's difference quotients cost n extra right-hand sides per Jacobian, with n tiny.
+      A = SUNDenseMatrix(n_new, n_new, ctx);
+      if (!check_null(A, "SUNDenseMatrix", sum)) return false;
+      ls = SUNLinSol_Dense(y, A, ctx);
+      if (!check_null(ls, "SUNLinSol_Dense", sum)) return false;
+      if (!check_flag(CVodeSetLinearSolver(mem, ls, A), "CVodeSetLinearSolver", sum)) return false;
+    } else {
+      nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
+      if (!check_null(nls, "SUNNonlinSol_FixedPoint", sum)) return false;
+      if (!check_flag(CVodeSetNonlinearSolver(mem, nls), "CVodeSetNonlinearSolver", sum)) return false;
+      if (!check_flag(CVodeSetMaxOrd(mem, 12), "CVodeSetMaxOrd", sum)) return false;
+    }
     n = n_new;
     return true;
   }
@@ -184,7 +203,7 @@ struct CvodeIntegrator::Solver {
   }
 };
 
-CvodeIntegrator::CvodeIntegrator(const IntegratorOptions& opts) : opts_(opts) {}
+CvodeIntegrator::CvodeIntegrator(const IntegratorOptions& opts, CvodeMethod method) : opts_(opts), method_(method) {}
 CvodeIntegrator::~CvodeIntegrator() = default;
 
 IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t_end, double* y0,
@@ -202,7 +221,10 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
     sum.message = fmt::format("CVODE: system size must be positive, got {}", sys.size());
     return sum;
   }
-  if (!solver_) solver_ = std::make_unique<Solver>();
+  if (!solver_) {
+    solver_ = std::make_unique<Solver>();
+    solver_->method = method_;
+  }
   Solver& cv = *solver_;
   if (!cv.prepare(sys, t0, t_end, y0, opts_, sum)) {
     cv.free_problem();  // start from new SUNDIALS objects next time
@@ -245,6 +267,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
     if (!check_flag(CVodeGetNumErrTestFails(cv.mem, &fails), "CVodeGetNumErrTestFails", sum)) return failed();
     sum.steps = steps;
     sum.rejected_steps = fails;
+
     sum.rhs_evals = cv.ud.rhs_evals;
     sum.t = t;
     if (flag < 0) {

@@ -1,5 +1,9 @@
-// SUNDIALS CVODE (Adams-Moulton, nonstiff, functional iteration) behind the same interface as
-// the own RK pair; CVODE's root finding locates the events, CVodeGetDky gives the dense output.
+// SUNDIALS CVODE behind the same interface as the own RK pair, in one of two set-ups:
+//   bdf    BDF orders 1-5, Newton iteration, dense direct linear solver with CVODE's difference-
+//          quotient Jacobian (n <= 2 dof + 1 is tiny): stiff-capable (slow strong motors, stiff
+//          diagonals: the motor line is a stiff damper);
+//   adams  Adams-Moulton orders 1-12, fixed-point iteration: non-stiff, no Jacobian.
+// CVODE's root finding locates the events, CVodeGetDky gives the dense output.
 // One object serves a whole run: the SUNDIALS context, CVODE memory, vectors and nonlinear solver
 // are created on the first integrate() and reused by the following calls through CVodeReInit
 // (which restarts CVODE at order 1 with a fresh initial step, as a new object would); they are
@@ -13,9 +17,11 @@
 
 namespace truss::integrators {
 
+enum class CvodeMethod { bdf, adams };
+
 class CvodeIntegrator : public Integrator {
  public:
-  explicit CvodeIntegrator(const IntegratorOptions& opts);
+  explicit CvodeIntegrator(const IntegratorOptions& opts, CvodeMethod method = CvodeMethod::bdf);
   ~CvodeIntegrator() override;
   CvodeIntegrator(const CvodeIntegrator&) = delete;             // owns SUNDIALS memory
   CvodeIntegrator& operator=(const CvodeIntegrator&) = delete;
@@ -28,6 +34,7 @@ class CvodeIntegrator : public Integrator {
  private:
   struct Solver;  // the SUNDIALS objects (cvode_integrator.cpp)
   IntegratorOptions opts_;
+  CvodeMethod method_;
   std::unique_ptr<Solver> solver_;  // created on first use
 };
 

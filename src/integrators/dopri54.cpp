@@ -15,6 +15,7 @@ const char* to_string(IntegratorStatus s) {
     case IntegratorStatus::step_limit: return "step limit";
     case IntegratorStatus::stopped_by_observer: return "stopped by observer";
     case IntegratorStatus::failure: return "failure";
+    case IntegratorStatus::stiff: return "stiff";
   }
   return "?";
 }
@@ -198,6 +199,22 @@ int DormandPrince54::find_event(OdeSystem& sys, double t, double t_new, const De
   return ev;
 }
 
+bool StiffnessTest::update(double h, const std::vector<double>& k7, const std::vector<double>& k6,
+                           const std::vector<double>& y7, const std::vector<double>& y6) {
+  double num = 0.0, den = 0.0;
+  for (std::size_t i = 0; i < k7.size(); ++i) {
+    num += (k7[i] - k6[i]) * (k7[i] - k6[i]);
+    den += (y7[i] - y6[i]) * (y7[i] - y6[i]);
+  }
+  if (!(den > 0.0)) return false;
+  if (h * std::sqrt(num / den) > 3.25) {
+    non_stiff = 0;
+    return ++stiff_steps >= 15;
+  }
+  if (++non_stiff >= 6) stiff_steps = 0;
+  return false;
+}
+
 IntegratorSummary DormandPrince54::integrate(OdeSystem& sys, double t0, double t_end, double* y,
                                              StepObserver* observer) {
   IntegratorSummary sum;
@@ -226,6 +243,7 @@ IntegratorSummary DormandPrince54::integrate(OdeSystem& sys, double t0, double t
 
   double err_prev = 1e-4;  // PI controller memory (Gustafsson)
   bool last_rejected = false;
+  StiffnessTest stiffness;
   Dopri5Dense dense;
   dense.rc = rc_;
   dense.n = n;
@@ -274,11 +292,15 @@ IntegratorSummary DormandPrince54::integrate(OdeSystem& sys, double t0, double t
       std::copy(ynew_.begin(), ynew_.end(), y);
       return finish(IntegratorStatus::stopped_by_observer, t_new);
     }
+    // k6 = f(t + h, ytmp_) (stage 6) and k7 = f(t + h, ynew_): h |lambda| ~ h |k7 - k6| / |ynew - ytmp|.
+    const bool stiff = opts_.stop_when_stiff && !fixed && stiffness.update(h, k_[6], k_[5], ynew_, ytmp_);
     std::copy(ynew_.begin(), ynew_.end(), y);
     std::swap(k_[0], k_[6]);  // FSAL
     if (ne > 0) std::swap(g0_, g1_);
     t = t_new;
     if (last) return finish(IntegratorStatus::reached_end, t);
+    if (stiff)
+      return finish(IntegratorStatus::stiff, t, fmt::format("stiff at t = {:.9g} s (h |lambda| > 3.25 on 15 steps)", t));
     if (!fixed) {
       // PI step control (Hairer's DOPRI5: beta = 0.04), no growth right after a rejection.
       const double e = std::max(err, 1e-10);

@@ -11,6 +11,17 @@
 
 namespace truss::integrators {
 
+// Hairer's stiffness test of DOPRI5 (Hairer & Wanner, Solving ODEs II, IV.2): the ratio
+// |k7 - k6| / |y7 - y6| of the last two stages estimates |lambda| along the step; h |lambda| beyond
+// 3.25 (the stability boundary of DP5 on the negative real axis is about 3.3) on 15 accepted steps
+// means the step size is set by stability, not accuracy.
+struct StiffnessTest {
+  int stiff_steps = 0, non_stiff = 0;
+  // True once the test has fired.
+  bool update(double h, const std::vector<double>& k7, const std::vector<double>& k6, const std::vector<double>& y7,
+              const std::vector<double>& y6);
+};
+
 class DormandPrince54 : public Integrator {
  public:
   explicit DormandPrince54(const IntegratorOptions& opts) : opts_(opts) {}

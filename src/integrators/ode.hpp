@@ -7,9 +7,16 @@
 
 namespace truss::integrators {
 
-// The integrators a run can use (scene key run.integrator).
-enum class IntegratorKind { dopri54, cvode };
-inline const char* to_string(IntegratorKind k) { return k == IntegratorKind::dopri54 ? "dopri54" : "cvode"; }
+// The integrators a run can use (scene key run.integrator):
+//   dopri54      own explicit Dormand-Prince 5(4) pair (non-stiff)
+//   cvode        SUNDIALS CVODE, BDF with Newton iteration and a dense direct solver (stiff)
+//   cvode_adams  SUNDIALS CVODE, Adams-Moulton with fixed-point iteration (non-stiff)
+//   automatic    dopri54 until Hairer's stiffness test fires, then cvode for the rest of the run
+enum class IntegratorKind { dopri54, cvode, cvode_adams, automatic };
+inline const char* to_string(IntegratorKind k) {
+  constexpr const char* names[] = {"dopri54", "cvode", "cvode_adams", "auto"};
+  return names[static_cast<int>(k)];
+}
 
 class OdeSystem {
  public:
@@ -45,10 +52,13 @@ struct IntegratorOptions {
   double fixed_step = 0.0;    // > 0: no error control, constant step (convergence studies)
   long max_steps = 1'000'000; // per call; the run fails with step_limit beyond it
   double event_time_tol = 1e-13;  // absolute tolerance (s) of located event times
+  // dopri54: stop with IntegratorStatus::stiff when Hairer's test (DOPRI5: h |lambda| > 3.25 on
+  // 15 accepted steps, 6 non-stiff steps reset the count) says the problem has become stiff.
+  bool stop_when_stiff = false;
   std::string validate() const;   // empty or "field: reason"
 };
 
-enum class IntegratorStatus { reached_end, event, step_limit, stopped_by_observer, failure };
+enum class IntegratorStatus { reached_end, event, step_limit, stopped_by_observer, failure, stiff };
 const char* to_string(IntegratorStatus);
 
 struct IntegratorSummary {

@@ -24,19 +24,29 @@ inline double calc_pin_force_N(const RailParams& r, double lambda_N) {
   return std::abs(lambda_N) / (3.0 * std::sin(r.beta_rad));
 }
 
+// The rail's trigonometric constants, computed once per phase rather than per evaluation (the
+// same expressions, so the same bits): c = cot(beta), y_r, and 3 sin(beta) for the pin force.
+struct RailConstants {
+  double cot_beta = 0, axis_height_m = 0, three_sin_beta = 0;
+};
+inline RailConstants calc_rail_constants(const RailParams& r) {
+  return {r.cot_beta(), r.axis_height_m(), 3.0 * std::sin(r.beta_rad)};
+}
+inline double calc_pin_force_N(const RailConstants& r, double lambda_N) { return std::abs(lambda_N) / r.three_sin_beta; }
+
 struct OnRailKinematics {
   double x = 0, s = 0;          // hinge offset and half-opening sqrt(l^2 - x^2)
   double Y = 0, dY = 0, d2Y = 0;  // upper (driven) frame height and derivatives in x
   double Z = 0, dZ = 0, d2Z = 0;  // lower frame height and derivatives in x
 };
 
-inline OnRailKinematics calc_on_rail(const RailParams& r, double strut_length_m, double x) {
-  const double c = r.cot_beta();
+inline OnRailKinematics calc_on_rail(const RailConstants& r, double strut_length_m, double x) {
+  const double c = r.cot_beta;
   const double l = strut_length_m;
   OnRailKinematics k;
   k.x = x;
   k.s = std::sqrt(l * l - x * x);
-  const double yh = r.axis_height_m() - c * x;
+  const double yh = r.axis_height_m - c * x;
   const double xs = x / k.s;
   const double curv = l * l / (k.s * k.s * k.s);
   k.Y = yh + k.s;
@@ -46,6 +56,9 @@ inline OnRailKinematics calc_on_rail(const RailParams& r, double strut_length_m,
   k.dZ = -c + xs;
   k.d2Z = curv;
   return k;
+}
+inline OnRailKinematics calc_on_rail(const RailParams& r, double strut_length_m, double x) {
+  return calc_on_rail(calc_rail_constants(r), strut_length_m, x);
 }
 
 // Hinge offset x on the rail for a driven-frame height y = Y(x), written without cancellation
@@ -89,6 +102,26 @@ inline HeldRailEntry calc_held_rail_entry(const RailParams& r, double strut_leng
   e.hinge_y_m = z0 + 0.5 * e.opening_m;
   e.upper_height_m = z0 + e.opening_m;
   return e;
+}
+
+// Well-posed held entry (MODEL.md 2; docs/model-notes.md "Rail geometry"). With h = y_r - z0,
+// f(0) = c l - h is the stowed pin's clearance to the rail and the pin meets the rail on the
+// falling branch of f. As h -> l the entry moves to the straight bay (x -> 0): the struts' radial
+// speed x' = -D D' / (4 x) grows without bound before the rail takes the pin, and the drive force
+// with it (a singular configuration of the held stack). The entry is kept 1e-4 l_s from straight,
+// MODEL.md's "singular configuration" margin:
+//   cos(th_e) >= delta  <=>  h >= l (c delta + r),  r = sqrt(1 - delta^2),
+// and the stowed pin must clear the rail, h < c l (at h = c l it touches it; beyond, the rail
+// passes below the stowed hinge and never takes it). The range is empty iff c <= 1 + O(delta),
+// i.e. beta >= 45 deg: the rail rises (c l) no more than the hinge does on its arc (l).
+inline constexpr double kEntryMarginFraction = 1e-4;
+struct HeldEntryRange {
+  double h_min_m = 0;  // admissible y_r - z0: [h_min_m, h_below_m)
+  double h_below_m = 0;
+};
+inline HeldEntryRange calc_held_entry_range(const RailParams& r, double strut_length_m) {
+  const double c = r.cot_beta(), l = strut_length_m, d = kEntryMarginFraction;
+  return {l * (c * d + std::sqrt(1.0 - d * d)), c * l};
 }
 
 // Lock: x = 0, upper frame at y_r + l, lower frame lifted to y_r - l.

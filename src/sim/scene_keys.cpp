@@ -79,9 +79,10 @@ std::vector<SceneKey> make_table() {
       TRUSS_REAL(run, output_step_s, "s", "s, time-history sample step, 0 = no histories", kFixed),
       TRUSS_REAL(run, rtol, "1", "1, relative tolerance of the ODE integrators", kFixed),
       TRUSS_REAL(run, atol, "1", "absolute tolerance (m, m/s, J) of the ODE integrators", kFixed),
-      TRUSS_ENUM(run, integrator, "\"dopri54\" | \"cvode\"", "dopri54", "cvode"),
+      TRUSS_ENUM(run, integrator, "\"dopri54\" | \"cvode\" (BDF) | \"cvode_adams\" | \"auto\"", "dopri54", "cvode", "cvode_adams", "auto"),
       TRUSS_INT(run, max_steps, "1", "cap on accepted integrator steps over the run", kFixed),
       TRUSS_REAL(run, max_wall_time_s, "s", "s, wall-time cap for one run", kFixed),
+      TRUSS_INT(run, max_history_rows, "1", "cap on time-history rows kept in memory (86 B a row); beyond it the history step doubles and every other row is dropped", kFixed),
   };
 }
 

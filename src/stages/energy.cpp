@@ -1,5 +1,8 @@
 #include "stages/energy.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "model/bay.hpp"
 
 namespace truss::stages {
@@ -17,6 +20,16 @@ EnergyLedger::EnergyLedger(const model::MastParams& mast) {
     U_locked_suffix_[i] = U_locked_suffix_[i + 1] +
                           model::calc_bay_potential_J(mast.bay(i), b2, 2.0 * mast.bay(i).strut_length_m);
   }
+}
+
+double calc_energy_scale_J(const RunResult& r) {
+  return std::abs(r.drive_work_smooth_J) + std::abs(r.drive_work_impulses_J) + std::abs(r.energy_lost_J) +
+         std::abs(r.kinetic_energy_start_J) + std::abs(r.kinetic_energy_end_J) + std::abs(r.potential_energy_start_J) +
+         std::abs(r.potential_energy_end_J);
+}
+
+double calc_allowed_energy_residual_J(const RunResult& r, double rtol) {
+  return std::min(1e-2, 1e3 * rtol) * calc_energy_scale_J(r);
 }
 
 void EnergyLedger::fill(RunResult& r) const {

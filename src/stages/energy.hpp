@@ -12,6 +12,15 @@
 
 namespace truss::stages {
 
+// Accuracy health check (docs/model-notes.md, "Accuracy check"). The energy scale of a run is the
+// sum of the magnitudes of the ledger's terms; integrated to relative tolerance rtol, the residual
+// stays within a few hundred rtol of that scale (measured on Table 1, every drive mode and
+// direction, rtol 1e-4..1e-12: at most 240 rtol, from per-step errors accumulated over 2 n phases
+// and their located events). A run whose residual exceeds 1e3 rtol of the scale (and in any case
+// 1 % of it) does not keep its balance to what its tolerance allows: status `inaccurate`.
+double calc_energy_scale_J(const RunResult& r);
+double calc_allowed_energy_residual_J(const RunResult& r, double rtol);
+
 class EnergyLedger {
  public:
   explicit EnergyLedger(const model::MastParams& mast);

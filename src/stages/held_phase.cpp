@@ -7,7 +7,7 @@ namespace truss::stages {
 
 using namespace truss::model;
 
-HeldPhase::HeldPhase(const PhaseContext& ctx) : ctx_(ctx) {
+HeldPhase::HeldPhase(const PhaseContext& ctx) : ctx_(ctx), rail_(model::calc_rail_constants(ctx.mast->rail)) {
   const MastParams& mast = *ctx_.mast;
   const int m = ctx_.bay;
   active_.m = m;
@@ -72,8 +72,8 @@ PhasePoint HeldPhase::calc_on_rail(double x, double xi, PhaseScratch& sys) const
   const int m = ctx_.bay;
   const BayParams& bay = mast.bay(m);
   const double l = bay.strut_length_m;
-  const double c = mast.rail.cot_beta();
-  const OnRailKinematics kin = model::calc_on_rail(mast.rail, l, x);
+  const double c = rail_.cot_beta;
+  const OnRailKinematics kin = model::calc_on_rail(rail_, l, x);
   const double u = kin.dY * xi;
   const double w = kin.dZ * xi;
   const double ys[3] = {ctx_.lower_held_height_m, kin.Z, kin.Y}, vs[3] = {0.0, w, u};  // frames m-2, m-1, m
@@ -98,7 +98,7 @@ PhasePoint HeldPhase::calc_on_rail(double x, double xi, PhaseScratch& sys) const
   p.q = x; p.qdot = xi;
   p.y_driven_m = kin.Y; p.y_lower_m = kin.Z;
   p.u_m_per_s = u; p.w_m_per_s = w;
-  p.hinge_x_m = x; p.hinge_y_m = mast.rail.axis_height_m() - c * x;
+  p.hinge_x_m = x; p.hinge_y_m = rail_.axis_height_m - c * x;
   double yddot;
   if (ctx_.drive.mode == model::DriveMode::velocity) {
     p.qddot = kin.d2Y * xi2 / gamma;
@@ -113,7 +113,7 @@ PhasePoint HeldPhase::calc_on_rail(double x, double xi, PhaseScratch& sys) const
     yddot = kin.dY * p.qddot + kin.d2Y * xi2;
     p.lambda_N = M_yy * yddot + M_yx * p.qddot - R_y;
   }
-  p.pin_force_N = calc_pin_force_N(mast.rail, p.lambda_N);
+  p.pin_force_N = calc_pin_force_N(rail_, p.lambda_N);
   const double D = 2.0 * kin.s;
   double tension = calc_diagonal_tension_N(bay, b2_m_, D);
   double U = calc_bay_potential_J(bay, b2_m_, D);

@@ -52,6 +52,7 @@ class HeldPhase final : public PhaseModel {
   PhasePoint calc_open(double y, double u, PhaseScratch& scratch) const;
   PhasePoint calc_on_rail(double x, double xi, PhaseScratch& scratch) const;
   PhaseContext ctx_;
+  model::RailConstants rail_;
   model::ActiveFrames active_;
   double b2_m_ = 0, b2_lower_ = 0;    // diagonal offsets^2 of bays m and m-1
 };

@@ -1,7 +1,14 @@
-// Optional time histories (MODEL.md 5): the phase points on the grid t_k = k * output_step_s,
-// pushed in time order by the phase solvers, plus a last row at the end of the run.
+// Optional time histories (MODEL.md 5): the phase points on the grid t_k = k * step, pushed in
+// time order by the phase solvers, plus a last row at the end of the run.
+// Memory is bounded: when the rows reach run.max_history_rows, every other row is dropped and the
+// step doubles (the rows left are exactly the grid of the doubled step, t = 0, 2h, 4h, ...), so a
+// long run keeps a coarser but complete history instead of exhausting memory. The step in force
+// is TimeHistory::step_s (written as the `step_s` attribute of every history).
 #pragma once
 #include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
 
 #include "model/drive.hpp"
 #include "stages/phase.hpp"
@@ -11,20 +18,26 @@ namespace truss::stages {
 
 class HistoryRecorder {
  public:
-  HistoryRecorder(TimeHistory* out, double step_s, const model::DriveParams& drive)
-      : out_(step_s > 0.0 ? out : nullptr), step_(step_s), drive_(drive) {}
+  HistoryRecorder(TimeHistory* out, double step_s, const model::DriveParams& drive, long max_rows)
+      : out_(step_s > 0.0 ? out : nullptr), step_(step_s), drive_(drive), max_rows_(std::max(2L, max_rows)) {
+    if (out_) out_->step_s = step_s;
+  }
   bool enabled() const { return out_ != nullptr; }
-  // Samples the grid times in [t0, t1); eval(t) gives the phase point at t.
+  // Samples the grid times in [t0, t1); eval(t) gives the phase point at t. Returns false (and
+  // stops sampling) once the wall-clock deadline has passed.
   template <class Eval>
-  void sample(Eval&& eval, double t0, double t1, int bay) {
-    if (!out_) return;
-    while (true) {
+  bool sample(Eval&& eval, double t0, double t1, int bay, std::chrono::steady_clock::time_point deadline) {
+    if (!out_) return true;
+    for (long k = 0;; ++k) {
       const double t = static_cast<double>(next_) * step_;
       if (t < t0 - 1e-12 * std::max(1.0, t0)) { ++next_; continue; }
       if (t >= t1) break;
+      if ((k & 1023) == 1023 && std::chrono::steady_clock::now() > deadline) return false;
       push(t, eval(std::clamp(t, t0, t1)), bay);
       ++next_;
+      if (static_cast<long>(out_->size()) >= max_rows_) decimate();
     }
+    return true;
   }
   // The last row of a history is the end of the run (on the grid or not).
   void finish(double t, const PhasePoint& last, int bay) {
@@ -45,10 +58,31 @@ class HistoryRecorder {
     out_->diagonal_tension_N.push_back(p.diagonal_tension_N);
     out_->driven_speed_m_per_s.push_back(p.u_m_per_s);
   }
+  // Keeps the rows on even grid points (t = k step, k even: k is exact as t / step rounded).
+  template <class V>
+  void keep_even(V& v, const std::vector<char>& keep) const {
+    std::size_t j = 0;
+    for (std::size_t i = 0; i < v.size(); ++i)
+      if (keep[i]) v[j++] = v[i];
+    v.resize(j);
+  }
+  void decimate() {
+    std::vector<char> keep(out_->size());
+    for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = std::llround(out_->t_s[i] / step_) % 2 == 0;
+    keep_even(out_->bay, keep); keep_even(out_->y_driven_m, keep); keep_even(out_->y_lower_m, keep);
+    keep_even(out_->hinge_x_m, keep); keep_even(out_->hinge_y_m, keep); keep_even(out_->drive_force_N, keep);
+    keep_even(out_->drive_torque_Nm, keep); keep_even(out_->pin_force_N, keep); keep_even(out_->diagonal_tension_N, keep);
+    keep_even(out_->driven_speed_m_per_s, keep);
+    keep_even(out_->t_s, keep);
+    step_ *= 2.0;
+    next_ = (next_ + 1) / 2;  // the next grid point of the doubled step at or after the old one
+    out_->step_s = step_;
+  }
   TimeHistory* out_;
   double step_;
   long next_ = 0;
   const model::DriveParams& drive_;
+  long max_rows_;
 };
 
 }  // namespace truss::stages

@@ -12,25 +12,26 @@ namespace {
 // The phase as an ODE: state (q, q', W), dof values each and the drive work.
 class PhaseOde final : public integrators::OdeSystem {
  public:
-  explicit PhaseOde(const PhaseModel& m) : m_(m), n_(m.dof()) {}
+  PhaseOde(const PhaseModel& m, double creep_speed_m_per_s) : m_(m), n_(m.dof()), creep_(creep_speed_m_per_s) {}
   int size() const override { return 2 * n_ + 1; }
   void calc_rhs(double, const double* y, double* dy) override {
     const PhasePoint p = m_.calc_point(y, y + n_, dy + n_, scratch_);
     std::copy(y + n_, y + 2 * n_, dy);
     dy[2 * n_] = p.drive_force_N * p.u_m_per_s;
   }
-  int num_events() const override { return m_.context().drive.mode == model::DriveMode::motor ? 3 : 2; }
+  int num_events() const override { return creep_ > 0.0 ? 3 : 2; }
   void calc_events(double, const double* y, double* g) override {
     g[0] = m_.calc_end_gap(y);
     const double u = m_.context().direction * m_.calc_driven_speed_m_per_s(y, y + n_);
     g[1] = u;
-    if (num_events() == 3) g[2] = u - DynamicPhaseSolver::calc_creep_speed_m_per_s(m_.context().drive);
+    if (creep_ > 0.0) g[2] = u - creep_;
   }
   int event_direction(int k) const override { return k == 0 ? +1 : -1; }
 
  private:
   const PhaseModel& m_;
   int n_;
+  double creep_;
   PhaseScratch scratch_;
 };
 
@@ -55,8 +56,8 @@ class PhaseObserver final : public integrators::StepObserver {
       const PhasePoint p = eval(t1);
       sinks_.phase_peaks.feed(t1, p, sample_.data(), 3 * n_);
     }
-    sinks_.history.sample(eval, d.t_begin, t1, m_.context().bay);
-    if (std::chrono::steady_clock::now() > sinks_.deadline) { timed_out = true; return false; }
+    const bool in_time = sinks_.history.sample(eval, d.t_begin, t1, m_.context().bay, sinks_.deadline);
+    if (!in_time || std::chrono::steady_clock::now() > sinks_.deadline) { timed_out = true; return false; }
     return true;
   }
 
@@ -94,7 +95,7 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
     out.end = p_start;
     return out;
   }
-  PhaseOde ode(model_);
+  PhaseOde ode(model_, start.creep_speed_m_per_s);
   PhaseObserver obs(model_, sinks, scratch);
   integrator_.set_options(options_);
   const integrators::IntegratorSummary sum = integrator_.integrate(ode, t, t + 1e7, y.data(), &obs);

@@ -14,8 +14,10 @@ class DynamicPhaseSolver final : public PhaseSolver {
                      const integrators::IntegratorOptions& options)
       : model_(model), integrator_(integrator), options_(options) {}
   PhaseOutcome solve(const PhaseStart& start, PhaseSinks& sinks) override;
-  // Motor mode: below this fraction of the no-load screw speed the mast has stopped for any
-  // engineering purpose (the rest of the stage would take ~1e6 times its nominal time).
+  // Below this fraction of a reference speed the mast has stopped for any engineering purpose
+  // (the rest of the stage would take ~1e6 times its nominal time): motor mode, the no-load screw
+  // speed; torque mode, the fastest driven speed of the run so far (frictionless, a torque-driven
+  // mast only creeps when it approaches an equilibrium or a singular configuration).
   static constexpr double kCreepSpeedFraction = 1e-6;
   static double calc_creep_speed_m_per_s(const model::DriveParams& d);
 

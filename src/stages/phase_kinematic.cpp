@@ -1,6 +1,7 @@
 #include "stages/phase_kinematic.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <vector>
 
@@ -67,7 +68,10 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
                                                  a, b, 1e-11 * f_scale * v * (b - a));  // |K15 - G7| bound: K15 is far better
   }
   sinks.peaks.absorb(sinks.phase_peaks, [&](double tt, const HermiteSpan&) { return eval(tt); }, 1e-12 * std::max(1.0, t1));
-  sinks.history.sample(eval, t0, t1, m);
+  const bool in_time = sinks.history.sample(eval, t0, t1, m, sinks.deadline);
+  // The wall-time cap holds in closed form too (long histories are the cost here): the phase's
+  // loads and work are complete, its history may not be; the run ends at the phase's end.
+  if (!in_time || std::chrono::steady_clock::now() > sinks.deadline) out.reason = PhaseEndReason::wall_time;
   out.t_end_s = t1;
   out.end = eval(t1);
   out.end.q = spec_.q_end;  // the event is exact in closed form

@@ -44,6 +44,9 @@ struct PhaseStart {
   double t_s = 0;
   const double* q = nullptr;
   const double* qdot = nullptr;
+  // Time stepping: below this driven-frame speed (m/s) the mast has crept to rest (a stall);
+  // 0 = no creep test.
+  double creep_speed_m_per_s = 0;
 };
 
 class PhaseSolver {

@@ -15,6 +15,8 @@ const char* to_string(RunStatus s) {
     case RunStatus::step_limit: return "step limit";
     case RunStatus::invalid_input: return "invalid input";
     case RunStatus::wall_time_limit: return "wall-time limit";
+    case RunStatus::solver_failure: return "solver failure";
+    case RunStatus::inaccurate: return "inaccurate";
   }
   return "?";
 }

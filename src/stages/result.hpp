@@ -9,9 +9,14 @@ namespace truss::stages {
 
 // wall_time_limit: the run was stopped by its wall-time cap (stages::RunOptions::max_wall_time_s); unlike
 // the other statuses it depends on the machine, not only on the inputs.
-enum class RunStatus { ok, rail_miss, stall, singular_configuration, step_limit, invalid_input, wall_time_limit };
+// solver_failure: the integrator could not continue (non-finite state, step-size underflow, a
+// CVODE error flag); step_limit is only the step cap. inaccurate: the run completed but its energy
+// balance is off by more than its tolerance allows (stages/accuracy.hpp), so its numbers are not
+// promised. New statuses go at the end: the codes are stored in journals and HDF5 files.
+enum class RunStatus { ok, rail_miss, stall, singular_configuration, step_limit, invalid_input, wall_time_limit,
+                       solver_failure, inaccurate };
 const char* to_string(RunStatus);
-constexpr int kRunStatusCount = 7;
+constexpr int kRunStatusCount = 9;
 
 struct BayResult {
   int bay = 0;                         // bay index i = 1..n
@@ -42,6 +47,7 @@ struct TimeHistory {
   std::vector<double> pin_force_N;       // rail normal force on one pin (0 off the rail)
   std::vector<double> diagonal_tension_N;  // tension in one diagonal of the deploying bay
   std::vector<double> driven_speed_m_per_s;
+  double step_s = 0.0;                   // grid step of the rows (output_step_s, doubled at each row cap)
   std::size_t size() const { return t_s.size(); }
 };
 

@@ -14,9 +14,10 @@ struct RunOptions {
   double output_step_s = 0.0;               // time-history sample step; 0 = no histories (fastest)
   double rtol = 1e-8;                       // relative tolerance of the ODE integrators
   double atol = 1e-10;                      // absolute tolerance (m, m/s, J) of the ODE integrators
-  integrators::IntegratorKind integrator = integrators::IntegratorKind::dopri54;  // own DP5(4) pair; cvode = SUNDIALS Adams
+  integrators::IntegratorKind integrator = integrators::IntegratorKind::automatic;  // dopri54, BDF once stiff (ode.hpp)
   long max_steps = 2'000'000;               // step cap over the whole run: a run never hangs
   double max_wall_time_s = 600.0;           // wall-time cap for one run
+  long max_history_rows = 200'000;          // history memory cap (86 B a row, 17 MB): beyond it the step doubles
   std::string validate() const;             // empty, or "run.key: reason"
 };
 

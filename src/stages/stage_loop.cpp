@@ -7,8 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "integrators/cvode_integrator.hpp"
-#include "integrators/dopri54.hpp"
+#include "integrators/auto_integrator.hpp"
 #include "model/impacts.hpp"
 #include "model/rail.hpp"
 #include "stages/energy.hpp"
@@ -40,7 +39,13 @@ TwoFrameMass calc_two_frame_mass(const MastParams& mast, const StageSpec& s, dou
 
 std::unique_ptr<integrators::Integrator> make_integrator(integrators::IntegratorKind kind,
                                                          const integrators::IntegratorOptions& io) {
-  if (kind == integrators::IntegratorKind::cvode) return std::make_unique<integrators::CvodeIntegrator>(io);
+  using integrators::IntegratorKind;
+  switch (kind) {
+    case IntegratorKind::cvode: return std::make_unique<integrators::CvodeIntegrator>(io, integrators::CvodeMethod::bdf);
+    case IntegratorKind::cvode_adams: return std::make_unique<integrators::CvodeIntegrator>(io, integrators::CvodeMethod::adams);
+    case IntegratorKind::automatic: return std::make_unique<integrators::AutoIntegrator>(io);
+    case IntegratorKind::dopri54: break;
+  }
   return std::make_unique<integrators::DormandPrince54>(io);
 }
 
@@ -59,6 +64,12 @@ class StageLoop {
   void end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePoint& p_end, BayResult& br);
   void close_stage(BayResult& br);
   void finish();
+  void check_accuracy();
+  double calc_creep_speed_m_per_s() const {
+    if (opts_.drive.mode == DriveMode::motor) return DynamicPhaseSolver::calc_creep_speed_m_per_s(opts_.drive);
+    const double peak = tracker_.run[kSpeed].value;
+    return DynamicPhaseSolver::kCreepSpeedFraction * std::max(std::abs(u_), std::isfinite(peak) ? peak : 0.0);
+  }
   void fail(RunStatus st, std::string msg) { r_.status = st; r_.message = std::move(msg); failed_ = true; }
 
   const MastParams& mast_;
@@ -88,7 +99,7 @@ class StageLoop {
 StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts)
     : mast_(mast), stages_(stages), opts_(opts), dir_(calc_direction_sign(opts.run.direction)),
       kinematic_(opts.drive.mode == DriveMode::velocity), wall_start_(std::chrono::steady_clock::now()),
-      ledger_(mast), history_(&r_.history, opts.run.output_step_s, opts_.drive), steps_left_(opts.run.max_steps) {
+      ledger_(mast), history_(&r_.history, opts.run.output_step_s, opts_.drive, opts.run.max_history_rows), steps_left_(opts.run.max_steps) {
   const int n = mast.n_bays();
   r_.n_bays = n;
   r_.direction = to_string(opts.run.direction);
@@ -147,10 +158,10 @@ void StageLoop::fail_phase(const PhaseOutcome& o, int m) {
                                                 "(drive force {:.6g} N)", t_, m, o.end.drive_force_N));
     case PhaseEndReason::crept_to_rest:
       return fail(RunStatus::stall, fmt::format("stall: the driven frame crept to rest (speed below {:.3g} m/s) at y = {:.9g} m, "
-                                                "t = {:.9g} s, in the stage of bay {} before its {}: the motor's stall torque "
-                                                "balances the mast short of the {}",
-                                                DynamicPhaseSolver::calc_creep_speed_m_per_s(opts_.drive), o.end.y_driven_m,
-                                                t_, m, goal, goal));
+                                                "t = {:.9g} s, in the stage of bay {} before its {}: the {} balances the mast "
+                                                "short of the {}",
+                                                calc_creep_speed_m_per_s(), o.end.y_driven_m, t_, m, goal,
+                                                opts_.drive.mode == DriveMode::motor ? "motor's stall torque" : "drive torque", goal));
     case PhaseEndReason::stopped:
       return fail(RunStatus::stall, fmt::format("stall: the driven frame stopped at y = {:.9g} m, t = {:.9g} s, in the stage "
                                                 "of bay {} before its {}", o.end.y_driven_m, t_, m, goal));
@@ -161,7 +172,7 @@ void StageLoop::fail_phase(const PhaseOutcome& o, int m) {
       return fail(RunStatus::step_limit, fmt::format("step cap of {} steps reached at t = {:.9g} s (bay {})",
                                                      opts_.run.max_steps, t_, m));
     case PhaseEndReason::failure:
-      return fail(RunStatus::step_limit, fmt::format("integrator failure at t = {:.9g} s (bay {}): {}", t_, m, o.message));
+      return fail(RunStatus::solver_failure, fmt::format("integrator failure at t = {:.9g} s (bay {}): {}", t_, m, o.message));
   }
 }
 
@@ -180,7 +191,7 @@ void StageLoop::run_phase(const StageSpec& s, const PhaseSpec& ph) {
   } else {
     integrators::IntegratorOptions io = opts_.calc_integrator_options();
     io.max_steps = std::max(1L, steps_left_);
-    o = DynamicPhaseSolver(phase, *integrator_, io).solve({t_, &q0, &qdot0}, sinks);
+    o = DynamicPhaseSolver(phase, *integrator_, io).solve({t_, &q0, &qdot0, calc_creep_speed_m_per_s()}, sinks);
   }
   steps_left_ -= o.steps;
   r_.steps += o.steps;
@@ -296,8 +307,29 @@ void StageLoop::finish() {
   ledger_.set_start(0.0, U_start);
   ledger_.set_end(ke_end_, U_end);
   ledger_.fill(r_);
+  check_accuracy();
   r_.rhs_evals = evals_;
   r_.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count();
+}
+
+// An `ok` run promises finite numbers and an energy balance within its tolerance (energy.hpp).
+void StageLoop::check_accuracy() {
+  if (failed_) return;
+  const std::pair<const char*, double> reported[] = {
+      {"deploy_time_s", r_.deploy_time_s}, {"peak_drive_force_N", r_.peak_drive_force_N},
+      {"min_drive_force_N", r_.min_drive_force_N}, {"peak_pin_force_N", r_.peak_pin_force_N},
+      {"peak_diagonal_tension_N", r_.peak_diagonal_tension_N}, {"drive_work_J", r_.drive_work_J},
+      {"energy_lost_J", r_.energy_lost_J}, {"energy_residual_J", r_.energy_residual_J}};
+  for (const auto& [name, v] : reported)
+    if (!std::isfinite(v))
+      return fail(RunStatus::inaccurate, fmt::format("{} is not finite ({}) at the end of the run", name, v));
+  const double allowed = calc_allowed_energy_residual_J(r_, opts_.run.rtol);
+  if (!(std::abs(r_.energy_residual_J) <= allowed))
+    fail(RunStatus::inaccurate,
+         fmt::format("energy residual {:.3g} J exceeds the {:.3g} J that rtol = {:g} allows ({:.3g} of the energy scale "
+                     "{:.6g} J): the numbers of this run are not to be trusted; tighten run.rtol / run.atol",
+                     r_.energy_residual_J, allowed, opts_.run.rtol, allowed / calc_energy_scale_J(r_),
+                     calc_energy_scale_J(r_)));
 }
 
 RunResult StageLoop::run() {

@@ -9,11 +9,68 @@ namespace truss::stages {
 
 using namespace truss::model;
 
+namespace {
+
+// A held lower frame at z0 = 0 must meet the rail away from the straight and the closed bay
+// (model/rail.hpp, calc_held_entry_range); otherwise the run is refused, naming the keys, the
+// reason and the valid range of rail.x_m for the other keys' values.
+std::string check_held_entry(const MastParams& mast, int m, const HeldRailEntry& e) {
+  const RailParams& r = mast.rail;
+  const double l = mast.bay(m).strut_length_m, c = r.cot_beta(), h = r.axis_height_m();
+  const double beta_deg = r.beta_rad * 180.0 / M_PI;
+  const HeldEntryRange ok = calc_held_entry_range(r, l);
+  if (e.reachable && h >= ok.h_min_m && h < ok.h_below_m) return {};
+  const std::string where = fmt::format(
+      "the rail's height on the mast axis y_r = rail.y_m + rail.x_m cot(rail.beta_deg) = {:.9g} m (rail.y_m = {:.9g} m, "
+      "rail.x_m = {:.9g} m, rail.beta_deg = {:.9g} deg) against bay {}'s strut length mast.strut_length_m = {:.9g} m",
+      h, r.y_m, r.x_m, beta_deg, m, l);
+  if (!(ok.h_min_m < ok.h_below_m))
+    return fmt::format("rail geometry: bay {}'s held lower frame never meets the rail properly: with rail.beta_deg = {:.9g} deg "
+                       ">= 45 deg the rail rises at most as fast (cot beta = {:.6g} <= 1) as the hinge on its arc, so the "
+                       "pin cannot meet the rail between the closed and the straight bay for any rail.x_m, rail.y_m; "
+                       "choose rail.beta_deg below 45 deg ({})",
+                       m, beta_deg, c, where);
+  const double x_lo = (ok.h_min_m - r.y_m) / c, x_hi = (ok.h_below_m - r.y_m) / c;
+  const char* why = h < ok.h_min_m
+                        ? "the bay would straighten (to within 1e-4 l_s) before its pin meets the rail, a singular "
+                          "configuration of the held stack (the struts' radial speed grows without bound)"
+                        : "the stowed hinge is not clear of the rail (clearance c l_s - y_r <= 0): the rail passes "
+                          "at or below the closed bay's pin and never takes it";
+  return fmt::format("rail geometry: bay {}: {}. y_r must lie in [{:.9g}, {:.9g}) m, i.e. rail.x_m in [{:.9g}, {:.9g}) m for "
+                     "these rail.y_m, rail.beta_deg and mast.strut_length_m; {}",
+                     m, why, ok.h_min_m, ok.h_below_m, x_lo, x_hi, where);
+}
+
+// Frame m starts where the lock of bay m+1 left it, y_r - l_s(m+1); its bay's pin must still be
+// below the rail then. The bound on rail.x_m is found by bisection: raising y_r raises the start
+// and lowers the entry, so start - entry is increasing in x_l.
+std::string explain_start_past_entry(const MastParams& mast, int m, double y_start, double y_entry) {
+  const double l = mast.bay(m).strut_length_m, l_up = mast.bay(m + 1).strut_length_m;
+  auto excess = [&](double x) {
+    RailParams r = mast.rail;
+    r.x_m = x;
+    return (r.axis_height_m() - l_up) - calc_held_rail_entry(r, l, 0.0).upper_height_m;
+  };
+  const HeldEntryRange ok = calc_held_entry_range(mast.rail, l);
+  const double c = mast.rail.cot_beta();
+  double lo = (ok.h_min_m - mast.rail.y_m) / c, hi = mast.rail.x_m;
+  for (int i = 0; i < 200 && excess(lo) < 0.0 && hi - lo > 1e-15 * std::abs(hi); ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (excess(mid) < 0.0 ? lo : hi) = mid;
+  }
+  return fmt::format("rail geometry: bay {} starts already past its rail entry: the lock of bay {} lifts frame {} to "
+                     "y_r - l_s({}) = {:.6g} m, above the height {:.6g} m at which bay {}'s pin meets the rail; with these "
+                     "rail.y_m, rail.beta_deg and mast.strut_length_m (bays {} and {}), rail.x_m must be below {:.9g} m "
+                     "(now {:.9g} m)",
+                     m, m + 1, m, m + 1, y_start, y_entry, m, m, m + 1, lo, mast.rail.x_m);
+}
+
+}  // namespace
+
 std::string plan_held_stages(const MastParams& mast, double direction, std::vector<StageSpec>& out) {
   const int n = mast.n_bays();
   out.clear();
   out.reserve(static_cast<std::size_t>(n));
-  const double yr = mast.rail.axis_height_m();
   // Locked mass and blanket height offset above frame m, built from the top down: O(n).
   std::vector<double> locked(n + 1, 0.0), span(n + 1, 0.0);
   locked[n] = mast.tip_mass_kg;
@@ -26,15 +83,9 @@ std::string plan_held_stages(const MastParams& mast, double direction, std::vect
   for (int m = n; m >= 1; --m) {
     const BayParams& b = mast.bay(m);
     const HeldRailEntry e = calc_held_rail_entry(mast.rail, b.strut_length_m, 0.0);
-    if (!e.reachable)
-      return fmt::format("rail: the held lower frame of bay {} never meets the rail (need c l_s > y_r - 0 > l_s with "
-                         "c = cot(beta) = {:.6g}, l_s = {:.6g} m, y_r = y_l + c x_l = {:.6g} m)",
-                         m, mast.rail.cot_beta(), b.strut_length_m, yr);
+    if (std::string bad = check_held_entry(mast, m, e); !bad.empty()) return bad;
     const double y_start = (m == n) ? 0.0 : calc_lock_lower_height_m(mast.rail, mast.bay(m + 1).strut_length_m);
-    if (!(y_start < e.upper_height_m))
-      return fmt::format("rail: bay {} starts already past its rail entry (frame {} starts at {:.6g} m, entry at "
-                         "{:.6g} m): the previous lock lifts it too high",
-                         m, m, y_start, e.upper_height_m);
+    if (!(y_start < e.upper_height_m)) return explain_start_past_entry(mast, m, y_start, e.upper_height_m);
     StageSpec s;
     s.bay = m;
     s.direction = 1.0;

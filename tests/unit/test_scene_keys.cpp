@@ -25,14 +25,14 @@ std::vector<unsigned char> bytes_of(const sim::SceneOptions& s) {
   put(s.drive.stall_torque_Nm); put(s.drive.no_load_speed_rad_per_s); put(s.stack.mode); put(s.panels.count);
   put(s.panels.length_m); put(s.panels.mass_kg); put(s.panels.tip_height_m.value_or(-1)); put(s.run.direction);
   put(s.run.output_step_s); put(s.run.rtol); put(s.run.atol); put(s.run.integrator); put(s.run.max_steps);
-  put(s.run.max_wall_time_s);
+  put(s.run.max_wall_time_s); put(s.run.max_history_rows);
   return b;
 }
 }  // namespace
 
 TEST_CASE("scene key table: each accessor writes its own field, by name", "[unit][keys]") {
   const auto& keys = sim::scene_keys();
-  REQUIRE(keys.size() == 30);  // every field of SceneOptions above has one row
+  REQUIRE(keys.size() == 31);  // every field of SceneOptions above has one row
   const sim::SceneOptions base;
   for (const auto& k : keys) {
     sim::SceneOptions s;
@@ -109,7 +109,7 @@ TEST_CASE("scene key table: dispersion scopes, mast fields and units", "[unit][k
   for (const char* name : run_keys) CHECK(sim::find_scene_key(name)->scope == sim::KeyScope::run);
   int n_fixed = 0;
   for (const auto& k : sim::scene_keys()) n_fixed += !k.is_dispersible();
-  CHECK(n_fixed == 30 - 13 - 5 - 2);
+  CHECK(n_fixed == 31 - 13 - 5 - 2);
   for (const char* name : {"panels.count", "run.rtol", "drive.mode", "stack.mode", "run.max_steps"})
     CHECK_FALSE(sim::find_scene_key(name)->is_dispersible());
   CHECK(sim::find_scene_key("mast.strut_inertia_kg_m2")->unit == "kg m^2");
