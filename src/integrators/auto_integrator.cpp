@@ -25,7 +25,9 @@ void AutoIntegrator::set_options(const IntegratorOptions& opts) {
 IntegratorSummary AutoIntegrator::integrate(OdeSystem& sys, double t0, double t_end, double* y, StepObserver* observer) {
   if (switch_time_s_ == switch_time_s_) return implicit_.integrate(sys, t0, t_end, y, observer);
   const IntegratorSummary first = explicit_.integrate(sys, t0, t_end, y, observer);
-  if (first.status != IntegratorStatus::stiff) return first;
+  // A step size that collapses (underflow) is the other face of stiffness for an explicit pair:
+  // the state at first.t is the last accepted one, so BDF takes over from there as well.
+  if (first.status != IntegratorStatus::stiff && first.status != IntegratorStatus::failure) return first;
   switch_time_s_ = first.t;
   // The rest of the call's step budget goes to CVODE, which continues from the accepted state.
   IntegratorOptions rest = opts_;

@@ -28,8 +28,10 @@ double calc_energy_scale_J(const RunResult& r) {
          std::abs(r.potential_energy_end_J);
 }
 
-double calc_allowed_energy_residual_J(const RunResult& r, double rtol) {
-  return std::min(1e-2, 1e3 * rtol) * calc_energy_scale_J(r);
+double calc_allowed_energy_residual_J(const RunResult& r, double rtol, double atol, double length_m) {
+  const double E = calc_energy_scale_J(r);
+  const double phases = 2.0 * std::max(1, r.n_bays);
+  return std::min(1e-2 * E, 20.0 * phases * std::max(rtol, atol / length_m) * E + static_cast<double>(r.steps) * atol);
 }
 
 void EnergyLedger::fill(RunResult& r) const {

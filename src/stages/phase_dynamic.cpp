@@ -98,7 +98,7 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
   PhaseOde ode(model_, start.creep_speed_m_per_s);
   PhaseObserver obs(model_, sinks, scratch);
   integrator_.set_options(options_);
-  const integrators::IntegratorSummary sum = integrator_.integrate(ode, t, t + 1e7, y.data(), &obs);
+  const integrators::IntegratorSummary sum = integrator_.integrate(ode, t, t + kHorizon_s, y.data(), &obs);
   out.steps = sum.steps;
   out.rejected_steps = sum.rejected_steps;
   out.evals += sum.rhs_evals + obs.point_evals;
@@ -124,8 +124,8 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
   if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 2) out.reason = PhaseEndReason::crept_to_rest;
   else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 1) out.reason = PhaseEndReason::stopped;
   else if (obs.timed_out) out.reason = PhaseEndReason::wall_time;
-  else if (sum.status == integrators::IntegratorStatus::step_limit || sum.status == integrators::IntegratorStatus::reached_end)
-    out.reason = PhaseEndReason::step_limit;
+  else if (sum.status == integrators::IntegratorStatus::step_limit) out.reason = PhaseEndReason::step_limit;
+  else if (sum.status == integrators::IntegratorStatus::reached_end) out.reason = PhaseEndReason::horizon;
   else out.reason = PhaseEndReason::failure;
   return out;
 }

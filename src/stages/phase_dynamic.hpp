@@ -20,6 +20,9 @@ class DynamicPhaseSolver final : public PhaseSolver {
   // mast only creeps when it approaches an equilibrium or a singular configuration).
   static constexpr double kCreepSpeedFraction = 1e-6;
   static double calc_creep_speed_m_per_s(const model::DriveParams& d);
+  // A phase still running after this much simulated time (116 days) deploys too slowly for any
+  // mission: the run ends as a stall (a creeping drive), not by a cap.
+  static constexpr double kHorizon_s = 1e7;
 
  private:
   const PhaseModel& model_;

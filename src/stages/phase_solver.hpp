@@ -19,6 +19,7 @@ enum class PhaseEndReason {
   crept_to_rest,  // motor mode: the speed fell below the creep threshold (stall)
   wall_time,      // the run's wall-time cap
   step_limit,     // the run's step budget
+  horizon,        // the phase's simulated-time horizon passed with the mast still creeping on
   failure,        // the integrator failed
 };
 

@@ -168,6 +168,10 @@ void StageLoop::fail_phase(const PhaseOutcome& o, int m) {
     case PhaseEndReason::wall_time:
       return fail(RunStatus::wall_time_limit, fmt::format("wall-time cap of {} s reached at t = {:.9g} s (bay {})",
                                                           opts_.run.max_wall_time_s, t_, m));
+    case PhaseEndReason::horizon:
+      return fail(RunStatus::stall, fmt::format("stall: the stage of bay {} has not reached its {} after {:.3g} s of simulated "
+                                                "time (t = {:.9g} s); the driven frame creeps at {:.3g} m/s",
+                                                m, goal, DynamicPhaseSolver::kHorizon_s, t_, o.end.u_m_per_s));
     case PhaseEndReason::step_limit:
       return fail(RunStatus::step_limit, fmt::format("step cap of {} steps reached at t = {:.9g} s (bay {})",
                                                      opts_.run.max_steps, t_, m));
@@ -323,12 +327,12 @@ void StageLoop::check_accuracy() {
   for (const auto& [name, v] : reported)
     if (!std::isfinite(v))
       return fail(RunStatus::inaccurate, fmt::format("{} is not finite ({}) at the end of the run", name, v));
-  const double allowed = calc_allowed_energy_residual_J(r_, opts_.run.rtol);
+  const double allowed = calc_allowed_energy_residual_J(r_, opts_.run.rtol, opts_.run.atol, mast_.bay(1).strut_length_m);
   if (!(std::abs(r_.energy_residual_J) <= allowed))
     fail(RunStatus::inaccurate,
-         fmt::format("energy residual {:.3g} J exceeds the {:.3g} J that rtol = {:g} allows ({:.3g} of the energy scale "
-                     "{:.6g} J): the numbers of this run are not to be trusted; tighten run.rtol / run.atol",
-                     r_.energy_residual_J, allowed, opts_.run.rtol, allowed / calc_energy_scale_J(r_),
+         fmt::format("energy residual {:.3g} J exceeds the {:.3g} J that rtol = {:g}, atol = {:g} allow ({:.3g} of the "
+                     "energy scale {:.6g} J): the numbers of this run are not to be trusted; tighten run.rtol / run.atol",
+                     r_.energy_residual_J, allowed, opts_.run.rtol, opts_.run.atol, allowed / calc_energy_scale_J(r_),
                      calc_energy_scale_J(r_)));
 }
 

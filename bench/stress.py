@@ -1,0 +1,166 @@
+#!/usr/bin/python3
+"""Stress grid of single runs (issue 10): does any run lie at the edges?
+
+Runs truss-sim over a seeded grid around Table 1: one-key sweeps over wide physical ranges, every
+numeric key at 1e-9 and 1e9 of its value, and random combinations (log-uniform in several keys at
+once), in all three drive modes and both directions. For every run it checks the promises:
+  - the exit code is 0 (ok), 1 (a named non-ok status) or 2 (refused input); nothing else;
+  - an `ok` run reports finite numbers (run-level loads, energies, times; per-bay event times);
+  - no run exceeds its wall-time cap (run.max_wall_time_s plus the process's start and output).
+It prints the counts by status, the NaN-in-ok count, timeouts, cap violations and wall-time
+percentiles, and exits 1 if a promise was broken.
+
+  bench/stress.py --sim build/truss-sim                 # the full grid (about 3,000 runs)
+  bench/stress.py --sim build/truss-sim --reduced       # about a minute: the ctest `stress_reduced`
+"""
+import argparse
+import collections
+import concurrent.futures as cf
+import itertools
+import json
+import math
+import os
+import random
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SCENE = os.path.join(HERE, "..", "campaigns", "scenes", "table1.toml")
+
+# Table 1 values of the numeric keys (the scene file's), for the 1e-9 / 1e9 extremes.
+NOMINAL = {
+    "mast.strut_length_m": 0.18, "mast.strut_mass_kg": 0.1, "mast.frame_side_m": 0.36,
+    "mast.frame_mass_kg": 0.5, "mast.diagonal_stiffness_N_per_m": 20.0, "mast.diagonal_free_length_m": 0.45,
+    "rail.x_m": 0.08, "rail.y_m": 0.15, "rail.beta_deg": 20.85, "drive.speed_m_per_s": 0.1,
+    "drive.screw_lead_m": 0.01, "drive.torque_Nm": 0.01, "drive.stall_torque_Nm": 0.02,
+    "drive.no_load_speed_rad_per_s": 75.0,
+}
+SWEEPS = {
+    "mast.diagonal_stiffness_N_per_m": [1, 10, 100, 1e3, 1e4, 1e5, 1e6],
+    "drive.speed_m_per_s": [1e-3, 1e-2, 0.1, 0.5, 1, 2],
+    "mast.n_bays": [1, 2, 10, 100, 1000],
+    "mast.strut_mass_kg": [1e-4, 1e-3, 1e-2, 0.1, 1],
+    "mast.frame_mass_kg": [1e-4, 1e-3, 1e-2, 0.1, 1],
+    "rail.beta_deg": [5, 10, 20, 30, 40, 44, 45, 50, 60],
+    "drive.stall_torque_Nm": [1e-3, 1e-2, 0.1, 1, 10],
+    "drive.no_load_speed_rad_per_s": [0.75, 7.5, 75, 750],
+    "run.rtol": [1e-2, 1e-3, 1e-6, 1e-10, 1e-13],
+}
+FULL_ONLY = {"mast.n_bays": [10000, 100000]}
+MODES = ["velocity", "torque", "motor"]
+DIRECTIONS = ["deploy", "retract"]
+OK_FINITE = ["deploy_time_s", "end_time_s", "peak_drive_force_N", "min_drive_force_N", "peak_pin_force_N",
+             "peak_diagonal_tension_N", "drive_work_J", "energy_lost_J", "energy_residual_J"]
+
+
+def cases(reduced, seed):
+    rng = random.Random(seed)
+    out = []
+    sweeps = dict(SWEEPS)
+    if not reduced:
+        for k, v in FULL_ONLY.items():
+            sweeps[k] = sweeps[k] + v
+    for mode, direction in itertools.product(MODES, DIRECTIONS):
+        for key, values in sweeps.items():
+            for v in values:
+                out.append({key: v, "drive.mode": mode, "run.direction": direction})
+        for key, nominal in NOMINAL.items():
+            for f in (1e-9, 1e9):
+                out.append({key: nominal * f, "drive.mode": mode, "run.direction": direction})
+    n_random = 60 if reduced else 1200
+    for _ in range(n_random):
+        c = {"drive.mode": rng.choice(MODES), "run.direction": rng.choice(DIRECTIONS)}
+        for key in rng.sample(sorted(NOMINAL), 3):
+            c[key] = NOMINAL[key] * 10 ** rng.uniform(-2, 2)
+        c["mast.n_bays"] = rng.choice([1, 3, 10, 30, 100])
+        out.append(c)
+    if reduced:
+        rng.shuffle(out)
+        out = out[:240]
+    return out
+
+
+def run_one(sim, case, cap_s):
+    args = [sim, SCENE, "--json", "--set", "run.output_step_s=0", "--set", f"run.max_wall_time_s={cap_s}"]
+    for k, v in case.items():
+        value = v if isinstance(v, str) else str(int(v)) if k == "mast.n_bays" else repr(float(v))
+        args += ["--set", f"{k}={value}"]
+    t0 = time.monotonic()
+    try:
+        p = subprocess.run(args, capture_output=True, text=True, timeout=cap_s * 3 + 20)
+    except subprocess.TimeoutExpired:
+        return {"case": case, "rc": "timeout", "wall": time.monotonic() - t0}
+    r = {"case": case, "rc": p.returncode, "wall": time.monotonic() - t0, "stderr": p.stderr[-300:]}
+    if p.returncode in (0, 1) and p.stdout.strip():
+        try:
+            r["json"] = json.loads(p.stdout)
+        except ValueError:
+            r["rc"] = "bad json"
+    return r
+
+
+def nonfinite_fields(js):
+    bad = [k for k in OK_FINITE if not (isinstance(js.get(k), (int, float)) and math.isfinite(js[k]))]
+    for b in js.get("bays", []):
+        for k in ("lock_time_s", "entry_time_s", "latch_energy_J"):
+            if not (isinstance(b.get(k), (int, float)) and math.isfinite(b[k])):
+                bad.append(f"bays[{b.get('bay')}].{k}")
+    return bad
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--sim", required=True, help="path to truss-sim")
+    ap.add_argument("--reduced", action="store_true", help="about a minute (ctest)")
+    ap.add_argument("--seed", type=int, default=20261123)
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 2)
+    ap.add_argument("--cap-s", type=float, default=None, help="run.max_wall_time_s of every run")
+    ap.add_argument("--show", default="", help="comma-separated statuses whose cases and messages to print")
+    a = ap.parse_args()
+    cap = a.cap_s if a.cap_s is not None else (2.0 if a.reduced else 20.0)
+    todo = cases(a.reduced, a.seed)
+    t0 = time.monotonic()
+    with cf.ThreadPoolExecutor(a.jobs) as ex:
+        results = list(ex.map(lambda c: run_one(a.sim, c, cap), todo))
+    by_status, problems, walls = collections.Counter(), [], []
+    for r in results:
+        walls.append(r["wall"])
+        if r["rc"] == 2:
+            by_status["refused (exit 2)"] += 1
+            continue
+        if r["rc"] not in (0, 1) or "json" not in r:
+            problems.append(f"exit {r['rc']}: {r['case']} {r.get('stderr', '')!r}")
+            by_status[f"exit {r['rc']}"] += 1
+            continue
+        js = r["json"]
+        by_status[js["status"]] += 1
+        if (js["status"] == "ok") != (r["rc"] == 0):
+            problems.append(f"status {js['status']} with exit {r['rc']}: {r['case']}")
+        if js["status"] == "ok" and (bad := nonfinite_fields(js)):
+            problems.append(f"NaN in ok run ({', '.join(bad[:4])}): {r['case']}")
+        # The cap bounds the run; the process adds its start, the stage plan and the output.
+        if js.get("wall_time_s", 0.0) > 1.5 * cap + 0.5:
+            problems.append(f"over its cap ({js['wall_time_s']:.2f} s > {cap} s): {r['case']}")
+    walls.sort()
+    pct = lambda q: walls[min(len(walls) - 1, int(q * len(walls)))]
+    print(f"stress grid: {len(results)} runs (seed {a.seed}, cap {cap} s, {a.jobs} jobs) in {time.monotonic() - t0:.1f} s")
+    for k, v in sorted(by_status.items(), key=lambda kv: -kv[1]):
+        print(f"  {k:24s} {v:6d}")
+    nan_ok = sum(p.startswith("NaN in ok") for p in problems)
+    timeouts = sum(r["rc"] == "timeout" for r in results)
+    print(f"  NaN in ok runs: {nan_ok}; timeouts: {timeouts}; exit codes outside 0/1/2: "
+          f"{sum(r['rc'] not in (0, 1, 2) for r in results)}")
+    print(f"  process wall time (s): median {pct(0.5):.3f}, p90 {pct(0.9):.3f}, p99 {pct(0.99):.3f}, max {walls[-1]:.3f}")
+    show = set(filter(None, a.show.split(",")))
+    for r in results:
+        st = r.get("json", {}).get("status", "refused (exit 2)" if r["rc"] == 2 else None)
+        if st in show:
+            print(f"  {st}: {r['case']}: {(r.get('json', {}).get('message') or r.get('stderr', ''))[:240]}")
+    for p in problems[:30]:
+        print("  PROBLEM", p)
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
