@@ -155,6 +155,8 @@ std::int64_t SamplePlan::saltelli_base_count() const {
 std::string SamplePlan::validate() const {
   if (n_runs_ < 1) return fmt::format("n_runs: must be >= 1 (got {})", n_runs_);
   if (d_ < 0) return fmt::format("d: must be >= 0 (got {})", d_);
+  if (!groups_.empty() && method_ != SamplingMethod::saltelli)
+    return fmt::format("saltelli_groups: only a saltelli plan has factor groups (method {})", to_string(method_));
   switch (method_) {
     case SamplingMethod::monte_carlo:
       return {};

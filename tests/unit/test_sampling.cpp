@@ -790,6 +790,7 @@ TEST_CASE("saltelli: factor groups, rows built independently from the plain sobo
              StartsWith("saltelli_groups:") && Contains("span 5 dimensions, not d = 6"));
   CHECK_THAT(SamplePlan(SamplingMethod::saltelli, 50, 6, 1, {6, 0}).validate(),
              StartsWith("saltelli_groups:") && Contains("group 1"));
+  CHECK_THAT(SamplePlan(SamplingMethod::sobol, 50, 6, 1, {1, 3, 2}).validate(), StartsWith("saltelli_groups:"));
   CHECK_THAT(SamplePlan(SamplingMethod::saltelli, 49, 6, 1, {1, 3, 2}).validate(),
              StartsWith("n_runs:") && Contains("multiple of G + 2 = 5") && Contains("45") && Contains("50"));
 }
