@@ -211,28 +211,7 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
   if (d.per == Per::bay && !is_bay_key(K)) c.fail(&t, fmt::format("{}.per: \"{}\" is not a per-bay key", where, K));
   if (d.per == Per::frame && !is_frame_key(K)) c.fail(&t, fmt::format("{}.per: \"{}\" is not a per-frame key", where, K));
   auto bad = [&](const std::string& what) { c.fail(&t, fmt::format("{}: {} distribution: {}", where, to_string(d.distribution), what)); };
-  auto Phi = [](double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); };
-  if (d.distribution == DistributionKind::normal || d.distribution == DistributionKind::truncated_normal) {
-    if (!(d.std > 0.0 && std::isfinite(d.std))) bad(fmt::format("std must be positive, got {}", d.std));
-    if (d.distribution == DistributionKind::truncated_normal) {
-      if (!(d.lower < d.upper)) bad(fmt::format("lower ({}) must be below upper ({})", d.lower, d.upper));
-      const double mass = Phi((d.upper - d.mean) / d.std) - Phi((d.lower - d.mean) / d.std);
-      if (!(mass > 1e-12))
-        bad(fmt::format("the truncation [{}, {}] excludes all probability mass of N({}, {}^2) (mass {:.3g})", d.lower,
-                        d.upper, d.mean, d.std, mass));
-    }
-  } else if (d.distribution == DistributionKind::uniform) {
-    if (!(d.lower < d.upper)) bad(fmt::format("lower ({}) must be below upper ({})", d.lower, d.upper));
-  } else if (d.distribution == DistributionKind::lognormal) {
-    if (!(d.sigma > 0.0 && std::isfinite(d.sigma))) bad(fmt::format("sigma must be positive, got {}", d.sigma));
-  } else if (d.distribution == DistributionKind::discrete) {
-    if (d.values.empty()) bad("needs a non-empty 'values' table");
-    if (!d.weights.empty() && d.weights.size() != d.values.size())
-      bad(fmt::format("'weights' has {} entries for {} values", d.weights.size(), d.values.size()));
-    for (double w : d.weights) if (!(w > 0.0 && std::isfinite(w))) bad(fmt::format("weights must be positive, got {}", w));
-  }
-  // The sampling library's own checks (non-finite parameters, repeated discrete values, ...):
-  // whatever the messages above do not cover still gets the file and line.
+  // The distribution's parameters: the sampling library's one set of checks, with this entry's file and line.
   if (const std::string e = make_distribution(d).validate(); !e.empty()) bad(e);
   if (K == "mast.n_bays") {
     if (d.distribution != DistributionKind::discrete || d.apply != Apply::absolute || d.per != Per::run)

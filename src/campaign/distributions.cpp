@@ -198,7 +198,7 @@ std::string Distribution::validate() const {
         return fmt::format("sigma: must be > 0 and finite (got {})", sigma);
       return {};
     case DistributionKind::discrete: {
-      if (values.empty()) return "values: must not be empty";
+      if (values.empty()) return "values: must not be empty (the table of values a draw takes)";
       if (weights.size() != values.size())
         return fmt::format("weights: has {} entries but values has {}", weights.size(), values.size());
       double total = 0.0;

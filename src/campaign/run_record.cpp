@@ -16,12 +16,11 @@ static_assert(std::endian::native == std::endian::little, "records and journals 
 
 namespace {
 
+// Saltelli: one factor per dispersion, spanning all its dimensions (bays, frames).
 SamplePlan make_plan(const CampaignOptions& c, const DimensionLayout& L) {
-  const int d = std::max(1, L.total);
-  if (c.ensemble.sampling != SamplingMethod::saltelli) return SamplePlan(c.ensemble.sampling, c.ensemble.n_runs, d, c.ensemble.master_seed);
-  const std::int64_t blocks = c.ensemble.n_runs / saltelli_block_runs(c);
-  return SamplePlan(2 * d <= kSobolMaxDims ? SamplingMethod::sobol : SamplingMethod::monte_carlo, blocks, 2 * d,
-                    c.ensemble.master_seed);
+  if (c.ensemble.sampling != SamplingMethod::saltelli)
+    return SamplePlan(c.ensemble.sampling, c.ensemble.n_runs, std::max(1, L.total), c.ensemble.master_seed);
+  return SamplePlan(SamplingMethod::saltelli, c.ensemble.n_runs, L.total, c.ensemble.master_seed, L.count);
 }
 
 template <class T>
@@ -62,31 +61,12 @@ struct Reader {
 
 }  // namespace
 
-RunSampler::RunSampler(const CampaignOptions& c)
-    : layout_(calc_layout(c)),
-      saltelli_(c.ensemble.sampling == SamplingMethod::saltelli),
-      block_(saltelli_ ? saltelli_block_runs(c) : 1),
-      plan_(make_plan(c, layout_)) {
+RunSampler::RunSampler(const CampaignOptions& c) : layout_(calc_layout(c)), plan_(make_plan(c, layout_)) {
   if (const std::string e = plan_.validate(); !e.empty()) throw std::invalid_argument("sampling plan: " + e);
 }
 
 void RunSampler::calc_uniforms(std::int64_t run_index, double* u) const {
-  const int d = layout_.total;
-  if (d == 0) return;
-  if (!saltelli_) {
-    plan_.calc_uniforms(run_index, u);
-    return;
-  }
-  const std::int64_t block = run_index / block_, pos = run_index % block_;
-  std::vector<double> ab(static_cast<std::size_t>(2 * d));
-  plan_.calc_uniforms(block, ab.data());
-  const double* A = ab.data();
-  const double* B = ab.data() + d;
-  std::memcpy(u, pos == 1 ? B : A, static_cast<std::size_t>(d) * sizeof(double));
-  if (pos >= 2) {
-    const std::size_t g = static_cast<std::size_t>(pos - 2);
-    for (int j = layout_.offset[g]; j < layout_.offset[g] + layout_.count[g]; ++j) u[j] = B[j];
-  }
+  if (layout_.total > 0) plan_.calc_uniforms(run_index, u);
 }
 
 OutputColumns OutputColumns::make(const DimensionLayout& layout) {

@@ -17,10 +17,10 @@
 
 namespace truss::campaign {
 
-// The uniforms of run i. monte_carlo, latin_hypercube, sobol: SamplePlan over all dimensions.
-// saltelli: blocks of G + 2 runs (A, B, AB_1 .. AB_G) where the G factors are the dispersions, so
-// AB_g takes every dimension of dispersion g (all its bays) from B; the base points are shifted
-// Sobol' points of dimension 2d (Monte Carlo beyond kSobolMaxDims).
+// The uniforms of run i: the campaign's SamplePlan over all dimensions. saltelli: the plan's
+// factor groups are the dispersions (blocks of G + 2 runs A, B, AB_1 .. AB_G), so AB_g takes every
+// dimension of dispersion g (all its bays) from B; the base points are shifted Sobol' points of
+// dimension 2d (Monte Carlo beyond kSobolMaxDims), see SamplePlan.
 class RunSampler {
  public:
   explicit RunSampler(const CampaignOptions& c);
@@ -28,8 +28,6 @@ class RunSampler {
   void calc_uniforms(std::int64_t run_index, double* u) const;  // u[layout().total]
  private:
   DimensionLayout layout_;
-  bool saltelli_ = false;
-  std::int64_t block_ = 1;
   SamplePlan plan_;
 };
 

@@ -82,10 +82,16 @@ std::uint64_t feistel(std::uint64_t x, int half_bits, const std::uint64_t* round
 // SamplePlan
 // ===========================================================================
 
-SamplePlan::SamplePlan(SamplingMethod method, std::int64_t n_runs, int d, std::uint64_t master_seed)
-    : method_(method), n_runs_(n_runs), d_(d), seed_(master_seed) {
+SamplePlan::SamplePlan(SamplingMethod method, std::int64_t n_runs, int d, std::uint64_t master_seed,
+                       std::vector<int> saltelli_groups)
+    : method_(method), n_runs_(n_runs), d_(d), seed_(master_seed), groups_(std::move(saltelli_groups)) {
   valid_ = validate().empty();
   if (!valid_) return;
+  if (method_ == SamplingMethod::saltelli) {
+    if (groups_.empty()) groups_.assign(static_cast<std::size_t>(d_), 1);
+    group_begin_.assign(1, 0);
+    for (int size : groups_) group_begin_.push_back(group_begin_.back() + size);
+  }
 
   const auto nd = static_cast<std::size_t>(d_);
   switch (method_) {
@@ -136,14 +142,21 @@ SamplePlan::SamplePlan(SamplingMethod method, std::int64_t n_runs, int d, std::u
   }
 }
 
+int SamplePlan::saltelli_factors() const {
+  if (method_ != SamplingMethod::saltelli) return 0;
+  return groups_.empty() ? d_ : static_cast<int>(groups_.size());
+}
+
 std::int64_t SamplePlan::saltelli_base_count() const {
   if (method_ != SamplingMethod::saltelli || d_ < 1) return 0;
-  return n_runs_ / saltelli_block(d_);
+  return n_runs_ / saltelli_block(saltelli_factors());
 }
 
 std::string SamplePlan::validate() const {
   if (n_runs_ < 1) return fmt::format("n_runs: must be >= 1 (got {})", n_runs_);
   if (d_ < 0) return fmt::format("d: must be >= 0 (got {})", d_);
+  if (!groups_.empty() && method_ != SamplingMethod::saltelli)
+    return fmt::format("saltelli_groups: only a saltelli plan has factor groups (method {})", to_string(method_));
   switch (method_) {
     case SamplingMethod::monte_carlo:
       return {};
@@ -163,19 +176,17 @@ std::string SamplePlan::validate() const {
       return {};
     case SamplingMethod::saltelli: {
       if (d_ < 1) return fmt::format("d: saltelli needs d >= 1 (got {})", d_);
-      const std::int64_t block = saltelli_block(d_);
+      if (std::string e = validate_groups(); !e.empty()) return e;
+      const int factors = saltelli_factors();
+      const std::int64_t block = saltelli_block(factors);
       if (n_runs_ % block != 0) {
+        const std::string what = fmt::format("n_runs: saltelli needs a multiple of {} + 2 = {} (blocks A, B, AB_1..AB_{})",
+                                             groups_.empty() ? "d" : "G", block, factors);
         const std::int64_t below = n_runs_ / block;
         const std::int64_t above = below + 1;
-        if (below == 0)
-          return fmt::format(
-              "n_runs: saltelli needs a multiple of d + 2 = {} (blocks A, B, AB_1..AB_{}); "
-              "got {}, nearest valid count is {} (N = 1)",
-              block, d_, n_runs_, block);
-        return fmt::format(
-            "n_runs: saltelli needs a multiple of d + 2 = {} (blocks A, B, AB_1..AB_{}); got {}, "
-            "nearest valid counts are {} (N = {}) and {} (N = {})",
-            block, d_, n_runs_, below * block, below, above * block, above);
+        if (below == 0) return fmt::format("{}; got {}, nearest valid count is {} (N = 1)", what, n_runs_, block);
+        return fmt::format("{}; got {}, nearest valid counts are {} (N = {}) and {} (N = {})", what, n_runs_,
+                           below * block, below, above * block, above);
       }
       if (saltelli_uses_sobol() && n_runs_ / block > (std::int64_t{1} << kSobolBits))
         return fmt::format("n_runs: saltelli with a Sobol' base supports at most 2^{} blocks (got {})",
@@ -184,6 +195,17 @@ std::string SamplePlan::validate() const {
     }
   }
   return "method: unknown sampling method";
+}
+
+std::string SamplePlan::validate_groups() const {
+  if (groups_.empty()) return {};
+  std::int64_t sum = 0;
+  for (std::size_t g = 0; g < groups_.size(); ++g) {
+    if (groups_[g] < 1) return fmt::format("saltelli_groups: group {} has {} dimensions (needs >= 1)", g, groups_[g]);
+    sum += groups_[g];
+  }
+  if (sum != d_) return fmt::format("saltelli_groups: the groups span {} dimensions, not d = {}", sum, d_);
+  return {};
 }
 
 double SamplePlan::sobol_point_unshifted(std::uint32_t index, int dim) {
@@ -269,13 +291,15 @@ void SamplePlan::calc_uniforms(std::int64_t run_index, double* u) const {
     }
     case SamplingMethod::saltelli: {
       // Block b = base point b in 2d dimensions: A = its first d
-      // coordinates, B = the last d. Position 0 -> A, 1 -> B, 2 + i -> AB_i
-      // (A with column i taken from B).
-      const int block = saltelli_block(d_);
+      // coordinates, B = the last d. Position 0 -> A, 1 -> B, 2 + g -> AB_g
+      // (A with the columns of factor g taken from B).
+      const int block = saltelli_block(static_cast<int>(groups_.size()));
       const std::int64_t b = run_index / block;
       const int pos = static_cast<int>(run_index % block);
       const int from = (pos == 1) ? d_ : 0;  // columns [from, from + d) of the base point
-      const int swapped = pos >= 2 ? pos - 2 : -1;
+      const int g = pos >= 2 ? pos - 2 : -1;
+      const int swap_first = g >= 0 ? group_begin_[static_cast<std::size_t>(g)] : 0;
+      const int swap_count = g >= 0 ? group_begin_[static_cast<std::size_t>(g) + 1] - swap_first : 0;
       if (saltelli_uses_sobol()) {
         auto coord = [&](std::uint32_t xi, int col) {
           const std::uint64_t z =
@@ -290,17 +314,18 @@ void SamplePlan::calc_uniforms(std::int64_t run_index, double* u) const {
           for (int j = 0; j < count; ++j)
             u[first + j] = coord(x[static_cast<std::size_t>(j)], from + first + j);
         }
-        if (swapped >= 0) {
-          std::uint32_t xb = 0;
-          calc_sobol(static_cast<std::uint64_t>(b), d_ + swapped, 1, &xb);
-          u[swapped] = coord(xb, d_ + swapped);
+        for (int first = swap_first; first < swap_first + swap_count; first += kChunk) {
+          const int count = std::min(kChunk, swap_first + swap_count - first);
+          calc_sobol(static_cast<std::uint64_t>(b), d_ + first, count, x.data());
+          for (int j = 0; j < count; ++j) u[first + j] = coord(x[static_cast<std::size_t>(j)], d_ + first + j);
         }
       } else {
-        const std::uint64_t state = counter_run_state(seed_, b, kTagSaltelliMc);
+        // Point b of the plain monte_carlo plan in 2d dimensions.
+        const std::uint64_t state = counter_run_state(seed_, b, kTagMonteCarlo);
         for (int j = 0; j < d_; ++j)
           u[j] = to_open_unit(splitmix_at(state, static_cast<std::uint64_t>(from + j)));
-        if (swapped >= 0)
-          u[swapped] = to_open_unit(splitmix_at(state, static_cast<std::uint64_t>(d_ + swapped)));
+        for (int j = swap_first; j < swap_first + swap_count; ++j)
+          u[j] = to_open_unit(splitmix_at(state, static_cast<std::uint64_t>(d_ + j)));
       }
       return;
     }

@@ -82,7 +82,6 @@ inline constexpr std::uint64_t kTagMonteCarlo = 0;
 inline constexpr std::uint64_t kTagLhsJitter = 0x4c48532d4a495454ULL;   // "LHS-JITT"
 inline constexpr std::uint64_t kTagLhsPerm = 0x4c48532d5045524dULL;     // "LHS-PERM"
 inline constexpr std::uint64_t kTagSobolShift = 0x534f424f4c2d5348ULL;  // "SOBOL-SH"
-inline constexpr std::uint64_t kTagSaltelliMc = 0x53414c542d4d432dULL;  // "SALT-MC-"
 inline constexpr std::uint64_t kTagBootstrap = 0x424f4f5453545250ULL;   // "BOOTSTRP"
 
 // Hash of the part of the key that is common to all dimensions of one run;
@@ -198,11 +197,15 @@ struct Distribution {
 //                    consecutive points has one point in each dyadic interval
 //                    of length 2^-m (A. B. Owen, "On dropping the first Sobol'
 //                    point", MCQMC 2020, arXiv:2008.08051).
-//   saltelli         blocks of d + 2 runs: A, B, AB_1 .. AB_d, where block b
-//                    takes its base point from a 2d-dimensional sample (the
-//                    shifted Sobol' point b if 2d <= kSobolMaxDims, else the
-//                    counter-based generator): A = first d coordinates, B =
-//                    last d, AB_i = A with column i from B.
+//   saltelli         blocks of G + 2 runs: A, B, AB_1 .. AB_G for G factors.
+//                    Block b's base point is point b of the plain
+//                    2d-dimensional sobol plan (shifted Sobol', same seed) if
+//                    2d <= kSobolMaxDims, else of the plain monte_carlo plan
+//                    (counter_uniform(seed, b, j)): A = its first d
+//                    coordinates, B = the last d. A factor is a group of
+//                    consecutive dimensions (by default each dimension is its
+//                    own factor, G = d); AB_g = A with every dimension of
+//                    factor g taken from B.
 enum class SamplingMethod { monte_carlo, latin_hypercube, sobol, saltelli };
 inline constexpr const char* kSamplingNames[] = {"monte_carlo", "latin_hypercube", "sobol", "saltelli"};
 inline const char* to_string(SamplingMethod m) { return kSamplingNames[static_cast<int>(m)]; }
@@ -214,9 +217,14 @@ inline constexpr int kSobolMaxDims = 2048;
 
 class SamplePlan {
  public:
-  // n_runs: number of runs (for saltelli, N * saltelli_block(d));
+  // n_runs: number of runs (for saltelli, N * (G + 2));
   // d: uniforms per run. Never throws for bad arguments: call validate().
-  SamplePlan(SamplingMethod method, std::int64_t n_runs, int d, std::uint64_t master_seed);
+  // saltelli_groups (saltelli only): sizes of the G factors, consecutive
+  // groups of dimensions in order, each >= 1, summing to d (a campaign's
+  // per-bay dispersion is one factor spanning all its bays). Empty: every
+  // dimension is its own factor.
+  SamplePlan(SamplingMethod method, std::int64_t n_runs, int d, std::uint64_t master_seed,
+             std::vector<int> saltelli_groups = {});
 
   // "" when usable, else "field: reason".
   std::string validate() const;
@@ -230,8 +238,10 @@ class SamplePlan {
   // (std::invalid_argument otherwise). No allocation.
   void calc_values(std::int64_t run_index, std::span<const Distribution> dists, double* x) const;
 
-  // Runs per Saltelli block: A, B, AB_1 .. AB_d.
-  static int saltelli_block(int d) { return d + 2; }
+  // Runs per Saltelli block of G factors: A, B, AB_1 .. AB_G.
+  static int saltelli_block(int factors) { return factors + 2; }
+  // saltelli: number of factors G (groups, or d without groups); otherwise 0.
+  int saltelli_factors() const;
 
   // The raw (unshifted) Joe-Kuo Sobol' point: coordinate `dim` (0-based:
   // dim 0 is Joe-Kuo dimension 1) of point `index`, in Gray-code order, as
@@ -249,11 +259,15 @@ class SamplePlan {
 
  private:
   void calc_sobol(std::uint64_t index, int first, int count, std::uint32_t* x) const;
+  std::string validate_groups() const;
 
   SamplingMethod method_;
   std::int64_t n_runs_;
   int d_;
   std::uint64_t seed_;
+  // saltelli: factor g spans dimensions [group_begin_[g], group_begin_[g + 1]).
+  std::vector<int> groups_;
+  std::vector<int> group_begin_;
   bool valid_ = false;
 
   // latin_hypercube: Feistel network on 2*half_bits_ bits, rounds keyed per dimension.

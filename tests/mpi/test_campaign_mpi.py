@@ -365,7 +365,7 @@ BAD = {
     "unknown_scene_key": ("[ensemble]\nn_runs = 10\n[[dispersion]]\nkey = \"mast.strut_colour\"\ndistribution = \"normal\"\nstd = 0.1\n",
                           ":3:", "mast.strut_colour"),
     "impossible_distribution": ("[ensemble]\nn_runs = 10\n[[dispersion]]\nkey = \"mast.strut_mass_kg\"\nper = \"bay\"\n"
-                                "distribution = \"normal\"\nstd = -0.1\n", ":3:", "std must be positive"),
+                                "distribution = \"normal\"\nstd = -0.1\n", ":3:", "std: must be > 0"),
     "negative_count": ("[ensemble]\nn_runs = -5\n", ":2:", "n_runs"),
     "empty_truncation": ("[ensemble]\nn_runs = 10\n[[dispersion]]\nkey = \"rail.x_m\"\napply = \"offset\"\n"
                          "distribution = \"truncated_normal\"\nstd = 0.001\nlower = 1.0\nupper = 2.0\n", ":3:", "excludes all"),

@@ -60,7 +60,7 @@ TEST_CASE("bad campaign files name the key and the line", "[campaign][input]") {
       {"[ensemble]\nn_runs = 0\n", "ensemble.n_runs", 2},
       {"[ensemble]\nsampling = \"quasi\"\n", "ensemble.sampling", 2},                  // bad enum
       {head + "[[dispersion]]\nkey = \"mast.wing_span_m\"\ndistribution = \"normal\"\nstd = 0.1\n", "mast.wing_span_m", 4},
-      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"normal\"\nstd = -0.1\n", "std must be positive", 4},
+      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"normal\"\nstd = -0.1\n", "std: must be > 0", 4},
       {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"uniform\"\nlower = 0.1\nupper = 0.0\n", "lower", 4},
       {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"truncated_normal\"\nmean = 0\nstd = 0.01\nlower = 1\nupper = 2\n",
        "excludes all probability mass", 4},
@@ -68,6 +68,8 @@ TEST_CASE("bad campaign files name the key and the line", "[campaign][input]") {
       {head + "[[dispersion]]\nkey = \"mast.n_bays\"\napply = \"absolute\"\ndistribution = \"discrete\"\nvalues = [10, 12.5]\n", "integers", 4},
       {head + "[[dispersion]]\nkey = \"mast.n_bays\"\ndistribution = \"normal\"\nstd = 1\n", "discrete", 4},
       {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"discrete\"\nvalues = [1, 2]\nweights = [1]\n", "weights", 4},
+      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"discrete\"\nvalues = []\n", "values: must not be empty", 4},
+      {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"lognormal\"\nsigma = 0\n", "sigma: must be > 0", 4},
       {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"normal\"\nstd = 0.1\nmean = \"zero\"\n", "expected a number", 8},
       {head + "[scene]\noverrides = { \"rail.beta_deg\" = 95 }\n", "rail.beta_deg", 0},
       {head + "[ensemble\n", "", 4},                                                    // syntax error

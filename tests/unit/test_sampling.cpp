@@ -732,6 +732,69 @@ TEST_CASE("saltelli: block layout A, B, AB_1..AB_d", "[sampling][saltelli]") {
   for (const auto& h : hits) CHECK(std::all_of(h.begin(), h.end(), [](int c) { return c == 1; }));
 }
 
+TEST_CASE("saltelli: factor groups, rows built independently from the plain sobol / monte_carlo plan",
+          "[sampling][saltelli]") {
+  // A factor may span several consecutive dimensions (a campaign's per-bay dispersion): AB_g takes
+  // all of them from B. Independent construction: A and B are the two halves of point b of the
+  // plain 2d-dimensional plan (sobol when 2d <= kSobolMaxDims, else monte_carlo), as documented;
+  // every row of the grouped plan must equal the row built here from them, bit for bit.
+  struct Case { std::vector<int> groups; SamplingMethod base; };
+  const Case cases[] = {{{1, 3, 2}, SamplingMethod::sobol},
+                        {{5}, SamplingMethod::sobol},
+                        {{300, 1, 723}, SamplingMethod::sobol},        // 2d = 2048: the last Sobol' case
+                        {{300, 1, 724}, SamplingMethod::monte_carlo},  // 2d = 2050 > 2048: Monte Carlo
+                        {{1000, 1, 99}, SamplingMethod::monte_carlo}};
+  const std::uint64_t seed = 424242;
+  for (const Case& c : cases) {
+    int d = 0;
+    std::vector<int> begin{0};
+    for (int size : c.groups) begin.push_back(d += size);
+    const SamplingMethod base = c.base;  // stated per case above, not derived from the code's rule
+    const auto G = static_cast<int>(c.groups.size());
+    const std::int64_t n_base = 9;  // not a power of 2: the Sobol' table holds only the bits it needs
+    const SamplePlan grouped(SamplingMethod::saltelli, n_base * (G + 2), d, seed, c.groups);
+    const SamplePlan plain(base, n_base, 2 * d, seed);
+    INFO("d = " << d << ", G = " << G);
+    REQUIRE(grouped.validate().empty());
+    REQUIRE(plain.validate().empty());
+    CHECK(grouped.saltelli_factors() == G);
+    CHECK(grouped.saltelli_base_count() == n_base);
+    CHECK(grouped.saltelli_uses_sobol() == (base == SamplingMethod::sobol));
+    const auto nd = static_cast<std::size_t>(d);
+    std::vector<double> ab(2 * nd), row(nd), expect(nd);
+    bool same = true;
+    for (std::int64_t b = 0; b < n_base; ++b) {
+      plain.calc_uniforms(b, ab.data());
+      for (int pos = 0; pos < G + 2; ++pos) {
+        for (std::size_t j = 0; j < nd; ++j) expect[j] = pos == 1 ? ab[nd + j] : ab[j];
+        if (pos >= 2)
+          for (int j = begin[static_cast<std::size_t>(pos - 2)]; j < begin[static_cast<std::size_t>(pos - 1)]; ++j)
+            expect[static_cast<std::size_t>(j)] = ab[nd + static_cast<std::size_t>(j)];
+        grouped.calc_uniforms(b * (G + 2) + pos, row.data());
+        same = same && row == expect;
+      }
+    }
+    CHECK(same);
+  }
+  // Without groups every dimension is its own factor: the same rows as groups of size 1.
+  const SamplePlan ungrouped(SamplingMethod::saltelli, 7 * 6, 4, seed);
+  const SamplePlan ones(SamplingMethod::saltelli, 7 * 6, 4, seed, {1, 1, 1, 1});
+  for (std::int64_t r = 0; r < 42; ++r) {
+    double x[4], y[4];
+    ungrouped.calc_uniforms(r, x);
+    ones.calc_uniforms(r, y);
+    CHECK(std::equal(x, x + 4, y));
+  }
+  // Groups that do not tile [0, d), and run counts that are not whole blocks of G + 2.
+  CHECK_THAT(SamplePlan(SamplingMethod::saltelli, 50, 6, 1, {1, 3, 1}).validate(),
+             StartsWith("saltelli_groups:") && Contains("span 5 dimensions, not d = 6"));
+  CHECK_THAT(SamplePlan(SamplingMethod::saltelli, 50, 6, 1, {6, 0}).validate(),
+             StartsWith("saltelli_groups:") && Contains("group 1"));
+  CHECK_THAT(SamplePlan(SamplingMethod::sobol, 50, 6, 1, {1, 3, 2}).validate(), StartsWith("saltelli_groups:"));
+  CHECK_THAT(SamplePlan(SamplingMethod::saltelli, 49, 6, 1, {1, 3, 2}).validate(),
+             StartsWith("n_runs:") && Contains("multiple of G + 2 = 5") && Contains("45") && Contains("50"));
+}
+
 TEST_CASE("saltelli: Ishigami indices and bootstrap intervals", "[sampling][saltelli]") {
   // Ishigami & Homma (1990): f = sin x1 + a sin^2 x2 + b x3^4 sin x1,
   // x_i ~ U(-pi, pi). Analytic partial variances (Sobol' & Levitan 1999):
