@@ -22,7 +22,7 @@ def section_nominal(page, e):
                          "truss-campaign stored the nominal run).</p></section>")
     out.append(f"<p>The base scene without dispersions, computed once: status <b>"
                f"{esc(e.nominal_status)}</b>{(': ' + esc(e.nominal_message)) if e.nominal_message else ''}."
-               " Its values are the nominal column of the design-load table and the dashed lines "
+               " Its values are the nominal column of the design-load table and the black lines "
                "of the histograms.</p>")
     if e.nominal_run is not None:
         out.append(page.figure(rf.fig5(page.plt, e.nominal_run), "nominal_history.png",
