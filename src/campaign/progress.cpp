@@ -4,6 +4,9 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+#include <utility>
+
 namespace truss::campaign {
 
 namespace {
@@ -63,11 +66,32 @@ void Progress::print(std::int64_t done, const StatusCounts& counts, bool final) 
   std::fflush(out_);
 }
 
+namespace {
+// A readable unit for values up to |magnitude|: the largest prefix not above it (mN m, uJ, ...).
+std::pair<std::string, double> readable_unit(const std::string& units, double magnitude) {
+  static const std::vector<std::pair<std::string, std::vector<std::pair<const char*, double>>>> prefixes = {
+      {"N", {{"mN", 1e-3}, {"N", 1.0}}},
+      {"Nm", {{"uN m", 1e-6}, {"mN m", 1e-3}, {"N m", 1.0}}},
+      {"J", {{"uJ", 1e-6}, {"mJ", 1e-3}, {"J", 1.0}}},
+      {"Ns", {{"mN s", 1e-3}, {"N s", 1.0}}}};
+  for (const auto& [u, opts] : prefixes) {
+    if (u != units) continue;
+    std::pair<std::string, double> best{opts.front().first, opts.front().second};
+    for (const auto& [label, f] : opts)
+      if (std::abs(magnitude) >= f) best = {label, f};
+    return best;
+  }
+  return {units, 1.0};
+}
+}  // namespace
+
 void print_design_summary(std::FILE* out, const std::vector<DesignValue>& values) {
   fmt::print(out, "[truss-campaign] design values (ok runs; nominal = base scene without dispersions):\n");
-  for (const auto& v : values)
-    fmt::print(out, "[truss-campaign]   {:<26} nominal {:>10.5g} {:<3}  P99.865 {:>10.5g} {:<3}  max {:>10.5g} {}\n", v.label,
-               v.nominal, v.units, v.p99_865, v.units, v.max, v.units);
+  for (const auto& v : values) {
+    const auto [u, f] = readable_unit(v.units, std::isfinite(v.max) ? v.max : v.nominal);
+    fmt::print(out, "[truss-campaign]   {:<22} nominal {:>8.5g} {:<4}  P99.865 {:>8.5g} {:<4}  max {:>8.5g} {}\n", v.label,
+               v.nominal / f, u, v.p99_865 / f, u, v.max / f, u);
+  }
   std::fflush(out);
 }
 
