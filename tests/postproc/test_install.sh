@@ -16,5 +16,5 @@ cd "$scratch"
 "$scratch/venv/bin/python" -c "
 import truss_report, os
 from truss_report import read_campaign
-assert not truss_report.__file__.startswith('$repo'), truss_report.__file__
+assert truss_report.__file__.startswith('$scratch/venv/'), truss_report.__file__
 print('ok: truss-report entry point and read_campaign installed at', os.path.dirname(truss_report.__file__))"
