@@ -129,8 +129,11 @@ def sobol_blocks(y, G, n_blocks):
 
 
 def sobol_estimates(fA, fB, fAB):
-    """Saltelli 2010 first order and Jansen 1999 total indices (per factor)."""
-    V = np.var(np.concatenate([fA, fB]), ddof=1)
+    """Saltelli 2010 first order and Jansen 1999 total indices (per factor), on outputs centred
+    by the mean of f(A) and f(B), V their population variance (as the campaign computes them)."""
+    mu = np.mean(np.concatenate([fA, fB]))
+    fA, fB, fAB = fA - mu, fB - mu, fAB - mu
+    V = np.var(np.concatenate([fA, fB]))
     s1 = np.mean(fB[:, None] * (fAB - fA[:, None]), axis=0) / V
     st = 0.5 * np.mean((fA[:, None] - fAB) ** 2, axis=0) / V
     return s1, st
