@@ -18,12 +18,15 @@ mkdir -p "$dir"
 # Open MPI refuses root without these; one rank per core.
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 name=$(basename "$campaign" .toml)
-mpirun -np "$(nproc)" build/truss-campaign "$campaign" -o "$dir/$name.h5" "$@"
+# Under mpirun rank 0's stderr is a pipe: ask for the in-place display when ours is a terminal.
+progress=(--progress lines); [ -t 2 ] && progress=(--progress tty)
+case " $* " in *" --progress"*) progress=() ;; esac      # the user's own choice wins
+mpirun -np "$(nproc)" build/truss-campaign "$campaign" -o "$dir/$name.h5" "${progress[@]}" "$@"
 
 # The paper's single run (deploy, with histories) for the report's single-run figures.
 build/truss-sim campaigns/scenes/table1.toml -o "$dir/table1_run.h5" --json > "$dir/table1_run.json"
-/usr/bin/python3 postproc/report.py "$dir/$name.h5" -o "$dir/report"
+/usr/bin/python3 postproc/report.py "$dir/$name.h5" -o "$dir/report" --csv
 /usr/bin/python3 postproc/report.py "$dir/table1_run.h5" -o "$dir/report_table1_run"
 echo "campaign results: $dir/$name.h5"
-echo "load report:      $dir/report/report.html"
+echo "load report:      $dir/report/report.html (run table: $dir/report/runs.csv)"
 echo "single run:       $dir/report_table1_run/report.html"

@@ -19,3 +19,9 @@ import sys
 _HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 if _HERE not in sys.path:
     sys.path.insert(0, _HERE)
+
+
+def read_campaign(path):
+    """A campaign file as a pandas DataFrame (truss_report.dataframe.read_campaign)."""
+    from .dataframe import read_campaign as _read
+    return _read(path)

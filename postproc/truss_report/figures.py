@@ -4,7 +4,7 @@ import numpy as np
 from .constants import LEVELS
 
 
-def fig_distribution(plt, x, title, u, est, cis):
+def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan")):
     n = len(x)
     fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(15.0, 4.3))
     edges = np.histogram_bin_edges(x, bins="auto")
@@ -33,6 +33,10 @@ def fig_distribution(plt, x, title, u, est, cis):
         a3.plot([est[name]], [level], "o", color=colors[name], ms=4,
                 label=f"{lab} and 95 % CI" + ("" if np.isfinite(ci.lo) and np.isfinite(ci.hi)
                                              else " (a bound beyond the sample)"))
+    if np.isfinite(nominal):
+        for ax in (a1, a2, a3):
+            ax.axvline(nominal, color="k", lw=1.4, ls="-", label=f"nominal = {nominal:.5g} {u}"
+                       if ax is a1 else None)
     for ax in (a1, a2, a3):
         ax.set_xlabel(f"{title} ({u})" if u != "1" else title)
         ax.grid(True, alpha=0.3)
@@ -104,7 +108,7 @@ def fig_tornado(plt, ranked, aggregate, title, band):
     ax.set_xlim(-1.05, 1.05)
     ax.set_xlabel("Spearman ρ (1)")
     for i, v in enumerate(vals):
-        ax.text(v, i, f" {v:+.3f} ", va="center", ha="left" if v > 0 else "right", fontsize=6)
+        ax.text(v, i, f" {v:+.3f} ".replace("-0.000", "0.000").replace("+0.000", "0.000"), va="center", ha="left" if v > 0 else "right", fontsize=6)
     ax.set_title(f"{title}: top {len(vals)} inputs by |ρ|", fontsize=9)
     ax.grid(True, axis="x", alpha=0.3)
     fig.tight_layout()

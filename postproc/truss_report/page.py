@@ -18,7 +18,8 @@ def fmt(v, digits=5):
     v = float(v)
     if np.isnan(v):
         return "NaN"
-    return f"{v:.{digits}g}".replace("inf", "∞")
+    text = f"{v:.{digits}g}".replace("inf", "∞")
+    return text[1:] if text.startswith("-") and float(text) == 0.0 else text   # never "-0"
 
 
 def data_value(v):
@@ -59,7 +60,7 @@ class Page:
         self.checks = []          # (what, passed, detail html)
 
     def figure(self, fig, name, caption, cls="wide"):
-        fig.savefig(os.path.join(self.dir, name), format="png", dpi=100)
+        fig.savefig(os.path.join(self.dir, name), format="png", dpi=150)   # sharp on paper
         self.plt.close(fig)
         self.files.append(name)
         return (f'<figure class="{cls}"><img src="{esc(name)}" alt="{esc(caption)}">'
@@ -89,6 +90,20 @@ figure.half img { max-width: 100%; } figcaption { font-size: 12px; color: #555; 
 .okc { color: #176b17; font-weight: bold; } .bad { color: #c00; font-weight: bold; }
 pre { background: #f6f8fa; padding: 8px; font-size: 12px; overflow-x: auto; }
 details { margin: 6px 0 12px 0; } summary { cursor: pointer; color: #234; }
+.verdict { padding: 8px 12px; margin: 8px 0; border-radius: 4px; font-size: 14px; }
+.verdict ul { margin: 4px 0 4px 18px; padding: 0; } .small { font-size: 11px; color: #444; }
+.verdict.fail { background: #fde8e8; border: 2px solid #c00; }
+.verdict.pass { background: #e7f6e7; border: 2px solid #176b17; }
+table.design td, table.design th { font-size: 12px; } table.design td small { color: #555; }
+h2#design, h2#mechanism { margin-top: 14px; }
+table.signoff td { min-width: 180px; height: 28px; }
+@media print {
+  body { font-size: 10pt; max-width: none; margin: 0; padding: 0; }
+  nav, details > summary { display: none; } details { display: block; }
+  h2 { page-break-after: avoid; } figure, table, .verdict { page-break-inside: avoid; }
+  figure img { max-width: 100%; border: none; } a { color: inherit; text-decoration: none; }
+  .grid { display: block; } @page { size: A4; margin: 15mm; }
+}
 """
 
 

@@ -225,7 +225,9 @@ def output_block(page, c, key, label, comparison):
                 f"show (the {esc(c.attrs['drive_mode'])} drive mode may not define it).</p>")
     cis = {name: quantile_ci(x, q / 100.0) for q, name, _ in LEVELS}
     est = {name: percentile(x, q) for q, name, _ in LEVELS}
-    fig = fig_distribution(page.plt, x, f"{word} ({key})", u, est, cis)
+    e = getattr(c, "extras", None)
+    nominal = e.nominal.get(key, float("nan")) if e is not None and e.nominal else float("nan")
+    fig = fig_distribution(page.plt, x, f"{word} ({key})", u, est, cis, nominal)
     parts = [head,
              f"<p>{num(f'{key}.count', len(x), tag='span')} ok runs with a finite value "
              f"(of {n_ok} ok runs and {c.n} runs).</p>",

@@ -6,8 +6,7 @@ import numpy as np
 import run_figures as rf
 from .constants import AGREE_RTOL, MAX_HISTORY_FIGURES, OUTPUTS, TORNADO_TOP, TORQUE_RTOL
 from .figures import fig_motor, fig_sobol, fig_tornado
-from .page import esc, fmt, html_page, num, table
-from .sections_campaign import section_campaign, section_loads, section_lock_timing
+from .page import esc, fmt, num, table
 from .stats import clopper_pearson, spearman
 
 
@@ -182,7 +181,13 @@ def section_sensitivity(page, c):
                + table(["input"] + [f"<code>{k}</code>" for k in OUTPUTS], rows, "corr"))
     figs = []
     aggregate = {col.label for col in cols if col.aggregate}
+    proportional = proportional_to(c)
     for key in OUTPUTS:
+        if key in proportional:
+            figs.append(f"<div class='cell'><p class='note'><code>{key}</code> is proportional to "
+                        f"<code>{proportional[key]}</code> in every ok run (same ranks): its "
+                        "tornado is that one.</p></div>")
+            continue
         ranked = sorted(((lab, r, n) for lab, (r, n) in rho[key].items() if np.isfinite(r)),
                         key=lambda t: -abs(t[1]))[:TORNADO_TOP]
         if not ranked:
@@ -205,6 +210,23 @@ def section_sensitivity(page, c):
         out.append("<p class='warn'>Saltelli sampling, but the file has no /sensitivity.</p>")
     out.append("</section>")
     return "\n".join(out)
+
+
+def proportional_to(c):
+    """{output: earlier output} for outputs whose ok values are a constant multiple of an earlier
+    one's (drive torque = force x lead / 2 pi): one tornado serves both."""
+    res = {}
+    keys = list(OUTPUTS)
+    for i, k in enumerate(keys):
+        for j in keys[:i]:
+            a, b = c.outputs[j][c.ok], c.outputs[k][c.ok]
+            m = np.isfinite(a) & np.isfinite(b) & (a != 0)
+            if m.sum() >= 3 and j not in res:
+                r = b[m] / a[m]
+                if np.ptp(r) <= 1e-9 * abs(np.mean(r)):
+                    res[k] = j
+                    break
+    return res
 
 
 def subsection_sobol(page, c):
@@ -277,21 +299,3 @@ def section_checks(page, number):
             "<code>/stats</code>, and compares: counts exactly, other statistics to "
             f"{AGREE_RTOL:g} of the largest |value| of the column.</p>"
             + table(["check", "result", "detail"], rows) + "</section>")
-
-
-def campaign_report(page, c):
-    body = [section_campaign(page, c), section_loads(page, c), section_lock_timing(page, c),
-            section_margins(page, c), section_sensitivity(page, c), section_histories(page, c)]
-    n_checks = 7 if c.histories else 6
-    body.append(section_checks(page, n_checks))
-    failed = [what for what, passed, _ in page.checks if not passed]
-    banner = ("<p class='warn'>The file is not consistent with itself: "
-              + "; ".join(esc(w) for w in failed)
-              + f". See section {n_checks}.</p>") if failed else ""
-    toc = ("<nav>1. <a href='#campaign'>Campaign</a> · 2. <a href='#loads'>Peak loads</a> · "
-           "3. <a href='#locks'>Lock timing</a> · 4. <a href='#margins'>Margins</a> · "
-           "5. <a href='#sensitivity'>What drives the loads</a>"
-           + (" · 6. <a href='#histories'>Histories</a>" if c.histories else "")
-           + f" · {n_checks}. <a href='#checks'>Consistency</a></nav>")
-    title = f"Statistical load report: campaign “{c.attrs['campaign_name']}”"
-    return html_page(title, c.path, c.sha256, banner + toc + "\n".join(body))

@@ -270,6 +270,7 @@ void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t
   write_sensitivity(file, ctx.options, sens);
   write_histories(file, ctx.options, histories);
   write_timing(file, t, info);
+  if (info.write_extra) info.write_extra(file);
 }
 
 }  // namespace

@@ -2,7 +2,10 @@
 // end from the in-memory table, atomically: to .NAME.tmp.PID, synced, then renamed onto NAME
 // (never replacing an existing file without force).
 #pragma once
+#include <hdf5.h>
+
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -32,6 +35,7 @@ struct CampaignFileInfo {
   std::string start_utc, end_utc;
   double wall_time_s = 0.0;      // summed over sessions
   ScheduleTiming schedule;       // of this session
+  std::function<void(hid_t file)> write_extra;  // more groups written into the file before it is committed (/nominal)
 };
 
 void write_campaign_h5(const std::string& path, const CampaignContext& ctx, const ResultTable& table,

@@ -15,6 +15,7 @@
 #include "campaign/campaign.hpp"
 #include "campaign/campaign_h5.hpp"
 #include "campaign/journal.hpp"
+#include "campaign/nominal.hpp"
 #include "campaign/progress.hpp"
 #include "campaign/results.hpp"
 #include "campaign/run_record.hpp"
@@ -40,7 +41,7 @@ struct CommandOptions {
   bool dry_run = false;
   double flush_interval_s = 2.0;
   std::string progress = "auto";
-  double progress_interval_s = 10.0;
+  double progress_interval_s = 2.0;  // a person watching a log sees it move
   int max_batch = 32;
   double synthetic_run_cost_s = -1.0;  // bench only (hidden): runs sleep this long and simulate nothing
 };
@@ -129,9 +130,9 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
   app.add_flag("--force", o.force, "Overwrite an existing output file and discard an unfinished journal");
   app.add_flag("--dry-run", o.dry_run, "Validate the campaign, print it resolved, run nothing");
   app.add_option("--flush-interval", o.flush_interval_s, "Seconds between journal flushes to disk")->check(CLI::Range(0.01, 3600.0));
-  app.add_option("--progress", o.progress, "Progress display: auto (in place on a terminal, lines otherwise), tty, lines, none")
+  app.add_option("--progress", o.progress, "Progress display: auto (in place when stderr is a terminal, lines otherwise; under mpirun stderr is a pipe, so pass tty there), tty, lines, none")
       ->check(CLI::IsMember({"auto", "tty", "lines", "none"}));
-  app.add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines when not on a terminal")
+  app.add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines when not in place")
       ->check(CLI::Range(0.01, 1e6));
   app.add_option("--max-batch", o.max_batch, "Largest batch of runs handed to a rank at once")->check(CLI::Range(1, 100000));
   // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
@@ -211,6 +212,33 @@ void restore_runs(Rank0& r0, campaign::ResultTable& table, const campaign::Outpu
   r0.frames.shrink_to_fit();
 }
 
+// Runs per status so far (restored and new).
+campaign::StatusCounts status_counts(const campaign::ResultTable& t) {
+  campaign::StatusCounts n{};
+  for (std::int64_t i = 0; i < t.n_runs(); ++i)
+    if (t.has(i)) ++n[static_cast<std::size_t>(t.status[static_cast<std::size_t>(i)])];
+  return n;
+}
+
+// The end summary's main design values: nominal, P99.865 and maximum over the ok runs.
+std::vector<campaign::DesignValue> design_values(const campaign::ResultTable& t, const sim::RunResult& nominal) {
+  static const std::pair<const char*, const char*> shown[] = {
+      {"peak_drive_force_N", "peak drive force"}, {"peak_drive_torque_Nm", "peak drive torque"},
+      {"peak_pin_force_N", "peak rail pin force"}, {"peak_diagonal_tension_N", "peak diagonal tension"},
+      {"peak_latch_energy_J", "peak latch energy"}, {"deploy_time_s", "deployment time"}};
+  std::vector<std::uint8_t> ok(t.status.size());
+  for (std::size_t i = 0; i < ok.size(); ++i) ok[i] = t.status[i] == static_cast<std::int8_t>(sim::RunStatus::ok);
+  std::vector<campaign::DesignValue> res;
+  const auto& cols = t.columns().f64;
+  for (const auto& [name, label] : shown)
+    for (std::size_t k = 0; k < cols.size(); ++k)
+      if (std::string(cols[k]->name) == name) {
+        const campaign::Stats s = campaign::calc_stats(t.f64[k], ok);
+        res.push_back({label, cols[k]->units, std::get<double>(cols[k]->get(nominal)), s.percentiles[5], s.max});
+      }
+  return res;
+}
+
 // Rank 0: histories, statistics and the results file; removes the journal. Returns the exit status.
 int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx, const std::string& campaign_text,
                   Rank0& r0, const campaign::ResultTable& table, const SessionState& st, int size,
@@ -222,6 +250,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     for (std::int64_t run : c.output.history_runs)
       histories.emplace_back(run, campaign::calc_run_with_history(ctx, run, c.output.history_step_s));
     const auto sens = campaign::calc_sensitivity(table, c);
+    const sim::RunResult nominal = campaign::calc_nominal_run(c, c.output.history_step_s > 0 ? c.output.history_step_s : 0.01);
     campaign::CampaignFileInfo info;
     info.campaign_toml = campaign_text;
     info.base_scene_toml = io::resolved_scene_toml(c.base);
@@ -232,12 +261,16 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.wall_time_s = st.previous_wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     info.schedule = {sched.wall_s, sched.rank0_compute_s, sched.rank0_poll_s, sched.rank0_tick_s, sched.rank0_idle_s,
                      sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s};
+    info.write_extra = [&](hid_t file) { campaign::write_nominal_group(file, nominal, ctx.columns.n_bays_max); };
     campaign::write_campaign_h5(o.output_path, ctx, table, sens, histories, info, o.force);
     r0.journal->close_and_remove();
+    std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n", sim::to_string(nominal.status),
+                             nominal.message.empty() ? "" : ": " + nominal.message);
+    campaign::print_design_summary(stderr, design_values(table, nominal));
     const std::int64_t results = sched.runs_by_rank0 + sched.runs_by_workers;
-    std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs, {} ok, {} failed, {:.3g} s on {} rank{} "
+    std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs ({}), {:.3g} s on {} rank{} "
                              "(statistics and file: {:.3g} s; rank 0: {} runs computed, {:.3g} us per result handled)\n",
-                             o.output_path, table.n_runs(), table.n_runs() - table.n_failed(), table.n_failed(),
+                             o.output_path, table.n_runs(), campaign::format_status_counts(status_counts(table)),
                              info.wall_time_s, size, size > 1 ? "s" : "",
                              std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count(),
                              sched.runs_by_rank0,
@@ -335,6 +368,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   if (root) todo = scan_journal(r0, c.ensemble.n_runs, t_start, size, st);
   const std::int64_t restored = root ? c.ensemble.n_runs - static_cast<std::int64_t>(todo.size()) : 0;
   campaign::Progress progress(c.ensemble.n_runs, restored, progress_mode(o.progress), o.progress_interval_s);
+  if (root) progress.banner(c.name, size, o.output_path);
   auto last_flush = std::chrono::steady_clock::now();
   auto flush_journal = [&] {
     std::string s;
@@ -365,7 +399,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
         [&] {
           if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= o.flush_interval_s)
             flush_journal();
-          progress.update(table->n_done(), table->n_failed());
+          progress.update(table->n_done(), [&] { return status_counts(*table); });
         },
         so);
   } catch (const std::exception& e) {
@@ -376,7 +410,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   if (root) {
     try {
       flush_journal();
-      progress.finish(table->n_done(), table->n_failed());
+      progress.finish(table->n_done(), status_counts(*table));
       status = write_results(o, *ctx, campaign_text, r0, *table, st, size, wall0, sched);
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";

@@ -1,0 +1,87 @@
+"""truss_report.dataframe: a campaign file as a pandas DataFrame, and the run table as a
+Dakota-style tabular CSV.
+
+    from truss_report import read_campaign
+    df = read_campaign("out/main/table1_dispersed.h5")
+    df[df.status == "stall"]
+    df.attrs["units"]["peak_drive_force_N"]      # "N"
+
+One row per run (index run_index). Columns: `status` (the status names read from the enum type
+of /runs/status, as a pandas Categorical in enum order: nothing is hard-coded), `message`, every
+1-D dataset of /runs, the inputs as `input:<key>` (per run) or `input:<key>[bay j]` /
+`input:<key>[frame k]`, and every /runs/bays field as `<field>[bay j]` (j = 1 .. n_bays_max).
+df.attrs: `units` (column -> units from the datasets' `units` attributes), `nominal` (the
+/nominal values, when the file has them) and the root attributes of the file."""
+import numpy as np
+
+import run_figures as rf
+
+
+def read_campaign(path):
+    import h5py
+    import pandas as pd
+    cols, units = {}, {}
+    with h5py.File(path, "r") as f:
+        if rf._text(f.attrs.get("kind", "")) != "campaign":
+            raise ValueError(f"{path}: not a truss-campaign file (kind is not 'campaign')")
+        runs = f["runs"]
+        enum = h5py.check_enum_dtype(runs["status"].dtype)
+        names = [k for k, _ in sorted(enum.items(), key=lambda kv: kv[1])]
+        by_value = {v: k for k, v in enum.items()}
+        codes = runs["status"][()]
+        cols["status"] = pd.Categorical([by_value[int(v)] for v in codes], categories=names)
+        units["status"] = "1"
+        cols["message"] = [rf._text(v) for v in runs["message"][()]]
+        units["message"] = "1"
+        for k, ds in runs.items():
+            if isinstance(ds, h5py.Dataset) and ds.ndim == 1 and k not in ("status", "message",
+                                                                         "run_index"):
+                cols[k] = ds[()]
+                units[k] = rf._text(ds.attrs["units"])
+        for key, ds in (runs["inputs"].items() if "inputs" in runs else []):
+            per = rf._text(ds.attrs["per"])
+            v = ds[()]
+            if v.ndim == 1:
+                name = f"input:{key}"
+                cols[name], units[name] = v, rf._text(ds.attrs["units"])
+            else:
+                start = 1 if per == "bay" else 0
+                for j in range(v.shape[1]):
+                    name = f"input:{key}[{per} {j + start}]"
+                    cols[name], units[name] = v[:, j], rf._text(ds.attrs["units"])
+        for key, ds in runs["bays"].items():
+            v = ds[()]
+            for j in range(v.shape[1]):
+                name = f"{key}[bay {j + 1}]"
+                cols[name], units[name] = v[:, j], rf._text(ds.attrs["units"])
+        attrs = {k: (rf._text(v) if isinstance(v, (bytes, str)) else
+                     (v.item() if isinstance(v, np.generic) else v)) for k, v in f.attrs.items()}
+        nominal = {}
+        if "nominal" in f:
+            for k, ds in f["nominal"].items():
+                if isinstance(ds, h5py.Dataset) and ds.dtype.kind in "fiu" and k != "status":
+                    nominal[k] = ds[()].item()
+        index = pd.Index(runs["run_index"][()], name="run_index")
+    df = pd.DataFrame(cols, index=index)
+    df.attrs.update(attrs)
+    df.attrs["units"] = units
+    df.attrs["nominal"] = nominal
+    df.attrs["path"] = path
+    return df
+
+
+def write_tabular(df, path, interface="truss_campaign"):
+    """Dakota-style tabular data, comma-separated: `%eval_id` (run index + 1), `interface`, the
+    inputs, then `status` and every numeric response (per-run columns; per-bay columns last).
+    Strings have their spaces replaced by underscores (Dakota reads whitespace-free tokens);
+    NaN is written as `nan`. Units are in the column names (`_N`, `_s`, ...), as in the file."""
+    inputs = [c for c in df.columns if c.startswith("input:")]
+    per_bay = [c for c in df.columns if "[bay " in c and not c.startswith("input:")]
+    responses = [c for c in df.columns if c not in inputs and c not in per_bay
+                 and c not in ("status", "message")]
+    order = inputs + responses + per_bay
+    out = df[order].copy()
+    out.insert(0, "status", df["status"].astype(str).str.replace(" ", "_"))
+    out.insert(0, "interface", interface)
+    out.insert(0, "%eval_id", df.index.to_numpy() + 1)
+    out.to_csv(path, index=False, na_rep="nan", float_format="%.17g")

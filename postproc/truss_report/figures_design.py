@@ -1,0 +1,174 @@
+"""truss_report.figures_design: per-bay envelopes, where the peaks occur, top inputs against each
+load, and the convergence of the percentile estimates and Sobol' indices with the run count."""
+import numpy as np
+
+from .design import readable_unit
+from .stats import percentile, quantile_ci
+
+
+def _scaled(unit, values):
+    finite = np.asarray(values)[np.isfinite(values)]
+    lab, f = readable_unit(unit, float(np.max(np.abs(finite))) if len(finite) else np.nan)
+    return lab, f
+
+
+def fig_envelopes(plt, fields, ok, nominal_bays, units, top_level):
+    """fields: [(field, label, n x nb array)]: P50 and P{top} per bay, min-max band, nominal."""
+    fig, axes = plt.subplots(1, len(fields), figsize=(4.6 * len(fields), 3.8), squeeze=False)
+    for ax, (key, label, b) in zip(axes[0], fields):
+        v = b[ok]
+        bays = np.arange(1, v.shape[1] + 1)
+        p50, ptop, lo, hi = (np.full(len(bays), np.nan) for _ in range(4))
+        for j in range(len(bays)):
+            col = v[:, j][np.isfinite(v[:, j])]
+            if len(col):
+                p50[j], ptop[j] = percentile(col, 50), percentile(col, top_level)
+                lo[j], hi[j] = col.min(), col.max()
+        lab, f = _scaled(units[key], hi)
+        ax.fill_between(bays, lo / f, hi / f, color="C0", alpha=0.15, label="min–max")
+        ax.plot(bays, p50 / f, "o-", ms=3, color="C0", label="P50")
+        ax.plot(bays, ptop / f, "s-", ms=3, color="C3", label=f"P{top_level:g}")
+        if nominal_bays is not None and key in nominal_bays:
+            ax.plot(bays, nominal_bays[key][:len(bays)] / f, "k--", lw=1, label="nominal")
+        ax.set_xlabel("bay")
+        ax.set_ylabel(f"{label} ({lab})")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def fig_peak_location(plt, items):
+    """items: [(label, bay array, time array, value array, unit)]: bay counts and value vs time."""
+    fig, axes = plt.subplots(2, len(items), figsize=(5.2 * len(items), 6.4), squeeze=False)
+    for j, (label, bay, t, v, unit) in enumerate(items):
+        sel = np.isfinite(bay) & np.isfinite(t) & np.isfinite(v)
+        bays = bay[sel].astype(int)
+        if not len(bays):
+            continue
+        u, counts = np.unique(bays, return_counts=True)
+        axes[0, j].bar(u, counts, color="C0")
+        axes[0, j].set_xlabel("bay where the peak occurs")
+        axes[0, j].set_ylabel("runs")
+        axes[0, j].set_title(label, fontsize=9)
+        lab, f = _scaled(unit, v[sel])
+        sc = axes[1, j].scatter(t[sel], v[sel] / f, c=bays, s=5, cmap="viridis")
+        fig.colorbar(sc, ax=axes[1, j], label="bay")
+        axes[1, j].set_xlabel("time of the peak (s)")
+        axes[1, j].set_ylabel(f"{label} ({lab})")
+        for ax in axes[:, j]:
+            ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def fig_scatter(plt, rows, nominal):
+    """rows: [(load label, unit, y, [(input label, x)])]; nominal: {load label: value}."""
+    ncol = max(len(r[3]) for r in rows)
+    fig, axes = plt.subplots(len(rows), ncol, figsize=(4.2 * ncol, 2.7 * len(rows)),
+                             squeeze=False)
+    for i, (label, unit, y, inputs) in enumerate(rows):
+        lab, f = _scaled(unit, y)
+        for j in range(ncol):
+            ax = axes[i, j]
+            if j >= len(inputs):
+                ax.set_visible(False)
+                continue
+            name, x = inputs[j]
+            sel = np.isfinite(x) & np.isfinite(y)
+            ax.plot(x[sel], y[sel] / f, ".", ms=2, color="C0", alpha=0.5)
+            if np.isfinite(nominal.get(label, np.nan)):
+                ax.axhline(nominal[label] / f, color="k", ls="--", lw=0.8, label="nominal")
+            ax.set_xlabel(name, fontsize=7)
+            ax.set_ylabel(f"{label} ({lab})", fontsize=7)
+            ax.tick_params(labelsize=7)
+            ax.grid(True, alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def convergence_points(n):
+    """Run counts at which estimates are shown: about 12 per decade from 20 up to n."""
+    if n < 20:
+        return np.array([n])
+    m = np.unique(np.round(np.logspace(np.log10(20), np.log10(n), 25)).astype(int))
+    return m[m <= n]
+
+
+def fig_convergence(plt, series, levels, confidence):
+    """series: [(label, unit, values in run order (ok and finite only))]: each level's estimate
+    over the first m runs with its two-sided order-statistic interval."""
+    fig, axes = plt.subplots(1, len(series), figsize=(4.6 * len(series), 3.6), squeeze=False)
+    for ax, (label, unit, x) in zip(axes[0], series):
+        lab, f = _scaled(unit, x)
+        ms = convergence_points(len(x))
+        for c_i, q in enumerate(levels):
+            est, lo, hi = [], [], []
+            for m in ms:
+                s = np.sort(x[:m])
+                ci = quantile_ci(s, q / 100.0, confidence)
+                est.append(percentile(s, q))
+                lo.append(ci.lo)
+                hi.append(ci.hi)
+            col = f"C{c_i}"
+            ax.plot(ms, np.array(est) / f, "-", color=col, label=f"P{q:g}")
+            ax.fill_between(ms, np.array(lo) / f, np.array(hi) / f, color=col, alpha=0.2)
+        ax.set_xscale("log")
+        ax.set_xlabel("runs")
+        ax.set_ylabel(f"{label} ({lab})")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
+def sobol_blocks(y, G, n_blocks):
+    """Per block (rows A, B, AB_1..AB_G of a Saltelli campaign): arrays fA, fB, fAB (b x G)."""
+    Y = y[:n_blocks * (G + 2)].reshape(n_blocks, G + 2)
+    return Y[:, 0], Y[:, 1], Y[:, 2:]
+
+
+def sobol_estimates(fA, fB, fAB):
+    """Saltelli 2010 first order and Jansen 1999 total indices (per factor), on outputs centred
+    by the mean of f(A) and f(B), V their population variance (as the campaign computes them)."""
+    mu = np.mean(np.concatenate([fA, fB]))
+    fA, fB, fAB = fA - mu, fB - mu, fAB - mu
+    V = np.var(np.concatenate([fA, fB]))
+    s1 = np.mean(fB[:, None] * (fAB - fA[:, None]), axis=0) / V
+    st = 0.5 * np.mean((fA[:, None] - fAB) ** 2, axis=0) / V
+    return s1, st
+
+
+def fig_sobol_convergence(plt, series, G, factors, confidence, n_boot=200):
+    """series: [(label, y over all runs, ok mask)]: S1 and ST against the number of blocks, with
+    a percentile bootstrap interval over blocks (seeded: the figure is reproducible)."""
+    rng = np.random.default_rng(12345)
+    fig, axes = plt.subplots(1, len(series), figsize=(4.8 * len(series), 3.8), squeeze=False)
+    a = (1.0 - confidence) / 2.0
+    for ax, (label, y, ok) in zip(axes[0], series):
+        nb = len(y) // (G + 2)
+        good = np.all((ok & np.isfinite(y))[:nb * (G + 2)].reshape(nb, G + 2), axis=1)
+        fA, fB, fAB = sobol_blocks(y, G, nb)
+        fA, fB, fAB = fA[good], fB[good], fAB[good]
+        ms = convergence_points(len(fA)) if len(fA) >= 20 else np.array([len(fA)])
+        for g in range(G):
+            est, lo, hi = [], [], []
+            for m in ms:
+                s1, st = sobol_estimates(fA[:m], fB[:m], fAB[:m])
+                boot = []
+                for _ in range(n_boot):
+                    i = rng.integers(0, m, m)
+                    boot.append(sobol_estimates(fA[i], fB[i], fAB[i])[1][g])
+                est.append(st[g])
+                lo.append(np.quantile(boot, a))
+                hi.append(np.quantile(boot, 1 - a))
+            ax.plot(ms, est, "-", color=f"C{g % 10}", label=factors[g])
+            ax.fill_between(ms, lo, hi, color=f"C{g % 10}", alpha=0.15)
+        ax.set_xscale("log")
+        ax.set_xlabel("Saltelli blocks used")
+        ax.set_ylabel("total Sobol' index ST (1)")
+        ax.set_title(label, fontsize=9)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=6)
+    fig.tight_layout()
+    return fig

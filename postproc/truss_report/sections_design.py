@@ -1,0 +1,143 @@
+"""truss_report.sections_design: the nominal run, the engineering plots and the assembly of the
+campaign report (verdict and design loads on top)."""
+import numpy as np
+
+import run_figures as rf
+from .design import design_loads
+from .figures_design import (fig_convergence, fig_envelopes, fig_peak_location, fig_scatter,
+                             fig_sobol_convergence, sobol_blocks, sobol_estimates)
+from .mechanism import compute_margins
+from .page import esc, html_page, num, table
+from .sections_campaign import section_campaign, section_loads, section_lock_timing
+from .sections_margins import (input_columns, section_checks, section_histories, section_margins,
+                               section_sensitivity)
+from .stats import spearman
+from .top import design_table_html, mechanism_html, model_limits_html, signoff_html, verdict_html
+
+
+def section_nominal(page, e):
+    out = ["<section id='nominal'><h2>Nominal run</h2>"]
+    if e.nominal is None:
+        return out[0] + ("<p class='warn'>This file has no <code>/nominal</code> (written before "
+                         "truss-campaign stored the nominal run).</p></section>")
+    out.append(f"<p>The base scene without dispersions, computed once: status <b>"
+               f"{esc(e.nominal_status)}</b>{(': ' + esc(e.nominal_message)) if e.nominal_message else ''}."
+               " Its values are the nominal column of the design-load table and the black lines "
+               "of the histograms.</p>")
+    if e.nominal_run is not None:
+        out.append(page.figure(rf.fig5(page.plt, e.nominal_run), "nominal_history.png",
+                               "nominal run: drive force and rail pin force against time, lock "
+                               "times dashed"))
+    lock = e.nominal["bays"]["lock_time_s"]
+    n = int(np.sum(np.isfinite(lock)))
+    rows = [[str(j + 1), num(f"nominal.lock_time_s.bay{j + 1}", float(lock[j]), "s")]
+            for j in range(n)]
+    out.append("<details><summary>lock times of the nominal run</summary>"
+               + table(["bay", "lock time"], rows, "narrow") + "</details></section>")
+    return "\n".join(out)
+
+
+def top_inputs(c, y, k=3):
+    cols = input_columns(c)
+    ranked = []
+    for col in cols:
+        r, _ = spearman(col.values, y)
+        if np.isfinite(r):
+            ranked.append((abs(r), col.label, col.values))
+    ranked.sort(key=lambda t: -t[0])
+    return [(lab, x) for _, lab, x in ranked[:k]]
+
+
+def section_plots(page, c, e, loads, opts):
+    out = ["<section id='plots'><h2>Where and how the loads arise</h2>"]
+    top = opts.levels[-1]
+    fields = [(k, lab, e.bays[k]) for k, lab in
+              (("peak_drive_force_N", "peak drive force"), ("peak_pin_force_N", "peak pin force"),
+               ("latch_energy_J", "latch energy"), ("entry_impulse_Ns", "rail-entry impulse"))
+              if k in e.bays and np.any(np.isfinite(e.bays[k][c.ok]) & (e.bays[k][c.ok] != 0))]
+    if fields:
+        out.append("<h3>Per-bay envelopes</h3>" + page.figure(
+            fig_envelopes(page.plt, fields, c.ok, e.nominal["bays"] if e.nominal else None,
+                          e.units, top), "envelopes.png",
+            f"per-bay peak loads over the ok runs: P50, P{top:g}, min–max band, nominal"))
+    items = [(lab, e.runs[b], e.runs[t], c.outputs[v], c.units[v]) for lab, b, t, v in
+             (("peak drive force", "peak_drive_force_bay", "peak_drive_force_time_s",
+               "peak_drive_force_N"),
+              ("peak pin force", "peak_pin_force_bay", "peak_pin_force_time_s", "peak_pin_force_N"))
+             if b in e.runs and t in e.runs]
+    items = [(lab, np.where(c.ok, b, np.nan), t, v, u) for lab, b, t, v, u in items]
+    if items:
+        out.append("<h3>Where the peaks occur</h3>" + page.figure(
+            fig_peak_location(page.plt, items), "peak_location.png",
+            "bay and time of each ok run's peak (top: runs per bay; bottom: value against time)"))
+    if c.dispersions:
+        rows, nominal = [], {}
+        for d in loads:
+            if d.impulse or d.key not in c.outputs:
+                continue
+            y = np.where(c.ok, c.outputs[d.key], np.nan)
+            rows.append((d.label, d.unit, y, top_inputs(c, y)))
+            nominal[d.label] = d.nominal
+        if rows:
+            out.append("<h3>Top inputs against each load</h3>" + page.figure(
+                fig_scatter(page.plt, rows, nominal), "scatter_top_inputs.png",
+                "each load against its three inputs of largest |Spearman ρ| (ok runs), nominal "
+                "dashed"))
+    series = [(d.label, d.unit, c.outputs[d.key][c.ok & np.isfinite(c.outputs[d.key])])
+              for d in loads if d.key in c.outputs and d.key != "deploy_time_s"]
+    if series:
+        out.append("<h3>Convergence of the percentile estimates</h3>" + page.figure(
+            fig_convergence(page.plt, series, opts.levels, opts.confidence), "convergence.png",
+            f"percentile estimates over the first m runs (run-index order) with their two-sided "
+            f"{opts.confidence:.0%} order-statistic intervals"))
+    if c.sensitivity is not None:
+        G = len(c.sensitivity["factor"])
+        ss = [(k, c.outputs[k], c.ok) for k in ("peak_drive_force_N", "peak_pin_force_N")]
+        out.append("<h3>Convergence of the Sobol' indices</h3>" + page.figure(
+            fig_sobol_convergence(page.plt, ss, G, c.sensitivity["factor"], opts.confidence),
+            "sobol_convergence.png", "total Sobol' index of each factor against the blocks "
+            "used, recomputed here (Jansen), with a percentile-bootstrap interval over blocks"))
+        out.append(sobol_agreement(c, ss, G))
+    out.append("</section>")
+    return "\n".join(out)
+
+
+def sobol_agreement(c, series, G):
+    """How far the indices recomputed here from all usable blocks are from /sensitivity."""
+    worst = 0.0
+    for key, y, ok in series:
+        nb = len(y) // (G + 2)
+        good = np.all((ok & np.isfinite(y))[:nb * (G + 2)].reshape(nb, G + 2), axis=1)
+        fA, fB, fAB = sobol_blocks(y, G, nb)
+        s1, st = sobol_estimates(fA[good], fB[good], fAB[good])
+        o = c.sensitivity["outputs"][key]
+        worst = max(worst, float(np.nanmax(np.abs(np.concatenate(
+            [s1 - o["first_order"], st - o["total"]])))))
+    return ("<p class='small'>Recomputed from all usable blocks, the indices differ from "
+            f"<code>/sensitivity</code> by at most {worst:.3g} (same estimators; only the order "
+            "of the roundings differs).</p>")
+
+
+def campaign_report(page, c, e, opts):
+    c.extras = e
+    body = [section_campaign(page, c), section_loads(page, c), section_lock_timing(page, c),
+            section_margins(page, c), section_sensitivity(page, c), section_histories(page, c)]
+    n_checks = 7 if c.histories else 6
+    body.append(section_checks(page, n_checks))
+    loads = design_loads(c, e, opts.levels, opts.confidence)
+    m = compute_margins(c, e, opts.motorisation_factor, opts.uncertainty_factor)
+    failed = [what for what, passed, _ in page.checks if not passed]
+    top = [verdict_html(c, m, failed, e.nominal_status, len(page.checks)),
+           design_table_html(loads, opts.confidence, c.attrs["sampling"]), mechanism_html(m)]
+    rest = [section_nominal(page, e), section_plots(page, c, e, loads, opts)]
+    toc = ("<nav><a href='#design'>Design loads</a> · <a href='#mechanism'>Mechanism margins</a> · "
+           "<a href='#nominal'>Nominal run</a> · <a href='#plots'>Plots</a> · "
+           "1. <a href='#campaign'>Campaign</a> · 2. <a href='#loads'>Peak loads</a> · "
+           "3. <a href='#locks'>Lock timing</a> · 4. <a href='#margins'>Margins</a> · "
+           "5. <a href='#sensitivity'>What drives the loads</a>"
+           + (" · 6. <a href='#histories'>Histories</a>" if c.histories else "")
+           + f" · {n_checks}. <a href='#checks'>Consistency</a> · <a href='#limits'>Model "
+           "limits</a> · <a href='#signoff'>Sign-off</a></nav>")
+    title = f"Load report: campaign “{c.attrs['campaign_name']}”"
+    return html_page(title, c.path, c.sha256, "\n".join(top) + toc + "\n".join(rest + body)
+                     + model_limits_html() + signoff_html(opts.revision))

@@ -1,0 +1,161 @@
+"""truss_report.top: the top of the campaign report: verdict banner, design-load table, mechanism
+margins (ECSS), model limits and the sign-off block."""
+import numpy as np
+
+from .design import readable_unit
+from .mechanism import ECSS_CLAUSE
+from .page import esc, fmt, num, table
+
+
+def verdict_items(c, m, failed_checks, nominal_status):
+    """[(key, text)] of everything that fails: margins below the required factor, every run
+    status other than ok (names from the file's enum: stalls, rail misses, solver or accuracy
+    flags), a nominal run that is not ok, and failed consistency checks."""
+    items = []
+    if m.fails:
+        items.append(("margin", f"motorisation factor below the required {fmt(m.mf_required)} in "
+                      + num("verdict.mf_n_below", m.n_below, tag="span") + f" of {m.n} ok runs "
+                      "(smallest " + num("verdict.mf_min", m.mf_min, digits=4, tag="span") + ")"))
+    for code in sorted(c.status_name):
+        name = c.status_name[code]
+        k = int(np.sum(c.status == code))
+        if name != "ok" and k:
+            items.append((f"status.{name}", num(f"verdict.status.{name}", k, tag="span")
+                          + f" of {c.n} runs <b>{esc(name)}</b> ("
+                          + num(f"verdict.status.{name}.fraction", k / c.n, digits=4, tag="span")
+                          + ")"))
+    if nominal_status and nominal_status != "ok":
+        items.append(("nominal", f"the nominal run is <b>{esc(nominal_status)}</b>"))
+    for what in failed_checks:
+        items.append(("check", f"consistency check failed: {esc(what)}"))
+    return items
+
+
+def verdict_html(c, m, failed_checks, nominal_status, n_checks):
+    items = verdict_items(c, m, failed_checks, nominal_status)
+    checked = (f"checked: motorisation factor ≥ {fmt(m.mf_required)} ({esc(ECSS_CLAUSE)}; "
+               f"uncertainty factor {fmt(m.k_uncertainty)})"
+               if m.mode == "velocity" else f"drive mode {esc(m.mode)}: {esc(m.note)}")
+    checked += f"; outcome of all {c.n} runs; {n_checks} consistency checks of the file."
+    if not items:
+        return ("<div class='verdict pass' data-key='verdict' data-value='pass'>"
+                "<b>VERDICT: PASS</b> — nothing fails. <span class='small'>" + checked
+                + "</span></div>")
+    return ("<div class='verdict fail' data-key='verdict' data-value='fail'><b>VERDICT: "
+            f"{len(items)} item{'s' if len(items) > 1 else ''} FAIL</b><ul>"
+            + "".join(f"<li data-item='{esc(k)}'>{t}</li>" for k, t in items)
+            + f"</ul><span class='small'>{checked}</span></div>")
+
+
+def cell(key, v, factor, unit_label, digits=5):
+    """A number shown in readable units; data-value keeps the SI value."""
+    shown = v / factor if np.isfinite(v) else v
+    return (f'<td class="num" data-key="{esc(key)}" data-value="{repr(float(v))}">'
+            f"{fmt(shown, digits)} {esc(unit_label)}</td>")
+
+
+def design_table_html(loads, confidence, sampling):
+    lev = [lv.level for lv in loads[0].levels] if loads else []
+    heads = ["load", "definition", "nominal", "mean"]
+    for q in lev:
+        heads += [f"P{fmt(q)}", f"upper {fmt(confidence * 100)} % bound of P{fmt(q)} (rank k of n)"]
+    heads += [f"P{fmt(lev[-1])} / nominal" if lev else "ratio"]
+    rows = []
+    for d in loads:
+        ref = max(abs(d.nominal) if np.isfinite(d.nominal) else 0.0, abs(d.levels[-1].estimate))
+        lab, f = readable_unit(d.unit, ref)
+        row = [f"<b>{esc(d.label)}</b><br><code>{esc(d.key)}</code>",
+               f"<small>{esc(d.definition)}</small>",
+               cell(f"design.{d.key}.nominal", d.nominal, f, lab),
+               cell(f"design.{d.key}.mean", d.mean, f, lab)]
+        for lv in d.levels:
+            tag = f"design.{d.key}.p{fmt(lv.level)}"
+            row.append(cell(tag, lv.estimate, f, lab))
+            if lv.rank:
+                row.append(cell(tag + ".ucb", lv.bound, f, lab)[:-5]
+                           + f" <small>(k = <span data-key='{tag}.ucb_rank' data-value="
+                           f"'{lv.rank}'>{lv.rank}</span> of {d.n})</small></td>")
+            else:
+                row.append(f"<td class='num toosmall' data-key='{tag}.ucb' data-value='nan'>"
+                           f"n = {d.n} too small (needs ≥ <span data-key='{tag}.ucb_n_needed' "
+                           f"data-value='{lv.n_needed}'>{lv.n_needed}</span>)</td>")
+        row.append(num(f"design.{d.key}.ratio", d.ratio, digits=4))
+        rows.append(row)
+    note = ("<p class='small'>Over the ok runs with a finite value (n per load). Percentiles: "
+            "linear interpolation between order statistics (type 7). The upper bound is the "
+            "order statistic x<sub>(k)</sub>, k the smallest rank with "
+            "Σ<sub>i&lt;k</sub> C(n,i) p<sup>i</sup>(1−p)<sup>n−i</sup> ≥ "
+            f"{fmt(confidence)}: distribution-free, one-sided, for independent runs"
+            + (" (not valid for Saltelli sampling)" if sampling == "saltelli" else
+               "" if sampling == "monte_carlo" else f" ({esc(sampling)} sampling: usually "
+               "conservative)") + ". Nominal: the base scene without dispersions "
+            "(<code>/nominal</code>); impulses are instantaneous momentum transfers, reported "
+            "apart from the smooth peaks.</p>")
+    return "<h2 id='design'>Design loads</h2>" + table(heads, rows, "design") + note
+
+
+def mechanism_html(m):
+    head = f"<h2 id='mechanism'>Mechanism margins ({esc(ECSS_CLAUSE)})</h2>"
+    if m.mode != "velocity" or m.n == 0:
+        return head + f"<p>Not computed: {esc(m.note)}.</p>"
+    lab, f = readable_unit("Nm", m.t_design)
+    lo, hi = m.p_below_ci
+    rows = [
+        ["required motorisation factor MF<sub>req</sub> (option --motorisation-factor)",
+         num("mech.mf_required", m.mf_required)],
+        ["uncertainty factor on the simulated resistive torque (--uncertainty-factor)",
+         num("mech.k_uncertainty", m.k_uncertainty)],
+        ["runs considered (ok, finite positive peak torque)", num("mech.n", m.n)],
+        ["smallest MF = T<sub>available</sub> / (k T<sub>peak</sub>) over the runs",
+         num("mech.mf_min", m.mf_min, digits=4)],
+        ["torque margin TM = MF − 1 (smallest)", num("mech.tm_min", m.mf_min - 1.0, digits=4)],
+        ["MF of the nominal run", num("mech.mf_nominal", m.mf_nominal, digits=4)],
+        ["runs with MF < MF<sub>req</sub>", num("mech.n_below", m.n_below)],
+        ["probability, 95 % Clopper-Pearson interval",
+         f"<td class='num'>[{fmt(lo, 4)}, {fmt(hi, 4)}]</td>"],
+        ["design resistive torque (largest peak over the runs)",
+         cell("mech.t_design", m.t_design, f, lab)],
+        ["torque needed at the prescribed speed = MF<sub>req</sub> k T<sub>design</sub>",
+         cell("mech.t_needed", m.t_needed_at_speed, f, lab)],
+        ["screw speed ω = 2π v / h", num("mech.omega", m.omega, "rad/s")],
+        ["no-load speed ω<sub>0</sub> of the scene's motor", num("mech.omega0", m.no_load_speed,
+                                                                 "rad/s")],
+        ["<b>stall torque needed</b> (with that ω<sub>0</sub>)",
+         cell("mech.stall_needed", m.stall_needed, f, lab)],
+        ["stall torque of the scene's motor", cell("mech.stall_scene", m.stall_scene, f, lab)],
+    ]
+    return (head + "<p>Velocity drive: the mast follows the prescribed speed, so the peak drive "
+            "torque is the resistive torque the motor must overcome. The factors and their source "
+            "are stated in the table; the model is frictionless, so friction (factor 3 in the "
+            "standard) must be added to the required torque by the user.</p>"
+            + table(["", "value"], [[f"<th>{a}</th>", b] for a, b in rows], "kv"))
+
+
+MODEL_LIMITS = [
+    "Rigid bodies: struts, frames and the screw do not deform; only the diagonals are elastic "
+    "(linear springs, tension only). No structural modes, so no dynamic amplification of the "
+    "loads beyond the rigid-body motion.",
+    "Frictionless: pins in the rail, hinges, the screw and the latches have no friction, "
+    "hysteresis, harness or adhesion torque. Add them (with their ECSS factor 3) to the "
+    "required torque.",
+    "Rigid latch: a latch locks instantaneously; the strut's radial kinetic energy is lost in "
+    "the impact (peak latch energy), with no latch spring, rebound or load spike. Rail entry "
+    "and the start are impulses (momentum jumps) too: their peak force depends on stiffness the "
+    "model does not hold, so only their impulses (N s) are reported.",
+    "Stack: the stowed bays are held or free as the scene's stack.mode says; a free stack moves "
+    "with the lower frame, a held stack does not.",
+    "The loads are per mast (total drive) or per pin / per diagonal as each definition says; "
+    "no fatigue, thermal or gravity (orbit: no gravity) effects.",
+]
+
+
+def model_limits_html():
+    return ("<h2 id='limits'>Model limits</h2><ul class='limits'>"
+            + "".join(f"<li>{esc(t)}</li>" for t in MODEL_LIMITS) + "</ul>")
+
+
+def signoff_html(revision):
+    rows = [[f"<th>{r}</th>", "", "", ""] for r in ("Prepared", "Checked", "Approved")]
+    return ("<h2 id='signoff'>Sign-off</h2><p>Revision <b data-key='revision'>"
+            f"{esc(revision)}</b></p>"
+            + table(["", "name", "date", "signature"], rows, "signoff"))

@@ -1,0 +1,237 @@
+#!/usr/bin/python3
+"""Test of the top of the campaign report (issue 12): verdict, design-load table, ECSS margins,
+the pandas reader and the Dakota-style CSV, against values recomputed here from the HDF5 file.
+
+Usage:
+    test_design_loads.py --repo REPO_ROOT --scratch DIR --campaign-h5 PATH [--campaign-h5 ...]
+
+Independent of the report's code: h5py and plain Python/numpy only; the percentile is written
+out here (type 7: h = (n - 1) p, x[floor h] + (h - floor h)(x[floor h + 1] - x[floor h])), the
+upper bound's rank is found with exact rational arithmetic (fractions.Fraction) from
+P(x_(k) >= xi_p) = sum_{i<k} C(n, i) p^i (1 - p)^(n - i), and the statuses are counted from the
+enum type of /runs/status. Tolerances: the report prints repr(float64) of its values; the same
+formulas on the same float64 data differ only in the order of roundings (a few ulps), so floats
+must agree to a relative 1e-12; counts and ranks exactly.
+Prints one line per check; exit 0 when all pass, 1 otherwise.
+"""
+import argparse
+import csv
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+from fractions import Fraction
+
+import h5py
+import numpy as np
+
+PY = "/usr/bin/python3"
+RTOL = 1e-12
+LEVELS = [90.0, 99.865]
+CONF = 0.95
+FAILS = []
+
+
+def check(cond, what):
+    print(("ok:   " if cond else "FAIL: ") + what)
+    if not cond:
+        FAILS.append(what)
+    return cond
+
+
+def close(a, b):
+    if isinstance(b, float) and math.isnan(b):
+        return math.isnan(a)
+    return abs(a - b) <= RTOL * max(abs(a), abs(b))
+
+
+def pct7(sorted_x, q):
+    n = len(sorted_x)
+    h = (n - 1) * q / 100.0
+    lo = int(math.floor(h))
+    hi = min(lo + 1, n - 1)
+    return sorted_x[lo] + (h - lo) * (sorted_x[hi] - sorted_x[lo])
+
+
+def ucb_rank(n, p, conf):
+    """Smallest k with sum_{i<k} C(n,i) p^i (1-p)^(n-i) >= conf, exactly (None if k > n)."""
+    p = Fraction(p).limit_denominator(10 ** 9)
+    conf = Fraction(conf).limit_denominator(10 ** 9)
+    total = Fraction(0)
+    for k in range(1, n + 1):
+        total += math.comb(n, k - 1) * p ** (k - 1) * (1 - p) ** (n - k + 1)
+        if total >= conf:
+            return k
+    return None
+
+
+def report_values(path):
+    text = open(path, encoding="utf-8").read()
+    vals = dict(re.findall(r"data-key=['\"]([^'\"]+)['\"] data-value=['\"]([^'\"]*)['\"]", text))
+    return vals, text
+
+
+def expected(h5path):
+    """{data-key: value} of the verdict, the design table and the margins, from the file."""
+    E = {}
+    with h5py.File(h5path, "r") as f:
+        enum = h5py.check_enum_dtype(f["runs/status"].dtype)
+        status = f["runs/status"][()]
+        ok = status == enum["ok"]
+        n = len(status)
+        for name, code in enum.items():
+            k = int(np.sum(status == code))
+            if name != "ok" and k:
+                E[f"verdict.status.{name}"] = k
+                E[f"verdict.status.{name}.fraction"] = k / n
+        nom = f["nominal"]
+        loads = {}
+        for key in ("peak_drive_force_N", "peak_drive_torque_Nm", "peak_pin_force_N",
+                    "peak_diagonal_tension_N", "peak_latch_energy_J", "start_drive_impulse_Ns",
+                    "drive_work_impulses_J", "deploy_time_s"):
+            if key in f["runs"]:
+                loads[key] = (f["runs"][key][()], float(nom[key][()]))
+        for key in ("entry_impulse_Ns", "entry_drive_impulse_Ns", "landing_impulse_Ns"):
+            b = f["runs/bays"][key][()]
+            per_run = np.array([max([v for v in row if not math.isnan(v)], default=math.nan)
+                                for row in b])
+            nb = [v for v in nom["bays"][key][()] if not math.isnan(v)]
+            loads[key] = (per_run, max(nb) if nb else math.nan)
+        for key, (x, nominal) in loads.items():
+            v = sorted(float(a) for a, good in zip(x, ok) if good and math.isfinite(a))
+            if not v or all(a == 0 for a in v):
+                continue
+            E[f"design.{key}.nominal"] = nominal
+            E[f"design.{key}.mean"] = math.fsum(v) / len(v)
+            for q in LEVELS:
+                tag = f"design.{key}.p{q:g}"
+                E[tag] = pct7(v, q)
+                k = ucb_rank(len(v), q / 100.0, CONF)
+                if k is None:
+                    E[tag + ".ucb"] = math.nan
+                    need = next(m for m in range(1, 10 ** 6) if 1 - (q / 100.0) ** m >= CONF)
+                    E[tag + ".ucb_n_needed"] = need
+                else:
+                    E[tag + ".ucb"] = v[k - 1]
+                    E[tag + ".ucb_rank"] = k
+            E[f"design.{key}.ratio"] = E[f"design.{key}.p{LEVELS[-1]:g}"] / nominal
+        scene = tomllib.loads(f.attrs["base_scene_toml"])
+        if f.attrs["drive_mode"] == "velocity":
+            t = f["runs/peak_drive_torque_Nm"][()]
+            av = f["runs/motor_torque_at_speed_Nm"][()]
+            mf = [a / (1.2 * b) for a, b, g in zip(av, t, ok) if g and b > 0]
+            E["mech.mf_min"] = min(mf)
+            E["mech.n_below"] = sum(1 for m in mf if m < 2.0)
+            E["verdict.mf_n_below"] = E["mech.n_below"]
+            E["verdict.mf_min"] = min(mf)
+            d = scene["drive"]
+            omega = 2 * math.pi * d["speed_m_per_s"] / d["screw_lead_m"]
+            tmax = max(b for b, g in zip(t, ok) if g)
+            E["mech.stall_needed"] = 2.0 * 1.2 * tmax / (1 - omega / d["no_load_speed_rad_per_s"])
+            E["mech.mf_nominal"] = float(nom["motor_torque_at_speed_Nm"][()]) / (
+                1.2 * float(nom["peak_drive_torque_Nm"][()]))
+    return E
+
+
+def check_report(repo, scratch, h5path):
+    name = os.path.basename(h5path)
+    out = os.path.join(scratch, name + ".report")
+    shutil.rmtree(out, ignore_errors=True)
+    p = subprocess.run([PY, os.path.join(repo, "postproc", "report.py"), h5path, "-o", out,
+                        "--levels", "99.865,90", "--confidence", str(CONF), "--csv",
+                        "--revision", "B"], capture_output=True, text=True)
+    if not check(p.returncode == 0, f"{name}: report written ({p.stderr.strip()[-300:]})"):
+        return
+    got, text = report_values(os.path.join(out, "report.html"))
+    E = expected(h5path)
+    bad = [f"{k}: report {got.get(k)!r}, expected {v!r}" for k, v in E.items()
+           if k not in got or not close(float(got[k]), float(v))]
+    check(not bad, f"{name}: {len(E)} verdict / design / margin numbers equal the values "
+          f"recomputed from the file" + (f": {bad[:4]}" if bad else ""))
+    fails = any(k.startswith("verdict.") for k in E) or E.get("mech.n_below", 0) > 0
+    check(got.get("verdict") == ("fail" if fails else "pass"),
+          f"{name}: verdict {got.get('verdict')} (expected {'fail' if fails else 'pass'})")
+    first = text.find("data-key='verdict'")
+    sections = re.search(r"id=[\"']campaign[\"']", text)
+    check(0 < first < text.find("id='design'") < (sections.start() if sections else -1),
+          f"{name}: the verdict, then the design-load table, come before everything else")
+    check(got.get("revision") is None and "Revision <b data-key='revision'>B</b>" in text,
+          f"{name}: sign-off block with the revision given")
+    check(not re.search(r">-0(\.0*)?( |<)", text), f"{name}: no '-0' shown")
+    check_csv(name, h5path, os.path.join(out, "runs.csv"))
+
+
+def check_csv(name, h5path, path):
+    with h5py.File(h5path, "r") as f, open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+        enum = {v: k for k, v in h5py.check_enum_dtype(f["runs/status"].dtype).items()}
+        status = [enum[int(s)].replace(" ", "_") for s in f["runs/status"][()]]
+        head = rows[0]
+        force = [float(r[head.index("peak_drive_force_N")]) for r in rows[1:]]
+        check(head[:3] == ["%eval_id", "interface", "status"] and len(rows) - 1 == len(status)
+              and [int(r[0]) for r in rows[1:]] == list(range(1, len(status) + 1))
+              and [r[2] for r in rows[1:]] == status
+              and np.array_equal(force, f["runs/peak_drive_force_N"][()], equal_nan=True),
+              f"{name}: Dakota-style CSV: %eval_id 1..n, status names, values exact")
+
+
+def check_reader(repo, h5path):
+    sys.path.insert(0, os.path.join(repo, "postproc"))
+    from truss_report import read_campaign
+    name = os.path.basename(h5path)
+    df = read_campaign(h5path)
+    with h5py.File(h5path, "r") as f:
+        enum = h5py.check_enum_dtype(f["runs/status"].dtype)
+        by_value = {v: k for k, v in enum.items()}
+        want = [by_value[int(s)] for s in f["runs/status"][()]]
+        check(list(df["status"].astype(str)) == want
+              and list(df["status"].cat.categories) == sorted(enum, key=enum.get),
+              f"{name}: read_campaign: status names from the enum, categories in enum order")
+        u = df.attrs["units"]
+        wrong = [k for k in ("peak_drive_force_N", "peak_drive_torque_Nm", "deploy_time_s")
+                 if u.get(k) != f["runs"][k].attrs["units"]]
+        nb = f.attrs["n_bays_max"]
+        check(not wrong and u.get("lock_time_s[bay 1]") == "s"
+              and f"lock_time_s[bay {nb}]" in df.columns and f"lock_time_s[bay {nb + 1}]" not in df
+              and np.array_equal(df[f"lock_time_s[bay {nb}]"].to_numpy(),
+                                 f["runs/bays/lock_time_s"][:, nb - 1], equal_nan=True),
+              f"{name}: read_campaign: units in attrs, per-bay columns 1..{nb} {wrong}")
+        inputs = [c for c in df.columns if c.startswith("input:")]
+        check(len(inputs) == sum(1 if ds.ndim == 1 else ds.shape[1]
+                                 for ds in f["runs/inputs"].values()),
+              f"{name}: read_campaign: one column per sampled input ({len(inputs)})")
+
+
+def check_bad_options(repo, scratch, h5path):
+    for opts in (["--confidence", "1.5"], ["--levels", "abc"], ["--levels", "100"]):
+        out = os.path.join(scratch, "bad_opts")
+        shutil.rmtree(out, ignore_errors=True)
+        p = subprocess.run([PY, os.path.join(repo, "postproc", "report.py"), h5path, "-o", out,
+                            *opts], capture_output=True, text=True)
+        check(p.returncode == 2 and p.stderr.startswith("error:") and not os.path.exists(out),
+              f"bad option {' '.join(opts)}: exit 2, one error line, nothing written")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--repo", required=True)
+    ap.add_argument("--scratch", required=True)
+    ap.add_argument("--campaign-h5", action="append", required=True)
+    a = ap.parse_args()
+    os.makedirs(a.scratch, exist_ok=True)
+    check(ucb_rank(300, 0.9, 0.95) is not None and ucb_rank(2217, 0.99865, 0.95) is None
+          and ucb_rank(2218, 0.99865, 0.95) == 2218,
+          "exact binomial rank: n = 2218 is the smallest with a P99.865 bound at 95 %")
+    for h5path in a.campaign_h5:
+        check_report(a.repo, a.scratch, h5path)
+        check_reader(a.repo, h5path)
+    check_bad_options(a.repo, a.scratch, a.campaign_h5[0])
+    print(f"{len(FAILS)} failed" if FAILS else "all passed")
+    return 1 if FAILS else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
