@@ -5,6 +5,7 @@
 #pragma once
 #include <chrono>
 #include <string>
+#include <vector>
 
 #include "stages/history.hpp"
 #include "stages/peaks.hpp"
@@ -20,6 +21,7 @@ enum class PhaseEndReason {
   wall_time,      // the run's wall-time cap
   step_limit,     // the run's step budget
   failure,        // the integrator failed
+  model_stop,     // one of the model's stop events (PhaseModel::num_stop_events); see stop_event
 };
 
 struct PhaseOutcome {
@@ -29,6 +31,8 @@ struct PhaseOutcome {
   double drive_work_J = 0; // integral of F dy_m over the phase
   long steps = 0, rejected_steps = 0, evals = 0;
   std::string message;     // the integrator's message on failure
+  int stop_event = -1;     // model_stop: which of the model's stop events fired
+  std::vector<double> end_state;  // (q, q') of the model at the end, dof values each
 };
 
 // Where a phase's samples go, shared by the stage loop and the solvers.

@@ -84,6 +84,12 @@ struct RunResult {
   double potential_energy_end_J = 0.0;
   double energy_residual_J = NAN_INIT();  // W - dT - dU - E_lost
   double max_rail_residual_m = 0.0;       // largest |f| on the rail (0 by construction when exact)
+  // Rail miss (free stack, MODEL.md 2): the bay that missed, the closest approach of its hinge to
+  // the rail line and its time, and the time the hinge rose above the rail's top y_r (NaN if not).
+  int rail_miss_bay = 0;
+  double rail_miss_closest_approach_m = NAN_INIT();
+  double rail_miss_closest_approach_time_s = NAN_INIT();
+  double rail_miss_above_rail_top_time_s = NAN_INIT();
 
   long steps = 0;                         // accepted integrator steps (0 in closed-form mode)
   long rejected_steps = 0;
