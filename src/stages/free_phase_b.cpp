@@ -129,6 +129,7 @@ PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* q
     const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
     const double Di = ys[static_cast<std::size_t>(i - first)] - ys[static_cast<std::size_t>(i - 1 - first)];
     U += calc_bay_potential_J(mast.bay(i), b2, Di);
+    p.min_bay_opening_m = std::min(p.min_bay_opening_m, Di);
     tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
   }
   p.kinetic_energy_J = T;

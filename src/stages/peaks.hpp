@@ -30,7 +30,8 @@ struct Extremum {
 
 // Quantities whose extremes a run reports. kRailApproach is minus the hinge's distance from the
 // rail (free stack, open phase; -inf elsewhere): its maximum is the stage's closest approach.
-enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kRailApproach, kQuantityCount };
+// kOverlap is minus the smallest bay opening (free stack): its maximum is the deepest overlap.
+enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kRailApproach, kOverlap, kQuantityCount };
 double calc_peak_quantity(int q, const PhasePoint& p, double direction);
 
 struct Sample {

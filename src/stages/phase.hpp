@@ -45,6 +45,9 @@ struct PhasePoint {
   // Free stack, open phase: distance of the hinge from the rail line, f sin(beta) (m; > 0 on
   // the stack's side); +inf where not tracked (held stack, on the rail).
   double rail_distance_m = __builtin_inf();
+  // Free stack: smallest bay opening D_i of the moving bays (m); < 0 when frames have passed
+  // through each other (or frame 1 through the floor): contacts are off. +inf where not tracked.
+  double min_bay_opening_m = __builtin_inf();
 };
 
 // Work space of a model evaluation, owned by the caller (the model functions stay pure).

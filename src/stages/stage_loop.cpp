@@ -394,6 +394,11 @@ void StageLoop::finish() {
     if (std::isfinite(b.latch_energy_J) && !(b.latch_energy_J <= r_.peak_latch_energy_J)) r_.peak_latch_energy_J = b.latch_energy_J;
   r_.peak_driven_speed_m_per_s = fin(run[kSpeed].value);
   r_.max_rail_residual_m = tracker_.max_rail_residual;
+  if (std::isfinite(run[kOverlap].value)) {
+    r_.min_bay_opening_m = -run[kOverlap].value;
+    r_.min_bay_opening_time_s = run[kOverlap].t;
+    r_.min_bay_opening_bay = run[kOverlap].bay;
+  }
 
   const double U_start = dir_ > 0 ? ledger_.get_stowed_potential_J() : ledger_.get_deployed_potential_J();
   double U_end = 0.0;

@@ -47,6 +47,14 @@ TEST_CASE("paper_free.toml: the Table-1 free stack ends in rail miss with a clos
   CHECK(r.rail_miss_closest_approach_m <= best + 1e-12);
   CHECK(r.rail_miss_closest_approach_m > best - 1e-6);
   CHECK(r.rail_miss_closest_approach_time_s == Approx(t_best).margin(2e-3));
+  // Contacts off: frames pass through each other (bay openings below zero). The
+  // reported smallest opening lies at or below every sampled opening of the deploying bay.
+  double d_min = 1e9;
+  for (std::size_t i = 0; i < h.size(); ++i) d_min = std::min(d_min, h.y_driven_m[i] - h.y_lower_m[i]);
+  CHECK(r.min_bay_opening_m < 0.0);
+  CHECK(r.min_bay_opening_m <= d_min + 1e-12);
+  sim::SceneOptions held = load("table1.toml");
+  CHECK(std::isnan(sim::simulate(held).min_bay_opening_m));  // not tracked for the held stack
 }
 
 TEST_CASE("paper_free_slack.toml: the free stack deploys; drive force small before entry, larger after",
