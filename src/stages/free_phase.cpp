@@ -27,7 +27,7 @@ double FreePhaseA::calc_rail_function_m(const double* q) const {
   return model::calc_rail_function_m(ctx_.mast->rail, x, 0.5 * (y_m + y_l));
 }
 
-void FreePhaseA::calc_stop_events(const double* q, const double*, double* g) const {
+void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
   const double l = mast.bay(m).strut_length_m, yr = mast.rail.axis_height_m();
@@ -41,7 +41,13 @@ void FreePhaseA::calc_stop_events(const double* q, const double*, double* g) con
     worst = std::max(worst, kStraightFraction * b.strut_length_m - calc_hinge_offset_m(b, q[i - lo_] - lower));
   }
   g[singular_bay] = worst;
-  if (watch_rail_top_) g[above_rail_top] = 0.5 * (y_m + y_l) - yr;
+  g[above_rail_top] = watch_rail_top_ ? 0.5 * (y_m + y_l) - yr : -1.0;
+  g[rail_approach_min] = -1.0;
+  if (watch_approach_min_) {
+    const double u = qdot[n - 1], w = n >= 2 ? qdot[n - 2] : 0.0, D = y_m - y_l;
+    const double x = std::max(calc_hinge_offset_m(mast.bay(m), D), kStraightFraction * l);
+    g[rail_approach_min] = 0.5 * (u + w) - mast.rail.cot_beta() * D * (u - w) / (4.0 * x);
+  }
 }
 
 PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {

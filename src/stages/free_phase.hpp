@@ -14,7 +14,11 @@
 //                      one bay 2 l_m without rail entry (rail miss);
 //   deploying_straight kStraightFraction l_m - x_m: bay m straightens without rail entry (rail miss);
 //   singular_bay       kStraightFraction l_i - x_i, largest over the moving bays i < m (singular);
+//   rail_approach_min  f' = (u + w)/2 - c D (u - w)/(4 x) (watched only): a local minimum of f. A
+//                      grazing approach can dip below f = 0 and back inside one step, which the
+//                      sign test at step ends misses; at the minimum the caller checks f <= 0;
 //   above_rail_top     y_h - y_r (watched only: the time the hinge rises above the rail's top, x = 0).
+// An event not watched returns -1 (never rises).
 #pragma once
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
@@ -35,11 +39,11 @@ class FreePhaseA final : public PhaseModel {
   // frame's acceleration along the drive's direction.
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.direction * qddot[dof() - 1]; }
   void snap_to_end(double*) const override {}  // the event is located to the event tolerance
-  enum StopEvent { past_miss_height, deploying_straight, singular_bay, above_rail_top };
+  enum StopEvent { past_miss_height, deploying_straight, singular_bay, rail_approach_min, above_rail_top };
   // A bay within this fraction of l_s of straight (hinge offset) is straight (MODEL.md 2: 1e-4 l_s).
   static constexpr double kStraightFraction = 1e-4;
-  void set_watch_rail_top(bool watch) { watch_rail_top_ = watch; }
-  int num_stop_events() const override { return watch_rail_top_ ? 4 : 3; }
+  void set_watch(bool rail_top, bool approach_min) { watch_rail_top_ = rail_top; watch_approach_min_ = approach_min; }
+  int num_stop_events() const override { return 5; }
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
@@ -50,7 +54,7 @@ class FreePhaseA final : public PhaseModel {
   model::ActiveFrames active_;
   int lo_;
   double held_height_m_;
-  bool watch_rail_top_ = false;
+  bool watch_rail_top_ = false, watch_approach_min_ = false;
 };
 
 }  // namespace truss::stages

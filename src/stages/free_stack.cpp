@@ -6,6 +6,7 @@
 #include "model/bay.hpp"
 #include "model/frames.hpp"
 #include "model/impacts.hpp"
+#include "model/rail.hpp"
 #include "stages/free_phase.hpp"
 #include "stages/free_phase_b.hpp"
 
@@ -16,12 +17,12 @@ using namespace truss::model;
 FreeStack::FreeStack(const MastParams& mast)
     : mast_(mast), y_(static_cast<std::size_t>(mast.n_bays() + 1), 0.0), v_(y_.size(), 0.0) {}
 
-std::unique_ptr<PhaseModel> FreeStack::make_phase(const PhaseContext& ctx, bool watch_rail_top) const {
+std::unique_ptr<PhaseModel> FreeStack::make_phase(const PhaseContext& ctx, bool watch_rail_top, bool watch_approach_min) const {
   const int lo = calc_lowest_frame(ctx.kind, ctx.bay);
   const double held = y_[0];  // frame 0 is the only held frame below a free stack
   if (ctx.kind == PhaseKind::open) {
     auto a = std::make_unique<FreePhaseA>(ctx, lo, held);
-    a->set_watch_rail_top(watch_rail_top);
+    a->set_watch(watch_rail_top, watch_approach_min);
     return a;
   }
   return std::make_unique<FreePhaseB>(ctx, lo, held, kBaumgarteRate_per_s);
@@ -89,6 +90,11 @@ FreeRailEntry FreeStack::apply_rail_entry(const StageSpec& s, bool drive_holds_s
   const double sh = 0.5 * D;
   xi_ = (v_[static_cast<std::size_t>(m - 1)] - v_[static_cast<std::size_t>(m)]) * sh / (2.0 * x_);
   return r;
+}
+
+double FreeStack::calc_rail_function_m(int m) const {
+  return model::calc_rail_function_m(mast_.rail, calc_hinge_offset_m(m),
+                                     0.5 * (y_[static_cast<std::size_t>(m)] + y_[static_cast<std::size_t>(m - 1)]));
 }
 
 double FreeStack::calc_hinge_offset_m(int i) const {

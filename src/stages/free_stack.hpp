@@ -30,9 +30,11 @@ class FreeStack {
   static int calc_lowest_frame(PhaseKind kind, int m) { return kind == PhaseKind::open || m >= 2 ? 1 : 0; }
 
   explicit FreeStack(const model::MastParams& mast);
-  // The phase model of ctx (ctx.kind, ctx.bay) on the current state; watch_rail_top adds the
-  // open phase's above-rail-top event.
-  std::unique_ptr<PhaseModel> make_phase(const PhaseContext& ctx, bool watch_rail_top) const;
+  // The phase model of ctx (ctx.kind, ctx.bay) on the current state; the open phase's watched
+  // events (FreePhaseA::set_watch): the hinge above the rail top, the minimum of f.
+  std::unique_ptr<PhaseModel> make_phase(const PhaseContext& ctx, bool watch_rail_top, bool watch_approach_min) const;
+  // Rail function f of bay m's hinge at the current heights (m; > 0 before the rail).
+  double calc_rail_function_m(int m) const;
   // Start state (q, q') of that phase, and its end state (q, q' concatenated) taken back.
   void get_start(const PhaseContext& ctx, std::vector<double>& q, std::vector<double>& qdot) const;
   void set_end(const PhaseContext& ctx, const std::vector<double>& end_state);

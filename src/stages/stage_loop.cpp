@@ -290,9 +290,11 @@ void StageLoop::run_free_phase(const StageSpec& s, const PhaseSpec& ph) {
   PhaseContext ctx = make_context(s, ph.kind, 0.0);
   ctx.q_end = 0.0;    // on the rail: the lock at x = 0, x falling
   ctx.sign_q = -1.0;
-  bool watch = ph.kind == PhaseKind::open;
+  // Watched events of the open phase, each at most once: the rail-top crossing (recorded) and the
+  // first minimum of f (a grazing entry if f <= 0 there, else the phase goes on).
+  bool watch = ph.kind == PhaseKind::open, watch_min = watch;
   for (;;) {
-    const std::unique_ptr<PhaseModel> phase = free_->make_phase(ctx, watch);
+    const std::unique_ptr<PhaseModel> phase = free_->make_phase(ctx, watch, watch_min);
     std::vector<double> q0, qd0;
     free_->get_start(ctx, q0, qd0);
     const PhaseOutcome o = solve_dynamic(*phase, q0.data(), qd0.data());
@@ -301,6 +303,13 @@ void StageLoop::run_free_phase(const StageSpec& s, const PhaseSpec& ph) {
     if (o.reason == PhaseEndReason::model_stop && watch && o.stop_event == FreePhaseA::above_rail_top) {
       rail_top_time_s_ = t_;  // recorded; the phase goes on without this event
       watch = false;
+      continue;
+    }
+    if (o.reason == PhaseEndReason::model_stop && watch_min && o.stop_event == FreePhaseA::rail_approach_min) {
+      // f' = 0 with f <= 0: the pin dipped into the rail within a step; it enters here, where its
+      // velocity is tangent to the rail (f' = 0: the entry impulse vanishes with the dip).
+      if (free_->calc_rail_function_m(s.bay) <= 0.0) return;
+      watch_min = false;
       continue;
     }
     if (o.reason == PhaseEndReason::model_stop) return fail_free_stop(s, ph, o);

@@ -179,12 +179,12 @@ TEST_CASE("free stack stopping rules: the event functions of MODEL.md 2", "[nume
   const model::MastParams mast = sim::build_mast(s);
   stages::PhaseContext ctx{&mast, stages::PhaseKind::open, 4, 0.0, 1.1, 0.36, s.drive, 1.0, 0.0, 1.0};
   stages::FreePhaseA a(ctx, 1, 0.0);
-  a.set_watch_rail_top(true);
-  REQUIRE(a.num_stop_events() == 4);
+  a.set_watch(true, true);
+  REQUIRE(a.num_stop_events() == 5);
   const double l = 0.18, yr = mast.rail.axis_height_m(), eps = 1e-4 * l;
   // D for a hinge offset x: D = 2 sqrt(l^2 - x^2).
   auto D_of_x = [&](double x) { return 2.0 * std::sqrt(l * l - x * x); };
-  double g[4];
+  double g[5];
   const double qd[4] = {0, 0, 0, 0};
   {  // bay 2 (frames 1, 2) just inside / outside 1e-4 l of straight: singular
     const double q_in[4] = {0.0, D_of_x(0.9 * eps), D_of_x(0.9 * eps) + 0.05, D_of_x(0.9 * eps) + 0.1};
@@ -201,5 +201,18 @@ TEST_CASE("free stack stopping rules: the event functions of MODEL.md 2", "[nume
     CHECK(g[stages::FreePhaseA::deploying_straight] > 0.0);
     CHECK(g[stages::FreePhaseA::past_miss_height] == Approx(0.3 + D_of_x(0.5 * eps) - (yr + 3 * l)).epsilon(1e-14));
     CHECK(g[stages::FreePhaseA::above_rail_top] == Approx(0.5 * (0.6 + D_of_x(0.5 * eps)) - yr).epsilon(1e-14));
+  }
+  {  // rail_approach_min is f' along the motion: central difference of f (error O(h^2) ~ 1e-10)
+    const double q[4] = {0.0, 0.01, 0.05, 0.2}, v[4] = {0.0, 0.02, 0.07, 0.1};
+    a.calc_stop_events(q, v, g);
+    const double h = 1e-5;
+    double qp[4], qm[4];
+    for (int k = 0; k < 4; ++k) { qp[k] = q[k] + h * v[k]; qm[k] = q[k] - h * v[k]; }
+    const double fd = (a.calc_rail_function_m(qp) - a.calc_rail_function_m(qm)) / (2 * h);
+    CHECK(g[stages::FreePhaseA::rail_approach_min] == Approx(fd).epsilon(1e-7));
+    a.set_watch(false, false);  // not watched: never rises
+    a.calc_stop_events(q, v, g);
+    CHECK(g[stages::FreePhaseA::rail_approach_min] == -1.0);
+    CHECK(g[stages::FreePhaseA::above_rail_top] == -1.0);
   }
 }

@@ -75,3 +75,13 @@ TEST_CASE("paper_free_slack.toml: the free stack deploys; drive force small befo
   INFO("max |F| before entry " << before << " N, after " << after << " N");
   CHECK(after > 3.0 * before);
 }
+
+TEST_CASE("free stack: a grazing approach that dips into the rail within a step enters it", "[regression][free]") {
+  // l_0 = 0.47037997 m (a draw of campaigns/free_rail_miss.toml): the hinge of bay 13 dips about
+  // 2e-5 m past the rail line and back between two step ends. Without the minimum-of-f event the
+  // run ended in "rail miss" with a negative closest approach; the pin must enter the rail there.
+  const sim::RunResult r = sim::simulate(load("paper_free.toml", {"mast.diagonal_free_length_m=0.47037996930478726"}));
+  INFO(r.message);
+  CHECK(r.bays_completed > 17);
+  if (r.status == sim::RunStatus::rail_miss) CHECK(r.rail_miss_closest_approach_m > 0.0);
+}
