@@ -8,6 +8,7 @@ from .constants import AGREE_RTOL, MAX_HISTORY_FIGURES, OUTPUTS, TORNADO_TOP, TO
 from .figures import fig_motor, fig_sobol, fig_tornado
 from .page import esc, fmt, html_page, num, table
 from .sections_campaign import section_campaign, section_loads, section_lock_timing
+from .sections_free import section_rail_miss
 from .stats import clopper_pearson, spearman
 
 
@@ -280,7 +281,7 @@ def section_checks(page, number):
 
 
 def campaign_report(page, c):
-    body = [section_campaign(page, c), section_loads(page, c), section_lock_timing(page, c),
+    body = [section_campaign(page, c), section_rail_miss(c), section_loads(page, c), section_lock_timing(page, c),
             section_margins(page, c), section_sensitivity(page, c), section_histories(page, c)]
     n_checks = 7 if c.histories else 6
     body.append(section_checks(page, n_checks))
