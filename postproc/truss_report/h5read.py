@@ -127,6 +127,9 @@ class Campaign:
     # computed it from its motor law (/runs/motor_torque_at_speed_Nm); None in older files
     motor_torque_at_speed: np.ndarray = None
     stall_torque_source: str = ""
+    # free stack: closest approach of a missing hinge to the rail (NaN unless rail miss)
+    rail_approach: np.ndarray = None
+    rail_approach_unit: str = ""
     sensitivity: dict = None
     histories: dict = field(default_factory=dict)
 
@@ -198,6 +201,9 @@ def load_campaign(h5, sha256):
         c.stall_torque, c.stall_torque_source = stall_torque_per_run(h5, c)
     if h5.has("runs/motor_torque_at_speed_Nm"):
         c.motor_torque_at_speed = h5.array("runs/motor_torque_at_speed_Nm", (n,))
+    if h5.has("runs/rail_miss_closest_approach_m"):
+        c.rail_approach = h5.array("runs/rail_miss_closest_approach_m", (n,))
+        c.rail_approach_unit = h5.units("runs/rail_miss_closest_approach_m")
     if h5.has("sensitivity"):
         c.sensitivity = read_sensitivity(h5)
     if h5.has("histories"):

@@ -9,6 +9,7 @@ from .figures_design import (fig_convergence, fig_envelopes, fig_peak_location, 
 from .mechanism import compute_margins
 from .page import esc, html_page, num, table
 from .sections_campaign import section_campaign, section_loads, section_lock_timing
+from .sections_free import section_rail_miss
 from .sections_margins import (input_columns, section_checks, section_histories, section_margins,
                                section_sensitivity)
 from .stats import spearman
@@ -120,7 +121,7 @@ def sobol_agreement(c, series, G):
 
 def campaign_report(page, c, e, opts):
     c.extras = e
-    body = [section_campaign(page, c), section_loads(page, c), section_lock_timing(page, c),
+    body = [section_campaign(page, c), section_rail_miss(c), section_loads(page, c), section_lock_timing(page, c),
             section_margins(page, c), section_sensitivity(page, c), section_histories(page, c)]
     n_checks = 7 if c.histories else 6
     body.append(section_checks(page, n_checks))

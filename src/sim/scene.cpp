@@ -46,8 +46,8 @@ std::string SceneOptions::validate() const {
   CHECK(positive("drive.torque_Nm", drive.torque_Nm));
   CHECK(positive("drive.stall_torque_Nm", drive.stall_torque_Nm));
   CHECK(positive("drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s));
-  if (stack.mode == StackMode::free)
-    return "stack.mode: \"free\" is not available yet (only \"held\"); see docs/model-notes.md";
+  if (stack.mode == StackMode::free && run.direction == model::Direction::retract)
+    return "stack.mode: the retraction of a free stack is not available yet (deployment only); see docs/model-notes.md";
   if (panels.count < 0 || panels.count % 2 != 0)
     return fmt::format("panels.count: must be 0 (no panels) or a positive even number, got {}", panels.count);
   if (panels.count > 0) {
@@ -58,6 +58,12 @@ std::string SceneOptions::validate() const {
   CHECK(run.validate());
 #undef CHECK
   return {};
+}
+
+std::string plan_stages(const SceneOptions& scene, const model::MastParams& mast, double direction,
+                        std::vector<stages::StageSpec>& out) {
+  if (scene.stack.mode == StackMode::free) return stages::plan_free_stages(mast, direction, out);
+  return stages::plan_held_stages(mast, direction, out);
 }
 
 model::MastParams build_mast(const SceneOptions& s) {
@@ -115,10 +121,10 @@ std::string validate_panels(const model::MastParams& mast) {
   return {};
 }
 
-std::string validate_mast(const model::MastParams& mast, const SceneOptions& /*scene*/) {
+std::string validate_mast(const model::MastParams& mast, const SceneOptions& scene) {
   std::string e = validate_mast_params(mast);
   std::vector<stages::StageSpec> plan;
-  if (e.empty()) e = stages::plan_held_stages(mast, 1.0, plan);
+  if (e.empty()) e = plan_stages(scene, mast, 1.0, plan);
   if (e.empty()) e = validate_panels(mast);
   return e;
 }

@@ -12,6 +12,7 @@
 #include "model/drive.hpp"
 #include "model/params.hpp"
 #include "stages/run_options.hpp"
+#include "stages/stage_plan.hpp"
 
 namespace truss::sim {
 
@@ -91,6 +92,9 @@ model::MastParams build_mast(const SceneOptions& scene);
 std::string validate_mast(const model::MastParams& mast, const SceneOptions& scene);
 // Its parts: per-bay and per-frame parameters positive; the blanket longer than the mast.
 std::string validate_mast_params(const model::MastParams& mast);
+// The stage plan of the scene's stack mode (stages/stage_plan.hpp): "" or "key: reason".
+std::string plan_stages(const SceneOptions& scene, const model::MastParams& mast, double direction,
+                        std::vector<stages::StageSpec>& out);
 std::string validate_panels(const model::MastParams& mast);
 
 }  // namespace truss::sim

@@ -24,7 +24,7 @@ RunResult simulate(const SceneOptions& scene, const model::MastParams& mast) {
   std::string e = scene.validate();
   if (e.empty()) e = validate_mast_params(mast);
   std::vector<stages::StageSpec> plan;
-  if (e.empty()) e = stages::plan_held_stages(mast, model::calc_direction_sign(scene.run.direction), plan);
+  if (e.empty()) e = plan_stages(scene, mast, model::calc_direction_sign(scene.run.direction), plan);
   if (e.empty()) e = validate_panels(mast);
   if (!e.empty()) return invalid(e);
 

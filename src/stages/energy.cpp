@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+
+#include <fmt/format.h>
 
 #include "model/bay.hpp"
 
@@ -32,6 +35,21 @@ double calc_allowed_energy_residual_J(const RunResult& r, double rtol, double at
   const double E = calc_energy_scale_J(r);
   const double phases = 2.0 * std::max(1, r.n_bays);
   return std::min(1e-2 * E, 20.0 * phases * std::max(rtol, atol / length_m) * E + static_cast<double>(r.steps) * atol);
+}
+
+std::string calc_accuracy_failure(const RunResult& r, double rtol, double atol, double length_m) {
+  const std::pair<const char*, double> reported[] = {
+      {"deploy_time_s", r.deploy_time_s}, {"peak_drive_force_N", r.peak_drive_force_N},
+      {"min_drive_force_N", r.min_drive_force_N}, {"peak_pin_force_N", r.peak_pin_force_N},
+      {"peak_diagonal_tension_N", r.peak_diagonal_tension_N}, {"drive_work_J", r.drive_work_J},
+      {"energy_lost_J", r.energy_lost_J}, {"energy_residual_J", r.energy_residual_J}};
+  for (const auto& [name, v] : reported)
+    if (!std::isfinite(v)) return fmt::format("{} is not finite ({}) at the end of the run", name, v);
+  const double allowed = calc_allowed_energy_residual_J(r, rtol, atol, length_m), E = calc_energy_scale_J(r);
+  if (std::abs(r.energy_residual_J) <= allowed) return {};
+  return fmt::format("energy residual {:.3g} J exceeds the {:.3g} J that rtol = {:g}, atol = {:g} allow ({:.3g} of the "
+                     "energy scale {:.6g} J): the numbers of this run are not to be trusted; tighten run.rtol / run.atol",
+                     r.energy_residual_J, allowed, rtol, atol, allowed / E, E);
 }
 
 void EnergyLedger::fill(RunResult& r) const {

@@ -5,6 +5,7 @@
 // (stowed at D = 0 below, locked at D = 2 l_s above) comes from prefix / suffix sums: O(1) per
 // look-up after an O(n) set-up.
 #pragma once
+#include <string>
 #include <vector>
 
 #include "model/params.hpp"
@@ -24,6 +25,9 @@ namespace truss::stages {
 // its tolerance allows: status `inaccurate`.
 double calc_energy_scale_J(const RunResult& r);
 double calc_allowed_energy_residual_J(const RunResult& r, double rtol, double atol, double length_m);
+// Empty if the run keeps the promise of `ok` (its reported numbers finite, its residual within
+// the bound above); otherwise the reason, for the `inaccurate` status.
+std::string calc_accuracy_failure(const RunResult& r, double rtol, double atol, double length_m);
 
 class EnergyLedger {
  public:

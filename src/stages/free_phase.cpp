@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "model/bay.hpp"
@@ -26,6 +27,29 @@ double FreePhaseA::calc_rail_function_m(const double* q) const {
   return model::calc_rail_function_m(ctx_.mast->rail, x, 0.5 * (y_m + y_l));
 }
 
+void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g) const {
+  const MastParams& mast = *ctx_.mast;
+  const int n = dof(), m = ctx_.bay;
+  const double l = mast.bay(m).strut_length_m, yr = mast.rail.axis_height_m();
+  const double y_m = q[n - 1], y_l = n >= 2 ? q[n - 2] : held_height_m_;
+  g[past_miss_height] = y_m - (yr + 3.0 * l);
+  g[deploying_straight] = kStraightFraction * l - calc_hinge_offset_m(mast.bay(m), y_m - y_l);
+  double worst = -kStraightFraction * l;  // no bay below m moves: never fires
+  for (int i = std::max(lo_, 1); i < m; ++i) {
+    const double lower = i - 1 >= lo_ ? q[i - 1 - lo_] : held_height_m_;
+    const BayParams& b = mast.bay(i);
+    worst = std::max(worst, kStraightFraction * b.strut_length_m - calc_hinge_offset_m(b, q[i - lo_] - lower));
+  }
+  g[singular_bay] = worst;
+  g[above_rail_top] = watch_rail_top_ ? 0.5 * (y_m + y_l) - yr : -1.0;
+  g[rail_approach_min] = -1.0;
+  if (watch_approach_min_) {
+    const double u = qdot[n - 1], w = n >= 2 ? qdot[n - 2] : 0.0, D = y_m - y_l;
+    const double x = std::max(calc_hinge_offset_m(mast.bay(m), D), kStraightFraction * l);
+    g[rail_approach_min] = 0.5 * (u + w) - mast.rail.cot_beta() * D * (u - w) / (4.0 * x);
+  }
+}
+
 PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
@@ -41,19 +65,23 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   const double u = qdot[n - 1];
   TridiagonalWork w;
   Eigen::VectorXd acc(n);
+  // A mass matrix that is not positive definite (a bay past straight inside a trial step) gives
+  // NaN accelerations: the integrator rejects the step and the stop events end the phase.
+  bool solved = true;
   if (ctx_.drive.mode == DriveMode::velocity) {
     acc.setZero();
     if (n > 1) {
       Eigen::VectorXd a;
-      solve_tridiagonal(sys.diag.head(n - 1), sys.sub.head(n - 1), rhs.head(n - 1), a, w);
-      acc.head(n - 1) = a;
+      solved = solve_tridiagonal(sys.diag.head(n - 1), sys.sub.head(n - 1), rhs.head(n - 1), a, w);
+      if (solved) acc.head(n - 1) = a;
     }
     p.drive_force_N = (n > 1 ? sys.sub[n - 1] * acc[n - 2] : 0.0) - rhs[n - 1];
   } else {
     p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
     rhs[n - 1] += p.drive_force_N;
-    solve_tridiagonal(sys.diag, sys.sub, rhs, acc, w);
+    solved = solve_tridiagonal(sys.diag, sys.sub, rhs, acc, w);
   }
+  if (!solved) { acc.setConstant(n, std::numeric_limits<double>::quiet_NaN()); p.drive_force_N = acc[0]; }
   for (int k = 0; k < n; ++k) qddot[k] = acc[k];
   p.q = q[n - 1]; p.qdot = u; p.qddot = acc[n - 1];
   p.y_driven_m = q[n - 1];
@@ -63,6 +91,7 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   const double D = p.y_driven_m - p.y_lower_m;
   p.hinge_x_m = calc_hinge_offset_m(mast.bay(m), D);
   p.hinge_y_m = 0.5 * (p.y_driven_m + p.y_lower_m);
+  p.rail_distance_m = model::calc_rail_function_m(mast.rail, p.hinge_x_m, p.hinge_y_m) * std::sin(mast.rail.beta_rad);
   double T = 0.0, U = 0.0, tension = 0.0;
   for (int k = 0; k < n; ++k) {
     T += 0.5 * sys.diag[k] * qdot[k] * qdot[k];
@@ -72,6 +101,7 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
     const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
     const double Di = ys[static_cast<std::size_t>(i - first)] - ys[static_cast<std::size_t>(i - 1 - first)];
     U += calc_bay_potential_J(mast.bay(i), b2, Di);
+    p.min_bay_opening_m = std::min(p.min_bay_opening_m, Di);
     tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
   }
   p.kinetic_energy_J = T;

@@ -9,6 +9,16 @@
 //     lo..m-1 is solved with y_m'' = 0, and F = M[m,m-1] y''_{m-1} - r_m - Q_m (inverse dynamics).
 // The phase ends when the hinge of bay m meets the rail: f = y_h - y_l + cot(beta)(x_h - x_l)
 // falls through 0 (end gap -f rises), with x_h = (1/2) sqrt(4 l^2 - D_m^2), y_h = (y_m + y_{m-1})/2.
+// Stopping rules (MODEL.md 2), as stop events rising through zero:
+//   past_miss_height   y_m - (y_r + 3 l_m): the driven frame passes the lock height y_r + l_m plus
+//                      one bay 2 l_m without rail entry (rail miss);
+//   deploying_straight kStraightFraction l_m - x_m: bay m straightens without rail entry (rail miss);
+//   singular_bay       kStraightFraction l_i - x_i, largest over the moving bays i < m (singular);
+//   rail_approach_min  f' = (u + w)/2 - c D (u - w)/(4 x) (watched only): a local minimum of f. A
+//                      grazing approach can dip below f = 0 and back inside one step, which the
+//                      sign test at step ends misses; at the minimum the caller checks f <= 0;
+//   above_rail_top     y_h - y_r (watched only: the time the hinge rises above the rail's top, x = 0).
+// An event not watched returns -1 (never rises).
 #pragma once
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
@@ -25,8 +35,16 @@ class FreePhaseA final : public PhaseModel {
   PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
   double calc_driven_speed_m_per_s(const double*, const double* qdot) const override { return qdot[dof() - 1]; }
   double calc_end_gap(const double* q) const override { return -calc_rail_function_m(q); }
-  double calc_end_gap_acceleration(const double*) const override { return 0.0; }  // not used: the frame moves
+  // Used by the solver's start check only (can the drive move the mast from rest?): the driven
+  // frame's acceleration along the drive's direction.
+  double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.direction * qddot[dof() - 1]; }
   void snap_to_end(double*) const override {}  // the event is located to the event tolerance
+  enum StopEvent { past_miss_height, deploying_straight, singular_bay, rail_approach_min, above_rail_top };
+  // A bay within this fraction of l_s of straight (hinge offset) is straight (MODEL.md 2: 1e-4 l_s).
+  static constexpr double kStraightFraction = 1e-4;
+  void set_watch(bool rail_top, bool approach_min) { watch_rail_top_ = rail_top; watch_approach_min_ = approach_min; }
+  int num_stop_events() const override { return 5; }
+  void calc_stop_events(const double* q, const double* qdot, double* g) const override;
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
   int get_lowest_frame() const { return lo_; }
@@ -36,6 +54,7 @@ class FreePhaseA final : public PhaseModel {
   model::ActiveFrames active_;
   int lo_;
   double held_height_m_;
+  bool watch_rail_top_ = false, watch_approach_min_ = false;
 };
 
 }  // namespace truss::stages

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <Eigen/LU>
 
 #include "model/bay.hpp"
 #include "model/rail.hpp"
+#include "stages/free_phase.hpp"
 
 namespace truss::stages {
 
@@ -29,6 +31,17 @@ double FreePhaseB::calc_rail_function_m(const double* q) const {
   const double s = std::sqrt(l * l - x * x);
   const RailParams& r = ctx_.mast->rail;
   return q[n - 2 >= 0 ? n - 2 : 0] + s - r.axis_height_m() + r.cot_beta() * x;
+}
+
+void FreePhaseB::calc_stop_events(const double* q, const double*, double* g) const {
+  const MastParams& mast = *ctx_.mast;
+  double worst = -FreePhaseA::kStraightFraction * mast.bay(ctx_.bay).strut_length_m;  // none: never fires
+  for (int i = std::max(lo_, 1); i < ctx_.bay; ++i) {
+    const double lower = i - 1 >= lo_ ? q[i - 1 - lo_] : held_height_m_;
+    const BayParams& b = mast.bay(i);
+    worst = std::max(worst, FreePhaseA::kStraightFraction * b.strut_length_m - calc_hinge_offset_m(b, q[i - lo_] - lower));
+  }
+  g[0] = worst;
 }
 
 double FreePhaseB::calc_driven_speed_m_per_s(const double* q, const double* qdot) const {
@@ -76,13 +89,14 @@ PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* q
   TridiagonalWork wk;
   Eigen::VectorXd acc;
   double lambda = 0.0;
+  bool solved = true;
   if (ctx_.drive.mode == DriveMode::velocity) {
     // Two rows: the rail and y_m'' = 0 (drive force as the multiplier): three solves and a 2x2.
     const double s_b = kx * xi2 - alpha_ * (u - ctx_.direction * ctx_.drive.speed_m_per_s);
     Eigen::VectorXd y0, za, zb;
-    solve_tridiagonal(diag, sub, rhs, y0, wk);
-    solve_tridiagonal(diag, sub, a, za, wk);
-    solve_tridiagonal(diag, sub, b, zb, wk);
+    solved = solve_tridiagonal(diag, sub, rhs, y0, wk) && solve_tridiagonal(diag, sub, a, za, wk) &&
+             solve_tridiagonal(diag, sub, b, zb, wk);
+    if (!solved) { y0 = za = zb = Eigen::VectorXd::Zero(n); }
     Eigen::Matrix2d S;
     S << a.dot(za), a.dot(zb), b.dot(za), b.dot(zb);
     const Eigen::Vector2d mult = S.partialPivLu().solve(Eigen::Vector2d(s_a - a.dot(y0), s_b - b.dot(y0)));
@@ -93,9 +107,11 @@ PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* q
     p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
     rhs += p.drive_force_N * b;
     double lam_neg = 0.0;
-    solve_bordered(diag, sub, a, rhs, s_a, acc, lam_neg, wk);
+    solved = solve_bordered(diag, sub, a, rhs, s_a, acc, lam_neg, wk);
     lambda = -lam_neg;
   }
+  // Not positive definite (a bay past straight inside a trial step): NaN, the step is rejected.
+  if (!solved) { acc.setConstant(n, std::numeric_limits<double>::quiet_NaN()); lambda = p.drive_force_N = acc[0]; }
   for (int i = 0; i < n; ++i) qddot[i] = acc[i];
   p.q = x; p.qdot = xi; p.qddot = acc[n - 1];
   p.y_driven_m = y_m; p.y_lower_m = y_l;
@@ -113,6 +129,7 @@ PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* q
     const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
     const double Di = ys[static_cast<std::size_t>(i - first)] - ys[static_cast<std::size_t>(i - 1 - first)];
     U += calc_bay_potential_J(mast.bay(i), b2, Di);
+    p.min_bay_opening_m = std::min(p.min_bay_opening_m, Di);
     tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
   }
   p.kinetic_energy_J = T;

@@ -34,6 +34,10 @@ class FreePhaseB final : public PhaseModel {
   double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[dof() - 1] - ctx_.q_end); }
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[dof() - 1]; }
   void snap_to_end(double* q) const override { q[dof() - 1] = ctx_.q_end; }
+  // Stop event 0 (MODEL.md 2, singular configuration): a moving bay below m comes within
+  // FreePhaseA::kStraightFraction l_s of straight (largest kStraightFraction l_i - x_i).
+  int num_stop_events() const override { return 1; }
+  void calc_stop_events(const double* q, const double* qdot, double* g) const override;
   // Rail function f (m) at p: 0 on the rail.
   double calc_rail_function_m(const double* q) const;
 

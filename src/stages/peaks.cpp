@@ -10,6 +10,8 @@ double calc_peak_quantity(int q, const PhasePoint& p, double direction) {
     case kNegForce: return -p.drive_force_N;
     case kPin: return p.pin_force_N;
     case kTension: return p.diagonal_tension_N;
+    case kRailApproach: return -p.rail_distance_m;
+    case kOverlap: return -p.min_bay_opening_m;
     default: return direction * p.u_m_per_s;
   }
 }

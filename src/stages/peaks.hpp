@@ -28,8 +28,10 @@ struct Extremum {
   }
 };
 
-// Quantities whose extremes a run reports.
-enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kQuantityCount };
+// Quantities whose extremes a run reports. kRailApproach is minus the hinge's distance from the
+// rail (free stack, open phase; -inf elsewhere): its maximum is the stage's closest approach.
+// kOverlap is minus the smallest bay opening (free stack): its maximum is the deepest overlap.
+enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kRailApproach, kOverlap, kQuantityCount };
 double calc_peak_quantity(int q, const PhasePoint& p, double direction);
 
 struct Sample {
@@ -79,9 +81,10 @@ class PeakTracker {
  public:
   std::array<Extremum, kQuantityCount> run;  // run-wide
   Extremum stage_force, stage_pin;           // per stage
+  Extremum stage_rail_approach;              // per stage, not merged into the run's
   double max_rail_residual = 0.0;
   int bay = 0;
-  void start_stage(int b) { bay = b; stage_force = Extremum{}; stage_pin = Extremum{}; }
+  void start_stage(int b) { bay = b; stage_force = Extremum{}; stage_pin = Extremum{}; stage_rail_approach = Extremum{}; }
   // The stage's force and pin records join the run's.
   void close_stage() {
     run[kForce].offer(stage_force.value, stage_force.t, stage_force.bay);
@@ -90,6 +93,7 @@ class PeakTracker {
   Extremum& target(int q) {
     if (q == kForce) return stage_force;
     if (q == kPin) return stage_pin;
+    if (q == kRailApproach) return stage_rail_approach;
     return run[static_cast<std::size_t>(q)];
   }
   // Refines each quantity of a finished phase whose best sample could beat the record.

@@ -42,6 +42,12 @@ struct PhasePoint {
   // Mass matrix in the phase's coordinates: open: mass_yy only; on_rail: (y_m, x) entries.
   double mass_yy = 0, mass_yx = 0, mass_xx = 0;
   double rail_slope = 0;              // on_rail: gamma = c + x/s = df/dx = -Y'(x)
+  // Free stack, open phase: distance of the hinge from the rail line, f sin(beta) (m; > 0 on
+  // the stack's side); +inf where not tracked (held stack, on the rail).
+  double rail_distance_m = __builtin_inf();
+  // Free stack: smallest bay opening D_i of the moving bays (m); < 0 when frames have passed
+  // through each other (or frame 1 through the floor): contacts are off. +inf where not tracked.
+  double min_bay_opening_m = __builtin_inf();
 };
 
 // Work space of a model evaluation, owned by the caller (the model functions stay pure).
@@ -61,6 +67,10 @@ class PhaseModel {
   virtual double calc_end_gap_acceleration(const double* qddot) const = 0;
   // Puts q exactly on the end surface once the event is located.
   virtual void snap_to_end(double* q) const = 0;
+  // Further events that end the phase early (free stack: rail miss, singular bay, watched
+  // crossings): each rises through zero when it fires. The held phases have none.
+  virtual int num_stop_events() const { return 0; }
+  virtual void calc_stop_events(const double* /*q*/, const double* /*qdot*/, double* /*g*/) const {}
 };
 
 }  // namespace truss::stages

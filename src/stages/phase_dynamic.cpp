@@ -19,14 +19,18 @@ class PhaseOde final : public integrators::OdeSystem {
     std::copy(y + n_, y + 2 * n_, dy);
     dy[2 * n_] = p.drive_force_N * p.u_m_per_s;
   }
-  int num_events() const override { return creep_ > 0.0 ? 3 : 2; }
+  // Events: 0 the phase end, 1 the stop of the driven frame, 2 the creep (when a creep speed is
+  // given), then the model's stop events.
+  int num_base_events() const { return creep_ > 0.0 ? 3 : 2; }
+  int num_events() const override { return num_base_events() + m_.num_stop_events(); }
   void calc_events(double, const double* y, double* g) override {
     g[0] = m_.calc_end_gap(y);
     const double u = m_.context().direction * m_.calc_driven_speed_m_per_s(y, y + n_);
     g[1] = u;
     if (creep_ > 0.0) g[2] = u - creep_;
+    m_.calc_stop_events(y, y + n_, g + num_base_events());
   }
-  int event_direction(int k) const override { return k == 0 ? +1 : -1; }
+  int event_direction(int k) const override { return k == 0 || k >= num_base_events() ? +1 : -1; }
 
  private:
   const PhaseModel& m_;
@@ -111,6 +115,7 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
     out.end = model_.calc_point(y.data(), y.data() + n, qddot.data(), scratch);
     ++out.evals;
   }
+  out.end_state.assign(y.begin(), y.begin() + 2 * n);
   // Peaks of the phase: best step-end samples refined on the Hermite interpolant.
   std::vector<double> q(static_cast<std::size_t>(n)), qd(static_cast<std::size_t>(n));
   sinks.peaks.absorb(sinks.phase_peaks, [&](double tt, const HermiteSpan& span) {
@@ -121,7 +126,10 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
   if (reached) return out;
   out.end = model_.calc_point(y.data(), y.data() + n, qddot.data(), scratch);
   out.message = sum.message;
-  if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 2) out.reason = PhaseEndReason::crept_to_rest;
+  if (sum.status == integrators::IntegratorStatus::event && sum.event_index >= ode.num_base_events()) {
+    out.reason = PhaseEndReason::model_stop;
+    out.stop_event = sum.event_index - ode.num_base_events();
+  } else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 2) out.reason = PhaseEndReason::crept_to_rest;
   else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 1) out.reason = PhaseEndReason::stopped;
   else if (obs.timed_out) out.reason = PhaseEndReason::wall_time;
   else if (sum.status == integrators::IntegratorStatus::step_limit) out.reason = PhaseEndReason::step_limit;

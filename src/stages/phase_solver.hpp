@@ -5,6 +5,7 @@
 #pragma once
 #include <chrono>
 #include <string>
+#include <vector>
 
 #include "stages/history.hpp"
 #include "stages/peaks.hpp"
@@ -21,6 +22,7 @@ enum class PhaseEndReason {
   step_limit,     // the run's step budget
   horizon,        // the phase's simulated-time horizon passed with the mast still creeping on
   failure,        // the integrator failed
+  model_stop,     // one of the model's stop events (PhaseModel::num_stop_events); see stop_event
 };
 
 struct PhaseOutcome {
@@ -30,6 +32,8 @@ struct PhaseOutcome {
   double drive_work_J = 0; // integral of F dy_m over the phase
   long steps = 0, rejected_steps = 0, evals = 0;
   std::string message;     // the integrator's message on failure
+  int stop_event = -1;     // model_stop: which of the model's stop events fired
+  std::vector<double> end_state;  // (q, q') of the model at the end, dof values each
 };
 
 // Where a phase's samples go, shared by the stage loop and the solvers.

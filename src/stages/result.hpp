@@ -90,6 +90,18 @@ struct RunResult {
   double potential_energy_end_J = 0.0;
   double energy_residual_J = NAN_INIT();  // W - dT - dU - E_lost
   double max_rail_residual_m = 0.0;       // largest |f| on the rail (0 by construction when exact)
+  // Rail miss (free stack, MODEL.md 2): the bay that missed, the closest approach of its hinge to
+  // the rail line and its time, and the time the hinge rose above the rail's top y_r (NaN if not).
+  int rail_miss_bay = 0;
+  double rail_miss_closest_approach_m = NAN_INIT();
+  double rail_miss_closest_approach_time_s = NAN_INIT();
+  double rail_miss_above_rail_top_time_s = NAN_INIT();
+  // Free stack without contacts (the paper's literal model): the smallest opening D_i of any bay
+  // over the run, its time and bay; negative when frames passed through each other or frame 1
+  // through the floor. NaN (bay 0) for the held stack.
+  double min_bay_opening_m = NAN_INIT();
+  double min_bay_opening_time_s = NAN_INIT();
+  int min_bay_opening_bay = 0;
 
   long steps = 0;                         // accepted integrator steps (0 in closed-form mode)
   long rejected_steps = 0;

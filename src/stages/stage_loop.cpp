@@ -11,6 +11,8 @@
 #include "model/impacts.hpp"
 #include "model/rail.hpp"
 #include "stages/energy.hpp"
+#include "stages/free_phase.hpp"
+#include "stages/free_stack.hpp"
 #include "stages/held_phase.hpp"
 #include "stages/phase_dynamic.hpp"
 #include "stages/phase_kinematic.hpp"
@@ -60,6 +62,18 @@ class StageLoop {
   }
   void start_stage(const StageSpec& s, BayResult& br);
   void run_phase(const StageSpec& s, const PhaseSpec& ph);
+  PhaseSinks make_sinks() {
+    return {tracker_, phase_peaks_, history_,
+            wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                              std::chrono::duration<double>(opts_.run.max_wall_time_s))};
+  }
+  PhaseOutcome solve_dynamic(const PhaseModel& phase, const double* q0, const double* qdot0);
+  void account(const PhaseOutcome& o, const StageSpec& s, const PhaseSpec& ph);
+  // Free stack (stages/free_stack.hpp): the same loop with n-frame phases and impacts.
+  void start_free_stage(const StageSpec& s);
+  void run_free_phase(const StageSpec& s, const PhaseSpec& ph);
+  void fail_free_stop(const StageSpec& s, const PhaseSpec& ph, const PhaseOutcome& o);
+  void end_free_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePoint& p_end, BayResult& br);
   void fail_phase(const PhaseOutcome& o, int m);
   void end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePoint& p_end, BayResult& br);
   void close_stage(BayResult& br);
@@ -84,6 +98,8 @@ class StageLoop {
   PhasePeaks phase_peaks_;
   HistoryRecorder history_;
   std::unique_ptr<integrators::Integrator> integrator_;  // the run's one integrator (time stepping)
+  std::unique_ptr<FreeStack> free_;                       // free stack only
+  double rail_top_time_s_ = kNaN;                         // free: the hinge rose above y_r (this stage)
   double t_ = 0.0;
   double u_ = 0.0;           // driven-frame velocity carried between stages
   double xi_ = 0.0;          // hinge speed carried between phases
@@ -106,11 +122,13 @@ StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stage
   r_.drive_mode = to_string(opts.drive.mode);
   r_.bays.resize(static_cast<std::size_t>(n));
   for (int i = 1; i <= n; ++i) r_.bays[static_cast<std::size_t>(i - 1)].bay = i;
-  if (!kinematic_) integrator_ = make_integrator(opts.run.integrator, opts.calc_integrator_options());
-  else r_.motor_torque_at_speed_Nm = opts.drive.calc_motor_torque_Nm(opts.drive.speed_m_per_s);
+  if (!stages.empty() && stages.front().free_stack) free_ = std::make_unique<FreeStack>(mast);
+  if (!kinematic_ || free_) integrator_ = make_integrator(opts.run.integrator, opts.calc_integrator_options());
+  if (kinematic_) r_.motor_torque_at_speed_Nm = opts.drive.calc_motor_torque_Nm(opts.drive.speed_m_per_s);
 }
 
 void StageLoop::start_stage(const StageSpec& s, BayResult& br) {
+  if (free_) return start_free_stage(s);
   const int m = s.bay;
   const double v = opts_.drive.speed_m_per_s;
   if (s.start == StageStart::from_rest_or_kick && kinematic_) {
@@ -153,6 +171,7 @@ void StageLoop::fail_phase(const PhaseOutcome& o, int m) {
   const char* goal = dir_ > 0 ? "lock" : "end";
   switch (o.reason) {
     case PhaseEndReason::reached_end: return;
+    case PhaseEndReason::model_stop: return;  // the free stack's stop events: fail_free_stop
     case PhaseEndReason::cannot_start:
       return fail(RunStatus::stall, fmt::format("stall: the drive cannot move the mast at t = {:.9g} s in the stage of bay {} "
                                                 "(drive force {:.6g} N)", t_, m, o.end.drive_force_N));
@@ -181,22 +200,28 @@ void StageLoop::fail_phase(const PhaseOutcome& o, int m) {
 }
 
 void StageLoop::run_phase(const StageSpec& s, const PhaseSpec& ph) {
+  if (free_) return run_free_phase(s, ph);
   PhaseContext ctx = make_context(s, ph.kind, ph.lower_held_height_m);
   ctx.q_end = ph.q_end;
   ctx.sign_q = ph.q_end > ph.q_start ? 1.0 : -1.0;
   const HeldPhase phase(ctx);
   const double q0 = ph.q_start, qdot0 = ph.kind == PhaseKind::open ? u_ : xi_;
-  PhaseSinks sinks{tracker_, phase_peaks_, history_,
-                   wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                                     std::chrono::duration<double>(opts_.run.max_wall_time_s))};
+  PhaseSinks sinks = make_sinks();
   PhaseOutcome o;
-  if (kinematic_) {
-    o = KinematicPhaseSolver(phase, ph, opts_.peak_samples_per_piece).solve({t_, &q0, &qdot0}, sinks);
-  } else {
-    integrators::IntegratorOptions io = opts_.calc_integrator_options();
-    io.max_steps = std::max(1L, steps_left_);
-    o = DynamicPhaseSolver(phase, *integrator_, io).solve({t_, &q0, &qdot0, calc_creep_speed_m_per_s()}, sinks);
-  }
+  if (kinematic_) o = KinematicPhaseSolver(phase, ph, opts_.peak_samples_per_piece).solve({t_, &q0, &qdot0}, sinks);
+  else o = solve_dynamic(phase, &q0, &qdot0);
+  account(o, s, ph);
+  fail_phase(o, s.bay);
+}
+
+PhaseOutcome StageLoop::solve_dynamic(const PhaseModel& phase, const double* q0, const double* qdot0) {
+  PhaseSinks sinks = make_sinks();
+  integrators::IntegratorOptions io = opts_.calc_integrator_options();
+  io.max_steps = std::max(1L, steps_left_);
+  return DynamicPhaseSolver(phase, *integrator_, io).solve({t_, q0, qdot0, calc_creep_speed_m_per_s()}, sinks);
+}
+
+void StageLoop::account(const PhaseOutcome& o, const StageSpec& s, const PhaseSpec& ph) {
   steps_left_ -= o.steps;
   r_.steps += o.steps;
   r_.rejected_steps += o.rejected_steps;
@@ -204,10 +229,10 @@ void StageLoop::run_phase(const StageSpec& s, const PhaseSpec& ph) {
   if (o.reason != PhaseEndReason::cannot_start) ledger_.add_smooth_work(o.drive_work_J);
   t_ = o.t_end_s;
   last_ = o.end; last_stage_ = &s; last_phase_ = &ph;
-  fail_phase(o, s.bay);
 }
 
 void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePoint& p_end, BayResult& br) {
+  if (free_) return end_free_phase(s, ph, p_end, br);
   const double u_end = p_end.u_m_per_s;
   switch (ph.end) {
     case PhaseEnd::rail_entry: {
@@ -266,6 +291,99 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
   }
 }
 
+void StageLoop::start_free_stage(const StageSpec& s) {
+  rail_top_time_s_ = kNaN;
+  if (s.start != StageStart::from_rest_or_kick || !kinematic_) return;
+  // Impulsive start (MODEL.md 2 "free"): the free frames take the momentum-consistent kick.
+  const StackImpact k = free_->apply_start_kick(s, dir_ * opts_.drive.speed_m_per_s);
+  if (!k.ok) return fail(RunStatus::singular_configuration, "singular configuration: the stowed stack's mass matrix is not positive definite");
+  r_.start_drive_impulse_Ns = k.drive_impulse_Ns;
+  ledger_.add_impulse_work(k.drive_work_J);
+}
+
+void StageLoop::run_free_phase(const StageSpec& s, const PhaseSpec& ph) {
+  PhaseContext ctx = make_context(s, ph.kind, 0.0);
+  ctx.q_end = 0.0;    // on the rail: the lock at x = 0, x falling
+  ctx.sign_q = -1.0;
+  // Watched events of the open phase, each at most once: the rail-top crossing (recorded) and the
+  // first minimum of f (a grazing entry if f <= 0 there, else the phase goes on).
+  bool watch = ph.kind == PhaseKind::open, watch_min = watch;
+  for (;;) {
+    const std::unique_ptr<PhaseModel> phase = free_->make_phase(ctx, watch, watch_min);
+    std::vector<double> q0, qd0;
+    free_->get_start(ctx, q0, qd0);
+    const PhaseOutcome o = solve_dynamic(*phase, q0.data(), qd0.data());
+    account(o, s, ph);
+    if (!o.end_state.empty()) free_->set_end(ctx, o.end_state);
+    if (o.reason == PhaseEndReason::model_stop && watch && o.stop_event == FreePhaseA::above_rail_top) {
+      rail_top_time_s_ = t_;  // recorded; the phase goes on without this event
+      watch = false;
+      continue;
+    }
+    if (o.reason == PhaseEndReason::model_stop && watch_min && o.stop_event == FreePhaseA::rail_approach_min) {
+      // f' = 0 with f <= 0: the pin dipped into the rail within a step; it enters here, where its
+      // velocity is tangent to the rail (f' = 0: the entry impulse vanishes with the dip).
+      if (free_->calc_rail_function_m(s.bay) <= 0.0) return;
+      watch_min = false;
+      continue;
+    }
+    if (o.reason == PhaseEndReason::model_stop) return fail_free_stop(s, ph, o);
+    return fail_phase(o, s.bay);
+  }
+}
+
+void StageLoop::fail_free_stop(const StageSpec& s, const PhaseSpec& ph, const PhaseOutcome& o) {
+  const int m = s.bay;
+  const bool singular = ph.kind == PhaseKind::on_rail || o.stop_event == FreePhaseA::singular_bay;
+  if (singular) {
+    const int i = free_->find_straightest_bay(m - 1);
+    return fail(RunStatus::singular_configuration,
+                fmt::format("singular configuration: bay {} (not deploying) came within {:.3g} l_s of straight "
+                            "(hinge offset {:.6g} m) at t = {:.9g} s in the stage of bay {}",
+                            i, FreePhaseA::kStraightFraction, free_->calc_hinge_offset_m(i), t_, m));
+  }
+  const Extremum& a = tracker_.stage_rail_approach;
+  r_.rail_miss_bay = m;
+  r_.rail_miss_closest_approach_m = -a.value;
+  r_.rail_miss_closest_approach_time_s = a.t;
+  r_.rail_miss_above_rail_top_time_s = rail_top_time_s_;
+  const std::string why = o.stop_event == FreePhaseA::past_miss_height
+      ? fmt::format("the driven frame passed the lock height plus one bay (y = {:.9g} m)", free_->get_height_m(m))
+      : std::string("bay ") + std::to_string(m) + " straightened";
+  fail(RunStatus::rail_miss,
+       fmt::format("rail miss: the hinge of bay {} never reached the rail; closest approach {:.6g} m at t = {:.9g} s; "
+                   "{}; stopped at t = {:.9g} s when {}",
+                   m, -a.value, a.t,
+                   std::isfinite(rail_top_time_s_) ? fmt::format("above the rail top (y_r = {:.6g} m) from t = {:.9g} s",
+                                                                 mast_.rail.axis_height_m(), rail_top_time_s_)
+                                                   : std::string("never above the rail top"),
+                   t_, why));
+}
+
+void StageLoop::end_free_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePoint& p_end, BayResult& br) {
+  if (ph.end == PhaseEnd::rail_entry) {
+    // Plastic impact of all moving frames with the rail (model/free_impacts.hpp).
+    const FreeRailEntry e = free_->apply_rail_entry(s, kinematic_);
+    if (!e.impact.ok) return fail(RunStatus::singular_configuration,
+                                  fmt::format("singular configuration: the rail entry of bay {} at t = {:.9g} s has no solution", s.bay, t_));
+    br.entry_time_s = t_;
+    br.entry_impulse_Ns = calc_pin_force_N(mast_.rail, e.impact.rail_impulse_Ns);  // per pin, as the force
+    br.entry_drive_impulse_Ns = e.impact.drive_impulse_Ns;
+    br.entry_energy_loss_J = e.impact.energy_loss_J;
+    ledger_.add_loss(e.impact.energy_loss_J);
+    ledger_.add_impulse_work(e.impact.drive_work_J);
+    return;
+  }
+  // Lock: the latch stops the struts' radial motion, g(0) xi^2 is lost; y_m' is continuous.
+  const double loss = calc_latch_loss_J(p_end.mass_xx, p_end.qdot);
+  free_->apply_lock(s.bay);
+  br.lock_time_s = t_;
+  br.latch_energy_J = loss;
+  ledger_.add_loss(loss);
+  ke_end_ = p_end.kinetic_energy_J - loss;
+  ++r_.bays_completed;
+}
+
 void StageLoop::close_stage(BayResult& br) {
   br.peak_drive_force_N = std::isfinite(tracker_.stage_force.value) ? tracker_.stage_force.value : kNaN;
   br.peak_drive_force_time_s = tracker_.stage_force.t;
@@ -300,11 +418,17 @@ void StageLoop::finish() {
     if (std::isfinite(b.latch_energy_J) && !(b.latch_energy_J <= r_.peak_latch_energy_J)) r_.peak_latch_energy_J = b.latch_energy_J;
   r_.peak_driven_speed_m_per_s = fin(run[kSpeed].value);
   r_.max_rail_residual_m = tracker_.max_rail_residual;
+  if (std::isfinite(run[kOverlap].value)) {
+    r_.min_bay_opening_m = -run[kOverlap].value;
+    r_.min_bay_opening_time_s = run[kOverlap].t;
+    r_.min_bay_opening_bay = run[kOverlap].bay;
+  }
 
   const double U_start = dir_ > 0 ? ledger_.get_stowed_potential_J() : ledger_.get_deployed_potential_J();
   double U_end = 0.0;
   if (last_stage_ && last_phase_) {
-    const int first_moving = last_phase_->kind == PhaseKind::on_rail ? std::max(last_stage_->bay - 1, 1) : last_stage_->bay;
+    // The free stack's phases carry every bay below the driven frame.
+    const int first_moving = free_ ? 1 : last_phase_->kind == PhaseKind::on_rail ? std::max(last_stage_->bay - 1, 1) : last_stage_->bay;
     if (failed_) U_end = ledger_.calc_total_potential_J(last_stage_->bay, first_moving, last_.potential_energy_J);
     else U_end = dir_ > 0 ? ledger_.get_deployed_potential_J() : ledger_.get_stowed_potential_J();
   }
@@ -319,21 +443,8 @@ void StageLoop::finish() {
 // An `ok` run promises finite numbers and an energy balance within its tolerance (energy.hpp).
 void StageLoop::check_accuracy() {
   if (failed_) return;
-  const std::pair<const char*, double> reported[] = {
-      {"deploy_time_s", r_.deploy_time_s}, {"peak_drive_force_N", r_.peak_drive_force_N},
-      {"min_drive_force_N", r_.min_drive_force_N}, {"peak_pin_force_N", r_.peak_pin_force_N},
-      {"peak_diagonal_tension_N", r_.peak_diagonal_tension_N}, {"drive_work_J", r_.drive_work_J},
-      {"energy_lost_J", r_.energy_lost_J}, {"energy_residual_J", r_.energy_residual_J}};
-  for (const auto& [name, v] : reported)
-    if (!std::isfinite(v))
-      return fail(RunStatus::inaccurate, fmt::format("{} is not finite ({}) at the end of the run", name, v));
-  const double allowed = calc_allowed_energy_residual_J(r_, opts_.run.rtol, opts_.run.atol, mast_.bay(1).strut_length_m);
-  if (!(std::abs(r_.energy_residual_J) <= allowed))
-    fail(RunStatus::inaccurate,
-         fmt::format("energy residual {:.3g} J exceeds the {:.3g} J that rtol = {:g}, atol = {:g} allow ({:.3g} of the "
-                     "energy scale {:.6g} J): the numbers of this run are not to be trusted; tighten run.rtol / run.atol",
-                     r_.energy_residual_J, allowed, opts_.run.rtol, opts_.run.atol, allowed / calc_energy_scale_J(r_),
-                     calc_energy_scale_J(r_)));
+  std::string why = calc_accuracy_failure(r_, opts_.run.rtol, opts_.run.atol, mast_.bay(1).strut_length_m);
+  if (!why.empty()) fail(RunStatus::inaccurate, std::move(why));
 }
 
 RunResult StageLoop::run() {

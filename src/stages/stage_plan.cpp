@@ -11,6 +11,19 @@ using namespace truss::model;
 
 namespace {
 
+// Locked mass and blanket height offset above frame m, built from the top down: O(n).
+void calc_rigid_above(const MastParams& mast, std::vector<double>& locked, std::vector<double>& span) {
+  const int n = mast.n_bays();
+  locked.assign(static_cast<std::size_t>(n + 1), 0.0);
+  span.assign(static_cast<std::size_t>(n + 1), 0.0);
+  locked[n] = mast.tip_mass_kg;
+  span[n] = mast.panels.tip_height_m;
+  for (int m = n - 1; m >= 1; --m) {
+    locked[m] = locked[m + 1] + calc_rigid_bay_mass_kg(mast.bay(m + 1), mast.frame(m + 1));
+    span[m] = span[m + 1] + 2.0 * mast.bay(m + 1).strut_length_m;
+  }
+}
+
 // A held lower frame at z0 = 0 must meet the rail away from the straight and the closed bay
 // (model/rail.hpp, calc_held_entry_range); otherwise the run is refused, naming the keys, the
 // reason and the valid range of rail.x_m for the other keys' values.
@@ -67,18 +80,32 @@ std::string explain_start_past_entry(const MastParams& mast, int m, double y_sta
 
 }  // namespace
 
+std::string plan_free_stages(const MastParams& mast, double direction, std::vector<StageSpec>& out) {
+  out.clear();
+  if (direction < 0) return "run.direction: retraction of a free stack (stack.mode = \"free\") is not available yet";
+  const int n = mast.n_bays();
+  std::vector<double> locked, span;
+  calc_rigid_above(mast, locked, span);
+  for (int m = n; m >= 1; --m) {
+    StageSpec s;
+    s.bay = m;
+    s.start = (m == n) ? StageStart::from_rest_or_kick : StageStart::continue_motion;
+    s.locked_mass_kg = locked[m];
+    s.panel_height_offset_m = span[m];
+    s.free_stack = true;
+    s.phases.push_back({PhaseKind::open, 0.0, 0.0, PhaseEnd::rail_entry, 0.0});
+    s.phases.push_back({PhaseKind::on_rail, 0.0, 0.0, PhaseEnd::lock, 0.0});
+    out.push_back(s);
+  }
+  return {};
+}
+
 std::string plan_held_stages(const MastParams& mast, double direction, std::vector<StageSpec>& out) {
   const int n = mast.n_bays();
   out.clear();
   out.reserve(static_cast<std::size_t>(n));
-  // Locked mass and blanket height offset above frame m, built from the top down: O(n).
-  std::vector<double> locked(n + 1, 0.0), span(n + 1, 0.0);
-  locked[n] = mast.tip_mass_kg;
-  span[n] = mast.panels.tip_height_m;
-  for (int m = n - 1; m >= 1; --m) {
-    locked[m] = locked[m + 1] + calc_rigid_bay_mass_kg(mast.bay(m + 1), mast.frame(m + 1));
-    span[m] = span[m + 1] + 2.0 * mast.bay(m + 1).strut_length_m;
-  }
+  std::vector<double> locked, span;
+  calc_rigid_above(mast, locked, span);
   std::vector<StageSpec> deploy(n);
   for (int m = n; m >= 1; --m) {
     const BayParams& b = mast.bay(m);

@@ -35,10 +35,18 @@ struct StageSpec {
   double panel_height_offset_m = 0; // H = y_m + offset
   // Rail-entry geometry of this bay (held lower frame at 0).
   double entry_hinge_x_m = 0, entry_upper_height_m = 0;
+  // Free stack (MODEL.md 2 "free"): the frames below the driven one are free; the phases' q
+  // values are not used (the state lives in stages/free_stack.hpp) and entry happens where the
+  // motion takes the pin to the rail.
+  bool free_stack = false;
 };
 
 // Builds the stages of a held-stack run. Returns an empty string, or "key: reason" if the
 // geometry makes the held stack impossible (rail never met, next bay already past the rail).
 std::string plan_held_stages(const model::MastParams& mast, double direction, std::vector<StageSpec>& out);
+
+// Builds the stages of a free-stack run (deployment only, so far): bays n..1, each phase A until
+// rail entry and phase B until the lock. Returns "key: reason" for what the free stack cannot run.
+std::string plan_free_stages(const model::MastParams& mast, double direction, std::vector<StageSpec>& out);
 
 }  // namespace truss::stages

@@ -74,6 +74,12 @@ run beta95_set 2 "$TABLE1" --set rail.beta_deg=95 -o beta95_set.h5
 expect_in beta95_set.err "rail.beta_deg" "beta95_set: message names the key"
 nothing_written beta95_set
 
+# free stack: retraction is not available yet; the message names the file, line and key
+scene free_retract.toml '[stack]\nmode = "free"\n[run]\ndirection = "retract"\n'
+run free_retract 2 free_retract.toml -o free_retract.h5
+expect_in free_retract.err "free_retract.toml:2: stack.mode" "free_retract: message names key and line"
+nothing_written free_retract
+
 run set_unknown 2 "$TABLE1" --set mast.n_bay=3 -o set_unknown.h5
 expect_in set_unknown.err "--set mast.n_bay=3" "set_unknown: message quotes the --set"
 nothing_written set_unknown

@@ -294,6 +294,23 @@ def expected_campaign(path):
                           "velmargin.ratio_p50": hf7(ratio, 0.5)})
                 required |= {"velmargin.p_exceed", "velmargin.n_exceed"}
 
+        # Section 1, free stack: rail-miss share (exact interval by bisection) and the closest
+        # approaches of the missing hinges (type-7 quantiles written out).
+        if "rail miss" in enum and "runs/rail_miss_closest_approach_m" in f:
+            miss = status == enum["rail miss"]
+            k = int(miss.sum())
+            if k:
+                a = f["runs/rail_miss_closest_approach_m"][()][miss]
+                a = np.sort(a[np.isfinite(a)])
+                E.update({"railmiss.n_runs": n, "railmiss.n_miss": k, "railmiss.p": k / n,
+                          "railmiss.p.ci_lo": clopper_pearson_bisect(k, n, "lo"),
+                          "railmiss.p.ci_hi": clopper_pearson_bisect(k, n, "hi")})
+                for name, p in (("min", 0.0), ("p05", 0.05), ("median", 0.5), ("p95", 0.95),
+                                ("max", 1.0)):
+                    E[f"railmiss.approach.{name}"] = hf7(a, p)
+                required |= {"railmiss.p", "railmiss.p.ci_lo", "railmiss.p.ci_hi",
+                             "railmiss.approach.min", "railmiss.approach.median"}
+
         # Section 5: rank correlations.
         for d in disps:
             v = d["values"]

@@ -1,0 +1,132 @@
+// Benchmark (not a test): the free stack (issue 9; MODEL.md 2 "free") on this machine.
+//  1. Cost of one right-hand side of phase A and of phase B (the bordered solve) against the
+//     number of moving frames, n = 10 .. 1000: median time per evaluation and per frame (the
+//     solve is O(n): the time per frame must stay flat).
+//  2. Whole slack free-stack deployments (l_0 = 0.49 m, velocity drive, rtol 1e-8) for n = 10 ..
+//     1000 bays: stage j has n - j moving frames, so a deployment is O(n^2) right-hand-side work
+//     per bay-frame; reported per bay and per bay^2. Target of the issue: 30 bays under 50 ms.
+//  3. Work-precision, n = 10 and 30, DP5(4) and CVODE, rtol 1e-4 .. 1e-12: largest error of the
+//     entry and lock times against a DP5(4) reference at rtol 1e-13, against wall time.
+// Usage: bench_free_stack [--quick]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include "sim/simulate.hpp"
+#include "stages/free_phase.hpp"
+#include "stages/free_phase_b.hpp"
+
+using namespace truss;
+using namespace truss::sim;
+
+namespace {
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+SceneOptions slack_scene(int n) {
+  SceneOptions s;
+  s.mast.n_bays = n;
+  s.mast.diagonal_free_length_m = 0.49;
+  s.stack.mode = StackMode::free;
+  s.run.max_wall_time_s = 3600.0;
+  return s;
+}
+double time_runs(const SceneOptions& s, int repeats, RunResult* out) {
+  const auto mast = build_mast(s);
+  std::vector<double> w;
+  for (int i = 0; i <= repeats; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    RunResult r = simulate(s, mast);
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (i > 0) w.push_back(dt);
+    if (out) *out = std::move(r);
+  }
+  return median(w);
+}
+double max_event_error(const RunResult& a, const RunResult& ref) {
+  double e = 0.0;
+  for (std::size_t i = 0; i < a.bays.size(); ++i) {
+    e = std::max(e, std::abs(a.bays[i].lock_time_s - ref.bays[i].lock_time_s));
+    e = std::max(e, std::abs(a.bays[i].entry_time_s - ref.bays[i].entry_time_s));
+  }
+  return e;
+}
+// Median time of one evaluation of the phase at a spread state (frames 1..n, bay n deploying).
+double time_rhs(const stages::PhaseModel& p, int n, int evals) {
+  std::vector<double> q(static_cast<std::size_t>(n)), qd(q.size(), 0.01), acc(q.size());
+  for (int k = 0; k < n; ++k) q[static_cast<std::size_t>(k)] = 0.001 * (k + 1);
+  if (p.context().kind == stages::PhaseKind::on_rail) q.back() = 0.1;  // x on the rail
+  stages::PhaseScratch scratch;
+  std::vector<double> w;
+  for (int rep = 0; rep < 7; ++rep) {
+    const auto t0 = std::chrono::steady_clock::now();
+    double sink = 0.0;
+    for (int i = 0; i < evals; ++i) sink += p.calc_point(q.data(), qd.data(), acc.data(), scratch).drive_force_N;
+    w.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / evals);
+    if (sink == 12345.678) std::printf(" ");
+  }
+  return median(w);
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);
+  std::printf("## One right-hand side of the free phases (torque drive)\n\n");
+  std::printf("| moving frames | phase A (us) | per frame (ns) | phase B (us) | per frame (ns) |\n|---:|---:|---:|---:|---:|\n");
+  for (int n : {10, 30, 100, 300, 1000}) {
+    SceneOptions s = slack_scene(n);
+    s.drive.mode = model::DriveMode::torque;
+    const auto mast = build_mast(s);
+    stages::PhaseContext ctx{&mast, stages::PhaseKind::open, n, 0.0, 1.1, 0.36, s.drive, 1.0, 0.0, 1.0};
+    const stages::FreePhaseA a(ctx, 1, 0.0);
+    ctx.kind = stages::PhaseKind::on_rail;
+    const stages::FreePhaseB b(ctx, 1, 0.0, 10.0);
+    const int evals = std::max(200, 200000 / n);
+    const double ta = time_rhs(a, n, evals), tb = time_rhs(b, n, evals);
+    std::printf("| %d | %.3f | %.1f | %.3f | %.1f |\n", n, 1e6 * ta, 1e9 * ta / n, 1e6 * tb, 1e9 * tb / n);
+  }
+
+  std::printf("\n## Slack free-stack deployment (l_0 = 0.49 m, velocity drive, DP5(4), rtol 1e-8)\n\n");
+  std::printf("| bays | median wall time (ms) | per bay (us) | per bay^2 (us) | steps | status |\n|---:|---:|---:|---:|---:|---|\n");
+  std::vector<int> ns = {10, 30, 100, 300};
+  if (!quick) ns.push_back(1000);
+  for (int n : ns) {
+    RunResult r;
+    const int reps = n <= 30 ? 11 : n <= 100 ? 5 : 1;
+    const double t = time_runs(slack_scene(n), reps, &r);
+    std::printf("| %d | %.3f | %.2f | %.3f | %ld | %s |\n", n, 1e3 * t, 1e6 * t / n, 1e6 * t / (double(n) * n), r.steps,
+                to_string(r.status));
+  }
+
+  std::printf("\n## Work-precision (slack scene, torque drive 0.002 N m; error: largest entry/lock time error)\n\n");
+  std::printf("| bays | integrator | rtol | wall time (ms) | error (s) | steps |\n|---:|---|---:|---:|---:|---:|\n");
+  for (int n : {10, 30}) {
+    SceneOptions ref_s = slack_scene(n);
+    ref_s.drive.mode = model::DriveMode::torque;
+    ref_s.drive.torque_Nm = 0.002;
+    ref_s.run.rtol = 1e-13;
+    ref_s.run.atol = 1e-15;
+    RunResult ref;
+    time_runs(ref_s, 0, &ref);
+    for (auto kind : {integrators::IntegratorKind::dopri54, integrators::IntegratorKind::cvode}) {
+      for (double rtol : {1e-4, 1e-6, 1e-8, 1e-10, 1e-12}) {
+        SceneOptions s = ref_s;
+        s.run.integrator = kind;
+        s.run.rtol = rtol;
+        s.run.atol = rtol * 1e-2;
+        RunResult r;
+        const double t = time_runs(s, quick ? 1 : 3, &r);
+        std::printf("| %d | %s | %.0e | %.3f | %.2e | %ld |\n", n, integrators::to_string(kind), rtol, 1e3 * t,
+                    max_event_error(r, ref), r.steps);
+      }
+    }
+  }
+  return 0;
+}
