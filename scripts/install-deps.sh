@@ -5,7 +5,8 @@ set -euo pipefail
 PKGS=(build-essential cmake pkg-config
       libeigen3-dev libopenmpi-dev openmpi-bin libhdf5-dev
       libsundials-dev catch2 libtomlplusplus-dev libcli11-dev libfmt-dev
-      python3-numpy python3-h5py python3-matplotlib python3-scipy)
+      python3-numpy python3-h5py python3-matplotlib python3-scipy
+      clang libclang-rt-14-dev)  # the sanitizer and fuzzing stage (scripts/sanitize.sh)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
