@@ -8,7 +8,8 @@ PKGS=(build-essential cmake pkg-config
       python3-numpy python3-h5py python3-matplotlib python3-scipy python3-pandas
       python3-venv        # the truss-report package installed into a venv (test postproc_install)
       help2man            # man pages from --help (cmake --install)
-      python3-openturns)  # independent cross-check of the Sobol' indices and sample marginals (tests)
+      python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests)
+      clang libclang-rt-14-dev)  # the sanitizer and fuzzing stage (scripts/sanitize.sh)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -34,7 +34,7 @@ int main(int argc, char** argv) {
   bool force = false;
   app.add_option("scene", scene_path, "Scene file (TOML), e.g. campaigns/scenes/table1.toml")
       ->required();
-  app.add_option("-o,--output", out_path, "Write the run to this HDF5 file (docs/hdf5-schema.md)");
+  auto* out_opt = app.add_option("-o,--output", out_path, "Write the run to this HDF5 file (docs/hdf5-schema.md)");
   app.add_option("--set", overrides,
                  "Override a scene key, e.g. --set mast.n_bays=12 --set drive.mode=motor "
                  "(repeatable; the value is read as a TOML value, a bare word as a string)")
@@ -58,9 +58,12 @@ int main(int argc, char** argv) {
   }
 
   truss::sim::SceneOptions scene;
+  const bool write_output = out_opt->count() > 0;  // -o "" is an error, not "no output"
   try {
-    scene = truss::io::parse_scene_file(scene_path, overrides);
-    if (!out_path.empty()) truss::io::check_output_path(out_path, force);  // before simulating
+    std::vector<std::string> warnings;
+    scene = truss::io::parse_scene_file(scene_path, overrides, &warnings);
+    for (const auto& w : warnings) std::cerr << w << '\n';
+    if (write_output) truss::io::check_output_path(out_path, force);  // before simulating
   } catch (const truss::io::InputError& e) {
     std::cerr << e.what() << '\n';
     return kExitBadInput;
@@ -79,7 +82,7 @@ int main(int argc, char** argv) {
     return kExitBadInput;
   }
 
-  if (!out_path.empty()) {
+  if (write_output) {
     try {
       truss::io::write_run_h5(out_path, r, truss::io::resolved_scene_toml(scene), force);
     } catch (const truss::io::InputError& e) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -30,7 +31,9 @@ int index_of(const std::vector<std::string>& names, const std::string& s) {
 
 struct Ctx {
   std::string file;
+  std::map<const toml::node*, std::string> set_by;  // values put in the tree by --set: the argument
   [[noreturn]] void fail(const toml::node* at, const std::string& what) const {
+    if (const auto it = set_by.find(at); it != set_by.end()) throw InputError(fmt::format("error: --set {}: {}", it->second, what));
     if (at && at->source().begin.line > 0) throw InputError(fmt::format("error: {}:{}: {}", file, at->source().begin.line, what));
     throw InputError(fmt::format("error: {}: {}", file, what));
   }
@@ -261,7 +264,7 @@ bool is_dispersible_key(const std::string& key) {
 
 namespace {
 
-CampaignOptions parse_campaign_root(toml::table root, const Ctx& c, const std::string& base_dir,
+CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string& base_dir,
                                     const std::vector<std::string>& overrides) {
   const std::string& path = c.file;
   // --set overrides: campaign keys go into the TOML tree (so they are checked like file keys),
@@ -291,6 +294,11 @@ CampaignOptions parse_campaign_root(toml::table root, const Ctx& c, const std::s
     toml::table* t = root[tname].as_table();
     if (!t) throw InputError(fmt::format("error: --set {}: '{}' is not a table in {}", arg, tname, path));
     t->insert_or_assign(kname, *v.get("v"));
+    // Messages about this value (or an element of it) name the --set, not the campaign file.
+    const toml::node* set_node = t->get(kname);
+    c.set_by[set_node] = arg;
+    if (const toml::array* a = set_node->as_array())
+      for (const auto& e : *a) c.set_by[&e] = arg;
   }
 
   CampaignOptions o;
@@ -316,9 +324,15 @@ CampaignOptions parse_campaign_root(toml::table root, const Ctx& c, const std::s
   if (!o.scene_file.empty()) {
     std::filesystem::path p(o.scene_file);
     if (p.is_relative()) p = std::filesystem::path(base_dir) / p;
-    o.base = io::parse_scene_file_with(p.string(), sets);
+    std::string text;
+    try {
+      text = io::read_input_file(p.string(), "scene file");
+    } catch (const InputError& e) {  // blame the campaign line that names the file
+      c.fail(root["scene"]["file"].node(), fmt::format("scene.file = \"{}\": {}", o.scene_file, std::string(e.what()).substr(7)));
+    }
+    o.base = io::parse_scene_text_with(text, p.string(), sets, &o.warnings);
   } else {
-    o.base = io::parse_scene_text_with("", path + " [scene]", sets);
+    o.base = io::parse_scene_text_with("", path + " [scene]", sets, &o.warnings);
   }
   // Campaign runs never record histories (only [output] history_runs do): work nobody reads.
   o.base.run.output_step_s = 0.0;
@@ -352,7 +366,7 @@ CampaignOptions parse_campaign_root(toml::table root, const Ctx& c, const std::s
 
 CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name, const std::string& base_dir,
                                     const std::vector<std::string>& overrides) {
-  Ctx c{source_name};
+  Ctx c{source_name, {}};
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -364,13 +378,13 @@ CampaignOptions parse_campaign_text(std::string_view text, const std::string& so
 }
 
 CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides) {
-  Ctx c{path};
+  Ctx c{path, {}};
   toml::table root;
+  const std::string text = io::read_input_file(path, "campaign file");  // bounded in size
   try {
-    root = toml::parse_file(path);
+    root = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
     const auto& b = e.source().begin;
-    if (b.line == 0) throw InputError(fmt::format("error: {}: cannot read the campaign file: {}", path, e.description()));
     throw InputError(fmt::format("error: {}:{}:{}: {}", path, b.line, b.column, e.description()));
   }
   return parse_campaign_root(std::move(root), c, std::filesystem::path(path).parent_path().string(), overrides);

@@ -58,6 +58,7 @@ struct CampaignOptions {
   std::vector<io::SceneSetting> scene_settings;  // inline tables, overrides and --set, in order
   sim::SceneOptions base;                     // the resolved base scene
   std::vector<DispersionOptions> dispersions;
+  std::vector<std::string> warnings;          // plausibility warnings of the base scene (not written back)
   // Empty, or "field: reason" naming the first inconsistent field. The parser reports the same
   // problems with file and line; this check guards options built in code, where they are used
   // (CampaignContext).

@@ -30,7 +30,7 @@ void put(std::string& out, const T& v) {
 template <class T>
 void put_array(std::string& out, const std::vector<T>& v) {
   put(out, static_cast<std::uint32_t>(v.size()));
-  out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  if (!v.empty()) out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
 }
 
 struct Reader {
@@ -53,7 +53,7 @@ struct Reader {
     if (n != expected) throw std::runtime_error(fmt::format("record has {} values where {} are expected", n, expected));
     need(n * sizeof(T));
     std::vector<T> v(n);
-    std::memcpy(v.data(), b.data() + at, n * sizeof(T));
+    if (n > 0) std::memcpy(v.data(), b.data() + at, n * sizeof(T));  // v.data() may be null for n = 0
     at += n * sizeof(T);
     return v;
   }

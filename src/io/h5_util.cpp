@@ -41,6 +41,14 @@ std::string hdf5_error_text() {
   H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, collect_error, &descs);
   H5Eclear2(H5E_DEFAULT);
   if (descs.empty()) return "unknown HDF5 error";
+  // A failed system call: HDF5's innermost description spans lines and quotes the system's
+  // message ("... errno = 28, error message = 'No space left on device', buf = ..."): keep that.
+  for (auto& d : descs) {
+    const auto at = d.find("error message = '");
+    if (at == std::string::npos) continue;
+    const auto from = at + 17, to = d.find('\'', from);
+    d = d.substr(0, d.find(':')) + ": " + d.substr(from, to == std::string::npos ? std::string::npos : to - from);
+  }
   if (descs.size() == 1 || descs.front() == descs.back()) return descs.front();
   return descs.front() + " (" + descs.back() + ")";
 }
@@ -199,6 +207,13 @@ void commit(const std::string& tmp, const std::string& path, bool force) {
 }
 
 void write_file_atomically(const std::string& path, bool force, const std::function<void(hid_t file)>& write) {
+  // A write that fails (disk full) makes H5Fclose fail too, and HDF5 1.10 then keeps a file
+  // identifier whose structure is half torn down: its exit-time cleanup (H5_term_library, an
+  // atexit handler) crashes on it (SIGSEGV in H5F__close_cb). Every identifier we open is closed
+  // by its Handle, the temporary file is removed below, and the process frees the rest at exit,
+  // so the library's atexit cleanup is not needed: switch it off. This must precede the first
+  // HDF5 call of the process (it is a no-op after); both commands make no HDF5 call before this.
+  H5dont_atexit();
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through exceptions
   const fs::path p(path);
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path();

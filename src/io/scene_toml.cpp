@@ -274,8 +274,67 @@ std::string join_diags(std::vector<Diag> diags) {
 
 namespace {
 
+// Where a key's value came from, for messages: "FILE:LINE", "--set ARG", a campaign's FILE:LINE,
+// or "default".
+std::string origin_text(const std::map<std::string, Origin>& origins, const std::string& key, const std::string& source) {
+  const auto it = origins.find(key);
+  if (it == origins.end()) return "default";
+  if (it->second.line > 0) return fmt::format("{}:{}", source, it->second.line);
+  if (!it->second.set_text.empty()) return "--set " + it->second.set_text;
+  return it->second.where.empty() ? "default" : it->second.where;
+}
+
+// The keys a geometry error of validate_mast involves, from the start of its message.
+std::vector<std::string> geometry_keys(const std::string& msg) {
+  if (msg.rfind("rail:", 0) == 0 || msg.rfind("rail geometry:", 0) == 0)
+    return {"rail.x_m", "rail.y_m", "rail.beta_deg", "mast.strut_length_m"};
+  if (msg.rfind("panels.", 0) == 0)
+    return {"panels.count", "panels.length_m", "panels.tip_height_m", "mast.n_bays", "mast.strut_length_m", "rail.x_m",
+            "rail.y_m", "rail.beta_deg"};
+  return {};
+}
+
+// validate() (with the hard ranges of the key table), then the mast's geometry, then the
+// plausibility warnings (typical ranges) of the keys the user set.
+void check_scene(const SceneOptions& s, const std::string& source_name, const std::map<std::string, Origin>& origins,
+                 std::vector<std::string>* warnings) {
+  std::string bad = s.validate();
+  if (!bad.empty()) {
+    // validate() names the key first: "table.key: reason".
+    const std::string key = bad.substr(0, bad.find(':'));
+    const auto it = origins.find(key);
+    if (it != origins.end() && it->second.line > 0)
+      throw InputError(fmt::format("error: {}:{}: {}", source_name, it->second.line, bad));
+    if (it != origins.end() && !it->second.set_text.empty())
+      throw InputError(
+          fmt::format("error: {}: {} (set by --set {})", source_name, bad, it->second.set_text));
+    if (it != origins.end() && !it->second.where.empty()) throw InputError(fmt::format("error: {}: {}", it->second.where, bad));
+    throw InputError(fmt::format("error: {}: {}", source_name, bad));
+  }
+  bad = sim::validate_mast(sim::build_mast(s), s);
+  if (!bad.empty()) {
+    std::string involved;
+    for (const auto& k : geometry_keys(bad)) {
+      const KeyDesc* d = sim::find_scene_key(k);
+      const auto v = d ? sim::key_value(*d, s) : std::nullopt;
+      involved += fmt::format("\n  {} = {}{} ({})", k, v ? fmt::format("{}", *v) : "unset", d && d->unit != "1" ? " " + std::string(d->unit) : "",
+                              origin_text(origins, k, source_name));
+    }
+    throw InputError(fmt::format("error: {}: {}{}", source_name, bad, involved.empty() ? "" : "\n  keys involved:" + involved));
+  }
+  if (!warnings) return;
+  for (const auto& [key, origin] : origins) {
+    const KeyDesc* d = sim::find_scene_key(key);
+    const auto v = d ? sim::key_value(*d, s) : std::nullopt;
+    if (!v) continue;
+    if (const std::string w = sim::check_typical_range(*d, *v); !w.empty())
+      warnings->push_back(fmt::format("warning: {}: {}", origin_text(origins, key, source_name), w));
+  }
+}
+
 sim::SceneOptions parse_scene(std::string_view text, const std::string& source_name,
-                              const std::vector<SceneSetting>& overrides, bool validate) {
+                              const std::vector<SceneSetting>& overrides, bool validate,
+                              std::vector<std::string>* warnings = nullptr) {
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -309,20 +368,7 @@ sim::SceneOptions parse_scene(std::string_view text, const std::string& source_n
   for (std::size_t i = 0; i < overrides.size(); ++i) apply_override(s, overrides[i], i, diags, origins);
   if (!diags.empty()) throw InputError(join_diags(std::move(diags)));
   if (!validate) return s;
-
-  const std::string bad = s.validate();
-  if (!bad.empty()) {
-    // validate() names the key first: "table.key: reason".
-    const std::string key = bad.substr(0, bad.find(':'));
-    const auto it = origins.find(key);
-    if (it != origins.end() && it->second.line > 0)
-      throw InputError(fmt::format("error: {}:{}: {}", source_name, it->second.line, bad));
-    if (it != origins.end() && !it->second.set_text.empty())
-      throw InputError(
-          fmt::format("error: {}: {} (set by --set {})", source_name, bad, it->second.set_text));
-    if (it != origins.end() && !it->second.where.empty()) throw InputError(fmt::format("error: {}: {}", it->second.where, bad));
-    throw InputError(fmt::format("error: {}: {}", source_name, bad));
-  }
+  check_scene(s, source_name, origins, warnings);
   return s;
 }
 
@@ -342,8 +388,8 @@ sim::SceneOptions parse_scene_text(std::string_view text, const std::string& sou
 }
 
 sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string& source_name,
-                                        const std::vector<SceneSetting>& settings) {
-  return parse_scene(text, source_name, settings, true);
+                                        const std::vector<SceneSetting>& settings, std::vector<std::string>* warnings) {
+  return parse_scene(text, source_name, settings, true, warnings);
 }
 
 sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
@@ -352,28 +398,35 @@ sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
   return parse_scene(text, source_name, as_settings(overrides), false);
 }
 
-sim::SceneOptions parse_scene_file(const std::string& path,
-                                   const std::vector<std::string>& overrides) {
-  return parse_scene_file_with(path, as_settings(overrides));
+sim::SceneOptions parse_scene_file(const std::string& path, const std::vector<std::string>& overrides,
+                                   std::vector<std::string>* warnings) {
+  return parse_scene_file_with(path, as_settings(overrides), warnings);
 }
 
-sim::SceneOptions parse_scene_file_with(const std::string& path,
-                                        const std::vector<SceneSetting>& overrides) {
+std::string read_input_file(const std::string& path, const char* what, std::size_t max_bytes) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec))
-    throw InputError(fmt::format("error: {}: cannot read scene file: is a directory", path));
+    throw InputError(fmt::format("error: {}: cannot read {}: is a directory", path, what));
   errno = 0;
   std::ifstream in(path, std::ios::binary);
   if (!in) {
     const int err = errno;
-    throw InputError(fmt::format("error: {}: cannot read scene file: {}", path,
-                                 err ? std::strerror(err) : "cannot open"));
+    throw InputError(fmt::format("error: {}: cannot read {}: {}", path, what, err ? std::strerror(err) : "cannot open"));
   }
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad())
-    throw InputError(fmt::format("error: {}: cannot read scene file: read error", path));
-  return parse_scene(ss.str(), path, overrides, true);
+  // Read at most max_bytes + 1: a device such as /dev/zero or a huge file is refused, not slurped.
+  std::string text(max_bytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  if (in.bad()) throw InputError(fmt::format("error: {}: cannot read {}: read error", path, what));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > max_bytes)
+    throw InputError(fmt::format("error: {}: cannot read {}: larger than the limit of {} bytes ({} MiB)", path, what,
+                                 max_bytes, max_bytes >> 20));
+  return text;
+}
+
+sim::SceneOptions parse_scene_file_with(const std::string& path, const std::vector<SceneSetting>& overrides,
+                                        std::vector<std::string>* warnings) {
+  return parse_scene(read_input_file(path, "scene file"), path, overrides, true, warnings);
 }
 
 std::vector<std::string> known_scene_keys() {

@@ -22,9 +22,20 @@ struct InputError : std::runtime_error {
 };
 
 // Reads and parses a scene file, then applies the overrides ("table.key=value", as given to
-// --set, in order) and SceneOptions::validate(). Throws InputError.
+// --set, in order), SceneOptions::validate() (with every numeric key's hard range, from the key
+// table) and the mast's geometry (an error names the keys involved and where each came from).
+// Throws InputError. If `warnings` is given, it receives one line per key set outside its
+// typical range ("warning: FILE:LINE: drive.stall_torque_Nm = 5.2 N m is outside ...").
 sim::SceneOptions parse_scene_file(const std::string& path,
-                                   const std::vector<std::string>& overrides = {});
+                                   const std::vector<std::string>& overrides = {},
+                                   std::vector<std::string>* warnings = nullptr);
+
+// Input files (scenes, campaigns) are bounded: a larger file, or a device like /dev/zero, is
+// refused with an InputError naming it.
+inline constexpr std::size_t kMaxInputFileBytes = std::size_t{16} << 20;
+// The whole file as text; InputError ("error: PATH: cannot read WHAT: reason") if it is a
+// directory, cannot be read, or holds more than max_bytes.
+std::string read_input_file(const std::string& path, const char* what, std::size_t max_bytes = kMaxInputFileBytes);
 
 // Same, for scene text already in memory; source_name is used in messages (e.g. the file name).
 sim::SceneOptions parse_scene_text(std::string_view text, const std::string& source_name,
@@ -37,9 +48,11 @@ struct SceneSetting {
   std::string where;
 };
 // As parse_scene_file / parse_scene_text, with settings that carry their origin.
-sim::SceneOptions parse_scene_file_with(const std::string& path, const std::vector<SceneSetting>& settings);
+sim::SceneOptions parse_scene_file_with(const std::string& path, const std::vector<SceneSetting>& settings,
+                                        std::vector<std::string>* warnings = nullptr);
 sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string& source_name,
-                                        const std::vector<SceneSetting>& settings);
+                                        const std::vector<SceneSetting>& settings,
+                                        std::vector<std::string>* warnings = nullptr);
 
 // As parse_scene_text but without SceneOptions::validate(): checks syntax, keys, types and
 // enumeration values only. For tools that change the options further and validate afterwards.

@@ -1,5 +1,9 @@
 // Adaptive Gauss-Kronrod (7, 15) quadrature (Piessens et al., QUADPACK's qk15 nodes and weights),
 // bisecting until |K15 - G7| <= abs_tol on each piece (the tolerance halves with each split).
+// A piece whose estimate is not finite is not split (a NaN error estimate never passes the
+// tolerance test and would otherwise bisect to the depth cap, 2^30 pieces): its non-finite K15
+// is returned and propagates to the caller, whose checks name the run's failure. Depth cap 30
+// for finite integrands as before.
 // Pure: standard library only.
 #pragma once
 #include <cmath>
@@ -27,6 +31,7 @@ double integrate_gk15(F&& f, double a, double b, double abs_tol, int depth = 0) 
     if (j % 2 == 1) g += wg[j / 2] * (f1 + f2);
   }
   k *= h; g *= h;
+  if (!std::isfinite(k) || !std::isfinite(g)) return k;
   if (std::abs(k - g) <= abs_tol || depth >= 30) return k;
   return integrate_gk15(f, a, c, 0.5 * abs_tol, depth + 1) + integrate_gk15(f, c, b, 0.5 * abs_tol, depth + 1);
 }

@@ -17,6 +17,7 @@
 #include "campaign/journal.hpp"
 #include "campaign/nominal.hpp"
 #include "campaign/progress.hpp"
+#include "campaign/resources.hpp"
 #include "campaign/results.hpp"
 #include "campaign/run_record.hpp"
 #include "io/h5_output.hpp"
@@ -79,11 +80,13 @@ struct Rank0 {
 
 // Rank 0: output and journal checks; opens or creates the journal. Throws io::InputError for
 // anything the user must decide.
-void prepare_output(const CommandOptions& o, const std::string& campaign_text, Rank0& r0) {
+void prepare_output(const CommandOptions& o, const campaign::CampaignContext& ctx, const std::string& campaign_text, Rank0& r0) {
   if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
   if (o.resume && fs::exists(o.output_path))
     throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
   io::check_output_path(o.output_path, o.force);
+  // Memory and disk for every run, before the journal exists (a refusal leaves nothing behind).
+  if (const std::string e = campaign::check_resources(ctx, o.output_path); !e.empty()) throw io::InputError(e);
   const std::string jpath = o.output_path + ".journal";
   const bool has_journal = fs::exists(fs::symlink_status(jpath));
   if (o.resume) {
@@ -102,7 +105,11 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, R
     if (!o.force)
       throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
                                        "(same campaign and --set options) or start over with --force", jpath));
-    campaign::Journal::remove_unused(jpath);
+    try {
+      campaign::Journal::remove_unused(jpath);
+    } catch (const campaign::JournalRefused& e) {  // a live campaign holds it: exit 2, as --resume does
+      throw io::InputError(std::string("error: --force: ") + e.what());
+    }
   }
   try {
     r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::create(jpath, campaign_text));
@@ -296,6 +303,7 @@ std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions&
   try {
     if (root) {
       ctx.emplace(campaign::parse_campaign_file(o.campaign_path, o.sets));
+      for (const auto& w : ctx->options.warnings) std::cerr << w << '\n';
       campaign_text = campaign::resolved_campaign_toml(ctx->options);
     }
   } catch (const io::InputError& e) {
@@ -328,11 +336,12 @@ std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions&
 }
 
 // Rank 0: the output and journal checks, agreed on by every rank.
-int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const std::string& campaign_text, Rank0& r0) {
+int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const campaign::CampaignContext& ctx,
+                       const std::string& campaign_text, Rank0& r0) {
   int status = kExitOk;
   if (root) {
     try {
-      prepare_output(o, campaign_text, r0);
+      prepare_output(o, ctx, campaign_text, r0);
     } catch (const io::InputError& e) {
       std::cerr << e.what() << '\n';
       status = kExitBadInput;
@@ -359,7 +368,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   std::string campaign_text;
   if (auto rc = load_campaign(comm, root, o, ctx, campaign_text)) return *rc;
   Rank0 r0;
-  if (int rc = prepare_output_all(comm, root, o, campaign_text, r0); rc != kExitOk) return rc;
+  if (int rc = prepare_output_all(comm, root, o, *ctx, campaign_text, r0); rc != kExitOk) return rc;
 
   const campaign::CampaignOptions& c = ctx->options;
   std::unique_ptr<campaign::ResultTable> table;

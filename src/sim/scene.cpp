@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "model/bay.hpp"
+#include "sim/scene_keys.hpp"
 #include "stages/stage_plan.hpp"
 
 namespace truss::sim {
@@ -56,6 +57,9 @@ std::string SceneOptions::validate() const {
     if (panels.tip_height_m) CHECK(positive("panels.tip_height_m", *panels.tip_height_m));
   }
   CHECK(run.validate());
+  // Magnitudes: every numeric key against its hard range (sim/scene_keys.hpp), so that 1e308
+  // never reaches the physics.
+  CHECK(check_scene_ranges(*this));
 #undef CHECK
   return {};
 }
@@ -104,7 +108,7 @@ std::string validate_mast_params(const model::MastParams& mast) {
     if (!(mast.frame(k).side_m > 0.0)) return fmt::format("mast.frame_side_m: frame {} has {}", k, mast.frame(k).side_m);
     if (!(mast.frame(k).mass_kg > 0.0)) return fmt::format("mast.frame_mass_kg: frame {} has {}", k, mast.frame(k).mass_kg);
   }
-  return {};
+  return check_mast_ranges(mast);  // dispersed per-bay and per-frame values: the keys' hard ranges
 }
 
 std::string validate_panels(const model::MastParams& mast) {

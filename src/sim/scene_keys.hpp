@@ -17,6 +17,16 @@
 namespace truss::sim {
 
 enum class KeyKind { real, opt_real, integer, enumeration };
+
+// A closed or open interval of values in the key's unit.
+struct KeyRange {
+  double lo = 0, hi = 0;
+  bool lo_open = false, hi_open = false;
+  bool contains(double v) const {
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+  }
+  std::string text() const;  // "(0, 1000]"
+};
 // How a campaign may disperse a key: not at all, per run, or per bay / per frame (which also
 // allows per run: build_mast spreads a per-run value over the bays or frames).
 enum class KeyScope { fixed, run, bay, frame };
@@ -39,12 +49,32 @@ struct SceneKey {
   std::size_t (*get_enum)(const SceneOptions&) = nullptr;           // enumeration
   double* (*bay_field)(model::BayParams&) = nullptr;                // scope bay
   double* (*frame_field)(model::FrameParams&) = nullptr;            // scope frame
+  // Numeric keys. hard: outside it a value is refused (parse, --set, campaign draws): it keeps
+  // absurd magnitudes (1e308) away from the physics, with margins of about 1000 around any
+  // plausible mast. typical: a value outside it runs but draws a plausibility warning (a torque
+  // typed in N m where mN m was meant, a length in mm). Semantic checks (beta in (0, 90), an even
+  // panel count) stay in SceneOptions::validate().
+  KeyRange hard{}, typical{};
 
   std::string dotted() const { return std::string(table) + "." + std::string(key); }
   bool is_dispersible() const { return scope != KeyScope::fixed; }
 };
 
 const std::vector<SceneKey>& scene_keys();
+
+// Empty if v lies in the key's hard range (enumerations: always), else
+// "table.key: must lie in RANGE UNIT, got V".
+std::string check_hard_range(const SceneKey& k, double v);
+// Empty if v lies in the key's typical range, else a sentence naming the key, the value, the
+// typical range, and a likely unit slip when v / 1000 (or v * 1000) would be typical.
+std::string check_typical_range(const SceneKey& k, double v);
+// The first key of the scene whose value lies outside its hard range ("" if none): the values
+// each key's get_real/get_int/get_opt returns (unset optional keys are skipped).
+std::string check_scene_ranges(const SceneOptions& s);
+// Per-bay and per-frame values of a (dispersed) mast against the hard ranges of their keys.
+std::string check_mast_ranges(const model::MastParams& m);
+// The value of a numeric key in a scene; nullopt for enumerations and unset optional keys.
+std::optional<double> key_value(const SceneKey& k, const SceneOptions& s);
 // Cheap look-ups by table and key, or by "table.key"; nullptr if unknown.
 const SceneKey* find_scene_key(std::string_view table, std::string_view key);
 const SceneKey* find_scene_key(std::string_view dotted);

@@ -26,8 +26,18 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   const double y_begin = open ? spec_.q_start : calc_on_rail(mast.rail, l, spec_.q_start).Y;
   const double y_finish = open ? spec_.q_end : calc_on_rail(mast.rail, l, spec_.q_end).Y;
   const double t0 = start.t_s, t1 = t0 + std::abs(y_finish - y_begin) / v;
-  auto eval = [&](double tt) {
-    ++out.evals;
+  // The run's wall-time cap (issue 13): checked at the start and every 1024 evaluations; past it,
+  // evaluations return NaN (the quadrature stops on a non-finite piece) and the phase ends with
+  // reason wall_time at its start time.
+  bool timed_out = std::chrono::steady_clock::now() > sinks.deadline;
+  auto timed_out_at = [&] {
+    out.reason = PhaseEndReason::wall_time;
+    out.t_end_s = t0;
+    out.drive_work_J = 0.0;
+    return out;
+  };
+  if (timed_out) return timed_out_at();
+  auto eval_point = [&](double tt) {
     tt = std::clamp(tt, t0, t1);
     if (open) {
       // distance from the phase end, measured from the nearer end for exactness
@@ -39,6 +49,12 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
     const double x = calc_x_on_rail_from_travel(mast.rail, l, e);
     const OnRailKinematics kin = calc_on_rail(mast.rail, l, x);
     return phase_.calc_point(x, dir * v / kin.dY, scratch);
+  };
+  auto eval = [&](double tt) {
+    if ((++out.evals & 1023) == 0 && std::chrono::steady_clock::now() > sinks.deadline) timed_out = true;
+    PhasePoint p = eval_point(tt);
+    if (timed_out) p.drive_force_N = kNaN;
+    return p;
   };
   // Smooth pieces: split where bay m's diagonals become taut (a kink of the force).
   std::vector<double> cuts{t0, t1};
@@ -67,13 +83,16 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
     out.drive_work_J += numerics::integrate_gk15([&](double tt) { const PhasePoint p = eval(tt); return p.drive_force_N * p.u_m_per_s; },
                                                  a, b, 1e-11 * f_scale * v * (b - a));  // |K15 - G7| bound: K15 is far better
   }
+  if (timed_out) return timed_out_at();
   sinks.peaks.absorb(sinks.phase_peaks, [&](double tt, const HermiteSpan&) { return eval(tt); }, 1e-12 * std::max(1.0, t1));
-  const bool in_time = sinks.history.sample(eval, t0, t1, m, sinks.deadline);
+  // The history and the end point use the plain evaluation: they are exact whatever the clock says.
+  const bool in_time = sinks.history.sample([&](double tt) { ++out.evals; return eval_point(tt); }, t0, t1, m, sinks.deadline);
   // The wall-time cap holds in closed form too (long histories are the cost here): the phase's
   // loads and work are complete, its history may not be; the run ends at the phase's end.
   if (!in_time || std::chrono::steady_clock::now() > sinks.deadline) out.reason = PhaseEndReason::wall_time;
   out.t_end_s = t1;
-  out.end = eval(t1);
+  out.end = eval_point(t1);
+  ++out.evals;
   out.end.q = spec_.q_end;  // the event is exact in closed form
   return out;
 }

@@ -150,6 +150,67 @@ fi
 stray=$(find . -maxdepth 1 -name '.*.tmp.*' | head -5)
 if [ -z "$stray" ]; then ok "no temporary files left"; else bad "temporary files left: $stray"; fi
 
+# --- hostile input (issue 13) ------------------------------------------------------------------
+touch "$WORK/.start"  # nothing_written: only files newer than this count
+sleep 1
+run huge_mass 2 "$TABLE1" --set mast.strut_mass_kg=1e308 --set run.max_wall_time_s=5 --set run.output_step_s=0 -o huge_mass.h5
+expect_in huge_mass.err "--set mast.strut_mass_kg=1e308" "huge_mass: message quotes the --set"
+expect_in huge_mass.err "must lie in (0, 10000] kg" "huge_mass: message gives the hard range"
+nothing_written huge_mass
+
+run empty_output 2 "$TABLE1" -o ""
+expect_in empty_output.err "output file name is empty" "empty_output: message"
+nothing_written empty_output
+
+run dev_zero 2 /dev/zero -o dev_zero.h5
+expect_in dev_zero.err "larger than the limit" "dev_zero: input bounded"
+nothing_written dev_zero
+
+# plausibility: runs (exit 0) with a warning naming key, origin and typical range
+scene torque_mm.toml '[mast]\nn_bays = 3\n[drive]\nmode = "motor"\nstall_torque_Nm = 5.2\n'
+run plausibility 0 torque_mm.toml --set drive.no_load_speed_rad_per_s=75
+expect_in plausibility.err "warning: torque_mm.toml:5: drive.stall_torque_Nm = 5.2 N m is outside the typical range [0.0001, 1] N m" \
+  "plausibility: warning with origin and typical range"
+
+run geometry 2 "$TABLE1" --set rail.beta_deg=80 -o geometry.h5
+expect_in geometry.err "rail.beta_deg = 80 deg (--set rail.beta_deg=80)" "geometry: the key and its --set"
+expect_in geometry.err "table1.toml:18)" "geometry: a key from the file with its line"
+nothing_written geometry
+
+# the wall-time cap holds in velocity mode too (kinematic phases): a named status, exit 1
+run wall_cap 1 "$TABLE1" --set run.max_wall_time_s=1e-6 --json
+if "$PY" -c 'import json,sys; d=json.load(sys.stdin); assert d["status"] == "wall-time limit" and "wall-time cap" in d["message"]' <wall_cap.out 2>wall_cap.json.err; then
+  ok "wall_cap: status wall-time limit with its reason"
+else
+  bad "wall_cap: not stopped by the cap"
+fi
+
+# --- a full disk while writing the HDF5 file: exit 3, a clear message, no crash, nothing left ----
+# A size-limited file (RLIMIT_FSIZE, SIGXFSZ ignored: writes fail with EFBIG) works without root;
+# a 1 MiB tmpfs (ENOSPC) when this runs as root.
+( trap '' XFSZ; ulimit -f 200; exec "$SIM" "$TABLE1" --set run.output_step_s=0.001 -o fsize.h5 ) >fsize.out 2>fsize.err
+rc=$?
+if [ "$rc" -eq 3 ]; then ok "fsize: exit 3"; else bad "fsize: exit $rc, expected 3"; sed 's/^/     | /' fsize.err | head; fi
+expect_in fsize.err "File too large" "fsize: the system's reason"
+if [ -z "$(find . -maxdepth 1 \( -name 'fsize.h5' -o -name '.fsize.h5.tmp.*' \))" ]; then ok "fsize: nothing left"; else bad "fsize: files left"; fi
+mkdir -p full
+if [ "$(id -u)" -eq 0 ] && mount -t tmpfs -o size=1m tmpfs full 2>/dev/null; then
+  # data writes fail (0.0001, 0.001); with 800 KiB taken by another file, a smaller file (0.03)
+  # fails later, in the final flush
+  for step in 0.0001 0.001 0.03; do
+    if [ "$step" = 0.03 ]; then head -c 819200 /dev/zero >full/filler; fi
+    "$SIM" "$TABLE1" --set run.output_step_s=$step -o full/r.h5 >full.out 2>full.err
+    rc=$?
+    rm -f full/filler
+    if [ "$rc" -eq 3 ]; then ok "tmpfs step $step: exit 3"; else bad "tmpfs step $step: exit $rc, expected 3"; sed 's/^/     | /' full.err | head -5; fi
+    expect_in full.err "No space left on device" "tmpfs step $step: the system's reason"
+    if [ -z "$(ls -A full)" ]; then ok "tmpfs step $step: nothing left"; else bad "tmpfs step $step: left $(ls -A full)"; fi
+  done
+  umount full
+else
+  echo "skip tmpfs disk-full checks (not root or no tmpfs)"
+fi
+
 echo "$passed passed, $failed failed"
 if [ "$failed" -eq 0 ]; then
   cd / && rm -rf "$WORK"

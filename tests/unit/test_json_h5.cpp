@@ -54,17 +54,33 @@ struct Json {
   std::string str;
   std::vector<Json> items;
   std::vector<std::pair<std::string, Json>> members;
-  const Json& at(const std::string& key) const {
-    for (const auto& [k, v] : members)
-      if (k == key) return v;
-    throw std::runtime_error("no key " + key);
-  }
-  bool has(const std::string& key) const {
-    for (const auto& [k, v] : members)
-      if (k == key) return true;
-    return false;
-  }
+  // Defined below, where Json is complete: clang 14 with libstdc++ 12 otherwise instantiates
+  // pair<string, Json> (and its explicit(...) default-constructor test) on an incomplete Json.
+  Json();
+  Json(const Json&);
+  Json(Json&&) noexcept;
+  Json& operator=(const Json&);
+  Json& operator=(Json&&) noexcept;
+  ~Json();
+  const Json& at(const std::string& key) const;
+  bool has(const std::string& key) const;
 };
+Json::Json() = default;
+Json::Json(const Json&) = default;
+Json::Json(Json&&) noexcept = default;
+Json& Json::operator=(const Json&) = default;
+Json& Json::operator=(Json&&) noexcept = default;
+Json::~Json() = default;
+const Json& Json::at(const std::string& key) const {
+  for (const auto& [k, v] : members)
+    if (k == key) return v;
+  throw std::runtime_error("no key " + key);
+}
+bool Json::has(const std::string& key) const {
+  for (const auto& [k, v] : members)
+    if (k == key) return true;
+  return false;
+}
 
 class JsonParser {
  public:

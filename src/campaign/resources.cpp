@@ -1,0 +1,90 @@
+#include "campaign/resources.hpp"
+
+#include <sys/resource.h>
+#include <sys/statvfs.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <fmt/format.h>
+
+namespace truss::campaign {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string human(double bytes) {
+  if (!std::isfinite(bytes)) return "unlimited";
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB", "ZiB"};
+  int u = 0;
+  while (bytes >= 1024.0 && u < 7) { bytes /= 1024.0; ++u; }
+  return fmt::format("{:.3g} {}", bytes, units[u]);
+}
+}  // namespace
+
+ResourceEstimate estimate_resources(const CampaignContext& ctx) {
+  const OutputColumns& c = ctx.columns;
+  const double n = static_cast<double>(ctx.options.ensemble.n_runs);
+  // Numeric values of one run: f64 and i64 outputs, per-bay outputs, dispersion inputs, wall
+  // time, rank and session (8 bytes each).
+  const double values = static_cast<double>(c.f64.size() + c.i64.size() + c.bay.size() * static_cast<std::size_t>(c.n_bays_max) +
+                                            static_cast<std::size_t>(c.n_inputs) + 3);
+  ResourceEstimate e;
+  // Result table: the values, a status byte, a done byte, an empty message (sizeof std::string);
+  // the journal scan: a done byte and an 8-byte to-do entry.
+  e.bytes_per_run = 8.0 * values + 2.0 + static_cast<double>(sizeof(std::string)) + 9.0;
+  e.memory_bytes = n * e.bytes_per_run;
+  e.output_bytes = n * (8.0 * values + 1.0);      // one row of /runs per run, uncompressed
+  e.journal_bytes = n * (8.0 * values + 1.0 + 24.0);  // a record per run with its frame header and counts
+  return e;
+}
+
+double available_memory_bytes() {
+  double avail = kInf;
+  std::ifstream mi("/proc/meminfo");
+  for (std::string line; std::getline(mi, line);)
+    if (line.rfind("MemAvailable:", 0) == 0) {
+      std::istringstream ss(line.substr(13));
+      double kib = 0;
+      if (ss >> kib) avail = kib * 1024.0;
+    }
+  std::ifstream cg("/sys/fs/cgroup/memory.max");
+  std::string v;
+  if (cg >> v && v != "max") {
+    try { avail = std::min(avail, std::stod(v)); } catch (const std::exception&) {}
+  }
+  rlimit rl{};
+  if (::getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) avail = std::min(avail, static_cast<double>(rl.rlim_cur));
+  return avail;
+}
+
+double free_disk_bytes(const std::string& dir) {
+  struct statvfs st{};
+  if (::statvfs(dir.c_str(), &st) != 0) return kInf;
+  return static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
+}
+
+std::string check_resources(const CampaignContext& ctx, const std::string& output_path) {
+  const ResourceEstimate e = estimate_resources(ctx);
+  const std::int64_t n = ctx.options.ensemble.n_runs;
+  const double mem = available_memory_bytes();
+  if (e.memory_bytes > 0.8 * mem)
+    return fmt::format("error: ensemble.n_runs = {}: rank 0 would hold about {} of results in memory ({} bytes per run), "
+                       "more than 80 % of the {} available; use fewer runs (at most about {})",
+                       n, human(e.memory_bytes), e.bytes_per_run, human(mem),
+                       static_cast<std::int64_t>(std::floor(0.8 * mem / e.bytes_per_run)));
+  const std::filesystem::path p(output_path);
+  const std::string dir = p.has_parent_path() ? p.parent_path().string() : ".";
+  const double disk = free_disk_bytes(dir);
+  const double need = e.output_bytes + e.journal_bytes;
+  if (need > disk)
+    return fmt::format("error: ensemble.n_runs = {}: the results file (about {}) and the journal (about {}) need more than "
+                       "the {} free in {}; free space or use fewer runs",
+                       n, human(e.output_bytes), human(e.journal_bytes), human(disk), dir);
+  return {};
+}
+
+}  // namespace truss::campaign

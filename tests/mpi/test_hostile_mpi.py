@@ -1,0 +1,142 @@
+#!/usr/bin/python3
+"""truss-campaign against hostile input and a failing machine (issue 13): resource limits before
+any work, messages that name the --set or the campaign line, a refused --force exits 2, a full
+disk while rank 0 writes the results, and the per-run wall-time cap.
+
+  test_hostile_mpi.py --driver truss-campaign --repo SRC --scratch DIR
+"""
+import argparse
+import fcntl
+import os
+import shutil
+import subprocess
+import sys
+
+import h5py
+import numpy as np
+
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
+           OMPI_MCA_rmaps_base_oversubscribe="1")
+
+
+def mpirun(args, ranks, extra):
+    cmd = ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, *extra]
+    return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=300)
+
+
+def check(cond, what):
+    if not cond:
+        raise AssertionError(what)
+    print("  ok:", what)
+
+
+def first_line(p):
+    return (p.stderr.strip().splitlines() or [""])[0][:160]
+
+
+def resources(args, d):
+    """n_runs too large for memory: exit 2 before any work, the estimate in the message, no
+    journal and no output (was: std::bad_alloc, exit 134, a journal that blocks the next start)."""
+    camp = os.path.join(args.repo, "campaigns/bay_count.toml")
+    out = os.path.join(d, "r.h5")
+    p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=100000000000", "--progress", "none"])
+    check(p.returncode == 2 and "in memory" in p.stderr and "bytes per run" in p.stderr
+          and not os.path.exists(out + ".journal") and not os.path.exists(out),
+          f"n_runs = 1e11: exit 2, '{first_line(p)}', nothing written")
+    for sampling in ("monte_carlo", "sobol", "latin_hypercube", "saltelli"):
+        p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=9223372036854775807",
+                             "--set", f"ensemble.sampling={sampling}", "--progress", "none"])
+        check(p.returncode == 2 and p.stderr.count("error:") == 1 and not os.listdir(d),
+              f"n_runs = 2^63-1 with {sampling}: exit 2, '{first_line(p)}', nothing written")
+
+
+def messages(args, d):
+    """Each message names where the bad value came from."""
+    camp = os.path.join(args.repo, "campaigns/table1_dispersed.toml")
+    out = os.path.join(d, "m.h5")
+    for s, words in (("campaign.name=1", "--set campaign.name=1: campaign.name"),
+                     ("ensemble.n_run=5", "--set ensemble.n_run=5: unknown key"),
+                     ("mast.frame_mass_kg=1e308", "--set mast.frame_mass_kg=1e308")):
+        p = mpirun(args, 2, [camp, "-o", out, "--set", s])
+        check(p.returncode == 2 and words in p.stderr, f"--set {s}: exit 2, '{first_line(p)}'")
+    bad = os.path.join(d, "slash.toml")
+    open(bad, "w").write('[ensemble]\nn_runs = 4\n\n[scene]\nfile = "/"\n')
+    p = mpirun(args, 2, [bad, "-o", out])
+    check(p.returncode == 2 and f"{bad}:5: scene.file" in p.stderr, f"file = \"/\": the campaign's line, '{first_line(p)}'")
+    zero = os.path.join(d, "zero.toml")
+    open(zero, "w").write('[ensemble]\nn_runs = 4\n[scene]\nfile = "/dev/zero"\n')
+    p = mpirun(args, 2, [zero, "-o", out])
+    check(p.returncode == 2 and "larger than the limit" in p.stderr, "scene file /dev/zero: bounded, exit 2")
+    p = mpirun(args, 2, [camp, "-o", out, "--set", "drive.speed_m_per_s=100", "--set", "ensemble.n_runs=2",
+                         "--progress", "none"])
+    check("warning: --set drive.speed_m_per_s=100" in p.stderr and p.stderr.count("warning:") == 1,
+          "plausibility warning printed once (rank 0)")
+    for f in os.listdir(d):
+        if not f.endswith(".toml"):
+            os.remove(os.path.join(d, f))
+
+
+def force_refused(args, d):
+    """--force on a journal that a live campaign holds: exit 2, as the same refusal with --resume."""
+    camp = os.path.join(args.repo, "campaigns/table1_dispersed.toml")
+    out = os.path.join(d, "f.h5")
+    with open(out + ".journal", "w") as j:
+        fcntl.flock(j, fcntl.LOCK_EX)  # what a running truss-campaign does
+        p = mpirun(args, 2, [camp, "-o", out, "--force"])
+        check(p.returncode == 2 and "in use" in p.stderr, f"--force on a held journal: exit 2, '{first_line(p)}'")
+    os.remove(out + ".journal")
+
+
+def disk_full(args, d):
+    """Rank 0's results file on a 1 MiB tmpfs (histories make it too large): exit 3, the system's
+    reason, no crash (was: SIGSEGV in HDF5's exit-time cleanup), no temporary file left."""
+    full = os.path.join(d, "full")
+    os.makedirs(full)
+    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", full]).returncode != 0:
+        print("  skip: disk full (needs root and tmpfs)")
+        return
+    try:
+        camp = os.path.join(args.repo, "campaigns/table1_dispersed.toml")
+        out = os.path.join(full, "r.h5")
+        p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=4", "--set", "output.history_runs=[0]",
+                             "--set", "output.history_step_s=0.0001", "--progress", "none"])
+        left = [f for f in os.listdir(full) if f != "r.h5.journal"]
+        check(p.returncode == 3 and "No space left on device" in p.stderr and not left,
+              f"disk full on rank 0: exit {p.returncode} (3 expected), '{first_line(p)}', left {left}")
+    finally:
+        subprocess.run(["umount", full])
+
+
+def wall_time(args, d):
+    """max_run_wall_time_s holds in a campaign: a cap of 1 microsecond stops every run with the
+    named status wall_time_limit (the runs need milliseconds), and the campaign completes."""
+    camp = os.path.join(args.repo, "campaigns/table1_dispersed.toml")
+    out = os.path.join(d, "w.h5")
+    p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=6", "--set", "ensemble.max_run_wall_time_s=1e-6",
+                         "--progress", "none"])
+    check(p.returncode == 0, f"campaign with a tiny wall-time cap: exit 0 ({first_line(p)})")
+    with h5py.File(out, "r") as f:
+        names = [s.decode() for s in f["stats/status_names"][:]]
+        status = f["runs/status"][:]
+        msgs = [m.decode() if isinstance(m, bytes) else m for m in f["runs/message"][:]]
+    w = [i for i, n in enumerate(names) if "wall" in n][0]
+    check(np.all(status == w) and all("wall-time cap" in m for m in msgs), "every run: wall_time_limit with its reason")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--driver", required=True)
+    ap.add_argument("--repo", required=True)
+    ap.add_argument("--scratch", required=True)
+    args = ap.parse_args()
+    for case in (resources, messages, force_refused, disk_full, wall_time):
+        d = os.path.join(args.scratch, case.__name__)
+        shutil.rmtree(d, ignore_errors=True)
+        os.makedirs(d)
+        print(f"{case.__name__}:")
+        case(args, d)
+    print("passed")
+
+
+if __name__ == "__main__":
+    main()
