@@ -1,0 +1,276 @@
+#include "campaign/result_store.hpp"
+
+#include <algorithm>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <hdf5_hl.h>
+
+namespace truss::campaign {
+
+using namespace io::h5;
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// zlib level 1: most of the gain of higher levels on these columns (shuffled float64) at a
+// fraction of the time, which rank 0 spends between results (docs/benchmarks.md).
+constexpr unsigned kDeflateLevel = 1;
+
+Handle make_group(hid_t loc, const std::string& name) {
+  return Handle(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create group " + name);
+}
+
+// A chunked, compressed dataset of n rows (x width columns when width > 0), chunks of `chunk`
+// rows by one column: a column reads back as whole chunks. Byte shuffle then deflate: both are
+// pure functions of a chunk's values, so the stored values, and each chunk's bytes, do not depend
+// on the ranks or the order in which runs finished.
+Handle make_chunked(hid_t loc, const std::string& name, hid_t type, const char* units, std::int64_t n,
+                    std::int64_t width, std::int64_t chunk) {
+  const hsize_t dims[2] = {static_cast<hsize_t>(n), static_cast<hsize_t>(width)};
+  Handle space(H5Screate_simple(width > 0 ? 2 : 1, dims, nullptr), H5Sclose, "dataspace for " + name);
+  Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "dataset properties for " + name);
+  if (n > 0) {
+    const hsize_t cdims[2] = {static_cast<hsize_t>(std::min(chunk, n)), 1};
+    check(H5Pset_chunk(dcpl.get(), width > 0 ? 2 : 1, cdims), "chunk " + name);
+    if (H5Tis_variable_str(type) <= 0) check(H5Pset_shuffle(dcpl.get()), "shuffle " + name);
+    check(H5Pset_deflate(dcpl.get(), kDeflateLevel), "deflate " + name);
+  }
+  Handle ds(H5Dcreate2(loc, name.c_str(), type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose,
+            "create dataset " + name);
+  write_string_attribute(ds.get(), "units", units);
+  return ds;
+}
+
+// A dimension scale: values first .. first + n - 1, named `name` (xarray's dimension name).
+Handle make_scale(hid_t loc, const std::string& name, std::int64_t first, std::int64_t n) {
+  std::vector<std::int64_t> v(static_cast<std::size_t>(n));
+  for (std::int64_t i = 0; i < n; ++i) v[static_cast<std::size_t>(i)] = first + i;
+  write_array(loc, name, "1", v.data(), v.size());
+  Handle ds(H5Dopen2(loc, name.c_str(), H5P_DEFAULT), H5Dclose, "open " + name);
+  check(H5DSset_scale(ds.get(), name.c_str()), "make " + name + " a dimension scale");
+  return ds;
+}
+
+void attach(hid_t ds, hid_t scale, unsigned dim, const std::string& what) {
+  check(H5DSattach_scale(ds, scale, dim), "attach a dimension scale to " + what);
+}
+
+// Writes rows [first, first + rows) of `ds` from memory laid out as rows x mem_width values,
+// columns [mem_col, mem_col + width) (width 0: a 1-D dataset, one column).
+void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, std::int64_t rows, std::int64_t width,
+                std::int64_t mem_width, std::int64_t mem_col, const std::string& what) {
+  const hsize_t w = static_cast<hsize_t>(std::max<std::int64_t>(width, 1));
+  Handle fspace(H5Dget_space(ds), H5Sclose, "space of " + what);
+  const hsize_t fstart[2] = {static_cast<hsize_t>(first), 0}, fcount[2] = {static_cast<hsize_t>(rows), w};
+  check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, fstart, nullptr, fcount, nullptr), "select " + what);
+  const hsize_t mdims[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(mem_width)};
+  Handle mspace(H5Screate_simple(2, mdims, nullptr), H5Sclose, "memory space of " + what);
+  const hsize_t mstart[2] = {0, static_cast<hsize_t>(mem_col)};
+  check(H5Sselect_hyperslab(mspace.get(), H5S_SELECT_SET, mstart, nullptr, fcount, nullptr), "select memory " + what);
+  check(H5Dwrite(ds, mem_type, mspace.get(), fspace.get(), H5P_DEFAULT, data), "write " + what);
+}
+
+}  // namespace
+
+struct ResultStore::Chunk {
+  std::int64_t first = 0, rows = 0, filled = 0;
+  std::vector<std::uint8_t> have;
+  std::vector<std::int8_t> status;
+  std::vector<std::string> message;
+  std::vector<double> f64;              // [column][row]
+  std::vector<std::int64_t> i64;        // [column][row]
+  std::vector<double> bays;             // [field][row][bay]
+  std::vector<double> inputs;           // [row][dimension]
+  std::vector<double> wall;
+  std::vector<std::int64_t> index, rank, session;
+};
+
+struct ResultStore::Datasets {
+  std::vector<Handle> keep;  // groups
+  Handle status_type = status_enum_type();
+  Handle str_type = string_type();
+  std::vector<Handle> f64, i64, bays, inputs;
+  std::vector<Handle> misc;  // run_index, status, message, run_wall_time_s, rank, session
+};
+
+ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, std::int64_t chunk_runs)
+    : ctx_(ctx), n_(ctx.options.ensemble.n_runs), chunk_(std::max<std::int64_t>(1, chunk_runs)),
+      done_(static_cast<std::size_t>(n_), 0), ds_(std::make_unique<Datasets>()) {
+  const OutputColumns& cols = ctx.columns;
+  Datasets& d = *ds_;
+  const std::int64_t nb = cols.n_bays_max;
+  Handle runs = make_group(file, "runs");
+  Handle bays = make_group(runs.get(), "bays");
+  Handle inputs = make_group(runs.get(), "inputs");
+  Handle timing = make_group(file, "timing");
+  d.misc.push_back(make_chunked(runs.get(), "run_index", H5T_STD_I64LE, "1", n_, 0, chunk_));
+  d.misc.push_back(make_chunked(runs.get(), "status", d.status_type.get(), "1", n_, 0, chunk_));
+  d.misc.push_back(make_chunked(runs.get(), "message", d.str_type.get(), "1", n_, 0, chunk_));
+  d.misc.push_back(make_chunked(timing.get(), "run_wall_time_s", H5T_IEEE_F64LE, "s", n_, 0, chunk_));
+  d.misc.push_back(make_chunked(timing.get(), "rank", H5T_STD_I64LE, "1", n_, 0, chunk_));
+  d.misc.push_back(make_chunked(timing.get(), "session", H5T_STD_I64LE, "1", n_, 0, chunk_));
+  for (const auto* f : cols.f64) d.f64.push_back(make_chunked(runs.get(), f->name, H5T_IEEE_F64LE, f->units, n_, 0, chunk_));
+  for (const auto* f : cols.i64) d.i64.push_back(make_chunked(runs.get(), f->name, H5T_STD_I64LE, f->units, n_, 0, chunk_));
+  for (const auto* f : cols.bay) d.bays.push_back(make_chunked(bays.get(), f->name, H5T_IEEE_F64LE, f->units, n_, nb, chunk_));
+  const DimensionLayout& L = ctx.sampler.layout();
+  for (std::size_t k = 0; k < ctx.options.dispersions.size(); ++k) {
+    const DispersionOptions& disp = ctx.options.dispersions[k];
+    const std::string units = find_key_units(disp.key);
+    d.inputs.push_back(make_chunked(inputs.get(), disp.key, H5T_IEEE_F64LE, units.c_str(), n_,
+                                    disp.per == Per::run ? 0 : L.count[k], chunk_));
+  }
+  attach_scales(file, d);
+  d.keep.push_back(std::move(runs));
+  d.keep.push_back(std::move(bays));
+  d.keep.push_back(std::move(inputs));
+  d.keep.push_back(std::move(timing));
+}
+
+// Dimension scales, so that netCDF-4 readers (xarray) see named dimensions: /runs/run_index
+// ("run_index") on the rows of every per-run dataset, /bay (1..n_bays_max) on the columns of the
+// per-bay ones, /frame (0..n_bays_max) on those of per-frame inputs.
+void ResultStore::attach_scales(hid_t file, Datasets& d) {
+  const std::int64_t nb = ctx_.columns.n_bays_max;
+  const hid_t run = d.misc[0].get();
+  check(H5DSset_scale(run, "run_index"), "make /runs/run_index a dimension scale");
+  Handle bay = make_scale(file, "bay", 1, nb);
+  const auto& disps = ctx_.options.dispersions;
+  bool frames = false;
+  for (const auto& disp : disps) frames = frames || disp.per == Per::frame;
+  std::unique_ptr<Handle> frame;
+  if (frames) frame = std::make_unique<Handle>(make_scale(file, "frame", 0, nb + 1));
+  for (std::size_t k = 1; k < d.misc.size(); ++k) attach(d.misc[k].get(), run, 0, "a per-run dataset");
+  for (auto* group : {&d.f64, &d.i64}) for (auto& h : *group) attach(h.get(), run, 0, "a /runs column");
+  for (auto& h : d.bays) {
+    attach(h.get(), run, 0, "a /runs/bays dataset");
+    attach(h.get(), bay.get(), 1, "a /runs/bays dataset");
+  }
+  for (std::size_t k = 0; k < d.inputs.size(); ++k) {
+    attach(d.inputs[k].get(), run, 0, disps[k].key);
+    if (disps[k].per != Per::run) attach(d.inputs[k].get(), disps[k].per == Per::bay ? bay.get() : frame->get(), 1, disps[k].key);
+  }
+}
+
+ResultStore::~ResultStore() = default;
+
+ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
+  const std::int64_t k = run / chunk_;
+  auto it = open_.find(k);
+  if (it != open_.end()) return *it->second;
+  std::unique_ptr<Chunk> c;
+  if (!spare_.empty()) {
+    c = std::move(spare_.back());
+    spare_.pop_back();
+  } else {
+    c = std::make_unique<Chunk>();
+  }
+  const OutputColumns& cols = ctx_.columns;
+  c->first = k * chunk_;
+  c->rows = std::min(chunk_, n_ - c->first);
+  c->filled = 0;
+  const auto r = static_cast<std::size_t>(c->rows);
+  c->have.assign(r, 0);
+  c->status.assign(r, 0);
+  c->message.assign(r, {});
+  c->f64.resize(cols.f64.size() * r);
+  c->i64.resize(cols.i64.size() * r);
+  c->bays.resize(cols.bay.size() * r * static_cast<std::size_t>(cols.n_bays_max));
+  c->inputs.resize(r * static_cast<std::size_t>(cols.n_inputs));
+  c->wall.resize(r);
+  c->index.resize(r);
+  c->rank.resize(r);
+  c->session.resize(r);
+  Chunk& ref = *c;
+  open_.emplace(k, std::move(c));
+  peak_chunks_ = std::max(peak_chunks_, open_.size());
+  return ref;
+}
+
+void ResultStore::add(const RunRecord& rec, int session) {
+  if (rec.run_index < 0 || rec.run_index >= n_) throw std::runtime_error(fmt::format("run index {} out of range", rec.run_index));
+  if (done_[static_cast<std::size_t>(rec.run_index)]) throw std::runtime_error(fmt::format("run {} received twice", rec.run_index));
+  Chunk& c = chunk_for(rec.run_index);
+  const auto i = static_cast<std::size_t>(rec.run_index - c.first);
+  const auto r = static_cast<std::size_t>(c.rows);
+  const OutputColumns& cols = ctx_.columns;
+  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
+  done_[static_cast<std::size_t>(rec.run_index)] = 1;
+  ++n_done_;
+  if (rec.status != sim::RunStatus::ok) ++n_failed_;
+  c.have[i] = 1;
+  c.status[i] = static_cast<std::int8_t>(rec.status);
+  c.message[i] = rec.message;
+  for (std::size_t k = 0; k < cols.f64.size(); ++k) c.f64[k * r + i] = rec.f64[k];
+  for (std::size_t k = 0; k < cols.i64.size(); ++k) c.i64[k * r + i] = rec.i64[k];
+  for (std::size_t k = 0; k < cols.bay.size(); ++k)
+    std::copy_n(rec.bays.begin() + static_cast<std::ptrdiff_t>(k * nb), nb, c.bays.begin() + static_cast<std::ptrdiff_t>((k * r + i) * nb));
+  std::copy(rec.inputs.begin(), rec.inputs.end(), c.inputs.begin() + static_cast<std::ptrdiff_t>(i * static_cast<std::size_t>(cols.n_inputs)));
+  c.wall[i] = rec.wall_time_s;
+  c.index[i] = rec.run_index;
+  c.rank[i] = rec.rank;
+  c.session[i] = session;
+  if (++c.filled < c.rows) return;
+  write_chunk(c);
+  auto it = open_.find(c.first / chunk_);
+  spare_.push_back(std::move(it->second));
+  open_.erase(it);
+  if (spare_.size() > 2) spare_.resize(2);
+}
+
+void ResultStore::write_chunk(const Chunk& c) {
+  const OutputColumns& cols = ctx_.columns;
+  Datasets& d = *ds_;
+  const std::int64_t r = c.rows, nb = cols.n_bays_max;
+  const std::string at = fmt::format("runs {}..{}", c.first, c.first + r - 1);
+  write_rows(d.misc[0].get(), H5T_NATIVE_INT64, c.index.data(), c.first, r, 0, 1, 0, "run_index " + at);
+  write_rows(d.misc[1].get(), d.status_type.get(), c.status.data(), c.first, r, 0, 1, 0, "status " + at);
+  std::vector<const char*> msg(static_cast<std::size_t>(r));
+  for (std::size_t i = 0; i < msg.size(); ++i) msg[i] = c.message[i].c_str();
+  write_rows(d.misc[2].get(), d.str_type.get(), msg.data(), c.first, r, 0, 1, 0, "message " + at);
+  write_rows(d.misc[3].get(), H5T_NATIVE_DOUBLE, c.wall.data(), c.first, r, 0, 1, 0, "run_wall_time_s " + at);
+  write_rows(d.misc[4].get(), H5T_NATIVE_INT64, c.rank.data(), c.first, r, 0, 1, 0, "rank " + at);
+  write_rows(d.misc[5].get(), H5T_NATIVE_INT64, c.session.data(), c.first, r, 0, 1, 0, "session " + at);
+  for (std::size_t k = 0; k < d.f64.size(); ++k)
+    write_rows(d.f64[k].get(), H5T_NATIVE_DOUBLE, c.f64.data() + k * static_cast<std::size_t>(r), c.first, r, 0, 1, 0, cols.f64[k]->name);
+  for (std::size_t k = 0; k < d.i64.size(); ++k)
+    write_rows(d.i64[k].get(), H5T_NATIVE_INT64, c.i64.data() + k * static_cast<std::size_t>(r), c.first, r, 0, 1, 0, cols.i64[k]->name);
+  for (std::size_t k = 0; k < d.bays.size(); ++k)
+    write_rows(d.bays[k].get(), H5T_NATIVE_DOUBLE, c.bays.data() + k * static_cast<std::size_t>(r * nb), c.first, r, nb, nb, 0,
+               cols.bay[k]->name);
+  const DimensionLayout& L = ctx_.sampler.layout();
+  for (std::size_t k = 0; k < d.inputs.size(); ++k) {
+    const bool per_run = ctx_.options.dispersions[k].per == Per::run;
+    write_rows(d.inputs[k].get(), H5T_NATIVE_DOUBLE, c.inputs.data(), c.first, r, per_run ? 0 : L.count[k], cols.n_inputs,
+               L.offset[k], ctx_.options.dispersions[k].key);
+  }
+}
+
+void ResultStore::check_complete() const {
+  if (n_done_ != n_ || !open_.empty())
+    throw std::runtime_error(fmt::format("internal: {} of {} runs stored, {} chunks unwritten", n_done_, n_, open_.size()));
+}
+
+std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n, std::int64_t width, std::int64_t col) {
+  std::vector<double> v(static_cast<std::size_t>(n), kNaN);
+  if (n == 0) return v;
+  Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
+  Handle fspace(H5Dget_space(ds.get()), H5Sclose, "space of " + path);
+  const hsize_t start[2] = {0, static_cast<hsize_t>(col)}, count[2] = {static_cast<hsize_t>(n), 1};
+  if (width > 0) check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select " + path);
+  Handle mspace = vector_space(static_cast<std::size_t>(n));
+  check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, v.data()), "read " + path);
+  return v;
+}
+
+std::vector<std::int8_t> read_status(hid_t file, std::int64_t n) {
+  std::vector<std::int8_t> v(static_cast<std::size_t>(n), 0);
+  if (n == 0) return v;
+  Handle ds(H5Dopen2(file, "runs/status", H5P_DEFAULT), H5Dclose, "open /runs/status");
+  Handle type = status_enum_type();  // enum to enum: HDF5 does not convert an enum to an integer
+  check(H5Dread(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "read /runs/status");
+  return v;
+}
+
+}  // namespace truss::campaign
