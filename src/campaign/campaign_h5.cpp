@@ -243,7 +243,7 @@ std::string CampaignFile::temporary_name(const std::string& path) {
   return (dir / fmt::format(".{}.tmp.{}", p.filename().string(), static_cast<long>(::getpid()))).string();
 }
 
-CampaignFile::CampaignFile(const std::string& path, const CampaignContext& ctx, std::int64_t chunk_runs)
+CampaignFile::CampaignFile(const std::string& path, const CampaignContext& ctx, const StoreOptions& opts)
     : path_(path), tmp_(temporary_name(path)), ctx_(ctx) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through exceptions
   file_ = H5Fcreate(tmp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
@@ -252,7 +252,7 @@ CampaignFile::CampaignFile(const std::string& path, const CampaignContext& ctx, 
     throw_h5("create " + temporary_name(path));
   }
   try {
-    store_ = std::make_unique<ResultStore>(file_, ctx, chunk_runs);
+    store_ = std::make_unique<ResultStore>(file_, ctx, opts);
   } catch (...) {
     discard();
     throw;

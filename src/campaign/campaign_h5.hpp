@@ -45,7 +45,7 @@ struct CampaignFileInfo {
 // its temporary file.
 class CampaignFile {
  public:
-  CampaignFile(const std::string& path, const CampaignContext& ctx, std::int64_t chunk_runs);
+  CampaignFile(const std::string& path, const CampaignContext& ctx, const StoreOptions& opts);
   ~CampaignFile();
   CampaignFile(const CampaignFile&) = delete;
   CampaignFile& operator=(const CampaignFile&) = delete;

@@ -14,9 +14,6 @@ using namespace io::h5;
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-// zlib level 1: most of the gain of higher levels on these columns (shuffled float64) at a
-// fraction of the time, which rank 0 spends between results (docs/benchmarks.md).
-constexpr unsigned kDeflateLevel = 1;
 
 Handle make_group(hid_t loc, const std::string& name) {
   return Handle(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, "create group " + name);
@@ -27,15 +24,15 @@ Handle make_group(hid_t loc, const std::string& name) {
 // pure functions of a chunk's values, so the stored values, and each chunk's bytes, do not depend
 // on the ranks or the order in which runs finished.
 Handle make_chunked(hid_t loc, const std::string& name, hid_t type, const char* units, std::int64_t n,
-                    std::int64_t width, std::int64_t chunk) {
+                    std::int64_t width, std::int64_t chunk, int deflate) {
   const hsize_t dims[2] = {static_cast<hsize_t>(n), static_cast<hsize_t>(width)};
   Handle space(H5Screate_simple(width > 0 ? 2 : 1, dims, nullptr), H5Sclose, "dataspace for " + name);
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "dataset properties for " + name);
   if (n > 0) {
     const hsize_t cdims[2] = {static_cast<hsize_t>(std::min(chunk, n)), 1};
     check(H5Pset_chunk(dcpl.get(), width > 0 ? 2 : 1, cdims), "chunk " + name);
-    if (H5Tis_variable_str(type) <= 0) check(H5Pset_shuffle(dcpl.get()), "shuffle " + name);
-    check(H5Pset_deflate(dcpl.get(), kDeflateLevel), "deflate " + name);
+    if (deflate > 0 && H5Tis_variable_str(type) <= 0) check(H5Pset_shuffle(dcpl.get()), "shuffle " + name);
+    if (deflate > 0) check(H5Pset_deflate(dcpl.get(), static_cast<unsigned>(deflate)), "deflate " + name);
   }
   Handle ds(H5Dcreate2(loc, name.c_str(), type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose,
             "create dataset " + name);
@@ -57,18 +54,15 @@ void attach(hid_t ds, hid_t scale, unsigned dim, const std::string& what) {
   check(H5DSattach_scale(ds, scale, dim), "attach a dimension scale to " + what);
 }
 
-// Writes rows [first, first + rows) of `ds` from memory laid out as rows x mem_width values,
-// columns [mem_col, mem_col + width) (width 0: a 1-D dataset, one column).
-void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, std::int64_t rows, std::int64_t width,
-                std::int64_t mem_width, std::int64_t mem_col, const std::string& what) {
-  const hsize_t w = static_cast<hsize_t>(std::max<std::int64_t>(width, 1));
+// Writes rows [first, first + rows) of column `col` of `ds` (a 1-D dataset when width is 0) from
+// `rows` contiguous values: one column of one chunk per call, so HDF5 copies no strided data.
+void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, std::int64_t rows, std::int64_t col,
+                const std::string& what) {
   Handle fspace(H5Dget_space(ds), H5Sclose, "space of " + what);
-  const hsize_t fstart[2] = {static_cast<hsize_t>(first), 0}, fcount[2] = {static_cast<hsize_t>(rows), w};
+  const hsize_t fstart[2] = {static_cast<hsize_t>(first), static_cast<hsize_t>(col)};
+  const hsize_t fcount[2] = {static_cast<hsize_t>(rows), 1};
   check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, fstart, nullptr, fcount, nullptr), "select " + what);
-  const hsize_t mdims[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(mem_width)};
-  Handle mspace(H5Screate_simple(2, mdims, nullptr), H5Sclose, "memory space of " + what);
-  const hsize_t mstart[2] = {0, static_cast<hsize_t>(mem_col)};
-  check(H5Sselect_hyperslab(mspace.get(), H5S_SELECT_SET, mstart, nullptr, fcount, nullptr), "select memory " + what);
+  Handle mspace = vector_space(static_cast<std::size_t>(rows));
   check(H5Dwrite(ds, mem_type, mspace.get(), fspace.get(), H5P_DEFAULT, data), "write " + what);
 }
 
@@ -81,8 +75,8 @@ struct ResultStore::Chunk {
   std::vector<std::string> message;
   std::vector<double> f64;              // [column][row]
   std::vector<std::int64_t> i64;        // [column][row]
-  std::vector<double> bays;             // [field][row][bay]
-  std::vector<double> inputs;           // [row][dimension]
+  std::vector<double> bays;             // [field][bay][row]: each column of a chunk contiguous
+  std::vector<double> inputs;           // [dimension][row]
   std::vector<double> wall;
   std::vector<std::int64_t> index, rank, session;
 };
@@ -95,9 +89,17 @@ struct ResultStore::Datasets {
   std::vector<Handle> misc;  // run_index, status, message, run_wall_time_s, rank, session
 };
 
-ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, std::int64_t chunk_runs)
-    : ctx_(ctx), n_(ctx.options.ensemble.n_runs), chunk_(std::max<std::int64_t>(1, chunk_runs)),
+std::string StoreOptions::validate() const {
+  if (chunk_runs < 1) return fmt::format("chunk_runs: must be >= 1, got {}", chunk_runs);
+  if (deflate_level < 0 || deflate_level > 9) return fmt::format("deflate_level: must be 0 to 9, got {}", deflate_level);
+  return {};
+}
+
+ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, const StoreOptions& opts)
+    : ctx_(ctx), n_(ctx.options.ensemble.n_runs), chunk_(std::max<std::int64_t>(1, opts.chunk_runs)),
+      deflate_(opts.deflate_level),
       done_(static_cast<std::size_t>(n_), 0), ds_(std::make_unique<Datasets>()) {
+  if (const std::string e = opts.validate(); !e.empty()) throw std::invalid_argument("result store: " + e);
   const OutputColumns& cols = ctx.columns;
   Datasets& d = *ds_;
   const std::int64_t nb = cols.n_bays_max;
@@ -105,21 +107,21 @@ ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, std::int64_t ch
   Handle bays = make_group(runs.get(), "bays");
   Handle inputs = make_group(runs.get(), "inputs");
   Handle timing = make_group(file, "timing");
-  d.misc.push_back(make_chunked(runs.get(), "run_index", H5T_STD_I64LE, "1", n_, 0, chunk_));
-  d.misc.push_back(make_chunked(runs.get(), "status", d.status_type.get(), "1", n_, 0, chunk_));
-  d.misc.push_back(make_chunked(runs.get(), "message", d.str_type.get(), "1", n_, 0, chunk_));
-  d.misc.push_back(make_chunked(timing.get(), "run_wall_time_s", H5T_IEEE_F64LE, "s", n_, 0, chunk_));
-  d.misc.push_back(make_chunked(timing.get(), "rank", H5T_STD_I64LE, "1", n_, 0, chunk_));
-  d.misc.push_back(make_chunked(timing.get(), "session", H5T_STD_I64LE, "1", n_, 0, chunk_));
-  for (const auto* f : cols.f64) d.f64.push_back(make_chunked(runs.get(), f->name, H5T_IEEE_F64LE, f->units, n_, 0, chunk_));
-  for (const auto* f : cols.i64) d.i64.push_back(make_chunked(runs.get(), f->name, H5T_STD_I64LE, f->units, n_, 0, chunk_));
-  for (const auto* f : cols.bay) d.bays.push_back(make_chunked(bays.get(), f->name, H5T_IEEE_F64LE, f->units, n_, nb, chunk_));
+  d.misc.push_back(make_chunked(runs.get(), "run_index", H5T_STD_I64LE, "1", n_, 0, chunk_, deflate_));
+  d.misc.push_back(make_chunked(runs.get(), "status", d.status_type.get(), "1", n_, 0, chunk_, deflate_));
+  d.misc.push_back(make_chunked(runs.get(), "message", d.str_type.get(), "1", n_, 0, chunk_, deflate_));
+  d.misc.push_back(make_chunked(timing.get(), "run_wall_time_s", H5T_IEEE_F64LE, "s", n_, 0, chunk_, deflate_));
+  d.misc.push_back(make_chunked(timing.get(), "rank", H5T_STD_I64LE, "1", n_, 0, chunk_, deflate_));
+  d.misc.push_back(make_chunked(timing.get(), "session", H5T_STD_I64LE, "1", n_, 0, chunk_, deflate_));
+  for (const auto* f : cols.f64) d.f64.push_back(make_chunked(runs.get(), f->name, H5T_IEEE_F64LE, f->units, n_, 0, chunk_, deflate_));
+  for (const auto* f : cols.i64) d.i64.push_back(make_chunked(runs.get(), f->name, H5T_STD_I64LE, f->units, n_, 0, chunk_, deflate_));
+  for (const auto* f : cols.bay) d.bays.push_back(make_chunked(bays.get(), f->name, H5T_IEEE_F64LE, f->units, n_, nb, chunk_, deflate_));
   const DimensionLayout& L = ctx.sampler.layout();
   for (std::size_t k = 0; k < ctx.options.dispersions.size(); ++k) {
     const DispersionOptions& disp = ctx.options.dispersions[k];
     const std::string units = find_key_units(disp.key);
     d.inputs.push_back(make_chunked(inputs.get(), disp.key, H5T_IEEE_F64LE, units.c_str(), n_,
-                                    disp.per == Per::run ? 0 : L.count[k], chunk_));
+                                    disp.per == Per::run ? 0 : L.count[k], chunk_, deflate_));
   }
   attach_scales(file, d);
   d.keep.push_back(std::move(runs));
@@ -204,9 +206,8 @@ void ResultStore::add(const RunRecord& rec, int session) {
   c.message[i] = rec.message;
   for (std::size_t k = 0; k < cols.f64.size(); ++k) c.f64[k * r + i] = rec.f64[k];
   for (std::size_t k = 0; k < cols.i64.size(); ++k) c.i64[k * r + i] = rec.i64[k];
-  for (std::size_t k = 0; k < cols.bay.size(); ++k)
-    std::copy_n(rec.bays.begin() + static_cast<std::ptrdiff_t>(k * nb), nb, c.bays.begin() + static_cast<std::ptrdiff_t>((k * r + i) * nb));
-  std::copy(rec.inputs.begin(), rec.inputs.end(), c.inputs.begin() + static_cast<std::ptrdiff_t>(i * static_cast<std::size_t>(cols.n_inputs)));
+  for (std::size_t k = 0; k < cols.bay.size() * nb; ++k) c.bays[k * r + i] = rec.bays[k];
+  for (std::size_t k = 0; k < rec.inputs.size(); ++k) c.inputs[k * r + i] = rec.inputs[k];
   c.wall[i] = rec.wall_time_s;
   c.index[i] = rec.run_index;
   c.rank[i] = rec.rank;
@@ -223,27 +224,29 @@ void ResultStore::write_chunk(const Chunk& c) {
   const OutputColumns& cols = ctx_.columns;
   Datasets& d = *ds_;
   const std::int64_t r = c.rows, nb = cols.n_bays_max;
-  const std::string at = fmt::format("runs {}..{}", c.first, c.first + r - 1);
-  write_rows(d.misc[0].get(), H5T_NATIVE_INT64, c.index.data(), c.first, r, 0, 1, 0, "run_index " + at);
-  write_rows(d.misc[1].get(), d.status_type.get(), c.status.data(), c.first, r, 0, 1, 0, "status " + at);
-  std::vector<const char*> msg(static_cast<std::size_t>(r));
-  for (std::size_t i = 0; i < msg.size(); ++i) msg[i] = c.message[i].c_str();
-  write_rows(d.misc[2].get(), d.str_type.get(), msg.data(), c.first, r, 0, 1, 0, "message " + at);
-  write_rows(d.misc[3].get(), H5T_NATIVE_DOUBLE, c.wall.data(), c.first, r, 0, 1, 0, "run_wall_time_s " + at);
-  write_rows(d.misc[4].get(), H5T_NATIVE_INT64, c.rank.data(), c.first, r, 0, 1, 0, "rank " + at);
-  write_rows(d.misc[5].get(), H5T_NATIVE_INT64, c.session.data(), c.first, r, 0, 1, 0, "session " + at);
+  const auto ur = static_cast<std::size_t>(r);
+  const std::string at = fmt::format(" (runs {} to {})", c.first, c.first + r - 1);
+  write_rows(d.misc[0].get(), H5T_NATIVE_INT64, c.index.data(), c.first, r, 0, "/runs/run_index" + at);
+  write_rows(d.misc[1].get(), d.status_type.get(), c.status.data(), c.first, r, 0, "/runs/status" + at);
+  std::vector<const char*> msg(ur);
+  for (std::size_t i = 0; i < ur; ++i) msg[i] = c.message[i].c_str();
+  write_rows(d.misc[2].get(), d.str_type.get(), msg.data(), c.first, r, 0, "/runs/message" + at);
+  write_rows(d.misc[3].get(), H5T_NATIVE_DOUBLE, c.wall.data(), c.first, r, 0, "/timing/run_wall_time_s" + at);
+  write_rows(d.misc[4].get(), H5T_NATIVE_INT64, c.rank.data(), c.first, r, 0, "/timing/rank" + at);
+  write_rows(d.misc[5].get(), H5T_NATIVE_INT64, c.session.data(), c.first, r, 0, "/timing/session" + at);
   for (std::size_t k = 0; k < d.f64.size(); ++k)
-    write_rows(d.f64[k].get(), H5T_NATIVE_DOUBLE, c.f64.data() + k * static_cast<std::size_t>(r), c.first, r, 0, 1, 0, cols.f64[k]->name);
+    write_rows(d.f64[k].get(), H5T_NATIVE_DOUBLE, c.f64.data() + k * ur, c.first, r, 0, cols.f64[k]->name + at);
   for (std::size_t k = 0; k < d.i64.size(); ++k)
-    write_rows(d.i64[k].get(), H5T_NATIVE_INT64, c.i64.data() + k * static_cast<std::size_t>(r), c.first, r, 0, 1, 0, cols.i64[k]->name);
+    write_rows(d.i64[k].get(), H5T_NATIVE_INT64, c.i64.data() + k * ur, c.first, r, 0, cols.i64[k]->name + at);
   for (std::size_t k = 0; k < d.bays.size(); ++k)
-    write_rows(d.bays[k].get(), H5T_NATIVE_DOUBLE, c.bays.data() + k * static_cast<std::size_t>(r * nb), c.first, r, nb, nb, 0,
-               cols.bay[k]->name);
+    for (std::int64_t b = 0; b < nb; ++b)
+      write_rows(d.bays[k].get(), H5T_NATIVE_DOUBLE, c.bays.data() + (k * static_cast<std::size_t>(nb) + static_cast<std::size_t>(b)) * ur,
+                 c.first, r, b, cols.bay[k]->name + at);
   const DimensionLayout& L = ctx_.sampler.layout();
   for (std::size_t k = 0; k < d.inputs.size(); ++k) {
-    const bool per_run = ctx_.options.dispersions[k].per == Per::run;
-    write_rows(d.inputs[k].get(), H5T_NATIVE_DOUBLE, c.inputs.data(), c.first, r, per_run ? 0 : L.count[k], cols.n_inputs,
-               L.offset[k], ctx_.options.dispersions[k].key);
+    for (int j = 0; j < L.count[k]; ++j)
+      write_rows(d.inputs[k].get(), H5T_NATIVE_DOUBLE, c.inputs.data() + static_cast<std::size_t>(L.offset[k] + j) * ur, c.first, r, j,
+                 ctx_.options.dispersions[k].key + at);
   }
 }
 

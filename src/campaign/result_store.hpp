@@ -19,11 +19,18 @@
 
 namespace truss::campaign {
 
+// How the per-run datasets are stored.
+struct StoreOptions {
+  std::int64_t chunk_runs = 4096;  // rows per chunk: 32 kB per float64 column, a few chunks in memory
+  int deflate_level = 1;           // zlib level (0: no compression); 1 keeps rank 0's per-result cost low
+  std::string validate() const;
+};
+
 class ResultStore {
  public:
   // Creates /runs (and its bays, inputs groups) and /timing's per-run datasets in `file`, chunked
-  // by chunk_runs rows.
-  ResultStore(hid_t file, const CampaignContext& ctx, std::int64_t chunk_runs);
+  // by chunk_runs rows, shuffled and deflated unless deflate_level is 0.
+  ResultStore(hid_t file, const CampaignContext& ctx, const StoreOptions& opts);
   ~ResultStore();
   ResultStore(const ResultStore&) = delete;
   ResultStore& operator=(const ResultStore&) = delete;
@@ -47,6 +54,7 @@ class ResultStore {
 
   const CampaignContext& ctx_;
   std::int64_t n_, chunk_;
+  int deflate_;
   std::vector<std::uint8_t> done_;
   std::int64_t n_done_ = 0, n_failed_ = 0;
   std::map<std::int64_t, std::unique_ptr<Chunk>> open_;  // by chunk index

@@ -42,6 +42,7 @@ struct CommandOptions {
   std::string progress = "auto";
   double progress_interval_s = 10.0;
   int max_batch = 32;
+  int compression = 1;                 // zlib level of the results file's datasets (0: none)
   double synthetic_run_cost_s = -1.0;  // bench only (hidden): runs sleep this long and simulate nothing
 };
 
@@ -149,7 +150,7 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
   if (!o.resume && has_journal && !o.force)
     throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
                                      "(same campaign and --set options) or start over with --force", jpath));
-  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, kChunkRuns);
+  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{kChunkRuns, o.compression});
   if (o.resume) {
     try {
       auto on_frame = [&](FrameKind k, std::string_view p, std::size_t at) { restore_frame(r0, ctx, k, p, at); };
@@ -197,6 +198,8 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
   app.add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines when not on a terminal")
       ->check(CLI::Range(0.01, 1e6));
   app.add_option("--max-batch", o.max_batch, "Largest batch of runs handed to a rank at once")->check(CLI::Range(1, 100000));
+  app.add_option("--compression", o.compression, "zlib level (0-9) of the results file's per-run datasets; 0 stores "
+                 "them uncompressed (largest file, least work for rank 0)")->check(CLI::Range(0, 9));
   // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
   app.add_option("--synthetic-run-cost-s", o.synthetic_run_cost_s, "")->check(CLI::Range(0.0, 60.0))->group("");
   app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
