@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "campaign/result_store.hpp"
@@ -144,7 +145,7 @@ void write_input_attributes(hid_t file, const CampaignContext& ctx) {
 // /stats: statistics of the ok runs, per output and per bay; status counts. Each column is read
 // back from /runs (one column in memory at a time) and its statistics are the exact ones of
 // calc_stats, as if the whole table were in memory.
-void write_stats(hid_t file, const CampaignContext& ctx, const std::vector<std::int8_t>& status) {
+void write_stats(hid_t file, const CampaignContext& ctx, const std::vector<std::int8_t>& status, std::int64_t chunk_rows) {
   const OutputColumns& cols = ctx.columns;
   const auto n = static_cast<std::int64_t>(status.size());
   std::int64_t n_failed = 0;
@@ -172,9 +173,17 @@ void write_stats(hid_t file, const CampaignContext& ctx, const std::vector<std::
   Handle bays = make_group(stats.get(), "bays");
   const std::int64_t nb = cols.n_bays_max;
   std::vector<Stats> per_bay(static_cast<std::size_t>(nb));
+  // Bays a group at a time: at most kColumnBytes of columns in memory, each field read (and
+  // decompressed) ceil(n_bays_max / group) times.
+  constexpr std::int64_t kColumnBytes = std::int64_t{64} << 20;
+  const std::int64_t group = std::clamp<std::int64_t>(kColumnBytes / (8 * std::max<std::int64_t>(n, 1)), 1, std::max<std::int64_t>(nb, 1));
   for (const auto* f : cols.bay) {
     const std::string path = "runs/bays/" + std::string(f->name);
-    for (std::int64_t b = 0; b < nb; ++b) per_bay[static_cast<std::size_t>(b)] = calc_stats(read_f64_column(file, path, n, nb, b), ok);
+    for (std::int64_t b0 = 0; b0 < nb; b0 += group) {
+      const std::int64_t g = std::min(group, nb - b0);
+      const auto columns = read_f64_columns(file, path, n, nb, b0, g, chunk_rows);
+      for (std::int64_t j = 0; j < g; ++j) per_bay[static_cast<std::size_t>(b0 + j)] = calc_stats(columns[static_cast<std::size_t>(j)], ok);
+    }
     write_stats_group(bays.get(), f->name, f->units, per_bay, true);
   }
 }
@@ -244,7 +253,7 @@ std::string CampaignFile::temporary_name(const std::string& path) {
 }
 
 CampaignFile::CampaignFile(const std::string& path, const CampaignContext& ctx, const StoreOptions& opts)
-    : path_(path), tmp_(temporary_name(path)), ctx_(ctx) {
+    : path_(path), tmp_(temporary_name(path)), ctx_(ctx), chunk_rows_(opts.chunk_runs) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through exceptions
   file_ = H5Fcreate(tmp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   if (file_ < 0) {
@@ -279,7 +288,7 @@ void CampaignFile::finish(const std::vector<std::pair<std::int64_t, sim::RunResu
   const std::vector<std::int8_t> status = read_status(file_, ctx_.options.ensemble.n_runs);
   write_root_attributes(file_, ctx_, info);
   write_input_attributes(file_, ctx_);
-  write_stats(file_, ctx_, status);
+  write_stats(file_, ctx_, status, chunk_rows_);
   write_sensitivity(file_, ctx_, status);
   write_histories(file_, ctx_.options, histories);
   write_timing_attributes(file_, info);

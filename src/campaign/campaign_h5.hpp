@@ -62,6 +62,7 @@ class CampaignFile {
   void discard() noexcept;
   std::string path_, tmp_;
   const CampaignContext& ctx_;
+  std::int64_t chunk_rows_;
   hid_t file_ = -1;
   std::unique_ptr<ResultStore> store_;
 };

@@ -20,7 +20,7 @@ Handle make_group(hid_t loc, const std::string& name) {
 }
 
 // A chunked, compressed dataset of n rows (x width columns when width > 0), chunks of `chunk`
-// rows by one column: a column reads back as whole chunks. Byte shuffle then deflate: both are
+// whole rows: a chunk of runs goes in with one contiguous copy per dataset. Byte shuffle then deflate: both are
 // pure functions of a chunk's values, so the stored values, and each chunk's bytes, do not depend
 // on the ranks or the order in which runs finished.
 Handle make_chunked(hid_t loc, const std::string& name, hid_t type, const char* units, std::int64_t n,
@@ -29,7 +29,7 @@ Handle make_chunked(hid_t loc, const std::string& name, hid_t type, const char* 
   Handle space(H5Screate_simple(width > 0 ? 2 : 1, dims, nullptr), H5Sclose, "dataspace for " + name);
   Handle dcpl(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, "dataset properties for " + name);
   if (n > 0) {
-    const hsize_t cdims[2] = {static_cast<hsize_t>(std::min(chunk, n)), 1};
+    const hsize_t cdims[2] = {static_cast<hsize_t>(std::min(chunk, n)), static_cast<hsize_t>(std::max<std::int64_t>(width, 1))};
     check(H5Pset_chunk(dcpl.get(), width > 0 ? 2 : 1, cdims), "chunk " + name);
     if (deflate > 0 && H5Tis_variable_str(type) <= 0) check(H5Pset_shuffle(dcpl.get()), "shuffle " + name);
     if (deflate > 0) check(H5Pset_deflate(dcpl.get(), static_cast<unsigned>(deflate)), "deflate " + name);
@@ -54,15 +54,15 @@ void attach(hid_t ds, hid_t scale, unsigned dim, const std::string& what) {
   check(H5DSattach_scale(ds, scale, dim), "attach a dimension scale to " + what);
 }
 
-// Writes rows [first, first + rows) of column `col` of `ds` (a 1-D dataset when width is 0) from
-// `rows` contiguous values: one column of one chunk per call, so HDF5 copies no strided data.
-void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, std::int64_t rows, std::int64_t col,
+// Writes rows [first, first + rows) of `ds` (width columns; 0: a 1-D dataset) from rows x width
+// contiguous values in row-major order: whole rows, so HDF5 copies contiguous blocks.
+void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, std::int64_t rows, std::int64_t width,
                 const std::string& what) {
   Handle fspace(H5Dget_space(ds), H5Sclose, "space of " + what);
-  const hsize_t fstart[2] = {static_cast<hsize_t>(first), static_cast<hsize_t>(col)};
-  const hsize_t fcount[2] = {static_cast<hsize_t>(rows), 1};
+  const hsize_t fstart[2] = {static_cast<hsize_t>(first), 0};
+  const hsize_t fcount[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(std::max<std::int64_t>(width, 1))};
   check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, fstart, nullptr, fcount, nullptr), "select " + what);
-  Handle mspace = vector_space(static_cast<std::size_t>(rows));
+  Handle mspace(H5Screate_simple(width > 0 ? 2 : 1, fcount, nullptr), H5Sclose, "memory space of " + what);
   check(H5Dwrite(ds, mem_type, mspace.get(), fspace.get(), H5P_DEFAULT, data), "write " + what);
 }
 
@@ -75,8 +75,8 @@ struct ResultStore::Chunk {
   std::vector<std::string> message;
   std::vector<double> f64;              // [column][row]
   std::vector<std::int64_t> i64;        // [column][row]
-  std::vector<double> bays;             // [field][bay][row]: each column of a chunk contiguous
-  std::vector<double> inputs;           // [dimension][row]
+  std::vector<double> bays;             // [field][row][bay]: each field's rows contiguous
+  std::vector<double> inputs;           // per dispersion k, from rows * offset[k]: [row][its dimensions]
   std::vector<double> wall;
   std::vector<std::int64_t> index, rank, session;
 };
@@ -206,8 +206,13 @@ void ResultStore::add(const RunRecord& rec, int session) {
   c.message[i] = rec.message;
   for (std::size_t k = 0; k < cols.f64.size(); ++k) c.f64[k * r + i] = rec.f64[k];
   for (std::size_t k = 0; k < cols.i64.size(); ++k) c.i64[k * r + i] = rec.i64[k];
-  for (std::size_t k = 0; k < cols.bay.size() * nb; ++k) c.bays[k * r + i] = rec.bays[k];
-  for (std::size_t k = 0; k < rec.inputs.size(); ++k) c.inputs[k * r + i] = rec.inputs[k];
+  for (std::size_t k = 0; k < cols.bay.size(); ++k)
+    std::copy_n(rec.bays.begin() + static_cast<std::ptrdiff_t>(k * nb), nb, c.bays.begin() + static_cast<std::ptrdiff_t>((k * r + i) * nb));
+  const DimensionLayout& L = ctx_.sampler.layout();
+  for (std::size_t k = 0; k < L.count.size(); ++k) {
+    const auto off = static_cast<std::size_t>(L.offset[k]), w = static_cast<std::size_t>(L.count[k]);
+    std::copy_n(rec.inputs.begin() + static_cast<std::ptrdiff_t>(off), w, c.inputs.begin() + static_cast<std::ptrdiff_t>(r * off + i * w));
+  }
   c.wall[i] = rec.wall_time_s;
   c.index[i] = rec.run_index;
   c.rank[i] = rec.rank;
@@ -239,15 +244,12 @@ void ResultStore::write_chunk(const Chunk& c) {
   for (std::size_t k = 0; k < d.i64.size(); ++k)
     write_rows(d.i64[k].get(), H5T_NATIVE_INT64, c.i64.data() + k * ur, c.first, r, 0, cols.i64[k]->name + at);
   for (std::size_t k = 0; k < d.bays.size(); ++k)
-    for (std::int64_t b = 0; b < nb; ++b)
-      write_rows(d.bays[k].get(), H5T_NATIVE_DOUBLE, c.bays.data() + (k * static_cast<std::size_t>(nb) + static_cast<std::size_t>(b)) * ur,
-                 c.first, r, b, cols.bay[k]->name + at);
+    write_rows(d.bays[k].get(), H5T_NATIVE_DOUBLE, c.bays.data() + k * ur * static_cast<std::size_t>(nb), c.first, r, nb,
+               cols.bay[k]->name + at);
   const DimensionLayout& L = ctx_.sampler.layout();
-  for (std::size_t k = 0; k < d.inputs.size(); ++k) {
-    for (int j = 0; j < L.count[k]; ++j)
-      write_rows(d.inputs[k].get(), H5T_NATIVE_DOUBLE, c.inputs.data() + static_cast<std::size_t>(L.offset[k] + j) * ur, c.first, r, j,
-                 ctx_.options.dispersions[k].key + at);
-  }
+  for (std::size_t k = 0; k < d.inputs.size(); ++k)
+    write_rows(d.inputs[k].get(), H5T_NATIVE_DOUBLE, c.inputs.data() + ur * static_cast<std::size_t>(L.offset[k]), c.first, r,
+               ctx_.options.dispersions[k].per == Per::run ? 0 : L.count[k], ctx_.options.dispersions[k].key + at);
 }
 
 void ResultStore::check_complete() const {
@@ -255,16 +257,32 @@ void ResultStore::check_complete() const {
     throw std::runtime_error(fmt::format("internal: {} of {} runs stored, {} chunks unwritten", n_done_, n_, open_.size()));
 }
 
-std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n, std::int64_t width, std::int64_t col) {
-  std::vector<double> v(static_cast<std::size_t>(n), kNaN);
+std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n) {
+  std::vector<double> v(static_cast<std::size_t>(n));
   if (n == 0) return v;
   Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
-  Handle fspace(H5Dget_space(ds.get()), H5Sclose, "space of " + path);
-  const hsize_t start[2] = {0, static_cast<hsize_t>(col)}, count[2] = {static_cast<hsize_t>(n), 1};
-  if (width > 0) check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select " + path);
-  Handle mspace = vector_space(static_cast<std::size_t>(n));
-  check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, v.data()), "read " + path);
+  check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "read " + path);
   return v;
+}
+
+std::vector<std::vector<double>> read_f64_columns(hid_t file, const std::string& path, std::int64_t n, std::int64_t width,
+                                                  std::int64_t col0, std::int64_t cols, std::int64_t block_rows) {
+  std::vector<std::vector<double>> out(static_cast<std::size_t>(cols), std::vector<double>(static_cast<std::size_t>(n)));
+  if (n == 0) return out;
+  Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
+  Handle fspace(H5Dget_space(ds.get()), H5Sclose, "space of " + path);
+  std::vector<double> buf(static_cast<std::size_t>(block_rows * width));
+  for (std::int64_t first = 0; first < n; first += block_rows) {
+    const std::int64_t rows = std::min(block_rows, n - first);
+    const hsize_t start[2] = {static_cast<hsize_t>(first), 0}, count[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(width)};
+    check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select " + path);
+    Handle mspace(H5Screate_simple(2, count, nullptr), H5Sclose, "memory space of " + path);
+    check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, buf.data()), "read " + path);
+    for (std::int64_t i = 0; i < rows; ++i)
+      for (std::int64_t j = 0; j < cols; ++j)
+        out[static_cast<std::size_t>(j)][static_cast<std::size_t>(first + i)] = buf[static_cast<std::size_t>(i * width + col0 + j)];
+  }
+  return out;
 }
 
 std::vector<std::int8_t> read_status(hid_t file, std::int64_t n) {

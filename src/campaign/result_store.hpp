@@ -63,9 +63,12 @@ class ResultStore {
   std::unique_ptr<Datasets> ds_;
 };
 
-// Reading the finished /runs back, one column at a time (statistics, sensitivity).
-std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n, std::int64_t width = 0,
-                                    std::int64_t col = 0);
+// Reading the finished /runs back (statistics, sensitivity): a 1-D float64 column; columns
+// col0 .. col0 + cols - 1 of an n x width dataset, read in blocks of block_rows whole rows (whole
+// chunks: each is decompressed once per call).
+std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n);
+std::vector<std::vector<double>> read_f64_columns(hid_t file, const std::string& path, std::int64_t n, std::int64_t width,
+                                                  std::int64_t col0, std::int64_t cols, std::int64_t block_rows);
 std::vector<std::int8_t> read_status(hid_t file, std::int64_t n);
 
 }  // namespace truss::campaign
