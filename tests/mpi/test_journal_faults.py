@@ -178,6 +178,49 @@ def case_journal(args):
 
 
 # ------------------------------------------------------------------------------------------------
+def case_layout(args):
+    """The streamed file's storage: chunked by whole rows, shuffled and deflated (or not, with
+    --compression 0, same values), dimension scales that netCDF-4 readers turn into named dims."""
+    import h5py
+    import numpy as np
+    d = fresh(args, "layout")
+    outs = {}
+    for level in (1, 0):
+        outs[level] = os.path.join(d, f"c{level}.h5")
+        p = run(args, 2, [os.path.join(args.repo, TABLE1), "-o", outs[level], "--set", "ensemble.n_runs=300",
+                          "--progress", "none", "--compression", str(level)])
+        check(p.returncode == 0, f"--compression {level}: exit 0")
+    same, why = same_values(datasets(outs[0]), datasets(outs[1]))
+    check(same, f"--compression 0 and 1 store the same values {why}")
+    with h5py.File(outs[1], "r") as f:
+        nb = int(f.attrs["n_bays_max"])
+        per_run = []
+        f["runs"].visititems(lambda n, o: per_run.append(o) if isinstance(o, h5py.Dataset) else None)
+        check(all(o.chunks is not None and o.chunks[0] == 300 and (o.ndim == 1 or o.chunks[1] == o.shape[1])
+                  for o in per_run), f"{len(per_run)} /runs datasets chunked by whole rows")
+        check(all(o.compression == "gzip" and (o.shuffle or o.dtype.kind == "O") for o in per_run),
+              "all deflated, numeric ones shuffled first")
+        check(all(o.dims[0][0].name == "/runs/run_index" for o in per_run if o.name != "/runs/run_index"),
+              "/runs/run_index is the row scale of every per-run dataset")
+        check(f["runs/bays/lock_time_s"].dims[1][0].name == "/bay" and np.array_equal(f["bay"][:], np.arange(1, nb + 1)),
+              "/bay (1..n_bays_max) is the column scale of the per-bay datasets")
+        frame_inputs = [o for o in f["runs/inputs"].values() if o.attrs["per"] == "frame"]
+        check(frame_inputs and all(o.dims[1][0].name == "/frame" for o in frame_inputs)
+              and np.array_equal(f["frame"][:], np.arange(0, nb + 1)), "/frame (0..n_bays_max) on the per-frame inputs")
+    with h5py.File(outs[0], "r") as f:
+        check(f["runs/peak_drive_force_N"].compression is None, "--compression 0: no filter")
+    try:
+        import xarray as xr
+    except ImportError:
+        print("  (xarray not installed: named dimensions checked through h5py only)")
+        return
+    bays = xr.open_dataset(outs[1], group="runs/bays", engine="h5netcdf")
+    check(bays["lock_time_s"].dims == ("run_index", "bay"), "xarray opens /runs/bays with dims (run_index, bay)")
+    runs = xr.open_dataset(outs[1], group="runs", engine="h5netcdf")
+    check(dict(runs.sizes) == {"run_index": 300}, "xarray opens /runs with the one dim run_index")
+
+
+# ------------------------------------------------------------------------------------------------
 def rank_of(pid):
     try:
         env = open(f"/proc/{pid}/environ", "rb").read().split(b"\0")
