@@ -177,6 +177,17 @@ def case_journal(args):
     check(same, f"the resumed file equals the uninterrupted one {why}")
 
 
+def splitmix_unit(run, column):
+    """parallel/synthetic_run.cpp's pseudo_value, in numpy uint64 arithmetic (wraps mod 2^64)."""
+    import numpy as np
+    with np.errstate(over="ignore"):
+        z = run * np.uint64(0x9E3779B97F4A7C15) + np.uint64(column) * np.uint64(0xD1B54A32D192ED03) + np.uint64(1)
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        z ^= z >> np.uint64(31)
+    return (z >> np.uint64(11)).astype(np.float64) * 2.0 ** -53
+
+
 # ------------------------------------------------------------------------------------------------
 def case_layout(args):
     """The streamed file's storage: chunked by whole rows, shuffled and deflated (or not, with
@@ -209,6 +220,27 @@ def case_layout(args):
               and np.array_equal(f["frame"][:], np.arange(0, nb + 1)), "/frame (0..n_bays_max) on the per-frame inputs")
     with h5py.File(outs[0], "r") as f:
         check(f["runs/peak_drive_force_N"].compression is None, "--compression 0: no filter")
+    # Rows land where they belong across chunks (4096 runs each; the second one partial): the
+    # synthetic records are splitmix64 values of (run, column), recomputed here. Column order is
+    # the field order of RunResult / BayResult: deploy_time_s is the first float64 output, n_bays
+    # the first int64 one, entry_time_s the first per-bay one.
+    n = 4500
+    out = os.path.join(d, "rows.h5")
+    p = run(args, 3, [os.path.join(args.repo, TABLE1), "-o", out, "--set", f"ensemble.n_runs={n}", "--progress", "none",
+                      "--synthetic-run-cost-s", "0"])
+    check(p.returncode == 0, f"{n} synthetic runs on 3 ranks: exit 0")
+    with h5py.File(out, "r") as f:
+        n_f64 = sum(1 for v in f["runs"].values() if isinstance(v, h5py.Dataset) and v.dtype.kind == "f")
+        n_i64 = sum(1 for k, v in f["runs"].items() if isinstance(v, h5py.Dataset) and v.dtype.kind == "i"
+                    and k != "run_index" and h5py.check_enum_dtype(v.dtype) is None)
+        nb = int(f.attrs["n_bays_max"])
+        i = np.arange(n, dtype=np.uint64)
+        check(np.array_equal(f["runs/deploy_time_s"][:], splitmix_unit(i, 0)), "/runs/deploy_time_s row by row")
+        check(np.array_equal(f["runs/n_bays"][:], np.floor(1000.0 * splitmix_unit(i, n_f64)).astype(np.int64)),
+              "/runs/n_bays row by row")
+        entry = np.stack([splitmix_unit(i, n_f64 + n_i64 + b) for b in range(nb)], axis=1)
+        check(np.array_equal(f["runs/bays/entry_time_s"][:], entry), f"/runs/bays/entry_time_s ({n} x {nb}) row by row")
+        check(np.array_equal(f["runs/run_index"][:], np.arange(n)), "/runs/run_index 0..n-1")
     try:
         import xarray as xr
     except ImportError:
