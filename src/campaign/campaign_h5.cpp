@@ -292,6 +292,7 @@ void CampaignFile::finish(const std::vector<std::pair<std::int64_t, sim::RunResu
   write_sensitivity(file_, ctx_, status);
   write_histories(file_, ctx_.options, histories);
   write_timing_attributes(file_, info);
+  if (info.write_extra) info.write_extra(file_);
   check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "flush " + tmp_);
   const hid_t f = file_;
   file_ = -1;

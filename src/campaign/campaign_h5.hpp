@@ -3,6 +3,7 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <utility>
@@ -34,6 +35,7 @@ struct CampaignFileInfo {
   std::string start_utc, end_utc;
   double wall_time_s = 0.0;      // summed over sessions
   ScheduleTiming schedule;       // of this session
+  std::function<void(hid_t file)> write_extra;  // more groups written into the file before it is committed (/nominal on main)
 };
 
 // The results file of a session, written as it runs: created at the start as .NAME.tmp.PID next to
