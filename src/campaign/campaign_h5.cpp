@@ -1,6 +1,12 @@
 #include "campaign/campaign_h5.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+
+#include "campaign/result_store.hpp"
 
 #include "io/h5_util.hpp"
 #include "io/json_summary.hpp"
@@ -9,6 +15,7 @@
 namespace truss::campaign {
 
 using namespace io::h5;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -80,7 +87,7 @@ const char* per_name(Per p) { return p == Per::run ? "run" : p == Per::bay ? "ba
 const char* apply_name(Apply a) { return a == Apply::absolute ? "absolute" : a == Apply::relative ? "relative" : "offset"; }
 
 // Root attributes: what the campaign was, and where and when it ran.
-void write_root_attributes(hid_t file, const CampaignContext& ctx, const ResultTable& t, const CampaignFileInfo& info) {
+void write_root_attributes(hid_t file, const CampaignContext& ctx, const CampaignFileInfo& info) {
   const CampaignOptions& c = ctx.options;
   const OutputColumns& cols = ctx.columns;
   write_int_attribute(file, "schema_version", kCampaignSchemaVersion);
@@ -89,7 +96,7 @@ void write_root_attributes(hid_t file, const CampaignContext& ctx, const ResultT
   write_string_attribute(file, "campaign_description", c.description);
   write_string_attribute(file, "campaign_toml", info.campaign_toml);
   write_string_attribute(file, "base_scene_toml", info.base_scene_toml);
-  write_int_attribute(file, "n_runs", t.n_runs());
+  write_int_attribute(file, "n_runs", c.ensemble.n_runs);
   write_int_attribute(file, "master_seed", static_cast<std::int64_t>(c.ensemble.master_seed));
   write_string_attribute(file, "sampling", to_string(c.ensemble.sampling));
   write_int_attribute(file, "n_bays_max", cols.n_bays_max);
@@ -104,23 +111,13 @@ void write_root_attributes(hid_t file, const CampaignContext& ctx, const ResultT
   write_double_attribute(file, "wall_time_s", info.wall_time_s);
 }
 
-// /runs/inputs: the applied value of every dispersion, with its distribution as attributes.
-void write_inputs(hid_t runs, const CampaignContext& ctx, const ResultTable& t) {
+// /runs/inputs/KEY (written by the ResultStore): the dispersion's distribution as attributes.
+void write_input_attributes(hid_t file, const CampaignContext& ctx) {
   const CampaignOptions& c = ctx.options;
-  const OutputColumns& cols = ctx.columns;
-  const auto n = static_cast<std::size_t>(t.n_runs());
-  Handle g = make_group(runs, "inputs");
-  const DimensionLayout& L = ctx.sampler.layout();
-  std::vector<double> col;
   for (std::size_t d = 0; d < c.dispersions.size(); ++d) {
     const DispersionOptions& disp = c.dispersions[d];
-    const auto w = static_cast<std::size_t>(L.count[d]), off = static_cast<std::size_t>(L.offset[d]);
-    col.resize(n * w);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = 0; j < w; ++j) col[i * w + j] = t.inputs[i * static_cast<std::size_t>(cols.n_inputs) + off + j];
-    const std::string units = find_key_units(disp.key);
-    write_array(g.get(), disp.key, units.c_str(), col.data(), n, disp.per == Per::run ? 0 : w);
-    Handle ds(H5Dopen2(g.get(), disp.key.c_str(), H5P_DEFAULT), H5Dclose, "open " + disp.key);
+    const std::string path = "runs/inputs/" + disp.key;
+    Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
     write_string_attribute(ds.get(), "per", per_name(disp.per));
     write_string_attribute(ds.get(), "apply", apply_name(disp.apply));
     write_string_attribute(ds.get(), "distribution", to_string(disp.distribution));
@@ -145,91 +142,79 @@ void write_inputs(hid_t runs, const CampaignContext& ctx, const ResultTable& t) 
   }
 }
 
-// /runs: one column per output, per-bay outputs as runs x bays.
-void write_runs(hid_t file, const CampaignContext& ctx, const ResultTable& t) {
+// /stats: statistics of the ok runs, per output and per bay; status counts. Each column is read
+// back from /runs (one column in memory at a time) and its statistics are the exact ones of
+// calc_stats, as if the whole table were in memory.
+void write_stats(hid_t file, const CampaignContext& ctx, const std::vector<std::int8_t>& status, std::int64_t chunk_rows) {
   const OutputColumns& cols = ctx.columns;
-  const auto n = static_cast<std::size_t>(t.n_runs());
-  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
-    Handle runs = make_group(file, "runs");
-  std::vector<std::int64_t> index(n);
-  for (std::size_t i = 0; i < n; ++i) index[i] = static_cast<std::int64_t>(i);
-  write_array(runs.get(), "run_index", "1", index.data(), n);
-  {
-    Handle type = status_enum_type();
-    Handle space = vector_space(n);
-    Handle ds = create_dataset(runs.get(), "status", type.get(), space.get());
-    if (n) check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, t.status.data()), "write /runs/status");
-    write_string_attribute(ds.get(), "units", "1");
+  const auto n = static_cast<std::int64_t>(status.size());
+  std::int64_t n_failed = 0;
+  std::vector<std::uint8_t> ok(status.size());
+  for (std::size_t i = 0; i < status.size(); ++i) {
+    ok[i] = status[i] == 0;
+    n_failed += status[i] != 0;
   }
-  write_strings(runs.get(), "message", t.message);
-  for (std::size_t k = 0; k < cols.f64.size(); ++k) write_array(runs.get(), cols.f64[k]->name, cols.f64[k]->units, t.f64[k].data(), n);
-  for (std::size_t k = 0; k < cols.i64.size(); ++k) write_array(runs.get(), cols.i64[k]->name, cols.i64[k]->units, t.i64[k].data(), n);
-  {
-    Handle g = make_group(runs.get(), "bays");
-    for (std::size_t k = 0; k < cols.bay.size(); ++k) write_array(g.get(), cols.bay[k]->name, cols.bay[k]->units, t.bays[k].data(), n, nb);
-  }
-  write_inputs(runs.get(), ctx, t);
-}
-
-// /stats: statistics of the ok runs, per output and per bay; status counts.
-void write_stats(hid_t file, const CampaignContext& ctx, const ResultTable& t) {
-  const OutputColumns& cols = ctx.columns;
-  const auto n = static_cast<std::size_t>(t.n_runs());
-  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
-  std::vector<std::uint8_t> ok(n);
-  for (std::size_t i = 0; i < n; ++i) ok[i] = t.status[i] == 0;
-    Handle stats = make_group(file, "stats");
-  write_int_attribute(stats.get(), "n_runs", t.n_runs());
-  write_int_attribute(stats.get(), "n_ok", t.n_runs() - t.n_failed());
-  write_int_attribute(stats.get(), "n_failed", t.n_failed());
+  Handle stats = make_group(file, "stats");
+  write_int_attribute(stats.get(), "n_runs", n);
+  write_int_attribute(stats.get(), "n_ok", n - n_failed);
+  write_int_attribute(stats.get(), "n_failed", n_failed);
   write_string_attribute(stats.get(), "percentile_method",
                          "linear interpolation between order statistics (Hyndman-Fan type 7, numpy.percentile default)");
   write_int_attribute(stats.get(), "std_ddof", 1);
   std::vector<std::string> names;
   std::vector<std::int64_t> counts(sim::kRunStatusCount, 0);
   for (int s = 0; s < sim::kRunStatusCount; ++s) names.emplace_back(sim::to_string(static_cast<sim::RunStatus>(s)));
-  for (auto s : t.status) ++counts[static_cast<std::size_t>(s)];
+  for (auto s : status) ++counts[static_cast<std::size_t>(s)];
   write_strings(stats.get(), "status_names", names);
   write_array(stats.get(), "status_counts", "1", counts.data(), counts.size());
-  for (std::size_t k = 0; k < cols.f64.size(); ++k)
-    write_stats_group(stats.get(), cols.f64[k]->name, cols.f64[k]->units, {calc_stats(t.f64[k], ok)}, false);
+  for (const auto* f : cols.f64)
+    write_stats_group(stats.get(), f->name, f->units, {calc_stats(read_f64_column(file, "runs/" + std::string(f->name), n), ok)},
+                      false);
   Handle bays = make_group(stats.get(), "bays");
-  std::vector<double> v(n);
-  std::vector<Stats> per_bay(nb);
-  for (std::size_t k = 0; k < cols.bay.size(); ++k) {
-    for (std::size_t b = 0; b < nb; ++b) {
-      for (std::size_t i = 0; i < n; ++i) v[i] = t.bays[k][i * nb + b];
-      per_bay[b] = calc_stats(v, ok);
+  const std::int64_t nb = cols.n_bays_max;
+  std::vector<Stats> per_bay(static_cast<std::size_t>(nb));
+  // Bays a group at a time: at most kColumnBytes of columns in memory, each field read (and
+  // decompressed) ceil(n_bays_max / group) times.
+  constexpr std::int64_t kColumnBytes = std::int64_t{64} << 20;
+  const std::int64_t group = std::clamp<std::int64_t>(kColumnBytes / (8 * std::max<std::int64_t>(n, 1)), 1, std::max<std::int64_t>(nb, 1));
+  for (const auto* f : cols.bay) {
+    const std::string path = "runs/bays/" + std::string(f->name);
+    for (std::int64_t b0 = 0; b0 < nb; b0 += group) {
+      const std::int64_t g = std::min(group, nb - b0);
+      const auto columns = read_f64_columns(file, path, n, nb, b0, g, chunk_rows);
+      for (std::int64_t j = 0; j < g; ++j) per_bay[static_cast<std::size_t>(b0 + j)] = calc_stats(columns[static_cast<std::size_t>(j)], ok);
     }
-    write_stats_group(bays.get(), cols.bay[k]->name, cols.bay[k]->units, per_bay, true);
+    write_stats_group(bays.get(), f->name, f->units, per_bay, true);
   }
 }
 
-void write_sensitivity(hid_t file, const CampaignOptions& c, const std::vector<OutputSensitivity>& sens) {
-  if (c.ensemble.sampling == SamplingMethod::saltelli) {
-    Handle g = make_group(file, "sensitivity");
-    std::vector<std::string> factors;
-    for (const auto& d : c.dispersions) factors.push_back(d.key);
-    write_strings(g.get(), "factor", factors);
-    for (const auto& s : sens) {
-      Handle o = make_group(g.get(), s.output);
-      const auto G = static_cast<std::size_t>(s.indices.d);
-      write_array(o.get(), "first_order", "1", s.indices.first_order.data(), G);
-      write_array(o.get(), "first_order_lo", "1", s.indices.first_order_lo.data(), G);
-      write_array(o.get(), "first_order_hi", "1", s.indices.first_order_hi.data(), G);
-      write_array(o.get(), "total", "1", s.indices.total.data(), G);
-      write_array(o.get(), "total_lo", "1", s.indices.total_lo.data(), G);
-      write_array(o.get(), "total_hi", "1", s.indices.total_hi.data(), G);
-      write_int_attribute(o.get(), "n_blocks", s.n_blocks);
-      write_int_attribute(o.get(), "n_blocks_dropped", s.n_blocks_dropped);
-      write_int_attribute(o.get(), "n_resamples", s.indices.n_resamples);
-      write_double_attribute(o.get(), "confidence", s.indices.confidence);
-      write_string_attribute(o.get(), "method",
-                             "Saltelli et al. 2010 design with one factor per dispersion; first order: Saltelli 2010 "
-                             "estimator; total: Jansen 1999; intervals: percentile bootstrap over blocks");
-    }
+void write_sensitivity(hid_t file, const CampaignContext& ctx, const std::vector<std::int8_t>& status) {
+  const CampaignOptions& c = ctx.options;
+  if (c.ensemble.sampling != SamplingMethod::saltelli) return;
+  const auto n = static_cast<std::int64_t>(status.size());
+  const auto sens = calc_sensitivity(status, ctx.columns, c,
+                                     [&](const std::string& name) { return read_f64_column(file, "runs/" + name, n); });
+  Handle g = make_group(file, "sensitivity");
+  std::vector<std::string> factors;
+  for (const auto& d : c.dispersions) factors.push_back(d.key);
+  write_strings(g.get(), "factor", factors);
+  for (const auto& s : sens) {
+    Handle o = make_group(g.get(), s.output);
+    const auto G = static_cast<std::size_t>(s.indices.d);
+    write_array(o.get(), "first_order", "1", s.indices.first_order.data(), G);
+    write_array(o.get(), "first_order_lo", "1", s.indices.first_order_lo.data(), G);
+    write_array(o.get(), "first_order_hi", "1", s.indices.first_order_hi.data(), G);
+    write_array(o.get(), "total", "1", s.indices.total.data(), G);
+    write_array(o.get(), "total_lo", "1", s.indices.total_lo.data(), G);
+    write_array(o.get(), "total_hi", "1", s.indices.total_hi.data(), G);
+    write_int_attribute(o.get(), "n_blocks", s.n_blocks);
+    write_int_attribute(o.get(), "n_blocks_dropped", s.n_blocks_dropped);
+    write_int_attribute(o.get(), "n_resamples", s.indices.n_resamples);
+    write_double_attribute(o.get(), "confidence", s.indices.confidence);
+    write_string_attribute(o.get(), "method",
+                           "Saltelli et al. 2010 design with one factor per dispersion; first order: Saltelli 2010 "
+                           "estimator; total: Jansen 1999; intervals: percentile bootstrap over blocks");
   }
-
 }
 
 void write_histories(hid_t file, const CampaignOptions& c, const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories) {
@@ -244,13 +229,10 @@ void write_histories(hid_t file, const CampaignOptions& c, const std::vector<std
   }
 }
 
-void write_timing(hid_t file, const ResultTable& t, const CampaignFileInfo& info) {
-  const auto n = static_cast<std::size_t>(t.n_runs());
-  Handle g = make_group(file, "timing");
+// /timing's per-run datasets are the ResultStore's; the schedule of this session as attributes.
+void write_timing_attributes(hid_t file, const CampaignFileInfo& info) {
+  Handle g(H5Gopen2(file, "timing", H5P_DEFAULT), H5Gclose, "open /timing");
   write_string_attribute(g.get(), "note", "not reproducible: depends on the machine, the ranks and the order of work");
-  write_array(g.get(), "run_wall_time_s", "s", t.wall_time_s.data(), n);
-  write_array(g.get(), "rank", "1", t.rank.data(), n);
-  write_array(g.get(), "session", "1", t.session.data(), n);
   const ScheduleTiming& st = info.schedule;
   write_double_attribute(g.get(), "schedule_wall_s", st.wall_s);
   write_double_attribute(g.get(), "rank0_compute_s", st.rank0_compute_s);
@@ -262,24 +244,78 @@ void write_timing(hid_t file, const ResultTable& t, const CampaignFileInfo& info
   if (st.synthetic_run_cost_s >= 0) write_double_attribute(g.get(), "synthetic_run_cost_s", st.synthetic_run_cost_s);
 }
 
-void write_contents(hid_t file, const CampaignContext& ctx, const ResultTable& t, const std::vector<OutputSensitivity>& sens,
-                    const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info) {
-  write_root_attributes(file, ctx, t, info);
-  write_runs(file, ctx, t);
-  write_stats(file, ctx, t);
-  write_sensitivity(file, ctx.options, sens);
-  write_histories(file, ctx.options, histories);
-  write_timing(file, t, info);
-  if (info.write_extra) info.write_extra(file);
-}
-
 }  // namespace
 
-void write_campaign_h5(const std::string& path, const CampaignContext& ctx, const ResultTable& table,
-                       const std::vector<OutputSensitivity>& sensitivity,
-                       const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,
-                       const CampaignFileInfo& info, bool force) {
-  write_file_atomically(path, force, [&](hid_t file) { write_contents(file, ctx, table, sensitivity, histories, info); });
+std::string CampaignFile::temporary_name(const std::string& path) {
+  const fs::path p(path);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path();
+  return (dir / fmt::format(".{}.tmp.{}", p.filename().string(), static_cast<long>(::getpid()))).string();
+}
+
+CampaignFile::CampaignFile(const std::string& path, const CampaignContext& ctx, const StoreOptions& opts)
+    : path_(path), tmp_(temporary_name(path)), ctx_(ctx), chunk_rows_(opts.chunk_runs) {
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through exceptions
+  file_ = H5Fcreate(tmp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  if (file_ < 0) {
+    tmp_.clear();
+    throw_h5("create " + temporary_name(path));
+  }
+  try {
+    store_ = std::make_unique<ResultStore>(file_, ctx, opts);
+  } catch (...) {
+    discard();
+    throw;
+  }
+}
+
+CampaignFile::~CampaignFile() { discard(); }
+
+void CampaignFile::discard() noexcept {
+  store_.reset();
+  if (file_ >= 0) H5Fclose(file_);
+  file_ = -1;
+  if (!tmp_.empty()) {
+    std::error_code ec;
+    fs::remove(tmp_, ec);
+    tmp_.clear();
+  }
+}
+
+void CampaignFile::finish(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info,
+                          bool force) {
+  store_->check_complete();
+  store_.reset();  // closes the per-run datasets
+  const std::vector<std::int8_t> status = read_status(file_, ctx_.options.ensemble.n_runs);
+  write_root_attributes(file_, ctx_, info);
+  write_input_attributes(file_, ctx_);
+  write_stats(file_, ctx_, status, chunk_rows_);
+  write_sensitivity(file_, ctx_, status);
+  write_histories(file_, ctx_.options, histories);
+  write_timing_attributes(file_, info);
+  if (info.write_extra) info.write_extra(file_);
+  check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "flush " + tmp_);
+  const hid_t f = file_;
+  file_ = -1;
+  check(H5Fclose(f), "close " + tmp_);
+  sync_file(tmp_);
+  commit(tmp_, path_, force);
+  tmp_.clear();
+}
+
+std::vector<std::string> CampaignFile::remove_stale(const std::string& path) {
+  const fs::path p(path);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  const std::string prefix = "." + p.filename().string() + ".tmp.";
+  const std::string mine = fs::path(temporary_name(path)).filename().string();
+  std::vector<std::string> removed;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() <= prefix.size() || name.rfind(prefix, 0) != 0 || name == mine) continue;
+    if (name.find_first_not_of("0123456789", prefix.size()) != std::string::npos) continue;  // .NAME.tmp.PID only
+    if (fs::remove(e.path(), ec)) removed.push_back(e.path().string());
+  }
+  return removed;
 }
 
 }  // namespace truss::campaign

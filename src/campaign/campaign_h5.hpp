@@ -1,15 +1,15 @@
-// The campaign results file (kind "campaign", schema in docs/hdf5-schema.md), written once at the
-// end from the in-memory table, atomically: to .NAME.tmp.PID, synced, then renamed onto NAME
-// (never replacing an existing file without force).
+// The campaign results file (kind "campaign", schema in docs/hdf5-schema.md).
 #pragma once
 #include <hdf5.h>
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "campaign/result_store.hpp"
 #include "campaign/results.hpp"
 
 namespace truss::campaign {
@@ -38,9 +38,35 @@ struct CampaignFileInfo {
   std::function<void(hid_t file)> write_extra;  // more groups written into the file before it is committed (/nominal)
 };
 
-void write_campaign_h5(const std::string& path, const CampaignContext& ctx, const ResultTable& table,
-                       const std::vector<OutputSensitivity>& sensitivity,
-                       const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,
-                       const CampaignFileInfo& info, bool force);
+// The results file of a session, written as it runs: created at the start as .NAME.tmp.PID next to
+// NAME, the runs streamed into /runs and /timing in run-index chunks (store()), then finish()
+// adds the statistics (from the stored columns), the Sobol' indices, the histories and the
+// attributes, flushes, closes, syncs and renames it onto NAME (never replacing a file without
+// force). HDF5 1.10 files are not crash-safe while open: the journal is what survives a crash,
+// and a resumed session writes a new file from it. Destroying an unfinished CampaignFile removes
+// its temporary file.
+class CampaignFile {
+ public:
+  CampaignFile(const std::string& path, const CampaignContext& ctx, const StoreOptions& opts);
+  ~CampaignFile();
+  CampaignFile(const CampaignFile&) = delete;
+  CampaignFile& operator=(const CampaignFile&) = delete;
+  ResultStore& store() { return *store_; }
+  void finish(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info,
+              bool force);
+  // Removes the .NAME.tmp.PID files that killed sessions left next to `path`, except this
+  // process's own; returns their paths. Call while holding the journal's lock (no live session
+  // of this campaign can own one then).
+  static std::vector<std::string> remove_stale(const std::string& path);
+  static std::string temporary_name(const std::string& path);  // .NAME.tmp.PID of this process
+
+ private:
+  void discard() noexcept;
+  std::string path_, tmp_;
+  const CampaignContext& ctx_;
+  std::int64_t chunk_rows_;
+  hid_t file_ = -1;
+  std::unique_ptr<ResultStore> store_;
+};
 
 }  // namespace truss::campaign

@@ -87,53 +87,149 @@ Journal Journal::create(const std::string& path, const std::string& campaign_tex
   return j;
 }
 
-Journal Journal::resume(const std::string& path, const std::string& campaign_text, std::vector<JournalFrame>& frames,
-                        std::size_t& dropped_bytes) {
+namespace {
+
+// Reads a file forward in blocks, keeping the unconsumed bytes.
+class BlockReader {
+ public:
+  BlockReader(int fd, const std::string& path) : fd_(fd), path_(path) {}
+  // True once at least n bytes are buffered past the read position (false at end of file).
+  bool need(std::size_t n) {
+    while (buf_.size() - at_ < n) {
+      if (at_ > (std::size_t{1} << 20)) {  // drop what has been consumed
+        buf_.erase(0, at_);
+        at_ = 0;
+      }
+      char block[1 << 16];
+      const ssize_t got = ::read(fd_, block, sizeof block);
+      if (got < 0) {
+        if (errno == EINTR) continue;
+        fail_errno("cannot read journal", path_);
+      }
+      if (got == 0) return false;
+      buf_.append(block, static_cast<std::size_t>(got));
+    }
+    return true;
+  }
+  std::string_view view(std::size_t n) const { return {buf_.data() + at_, n}; }
+  void skip(std::size_t n) {
+    at_ += n;
+    offset_ += n;
+  }
+  std::size_t offset() const { return offset_; }  // of the read position, from the start of the file
+
+ private:
+  int fd_;
+  const std::string& path_;
+  std::string buf_;
+  std::size_t at_ = 0, offset_ = 0;
+};
+
+// The header: magic, version, campaign text, CRC. Throws unless it holds `campaign_text`.
+void read_header(BlockReader& r, const std::string& path, const std::string& campaign_text) {
+  const std::size_t head = sizeof kMagic + 2 * sizeof(std::uint32_t);
+  if (!r.need(head) || std::memcmp(r.view(sizeof kMagic).data(), kMagic, sizeof kMagic) != 0)
+    throw std::runtime_error(fmt::format("{} is not a truss-campaign journal", path));
+  std::uint32_t version = 0, len = 0, crc = 0;
+  std::size_t at = sizeof kMagic;
+  get(r.view(head), at, version);
+  get(r.view(head), at, len);
+  if (version != kVersion || !r.need(head + len + sizeof crc))
+    throw std::runtime_error(fmt::format("{}: unreadable journal header", path));
+  const std::string_view all = r.view(head + len + sizeof crc);
+  const std::string_view text = all.substr(head, len);
+  at = head + len;
+  get(all, at, crc);
+  if (crc != crc32_of(text)) throw std::runtime_error(fmt::format("{}: damaged journal header", path));
+  if (text != campaign_text)
+    throw JournalRefused(fmt::format("{} belongs to a different campaign (resolved campaign text differs); "
+                                      "finish it with the same campaign file and --set options, or start over with --force", path));
+  r.skip(head + len + sizeof crc);
+}
+
+constexpr std::size_t kFrameHead = 1 + 2 * sizeof(std::uint32_t);
+constexpr std::uint32_t kMaxPayload = std::uint32_t{1} << 26;  // 64 MiB: a record is a few kB
+
+bool known_kind(std::uint8_t k) {
+  return k == static_cast<std::uint8_t>(FrameKind::run) || k == static_cast<std::uint8_t>(FrameKind::session) ||
+         k == static_cast<std::uint8_t>(FrameKind::heartbeat);
+}
+
+// The frame at the read position if it is complete, of a known kind and passes its CRC.
+bool frame_at(BlockReader& r, std::size_t bytes_left, std::uint8_t& kind, std::string_view& payload) {
+  if (!r.need(kFrameHead)) return false;
+  std::uint32_t n = 0, c = 0;
+  std::size_t at = 0;
+  const std::string_view h = r.view(kFrameHead);
+  get(h, at, kind);
+  get(h, at, n);
+  get(h, at, c);
+  if (!known_kind(kind) || n > kMaxPayload || n > bytes_left - kFrameHead || !r.need(kFrameHead + n)) return false;
+  payload = r.view(kFrameHead + n).substr(kFrameHead);
+  const auto k = static_cast<Bytef>(kind);
+  uLong crc = ::crc32(0L, &k, 1);
+  crc = ::crc32(crc, reinterpret_cast<const Bytef*>(payload.data()), static_cast<uInt>(payload.size()));
+  return c == static_cast<std::uint32_t>(crc);
+}
+
+}  // namespace
+
+std::string JournalScan::describe(const std::string& path) const {
+  if (dropped_bytes == 0) return "";
+  if (!damaged_middle())
+    return fmt::format("{}: torn last record dropped ({} bytes at byte {}); {} records kept", path, dropped_bytes,
+                       damage_offset, records_kept);
+  return fmt::format("{}: damaged in the middle at byte {}: {} records before the damage kept, {} valid records after "
+                     "it dropped ({} bytes) and computed again", path, damage_offset, records_kept, records_dropped,
+                     dropped_bytes);
+}
+
+Journal Journal::resume(const std::string& path, const std::string& campaign_text, const FrameFn& on_frame,
+                        JournalScan& scan) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd < 0) fail_errno("cannot open journal", path);
   lock_or_refuse(fd, path);
   Journal j(path, fd);
-  std::string all;
-  char buf[1 << 16];
-  for (;;) {
-    const ssize_t n = ::read(fd, buf, sizeof buf);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail_errno("cannot read journal", path);
+  const off_t size = ::lseek(fd, 0, SEEK_END);
+  if (size < 0 || ::lseek(fd, 0, SEEK_SET) < 0) fail_errno("cannot seek journal", path);
+  const auto file_size = static_cast<std::size_t>(size);
+  BlockReader r(fd, path);
+  read_header(r, path, campaign_text);
+  scan = JournalScan{};
+  std::uint8_t kind = 0;
+  std::string_view payload;
+  while (r.offset() < file_size && frame_at(r, file_size - r.offset(), kind, payload)) {
+    on_frame(static_cast<FrameKind>(kind), payload, r.offset());
+    ++scan.frames_kept;
+    scan.records_kept += kind == static_cast<std::uint8_t>(FrameKind::run);
+    r.skip(kFrameHead + payload.size());
+  }
+  const std::size_t good = r.offset();
+  scan.damage_offset = good;
+  scan.dropped_bytes = file_size - good;
+  // After the damage: count the frames that still pass, at any byte (their framing is lost).
+  if (good < file_size) r.skip(1);
+  while (r.offset() < file_size) {
+    if (frame_at(r, file_size - r.offset(), kind, payload)) {
+      scan.records_dropped += kind == static_cast<std::uint8_t>(FrameKind::run);
+      r.skip(kFrameHead + payload.size());
+    } else {
+      r.skip(1);
     }
-    if (n == 0) break;
-    all.append(buf, static_cast<std::size_t>(n));
   }
-  std::size_t at = 0;
-  std::uint32_t version = 0, len = 0, crc = 0;
-  if (all.size() < sizeof kMagic || std::memcmp(all.data(), kMagic, sizeof kMagic) != 0)
-    throw std::runtime_error(fmt::format("{} is not a truss-campaign journal", path));
-  at = sizeof kMagic;
-  if (!get(all, at, version) || version != kVersion || !get(all, at, len) || all.size() - at < len)
-    throw std::runtime_error(fmt::format("{}: unreadable journal header", path));
-  const std::string_view text(all.data() + at, len);
-  at += len;
-  if (!get(all, at, crc) || crc != crc32_of(text)) throw std::runtime_error(fmt::format("{}: damaged journal header", path));
-  if (text != campaign_text)
-    throw JournalRefused(fmt::format("{} belongs to a different campaign (resolved campaign text differs); "
-                                      "finish it with the same campaign file and --set options, or start over with --force", path));
-  frames.clear();
-  std::size_t good = at;
-  for (;;) {
-    std::uint8_t kind = 0;
-    std::uint32_t n = 0, c = 0;
-    std::size_t p = good;
-    if (!get(all, p, kind) || !get(all, p, n) || !get(all, p, c) || all.size() - p < n) break;
-    std::string payload(all.data() + p, n);
-    std::string framed(1, static_cast<char>(kind));
-    framed += payload;
-    if (c != crc32_of(framed)) break;
-    frames.push_back({static_cast<FrameKind>(kind), std::move(payload)});
-    good = p + n;
-  }
-  dropped_bytes = all.size() - good;
-  if (dropped_bytes > 0 && ::ftruncate(fd, static_cast<off_t>(good)) != 0) fail_errno("cannot truncate journal", path);
+  if (scan.dropped_bytes > 0 && ::ftruncate(fd, static_cast<off_t>(good)) != 0) fail_errno("cannot truncate journal", path);
   if (::lseek(fd, static_cast<off_t>(good), SEEK_SET) < 0) fail_errno("cannot seek journal", path);
+  return j;
+}
+
+Journal Journal::resume(const std::string& path, const std::string& campaign_text, std::vector<JournalFrame>& frames,
+                        std::size_t& dropped_bytes) {
+  frames.clear();
+  JournalScan scan;
+  Journal j = resume(
+      path, campaign_text,
+      [&](FrameKind k, std::string_view p, std::size_t) { frames.push_back({k, std::string(p)}); }, scan);
+  dropped_bytes = scan.dropped_bytes;
   return j;
 }
 

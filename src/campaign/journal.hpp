@@ -8,6 +8,7 @@
 // then frames: u8 kind, u32 payload length, u32 CRC-32 of kind + payload, payload.
 #pragma once
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <stdexcept>
 #include <string_view>
@@ -24,6 +25,19 @@ enum class FrameKind : std::uint8_t {
 struct JournalFrame {
   FrameKind kind;
   std::string payload;
+};
+
+// What reading a journal back found. Frames are read up to the first one that fails its CRC or
+// its framing (the damage); the file is cut there. The rest of the file is then scanned (at every
+// byte) for frames that would still pass, to tell a torn last record (a crash while appending:
+// nothing valid after it) from a damaged middle (valid records after it, dropped and recomputed).
+struct JournalScan {
+  std::int64_t frames_kept = 0, records_kept = 0;  // delivered to the caller (records: run frames)
+  std::size_t damage_offset = 0;                   // byte offset of the first bad frame (if any)
+  std::size_t dropped_bytes = 0;                   // from damage_offset to the end of the file
+  std::int64_t records_dropped = 0;                // valid run frames found after the damage
+  bool damaged_middle() const { return records_dropped > 0; }
+  std::string describe(const std::string& path) const;  // "" when nothing was dropped
 };
 
 // A journal that must not be used: it belongs to another campaign, or a live process holds it.
@@ -44,6 +58,13 @@ class Journal {
   // campaign text or another process has it open.
   static Journal resume(const std::string& path, const std::string& campaign_text, std::vector<JournalFrame>& frames,
                         std::size_t& dropped_bytes);
+  // Same, handing each good frame to on_frame as it is read (the payload view is valid during
+  // the call only; `offset` is the frame's byte offset in the file): memory stays bounded
+  // whatever the journal's size. An exception from on_frame propagates and leaves the file as
+  // it was (nothing is cut).
+  using FrameFn = std::function<void(FrameKind, std::string_view payload, std::size_t offset)>;
+  static Journal resume(const std::string& path, const std::string& campaign_text, const FrameFn& on_frame,
+                        JournalScan& scan);
   Journal(Journal&&) noexcept;
   Journal& operator=(Journal&&) = delete;
   Journal(const Journal&) = delete;

@@ -33,9 +33,11 @@ ResourceEstimate estimate_resources(const CampaignContext& ctx) {
   const double values = static_cast<double>(c.f64.size() + c.i64.size() + c.bay.size() * static_cast<std::size_t>(c.n_bays_max) +
                                             static_cast<std::size_t>(c.n_inputs) + 3);
   ResourceEstimate e;
-  // Result table: the values, a status byte, a done byte, an empty message (sizeof std::string);
-  // the journal scan: a done byte and an 8-byte to-do entry.
-  e.bytes_per_run = 8.0 * values + 2.0 + static_cast<double>(sizeof(std::string)) + 9.0;
+  // Results stream to the file in chunks (result_store.hpp): rank 0 keeps per run only a done
+  // byte and an 8-byte to-do entry, and at the end one column read back for the statistics
+  // with its sorted copy and the ok mask (8 + 8 + 1 bytes); per-bay columns are read in bounded
+  // groups. The chunks in flight are a constant, not a per-run cost.
+  e.bytes_per_run = 9.0 + 17.0;
   e.memory_bytes = n * e.bytes_per_run;
   e.output_bytes = n * (8.0 * values + 1.0);      // one row of /runs per run, uncompressed
   e.journal_bytes = n * (8.0 * values + 1.0 + 24.0);  // a record per run with its frame header and counts
@@ -72,7 +74,7 @@ std::string check_resources(const CampaignContext& ctx, const std::string& outpu
   const std::int64_t n = ctx.options.ensemble.n_runs;
   const double mem = available_memory_bytes();
   if (e.memory_bytes > 0.8 * mem)
-    return fmt::format("error: ensemble.n_runs = {}: rank 0 would hold about {} of results in memory ({} bytes per run), "
+    return fmt::format("error: ensemble.n_runs = {}: rank 0 would need about {} in memory ({} bytes per run: run flags, to-do list, one column for the statistics), "
                        "more than 80 % of the {} available; use fewer runs (at most about {})",
                        n, human(e.memory_bytes), e.bytes_per_run, human(mem),
                        static_cast<std::int64_t>(std::floor(0.8 * mem / e.bytes_per_run)));

@@ -132,25 +132,36 @@ const std::vector<std::string>& sensitivity_outputs() {
 }
 
 std::vector<OutputSensitivity> calc_sensitivity(const ResultTable& t, const CampaignOptions& c) {
+  const auto& cols = t.columns();
+  return calc_sensitivity(t.status, cols, c, [&](const std::string& name) {
+    for (std::size_t i = 0; i < cols.f64.size(); ++i)
+      if (name == cols.f64[i]->name) return t.f64[i];
+    return std::vector<double>{};
+  });
+}
+
+std::vector<OutputSensitivity> calc_sensitivity(const std::vector<std::int8_t>& status, const OutputColumns& cols,
+                                                const CampaignOptions& c,
+                                                const std::function<std::vector<double>(const std::string&)>& column) {
   std::vector<OutputSensitivity> out;
   if (c.ensemble.sampling != SamplingMethod::saltelli) return out;
   const std::int64_t block = saltelli_block_runs(c);
   const int G = static_cast<int>(c.dispersions.size());
-  const std::int64_t n_blocks = t.n_runs() / block;
+  const std::int64_t n_blocks = static_cast<std::int64_t>(status.size()) / block;
   for (const std::string& name : sensitivity_outputs()) {
-    std::size_t col = t.columns().f64.size();
-    for (std::size_t i = 0; i < t.columns().f64.size(); ++i)
-      if (name == t.columns().f64[i]->name) col = i;
-    if (col == t.columns().f64.size()) continue;
+    bool known = false;
+    for (const auto* f : cols.f64) known = known || name == f->name;
+    if (!known) continue;
+    const std::vector<double> v = column(name);
     OutputSensitivity s;
     s.output = name;
     std::vector<double> y;
     for (std::int64_t b = 0; b < n_blocks; ++b) {
       bool usable = true;
       for (std::int64_t k = b * block; k < (b + 1) * block && usable; ++k)
-        usable = t.status[static_cast<std::size_t>(k)] == 0 && std::isfinite(t.f64[col][static_cast<std::size_t>(k)]);
+        usable = status[static_cast<std::size_t>(k)] == 0 && std::isfinite(v[static_cast<std::size_t>(k)]);
       if (!usable) { ++s.n_blocks_dropped; continue; }
-      for (std::int64_t k = b * block; k < (b + 1) * block; ++k) y.push_back(t.f64[col][static_cast<std::size_t>(k)]);
+      for (std::int64_t k = b * block; k < (b + 1) * block; ++k) y.push_back(v[static_cast<std::size_t>(k)]);
       ++s.n_blocks;
     }
     if (s.n_blocks >= 2) {
@@ -160,9 +171,9 @@ std::vector<OutputSensitivity> calc_sensitivity(const ResultTable& t, const Camp
       s.indices.n_base = s.n_blocks;
       s.indices.n_resamples = 1000;
       s.indices.confidence = 0.95;
-      for (auto* v : {&s.indices.first_order, &s.indices.total, &s.indices.first_order_lo, &s.indices.first_order_hi,
+      for (auto* p : {&s.indices.first_order, &s.indices.total, &s.indices.first_order_lo, &s.indices.first_order_hi,
                       &s.indices.total_lo, &s.indices.total_hi})
-        v->assign(static_cast<std::size_t>(G), kNaN);
+        p->assign(static_cast<std::size_t>(G), kNaN);
     }
     out.push_back(std::move(s));
   }

@@ -5,6 +5,7 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -68,5 +69,10 @@ const std::vector<std::string>& sensitivity_outputs();
 // Blocks with a failed run or a non-finite output are left out; fewer than 2 usable blocks give
 // NaN indices.
 std::vector<OutputSensitivity> calc_sensitivity(const ResultTable& t, const CampaignOptions& c);
+// Same, from the run statuses and a function that returns a float64 column (all n runs) by name
+// (the results file read back, one column at a time).
+std::vector<OutputSensitivity> calc_sensitivity(const std::vector<std::int8_t>& status, const OutputColumns& cols,
+                                                const CampaignOptions& c,
+                                                const std::function<std::vector<double>(const std::string&)>& column);
 
 }  // namespace truss::campaign

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <ctime>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -44,6 +45,7 @@ struct CommandOptions {
   std::string progress = "auto";
   double progress_interval_s = 2.0;  // a person watching a log sees it move
   int max_batch = 32;
+  int compression = 1;                 // zlib level of the results file's datasets (0: none)
   double synthetic_run_cost_s = -1.0;  // bench only (hidden): runs sleep this long and simulate nothing
 };
 
@@ -71,16 +73,74 @@ T get_at(const std::string& s, std::size_t at) {
   return v;
 }
 
-// Rank 0's state between the checks and the end.
-struct Rank0 {
-  std::unique_ptr<campaign::Journal> journal;
-  std::vector<campaign::JournalFrame> frames;
-  std::size_t dropped_bytes = 0;
+// What rank 0 carries from the journal into this session.
+struct SessionState {
+  int session = 0;             // index of this invocation (0 unless resumed)
+  double previous_wall_s = 0;  // wall time of the earlier sessions
+  double first_start = 0;      // unix time of the first session
+  double session_wall = 0;     // while reading the journal: the last heartbeat of the session read
 };
 
-// Rank 0: output and journal checks; opens or creates the journal. Throws io::InputError for
+// Rank 0's state between the checks and the end.
+struct Rank0 {
+  std::unique_ptr<campaign::CampaignFile> file;  // the results file being written (a temporary name)
+  std::unique_ptr<campaign::Journal> journal;
+  std::string journal_path;
+  campaign::JournalScan scan;
+  SessionState st;
+};
+
+// Results go to the file in chunks of this many runs: rank 0 holds only the chunks still filling
+// (around the scheduling front), and each chunk is one HDF5 chunk of every column (32 kB).
+constexpr std::int64_t kChunkRuns = 4096;
+
+// Rank 0, --resume: one journal frame into the session state or the results file. A frame that
+// passed its CRC but makes no sense (a short payload, a run index out of range, a run twice) is
+// not a crash's doing: the journal is refused (exit 2) with what is wrong and where.
+void restore_frame(Rank0& r0, const campaign::CampaignContext& ctx, FrameKind kind, std::string_view payload,
+                   std::size_t offset) {
+  SessionState& st = r0.st;
+  const std::string where = fmt::format("{}: record at byte {}", r0.journal_path, offset);
+  auto need = [&](std::size_t n, const char* what) {
+    if (payload.size() != n)
+      throw io::InputError(fmt::format("error: --resume: {}: a {} record of {} bytes (expected {}): the journal is "
+                                       "inconsistent; start over with --force", where, what, payload.size(), n));
+  };
+  if (kind == FrameKind::session) {
+    need(sizeof(double) + sizeof(std::int32_t), "session");
+    if (st.session == 0) st.first_start = get_at<double>(std::string(payload), 0);
+    st.previous_wall_s += st.session_wall;
+    st.session_wall = 0.0;
+    ++st.session;
+    return;
+  }
+  if (kind == FrameKind::heartbeat) {
+    need(sizeof(double), "heartbeat");
+    st.session_wall = get_at<double>(std::string(payload), 0);
+    return;
+  }
+  campaign::RunRecord rec;
+  try {
+    rec = campaign::RunRecord::from_bytes(payload, ctx.columns);
+  } catch (const std::exception& e) {
+    throw io::InputError(fmt::format("error: --resume: {}: not a run record of this campaign ({}, {} bytes); the journal "
+                                     "is inconsistent; start over with --force", where, e.what(), payload.size()));
+  }
+  const std::int64_t n = ctx.options.ensemble.n_runs;
+  if (rec.run_index < 0 || rec.run_index >= n)
+    throw io::InputError(fmt::format("error: --resume: {}: run index {} out of range (the campaign has runs 0 to {}); the "
+                                     "journal is inconsistent; start over with --force", where, rec.run_index, n - 1));
+  if (r0.file->store().has(rec.run_index))
+    throw io::InputError(fmt::format("error: --resume: {}: run {} recorded twice; the journal is inconsistent; start "
+                                     "over with --force", where, rec.run_index));
+  r0.file->store().add(rec, std::max(0, st.session - 1));
+}
+
+// Rank 0: output and journal checks; creates the results file (a temporary name until the end)
+// and opens or creates the journal, restoring its runs into the file. Throws io::InputError for
 // anything the user must decide.
-void prepare_output(const CommandOptions& o, const campaign::CampaignContext& ctx, const std::string& campaign_text, Rank0& r0) {
+void prepare_output(const CommandOptions& o, const std::string& campaign_text, const campaign::CampaignContext& ctx,
+                    Rank0& r0) {
   if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
   if (o.resume && fs::exists(o.output_path))
     throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
@@ -88,34 +148,35 @@ void prepare_output(const CommandOptions& o, const campaign::CampaignContext& ct
   // Memory and disk for every run, before the journal exists (a refusal leaves nothing behind).
   if (const std::string e = campaign::check_resources(ctx, o.output_path); !e.empty()) throw io::InputError(e);
   const std::string jpath = o.output_path + ".journal";
+  r0.journal_path = jpath;
   const bool has_journal = fs::exists(fs::symlink_status(jpath));
+  if (o.resume && !has_journal)
+    throw io::InputError(fmt::format("error: --resume: no journal {} to resume from (run without --resume to start)", jpath));
+  if (!o.resume && has_journal && !o.force)
+    throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
+                                     "(same campaign and --set options) or start over with --force", jpath));
+  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{kChunkRuns, o.compression});
   if (o.resume) {
-    if (!has_journal)
-      throw io::InputError(fmt::format("error: --resume: no journal {} to resume from (run without --resume to start)", jpath));
     try {
-      r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::resume(jpath, campaign_text, r0.frames, r0.dropped_bytes));
+      auto on_frame = [&](FrameKind k, std::string_view p, std::size_t at) { restore_frame(r0, ctx, k, p, at); };
+      r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::resume(jpath, campaign_text, on_frame, r0.scan));
+    } catch (const io::InputError&) {
+      throw;
+    } catch (const std::runtime_error& e) {  // JournalRefused included
+      throw io::InputError(std::string("error: --resume: ") + e.what());
+    }
+    r0.st.previous_wall_s += r0.st.session_wall;
+  } else {
+    try {
+      if (has_journal) campaign::Journal::remove_unused(jpath);
+      r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::create(jpath, campaign_text));
     } catch (const campaign::JournalRefused& e) {
-      throw io::InputError(std::string("error: --resume: ") + e.what());
-    } catch (const std::runtime_error& e) {
-      throw io::InputError(std::string("error: --resume: ") + e.what());
-    }
-    return;
-  }
-  if (has_journal) {
-    if (!o.force)
-      throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
-                                       "(same campaign and --set options) or start over with --force", jpath));
-    try {
-      campaign::Journal::remove_unused(jpath);
-    } catch (const campaign::JournalRefused& e) {  // a live campaign holds it: exit 2, as --resume does
-      throw io::InputError(std::string("error: --force: ") + e.what());
+      throw io::InputError(std::string(has_journal ? "error: --force: " : "error: ") + e.what());  // held by a live campaign: exit 2, as --resume
     }
   }
-  try {
-    r0.journal = std::make_unique<campaign::Journal>(campaign::Journal::create(jpath, campaign_text));
-  } catch (const campaign::JournalRefused& e) {
-    throw io::InputError(std::string("error: ") + e.what());
-  }
+  // Temporary files of killed sessions: no live session of this campaign exists (we hold the lock).
+  for (const auto& stale : campaign::CampaignFile::remove_stale(o.output_path))
+    std::cerr << fmt::format("[truss-campaign] removed {}, left by an interrupted session\n", stale);
 }
 
 campaign::ProgressMode progress_mode(const std::string& s) {
@@ -142,6 +203,8 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
   app.add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines when not in place")
       ->check(CLI::Range(0.01, 1e6));
   app.add_option("--max-batch", o.max_batch, "Largest batch of runs handed to a rank at once")->check(CLI::Range(1, 100000));
+  app.add_option("--compression", o.compression, "zlib level (0-9) of the results file's per-run datasets; 0 stores "
+                 "them uncompressed (largest file, least work for rank 0)")->check(CLI::Range(0, 9));
   // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
   app.add_option("--synthetic-run-cost-s", o.synthetic_run_cost_s, "")->check(CLI::Range(0.0, 60.0))->group("");
   app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
@@ -162,101 +225,74 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
   return std::nullopt;
 }
 
-// What rank 0 carries from the journal into this session.
-struct SessionState {
-  int session = 0;             // index of this invocation (0 unless resumed)
-  double previous_wall_s = 0;  // wall time of the earlier sessions
-  double first_start = 0;      // unix time of the first session
-};
-
-// Rank 0: reads the journal's sessions and which runs it holds, journals this session's start and
-// returns the runs still to do (the records themselves go into the table in restore_runs).
-std::vector<std::int64_t> scan_journal(Rank0& r0, std::int64_t n_runs, double t_start, int size, SessionState& st) {
-  st.first_start = t_start;
-  double session_wall = 0.0;
-  std::vector<std::uint8_t> done(static_cast<std::size_t>(n_runs), 0);
-  std::int64_t n_done = 0;
-  for (const auto& f : r0.frames) {
-    if (f.kind == FrameKind::session) {
-      if (st.session == 0) st.first_start = get_at<double>(f.payload, 0);
-      st.previous_wall_s += session_wall;
-      session_wall = 0.0;
-      ++st.session;
-    } else if (f.kind == FrameKind::heartbeat) {
-      session_wall = get_at<double>(f.payload, 0);
-    } else if (f.kind == FrameKind::run) {
-      const auto i = get_at<std::int64_t>(f.payload, 0);  // a record starts with its run index
-      if (i >= 0 && i < n_runs && !done[static_cast<std::size_t>(i)]) {
-        done[static_cast<std::size_t>(i)] = 1;
-        ++n_done;
-      }
-    }
+// Rank 0: journals this session's start and returns the runs still to do.
+std::vector<std::int64_t> start_session(Rank0& r0, std::int64_t n_runs, double t_start, int size) {
+  if (r0.st.session == 0) r0.st.first_start = t_start;
+  const campaign::ResultStore& store = r0.file->store();
+  if (r0.st.session > 0) {
+    std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}\n", store.n_done(), n_runs,
+                             r0.journal->path());
+    if (const std::string d = r0.scan.describe(r0.journal->path()); !d.empty()) std::cerr << "[truss-campaign] " << d << '\n';
   }
-  st.previous_wall_s += session_wall;
-  if (st.session > 0)
-    std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}{}\n", n_done, n_runs,
-                             r0.journal->path(),
-                             r0.dropped_bytes ? fmt::format(" ({} bytes of a torn last record dropped)", r0.dropped_bytes) : "");
   std::string s;
   put(s, t_start);
   put(s, static_cast<std::int32_t>(size));
   r0.journal->append(FrameKind::session, s);
   r0.journal->flush();
   std::vector<std::int64_t> todo;
+  todo.reserve(static_cast<std::size_t>(n_runs - store.n_done()));
   for (std::int64_t i = 0; i < n_runs; ++i)
-    if (!done[static_cast<std::size_t>(i)]) todo.push_back(i);
+    if (!store.has(i)) todo.push_back(i);
   return todo;
 }
 
-// Rank 0: the journal's records into the table (session numbers as they were), then frees them.
-void restore_runs(Rank0& r0, campaign::ResultTable& table, const campaign::OutputColumns& cols) {
-  int session = 0;
-  for (const auto& f : r0.frames) {
-    if (f.kind == FrameKind::session) ++session;
-    else if (f.kind == FrameKind::run) table.add(campaign::RunRecord::from_bytes(f.payload, cols), std::max(0, session - 1));
-  }
-  r0.frames.clear();
-  r0.frames.shrink_to_fit();
-}
-
-// Runs per status so far (restored and new).
-campaign::StatusCounts status_counts(const campaign::ResultTable& t) {
+// Runs per status so far (restored and new), from the results store.
+campaign::StatusCounts status_counts(const campaign::ResultStore& store) {
   campaign::StatusCounts n{};
-  for (std::int64_t i = 0; i < t.n_runs(); ++i)
-    if (t.has(i)) ++n[static_cast<std::size_t>(t.status[static_cast<std::size_t>(i)])];
+  const auto& c = store.status_counts();
+  std::copy(c.begin(), c.end(), n.begin());
   return n;
 }
 
-// The end summary's main design values: nominal, P99.865 and maximum over the ok runs.
-std::vector<campaign::DesignValue> design_values(const campaign::ResultTable& t, const sim::RunResult& nominal) {
+// The end summary's main design values: nominal, P99.865 and maximum over the ok runs, read back
+// from the finished file (rank 0 holds no result table: results stream to the file).
+std::vector<campaign::DesignValue> design_values(const std::string& path, const campaign::OutputColumns& cols,
+                                                 std::int64_t n, const sim::RunResult& nominal) {
   static const std::pair<const char*, const char*> shown[] = {
       {"peak_drive_force_N", "peak drive force"}, {"peak_drive_torque_Nm", "peak drive torque"},
       {"peak_pin_force_N", "peak rail pin force"}, {"peak_diagonal_tension_N", "peak diagonal tension"},
       {"peak_latch_energy_J", "peak latch energy"}, {"deploy_time_s", "deployment time"}};
-  std::vector<std::uint8_t> ok(t.status.size());
-  for (std::size_t i = 0; i < ok.size(); ++i) ok[i] = t.status[i] == static_cast<std::int8_t>(sim::RunStatus::ok);
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return {};
   std::vector<campaign::DesignValue> res;
-  const auto& cols = t.columns().f64;
-  for (const auto& [name, label] : shown)
-    for (std::size_t k = 0; k < cols.size(); ++k)
-      if (std::string(cols[k]->name) == name) {
-        const campaign::Stats s = campaign::calc_stats(t.f64[k], ok);
-        res.push_back({label, cols[k]->units, std::get<double>(cols[k]->get(nominal)), s.percentiles[5], s.max});
-      }
+  try {
+    const std::vector<std::int8_t> status = campaign::read_status(file, n);
+    std::vector<std::uint8_t> ok(status.size());
+    for (std::size_t i = 0; i < ok.size(); ++i) ok[i] = status[i] == static_cast<std::int8_t>(sim::RunStatus::ok);
+    for (const auto& [name, label] : shown)
+      for (const auto* f : cols.f64)
+        if (std::string(f->name) == name) {
+          const campaign::Stats st = campaign::calc_stats(campaign::read_f64_column(file, std::string("runs/") + name, n), ok);
+          res.push_back({label, f->units, std::get<double>(f->get(nominal)), st.percentiles[5], st.max});
+        }
+  } catch (const std::exception&) {
+    res.clear();  // the summary is a convenience: the file itself is complete
+  }
+  H5Fclose(file);
   return res;
 }
 
 // Rank 0: histories, statistics and the results file; removes the journal. Returns the exit status.
 int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx, const std::string& campaign_text,
-                  Rank0& r0, const campaign::ResultTable& table, const SessionState& st, int size,
-                  std::chrono::steady_clock::time_point wall0, const ScheduleSummary& sched) {
+                  Rank0& r0, int size, std::chrono::steady_clock::time_point wall0, const ScheduleSummary& sched) {
+  const SessionState& st = r0.st;
   const campaign::CampaignOptions& c = ctx.options;
   try {
     const auto t_finish = std::chrono::steady_clock::now();
+    const std::clock_t cpu_finish = std::clock();  // rank 0's CPU time: the tail without the other processes' share
     std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
     for (std::int64_t run : c.output.history_runs)
       histories.emplace_back(run, campaign::calc_run_with_history(ctx, run, c.output.history_step_s));
-    const auto sens = campaign::calc_sensitivity(table, c);
     const sim::RunResult nominal = campaign::calc_nominal_run(c, c.output.history_step_s > 0 ? c.output.history_step_s : 0.01);
     campaign::CampaignFileInfo info;
     info.campaign_toml = campaign_text;
@@ -269,19 +305,24 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.schedule = {sched.wall_s, sched.rank0_compute_s, sched.rank0_poll_s, sched.rank0_tick_s, sched.rank0_idle_s,
                      sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s};
     info.write_extra = [&](hid_t file) { campaign::write_nominal_group(file, nominal, ctx.columns.n_bays_max); };
-    campaign::write_campaign_h5(o.output_path, ctx, table, sens, histories, info, o.force);
+    const campaign::ResultStore& store = r0.file->store();
+    const std::int64_t n_runs = store.n_runs();
+    const campaign::StatusCounts counts = status_counts(store);
+    const std::size_t peak_chunks = store.peak_chunks_in_memory();
+    r0.file->finish(histories, info, o.force);
     r0.journal->close_and_remove();
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n", sim::to_string(nominal.status),
                              nominal.message.empty() ? "" : ": " + nominal.message);
-    campaign::print_design_summary(stderr, design_values(table, nominal));
+    campaign::print_design_summary(stderr, design_values(o.output_path, ctx.columns, n_runs, nominal));
     const std::int64_t results = sched.runs_by_rank0 + sched.runs_by_workers;
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs ({}), {:.3g} s on {} rank{} "
-                             "(statistics and file: {:.3g} s; rank 0: {} runs computed, {:.3g} us per result handled)\n",
-                             o.output_path, table.n_runs(), campaign::format_status_counts(status_counts(table)),
-                             info.wall_time_s, size, size > 1 ? "s" : "",
+                             "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per result handled, "
+                             "at most {} chunks of {} runs in memory)\n",
+                             o.output_path, n_runs, campaign::format_status_counts(counts), info.wall_time_s, size, size > 1 ? "s" : "",
                              std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count(),
-                             sched.runs_by_rank0,
-                             results ? 1e6 * (sched.rank0_poll_s + sched.rank0_tick_s) / static_cast<double>(results) : 0.0);
+                             static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC, sched.runs_by_rank0,
+                             results ? 1e6 * (sched.rank0_poll_s + sched.rank0_tick_s) / static_cast<double>(results) : 0.0,
+                             peak_chunks, kChunkRuns);
     return kExitOk;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
@@ -336,18 +377,22 @@ std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions&
 }
 
 // Rank 0: the output and journal checks, agreed on by every rank.
-int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const campaign::CampaignContext& ctx,
-                       const std::string& campaign_text, Rank0& r0) {
+int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const std::string& campaign_text,
+                       const campaign::CampaignContext& ctx, Rank0& r0) {
   int status = kExitOk;
   if (root) {
     try {
-      prepare_output(o, ctx, campaign_text, r0);
+      prepare_output(o, campaign_text, ctx, r0);
     } catch (const io::InputError& e) {
       std::cerr << e.what() << '\n';
       status = kExitBadInput;
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << '\n';
       status = kExitIoError;
+    }
+    if (status != kExitOk) {  // nothing written: no results file, and the journal as it was
+      r0.journal.reset();
+      r0.file.reset();
     }
   }
   return broadcast_int(comm, status);
@@ -368,13 +413,11 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   std::string campaign_text;
   if (auto rc = load_campaign(comm, root, o, ctx, campaign_text)) return *rc;
   Rank0 r0;
-  if (int rc = prepare_output_all(comm, root, o, *ctx, campaign_text, r0); rc != kExitOk) return rc;
+  if (int rc = prepare_output_all(comm, root, o, campaign_text, *ctx, r0); rc != kExitOk) return rc;
 
   const campaign::CampaignOptions& c = ctx->options;
-  std::unique_ptr<campaign::ResultTable> table;
   std::vector<std::int64_t> todo;
-  SessionState st;
-  if (root) todo = scan_journal(r0, c.ensemble.n_runs, t_start, size, st);
+  if (root) todo = start_session(r0, c.ensemble.n_runs, t_start, size);
   const std::int64_t restored = root ? c.ensemble.n_runs - static_cast<std::int64_t>(todo.size()) : 0;
   campaign::Progress progress(c.ensemble.n_runs, restored, progress_mode(o.progress), o.progress_interval_s);
   if (root) progress.banner(c.name, size, o.output_path);
@@ -393,22 +436,18 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   ScheduleOptions so;
   so.max_batch = o.max_batch;
   so.tick_interval_s = std::min(0.25, o.flush_interval_s);
-  so.on_started = [&] {  // workers are busy with their first batches meanwhile
-    table = std::make_unique<campaign::ResultTable>(c.ensemble.n_runs, ctx->columns);
-    restore_runs(r0, *table, ctx->columns);
-  };
   ScheduleSummary sched;
   try {
     sched = run_schedule(
         comm, todo, compute,
         [&](std::string_view bytes) {
-          table->add(campaign::RunRecord::from_bytes(bytes, ctx->columns), st.session);
           r0.journal->append(FrameKind::run, bytes);
+          r0.file->store().add(campaign::RunRecord::from_bytes(bytes, ctx->columns), r0.st.session);
         },
         [&] {
           if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= o.flush_interval_s)
             flush_journal();
-          progress.update(table->n_done(), [&] { return status_counts(*table); });
+          progress.update(r0.file->store().n_done(), [&] { return status_counts(r0.file->store()); });
         },
         so);
   } catch (const std::exception& e) {
@@ -419,11 +458,15 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   if (root) {
     try {
       flush_journal();
-      progress.finish(table->n_done(), status_counts(*table));
-      status = write_results(o, *ctx, campaign_text, r0, *table, st, size, wall0, sched);
+      progress.finish(r0.file->store().n_done(), status_counts(r0.file->store()));
+      status = write_results(o, *ctx, campaign_text, r0, size, wall0, sched);
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
       status = kExitIoError;
+    }
+    if (status != kExitOk) {  // nothing written: no results file, and the journal as it was
+      r0.journal.reset();
+      r0.file.reset();
     }
   }
   return broadcast_int(comm, status);

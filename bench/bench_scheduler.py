@@ -1,0 +1,151 @@
+#!/usr/bin/python3
+"""Scheduler benchmark of truss-campaign (not a test; see docs/benchmarks.md, "Scheduler").
+
+real:       the Table-1 campaign (campaigns/table1_dispersed.toml) on 1 rank and on 2 ranks over
+            three transports: shared memory (Linux CMA single-copy on), shared memory with
+            single-copy off (btl_vader_single_copy_mechanism none), TCP (btl self,tcp).
+            Interleaved repeats, medians. Efficiency E(2) = T(1) / (2 T(2)) on the campaign's own
+            wall time (root attribute wall_time_s).
+synthetic:  P oversubscribed ranks whose runs sleep COST seconds (hidden --synthetic-run-cost-s:
+            no physics, records of the real size), under shared memory and TCP. Efficiency
+            E = sum of run times / (P x schedule wall time) (/timing/run_wall_time_s,
+            /timing@schedule_wall_s), rank 0's per-result cost h = (time rank 0 spends matching,
+            receiving, storing, journalling and answering) / results, and the model's prediction.
+
+Model (rank 0 computes runs and handles every result, serially): with per-run cost c and rank
+0's per-result cost h, the P - 1 workers deliver (P - 1)/c results per second, which take rank 0
+a fraction u = (P - 1) h / c of its time; it computes its own runs (cost c + h each) in the rest.
+  u < 1: throughput X = (P - 1)/c + (1 - u)/(c + h);   u >= 1: X = 1/h (rank 0 saturated)
+  E(P) = X c / P.
+So E stays near 1 - h/c up to P ~ c/h and falls as c/(P h) beyond.
+
+  bench/bench_scheduler.py BUILD_DIR real [--runs 4000] [--repeats 3] [--driver OTHER_BINARY]
+  bench/bench_scheduler.py BUILD_DIR synthetic [--ranks 32] [--cost 0.002] [--runs 20000] [--repeats 3]
+  bench/bench_scheduler.py model --c C --h H [--ranks 2 16 32 64]
+"""
+import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+
+import h5py
+
+ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1")
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TABLE1 = os.path.join(REPO, "campaigns", "table1_dispersed.toml")
+TRANSPORTS = {
+    "shm (CMA)": [],
+    "shm, single-copy off": ["--mca", "btl_vader_single_copy_mechanism", "none"],
+    "tcp": ["--mca", "btl", "self,tcp"],
+}
+
+
+def model_efficiency(P, c, h):
+    u = (P - 1) * h / c
+    X = (P - 1) / c + (1 - u) / (c + h) if u < 1 else 1 / h
+    return min(1.0, X * c / P)
+
+
+def run(driver, ranks, mca, out, sets, extra=()):
+    if os.path.exists(out):
+        os.remove(out)
+    cmd = ["mpirun", "--oversubscribe", "-np", str(ranks), *mca, driver, TABLE1, "-o", out, "--progress", "none",
+           *[a for s in sets for a in ("--set", s)], *extra]
+    subprocess.run(cmd, env=ENV, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=3600)
+    with h5py.File(out, "r") as f:
+        t = f["timing"]
+        a = dict(t.attrs)
+        runs = t["run_wall_time_s"][:]
+        n = runs.size
+        handled = a.get("rank0_poll_s", float("nan")) + a.get("rank0_tick_s", 0.0)
+        return {
+            "wall": float(f.attrs["wall_time_s"]),
+            "sched": float(a.get("schedule_wall_s", float("nan"))),
+            "rank0_runs": int((t["rank"][:] == 0).sum()),
+            "n": n,
+            "run_sum": float(runs.sum()),
+            "h": handled / n,
+        }
+
+
+def med(rows, key):
+    return statistics.median(r[key] for r in rows)
+
+
+def bench_real(a):
+    driver = a.driver or os.path.join(a.build, "truss-campaign")
+    sets = [f"ensemble.n_runs={a.runs}"]
+    rows = {k: [] for k in ["1 rank", *TRANSPORTS]}
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "r.h5")
+        for rep in range(a.repeats):
+            rows["1 rank"].append(run(driver, 1, [], out, sets))
+            for name, mca in TRANSPORTS.items():
+                rows[name].append(run(driver, 2, mca, out, sets))
+            print(f"repeat {rep + 1}/{a.repeats} done", file=sys.stderr)
+    t1 = med(rows["1 rank"], "wall")
+    c = statistics.median(r["run_sum"] / r["n"] for r in rows["1 rank"])
+    print(f"driver: {driver}\n{a.runs} runs, {a.repeats} repeats (medians); per-run cost on 1 rank c = {c * 1e3:.3f} ms\n")
+    print("| ranks | transport | campaign wall (s) | efficiency | runs by rank 0 | rank 0 per result (us) | h / c |")
+    print("|---:|---|---:|---:|---:|---:|---:|")
+    for name, rs in rows.items():
+        P = 1 if name == "1 rank" else 2
+        w = med(rs, "wall")
+        h = med(rs, "h")
+        print(f"| {P} | {'-' if P == 1 else name} | {w:.3f} | {t1 / (P * w):.2f} | {med(rs, 'rank0_runs'):.0f} "
+              f"| {h * 1e6:.1f} | {h / c * 100:.2f} % |")
+
+
+def bench_synthetic(a):
+    driver = os.path.join(a.build, "truss-campaign")
+    sets = [f"ensemble.n_runs={a.runs}"]
+    extra = ["--synthetic-run-cost-s", str(a.cost)]
+    rows = {k: [] for k in ("shm (CMA)", "tcp")}
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "s.h5")
+        for rep in range(a.repeats):
+            for name in rows:
+                rows[name].append(run(driver, a.ranks, TRANSPORTS[name], out, sets, extra))
+            print(f"repeat {rep + 1}/{a.repeats} done", file=sys.stderr)
+    P = a.ranks
+    print(f"{P} ranks, {a.runs} sleeping runs of {a.cost * 1e3:g} ms, {a.repeats} repeats (medians)\n")
+    print("| transport | schedule wall (s) | mean run (ms) | efficiency | runs by rank 0 | rank 0 per result (us) "
+          "| h / c | model E |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|")
+    for name, rs in rows.items():
+        E = statistics.median(r["run_sum"] / (P * r["sched"]) for r in rs)
+        c = statistics.median(r["run_sum"] / r["n"] for r in rs)
+        h = med(rs, "h")
+        print(f"| {name} | {med(rs, 'sched'):.3f} | {c * 1e3:.3f} | {E:.3f} | {med(rs, 'rank0_runs'):.0f} "
+              f"| {h * 1e6:.1f} | {h / c * 100:.2f} % | {model_efficiency(P, c, h):.3f} |")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("build", help="build directory, or 'model'")
+    ap.add_argument("what", nargs="?", choices=["real", "synthetic"])
+    ap.add_argument("--runs", type=int)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--driver", help="real: another truss-campaign binary (e.g. an older build)")
+    ap.add_argument("--ranks", type=int, nargs="+", default=[32])
+    ap.add_argument("--cost", type=float, default=0.002)
+    ap.add_argument("--c", type=float, help="model: per-run cost (s)")
+    ap.add_argument("--h", type=float, help="model: rank 0's per-result cost (s)")
+    a = ap.parse_args()
+    if a.build == "model":
+        for P in a.ranks:
+            print(f"P = {P:4d}: E = {model_efficiency(P, a.c, a.h):.3f}")
+        return
+    if a.what == "real":
+        a.runs = a.runs or 4000
+        bench_real(a)
+    else:
+        a.runs = a.runs or 20000
+        a.ranks = a.ranks[0]
+        bench_synthetic(a)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,112 @@
+// Benchmark (not a test): rank 0's serial work per result and at the end, without MPI.
+//   per-run cost c:     calc_run_record of the campaign's runs (what every rank does per run);
+//   per-result cost h:  what rank 0 does with each result: journal append, RunRecord::from_bytes,
+//                       ResultStore::add (with the chunk writes, shuffle and deflate it triggers),
+//                       for --compression 0 and 1;
+//   tail:               CampaignFile::finish: statistics from the columns read back, Sobol' indices,
+//                       attributes, close, sync, rename.
+// Times are process CPU time (CLOCK_PROCESS_CPUTIME_ID, so a shared, loaded machine does not
+// inflate them) and wall time; medians of REPEATS. The records are computed once and replayed
+// (cycled over the first N_DISTINCT runs, run indices 0..N_RUNS-1) so that N_RUNS can be large.
+// Usage: bench_store CAMPAIGN.toml N_RUNS [REPEATS] [N_DISTINCT] [DIR] [--set KEY=VALUE ...]
+#include <time.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "campaign/campaign_h5.hpp"
+#include "campaign/journal.hpp"
+#include "campaign/run_record.hpp"
+
+using namespace truss;
+
+namespace {
+
+double cpu_now() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+double wall_now() { return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count(); }
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+struct Times {
+  double h_cpu, h_wall, tail_cpu, tail_wall;
+};
+
+// One replay of n results into a journal and a results file in dir; the files are removed after.
+Times replay(const campaign::CampaignContext& ctx, const std::vector<std::string>& recs, std::int64_t n, int level,
+             const std::string& dir) {
+  const std::string out = dir + "/bench_store.h5";
+  std::filesystem::remove(out + ".journal");
+  campaign::Journal journal = campaign::Journal::create(out + ".journal", "bench");
+  campaign::CampaignFile file(out, ctx, campaign::StoreOptions{4096, level});
+  std::string bytes;
+  const double c0 = cpu_now(), w0 = wall_now();
+  for (std::int64_t i = 0; i < n; ++i) {
+    bytes = recs[static_cast<std::size_t>(i) % recs.size()];
+    std::memcpy(bytes.data(), &i, sizeof i);  // a record starts with its run index
+    journal.append(campaign::FrameKind::run, bytes);
+    file.store().add(campaign::RunRecord::from_bytes(bytes, ctx.columns), 0);
+  }
+  journal.flush();
+  const double c1 = cpu_now(), w1 = wall_now();
+  campaign::CampaignFileInfo info;
+  file.finish({}, info, true);
+  const double c2 = cpu_now(), w2 = wall_now();
+  journal.close_and_remove();
+  std::filesystem::remove(out);
+  return {(c1 - c0) / static_cast<double>(n), (w1 - w0) / static_cast<double>(n), c2 - c1, w2 - w1};
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: bench_store CAMPAIGN.toml N_RUNS [REPEATS] [N_DISTINCT] [DIR] [--set KEY=VALUE ...]\n");
+    return 2;
+  }
+  std::vector<std::string> sets;
+  std::vector<std::string> pos;
+  for (int i = 1; i < argc; ++i) {
+    if (std::string(argv[i]) == "--set" && i + 1 < argc) sets.emplace_back(argv[++i]);
+    else pos.emplace_back(argv[i]);
+  }
+  const std::int64_t n = std::atoll(pos[1].c_str());
+  const int repeats = pos.size() > 2 ? std::atoi(pos[2].c_str()) : 3;
+  const std::int64_t distinct = std::min<std::int64_t>(n, pos.size() > 3 ? std::atoll(pos[3].c_str()) : 2000);
+  const std::string dir = pos.size() > 4 ? pos[4] : ".";
+  sets.push_back("ensemble.n_runs=" + std::to_string(n));
+  const campaign::CampaignContext ctx(campaign::parse_campaign_file(pos[0], sets));
+  std::vector<std::string> recs(static_cast<std::size_t>(distinct));
+  const double c0 = cpu_now();
+  for (std::int64_t i = 0; i < distinct; ++i) campaign::calc_run_record(ctx, i, 0).append_bytes(recs[static_cast<std::size_t>(i)]);
+  const double c = (cpu_now() - c0) / static_cast<double>(distinct);
+  std::printf("campaign %s, %lld runs (records of %zu bytes, %lld distinct), per-run cost c = %.1f us CPU\n", pos[0].c_str(),
+              static_cast<long long>(n), recs[0].size(), static_cast<long long>(distinct), 1e6 * c);
+  std::printf("| compression | h CPU (us) | h wall (us) | h / c | tail CPU (s) | tail wall (s) | tail CPU per 100k runs (s) |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|---:|\n");
+  for (int level : {0, 1}) {
+    std::vector<double> hc, hw, tc, tw;
+    for (int r = 0; r < repeats; ++r) {
+      const Times t = replay(ctx, recs, n, level, dir);
+      hc.push_back(t.h_cpu);
+      hw.push_back(t.h_wall);
+      tc.push_back(t.tail_cpu);
+      tw.push_back(t.tail_wall);
+    }
+    std::printf("| %d | %.2f | %.2f | %.2f %% | %.3f | %.3f | %.3f |\n", level, 1e6 * median(hc), 1e6 * median(hw),
+                100.0 * median(hc) / c, median(tc), median(tw), median(tc) * 1e5 / static_cast<double>(n));
+  }
+  return 0;
+}
