@@ -7,6 +7,7 @@ PKGS=(build-essential cmake pkg-config
       libsundials-dev catch2 libtomlplusplus-dev libcli11-dev libfmt-dev
       python3-numpy python3-h5py python3-matplotlib python3-scipy python3-pandas
       python3-venv        # the truss-report package installed into a venv (test postproc_install)
+      python3-xarray python3-h5netcdf  # xarray opens the campaign file with named dimensions (mpi_layout)
       help2man            # man pages from --help (cmake --install)
       python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests)
       clang libclang-rt-14-dev)  # the sanitizer and fuzzing stage (scripts/sanitize.sh)
