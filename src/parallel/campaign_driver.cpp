@@ -401,6 +401,10 @@ int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const 
 }  // namespace
 
 int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
+  // Before any HDF5 call: a write that fails (disk full) leaves HDF5 1.10 an identifier whose
+  // exit-time cleanup crashes (io/h5_util.cpp, write_file_atomically); every identifier is closed
+  // by its owner, so the library's atexit cleanup is switched off.
+  H5dont_atexit();
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
