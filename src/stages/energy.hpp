@@ -20,7 +20,8 @@ namespace truss::stages {
 // rtol 1e-4..1e-12) at most 240 rtol E, i.e. 4 rtol E per phase. Where atol dominates (rtol near
 // 1e-13) positions are held to atol, atol / l_s relative to a bay; and the drive-work state W (J)
 // gains up to atol per accepted step. The bound, with a safety factor of 5 on the measured 4:
-//   allowed = min(1e-2 E,  20 (2 n) max(rtol, atol / l_s) E + steps atol)
+//   allowed = min(1e-2 E,  20 max(60, 2 n) max(rtol, atol / l_s) E + steps atol)
+// (a share of the error does not shrink with fewer phases: one-bay runs reach 50 rtol E).
 // A run beyond it (or beyond 1 % of E whatever the tolerance) does not keep its balance to what
 // its tolerance allows: status `inaccurate`.
 double calc_energy_scale_J(const RunResult& r);
