@@ -4,15 +4,26 @@
 # -DTRUSS_FUZZ=ON); every sanitizer report is fatal (halt_on_error, -fno-sanitize-recover).
 #   scripts/sanitize.sh            # sanitized tests, then each fuzzer for FUZZ_SECONDS (60)
 #   FUZZ_SECONDS=600 scripts/sanitize.sh fuzz   # fuzzers only, longer
-# Which tests: every test that runs our code in-process or through truss-sim (SAN_TESTS below);
-# the MPI and post-processing tests are left out (see docs/reliability.md: they run the same code
-# paths through truss-campaign, under mpirun, and would double the stage's time).
+# Which tests: every ctest test that runs compiled code of ours, in two passes:
+#   1. in-process tests and truss-sim (SAN_TESTS), with LeakSanitizer on;
+#   2. truss-campaign under mpirun (SAN_MPI_TESTS: the report and OpenTURNS fixture campaigns
+#      and every tests/mpi case but one), with leak detection off: Open MPI's components are
+#      dlclose()d at MPI_Finalize and their never-freed start-up blocks show as leaks in
+#      "<unknown module>" frames that no suppression can name.
+# Left out (docs/reliability.md): the Python-only tests that read files the fixtures above wrote
+# (postproc_*, openturns_crosscheck), the source scans (layering, code_size), the install
+# consumer (packaging: it compiles another project), and mpi_transports, whose efficiency floors
+# are timings that the sanitizers' ~10x cost invalidates (its byte identity over TCP and without
+# single-copy is the scheduler code mpi_ranks runs here). TRUSS_SANITIZED=1 tells the tests
+# that scale a campaign for timing reasons to use fewer runs (mpi_resume 2,000 instead of 5,000;
+# the free-stack fixture 60 instead of 300, in tests/CMakeLists.txt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
 BUILD=${SAN_BUILD_DIR:-build-san}
-FUZZ_SECONDS=${FUZZ_SECONDS:-60}
-SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|integrators|truss_tests_io|campaign_files|truss_tests_sampling|cli_bad_input)$'}
+FUZZ_SECONDS=${FUZZ_SECONDS:-45}
+SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|free_stack|integrators|truss_tests_io|campaign_files|truss_tests_sampling|cli_bad_input|stress_reduced|end_to_end_figures|report_fixture_run)$'}
+SAN_MPI_TESTS=${SAN_MPI_TESTS:-'^(report_fixture_(table1_dispersed|motor_torque|free_rail_miss)|openturns_fixture_.*|mpi_(ranks|resume|failures|saltelli|bad_input|paths|hostile|journal|faults|layout))$'}
 what=${1:-all}
 t0=$(date +%s)
 
@@ -23,15 +34,20 @@ cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clan
   -DTRUSS_SANITIZE=ON -DTRUSS_FUZZ=ON > "$BUILD.log" 2>&1 || { cat "$BUILD.log"; exit 1; }
 targets=(fuzz_scene fuzz_campaign)
 if [ "$what" != fuzz ]; then
-  targets+=(truss_tests_model truss_tests_stages truss_tests_integrators truss_tests_io truss_tests_campaign
-            truss_tests_sampling truss-sim)
+  targets+=(truss_tests_model truss_tests_stages truss_tests_free truss_tests_integrators truss_tests_io
+            truss_tests_campaign truss_tests_sampling truss-sim truss-campaign)
 fi
 cmake --build "$BUILD" -j"$(nproc)" --target "${targets[@]}" >> "$BUILD.log" 2>&1 || { tail -50 "$BUILD.log"; exit 1; }
 t_build=$(date +%s)
 echo "[sanitize] build: $((t_build - t0)) s"
 
 if [ "$what" != fuzz ]; then
+  export TRUSS_SANITIZED=1
   (cd "$BUILD" && ctest --output-on-failure --timeout 900 -R "$SAN_TESTS")
+  t_inproc=$(date +%s)
+  echo "[sanitize] in-process and truss-sim tests (leaks checked): $((t_inproc - t_build)) s"
+  (cd "$BUILD" && ASAN_OPTIONS=${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0} \
+     ctest --output-on-failure --timeout 900 -R "$SAN_MPI_TESTS")
 fi
 t_tests=$(date +%s)
 echo "[sanitize] tests under ASan+UBSan: $((t_tests - t_build)) s"

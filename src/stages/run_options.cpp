@@ -16,13 +16,10 @@ std::string positive(const char* key, double v) {
 std::string RunOptions::validate() const {
   if (!(std::isfinite(output_step_s) && output_step_s >= 0.0))
     return fmt::format("run.output_step_s: must be >= 0 (0 = no time histories), got {}", output_step_s);
-  // Sane tolerances: below 1e-14 (about 50 ulp) no step can meet rtol in double precision; above
-  // 1e-2 the solution is not worth reporting. atol is in m, m/s and J: beyond 1 mm the error
-  // control no longer sees the motion of a bay (l_s = 0.18 m in Table 1).
-  if (!(rtol >= 1e-14 && rtol <= 1e-2))
-    return fmt::format("run.rtol: must lie in [1e-14, 1e-2] (relative error per step), got {}", rtol);
-  if (!(atol > 0.0 && atol <= 1e-3))
-    return fmt::format("run.atol: must lie in (0, 1e-3] (m, m/s, J per step), got {}", atol);
+  if (!(rtol >= kMinRtol && rtol <= kMaxRtol))
+    return fmt::format("run.rtol: must lie in [{}, {}] (relative error per step), got {}", kMinRtol, kMaxRtol, rtol);
+  if (!(atol > 0.0 && atol <= kMaxAtol))
+    return fmt::format("run.atol: must lie in (0, {}] (m, m/s, J per step), got {}", kMaxAtol, atol);
   if (!(max_history_rows >= 2))
     return fmt::format("run.max_history_rows: must be >= 2, got {}", max_history_rows);
   if (max_steps < 1) return fmt::format("run.max_steps: must be positive, got {}", max_steps);

@@ -9,6 +9,12 @@
 
 namespace truss::stages {
 
+// The one statement of the sane tolerance ranges (RunOptions::validate and the scene key table's
+// hard ranges both read these). Below 1e-14 (about 50 ulp) no step can meet rtol in double
+// precision; above 1e-2 the solution is not worth reporting. atol is in m, m/s and J: beyond 1 mm
+// the error control no longer sees the motion of a bay (l_s = 0.18 m in Table 1); it must be > 0.
+inline constexpr double kMinRtol = 1e-14, kMaxRtol = 1e-2, kMaxAtol = 1e-3;
+
 struct RunOptions {
   model::Direction direction = model::Direction::deploy;  // deploy from the stowed stack, or retract into it
   double output_step_s = 0.0;               // time-history sample step; 0 = no histories (fastest)

@@ -208,7 +208,10 @@ def case_resume(args):
     uninterrupted campaign, finished runs not recomputed."""
     d = fresh(args, "resume")
     camp = os.path.join(args.repo, TABLE1)
-    sets = ["--set", "ensemble.n_runs=5000"]
+    # Under the sanitizer stage (scripts/sanitize.sh sets TRUSS_SANITIZED=1) every run costs ~10x:
+    # 2,000 runs still leave the kill (at ~110 runs on disk) well inside the campaign.
+    n = 2000 if os.environ.get("TRUSS_SANITIZED") else 5000
+    sets = ["--set", f"ensemble.n_runs={n}"]
     ref = os.path.join(d, "ref.h5")
     t_ref = time.time()
     p = mpirun(args, 2, [camp, "-o", ref, *sets, "--progress", "none"])
@@ -271,9 +274,9 @@ def case_resume(args):
     with h5py.File(out, "r") as f:
         sess = f["timing/session"][:]
         restored = np.count_nonzero(sess == 0)
-        check(f.attrs["n_sessions"] == 2 and 0 < restored < 4000 and np.count_nonzero(sess == 1) == 5000 - restored,
-              f"{restored} runs kept from the first session, {5000 - restored} computed after the resume")
-        check(f"{restored} of 5000 runs restored" in p.stderr, "the resume reports how many runs it restored")
+        check(f.attrs["n_sessions"] == 2 and 0 < restored < 0.8 * n and np.count_nonzero(sess == 1) == n - restored,
+              f"{restored} runs kept from the first session, {n - restored} computed after the resume")
+        check(f"{restored} of {n} runs restored" in p.stderr, "the resume reports how many runs it restored")
     p = mpirun(args, 2, [camp, "-o", out, *sets, "--resume"])
     check(p.returncode == 2 and "finished" in p.stderr, "--resume of a finished campaign refused with exit 2")
     before = open(out, "rb").read()
