@@ -364,3 +364,24 @@ TEST_CASE("static drive force is dU/dy_m along the path (finite differences of t
     CHECK(n_taut >= 3);  // the check is not 0 == 0: the diagonals are taut at some of these points
   }
 }
+
+TEST_CASE("resistive torque of a run: the spring part depends on the path only, the inertial part closes the sum",
+          "[numeric][margins]") {
+  // The static (spring) resistance is a function of the configuration, and every held-stack run
+  // follows the same path: its peak is the same in velocity and motor drive, up to the peak
+  // refinement (Brent, 1e-9 of a phase: 1e-9 relative here). In motor drive the motor starts
+  // from rest at its stall torque with slack diagonals (zero spring force at the stowed start),
+  // so the inertial part's peak is the stall torque itself.
+  SceneOptions s;
+  s.mast.n_bays = 4;
+  const RunResult v = simulate(s);
+  s.drive.mode = model::DriveMode::motor;
+  const RunResult m = simulate(s);
+  REQUIRE(v.status == RunStatus::ok);
+  REQUIRE(m.status == RunStatus::ok);
+  CHECK(v.peak_static_drive_torque_Nm > 1e-3);
+  CHECK(m.peak_static_drive_torque_Nm == Approx(v.peak_static_drive_torque_Nm).epsilon(1e-9));
+  CHECK(m.peak_inertial_drive_torque_Nm == Approx(s.drive.stall_torque_Nm).epsilon(1e-12));
+  // Velocity drive: drive = static + inertial at every instant, so the peaks bound the drive's.
+  CHECK(v.peak_drive_torque_Nm <= v.peak_static_drive_torque_Nm + v.peak_inertial_drive_torque_Nm + 1e-15);
+}
