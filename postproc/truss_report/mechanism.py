@@ -115,6 +115,10 @@ def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAI
     if s is None:
         return m
     sel = c.ok & np.isfinite(s) & np.isfinite(d) & np.isfinite(avail)
+    if not np.any(sel):
+        m.note = ("no ok run with a finite resistance and available torque (the free stack has no "
+                  "static resistance: NaN in the file)")
+        return m
     s, d, avail = np.maximum(s[sel], 0.0), d[sel], avail[sel]   # S <= 0: the springs help
     t_min = _required(m, s, d)
     m.n = int(np.sum(t_min > 0))
