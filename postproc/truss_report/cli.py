@@ -10,7 +10,7 @@ from run_figures import InputError
 from .constants import CONFIDENCE, EXIT_INPUT_ERROR, REPORT_NAME
 from .extras import load_extras
 from .h5read import H5, file_sha256, load_campaign, load_single_run, read_kind
-from .mechanism import DEFAULT_MF, DEFAULT_UNCERTAINTY
+from .mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY
 from .page import Page
 from .sections_design import campaign_report
 from .single_run import single_run_report
@@ -83,10 +83,14 @@ def parse_args(argv=None):
                    help="percentile levels of the design-load table, in percent, 0 < P < 100 "
                         "(default 99.865: the one-sided 3-sigma level)")
     p.add_argument("--motorisation-factor", type=float, default=DEFAULT_MF, metavar="MF",
-                   help=f"required motorisation factor (ECSS-E-ST-33-01C 4.7.5.2; default {DEFAULT_MF})")
+                   help="required motorisation factor (ECSS-E-ST-33-01C clause 4.7.5.3.1; "
+                        f"default {DEFAULT_MF})")
     p.add_argument("--uncertainty-factor", type=float, default=DEFAULT_UNCERTAINTY, metavar="K",
-                   help="uncertainty factor applied to the simulated resistive torque "
-                        f"(default {DEFAULT_UNCERTAINTY}: the standard's factor for elastic resistances)")
+                   help="uncertainty factor on the simulated spring resistance (default "
+                        f"{DEFAULT_UNCERTAINTY}: Table 4-2 of the standard, spring)")
+    p.add_argument("--inertia-factor", type=float, default=DEFAULT_INERTIA, metavar="KD",
+                   help="factor on the inertial resistance torque T_D, velocity drive (default "
+                        f"{DEFAULT_INERTIA}: clause 4.7.5.3.1)")
     p.add_argument("--revision", default="draft", help="revision shown in the sign-off block")
     p.add_argument("--csv", action="store_true",
                    help=f"also write DIR/{CSV_NAME}: the run table, Dakota-style tabular (campaigns)")
@@ -99,8 +103,8 @@ def parse_args(argv=None):
         p.error(f"--levels {a.levels}: not a comma-separated list of numbers")
     if not all(0.0 < v < 100.0 for v in a.levels):
         p.error(f"--levels: every level must be between 0 and 100 (exclusive), got {a.levels}")
-    if not a.motorisation_factor > 0 or not a.uncertainty_factor > 0:
-        p.error("--motorisation-factor and --uncertainty-factor must be positive")
+    if not (a.motorisation_factor > 0 and a.uncertainty_factor > 0 and a.inertia_factor > 0):
+        p.error("--motorisation-factor, --uncertainty-factor and --inertia-factor must be positive")
     return a
 
 

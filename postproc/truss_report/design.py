@@ -36,13 +36,16 @@ LOADS = [
     ("landing_impulse_Ns", "landing impulse", "bays_max",
      "impulse, total: stack impulse on the lower frame at rail exit (retraction), largest over "
      "the bays"),
+    ("unlock_impulse_Ns", "unlock impulse per pin", "bays_max",
+     "impulse on one pin when a bay unlocks (retraction): the rail gives the hinge its radial "
+     "speed; largest over the bays"),
     ("drive_work_impulses_J", "drive work of the impulses", "runs",
      "work of the start, rail-entry and unlock drive impulses, summed over the run"),
     ("deploy_time_s", "deployment time", "runs", "time of the last lock (end of retraction)"),
 ]
 
 IMPULSE_KEYS = {"start_drive_impulse_Ns", "entry_impulse_Ns", "entry_drive_impulse_Ns",
-                "landing_impulse_Ns", "drive_work_impulses_J"}
+                "landing_impulse_Ns", "unlock_impulse_Ns", "drive_work_impulses_J"}
 
 # Readable units: base unit -> [(label, factor)] in increasing order of size.
 PREFIXES = {"N": [("mN", 1e-3), ("N", 1.0)], "Nm": [("µN m", 1e-6), ("mN m", 1e-3), ("N m", 1.0)],

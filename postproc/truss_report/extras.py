@@ -10,7 +10,8 @@ import run_figures as rf
 # /runs columns read when present (units from the file).
 EXTRA_RUN_COLUMNS = ["start_drive_impulse_Ns", "drive_work_impulses_J", "peak_drive_force_time_s",
                      "peak_drive_force_bay", "peak_pin_force_time_s", "peak_pin_force_bay",
-                     "motor_torque_at_speed_Nm", "n_bays", "energy_residual_J"]
+                     "motor_torque_at_speed_Nm", "n_bays", "energy_residual_J",
+                     "peak_static_drive_torque_Nm", "peak_inertial_drive_torque_Nm"]
 
 
 @dataclass

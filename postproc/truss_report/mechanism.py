@@ -1,49 +1,75 @@
 """truss_report.mechanism: mechanism margins in the form of the ECSS mechanisms standard.
 
-ECSS-E-ST-33-01C, clause 4.7.5.2 (motorisation factor, deployment and actuation mechanisms):
-the available (minimum) driving torque must exceed the resistive torque, each resistive
-contribution multiplied by its uncertainty factor, by the motorisation factor, 2 by default
-(the value this report uses for the design and qualification of a deployment mechanism). The
-simulated resistive torque here is inertial and elastic (diagonals, hinge springs) in one
-number: the report applies ONE uncertainty factor to it, by default 1.2 (the standard's factor
-for spring / elastic resistances, the larger of the two kinds the model holds; 1.1 for inertia).
-The model is frictionless: friction, hysteresis, harness and adhesion, whose factor in the
-standard is 3, are not in it and must be added by the user. Both factors are report options
-(--motorisation-factor, --uncertainty-factor).
+Source: ECSS-E-ST-33-01C (6 March 2009), "Space engineering - Mechanisms", clause 4.7.5.3.1
+"Motorization factors" and its Table 4-2, read in a text copy of the standard (see ECSS_SOURCE;
+docs/report.md). The clause: the components of resistance are multiplied by the minimum
+uncertainty factors of Table 4-2 (theoretical column: inertia I 1.1, spring S 1.2, motor magnetic
+losses H_M 1.5, friction F_R 3, hysteresis H_Y 3, others/harness H_A 3, adhesion H_D 3; measured
+column 1.1, 1.2, 1.2, 1.5, 1.5, 1.5, 3), and the minimum actuation torque is
 
-  MF = T_available / (k_u T_resistive),  torque margin TM = MF - 1,  required MF >= MF_req.
+  T_min = 2 (1.1 I + 1.2 S + 1.5 H_M + 3 F_R + 3 H_Y + 3 H_A + 3 H_D) + 1.25 T_D + T_L
 
-Velocity drive: T_resistive = the run's peak drive (screw) torque, T_available = the scene's
-motor at the prescribed screw speed (/runs/motor_torque_at_speed_Nm, the simulator's motor law).
-The motor that would be needed: the torque MF_req k_u T_design at the prescribed speed, and the
-stall torque giving it on the linear line T_s (1 - omega / omega_0) with the scene's no-load
-speed, T_design the largest peak torque over the ok runs.
-Motor drive: the peak torque equals the stall torque (the motor starts from rest), so the
-resistive torque is not in the file; the runs that stall are the motor's failures."""
+with I the inertial torque of an accelerated reference frame (a spinning spacecraft), T_D the
+inertial resistance torque "to accelerate the inertia" under the acceleration the customer
+specifies (or deduces from speed or time requirements), T_L a deliverable output torque; the
+actuation torque T must be >= T_min over the full range of travel (4.7.5.3.2 b), and the kinetic
+energy of the moving parts must not be counted on to meet the motorisation factor (4.7.5.3.1 f).
+In the text copy the factors 2, 1.1, 1.2, 1.5 and 1.25 of the equation are legible; the factor 3
+of the friction-like terms is read from Table 4-2 (the equation's typesetting is garbled there).
+
+This rigid, frictionless model has two of these resistances (the others are zero in it, and the
+report says they must be added by the user):
+  S   = /runs/peak_static_drive_torque_Nm: the torque at the screws that holds the mast at rest in
+        each configuration of its path, (h / 2 pi) dU/dy_m, U the diagonals' strain energy (spring);
+  T_D = /runs/peak_inertial_drive_torque_Nm: drive torque minus S, the torque that accelerates the
+        mast (velocity drive: its prescribed motion is the acceleration requirement).
+Both are peaks over the run; they need not occur at the same instant, so S and T_D at their peaks
+bound the torque at every instant from above: the report's T_min is conservative.
+
+  velocity drive: T_min = MF (k_S S) + k_D T_D, T_available = the scene's motor at the prescribed
+                  screw speed (/runs/motor_torque_at_speed_Nm; the speed is constant over travel);
+  motor drive:    T_min = MF (k_S S), T_D = 0 (no acceleration is specified: the motor's own
+                  acceleration of the mast is not a requirement), T_available = the stall torque
+                  (per run when dispersed): the torque the motor gives wherever the mast holds it.
+  achieved motorisation factor MF_ach = (T_available - k_D T_D) / (k_S S) (>= MF required;
+  infinite when S <= 0, as in retraction, where the diagonals help), torque margin
+  T_available / T_min - 1 (>= 0); a run fails when T_available < T_min. Runs with T_min = 0 (no
+  resistance at all) are not counted.
+MF (2), k_S (1.2) and k_D (1.25) are report options (--motorisation-factor, --uncertainty-factor,
+--inertia-factor)."""
 from dataclasses import dataclass
 
 import numpy as np
 
 from .stats import clopper_pearson
 
-ECSS_CLAUSE = "ECSS-E-ST-33-01C (6 March 2009), clause 4.7.5.2, motorisation factor"
+ECSS_CLAUSE = "ECSS-E-ST-33-01C (6 March 2009), clause 4.7.5.3.1 and Table 4-2"
+ECSS_SOURCE = ("text copy of ECSS-E-ST-33-01C (6 March 2009) found by the project's reference "
+               "search (code corpus), pages 27-29; not checked against an ESA-issued PDF")
 DEFAULT_MF = 2.0
-DEFAULT_UNCERTAINTY = 1.2
+DEFAULT_UNCERTAINTY = 1.2     # Table 4-2, spring (S), theoretical and measured
+DEFAULT_INERTIA = 1.25        # clause 4.7.5.3.1 equation, inertial resistance T_D
+STATIC = "peak_static_drive_torque_Nm"
+INERTIAL = "peak_inertial_drive_torque_Nm"
 
 
 @dataclass
 class Margins:
     mode: str
     mf_required: float
-    k_uncertainty: float
+    k_uncertainty: float          # k_S, on the spring resistance
+    k_inertia: float = DEFAULT_INERTIA
     n: int = 0                    # runs considered
-    mf: np.ndarray = None         # per considered run
+    mf: np.ndarray = None         # achieved MF per considered run
     mf_min: float = float("nan")
+    tm_min: float = float("nan")  # smallest torque margin T_available / T_min - 1
     mf_nominal: float = float("nan")
     n_below: int = 0
     p_below_ci: tuple = (float("nan"), float("nan"))
-    t_design: float = float("nan")       # largest peak torque, Nm
-    t_needed_at_speed: float = float("nan")
+    s_design: float = float("nan")       # largest spring resistance S over the runs, Nm
+    d_design: float = float("nan")       # largest inertial resistance T_D, Nm
+    t_min_design: float = float("nan")   # largest T_min, Nm
+    t_avail_min: float = float("nan")
     stall_needed: float = float("nan")
     stall_scene: float = float("nan")
     no_load_speed: float = float("nan")
@@ -55,36 +81,71 @@ class Margins:
         return self.n > 0 and self.n_below > 0
 
 
-def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAINTY):
-    m = Margins(c.attrs["drive_mode"], mf_required, k_uncertainty)
+def _required(m, s, d):
+    """T_min per run from the spring and inertial resistances (T_D = 0 in motor mode)."""
+    return m.mf_required * m.k_uncertainty * s + m.k_inertia * d
+
+
+def _resistances(c, e, m):
+    s, d = e.runs.get(STATIC), e.runs.get(INERTIAL)
+    if s is None or d is None:
+        m.note = f"the file has no /runs/{STATIC} (written since issue 12)"
+        return None, None
+    d = np.maximum(d, 0.0) if m.mode == "velocity" else np.zeros_like(d)
+    return s, d
+
+
+def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAINTY,
+                    k_inertia=DEFAULT_INERTIA):
+    m = Margins(c.attrs["drive_mode"], mf_required, k_uncertainty, k_inertia)
     drive = c.base_scene.get("drive") or {}
     m.stall_scene = float(drive.get("stall_torque_Nm", np.nan))
     m.no_load_speed = float(drive.get("no_load_speed_rad_per_s", np.nan))
-    if m.mode != "velocity":
-        m.note = ("motor drive: the peak torque is the motor's own stall torque, the resistive "
-                  "torque is not in the file; see the stalls" if m.mode == "motor" else
-                  "torque drive: no motor")
+    if m.mode == "velocity":
+        if c.motor_torque_at_speed is None:
+            m.note = "the file has no /runs/motor_torque_at_speed_Nm"
+            return m
+        avail = c.motor_torque_at_speed
+    elif m.mode == "motor":
+        avail = c.stall_torque
+    else:
+        m.note = "torque drive: no motor"
         return m
-    if c.motor_torque_at_speed is None:
-        m.note = "the file has no /runs/motor_torque_at_speed_Nm"
+    s, d = _resistances(c, e, m)
+    if s is None:
         return m
-    t = c.outputs["peak_drive_torque_Nm"]
-    avail = c.motor_torque_at_speed
-    sel = c.ok & np.isfinite(t) & np.isfinite(avail) & (t > 0)
-    m.n = int(sel.sum())
+    sel = c.ok & np.isfinite(s) & np.isfinite(d) & np.isfinite(avail)
+    if not np.any(sel):
+        m.note = ("no ok run with a finite resistance and available torque (the free stack has no "
+                  "static resistance: NaN in the file)")
+        return m
+    s, d, avail = np.maximum(s[sel], 0.0), d[sel], avail[sel]   # S <= 0: the springs help
+    t_min = _required(m, s, d)
+    m.n = int(np.sum(t_min > 0))
     if m.n == 0:
-        m.note = "no ok run with a finite positive peak torque"
+        m.note = ("no ok run has a resistance to overcome: the diagonals drive the mast and the "
+                  "drive only brakes it (as in retraction); its braking torque is the peak drive "
+                  "torque of the design loads")
         return m
-    m.mf = avail[sel] / (k_uncertainty * t[sel])
+    s, d, avail, t_min = s[t_min > 0], d[t_min > 0], avail[t_min > 0], t_min[t_min > 0]
+    with np.errstate(divide="ignore"):
+        m.mf = np.where(s > 0, (avail - k_inertia * d) / (k_uncertainty * s),
+                        np.where(avail >= k_inertia * d, np.inf, -np.inf))
     m.mf_min = float(np.min(m.mf))
-    m.n_below = int(np.sum(m.mf < mf_required))
+    m.tm_min = float(np.min(avail / t_min - 1.0))
+    m.n_below = int(np.sum(avail < t_min))
     m.p_below_ci = clopper_pearson(m.n_below, m.n)
-    if e.nominal and e.nominal.get("peak_drive_torque_Nm", 0) > 0:
-        m.mf_nominal = e.nominal["motor_torque_at_speed_Nm"] / (
-            k_uncertainty * e.nominal["peak_drive_torque_Nm"])
-    m.t_design = float(np.max(t[sel]))
-    m.t_needed_at_speed = mf_required * k_uncertainty * m.t_design
-    m.omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
-    frac = 1.0 - m.omega / m.no_load_speed
-    m.stall_needed = m.t_needed_at_speed / frac if frac > 0 else float("inf")
+    m.s_design, m.d_design = float(np.max(s)), float(np.max(d))
+    m.t_min_design = float(np.max(t_min))
+    m.t_avail_min = float(np.min(avail))
+    if e.nominal and e.nominal.get(STATIC, 0) > 0 and m.mode in ("velocity", "motor"):
+        nd = max(e.nominal[INERTIAL], 0.0) if m.mode == "velocity" else 0.0
+        na = e.nominal["motor_torque_at_speed_Nm"] if m.mode == "velocity" else m.stall_scene
+        m.mf_nominal = (na - k_inertia * nd) / (k_uncertainty * e.nominal[STATIC])
+    if m.mode == "velocity":
+        m.omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
+        frac = 1.0 - m.omega / m.no_load_speed
+        m.stall_needed = m.t_min_design / frac if frac > 0 else float("inf")
+    else:
+        m.stall_needed = m.t_min_design
     return m

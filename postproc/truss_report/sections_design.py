@@ -54,7 +54,8 @@ def section_plots(page, c, e, loads, opts):
     top = opts.levels[-1]
     fields = [(k, lab, e.bays[k]) for k, lab in
               (("peak_drive_force_N", "peak drive force"), ("peak_pin_force_N", "peak pin force"),
-               ("latch_energy_J", "latch energy"), ("entry_impulse_Ns", "rail-entry impulse"))
+               ("latch_energy_J", "latch energy"), ("entry_impulse_Ns", "rail-entry impulse"),
+               ("unlock_impulse_Ns", "unlock impulse"))
               if k in e.bays and np.any(np.isfinite(e.bays[k][c.ok]) & (e.bays[k][c.ok] != 0))]
     if fields:
         out.append("<h3>Per-bay envelopes</h3>" + page.figure(
@@ -126,7 +127,7 @@ def campaign_report(page, c, e, opts):
     n_checks = 7 if c.histories else 6
     body.append(section_checks(page, n_checks))
     loads = design_loads(c, e, opts.levels, opts.confidence)
-    m = compute_margins(c, e, opts.motorisation_factor, opts.uncertainty_factor)
+    m = compute_margins(c, e, opts.motorisation_factor, opts.uncertainty_factor, opts.inertia_factor)
     failed = [what for what, passed, _ in page.checks if not passed]
     top = [verdict_html(c, m, failed, e.nominal_status, len(page.checks)),
            design_table_html(loads, opts.confidence, c.attrs["sampling"]), mechanism_html(m)]

@@ -3,7 +3,7 @@ margins (ECSS), model limits and the sign-off block."""
 import numpy as np
 
 from .design import readable_unit
-from .mechanism import ECSS_CLAUSE
+from .mechanism import ECSS_CLAUSE, ECSS_SOURCE
 from .page import esc, fmt, num, table
 
 
@@ -34,8 +34,9 @@ def verdict_items(c, m, failed_checks, nominal_status):
 def verdict_html(c, m, failed_checks, nominal_status, n_checks):
     items = verdict_items(c, m, failed_checks, nominal_status)
     checked = (f"checked: motorisation factor ≥ {fmt(m.mf_required)} ({esc(ECSS_CLAUSE)}; "
-               f"uncertainty factor {fmt(m.k_uncertainty)})"
-               if m.mode == "velocity" else f"drive mode {esc(m.mode)}: {esc(m.note)}")
+               f"spring factor {fmt(m.k_uncertainty)}"
+               + (f", inertial factor {fmt(m.k_inertia)})" if m.mode == "velocity" else ")")
+               if m.n > 0 else f"drive mode {esc(m.mode)}: margins not computed ({esc(m.note)})")
     checked += f"; outcome of all {c.n} runs; {n_checks} consistency checks of the file."
     if not items:
         return ("<div class='verdict pass' data-key='verdict' data-value='pass'>"
@@ -96,39 +97,60 @@ def design_table_html(loads, confidence, sampling):
 
 def mechanism_html(m):
     head = f"<h2 id='mechanism'>Mechanism margins ({esc(ECSS_CLAUSE)})</h2>"
-    if m.mode != "velocity" or m.n == 0:
+    if m.n == 0:
         return head + f"<p>Not computed: {esc(m.note)}.</p>"
-    lab, f = readable_unit("Nm", m.t_design)
+    lab, f = readable_unit("Nm", m.t_min_design)
     lo, hi = m.p_below_ci
+    vel = m.mode == "velocity"
+    avail = ("the scene's motor at the prescribed screw speed" if vel else
+             "the motor's stall torque (per run when dispersed)")
     rows = [
-        ["required motorisation factor MF<sub>req</sub> (option --motorisation-factor)",
+        ["required motorisation factor MF (option --motorisation-factor)",
          num("mech.mf_required", m.mf_required)],
-        ["uncertainty factor on the simulated resistive torque (--uncertainty-factor)",
-         num("mech.k_uncertainty", m.k_uncertainty)],
-        ["runs considered (ok, finite positive peak torque)", num("mech.n", m.n)],
-        ["smallest MF = T<sub>available</sub> / (k T<sub>peak</sub>) over the runs",
-         num("mech.mf_min", m.mf_min, digits=4)],
-        ["torque margin TM = MF − 1 (smallest)", num("mech.tm_min", m.mf_min - 1.0, digits=4)],
-        ["MF of the nominal run", num("mech.mf_nominal", m.mf_nominal, digits=4)],
-        ["runs with MF < MF<sub>req</sub>", num("mech.n_below", m.n_below)],
+        ["uncertainty factor k<sub>S</sub> on the spring resistance S (--uncertainty-factor; "
+         "Table 4-2: spring 1.2)", num("mech.k_uncertainty", m.k_uncertainty)],
+        ["factor k<sub>D</sub> on the inertial resistance T<sub>D</sub> (--inertia-factor; "
+         "equation: 1.25)" + ("" if vel else ": T<sub>D</sub> = 0 in motor mode"),
+         num("mech.k_inertia", m.k_inertia)],
+        ["runs considered (ok, finite positive S)", num("mech.n", m.n)],
+        ["largest spring resistance S (peak static torque)", cell("mech.s_design", m.s_design, f, lab)],
+        ["largest inertial resistance T<sub>D</sub> (peak drive − static torque)",
+         cell("mech.d_design", m.d_design, f, lab)],
+        ["largest T<sub>min</sub> = MF k<sub>S</sub> S + k<sub>D</sub> T<sub>D</sub>",
+         cell("mech.t_min", m.t_min_design, f, lab)],
+        [f"smallest available torque ({avail})", cell("mech.t_avail_min", m.t_avail_min, f, lab)],
+        ["smallest achieved MF = (T<sub>available</sub> − k<sub>D</sub> T<sub>D</sub>) / "
+         "(k<sub>S</sub> S)", num("mech.mf_min", m.mf_min, digits=4)],
+        ["smallest torque margin T<sub>available</sub> / T<sub>min</sub> − 1",
+         num("mech.tm_min", m.tm_min, digits=4)],
+        ["achieved MF of the nominal run", num("mech.mf_nominal", m.mf_nominal, digits=4)],
+        ["runs with MF < MF required", num("mech.n_below", m.n_below)],
         ["probability, 95 % Clopper-Pearson interval",
          f"<td class='num'>[{fmt(lo, 4)}, {fmt(hi, 4)}]</td>"],
-        ["design resistive torque (largest peak over the runs)",
-         cell("mech.t_design", m.t_design, f, lab)],
-        ["torque needed at the prescribed speed = MF<sub>req</sub> k T<sub>design</sub>",
-         cell("mech.t_needed", m.t_needed_at_speed, f, lab)],
-        ["screw speed ω = 2π v / h", num("mech.omega", m.omega, "rad/s")],
-        ["no-load speed ω<sub>0</sub> of the scene's motor", num("mech.omega0", m.no_load_speed,
-                                                                 "rad/s")],
-        ["<b>stall torque needed</b> (with that ω<sub>0</sub>)",
-         cell("mech.stall_needed", m.stall_needed, f, lab)],
-        ["stall torque of the scene's motor", cell("mech.stall_scene", m.stall_scene, f, lab)],
     ]
-    return (head + "<p>Velocity drive: the mast follows the prescribed speed, so the peak drive "
-            "torque is the resistive torque the motor must overcome. The factors and their source "
-            "are stated in the table; the model is frictionless, so friction (factor 3 in the "
-            "standard) must be added to the required torque by the user.</p>"
-            + table(["", "value"], [[f"<th>{a}</th>", b] for a, b in rows], "kv"))
+    if vel:
+        rows += [["screw speed ω = 2π v / h", num("mech.omega", m.omega, "rad/s")],
+                 ["no-load speed ω<sub>0</sub> of the scene's motor",
+                  num("mech.omega0", m.no_load_speed, "rad/s")]]
+    rows += [["<b>stall torque needed</b>" + (" (with that ω<sub>0</sub>: T<sub>min</sub> / "
+                                               "(1 − ω/ω<sub>0</sub>))" if vel else ""),
+              cell("mech.stall_needed", m.stall_needed, f, lab)],
+             ["stall torque of the scene's motor", cell("mech.stall_scene", m.stall_scene, f, lab)]]
+    text = ("<p>T<sub>min</sub> = 2 (1.1 I + 1.2 S + 1.5 H<sub>M</sub> + 3 F<sub>R</sub> + "
+            "3 H<sub>Y</sub> + 3 H<sub>A</sub> + 3 H<sub>D</sub>) + 1.25 T<sub>D</sub> + "
+            "T<sub>L</sub> (clause 4.7.5.3.1; uncertainty factors of Table 4-2, theoretical "
+            "column). This rigid, frictionless model has the spring resistance S (the diagonals: "
+            "the torque that holds the mast at rest along its path)"
+            + (" and, with the prescribed speed as the acceleration requirement, the inertial "
+               "resistance T<sub>D</sub> (drive torque minus S). " if vel else
+               "; the motor drive has no specified acceleration, so T<sub>D</sub> = 0 and the "
+               "motor's stall torque is compared with the factored springs. ")
+            + "Each is its peak over the run, so T<sub>min</sub> is an upper bound. I, "
+            "H<sub>M</sub>, F<sub>R</sub>, H<sub>Y</sub>, H<sub>A</sub>, H<sub>D</sub> and "
+            "T<sub>L</sub> are zero in the model: friction, hysteresis, harness and adhesion "
+            "(factor 3) must be added by the user. Source of the clause: "
+            f"{esc(ECSS_SOURCE)}.</p>")
+    return head + text + table(["", "value"], [[f"<th>{a}</th>", b] for a, b in rows], "kv")
 
 
 MODEL_LIMITS = [
@@ -136,8 +158,8 @@ MODEL_LIMITS = [
     "(linear springs, tension only). No structural modes, so no dynamic amplification of the "
     "loads beyond the rigid-body motion.",
     "Frictionless: pins in the rail, hinges, the screw and the latches have no friction, "
-    "hysteresis, harness or adhesion torque. Add them (with their ECSS factor 3) to the "
-    "required torque.",
+    "hysteresis, harness or adhesion torque. Add them (with their factor 3 of ECSS-E-ST-33-01C "
+    "Table 4-2) to the required torque.",
     "Rigid latch: a latch locks instantaneously; the strut's radial kinetic energy is lost in "
     "the impact (peak latch energy), with no latch spring, rebound or load spike. Rail entry "
     "and the start are impulses (momentum jumps) too: their peak force depends on stiffness the "

@@ -90,6 +90,7 @@ inline double calc_latch_loss_J(double mass_xx_kg, double hinge_speed_m_per_s) {
 struct UnlockImpact {
   double du_m_per_s = 0;       // driven-frame velocity jump
   double hinge_speed_m_per_s = 0;  // xi after the unlock
+  double rail_impulse_Ns = 0;  // Lambda, the rail's impulse (all three pins)
   double drive_work_J = 0;     // velocity drive: work of its impulse
   double energy_loss_J = 0;
 };
@@ -101,10 +102,12 @@ inline UnlockImpact calc_unlock_impact(double mass_yy_kg, double mass_xx_kg, dou
   if (drive_holds_speed) {
     r.hinge_speed_m_per_s = -u / c;
     const double Lambda = mass_xx_kg * r.hinge_speed_m_per_s / c;
+    r.rail_impulse_Ns = Lambda;
     r.drive_work_J = -Lambda * u;
     r.energy_loss_J = r.drive_work_J - 0.5 * mass_xx_kg * r.hinge_speed_m_per_s * r.hinge_speed_m_per_s;
   } else {
     const double Lambda = -u / (1.0 / mass_yy_kg + c * c / mass_xx_kg);
+    r.rail_impulse_Ns = Lambda;
     r.du_m_per_s = Lambda / mass_yy_kg;
     r.hinge_speed_m_per_s = c * Lambda / mass_xx_kg;
     r.energy_loss_J = 0.5 * (mass_yy_kg * r.du_m_per_s * r.du_m_per_s +

@@ -53,6 +53,7 @@ PhasePoint HeldPhase::calc_open(double y, double u, PhaseScratch& sys) const {
   p.hinge_y_m = ctx_.lower_held_height_m + 0.5 * D;
   const double M = sys.diag[0];
   const double R = sys.velocity_terms[0] + sys.spring_forces[0];
+  p.static_drive_force_N = -sys.spring_forces[0];
   if (ctx_.drive.mode == model::DriveMode::velocity) {
     p.qddot = 0.0;
     p.drive_force_N = -R;
@@ -114,6 +115,9 @@ PhasePoint HeldPhase::calc_on_rail(double x, double xi, PhaseScratch& sys) const
     p.lambda_N = M_yy * yddot + M_yx * p.qddot - R_y;
   }
   p.pin_force_N = calc_pin_force_N(rail_, p.lambda_N);
+  // At rest (xi = 0): F + Q_y + lambda = 0 and Q_x + gamma lambda = 0 with the springs' Q_y = s_m + s_l,
+  // Q_x = k s_l, so F = -(s_m + s_l) + k s_l / gamma = dU/dY along the rail.
+  p.static_drive_force_N = -(sys.spring_forces[1] + sys.spring_forces[0]) + k * sys.spring_forces[0] / gamma;
   const double D = 2.0 * kin.s;
   double tension = calc_diagonal_tension_N(bay, b2_m_, D);
   double U = calc_bay_potential_J(bay, b2_m_, D);

@@ -12,6 +12,8 @@ double calc_peak_quantity(int q, const PhasePoint& p, double direction) {
     case kTension: return p.diagonal_tension_N;
     case kRailApproach: return -p.rail_distance_m;
     case kOverlap: return -p.min_bay_opening_m;
+    case kStaticForce: return direction * p.static_drive_force_N;
+    case kInertialForce: return direction * (p.drive_force_N - p.static_drive_force_N);
     default: return direction * p.u_m_per_s;
   }
 }

@@ -31,7 +31,11 @@ struct Extremum {
 // Quantities whose extremes a run reports. kRailApproach is minus the hinge's distance from the
 // rail (free stack, open phase; -inf elsewhere): its maximum is the stage's closest approach.
 // kOverlap is minus the smallest bay opening (free stack): its maximum is the deepest overlap.
-enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kRailApproach, kOverlap, kQuantityCount };
+// kStaticForce and kInertialForce are the spring (static) and the inertial part of the drive
+// force along the run direction (PhasePoint::static_drive_force_N; NaN, never a record, where
+// the static part is not defined).
+enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kRailApproach, kOverlap, kStaticForce, kInertialForce,
+                    kQuantityCount };
 double calc_peak_quantity(int q, const PhasePoint& p, double direction);
 
 struct Sample {

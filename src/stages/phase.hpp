@@ -33,6 +33,11 @@ struct PhasePoint {
   double u_m_per_s = 0, w_m_per_s = 0;  // velocities of driven and lower frame
   double hinge_x_m = 0, hinge_y_m = 0;
   double drive_force_N = 0;
+  // Drive force (N, along +y) that holds the mast at rest in this configuration: the diagonals'
+  // (spring) resistance alone, -dU/dy_m along the phase's path (no velocity, no acceleration).
+  // The inertial part of the drive force is drive_force_N - static_drive_force_N. NaN where not
+  // defined (the free stack, whose frames below the driven one have no rest configuration).
+  double static_drive_force_N = __builtin_nan("");
   double lambda_N = 0;                // rail multiplier (0 off the rail)
   double pin_force_N = 0;
   double diagonal_tension_N = 0;      // largest tension of one diagonal in the moving bays

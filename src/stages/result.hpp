@@ -27,6 +27,7 @@ struct BayResult {
   double entry_impulse_Ns = NAN_INIT();     // rail impulse per pin at rail entry (deploy)
   double landing_impulse_Ns = NAN_INIT();   // stack impulse on the lower frame at rail exit (retract)
   double entry_drive_impulse_Ns = NAN_INIT();  // drive impulse at rail entry / exit (velocity mode)
+  double unlock_impulse_Ns = NAN_INIT();    // rail impulse per pin at the unlock (retract; 0 from rest in torque/motor)
   double entry_energy_loss_J = NAN_INIT();  // energy lost in the rail-entry (or landing) impact
   double peak_drive_force_N = NAN_INIT();   // peak of the smooth drive force in this bay's stage
   double peak_drive_force_time_s = NAN_INIT();
@@ -72,6 +73,12 @@ struct RunResult {
   // Velocity mode: the torque the scene's motor (drive.stall_torque_Nm, no_load_speed) gives at
   // the prescribed speed, from the one motor law (model/drive.hpp); NaN in torque and motor modes.
   double motor_torque_at_speed_Nm = NAN_INIT();
+  // The drive torque split into its resistances (the three screws together, along the run
+  // direction, peaks over the smooth motion; impulses apart): static = the torque that holds the
+  // mast at rest in each configuration (the diagonals' springs, the model's only resistance), and
+  // inertial = drive torque - static (what accelerates the mast). NaN for the free stack.
+  double peak_static_drive_torque_Nm = NAN_INIT();
+  double peak_inertial_drive_torque_Nm = NAN_INIT();
   double peak_pin_force_N = NAN_INIT();
   double peak_pin_force_time_s = NAN_INIT();
   int peak_pin_force_bay = 0;

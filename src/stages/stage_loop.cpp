@@ -154,6 +154,7 @@ void StageLoop::start_stage(const StageSpec& s, BayResult& br) {
     const DriveRamp ramp = calc_drive_ramp(p0.mass_yy + p0.mass_xx / (c * c), u_);
     r_.start_drive_impulse_Ns = ramp.impulse_Ns;
     ledger_.add_impulse_work(ramp.work_J);
+    br.unlock_impulse_Ns = calc_pin_force_N(mast_.rail, p0.mass_xx * xi_ / c);  // the rail gives the hinge M_xx xi = c Lambda
     br.latch_energy_J = 0.0;
     br.lock_time_s = t_;
     return;
@@ -162,6 +163,7 @@ void StageLoop::start_stage(const StageSpec& s, BayResult& br) {
   if (kinematic_) ledger_.add_impulse_work(imp.drive_work_J);
   else u_ += imp.du_m_per_s;
   xi_ = imp.hinge_speed_m_per_s;
+  br.unlock_impulse_Ns = calc_pin_force_N(mast_.rail, imp.rail_impulse_Ns);  // per pin, as the force
   br.latch_energy_J = imp.energy_loss_J;
   br.lock_time_s = t_;
   ledger_.add_loss(imp.energy_loss_J);
@@ -410,6 +412,8 @@ void StageLoop::finish() {
   r_.min_drive_force_bay = run[kNegForce].bay;
   r_.peak_drive_torque_Nm = opts_.drive.calc_torque_Nm(r_.peak_drive_force_N);
   r_.min_drive_torque_Nm = opts_.drive.calc_torque_Nm(r_.min_drive_force_N);
+  r_.peak_static_drive_torque_Nm = opts_.drive.calc_torque_Nm(fin(run[kStaticForce].value)) + 0.0;  // + 0: no -0
+  r_.peak_inertial_drive_torque_Nm = opts_.drive.calc_torque_Nm(fin(run[kInertialForce].value)) + 0.0;
   r_.peak_pin_force_N = fin(run[kPin].value);
   r_.peak_pin_force_time_s = run[kPin].t;
   r_.peak_pin_force_bay = run[kPin].bay;

@@ -95,12 +95,14 @@ TEST_CASE("unlock, hand-derived", "[unit][impacts]") {
     CHECK(r.hinge_speed_m_per_s == Approx(0.048).epsilon(kRel));
     CHECK(r.energy_loss_J == Approx(6e-4).epsilon(1e-13));
     CHECK(std::abs((-0.1 + r.du_m_per_s) + 2.0 * r.hinge_speed_m_per_s) < 1e-16);  // on the rail after
+    CHECK(r.rail_impulse_Ns == Approx(0.012).epsilon(kRel));
   }
   SECTION("velocity: xi = -u/c = 0.05, Lambda = 0.0125, work 1.25e-3, lost 6.25e-4") {
     const auto r = model::calc_unlock_impact(3.0, 0.5, 2.0, -0.1, true);
     CHECK(r.du_m_per_s == 0.0);
     CHECK(r.hinge_speed_m_per_s == Approx(0.05).epsilon(kRel));
     CHECK(r.drive_work_J == Approx(1.25e-3).epsilon(kRel));
+    CHECK(r.rail_impulse_Ns == Approx(0.0125).epsilon(kRel));  // M_xx xi / c = 0.5 0.05 / 2
     CHECK(r.energy_loss_J == Approx(6.25e-4).epsilon(1e-13));
   }
 }
