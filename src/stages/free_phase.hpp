@@ -20,6 +20,8 @@
 //   above_rail_top     y_h - y_r (watched only: the time the hinge rises above the rail's top, x = 0).
 // An event not watched returns -1 (never rises).
 #pragma once
+#include <vector>
+
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
 #include "stages/phase.hpp"
@@ -48,8 +50,12 @@ class FreePhaseA final : public PhaseModel {
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
   int get_lowest_frame() const { return lo_; }
+  // Residual form (phase.hpp): velocity mode one multiplier (the drive force, y_m'' = 0), else none.
+  int num_multipliers() const override { return ctx_.drive.mode == model::DriveMode::velocity ? 1 : 0; }
+  bool calc_dae_terms(const double* q, const double* qdot, PhaseScratch& scratch, PhaseDaeTerms& out) const override;
 
  private:
+  int assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs) const;
   PhaseContext ctx_;
   model::ActiveFrames active_;
   int lo_;

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "integrators/auto_integrator.hpp"
+#include "integrators/ida_integrator.hpp"
 #include "model/impacts.hpp"
 #include "model/rail.hpp"
 #include "stages/energy.hpp"
@@ -46,6 +47,7 @@ std::unique_ptr<integrators::Integrator> make_integrator(integrators::Integrator
     case IntegratorKind::cvode: return std::make_unique<integrators::CvodeIntegrator>(io, integrators::CvodeMethod::bdf);
     case IntegratorKind::cvode_adams: return std::make_unique<integrators::CvodeIntegrator>(io, integrators::CvodeMethod::adams);
     case IntegratorKind::automatic: return std::make_unique<integrators::AutoIntegrator>(io);
+    case IntegratorKind::ida: return std::make_unique<integrators::IdaIntegrator>(io);
     case IntegratorKind::dopri54: break;
   }
   return std::make_unique<integrators::DormandPrince54>(io);
