@@ -155,6 +155,10 @@ struct IdaIntegrator::Solver {
     for (int i = 0; i < n_new; ++i) pid[i] = i < n_ode_new ? 1.0 : 0.0;
     if (!check_flag(IDASetId(mem, id), "IDASetId", sum)) return false;
     if (!check_flag(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", sum)) return false;
+    // The residual is linear in the unknowns of IDACalcIC (y' and z at fixed y): full Newton steps
+    // are exact up to rounding, and the line search only fails on that rounding at tight atol
+    // (IDA_LINESEARCH_FAIL at rtol 1e-12 in a rail entry).
+    if (!check_flag(IDASetLineSearchOffIC(mem, SUNTRUE), "IDASetLineSearchOffIC", sum)) return false;
     n = n_new;
     n_ode = n_ode_new;
     return true;
@@ -172,9 +176,16 @@ struct IdaIntegrator::Solver {
     ud.nonfinite_res = 0;
     ud.error = nullptr;
     N_VConst(0.0, yy);
-    N_VConst(0.0, yp);  // the guess of y' and z: the residual is linear in them at fixed y
+    N_VConst(0.0, yp);
     double* p = N_VGetArrayPointer(yy);
     for (int i = 0; i < n_ode; ++i) p[i] = y0[i];
+    // The system's guess of y' and z (else zeros); IDACalcIC corrects it. From a zero guess its
+    // Newton iteration (on the DQ Jacobian with the differential columns scaled by 1/h) failed to
+    // converge (IDA_CONV_FAIL) at some rail entries of torque-driven runs.
+    if (!dae.calc_initial_guess(t0, p, N_VGetArrayPointer(yp), p + n_ode)) {
+      N_VConst(0.0, yp);
+      for (int i = n_ode; i < n; ++i) p[i] = 0.0;
+    }
     if (!check_flag(IDAReInit(mem, t0, yy, yp), "IDAReInit", sum)) return false;
     if (!check_flag(IDASStolerances(mem, o.rtol, o.atol), "IDASStolerances", sum)) return false;
     if (!check_flag(IDASetMaxNumSteps(mem, o.max_steps), "IDASetMaxNumSteps", sum)) return false;
@@ -193,7 +204,23 @@ struct IdaIntegrator::Solver {
     // Consistent start: z and the differential components of y' for the given y. tout1 only sets
     // the direction and the scale of IDACalcIC's internal step (a thousandth of the distance).
     const double tout1 = std::min(t_end, t0 + (o.initial_step > 0.0 ? o.initial_step : 1e-3));
-    return check_flag(IDACalcIC(mem, IDA_YA_YDP_INIT, tout1), "IDACalcIC", sum);
+    if (!check_flag(IDACalcIC(mem, IDA_YA_YDP_INIT, tout1), "IDACalcIC", sum)) return false;
+    if (o.initial_step > 0.0) return true;
+    // IDA's own first step, h ||y'0||_WRMS = 1/2, is ~1e-14 s at tight atol (y' is O(1) while the
+    // weights are atol): 40 doublings per phase, and steps of a few ulps of t that spoil the
+    // Hermite refinement of the peaks (its q' is a difference quotient over the span). Hairer's
+    // first guess instead (Hairer, Norsett, Wanner I, II.4): h0 = 0.01 ||y0|| / ||y'0||.
+    if (!check_flag(IDAGetConsistentIC(mem, yy, yp), "IDAGetConsistentIC", sum)) return false;
+    const double* y = N_VGetArrayPointer(yy);
+    const double* dy = N_VGetArrayPointer(yp);
+    double d0 = 0.0, d1 = 0.0;
+    for (int i = 0; i < n_ode; ++i) {
+      const double w = o.atol + o.rtol * std::abs(y[i]);
+      d0 += (y[i] / w) * (y[i] / w);
+      d1 += (dy[i] / w) * (dy[i] / w);
+    }
+    const double h0 = d0 < 1e-10 * n_ode || d1 < 1e-10 * n_ode ? 1e-6 : 0.01 * std::sqrt(d0 / d1);
+    return check_flag(IDASetInitStep(mem, std::min(h0, 0.5 * (t_end - t0))), "IDASetInitStep", sum);
   }
 };
 

@@ -29,6 +29,8 @@ class DaeForm {
   virtual int num_algebraic() const = 0;
   // Returns false if the residual cannot be evaluated (a non-finite value, a bay past straight).
   virtual bool calc_residual(double t, const double* y, const double* yp, const double* z, double* res) = 0;
+  // A guess of y' and z at (t, y) for the consistent start (IDACalcIC); false: zeros.
+  virtual bool calc_initial_guess(double /*t*/, const double* /*y*/, double* /*yp*/, double* /*z*/) { return false; }
 };
 
 class OdeSystem {

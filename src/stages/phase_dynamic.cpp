@@ -40,6 +40,17 @@ class PhaseOde final : public integrators::OdeSystem, public integrators::DaeFor
     }
     return true;
   }
+  // Start guess for IDACalcIC: y' and the multipliers of the direct solve (the rail's lambda, the
+  // velocity drive's force), which IDACalcIC then checks against the residual.
+  bool calc_initial_guess(double t, const double* y, double* yp, double* mu) override {
+    calc_rhs(t, y, yp);
+    if (!m_.calc_dae_terms(y, y + n_, scratch_, terms_)) return false;
+    thread_local std::vector<double> acc;
+    acc.resize(static_cast<std::size_t>(n_));
+    const PhasePoint p = m_.calc_point(y, y + n_, acc.data(), scratch_);
+    for (int j = 0; j < terms_.num_multipliers; ++j) mu[j] = j == terms_.drive_multiplier ? p.drive_force_N : p.lambda_N;
+    return std::isfinite(yp[0]);
+  }
   void calc_rhs(double, const double* y, double* dy) override {
     const PhasePoint p = m_.calc_point(y, y + n_, dy + n_, scratch_);
     std::copy(y + n_, y + 2 * n_, dy);
