@@ -84,6 +84,17 @@ bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratc
   return true;
 }
 
+void FreePhaseA::fill_locked_heights(const MastParams& mast, int m, double* y) {
+  for (int k = m + 1; k <= mast.n_bays(); ++k) y[k] = y[k - 1] + 2.0 * mast.bay(k).strut_length_m;
+}
+
+bool FreePhaseA::calc_frame_heights(const double* q, double* y) const {
+  for (int k = 0; k < lo_; ++k) y[k] = held_height_m_;
+  for (int k = 0; k < dof(); ++k) y[lo_ + k] = q[k];
+  fill_locked_heights(*ctx_.mast, ctx_.bay, y);
+  return true;
+}
+
 PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;

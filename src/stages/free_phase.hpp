@@ -53,6 +53,9 @@ class FreePhaseA final : public PhaseModel {
   // Residual form (phase.hpp): velocity mode one multiplier (the drive force, y_m'' = 0), else none.
   int num_multipliers() const override { return ctx_.drive.mode == model::DriveMode::velocity ? 1 : 0; }
   bool calc_dae_terms(const double* q, const double* qdot, PhaseScratch& scratch, PhaseDaeTerms& out) const override;
+  bool calc_frame_heights(const double* q, double* y) const override;
+  // Frames above the driven frame m are locked, rigid with it: y_k = y_{k-1} + 2 l_k, k = m+1..n.
+  static void fill_locked_heights(const model::MastParams& mast, int m, double* y);
 
  private:
   int assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs) const;

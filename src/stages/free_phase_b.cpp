@@ -110,6 +110,16 @@ bool FreePhaseB::calc_dae_terms(const double* q, const double* qdot, PhaseScratc
   return assemble(q, qdot, sys, ys, vs, t);
 }
 
+bool FreePhaseB::calc_frame_heights(const double* q, double* y) const {
+  const int n = dof(), m = ctx_.bay;
+  const double l = ctx_.mast->bay(m).strut_length_m, x = q[n - 1];
+  for (int k = 0; k < lo_; ++k) y[k] = held_height_m_;
+  for (int k = 0; k < n - 1; ++k) y[lo_ + k] = q[k];
+  y[m] = y[m - 1] + 2.0 * std::sqrt(std::max(0.0, l * l - x * x));
+  FreePhaseA::fill_locked_heights(*ctx_.mast, m, y);
+  return true;
+}
+
 PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;

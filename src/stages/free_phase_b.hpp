@@ -46,6 +46,7 @@ class FreePhaseB final : public PhaseModel {
   // with b, s_b (the bordered rows above, assembled without solving).
   int num_multipliers() const override { return ctx_.drive.mode == model::DriveMode::velocity ? 2 : 1; }
   bool calc_dae_terms(const double* q, const double* qdot, PhaseScratch& scratch, PhaseDaeTerms& out) const override;
+  bool calc_frame_heights(const double* q, double* y) const override;
 
  private:
   bool assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs,

@@ -91,6 +91,9 @@ class PhaseModel {
   // Residual form (PhaseDaeTerms) at (q, q'): the number of multipliers, -1 when the model has
   // none (the held phases); calc_dae_terms returns false where the terms are not defined.
   virtual int num_multipliers() const { return -1; }
+  // Heights of all frames 0..n (m) at q, for the per-frame history; false: not tracked (held
+  // stack, whose frames below the deploying bay are at their stowed or lock heights).
+  virtual bool calc_frame_heights(const double* /*q*/, double* /*y*/) const { return false; }
   virtual bool calc_dae_terms(const double* /*q*/, const double* /*qdot*/, PhaseScratch& /*scratch*/,
                               PhaseDaeTerms& /*out*/) const { return false; }
 };

@@ -90,6 +90,7 @@ class PhaseObserver final : public integrators::StepObserver {
     auto eval = [&](double t) {
       d.calc_state(t, state_.data());
       ++point_evals;
+      if (sinks_.history.records_frames()) m_.calc_frame_heights(state_.data(), sinks_.history.frame_buffer());
       std::copy(state_.begin(), state_.begin() + 2 * n_, sample_.begin());
       return m_.calc_point(state_.data(), state_.data() + n_, sample_.data() + 2 * n_, scratch_);
     };
