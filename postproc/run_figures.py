@@ -12,6 +12,8 @@ histories (`run.output_step_s > 0`). Writes into OUTDIR (created if needed):
     fig5_drive_and_pin_force.png      drive force and rail pin force over the whole run
                                       (paper Fig. 5), lock times as faint vertical lines
     fig5_bay<N>_zoom.png              the same two quantities in the stage of bay N
+    frame_heights.png                 free stack only (/history/frame_height_m): the heights of
+                                      the frames against time, the lower frames included
 
 N defaults to the top bay (n_bays), the one the paper plots. The paths written are printed,
 one per line. Any problem with the input (missing file, not HDF5, wrong schema_version, no
@@ -183,6 +185,46 @@ def fig5_zoom(plt, run, bay):
     return fig
 
 
+MAX_FRAME_LINES = 41  # frames drawn by frame_heights (evenly spread over 0..n, top and 0 always)
+
+
+def frame_lines(n_frames):
+    """The frame indices drawn: all of them up to MAX_FRAME_LINES, else an even spread."""
+    if n_frames <= MAX_FRAME_LINES:
+        return np.arange(n_frames)
+    return np.unique(np.round(np.linspace(0, n_frames - 1, MAX_FRAME_LINES)).astype(int))
+
+
+def fig_frame_heights(plt, run):
+    """Heights of the frames against time (free stack: /history/frame_height_m). Top panel: every
+    frame (root dark, top light); bottom panel: the lower frames only, each while it is below the
+    driven frame (frame k < the running stage's bay), where they move freely by centimetres."""
+    h, u = run["history"], run["units"]
+    Y = h["frame_height_m"]
+    idx = frame_lines(Y.shape[1])
+    fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(10.0, 7.5))
+    cmap = plt.get_cmap("viridis")
+    below = np.arange(Y.shape[1])[None, :] < h["bay"][:, None]  # frame k below the driven frame
+    for j, k in enumerate(idx):
+        c = cmap(j / max(1, len(idx) - 1))
+        a1.plot(h["t_s"], Y[:, k], lw=0.9, color=c, label=f"frame {k}")
+        a2.plot(h["t_s"], np.where(below[:, k], Y[:, k], np.nan), lw=0.9, color=c)
+    for ax in (a1, a2):
+        for tm in _lock_times(run):
+            ax.axvline(tm, color="0.6", lw=0.5, ls=":", zorder=0)
+        ax.grid(True, alpha=0.3)
+    a2.set_xlabel(f"time ({u['t_s']})")
+    a1.set_ylabel(f"frame height ({u['frame_height_m']})")
+    a2.set_ylabel(f"lower frames ({u['frame_height_m']})")
+    shown = "all frames" if len(idx) == Y.shape[1] else f"{len(idx)} of {Y.shape[1]} frames"
+    a1.set_title(f"Frame heights against time ({shown}; dotted: {_words(run)['lock']} times); "
+                 f"bottom: frames below the driven frame\n{_title(run)}", fontsize=9)
+    if len(idx) <= 12:
+        a1.legend(loc="upper left", fontsize=7, ncol=2)
+    fig.tight_layout()
+    return fig
+
+
 def main(argv=None):
     p = _Parser(
         prog="run_figures.py",
@@ -216,6 +258,8 @@ def main(argv=None):
         names = [f"fig4_hinge_trajectory_bay{bay}.png",
                  "fig5_drive_and_pin_force.png",
                  f"fig5_bay{bay}_zoom.png"]
+        if "frame_height_m" in h:
+            names.append("frame_heights.png")
         targets = [os.path.join(outdir, nm) for nm in names]
         if not args.force:
             for tpath in targets:
@@ -230,6 +274,8 @@ def main(argv=None):
     import matplotlib.pyplot as plt
 
     figs = [fig4(plt, run, bay), fig5(plt, run), fig5_zoom(plt, run, bay)]
+    if "frame_height_m" in run["history"]:
+        figs.append(fig_frame_heights(plt, run))
 
     # Render every figure to a temporary file first, then move all into place: a failure
     # while rendering leaves no partial set of PNGs behind.

@@ -164,6 +164,16 @@ def load_run(path):
                 h[name] = np.asarray(h[name]).astype(np.int64)
             else:
                 h[name] = np.asarray(h[name], dtype=float)
+        # Free stack: every frame's height, one row per sample (optional, 2-D).
+        if "frame_height_m" in hist:
+            ds = hist["frame_height_m"]
+            if (not isinstance(ds, h5py.Dataset) or ds.ndim != 2
+                    or ds.shape != (len(h["t_s"]), run["n_bays"] + 1)):
+                raise InputError(
+                    f"/history/frame_height_m has shape {getattr(ds, 'shape', None)}; expected "
+                    f"({len(h['t_s'])}, {run['n_bays'] + 1}): one row per sample, one column per frame")
+            h["frame_height_m"] = np.asarray(ds[()], dtype=float)
+            units["frame_height_m"] = _units(ds, "m")
         run["history"], run["units"] = h, units
 
         # Per-bay events (optional for the figures: only markers depend on them).

@@ -64,5 +64,8 @@ def single_run_figures(page, run):
     if np.any(sel):
         parts.append(page.figure(rf.fig5_zoom(page.plt, run, bay), f"fig5_bay{bay}_zoom.png",
                                  f"the same in the stage of bay {bay}"))
+    if "frame_height_m" in h:
+        parts.append(page.figure(rf.fig_frame_heights(page.plt, run), "frame_heights.png",
+                                 "heights of the frames against time (free stack)"))
     parts.append("</section>")
     return "\n".join(parts)

@@ -12,14 +12,31 @@ namespace truss::integrators {
 //   cvode        SUNDIALS CVODE, BDF with Newton iteration and a dense direct solver (stiff)
 //   cvode_adams  SUNDIALS CVODE, Adams-Moulton with fixed-point iteration (non-stiff)
 //   automatic    dopri54 until Hairer's stiffness test fires, then cvode for the rest of the run
-enum class IntegratorKind { dopri54, cvode, cvode_adams, automatic };
+//   ida          SUNDIALS IDA (variable-order BDF on a residual F(t, y, y', z) = 0, dense direct
+//                linear solver) on the system's DaeForm: the free stack's cross-check solver
+enum class IntegratorKind { dopri54, cvode, cvode_adams, automatic, ida };
 inline const char* to_string(IntegratorKind k) {
-  constexpr const char* names[] = {"dopri54", "cvode", "cvode_adams", "auto"};
+  constexpr const char* names[] = {"dopri54", "cvode", "cvode_adams", "auto", "ida"};
   return names[static_cast<int>(k)];
 }
 
+// The residual form of the same system for DAE solvers (IDA): the ODE state y (size() values)
+// plus num_algebraic() algebraic unknowns z (multipliers), and size() + num_algebraic() residual
+// equations F(t, y, y', z) = 0 that the solution of y' = f(t, y) satisfies with the right z.
+class DaeForm {
+ public:
+  virtual ~DaeForm() = default;
+  virtual int num_algebraic() const = 0;
+  // Returns false if the residual cannot be evaluated (a non-finite value, a bay past straight).
+  virtual bool calc_residual(double t, const double* y, const double* yp, const double* z, double* res) = 0;
+  // A guess of y' and z at (t, y) for the consistent start (IDACalcIC); false: zeros.
+  virtual bool calc_initial_guess(double /*t*/, const double* /*y*/, double* /*yp*/, double* /*z*/) { return false; }
+};
+
 class OdeSystem {
  public:
+  // The residual form, or nullptr when the system has none (IDA then refuses it).
+  virtual DaeForm* dae_form() { return nullptr; }
   virtual ~OdeSystem() = default;
   virtual int size() const = 0;
   virtual void calc_rhs(double t, const double* y, double* dydt) = 0;

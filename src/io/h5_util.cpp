@@ -133,6 +133,10 @@ void write_history(hid_t group, const sim::TimeHistory& h) {
       write_array(group, f.name, f.units, w.data(), w.size());
     }
   }
+  // Free stack: the heights of frames 0..n, one row per sample (rows x (n + 1)).
+  if (h.n_frames > 0 && !h.frame_height_m.empty())
+    write_array(group, "frame_height_m", "m", h.frame_height_m.data(), h.frame_height_m.size() / static_cast<std::size_t>(h.n_frames),
+                static_cast<std::size_t>(h.n_frames));
 }
 
 Handle status_enum_type() {

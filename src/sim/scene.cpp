@@ -49,6 +49,9 @@ std::string SceneOptions::validate() const {
   CHECK(positive("drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s));
   if (stack.mode == StackMode::free && run.direction == model::Direction::retract)
     return "stack.mode: the retraction of a free stack is not available yet (deployment only); see docs/model-notes.md";
+  if (run.integrator == IntegratorKind::ida && stack.mode != StackMode::free)
+    return "run.integrator: \"ida\" solves the free stack's phases only (stack.mode = \"free\"); the held stack "
+           "has one coordinate per phase and no rail multiplier: use \"dopri54\", \"cvode\", \"cvode_adams\" or \"auto\"";
   if (panels.count < 0 || panels.count % 2 != 0)
     return fmt::format("panels.count: must be 0 (no panels) or a positive even number, got {}", panels.count);
   if (panels.count > 0) {

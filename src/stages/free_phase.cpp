@@ -50,16 +50,56 @@ void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g
   }
 }
 
-PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
-  const MastParams& mast = *ctx_.mast;
-  const int n = dof(), m = ctx_.bay;
-  // Heights and velocities from frame lo - 1 (held) when it exists, so that bay lo sees it.
-  const int first = std::max(lo_ - 1, 0);
-  thread_local std::vector<double> ys, vs;  // work space of the heights only; M, r, Q live in sys
+// Heights and velocities from frame lo - 1 (held) when it exists, so that bay lo sees it; returns
+// that first frame.
+int FreePhaseA::assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys,
+                         std::vector<double>& vs) const {
+  const int n = dof(), m = ctx_.bay, first = std::max(lo_ - 1, 0);
   ys.assign(static_cast<std::size_t>(m - first + 1), held_height_m_);
   vs.assign(ys.size(), 0.0);
   for (int k = 0; k < n; ++k) { ys[static_cast<std::size_t>(lo_ - first + k)] = q[k]; vs[static_cast<std::size_t>(lo_ - first + k)] = qdot[k]; }
-  calc_frame_system(mast, active_, ys.data(), vs.data(), first, sys);
+  calc_frame_system(*ctx_.mast, active_, ys.data(), vs.data(), first, sys);
+  return first;
+}
+
+bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratch& sys, PhaseDaeTerms& t) const {
+  thread_local std::vector<double> ys, vs;
+  assemble(q, qdot, sys, ys, vs);
+  const int n = dof();
+  t.diag = sys.diag;
+  t.sub = sys.sub;
+  t.rhs = sys.velocity_terms + sys.spring_forces;
+  t.driven_speed_m_per_s = qdot[n - 1];
+  t.num_multipliers = num_multipliers();
+  if (ctx_.drive.mode == DriveMode::velocity) {
+    // y_m'' = 0 with the drive force as its multiplier (M y'' = r + F e_m).
+    t.c[0] = Eigen::VectorXd::Unit(n, n - 1);
+    t.s[0] = 0.0;
+    t.drive_multiplier = 0;
+    return true;
+  }
+  t.drive_multiplier = -1;
+  t.drive_force_N = ctx_.drive.calc_force_N(qdot[n - 1], ctx_.direction);
+  t.rhs[n - 1] += t.drive_force_N;
+  return true;
+}
+
+void FreePhaseA::fill_locked_heights(const MastParams& mast, int m, double* y) {
+  for (int k = m + 1; k <= mast.n_bays(); ++k) y[k] = y[k - 1] + 2.0 * mast.bay(k).strut_length_m;
+}
+
+bool FreePhaseA::calc_frame_heights(const double* q, double* y) const {
+  for (int k = 0; k < lo_; ++k) y[k] = held_height_m_;
+  for (int k = 0; k < dof(); ++k) y[lo_ + k] = q[k];
+  fill_locked_heights(*ctx_.mast, ctx_.bay, y);
+  return true;
+}
+
+PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  const MastParams& mast = *ctx_.mast;
+  const int n = dof(), m = ctx_.bay;
+  thread_local std::vector<double> ys, vs;  // work space of the heights only; M, r, Q live in sys
+  const int first = assemble(q, qdot, sys, ys, vs);
   Eigen::VectorXd rhs = sys.velocity_terms + sys.spring_forces;
   PhasePoint p;
   const double u = qdot[n - 1];

@@ -20,6 +20,8 @@
 //   above_rail_top     y_h - y_r (watched only: the time the hinge rises above the rail's top, x = 0).
 // An event not watched returns -1 (never rises).
 #pragma once
+#include <vector>
+
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
 #include "stages/phase.hpp"
@@ -48,8 +50,15 @@ class FreePhaseA final : public PhaseModel {
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
   int get_lowest_frame() const { return lo_; }
+  // Residual form (phase.hpp): velocity mode one multiplier (the drive force, y_m'' = 0), else none.
+  int num_multipliers() const override { return ctx_.drive.mode == model::DriveMode::velocity ? 1 : 0; }
+  bool calc_dae_terms(const double* q, const double* qdot, PhaseScratch& scratch, PhaseDaeTerms& out) const override;
+  bool calc_frame_heights(const double* q, double* y) const override;
+  // Frames above the driven frame m are locked, rigid with it: y_k = y_{k-1} + 2 l_k, k = m+1..n.
+  static void fill_locked_heights(const model::MastParams& mast, int m, double* y);
 
  private:
+  int assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs) const;
   PhaseContext ctx_;
   model::ActiveFrames active_;
   int lo_;

@@ -50,7 +50,10 @@ double FreePhaseB::calc_driven_speed_m_per_s(const double* q, const double* qdot
   return qdot[n - 2] - 2.0 * x / std::sqrt(l * l - x * x) * qdot[n - 1];
 }
 
-PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+// The bordered system's terms at (q, q') (the header's equations), with the frame heights
+// first..m into ys, vs.
+bool FreePhaseB::assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys,
+                          std::vector<double>& vs, PhaseDaeTerms& t) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
   const BayParams& bay = mast.bay(m);
@@ -59,7 +62,6 @@ PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* q
   const double s = std::sqrt(l * l - x * x), k = 2.0 * x / s, kx = 2.0 * l * l / (s * s * s);
   // Frame heights first..m (frame lo - 1 held when it exists).
   const int first = std::max(lo_ - 1, 0);
-  thread_local std::vector<double> ys, vs;
   ys.assign(static_cast<std::size_t>(m - first + 1), held_height_m_);
   vs.assign(ys.size(), 0.0);
   const int off = lo_ - first;
@@ -73,18 +75,63 @@ PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* q
   const double R_l = sys.velocity_terms[n - 2] + sys.spring_forces[n - 2];
   const double R_m = sys.velocity_terms[n - 1] + sys.spring_forces[n - 1];
   const double g = calc_g_hinge(bay, x), dg = calc_dg_hinge_dx(bay, x), h = -kx * xi2;
-  Eigen::VectorXd diag = sys.diag, sub = sys.sub;
-  Eigen::VectorXd rhs = sys.velocity_terms + sys.spring_forces;
-  diag[n - 2] = A_ll + 2.0 * A_ml + A_mm;
-  sub[n - 1] = -k * (A_ml + A_mm);
-  diag[n - 1] = k * k * A_mm + 2.0 * g;
-  rhs[n - 2] = R_l + R_m - (A_ml + A_mm) * h;
-  rhs[n - 1] = -k * (R_m - A_mm * h) - dg * xi2;
-  Eigen::VectorXd a = Eigen::VectorXd::Zero(n), b = Eigen::VectorXd::Zero(n);
+  t.diag = sys.diag;
+  t.sub = sys.sub;
+  t.rhs = sys.velocity_terms + sys.spring_forces;
+  t.diag[n - 2] = A_ll + 2.0 * A_ml + A_mm;
+  t.sub[n - 1] = -k * (A_ml + A_mm);
+  t.diag[n - 1] = k * k * A_mm + 2.0 * g;
+  t.rhs[n - 2] = R_l + R_m - (A_ml + A_mm) * h;
+  t.rhs[n - 1] = -k * (R_m - A_mm * h) - dg * xi2;
+  Eigen::VectorXd& a = t.c[0];
+  Eigen::VectorXd& b = t.c[1];
+  a = Eigen::VectorXd::Zero(n);
+  b = Eigen::VectorXd::Zero(n);
   a[n - 2] = 1.0; a[n - 1] = c - x / s;
   b[n - 2] = 1.0; b[n - 1] = -k;
   const double f = y_l + s - mast.rail.axis_height_m() + c * x, fdot = a.dot(Eigen::Map<const Eigen::VectorXd>(qdot, n));
-  const double s_a = l * l / (s * s * s) * xi2 - 2.0 * alpha_ * fdot - alpha_ * alpha_ * f;
+  t.s[0] = l * l / (s * s * s) * xi2 - 2.0 * alpha_ * fdot - alpha_ * alpha_ * f;
+  t.driven_speed_m_per_s = u;
+  t.num_multipliers = num_multipliers();
+  if (ctx_.drive.mode == DriveMode::velocity) {
+    // The second row y_m'' = 0 (drive force as its multiplier), with the speed's Baumgarte term.
+    t.s[1] = kx * xi2 - alpha_ * (u - ctx_.direction * ctx_.drive.speed_m_per_s);
+    t.drive_multiplier = 1;
+  } else {
+    t.drive_multiplier = -1;
+    t.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
+    t.rhs += t.drive_force_N * b;
+  }
+  return std::isfinite(s);
+}
+
+bool FreePhaseB::calc_dae_terms(const double* q, const double* qdot, PhaseScratch& sys, PhaseDaeTerms& t) const {
+  thread_local std::vector<double> ys, vs;
+  return assemble(q, qdot, sys, ys, vs, t);
+}
+
+bool FreePhaseB::calc_frame_heights(const double* q, double* y) const {
+  const int n = dof(), m = ctx_.bay;
+  const double l = ctx_.mast->bay(m).strut_length_m, x = q[n - 1];
+  for (int k = 0; k < lo_; ++k) y[k] = held_height_m_;
+  for (int k = 0; k < n - 1; ++k) y[lo_ + k] = q[k];
+  y[m] = y[m - 1] + 2.0 * std::sqrt(std::max(0.0, l * l - x * x));
+  FreePhaseA::fill_locked_heights(*ctx_.mast, m, y);
+  return true;
+}
+
+PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  const MastParams& mast = *ctx_.mast;
+  const int n = dof(), m = ctx_.bay;
+  const double l = mast.bay(m).strut_length_m, c = mast.rail.cot_beta();
+  const double x = q[n - 1], xi = qdot[n - 1], s = std::sqrt(l * l - x * x);
+  const int first = std::max(lo_ - 1, 0);
+  thread_local std::vector<double> ys, vs;
+  thread_local PhaseDaeTerms t;
+  assemble(q, qdot, sys, ys, vs, t);
+  const Eigen::VectorXd &diag = t.diag, &sub = t.sub, &a = t.c[0], &b = t.c[1];
+  const double y_l = q[n - 2], w = qdot[n - 2], y_m = ys.back(), u = vs.back();
+  const double f = calc_rail_function_m(q);
   PhasePoint p;
   TridiagonalWork wk;
   Eigen::VectorXd acc;
@@ -92,22 +139,20 @@ PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* q
   bool solved = true;
   if (ctx_.drive.mode == DriveMode::velocity) {
     // Two rows: the rail and y_m'' = 0 (drive force as the multiplier): three solves and a 2x2.
-    const double s_b = kx * xi2 - alpha_ * (u - ctx_.direction * ctx_.drive.speed_m_per_s);
     Eigen::VectorXd y0, za, zb;
-    solved = solve_tridiagonal(diag, sub, rhs, y0, wk) && solve_tridiagonal(diag, sub, a, za, wk) &&
+    solved = solve_tridiagonal(diag, sub, t.rhs, y0, wk) && solve_tridiagonal(diag, sub, a, za, wk) &&
              solve_tridiagonal(diag, sub, b, zb, wk);
     if (!solved) { y0 = za = zb = Eigen::VectorXd::Zero(n); }
     Eigen::Matrix2d S;
     S << a.dot(za), a.dot(zb), b.dot(za), b.dot(zb);
-    const Eigen::Vector2d mult = S.partialPivLu().solve(Eigen::Vector2d(s_a - a.dot(y0), s_b - b.dot(y0)));
+    const Eigen::Vector2d mult = S.partialPivLu().solve(Eigen::Vector2d(t.s[0] - a.dot(y0), t.s[1] - b.dot(y0)));
     lambda = mult[0];
     p.drive_force_N = mult[1];
     acc = y0 + lambda * za + p.drive_force_N * zb;
   } else {
-    p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
-    rhs += p.drive_force_N * b;
+    p.drive_force_N = t.drive_force_N;
     double lam_neg = 0.0;
-    solved = solve_bordered(diag, sub, a, rhs, s_a, acc, lam_neg, wk);
+    solved = solve_bordered(diag, sub, a, t.rhs, t.s[0], acc, lam_neg, wk);
     lambda = -lam_neg;
   }
   // Not positive definite (a bay past straight inside a trial step): NaN, the step is rejected.

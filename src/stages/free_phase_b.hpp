@@ -16,6 +16,8 @@
 // velocity mode y_m'' = 0 is a second row b' p'' = k_x x'^2 - alpha (y_m' - v) with the drive force
 // as its multiplier: three solves and a 2x2 system. Pin force |lambda| / (3 sin beta).
 #pragma once
+#include <vector>
+
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
 #include "stages/phase.hpp"
@@ -40,8 +42,15 @@ class FreePhaseB final : public PhaseModel {
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;
   // Rail function f (m) at p: 0 on the rail.
   double calc_rail_function_m(const double* q) const;
+  // Residual form (phase.hpp): the rail's lambda with a, s_a, and in velocity mode the drive force
+  // with b, s_b (the bordered rows above, assembled without solving).
+  int num_multipliers() const override { return ctx_.drive.mode == model::DriveMode::velocity ? 2 : 1; }
+  bool calc_dae_terms(const double* q, const double* qdot, PhaseScratch& scratch, PhaseDaeTerms& out) const override;
+  bool calc_frame_heights(const double* q, double* y) const override;
 
  private:
+  bool assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs,
+                PhaseDaeTerms& t) const;
   PhaseContext ctx_;
   model::ActiveFrames active_;
   int lo_;

@@ -108,6 +108,11 @@ int FreeStack::find_straightest_bay(int top) const {
   return best;
 }
 
+void FreeStack::get_frame_heights(int m, double* y) const {
+  for (int k = 0; k <= m; ++k) y[k] = y_[static_cast<std::size_t>(k)];
+  FreePhaseA::fill_locked_heights(mast_, m, y);
+}
+
 void FreeStack::apply_lock(int m) {
   y_[static_cast<std::size_t>(m)] = y_[static_cast<std::size_t>(m - 1)] + 2.0 * mast_.bay(m).strut_length_m;
   v_[static_cast<std::size_t>(m)] = v_[static_cast<std::size_t>(m - 1)];

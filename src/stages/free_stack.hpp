@@ -48,6 +48,8 @@ class FreeStack {
   double calc_hinge_offset_m(int i) const;
   int find_straightest_bay(int top) const;
   double get_height_m(int k) const { return y_[static_cast<std::size_t>(k)]; }
+  // Heights of frames 0..n with driven frame m (the frames above it locked rigid with it).
+  void get_frame_heights(int m, double* y) const;
   double get_speed_m_per_s(int k) const { return v_[static_cast<std::size_t>(k)]; }
 
  private:

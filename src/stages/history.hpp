@@ -23,6 +23,15 @@ class HistoryRecorder {
     if (out_) out_->step_s = step_s;
   }
   bool enabled() const { return out_ != nullptr; }
+  // Free stack: also record the heights of frames 0..n_frames-1 per row. The caller writes them
+  // into frame_buffer() before each sample (eval) and before finish(); NaN where it did not.
+  void enable_frames(int n_frames) {
+    if (!out_) return;
+    out_->n_frames = n_frames;
+    frames_.assign(static_cast<std::size_t>(n_frames), __builtin_nan(""));
+  }
+  bool records_frames() const { return out_ && out_->n_frames > 0; }
+  double* frame_buffer() { return frames_.data(); }
   // Samples the grid times in [t0, t1); eval(t) gives the phase point at t. Returns false (and
   // stops sampling) once the wall-clock deadline has passed.
   template <class Eval>
@@ -57,6 +66,10 @@ class HistoryRecorder {
     out_->pin_force_N.push_back(p.pin_force_N);
     out_->diagonal_tension_N.push_back(p.diagonal_tension_N);
     out_->driven_speed_m_per_s.push_back(p.u_m_per_s);
+    if (out_->n_frames > 0) {
+      out_->frame_height_m.insert(out_->frame_height_m.end(), frames_.begin(), frames_.end());
+      std::fill(frames_.begin(), frames_.end(), __builtin_nan(""));
+    }
   }
   // Keeps the rows on even grid points (t = k step, k even: k is exact as t / step rounded).
   template <class V>
@@ -73,6 +86,14 @@ class HistoryRecorder {
     keep_even(out_->hinge_x_m, keep); keep_even(out_->hinge_y_m, keep); keep_even(out_->drive_force_N, keep);
     keep_even(out_->drive_torque_Nm, keep); keep_even(out_->pin_force_N, keep); keep_even(out_->diagonal_tension_N, keep);
     keep_even(out_->driven_speed_m_per_s, keep);
+    if (out_->n_frames > 0) {  // rows of n_frames values
+      const std::size_t w = static_cast<std::size_t>(out_->n_frames);
+      std::size_t j = 0;
+      for (std::size_t i = 0; i < keep.size(); ++i)
+        if (keep[i]) std::copy_n(out_->frame_height_m.begin() + static_cast<std::ptrdiff_t>(i * w), w,
+                                 out_->frame_height_m.begin() + static_cast<std::ptrdiff_t>(j++ * w));
+      out_->frame_height_m.resize(j * w);
+    }
     keep_even(out_->t_s, keep);
     step_ *= 2.0;
     next_ = (next_ + 1) / 2;  // the next grid point of the doubled step at or after the old one
@@ -83,6 +104,7 @@ class HistoryRecorder {
   long next_ = 0;
   const model::DriveParams& drive_;
   long max_rows_;
+  std::vector<double> frames_;
 };
 
 }  // namespace truss::stages

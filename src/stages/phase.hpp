@@ -58,6 +58,23 @@ struct PhasePoint {
 // Work space of a model evaluation, owned by the caller (the model functions stay pure).
 using PhaseScratch = model::FrameSystem;
 
+// The residual form of a phase's equations (DAE solvers: IDA), assembled without solving:
+//   M(q) q'' = r(q, q') + sum_j mu_j c_j(q),   c_j(q)' q'' = s_j(q, q'),   j < num_multipliers,
+// M symmetric tridiagonal (diag, sub as model/frames.hpp), r with the drive force of the torque and
+// motor modes, multipliers mu_j: the rail's lambda (on the rail) and, in velocity mode, the drive
+// force F (its constraint keeps the driven frame's speed). The drive force is the multiplier
+// drive_multiplier, or drive_force_N (torque, motor) when that is -1.
+struct PhaseDaeTerms {
+  static constexpr int kMaxMultipliers = 2;
+  Eigen::VectorXd diag, sub, rhs;
+  int num_multipliers = 0;
+  Eigen::VectorXd c[kMaxMultipliers];
+  double s[kMaxMultipliers] = {0.0, 0.0};
+  int drive_multiplier = -1;
+  double drive_force_N = 0;
+  double driven_speed_m_per_s = 0;
+};
+
 class PhaseModel {
  public:
   virtual ~PhaseModel() = default;
@@ -76,6 +93,14 @@ class PhaseModel {
   // crossings): each rises through zero when it fires. The held phases have none.
   virtual int num_stop_events() const { return 0; }
   virtual void calc_stop_events(const double* /*q*/, const double* /*qdot*/, double* /*g*/) const {}
+  // Residual form (PhaseDaeTerms) at (q, q'): the number of multipliers, -1 when the model has
+  // none (the held phases); calc_dae_terms returns false where the terms are not defined.
+  virtual int num_multipliers() const { return -1; }
+  // Heights of all frames 0..n (m) at q, for the per-frame history; false: not tracked (held
+  // stack, whose frames below the deploying bay are at their stowed or lock heights).
+  virtual bool calc_frame_heights(const double* /*q*/, double* /*y*/) const { return false; }
+  virtual bool calc_dae_terms(const double* /*q*/, const double* /*qdot*/, PhaseScratch& /*scratch*/,
+                              PhaseDaeTerms& /*out*/) const { return false; }
 };
 
 }  // namespace truss::stages

@@ -9,11 +9,48 @@ namespace truss::stages {
 
 namespace {
 
-// The phase as an ODE: state (q, q', W), dof values each and the drive work.
-class PhaseOde final : public integrators::OdeSystem {
+// The phase as an ODE: state (q, q', W), dof values each and the drive work. When the model has
+// a residual form (PhaseModel::calc_dae_terms), also as the DAE of integrators::DaeForm with the
+// model's multipliers mu as algebraic unknowns, residual rows (state v = q'):
+//   q' - v,   M v' - r - sum_j mu_j c_j,   W' - F u,   c_j' v' - s_j.
+class PhaseOde final : public integrators::OdeSystem, public integrators::DaeForm {
  public:
   PhaseOde(const PhaseModel& m, double creep_speed_m_per_s) : m_(m), n_(m.dof()), creep_(creep_speed_m_per_s) {}
   int size() const override { return 2 * n_ + 1; }
+  integrators::DaeForm* dae_form() override { return m_.num_multipliers() >= 0 ? this : nullptr; }
+  int num_algebraic() const override { return m_.num_multipliers(); }
+  bool calc_residual(double, const double* y, const double* yp, const double* mu, double* res) override {
+    if (!m_.calc_dae_terms(y, y + n_, scratch_, terms_)) return false;
+    const PhaseDaeTerms& t = terms_;
+    const double* acc = yp + n_;
+    for (int i = 0; i < n_; ++i) {
+      res[i] = yp[i] - y[n_ + i];
+      double r = t.diag[i] * acc[i] - t.rhs[i];
+      if (i > 0) r += t.sub[i] * acc[i - 1];
+      if (i + 1 < n_) r += t.sub[i + 1] * acc[i + 1];
+      for (int j = 0; j < t.num_multipliers; ++j) r -= mu[j] * t.c[j][i];
+      res[n_ + i] = r;
+    }
+    const double F = t.drive_multiplier >= 0 ? mu[t.drive_multiplier] : t.drive_force_N;
+    res[2 * n_] = yp[2 * n_] - F * t.driven_speed_m_per_s;
+    for (int j = 0; j < t.num_multipliers; ++j) {
+      double r = -t.s[j];
+      for (int i = 0; i < n_; ++i) r += t.c[j][i] * acc[i];
+      res[2 * n_ + 1 + j] = r;
+    }
+    return true;
+  }
+  // Start guess for IDACalcIC: y' and the multipliers of the direct solve (the rail's lambda, the
+  // velocity drive's force), which IDACalcIC then checks against the residual.
+  bool calc_initial_guess(double t, const double* y, double* yp, double* mu) override {
+    calc_rhs(t, y, yp);
+    if (!m_.calc_dae_terms(y, y + n_, scratch_, terms_)) return false;
+    thread_local std::vector<double> acc;
+    acc.resize(static_cast<std::size_t>(n_));
+    const PhasePoint p = m_.calc_point(y, y + n_, acc.data(), scratch_);
+    for (int j = 0; j < terms_.num_multipliers; ++j) mu[j] = j == terms_.drive_multiplier ? p.drive_force_N : p.lambda_N;
+    return std::isfinite(yp[0]);
+  }
   void calc_rhs(double, const double* y, double* dy) override {
     const PhasePoint p = m_.calc_point(y, y + n_, dy + n_, scratch_);
     std::copy(y + n_, y + 2 * n_, dy);
@@ -37,6 +74,7 @@ class PhaseOde final : public integrators::OdeSystem {
   int n_;
   double creep_;
   PhaseScratch scratch_;
+  PhaseDaeTerms terms_;
 };
 
 // Feeds the peak brackets with every step end and the history with its grid times; enforces
@@ -52,6 +90,7 @@ class PhaseObserver final : public integrators::StepObserver {
     auto eval = [&](double t) {
       d.calc_state(t, state_.data());
       ++point_evals;
+      if (sinks_.history.records_frames()) m_.calc_frame_heights(state_.data(), sinks_.history.frame_buffer());
       std::copy(state_.begin(), state_.begin() + 2 * n_, sample_.begin());
       return m_.calc_point(state_.data(), state_.data() + n_, sample_.data() + 2 * n_, scratch_);
     };

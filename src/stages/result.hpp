@@ -48,6 +48,9 @@ struct TimeHistory {
   std::vector<double> pin_force_N;       // rail normal force on one pin (0 off the rail)
   std::vector<double> diagonal_tension_N;  // tension in one diagonal of the deploying bay
   std::vector<double> driven_speed_m_per_s;
+  // Free stack: heights of frames 0..n per row (row-major, rows x n_frames, m); empty otherwise.
+  std::vector<double> frame_height_m;
+  int n_frames = 0;
   double step_s = 0.0;                   // grid step of the rows (output_step_s, doubled at each row cap)
   std::size_t size() const { return t_s.size(); }
 };

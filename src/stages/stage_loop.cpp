@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "integrators/auto_integrator.hpp"
+#include "integrators/ida_integrator.hpp"
 #include "model/impacts.hpp"
 #include "model/rail.hpp"
 #include "stages/energy.hpp"
@@ -46,6 +47,7 @@ std::unique_ptr<integrators::Integrator> make_integrator(integrators::Integrator
     case IntegratorKind::cvode: return std::make_unique<integrators::CvodeIntegrator>(io, integrators::CvodeMethod::bdf);
     case IntegratorKind::cvode_adams: return std::make_unique<integrators::CvodeIntegrator>(io, integrators::CvodeMethod::adams);
     case IntegratorKind::automatic: return std::make_unique<integrators::AutoIntegrator>(io);
+    case IntegratorKind::ida: return std::make_unique<integrators::IdaIntegrator>(io);
     case IntegratorKind::dopri54: break;
   }
   return std::make_unique<integrators::DormandPrince54>(io);
@@ -122,7 +124,10 @@ StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stage
   r_.drive_mode = to_string(opts.drive.mode);
   r_.bays.resize(static_cast<std::size_t>(n));
   for (int i = 1; i <= n; ++i) r_.bays[static_cast<std::size_t>(i - 1)].bay = i;
-  if (!stages.empty() && stages.front().free_stack) free_ = std::make_unique<FreeStack>(mast);
+  if (!stages.empty() && stages.front().free_stack) {
+    free_ = std::make_unique<FreeStack>(mast);
+    history_.enable_frames(n + 1);
+  }
   if (!kinematic_ || free_) integrator_ = make_integrator(opts.run.integrator, opts.calc_integrator_options());
   if (kinematic_) r_.motor_torque_at_speed_Nm = opts.drive.calc_motor_torque_Nm(opts.drive.speed_m_per_s);
 }
@@ -401,6 +406,7 @@ void StageLoop::finish() {
   } else {
     r_.deploy_time_s = t_;
   }
+  if (free_ && history_.records_frames() && last_stage_) free_->get_frame_heights(last_stage_->bay, history_.frame_buffer());
   history_.finish(t_, last_, last_stage_ ? last_stage_->bay : 0);
   auto fin = [](double v) { return std::isfinite(v) ? v : kNaN; };
   const auto& run = tracker_.run;

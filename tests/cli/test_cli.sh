@@ -80,6 +80,12 @@ run free_retract 2 free_retract.toml -o free_retract.h5
 expect_in free_retract.err "free_retract.toml:2: stack.mode" "free_retract: message names key and line"
 nothing_written free_retract
 
+# run.integrator = "ida" solves the free stack only: refused on a held stack, naming file, line, key
+scene ida_held.toml '[run]\nintegrator = "ida"\n'
+run ida_held 2 ida_held.toml -o ida_held.h5
+expect_in ida_held.err "ida_held.toml:2: run.integrator" "ida_held: message names key and line"
+nothing_written ida_held
+
 run set_unknown 2 "$TABLE1" --set mast.n_bay=3 -o set_unknown.h5
 expect_in set_unknown.err "--set mast.n_bay=3" "set_unknown: message quotes the --set"
 nothing_written set_unknown

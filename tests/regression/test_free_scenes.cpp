@@ -85,3 +85,44 @@ TEST_CASE("free stack: a grazing approach that dips into the rail within a step 
   CHECK(r.bays_completed > 17);
   if (r.status == sim::RunStatus::rail_miss) CHECK(r.rail_miss_closest_approach_m > 0.0);
 }
+
+TEST_CASE("free_singular.toml: a high rail straightens the bay below the deploying one (singular configuration)",
+          "[regression][free]") {
+  // Independent of the code: y_r = y_l + x_l cot(beta) = 0.5486 m, and at the lock of bay m its
+  // rail must hold frame m-1 at y_r - l_s = 0.3686 m > 2 l_s. In the stage of bay 2, frame 0 rests
+  // on the floor, so bay 1 (frames 0, 1) must straighten first: the run has to stop there, after
+  // the lock of bay 3 and before the driven frame 2 could reach its own lock.
+  const double beta = 15.0 * M_PI / 180.0, yr = 0.25 + 0.08 / std::tan(beta), l = 0.18, v = 0.1;
+  REQUIRE(yr - l > 2 * l);
+  for (const char* integ : {"dopri54", "ida"}) {
+    INFO(integ);
+    const sim::RunResult r = sim::simulate(load("free_singular.toml", {std::string("run.integrator=\"") + integ + "\""}));
+    REQUIRE(r.status == sim::RunStatus::singular_configuration);
+    CHECK(r.message.find("bay 1 (not deploying)") != std::string::npos);
+    CHECK(r.message.find("in the stage of bay 2") != std::string::npos);
+    CHECK(r.bays_completed == 1);
+    // Velocity drive: y_driven = v t, so bay 3 locks at (y_r + l) / v and bay 2 would lock at
+    // (y_r + 3 l) / v; the stop lies between (bounded time). On the rail the driven speed is a
+    // constraint integrated with the state (Baumgarte), so the lock time carries the integration
+    // error of the stage's two phases: 20 rtol per phase (stages/energy.hpp), rtol = 1e-8 here
+    // (measured: dopri54 1e-10, ida 3e-9 relative).
+    CHECK(r.bays[2].lock_time_s == Approx((yr + l) / v).epsilon(40 * 1e-8));
+    CHECK(r.end_time_s > (yr + l) / v);
+    CHECK(r.end_time_s < (yr + 3 * l) / v);
+    // The history's last row is the stop: bay 1's opening D = y_1 - y_0 is within 1e-4 l_s of
+    // straight in the hinge offset, x = sqrt(l^2 - D^2 / 4) < 1e-4 l (+ the event tolerance).
+    const auto& h = r.history;
+    REQUIRE(h.n_frames == 4);
+    const double* last = h.frame_height_m.data() + (h.size() - 1) * 4;
+    const double D1 = last[1] - last[0];
+    CHECK(std::sqrt(std::max(0.0, l * l - 0.25 * D1 * D1)) < 1.01e-4 * l);
+    CHECK(std::sqrt(std::max(0.0, l * l - 0.25 * D1 * D1)) > 0.9e-4 * l);  // not past it either
+    CHECK(last[0] == 0.0);  // frame 0 still on the floor
+  }
+  for (const char* mode : {"torque", "motor"}) {  // every drive mode ends the same way, in bounded time
+    INFO(mode);
+    const sim::RunResult r = sim::simulate(load("free_singular.toml", {std::string("drive.mode=\"") + mode + "\""}));
+    CHECK(r.status == sim::RunStatus::singular_configuration);
+    CHECK(r.end_time_s < 60.0);
+  }
+}

@@ -370,7 +370,9 @@ TEST_CASE("the field tables cover every field of the result structs", "[json][h5
   // If one of these fails, a field was added to (or removed from) sim/result.hpp: add it to the
   // tables in src/io/json_summary.cpp (and to docs/hdf5-schema.md).
   CHECK(field_count<BayResult>() == truss::io::bay_result_fields().size());
-  CHECK(field_count<TimeHistory>() == truss::io::history_fields().size() + 1);  // + step_s (an attribute)
+  // + step_s (an attribute), frame_height_m and n_frames (the free stack's 2-D dataset, written by
+  // write_history apart from the 1-D table)
+  CHECK(field_count<TimeHistory>() == truss::io::history_fields().size() + 3);
   // + status, message, bays, history
   CHECK(field_count<RunResult>() == truss::io::run_result_fields().size() + 4);
   for (const auto& f : truss::io::run_result_fields()) CHECK(std::string(f.units) != "");
