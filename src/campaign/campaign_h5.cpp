@@ -283,6 +283,7 @@ void CampaignFile::discard() noexcept {
 
 void CampaignFile::finish(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info,
                           bool force) {
+  store_->drain_jobs();
   store_->check_complete();
   store_.reset();  // closes the per-run datasets
   const std::vector<std::int8_t> status = read_status(file_, ctx_.options.ensemble.n_runs);
