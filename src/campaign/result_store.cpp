@@ -73,22 +73,32 @@ void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, 
 
 namespace {
 
-// Encoding job (rank 0 -> encoder): header then the chunk's raw bytes; its output (encoder ->
-// job_done): header then the stored bytes. Both little-endian, fixed size.
+// Encoding job (rank 0 -> encoder): one or more parts, each a header and one dataset chunk's raw
+// bytes; its output (encoder -> job_done): the same parts with the stored bytes. Little-endian.
 struct JobHeader {
   std::uint32_t dataset = 0;  // index into Datasets::direct
   std::uint32_t elem_size = 0;
   std::int64_t chunk = 0;     // chunk index (first row / chunk_runs)
   std::int32_t level = 0;
   std::uint32_t mask = 0;     // output: the filter mask of the stored bytes
+  std::uint64_t bytes = 0;    // bytes after the header
 };
 constexpr std::size_t kJobHeader = sizeof(JobHeader);
+// Small dataset chunks (the scalar columns, 32 kB each) are grouped into jobs of about this size,
+// so that a chunk of runs makes some twenty jobs: fewer than the batches that carry them.
+constexpr std::size_t kJobBytes = std::size_t{1} << 20;
 
-JobHeader read_header(std::string_view bytes, const char* what) {
-  if (bytes.size() < kJobHeader) throw std::runtime_error(fmt::format("{} of {} bytes: shorter than its header", what, bytes.size()));
-  JobHeader h;
-  std::memcpy(&h, bytes.data(), kJobHeader);
-  return h;
+// Calls f(header, bytes) for each part of a job or of its output.
+template <class F>
+void for_each_part(std::string_view job, const char* what, F&& f) {
+  while (!job.empty()) {
+    JobHeader h;
+    if (job.size() < kJobHeader) throw std::runtime_error(fmt::format("{}: a part of {} bytes, shorter than its header", what, job.size()));
+    std::memcpy(&h, job.data(), kJobHeader);
+    if (h.bytes > job.size() - kJobHeader) throw std::runtime_error(fmt::format("{}: a part of {} bytes in {}", what, h.bytes, job.size()));
+    f(h, job.substr(kJobHeader, h.bytes));
+    job.remove_prefix(kJobHeader + h.bytes);
+  }
 }
 
 }  // namespace
@@ -139,10 +149,10 @@ ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, const StoreOpti
   };
   add(runs.get(), "run_index", H5T_STD_I64LE, "1", 0, 8);
   add(runs.get(), "status", d.status_type.get(), "1", 0, 1);
+  d.message = std::make_unique<Handle>(make_chunked(runs.get(), "message", d.str_type.get(), "1", n_, 0, chunk_, deflate_));
   add(timing.get(), "run_wall_time_s", H5T_IEEE_F64LE, "s", 0, 8);
   add(timing.get(), "rank", H5T_STD_I64LE, "1", 0, 8);
   add(timing.get(), "session", H5T_STD_I64LE, "1", 0, 8);
-  d.message = std::make_unique<Handle>(make_chunked(runs.get(), "message", d.str_type.get(), "1", n_, 0, chunk_, deflate_));
   d.f64_0 = d.direct.size();
   for (const auto* f : cols.f64) add(runs.get(), f->name, H5T_IEEE_F64LE, f->units, 0, 8);
   d.i64_0 = d.direct.size();
@@ -179,8 +189,9 @@ void ResultStore::attach_scales(hid_t file, Datasets& d) {
   for (const auto& disp : disps) frames = frames || disp.per == Per::frame;
   std::unique_ptr<Handle> frame;
   if (frames) frame = std::make_unique<Handle>(make_scale(file, "frame", 0, nb + 1));
+  attach(d.direct[1].ds.get(), run, 0, "/runs/status");  // the order of the older files' REFERENCE_LIST
   attach(d.message->get(), run, 0, "/runs/message");
-  for (std::size_t k = 1; k < d.inputs_0; ++k) attach(d.direct[k].ds.get(), run, 0, "a per-run dataset");
+  for (std::size_t k = 2; k < d.inputs_0; ++k) attach(d.direct[k].ds.get(), run, 0, "a per-run dataset");
   for (std::size_t k = d.bays_0; k < d.inputs_0; ++k) attach(d.direct[k].ds.get(), bay.get(), 1, "a /runs/bays dataset");
   for (std::size_t k = 0; k < disps.size(); ++k) {
     const hid_t ds = d.direct[d.inputs_0 + k].ds.get();
@@ -297,16 +308,28 @@ void ResultStore::complete_chunk(Chunk& c) {
   for (std::size_t i = 0; i < r; ++i) msg[i] = c.message[i].c_str();
   write_rows(d.message->get(), d.str_type.get(), msg.data(), c.first, c.rows, 0,
              fmt::format("/runs/message (runs {} to {})", c.first, c.first + c.rows - 1));
+  std::string small;  // small chunks grouped into one job
   for (std::size_t j = 0; j < d.direct.size(); ++j) {
     std::string& b = c.buf[j];
-    JobHeader h{static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(d.direct[j].elem), c.first / chunk_, deflate_, 0};
+    const JobHeader h{static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(d.direct[j].elem), c.first / chunk_, deflate_, 0,
+                      b.size() - kJobHeader};
     std::memcpy(b.data(), &h, kJobHeader);
     if (deflate_ == 0) {
       write_encoded(b);  // the stored bytes are the raw bytes
       continue;
     }
+    if (b.size() < kJobBytes / 4) {
+      small += b;
+      if (small.size() < kJobBytes && j + 1 < d.direct.size()) continue;
+      b = std::move(small);
+      small.clear();
+    }
     jobs_bytes_ += b.size();
     jobs_.push_back(std::move(b));
+  }
+  if (!small.empty()) {
+    jobs_bytes_ += small.size();
+    jobs_.push_back(std::move(small));
   }
   std::string out;
   while (!jobs_.empty() && jobs_bytes_ > max_jobs_bytes_) {
@@ -345,23 +368,25 @@ void ResultStore::drain_jobs() {
 }
 
 void ResultStore::write_encoded(std::string_view output) {
-  const JobHeader h = read_header(output, "an encoded chunk");
   const Datasets& d = *ds_;
-  if (h.dataset >= d.direct.size() || h.chunk < 0 || h.chunk * chunk_ >= n_)
-    throw std::runtime_error(fmt::format("an encoded chunk for dataset {} chunk {}: no such chunk", h.dataset, h.chunk));
-  const Datasets::Direct& x = d.direct[h.dataset];
-  const hsize_t offset[2] = {static_cast<hsize_t>(h.chunk * chunk_), 0};
-  check(H5Dwrite_chunk(x.ds.get(), H5P_DEFAULT, h.mask, offset, output.size() - kJobHeader, output.data() + kJobHeader),
-        fmt::format("write chunk {} of dataset {}", h.chunk, h.dataset));
+  for_each_part(output, "an encoded chunk", [&](const JobHeader& h, std::string_view bytes) {
+    if (h.dataset >= d.direct.size() || h.chunk < 0 || h.chunk * chunk_ >= n_)
+      throw std::runtime_error(fmt::format("an encoded chunk for dataset {} chunk {}: no such chunk", h.dataset, h.chunk));
+    const hsize_t offset[2] = {static_cast<hsize_t>(h.chunk * chunk_), 0};
+    check(H5Dwrite_chunk(d.direct[h.dataset].ds.get(), H5P_DEFAULT, h.mask, offset, bytes.size(), bytes.data()),
+          fmt::format("write chunk {} of dataset {}", h.chunk, h.dataset));
+  });
 }
 
 void encode_job_output(std::string_view job, std::string& out) {
-  JobHeader h = read_header(job, "an encoding job");
+  out.clear();
   std::string enc;
-  h.mask = encode_chunk(job.substr(kJobHeader), h.elem_size, h.level, enc);
-  out.resize(kJobHeader);
-  std::memcpy(out.data(), &h, kJobHeader);
-  out += enc;
+  for_each_part(job, "an encoding job", [&](JobHeader h, std::string_view raw) {
+    h.mask = encode_chunk(raw, h.elem_size, h.level, enc);
+    h.bytes = enc.size();
+    out.append(reinterpret_cast<const char*>(&h), kJobHeader);
+    out += enc;
+  });
 }
 
 void ResultStore::check_complete() const {

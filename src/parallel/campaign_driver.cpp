@@ -133,14 +133,14 @@ void restore_frame(Rank0& r0, const campaign::CampaignContext& ctx, FrameKind ki
   if (r0.file->store().has(rec.run_index))
     throw io::InputError(fmt::format("error: --resume: {}: run {} recorded twice; the journal is inconsistent; start "
                                      "over with --force", where, rec.run_index));
-  r0.file->store().add(rec, std::max(0, st.session - 1));
+  r0.file->store().add_bytes(payload, std::max(0, st.session - 1));
 }
 
 // Rank 0: output and journal checks; creates the results file (a temporary name until the end)
 // and opens or creates the journal, restoring its runs into the file. Throws io::InputError for
 // anything the user must decide.
 void prepare_output(const CommandOptions& o, const std::string& campaign_text, const campaign::CampaignContext& ctx,
-                    Rank0& r0) {
+                    Rank0& r0, int size) {
   if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
   if (o.resume && fs::exists(o.output_path))
     throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
@@ -155,7 +155,7 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
   if (!o.resume && has_journal && !o.force)
     throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
                                      "(same campaign and --set options) or start over with --force", jpath));
-  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{kChunkRuns, o.compression});
+  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{kChunkRuns, o.compression, size > 1});
   if (o.resume) {
     try {
       auto on_frame = [&](FrameKind k, std::string_view p, std::size_t at) { restore_frame(r0, ctx, k, p, at); };
@@ -303,12 +303,15 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.end_utc = io::h5::utc_now_iso8601();
     info.wall_time_s = st.previous_wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     info.schedule = {sched.wall_s, sched.rank0_compute_s, sched.rank0_poll_s, sched.rank0_tick_s, sched.rank0_idle_s,
-                     sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s};
+                     sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s, sched.rank0_handle_cpu_s};
     info.write_extra = [&](hid_t file) { campaign::write_nominal_group(file, nominal, ctx.columns.n_bays_max); };
     const campaign::ResultStore& store = r0.file->store();
     const std::int64_t n_runs = store.n_runs();
     const campaign::StatusCounts counts = status_counts(store);
     const std::size_t peak_chunks = store.peak_chunks_in_memory();
+    const std::int64_t jobs_offloaded = store.jobs_offloaded();
+    r0.file->store().drain_jobs();
+    const std::int64_t jobs_local = store.jobs_local();
     r0.file->finish(histories, info, o.force);
     r0.journal->close_and_remove();
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n", sim::to_string(nominal.status),
@@ -316,13 +319,14 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     campaign::print_design_summary(stderr, design_values(o.output_path, ctx.columns, n_runs, nominal));
     const std::int64_t results = sched.runs_by_rank0 + sched.runs_by_workers;
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs ({}), {:.3g} s on {} rank{} "
-                             "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per result handled, "
-                             "at most {} chunks of {} runs in memory)\n",
+                             "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per result handled "
+                             "({:.3g} us CPU), at most {} chunks of {} runs in memory, {} of {} chunk encodings by workers)\n",
                              o.output_path, n_runs, campaign::format_status_counts(counts), info.wall_time_s, size, size > 1 ? "s" : "",
                              std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count(),
                              static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC, sched.runs_by_rank0,
                              results ? 1e6 * (sched.rank0_poll_s + sched.rank0_tick_s) / static_cast<double>(results) : 0.0,
-                             peak_chunks, kChunkRuns);
+                             results ? 1e6 * sched.rank0_handle_cpu_s / static_cast<double>(results) : 0.0, peak_chunks, kChunkRuns,
+                             jobs_offloaded, jobs_offloaded + jobs_local);
     return kExitOk;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
@@ -379,10 +383,11 @@ std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions&
 // Rank 0: the output and journal checks, agreed on by every rank.
 int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const std::string& campaign_text,
                        const campaign::CampaignContext& ctx, Rank0& r0) {
-  int status = kExitOk;
+  int status = kExitOk, size = 1;
+  MPI_Comm_size(comm, &size);
   if (root) {
     try {
-      prepare_output(o, campaign_text, ctx, r0);
+      prepare_output(o, campaign_text, ctx, r0, size);
     } catch (const io::InputError& e) {
       std::cerr << e.what() << '\n';
       status = kExitBadInput;
@@ -440,13 +445,17 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   ScheduleOptions so;
   so.max_batch = o.max_batch;
   so.tick_interval_s = std::min(0.25, o.flush_interval_s);
+  // Workers encode the results file's chunks (campaign/result_store.hpp), rank 0 writes them.
+  so.take_job = [&](std::string& job) { return r0.file->store().take_job(job); };
+  so.on_job_done = [&](std::string_view out) { r0.file->store().job_done(out); };
+  so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
   ScheduleSummary sched;
   try {
     sched = run_schedule(
         comm, todo, compute,
         [&](std::string_view bytes) {
           r0.journal->append(FrameKind::run, bytes);
-          r0.file->store().add(campaign::RunRecord::from_bytes(bytes, ctx->columns), r0.st.session);
+          r0.file->store().add_bytes(bytes, r0.st.session);
         },
         [&] {
           if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= o.flush_interval_s)

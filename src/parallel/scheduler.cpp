@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
+#include <ctime>
 #include <memory>
 
 #include <fmt/format.h>
@@ -23,9 +25,15 @@ struct Incoming {
   std::string bytes;
 };
 struct WorkOut {
-  std::vector<std::int64_t> runs;
+  std::string bytes;  // kTagWork layout
   MPI_Request req = MPI_REQUEST_NULL;
 };
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 class Rank0 {
  public:
@@ -57,9 +65,10 @@ class Rank0 {
   std::vector<std::unique_ptr<Incoming>> incoming_;  // buffers stay put while their receive is posted
   std::vector<std::unique_ptr<WorkOut>> sends_;
   std::vector<int> done_idx_;
-  std::string one_;
+  std::string one_, job_;
   Clock::time_point last_tick_ = Clock::now();
   ScheduleSummary sum_;
+  double compute_cpu_s_ = 0.0;  // rank 0's thread CPU time inside compute()
 };
 
 Rank0::Rank0(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute, const ResultFn& on_result,
@@ -76,11 +85,17 @@ void Rank0::send_batch(int w) {
   const std::size_t remaining = todo_.size() - next_run_;
   std::size_t k = remaining / static_cast<std::size_t>(opts_.batches_per_rank * size_);
   k = std::min(std::clamp<std::size_t>(k, 1, static_cast<std::size_t>(opts_.max_batch)), remaining);
-  const auto first = todo_.begin() + static_cast<std::ptrdiff_t>(next_run_);
-  out->runs.assign(first, first + static_cast<std::ptrdiff_t>(k));
+  job_.clear();
+  if (k > 0 && opts_.take_job && opts_.take_job(job_)) ++sum_.jobs_sent;
+  else job_.clear();
+  const std::uint32_t head[2] = {static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(job_.size())};
+  out->bytes.reserve(sizeof head + 8 * k + job_.size());
+  out->bytes.append(reinterpret_cast<const char*>(head), sizeof head);
+  out->bytes.append(reinterpret_cast<const char*>(todo_.data() + next_run_), 8 * k);
+  out->bytes += job_;
   next_run_ += k;
   if (k == 0) stopped_[static_cast<std::size_t>(w)] = 1;
-  MPI_Isend(out->runs.data(), static_cast<int>(k), MPI_INT64_T, w, kTagWork, comm_, &out->req);
+  MPI_Isend(out->bytes.data(), static_cast<int>(out->bytes.size()), MPI_BYTE, w, kTagWork, comm_, &out->req);
   sends_.push_back(std::move(out));
   ++sum_.batches_sent;
 }
@@ -118,8 +133,17 @@ bool Rank0::complete_receives() {
   if (n_done <= 0) return false;
   for (int k = 0; k < n_done; ++k) {
     const auto before = received_;
-    for_each_framed(incoming_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])]->bytes,
-                    [&](std::string_view one) { deliver(one); });
+    std::string_view msg = incoming_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])]->bytes;
+    std::uint32_t job = 0;
+    std::memcpy(&job, msg.data(), sizeof job);
+    if (job > 0) {
+      try {
+        opts_.on_job_done(msg.substr(sizeof job, job));
+      } catch (const std::exception& e) {
+        abort_job(comm_, "storing a side job's output", e);
+      }
+    }
+    for_each_framed(msg.substr(sizeof job + job), [&](std::string_view one) { deliver(one); });
     sum_.runs_by_workers += received_ - before;
   }
   // Drop the completed receives (MPI_Testsome set their requests to MPI_REQUEST_NULL).
@@ -168,11 +192,13 @@ void Rank0::compute_one() {
   const std::int64_t run = todo_[next_run_++];
   one_.clear();
   const auto t0 = Clock::now();
+  const double c0 = thread_cpu_s();
   try {
     compute_(run, one_);
   } catch (const std::exception& e) {
     abort_job(comm_, "a run", e);
   }
+  compute_cpu_s_ += thread_cpu_s() - c0;
   sum_.rank0_compute_s += seconds_since(t0);
   ++sum_.runs_by_rank0;
   const auto t1 = Clock::now();
@@ -190,6 +216,7 @@ void Rank0::maybe_tick() {
 
 ScheduleSummary Rank0::run() {
   const auto t0 = Clock::now();
+  const double cpu0 = thread_cpu_s();
   const auto total = static_cast<std::int64_t>(todo_.size());
   for (int w = 1; w < size_; ++w) send_batch(w);
   for (int w = 1; w < size_; ++w)
@@ -216,6 +243,7 @@ ScheduleSummary Rank0::run() {
   sends_.clear();
   sum_.wall_s = seconds_since(t0);
   on_tick_();
+  sum_.rank0_handle_cpu_s = thread_cpu_s() - cpu0 - compute_cpu_s_;
   return sum_;
 }
 
@@ -225,6 +253,7 @@ std::string ScheduleOptions::validate() const {
   if (max_batch < 1) return fmt::format("max_batch: must be >= 1, got {}", max_batch);
   if (batches_per_rank < 1) return fmt::format("batches_per_rank: must be >= 1, got {}", batches_per_rank);
   if (!(tick_interval_s > 0.0)) return fmt::format("tick_interval_s: must be positive, got {}", tick_interval_s);
+  if (take_job && !on_job_done) return "take_job needs on_job_done";
   return {};
 }
 
@@ -233,7 +262,7 @@ ScheduleSummary run_schedule(MPI_Comm comm, const std::vector<std::int64_t>& tod
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   if (rank != 0) {
-    run_worker(comm, compute);
+    run_worker(comm, compute, opts);
     return {};
   }
   return Rank0(comm, todo, compute, on_result, on_tick, opts).run();
