@@ -9,6 +9,7 @@
 // inflate them) and wall time; medians of REPEATS. The records are computed once and replayed
 // (cycled over the first N_DISTINCT runs, run indices 0..N_RUNS-1) so that N_RUNS can be large.
 // Usage: bench_store CAMPAIGN.toml N_RUNS [REPEATS] [N_DISTINCT] [DIR] [--set KEY=VALUE ...]
+#include <malloc.h>
 #include <time.h>
 
 #include <algorithm>
@@ -146,6 +147,8 @@ Times replay(const campaign::CampaignContext& ctx, const std::vector<std::string
 }  // namespace
 
 int main(int argc, char** argv) {
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);  // as truss-campaign does (parallel/campaign_driver.cpp)
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
   if (argc < 3) {
     std::fprintf(stderr, "usage: bench_store CAMPAIGN.toml N_RUNS [REPEATS] [N_DISTINCT] [DIR] [--set KEY=VALUE ...]\n");
     return 2;

@@ -26,6 +26,7 @@ struct ScheduleTiming {
   std::int64_t runs_by_rank0 = 0, runs_by_workers = 0;
   double synthetic_run_cost_s = -1;  // >= 0: a bench-only campaign of sleeping runs (no physics)
   double rank0_handle_cpu_s = 0;     // rank 0's thread CPU time outside its own runs (results, answers, journal)
+  double rank0_compute_cpu_s = 0;    // rank 0's thread CPU time in its own runs
 };
 
 struct CampaignFileInfo {

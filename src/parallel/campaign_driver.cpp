@@ -3,6 +3,8 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <malloc.h>
+
 #include <chrono>
 #include <ctime>
 #include <cstring>
@@ -303,7 +305,8 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.end_utc = io::h5::utc_now_iso8601();
     info.wall_time_s = st.previous_wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     info.schedule = {sched.wall_s, sched.rank0_compute_s, sched.rank0_poll_s, sched.rank0_tick_s, sched.rank0_idle_s,
-                     sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s, sched.rank0_handle_cpu_s};
+                     sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s, sched.rank0_handle_cpu_s,
+                     sched.rank0_compute_cpu_s};
     info.write_extra = [&](hid_t file) { campaign::write_nominal_group(file, nominal, ctx.columns.n_bays_max); };
     const campaign::ResultStore& store = r0.file->store();
     const std::int64_t n_runs = store.n_runs();
@@ -410,6 +413,10 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   // exit-time cleanup crashes (io/h5_util.cpp, write_file_atomically); every identifier is closed
   // by its owner, so the library's atexit cleanup is switched off.
   H5dont_atexit();
+  // Chunk buffers, messages and encoding jobs are megabytes each and come and go all the time:
+  // kept in the heap, not mapped and unmapped (each new page costs a fault, several us here).
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);

@@ -244,6 +244,7 @@ ScheduleSummary Rank0::run() {
   sum_.wall_s = seconds_since(t0);
   on_tick_();
   sum_.rank0_handle_cpu_s = thread_cpu_s() - cpu0 - compute_cpu_s_;
+  sum_.rank0_compute_cpu_s = compute_cpu_s_;
   return sum_;
 }
 
