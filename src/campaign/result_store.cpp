@@ -357,14 +357,19 @@ void ResultStore::job_done(std::string_view output) {
 }
 
 void ResultStore::drain_jobs() {
-  std::string out;
-  while (!jobs_.empty()) {
-    encode_job_output(jobs_.front(), out);
-    jobs_bytes_ -= jobs_.front().size();
-    jobs_.pop_front();
-    write_encoded(out);
-    ++jobs_local_;
+  while (drain_one()) {
   }
+}
+
+bool ResultStore::drain_one() {
+  if (jobs_.empty()) return false;
+  std::string out;
+  encode_job_output(jobs_.front(), out);
+  jobs_bytes_ -= jobs_.front().size();
+  jobs_.pop_front();
+  write_encoded(out);
+  ++jobs_local_;
+  return true;
 }
 
 void ResultStore::write_encoded(std::string_view output) {

@@ -65,6 +65,7 @@ class ResultStore {
   bool take_job(std::string& job);
   void job_done(std::string_view output);
   void drain_jobs();
+  bool drain_one();  // encodes and writes the next waiting job here; false if none
   std::int64_t jobs_offloaded() const { return jobs_returned_; }
   std::int64_t jobs_local() const { return jobs_local_; }
   // Throws std::runtime_error unless every run has arrived and every chunk is written.

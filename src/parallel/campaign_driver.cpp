@@ -456,6 +456,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   so.take_job = [&](std::string& job) { return r0.file->store().take_job(job); };
   so.on_job_done = [&](std::string_view out) { r0.file->store().job_done(out); };
   so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
+  so.do_local_job = [&] { return r0.file->store().drain_one(); };
   ScheduleSummary sched;
   try {
     sched = run_schedule(

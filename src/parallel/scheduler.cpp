@@ -50,6 +50,7 @@ class Rank0 {
   void deliver(std::string_view one);
   void compute_one();
   void maybe_tick();
+  void dispatch_waiting();
 
   MPI_Comm comm_;
   const std::vector<std::int64_t>& todo_;
@@ -60,7 +61,9 @@ class Rank0 {
   int size_ = 1;
   std::size_t next_run_ = 0;  // todo_[next_run_] is the next run to hand out
   std::int64_t received_ = 0;
-  std::vector<std::uint8_t> stopped_;
+  std::vector<std::uint8_t> stopped_, waiting_;
+  bool final_ = false;         // sending stop messages: no more jobs
+  std::int64_t jobs_out_ = 0;  // side jobs sent whose output has not come back
   std::vector<MPI_Request> recv_reqs_;              // parallel to incoming_
   std::vector<std::unique_ptr<Incoming>> incoming_;  // buffers stay put while their receive is posted
   std::vector<std::unique_ptr<WorkOut>> sends_;
@@ -69,6 +72,14 @@ class Rank0 {
   Clock::time_point last_tick_ = Clock::now();
   ScheduleSummary sum_;
   double compute_cpu_s_ = 0.0;  // rank 0's thread CPU time inside compute()
+  double local_jobs_cpu_ = 0.0;  // ... and in side jobs it ran itself while idle (not per-result work)
+  bool local_job() {
+    if (!opts_.do_local_job) return false;
+    const double c0 = thread_cpu_s();
+    const bool did = opts_.do_local_job();
+    local_jobs_cpu_ += thread_cpu_s() - c0;
+    return did;
+  }
 };
 
 Rank0::Rank0(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute, const ResultFn& on_result,
@@ -76,6 +87,15 @@ Rank0::Rank0(MPI_Comm comm, const std::vector<std::int64_t>& todo, const Compute
     : comm_(comm), todo_(todo), compute_(compute), on_result_(on_result), on_tick_(on_tick), opts_(opts) {
   MPI_Comm_size(comm, &size_);
   stopped_.assign(static_cast<std::size_t>(size_), 0);
+  waiting_.assign(static_cast<std::size_t>(size_), 0);
+}
+
+// Workers with no runs left to do get the side jobs that have appeared since they asked (at the
+// end: the encoding of the last chunk).
+void Rank0::dispatch_waiting() {
+  if (!opts_.take_job) return;
+  for (int w = 1; w < size_; ++w)
+    if (waiting_[static_cast<std::size_t>(w)] && !stopped_[static_cast<std::size_t>(w)]) send_batch(w);
 }
 
 // Guided batches: remaining / (batches_per_rank * ranks), at least 1, at most max_batch. An empty
@@ -86,15 +106,24 @@ void Rank0::send_batch(int w) {
   std::size_t k = remaining / static_cast<std::size_t>(opts_.batches_per_rank * size_);
   k = std::min(std::clamp<std::size_t>(k, 1, static_cast<std::size_t>(opts_.max_batch)), remaining);
   job_.clear();
-  if (k > 0 && opts_.take_job && opts_.take_job(job_)) ++sum_.jobs_sent;
-  else job_.clear();
+  const bool job = !final_ && opts_.take_job && opts_.take_job(job_);
+  if (!job) job_.clear();
+  if (k == 0 && !job && !final_) {  // nothing to do now: it waits, and gets a job or the stop message later
+    waiting_[static_cast<std::size_t>(w)] = 1;
+    return;
+  }
+  waiting_[static_cast<std::size_t>(w)] = 0;
+  if (job) {
+    ++sum_.jobs_sent;
+    ++jobs_out_;
+  }
   const std::uint32_t head[2] = {static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(job_.size())};
   out->bytes.reserve(sizeof head + 8 * k + job_.size());
   out->bytes.append(reinterpret_cast<const char*>(head), sizeof head);
   out->bytes.append(reinterpret_cast<const char*>(todo_.data() + next_run_), 8 * k);
   out->bytes += job_;
   next_run_ += k;
-  if (k == 0) stopped_[static_cast<std::size_t>(w)] = 1;
+  if (k == 0 && !job) stopped_[static_cast<std::size_t>(w)] = 1;
   MPI_Isend(out->bytes.data(), static_cast<int>(out->bytes.size()), MPI_BYTE, w, kTagWork, comm_, &out->req);
   sends_.push_back(std::move(out));
   ++sum_.batches_sent;
@@ -137,6 +166,7 @@ bool Rank0::complete_receives() {
     std::uint32_t job = 0;
     std::memcpy(&job, msg.data(), sizeof job);
     if (job > 0) {
+      --jobs_out_;
       try {
         opts_.on_job_done(msg.substr(sizeof job, job));
       } catch (const std::exception& e) {
@@ -223,11 +253,16 @@ ScheduleSummary Rank0::run() {
     if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
   if (opts_.on_started) opts_.on_started();
   Backoff backoff(200);  // rank 0 idles only at the very end, where latency matters
-  while (received_ < total) {
+  double handle_cpu = -1.0;
+  // Until every result is in and every side job given out is back; meanwhile rank 0 takes side
+  // jobs itself when it has nothing else to do.
+  while (received_ < total || jobs_out_ > 0) {
     const bool progressed = poll();
+    dispatch_waiting();
+    if (received_ == total && handle_cpu < 0) handle_cpu = thread_cpu_s() - cpu0 - compute_cpu_s_ - local_jobs_cpu_;
     if (next_run_ < todo_.size()) {
       compute_one();
-    } else if (received_ < total && !progressed) {
+    } else if (!progressed && !local_job()) {
       const auto ti = Clock::now();
       backoff.sleep();
       sum_.rank0_idle_s += seconds_since(ti);
@@ -237,13 +272,14 @@ ScheduleSummary Rank0::run() {
     maybe_tick();
   }
   // Workers still waiting for a batch get the stop message.
+  final_ = true;
   for (int w = 1; w < size_; ++w)
     if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
   for (auto& s : sends_) wait_idle(&s->req);
   sends_.clear();
   sum_.wall_s = seconds_since(t0);
   on_tick_();
-  sum_.rank0_handle_cpu_s = thread_cpu_s() - cpu0 - compute_cpu_s_;
+  sum_.rank0_handle_cpu_s = handle_cpu >= 0 ? handle_cpu : thread_cpu_s() - cpu0 - compute_cpu_s_ - local_jobs_cpu_;
   sum_.rank0_compute_cpu_s = compute_cpu_s_;
   return sum_;
 }

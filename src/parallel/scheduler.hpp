@@ -37,6 +37,8 @@ struct ScheduleOptions {
   std::function<bool(std::string& job)> take_job;
   std::function<void(std::string_view output)> on_job_done;
   std::function<void(std::string_view job, std::string& output)> do_job;
+  // Rank 0 with no runs left and nothing received: runs one waiting side job itself (false: none).
+  std::function<bool()> do_local_job;
   std::string validate() const;
 };
 
@@ -51,7 +53,7 @@ struct ScheduleSummary {
   double rank0_poll_s = 0.0;          // matching, receiving, on_result and answering (every poll, even empty)
   double rank0_tick_s = 0.0;          // inside on_tick (journal flushes, progress)
   double rank0_idle_s = 0.0;          // waiting for results with nothing left to compute
-  double rank0_handle_cpu_s = 0.0;    // rank 0's thread CPU time outside compute(): the per-result work
+  double rank0_handle_cpu_s = 0.0;    // rank 0's thread CPU time outside compute() until the last result: the per-result work
   double rank0_compute_cpu_s = 0.0;   // rank 0's thread CPU time inside compute()
   std::int64_t jobs_sent = 0;         // side jobs handed to workers
 };

@@ -152,7 +152,7 @@ void Worker::run() {
     if (batches_.empty()) receive_work();
     const Batch batch = std::move(batches_.front());
     batches_.pop_front();
-    if (batch.runs.empty()) break;  // the stop message: rank 0 sends it after every batch
+    if (batch.runs.empty() && batch.job.empty()) break;  // the stop message: rank 0 sends it last
     compute_batch(batch);
   }
   for (auto& s : sends_) wait_idle(&s.req);
