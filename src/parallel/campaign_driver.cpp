@@ -69,7 +69,7 @@ void put(std::string& s, T v) {
   s.append(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 template <class T>
-T get_at(const std::string& s, std::size_t at) {
+T get_at(std::string_view s, std::size_t at) {
   T v{};
   if (s.size() >= at + sizeof(T)) std::memcpy(&v, s.data() + at, sizeof(T));
   return v;
@@ -110,7 +110,7 @@ void restore_frame(Rank0& r0, const campaign::CampaignContext& ctx, FrameKind ki
   };
   if (kind == FrameKind::session) {
     need(sizeof(double) + sizeof(std::int32_t), "session");
-    if (st.session == 0) st.first_start = get_at<double>(std::string(payload), 0);
+    if (st.session == 0) st.first_start = get_at<double>(payload, 0);
     st.previous_wall_s += st.session_wall;
     st.session_wall = 0.0;
     ++st.session;
@@ -118,7 +118,7 @@ void restore_frame(Rank0& r0, const campaign::CampaignContext& ctx, FrameKind ki
   }
   if (kind == FrameKind::heartbeat) {
     need(sizeof(double), "heartbeat");
-    st.session_wall = get_at<double>(std::string(payload), 0);
+    st.session_wall = get_at<double>(payload, 0);
     return;
   }
   campaign::RunRecord rec;
@@ -413,8 +413,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   // exit-time cleanup crashes (io/h5_util.cpp, write_file_atomically); every identifier is closed
   // by its owner, so the library's atexit cleanup is switched off.
   H5dont_atexit();
-  // Chunk buffers, messages and encoding jobs are megabytes each and come and go all the time:
-  // kept in the heap, not mapped and unmapped (each new page costs a fault, several us here).
+  // Megabyte buffers (chunks, messages, jobs) stay in the heap: no page faults for each new one.
   mallopt(M_MMAP_THRESHOLD, 64 << 20);
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   int rank = 0, size = 1;
@@ -445,9 +444,12 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
     r0.journal->flush();
     last_flush = std::chrono::steady_clock::now();
   };
+  // A result is the record's bytes and their journal CRC, computed where the run ran.
   auto compute = [&](std::int64_t run, std::string& out) {
     if (o.synthetic_run_cost_s >= 0.0) synthetic_run_record(*ctx, run, rank, o.synthetic_run_cost_s).append_bytes(out);
     else campaign::calc_run_record(*ctx, run, rank).append_bytes(out);
+    const std::uint32_t crc = campaign::Journal::frame_crc(FrameKind::run, out);
+    out.append(reinterpret_cast<const char*>(&crc), sizeof crc);
   };
   ScheduleOptions so;
   so.max_batch = o.max_batch;
@@ -461,8 +463,10 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   try {
     sched = run_schedule(
         comm, todo, compute,
-        [&](std::string_view bytes) {
-          r0.journal->append(FrameKind::run, bytes);
+        [&](std::string_view result) {
+          if (result.size() < sizeof(std::uint32_t)) throw std::runtime_error("a result without its CRC");
+          const std::string_view bytes = result.substr(0, result.size() - sizeof(std::uint32_t));
+          r0.journal->append(FrameKind::run, bytes, get_at<std::uint32_t>(result, bytes.size()));
           r0.file->store().add_bytes(bytes, r0.st.session);
         },
         [&] {
