@@ -1,8 +1,9 @@
 // Benchmark (not a test): rank 0's serial work per result and at the end, without MPI.
 //   per-run cost c:     calc_run_record of the campaign's runs (what every rank does per run);
-//   per-result cost h:  what rank 0 does with each result: journal append, RunRecord::from_bytes,
-//                       ResultStore::add (with the chunk writes, shuffle and deflate it triggers),
-//                       for --compression 0 and 1;
+//   per-result cost h:  what rank 0 does with each result: journal append (with its CRC, which the
+//                       campaign computes on the worker), ResultStore::add_bytes and the chunk
+//                       writes: --compression 0; 1 encoded on rank 0 (one rank); 1 encoded by a
+//                       second thread standing for the workers (only rank 0's thread is timed);
 //   tail:               CampaignFile::finish: statistics from the columns read back, Sobol' indices,
 //                       attributes, close, sync, rename.
 // Times are thread CPU time (CLOCK_THREAD_CPUTIME_ID of the main thread, i.e. rank 0: a shared, loaded machine does not
