@@ -60,7 +60,10 @@ def run(driver, ranks, mca, out, sets, extra=()):
         runs = t["run_wall_time_s"][:]
         n = runs.size
         handled = a.get("rank0_poll_s", float("nan")) + a.get("rank0_tick_s", 0.0)
+        r0 = max(1, int(a.get("runs_by_rank0", 1)))
         return {
+            "h_cpu": a.get("rank0_handle_cpu_s", float("nan")) / n,
+            "c_cpu": a.get("rank0_compute_cpu_s", float("nan")) / r0,
             "wall": float(f.attrs["wall_time_s"]),
             "sched": float(a.get("schedule_wall_s", float("nan"))),
             "rank0_runs": int((t["rank"][:] == 0).sum()),
@@ -75,6 +78,7 @@ def med(rows, key):
 
 
 def bench_real(a):
+    load0 = os.getloadavg()
     driver = a.driver or os.path.join(a.build, "truss-campaign")
     sets = [f"ensemble.n_runs={a.runs}"]
     rows = {k: [] for k in ["1 rank", *TRANSPORTS]}
@@ -87,18 +91,21 @@ def bench_real(a):
             print(f"repeat {rep + 1}/{a.repeats} done", file=sys.stderr)
     t1 = med(rows["1 rank"], "wall")
     c = statistics.median(r["run_sum"] / r["n"] for r in rows["1 rank"])
-    print(f"driver: {driver}\n{a.runs} runs, {a.repeats} repeats (medians); per-run cost on 1 rank c = {c * 1e3:.3f} ms\n")
-    print("| ranks | transport | campaign wall (s) | efficiency | runs by rank 0 | rank 0 per result (us) | h / c |")
-    print("|---:|---|---:|---:|---:|---:|---:|")
+    print(f"driver: {driver}\n{a.runs} runs, {a.repeats} repeats (medians); per-run cost on 1 rank c = {c * 1e3:.3f} ms wall; "
+          f"load average before / after: {load0} / {os.getloadavg()}\n")
+    print("| ranks | transport | campaign wall (s) | efficiency | runs by rank 0 | rank 0 per result, wall (us) "
+          "| rank 0 per result, CPU (us) | rank 0 per run, CPU (us) | h / c (CPU) |")
+    print("|---:|---|---:|---:|---:|---:|---:|---:|---:|")
     for name, rs in rows.items():
         P = 1 if name == "1 rank" else 2
         w = med(rs, "wall")
-        h = med(rs, "h")
+        h, hc, cc = med(rs, "h"), med(rs, "h_cpu"), med(rs, "c_cpu")
         print(f"| {P} | {'-' if P == 1 else name} | {w:.3f} | {t1 / (P * w):.2f} | {med(rs, 'rank0_runs'):.0f} "
-              f"| {h * 1e6:.1f} | {h / c * 100:.2f} % |")
+              f"| {h * 1e6:.1f} | {hc * 1e6:.1f} | {cc * 1e6:.1f} | {hc / cc * 100:.2f} % |")
 
 
 def bench_synthetic(a):
+    load0 = os.getloadavg()
     driver = os.path.join(a.build, "truss-campaign")
     sets = [f"ensemble.n_runs={a.runs}"]
     extra = ["--synthetic-run-cost-s", str(a.cost)]
@@ -110,16 +117,17 @@ def bench_synthetic(a):
                 rows[name].append(run(driver, a.ranks, TRANSPORTS[name], out, sets, extra))
             print(f"repeat {rep + 1}/{a.repeats} done", file=sys.stderr)
     P = a.ranks
-    print(f"{P} ranks, {a.runs} sleeping runs of {a.cost * 1e3:g} ms, {a.repeats} repeats (medians)\n")
-    print("| transport | schedule wall (s) | mean run (ms) | efficiency | runs by rank 0 | rank 0 per result (us) "
-          "| h / c | model E |")
+    print(f"{P} ranks, {a.runs} sleeping runs of {a.cost * 1e3:g} ms, {a.repeats} repeats (medians); "
+          f"load average before / after: {load0} / {os.getloadavg()}\n")
+    print("| transport | schedule wall (s) | mean run (ms) | efficiency | runs by rank 0 | rank 0 per result, wall (us) "
+          "| rank 0 per result, CPU (us) | model E (wall h) |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
     for name, rs in rows.items():
         E = statistics.median(r["run_sum"] / (P * r["sched"]) for r in rs)
         c = statistics.median(r["run_sum"] / r["n"] for r in rs)
         h = med(rs, "h")
         print(f"| {name} | {med(rs, 'sched'):.3f} | {c * 1e3:.3f} | {E:.3f} | {med(rs, 'rank0_runs'):.0f} "
-              f"| {h * 1e6:.1f} | {h / c * 100:.2f} % | {model_efficiency(P, c, h):.3f} |")
+              f"| {h * 1e6:.1f} | {med(rs, 'h_cpu') * 1e6:.1f} | {model_efficiency(P, c, h):.3f} |")
 
 
 def main():

@@ -19,7 +19,25 @@ SKIP_ROOT_ATTRS = {"start_utc", "end_utc", "wall_time_s", "git_revision", "softw
                    "n_sessions"}
 
 
-def same_value(a, b):
+def resolve(f, v):
+    """Object references (dimension scales' DIMENSION_LIST, REFERENCE_LIST) hold file addresses,
+    which depend on the order the file was written in: compare the names they point to."""
+    if isinstance(v, h5py.Reference):
+        return f[v].name if v else None
+    if isinstance(v, np.void) or (isinstance(v, np.ndarray) and v.dtype.names):
+        return [resolve(f, x) for x in (v.tolist() if isinstance(v, np.void) else v.ravel())]
+    if isinstance(v, tuple):
+        return tuple(resolve(f, x) for x in v)
+    if isinstance(v, np.ndarray) and v.dtype.kind == "O":
+        return [resolve(f, x) for x in v.ravel()]
+    return v
+
+
+def same_value(a, b, fa=None, fb=None):
+    if fa is not None:
+        ra, rb = resolve(fa, a), resolve(fb, b)
+        if isinstance(ra, list) or isinstance(rb, list):
+            return str(ra) == str(rb)
     a, b = np.asarray(a), np.asarray(b)
     if a.dtype != b.dtype or a.shape != b.shape:
         return False
@@ -50,7 +68,7 @@ def compare(path_a, path_b):
             if ka != kb:
                 diffs.append(f"{name}: attributes differ: {sorted(ka ^ kb)}")
             for k in sorted(ka & kb):
-                if not same_value(oa.attrs[k], ob.attrs[k]):
+                if not same_value(oa.attrs[k], ob.attrs[k], fa, fb):
                     diffs.append(f"{name}: attribute {k} differs")
             if isinstance(oa, h5py.Dataset) != isinstance(ob, h5py.Dataset):
                 diffs.append(f"{name}: dataset in one file, group in the other")

@@ -239,6 +239,8 @@ void write_timing_attributes(hid_t file, const CampaignFileInfo& info) {
   write_double_attribute(g.get(), "rank0_poll_s", st.rank0_poll_s);
   write_double_attribute(g.get(), "rank0_tick_s", st.rank0_tick_s);
   write_double_attribute(g.get(), "rank0_idle_s", st.rank0_idle_s);
+  write_double_attribute(g.get(), "rank0_handle_cpu_s", st.rank0_handle_cpu_s);
+  write_double_attribute(g.get(), "rank0_compute_cpu_s", st.rank0_compute_cpu_s);
   write_int_attribute(g.get(), "runs_by_rank0", st.runs_by_rank0);
   write_int_attribute(g.get(), "runs_by_workers", st.runs_by_workers);
   if (st.synthetic_run_cost_s >= 0) write_double_attribute(g.get(), "synthetic_run_cost_s", st.synthetic_run_cost_s);
@@ -283,6 +285,7 @@ void CampaignFile::discard() noexcept {
 
 void CampaignFile::finish(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info,
                           bool force) {
+  store_->drain_jobs();
   store_->check_complete();
   store_.reset();  // closes the per-run datasets
   const std::vector<std::int8_t> status = read_status(file_, ctx_.options.ensemble.n_runs);

@@ -25,6 +25,8 @@ struct ScheduleTiming {
   double rank0_idle_s = 0;      // rank 0 waiting with nothing left to compute (the end)
   std::int64_t runs_by_rank0 = 0, runs_by_workers = 0;
   double synthetic_run_cost_s = -1;  // >= 0: a bench-only campaign of sleeping runs (no physics)
+  double rank0_handle_cpu_s = 0;     // rank 0's thread CPU time outside its own runs (results, answers, journal)
+  double rank0_compute_cpu_s = 0;    // rank 0's thread CPU time in its own runs
 };
 
 struct CampaignFileInfo {

@@ -245,11 +245,17 @@ Journal::~Journal() {
   }
 }
 
-void Journal::append(FrameKind kind, std::string_view payload) {
+std::uint32_t Journal::frame_crc(FrameKind kind, std::string_view payload) {
   // CRC-32 of kind + payload, without building that string.
   const auto k = static_cast<Bytef>(kind);
   uLong crc = ::crc32(0L, &k, 1);
   crc = ::crc32(crc, reinterpret_cast<const Bytef*>(payload.data()), static_cast<uInt>(payload.size()));
+  return static_cast<std::uint32_t>(crc);
+}
+
+void Journal::append(FrameKind kind, std::string_view payload) { append(kind, payload, frame_crc(kind, payload)); }
+
+void Journal::append(FrameKind kind, std::string_view payload, std::uint32_t crc) {
   put(buffer_, static_cast<std::uint8_t>(kind));
   put(buffer_, static_cast<std::uint32_t>(payload.size()));
   put(buffer_, static_cast<std::uint32_t>(crc));

@@ -76,6 +76,10 @@ class Journal {
   // Buffered; a buffer of kWriteThrough bytes is written out (not synced) at once, so memory stays
   // bounded however long the flush interval.
   void append(FrameKind kind, std::string_view payload);
+  // The same with the frame's CRC-32 computed elsewhere (frame_crc: a worker computes it for its
+  // records, which takes the CRC off rank 0's per-result work).
+  void append(FrameKind kind, std::string_view payload, std::uint32_t crc);
+  static std::uint32_t frame_crc(FrameKind kind, std::string_view payload);
   static constexpr std::size_t kWriteThrough = std::size_t{1} << 20;
   void flush();           // write() the buffer and fdatasync: on disk from now on
   void close_and_remove();  // after the results file is in place

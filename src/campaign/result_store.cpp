@@ -1,11 +1,14 @@
 #include "campaign/result_store.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
 #include <hdf5_hl.h>
+
+#include "campaign/chunk_codec.hpp"
 
 namespace truss::campaign {
 
@@ -68,25 +71,58 @@ void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, 
 
 }  // namespace
 
+namespace {
+
+// Encoding job (rank 0 -> encoder): one or more parts, each a header and one dataset chunk's raw
+// bytes; its output (encoder -> job_done): the same parts with the stored bytes. Little-endian.
+struct JobHeader {
+  std::uint32_t dataset = 0;  // index into Datasets::direct
+  std::uint32_t elem_size = 0;
+  std::int64_t chunk = 0;     // chunk index (first row / chunk_runs)
+  std::int32_t level = 0;
+  std::uint32_t mask = 0;     // output: the filter mask of the stored bytes
+  std::uint64_t bytes = 0;    // bytes after the header
+};
+constexpr std::size_t kJobHeader = sizeof(JobHeader);
+// Small dataset chunks (the scalar columns, 32 kB each) are grouped into jobs of about this size,
+// so that a chunk of runs makes some twenty jobs: fewer than the batches that carry them.
+constexpr std::size_t kJobBytes = std::size_t{1} << 20;
+
+// Calls f(header, bytes) for each part of a job or of its output.
+template <class F>
+void for_each_part(std::string_view job, const char* what, F&& f) {
+  while (!job.empty()) {
+    JobHeader h;
+    if (job.size() < kJobHeader) throw std::runtime_error(fmt::format("{}: a part of {} bytes, shorter than its header", what, job.size()));
+    std::memcpy(&h, job.data(), kJobHeader);
+    if (h.bytes > job.size() - kJobHeader) throw std::runtime_error(fmt::format("{}: a part of {} bytes in {}", what, h.bytes, job.size()));
+    f(h, job.substr(kJobHeader, h.bytes));
+    job.remove_prefix(kJobHeader + h.bytes);
+  }
+}
+
+}  // namespace
+
 struct ResultStore::Chunk {
   std::int64_t first = 0, rows = 0, filled = 0;
-  std::vector<std::uint8_t> have;
-  std::vector<std::int8_t> status;
+  std::vector<std::string> buf;  // per direct dataset: a job header, then chunk rows x width values (zero past rows)
   std::vector<std::string> message;
-  std::vector<double> f64;              // [column][row]
-  std::vector<std::int64_t> i64;        // [column][row]
-  std::vector<double> bays;             // [field][row][bay]: each field's rows contiguous
-  std::vector<double> inputs;           // per dispersion k, from rows * offset[k]: [row][its dimensions]
-  std::vector<double> wall;
-  std::vector<std::int64_t> index, rank, session;
 };
 
+// The per-run datasets written with H5Dwrite_chunk ("direct"), in record order, and /runs/message
+// (variable-length strings go through H5Dwrite).
 struct ResultStore::Datasets {
   std::vector<Handle> keep;  // groups
   Handle status_type = status_enum_type();
   Handle str_type = string_type();
-  std::vector<Handle> f64, i64, bays, inputs;
-  std::vector<Handle> misc;  // run_index, status, message, run_wall_time_s, rank, session
+  struct Direct {
+    Handle ds;
+    std::size_t elem = 8, width = 1;  // bytes per value, values per row
+    int rank = 1;                     // dataspace rank (1: a column, 2: rows x width)
+  };
+  std::vector<Direct> direct;  // run_index, status, run_wall_time_s, rank, session, f64, i64, bays, inputs
+  std::size_t f64_0 = 0, i64_0 = 0, bays_0 = 0, inputs_0 = 0;  // first index of each group in `direct`
+  std::unique_ptr<Handle> message;
 };
 
 std::string StoreOptions::validate() const {
@@ -107,27 +143,37 @@ ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, const StoreOpti
   Handle bays = make_group(runs.get(), "bays");
   Handle inputs = make_group(runs.get(), "inputs");
   Handle timing = make_group(file, "timing");
-  d.misc.push_back(make_chunked(runs.get(), "run_index", H5T_STD_I64LE, "1", n_, 0, chunk_, deflate_));
-  d.misc.push_back(make_chunked(runs.get(), "status", d.status_type.get(), "1", n_, 0, chunk_, deflate_));
-  d.misc.push_back(make_chunked(runs.get(), "message", d.str_type.get(), "1", n_, 0, chunk_, deflate_));
-  d.misc.push_back(make_chunked(timing.get(), "run_wall_time_s", H5T_IEEE_F64LE, "s", n_, 0, chunk_, deflate_));
-  d.misc.push_back(make_chunked(timing.get(), "rank", H5T_STD_I64LE, "1", n_, 0, chunk_, deflate_));
-  d.misc.push_back(make_chunked(timing.get(), "session", H5T_STD_I64LE, "1", n_, 0, chunk_, deflate_));
-  for (const auto* f : cols.f64) d.f64.push_back(make_chunked(runs.get(), f->name, H5T_IEEE_F64LE, f->units, n_, 0, chunk_, deflate_));
-  for (const auto* f : cols.i64) d.i64.push_back(make_chunked(runs.get(), f->name, H5T_STD_I64LE, f->units, n_, 0, chunk_, deflate_));
-  for (const auto* f : cols.bay) d.bays.push_back(make_chunked(bays.get(), f->name, H5T_IEEE_F64LE, f->units, n_, nb, chunk_, deflate_));
+  auto add = [&](hid_t loc, const std::string& name, hid_t type, const char* units, std::int64_t width, std::size_t elem) {
+    d.direct.push_back({make_chunked(loc, name, type, units, n_, width, chunk_, deflate_), elem,
+                        static_cast<std::size_t>(std::max<std::int64_t>(width, 1)), width > 0 ? 2 : 1});
+  };
+  add(runs.get(), "run_index", H5T_STD_I64LE, "1", 0, 8);
+  add(runs.get(), "status", d.status_type.get(), "1", 0, 1);
+  d.message = std::make_unique<Handle>(make_chunked(runs.get(), "message", d.str_type.get(), "1", n_, 0, chunk_, deflate_));
+  add(timing.get(), "run_wall_time_s", H5T_IEEE_F64LE, "s", 0, 8);
+  add(timing.get(), "rank", H5T_STD_I64LE, "1", 0, 8);
+  add(timing.get(), "session", H5T_STD_I64LE, "1", 0, 8);
+  d.f64_0 = d.direct.size();
+  for (const auto* f : cols.f64) add(runs.get(), f->name, H5T_IEEE_F64LE, f->units, 0, 8);
+  d.i64_0 = d.direct.size();
+  for (const auto* f : cols.i64) add(runs.get(), f->name, H5T_STD_I64LE, f->units, 0, 8);
+  d.bays_0 = d.direct.size();
+  for (const auto* f : cols.bay) add(bays.get(), f->name, H5T_IEEE_F64LE, f->units, nb, 8);
+  d.inputs_0 = d.direct.size();
   const DimensionLayout& L = ctx.sampler.layout();
   for (std::size_t k = 0; k < ctx.options.dispersions.size(); ++k) {
     const DispersionOptions& disp = ctx.options.dispersions[k];
     const std::string units = find_key_units(disp.key);
-    d.inputs.push_back(make_chunked(inputs.get(), disp.key, H5T_IEEE_F64LE, units.c_str(), n_,
-                                    disp.per == Per::run ? 0 : L.count[k], chunk_, deflate_));
+    add(inputs.get(), disp.key, H5T_IEEE_F64LE, units.c_str(), disp.per == Per::run ? 0 : L.count[k], 8);
   }
   attach_scales(file, d);
   d.keep.push_back(std::move(runs));
   d.keep.push_back(std::move(bays));
   d.keep.push_back(std::move(inputs));
   d.keep.push_back(std::move(timing));
+  std::size_t chunk_bytes = 0;
+  for (const auto& x : d.direct) chunk_bytes += static_cast<std::size_t>(std::min(chunk_, n_)) * x.width * x.elem;
+  max_jobs_bytes_ = opts.offload_encoding ? 2 * chunk_bytes : 0;
 }
 
 // Dimension scales, so that netCDF-4 readers (xarray) see named dimensions: /runs/run_index
@@ -135,7 +181,7 @@ ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, const StoreOpti
 // per-bay ones, /frame (0..n_bays_max) on those of per-frame inputs.
 void ResultStore::attach_scales(hid_t file, Datasets& d) {
   const std::int64_t nb = ctx_.columns.n_bays_max;
-  const hid_t run = d.misc[0].get();
+  const hid_t run = d.direct[0].ds.get();
   check(H5DSset_scale(run, "run_index"), "make /runs/run_index a dimension scale");
   Handle bay = make_scale(file, "bay", 1, nb);
   const auto& disps = ctx_.options.dispersions;
@@ -143,15 +189,14 @@ void ResultStore::attach_scales(hid_t file, Datasets& d) {
   for (const auto& disp : disps) frames = frames || disp.per == Per::frame;
   std::unique_ptr<Handle> frame;
   if (frames) frame = std::make_unique<Handle>(make_scale(file, "frame", 0, nb + 1));
-  for (std::size_t k = 1; k < d.misc.size(); ++k) attach(d.misc[k].get(), run, 0, "a per-run dataset");
-  for (auto* group : {&d.f64, &d.i64}) for (auto& h : *group) attach(h.get(), run, 0, "a /runs column");
-  for (auto& h : d.bays) {
-    attach(h.get(), run, 0, "a /runs/bays dataset");
-    attach(h.get(), bay.get(), 1, "a /runs/bays dataset");
-  }
-  for (std::size_t k = 0; k < d.inputs.size(); ++k) {
-    attach(d.inputs[k].get(), run, 0, disps[k].key);
-    if (disps[k].per != Per::run) attach(d.inputs[k].get(), disps[k].per == Per::bay ? bay.get() : frame->get(), 1, disps[k].key);
+  attach(d.direct[1].ds.get(), run, 0, "/runs/status");  // the order of the older files' REFERENCE_LIST
+  attach(d.message->get(), run, 0, "/runs/message");
+  for (std::size_t k = 2; k < d.inputs_0; ++k) attach(d.direct[k].ds.get(), run, 0, "a per-run dataset");
+  for (std::size_t k = d.bays_0; k < d.inputs_0; ++k) attach(d.direct[k].ds.get(), bay.get(), 1, "a /runs/bays dataset");
+  for (std::size_t k = 0; k < disps.size(); ++k) {
+    const hid_t ds = d.direct[d.inputs_0 + k].ds.get();
+    attach(ds, run, 0, disps[k].key);
+    if (disps[k].per != Per::run) attach(ds, disps[k].per == Per::bay ? bay.get() : frame->get(), 1, disps[k].key);
   }
 }
 
@@ -168,94 +213,191 @@ ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
   } else {
     c = std::make_unique<Chunk>();
   }
-  const OutputColumns& cols = ctx_.columns;
+  const Datasets& d = *ds_;
   c->first = k * chunk_;
   c->rows = std::min(chunk_, n_ - c->first);
   c->filled = 0;
-  const auto r = static_cast<std::size_t>(c->rows);
-  c->have.assign(r, 0);
-  c->status.assign(r, 0);
-  c->message.assign(r, {});
-  c->f64.resize(cols.f64.size() * r);
-  c->i64.resize(cols.i64.size() * r);
-  c->bays.resize(cols.bay.size() * r * static_cast<std::size_t>(cols.n_bays_max));
-  c->inputs.resize(r * static_cast<std::size_t>(cols.n_inputs));
-  c->wall.resize(r);
-  c->index.resize(r);
-  c->rank.resize(r);
-  c->session.resize(r);
+  const auto full = static_cast<std::size_t>(std::min(chunk_, n_));
+  c->buf.resize(d.direct.size());
+  for (std::size_t j = 0; j < d.direct.size(); ++j) {
+    const std::size_t bytes = kJobHeader + full * d.direct[j].width * d.direct[j].elem;
+    if (c->buf[j].size() != bytes || c->rows < chunk_) c->buf[j].assign(bytes, '\0');  // an edge chunk: zeros past n
+  }
+  c->message.assign(static_cast<std::size_t>(c->rows), {});
   Chunk& ref = *c;
   open_.emplace(k, std::move(c));
   peak_chunks_ = std::max(peak_chunks_, open_.size());
   return ref;
 }
 
-void ResultStore::add(const RunRecord& rec, int session) {
-  if (rec.run_index < 0 || rec.run_index >= n_) throw std::runtime_error(fmt::format("run index {} out of range", rec.run_index));
-  if (done_[static_cast<std::size_t>(rec.run_index)]) throw std::runtime_error(fmt::format("run {} received twice", rec.run_index));
-  Chunk& c = chunk_for(rec.run_index);
-  const auto i = static_cast<std::size_t>(rec.run_index - c.first);
-  const auto r = static_cast<std::size_t>(c.rows);
+void ResultStore::add(const RunRecord& r, int session) {
+  std::string bytes;
+  r.append_bytes(bytes);
+  add_bytes(bytes, session);
+}
+
+// The record layout of RunRecord::append_bytes: i64 run, i8 status, i32 rank, f64 wall time,
+// u32 message length and message, then the f64, i64, per-bay and input arrays.
+void ResultStore::add_bytes(std::string_view rec, int session) {
   const OutputColumns& cols = ctx_.columns;
-  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
-  done_[static_cast<std::size_t>(rec.run_index)] = 1;
-  ++n_done_;
-  if (rec.status != sim::RunStatus::ok) ++n_failed_;
-  ++status_counts_[static_cast<std::size_t>(rec.status)];
-  c.have[i] = 1;
-  c.status[i] = static_cast<std::int8_t>(rec.status);
-  c.message[i] = rec.message;
-  for (std::size_t k = 0; k < cols.f64.size(); ++k) c.f64[k * r + i] = rec.f64[k];
-  for (std::size_t k = 0; k < cols.i64.size(); ++k) c.i64[k * r + i] = rec.i64[k];
-  for (std::size_t k = 0; k < cols.bay.size(); ++k)
-    std::copy_n(rec.bays.begin() + static_cast<std::ptrdiff_t>(k * nb), nb, c.bays.begin() + static_cast<std::ptrdiff_t>((k * r + i) * nb));
-  const DimensionLayout& L = ctx_.sampler.layout();
-  for (std::size_t k = 0; k < L.count.size(); ++k) {
-    const auto off = static_cast<std::size_t>(L.offset[k]), w = static_cast<std::size_t>(L.count[k]);
-    std::copy_n(rec.inputs.begin() + static_cast<std::ptrdiff_t>(off), w, c.inputs.begin() + static_cast<std::ptrdiff_t>(r * off + i * w));
+  const Datasets& d = *ds_;
+  constexpr std::size_t kHead = 8 + 1 + 4 + 8 + 4;
+  std::int64_t run = -1;
+  std::uint32_t len = 0;
+  if (rec.size() >= kHead) {
+    std::memcpy(&run, rec.data(), 8);
+    std::memcpy(&len, rec.data() + 21, 4);
   }
-  c.wall[i] = rec.wall_time_s;
-  c.index[i] = rec.run_index;
-  c.rank[i] = rec.rank;
-  c.session[i] = session;
+  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
+  const std::size_t values = cols.f64.size() + cols.i64.size() + cols.bay.size() * nb + static_cast<std::size_t>(cols.n_inputs);
+  if (rec.size() < kHead || rec.size() != kHead + len + 4 * 4 + 8 * values)
+    throw std::runtime_error(fmt::format("a record of {} bytes is not a run record of this campaign", rec.size()));
+  // Each array is prefixed by its length (u32): checked against the columns.
+  const std::size_t counts[4] = {cols.f64.size(), cols.i64.size(), cols.bay.size() * nb, static_cast<std::size_t>(cols.n_inputs)};
+  for (std::size_t k = 0, at = kHead + len; k < 4; at += 4 + 8 * counts[k], ++k) {
+    std::uint32_t m = 0;
+    std::memcpy(&m, rec.data() + at, 4);
+    if (m != counts[k]) throw std::runtime_error(fmt::format("record has {} values where {} are expected", m, counts[k]));
+  }
+  const auto status = static_cast<std::int8_t>(rec[8]);
+  if (status < 0 || status >= sim::kRunStatusCount) throw std::runtime_error(fmt::format("record has an unknown status {}", status));
+  if (run < 0 || run >= n_) throw std::runtime_error(fmt::format("run index {} out of range", run));
+  if (done_[static_cast<std::size_t>(run)]) throw std::runtime_error(fmt::format("run {} received twice", run));
+  Chunk& c = chunk_for(run);
+  const auto i = static_cast<std::size_t>(run - c.first);
+  done_[static_cast<std::size_t>(run)] = 1;
+  ++n_done_;
+  if (status != 0) ++n_failed_;
+  ++status_counts_[static_cast<std::size_t>(status)];
+  auto put = [&](std::size_t ds, const void* src, std::size_t bytes) {
+    std::memcpy(c.buf[ds].data() + kJobHeader + i * bytes, src, bytes);
+  };
+  std::int32_t rank = 0;
+  std::memcpy(&rank, rec.data() + 9, 4);
+  const std::int64_t rank64 = rank, session64 = session;
+  put(0, &run, 8);
+  put(1, &status, 1);
+  put(2, rec.data() + 13, 8);
+  put(3, &rank64, 8);
+  put(4, &session64, 8);
+  c.message[i].assign(rec.data() + kHead, len);
+  const char* p = rec.data() + kHead + len + 4;
+  for (std::size_t k = 0; k < cols.f64.size(); ++k, p += 8) put(d.f64_0 + k, p, 8);
+  p += 4;
+  for (std::size_t k = 0; k < cols.i64.size(); ++k, p += 8) put(d.i64_0 + k, p, 8);
+  p += 4;
+  for (std::size_t k = 0; k < cols.bay.size(); ++k, p += 8 * nb) put(d.bays_0 + k, p, 8 * nb);
+  p += 4;
+  const DimensionLayout& L = ctx_.sampler.layout();
+  for (std::size_t k = 0; k < L.count.size(); ++k)
+    put(d.inputs_0 + k, p + 8 * static_cast<std::size_t>(L.offset[k]), 8 * static_cast<std::size_t>(L.count[k]));
   if (++c.filled < c.rows) return;
-  write_chunk(c);
+  complete_chunk(c);
   auto it = open_.find(c.first / chunk_);
   spare_.push_back(std::move(it->second));
   open_.erase(it);
   if (spare_.size() > 2) spare_.resize(2);
 }
 
-void ResultStore::write_chunk(const Chunk& c) {
-  const OutputColumns& cols = ctx_.columns;
+// A complete chunk: the messages through H5Dwrite, every other dataset's chunk written raw
+// (level 0) or queued as an encoding job; a backlog past two chunks is encoded here.
+void ResultStore::complete_chunk(Chunk& c) {
   Datasets& d = *ds_;
-  const std::int64_t r = c.rows, nb = cols.n_bays_max;
-  const auto ur = static_cast<std::size_t>(r);
-  const std::string at = fmt::format(" (runs {} to {})", c.first, c.first + r - 1);
-  write_rows(d.misc[0].get(), H5T_NATIVE_INT64, c.index.data(), c.first, r, 0, "/runs/run_index" + at);
-  write_rows(d.misc[1].get(), d.status_type.get(), c.status.data(), c.first, r, 0, "/runs/status" + at);
-  std::vector<const char*> msg(ur);
-  for (std::size_t i = 0; i < ur; ++i) msg[i] = c.message[i].c_str();
-  write_rows(d.misc[2].get(), d.str_type.get(), msg.data(), c.first, r, 0, "/runs/message" + at);
-  write_rows(d.misc[3].get(), H5T_NATIVE_DOUBLE, c.wall.data(), c.first, r, 0, "/timing/run_wall_time_s" + at);
-  write_rows(d.misc[4].get(), H5T_NATIVE_INT64, c.rank.data(), c.first, r, 0, "/timing/rank" + at);
-  write_rows(d.misc[5].get(), H5T_NATIVE_INT64, c.session.data(), c.first, r, 0, "/timing/session" + at);
-  for (std::size_t k = 0; k < d.f64.size(); ++k)
-    write_rows(d.f64[k].get(), H5T_NATIVE_DOUBLE, c.f64.data() + k * ur, c.first, r, 0, cols.f64[k]->name + at);
-  for (std::size_t k = 0; k < d.i64.size(); ++k)
-    write_rows(d.i64[k].get(), H5T_NATIVE_INT64, c.i64.data() + k * ur, c.first, r, 0, cols.i64[k]->name + at);
-  for (std::size_t k = 0; k < d.bays.size(); ++k)
-    write_rows(d.bays[k].get(), H5T_NATIVE_DOUBLE, c.bays.data() + k * ur * static_cast<std::size_t>(nb), c.first, r, nb,
-               cols.bay[k]->name + at);
-  const DimensionLayout& L = ctx_.sampler.layout();
-  for (std::size_t k = 0; k < d.inputs.size(); ++k)
-    write_rows(d.inputs[k].get(), H5T_NATIVE_DOUBLE, c.inputs.data() + ur * static_cast<std::size_t>(L.offset[k]), c.first, r,
-               ctx_.options.dispersions[k].per == Per::run ? 0 : L.count[k], ctx_.options.dispersions[k].key + at);
+  const auto r = static_cast<std::size_t>(c.rows);
+  std::vector<const char*> msg(r);
+  for (std::size_t i = 0; i < r; ++i) msg[i] = c.message[i].c_str();
+  write_rows(d.message->get(), d.str_type.get(), msg.data(), c.first, c.rows, 0,
+             fmt::format("/runs/message (runs {} to {})", c.first, c.first + c.rows - 1));
+  std::string small;  // small chunks grouped into one job
+  for (std::size_t j = 0; j < d.direct.size(); ++j) {
+    std::string& b = c.buf[j];
+    const JobHeader h{static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(d.direct[j].elem), c.first / chunk_, deflate_, 0,
+                      b.size() - kJobHeader};
+    std::memcpy(b.data(), &h, kJobHeader);
+    if (deflate_ == 0) {
+      write_encoded(b);  // the stored bytes are the raw bytes
+      continue;
+    }
+    if (b.size() < kJobBytes / 4) {
+      small += b;
+      if (small.size() < kJobBytes && j + 1 < d.direct.size()) continue;
+      b = std::move(small);
+      small.clear();
+    }
+    jobs_bytes_ += b.size();
+    jobs_.push_back(std::move(b));
+  }
+  if (!small.empty()) {
+    jobs_bytes_ += small.size();
+    jobs_.push_back(std::move(small));
+  }
+  std::string out;
+  while (!jobs_.empty() && jobs_bytes_ > max_jobs_bytes_) {
+    jobs_bytes_ -= jobs_.front().size();
+    encode_job_output(jobs_.front(), out);
+    jobs_.pop_front();
+    write_encoded(out);
+    ++jobs_local_;
+  }
+}
+
+bool ResultStore::take_job(std::string& job) {
+  if (jobs_.empty()) return false;
+  job = std::move(jobs_.front());
+  jobs_.pop_front();
+  jobs_bytes_ -= job.size();
+  ++jobs_out_;
+  return true;
+}
+
+void ResultStore::job_done(std::string_view output) {
+  write_encoded(output);
+  --jobs_out_;
+  ++jobs_returned_;
+}
+
+void ResultStore::drain_jobs() {
+  while (drain_one()) {
+  }
+}
+
+bool ResultStore::drain_one() {
+  if (jobs_.empty()) return false;
+  std::string out;
+  encode_job_output(jobs_.front(), out);
+  jobs_bytes_ -= jobs_.front().size();
+  jobs_.pop_front();
+  write_encoded(out);
+  ++jobs_local_;
+  return true;
+}
+
+void ResultStore::write_encoded(std::string_view output) {
+  const Datasets& d = *ds_;
+  for_each_part(output, "an encoded chunk", [&](const JobHeader& h, std::string_view bytes) {
+    if (h.dataset >= d.direct.size() || h.chunk < 0 || h.chunk * chunk_ >= n_)
+      throw std::runtime_error(fmt::format("an encoded chunk for dataset {} chunk {}: no such chunk", h.dataset, h.chunk));
+    const hsize_t offset[2] = {static_cast<hsize_t>(h.chunk * chunk_), 0};
+    check(H5Dwrite_chunk(d.direct[h.dataset].ds.get(), H5P_DEFAULT, h.mask, offset, bytes.size(), bytes.data()),
+          fmt::format("write chunk {} of dataset {}", h.chunk, h.dataset));
+  });
+}
+
+void encode_job_output(std::string_view job, std::string& out) {
+  out.clear();
+  std::string enc;
+  for_each_part(job, "an encoding job", [&](JobHeader h, std::string_view raw) {
+    h.mask = encode_chunk(raw, h.elem_size, h.level, enc);
+    h.bytes = enc.size();
+    out.append(reinterpret_cast<const char*>(&h), kJobHeader);
+    out += enc;
+  });
 }
 
 void ResultStore::check_complete() const {
-  if (n_done_ != n_ || !open_.empty())
-    throw std::runtime_error(fmt::format("internal: {} of {} runs stored, {} chunks unwritten", n_done_, n_, open_.size()));
+  if (n_done_ != n_ || !open_.empty() || !jobs_.empty() || jobs_out_ != 0)
+    throw std::runtime_error(fmt::format("internal: {} of {} runs stored, {} chunks unwritten, {} encoding jobs waiting, {} out",
+                                         n_done_, n_, open_.size(), jobs_.size(), jobs_out_));
 }
 
 std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n) {

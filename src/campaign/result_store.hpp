@@ -10,9 +10,11 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "campaign/run_record.hpp"
@@ -23,10 +25,18 @@ namespace truss::campaign {
 // How the per-run datasets are stored.
 struct StoreOptions {
   std::int64_t chunk_runs = 4096;  // rows per chunk: 32 kB per float64 column, a few chunks in memory
-  int deflate_level = 1;           // zlib level (0: no compression); 1 keeps rank 0's per-result cost low
+  int deflate_level = 1;           // zlib level (0: no compression); 1: the fastest, most of level 9's ratio
+  bool offload_encoding = false;   // jobs wait for take_job (other ranks encode them), up to two chunks' bytes
   std::string validate() const;
 };
 
+// Encoding a completed chunk (shuffle + deflate, about 60 us of zlib per 4.4 kB record at level
+// 1) is the only heavy part of storing a result. It is packaged as jobs, one per dataset chunk
+// (encode_job_output is a pure function of the job's bytes): the scheduler hands them to workers
+// with their next batch and the encoded bytes come back with the batch's results (take_job,
+// job_done), so rank 0 only copies values and writes finished chunks with H5Dwrite_chunk. Jobs
+// that nobody takes (one rank, the end of the schedule, a backlog beyond two chunks) are encoded
+// on rank 0 (drain_jobs). The bytes are the same whoever encodes them.
 class ResultStore {
  public:
   // Creates /runs (and its bays, inputs groups) and /timing's per-run datasets in `file`, chunked
@@ -36,7 +46,10 @@ class ResultStore {
   ResultStore(const ResultStore&) = delete;
   ResultStore& operator=(const ResultStore&) = delete;
 
-  void add(const RunRecord& r, int session);  // throws std::runtime_error for a bad or repeated index
+  // A record's bytes (RunRecord::append_bytes) straight into the chunk buffers. Throws
+  // std::runtime_error for a bad or repeated index or bytes that are not a record of these columns.
+  void add_bytes(std::string_view record, int session);
+  void add(const RunRecord& r, int session);
   bool has(std::int64_t run) const { return done_[static_cast<std::size_t>(run)] != 0; }
   std::int64_t n_runs() const { return n_; }
   std::int64_t n_done() const { return n_done_; }
@@ -45,14 +58,25 @@ class ResultStore {
   const std::array<std::int64_t, sim::kRunStatusCount>& status_counts() const { return status_counts_; }
   std::int64_t chunk_runs() const { return chunk_; }
   std::size_t peak_chunks_in_memory() const { return peak_chunks_; }
-  // Throws std::runtime_error unless every run has arrived (and so every chunk is written).
+
+  // Encoding jobs: take_job moves the next one into `job` (false when none is waiting);
+  // job_done writes an encoded chunk (encode_job_output of a job); drain_jobs encodes and writes
+  // every job still waiting. Counters for the end summary.
+  bool take_job(std::string& job);
+  void job_done(std::string_view output);
+  void drain_jobs();
+  bool drain_one();  // encodes and writes the next waiting job here; false if none
+  std::int64_t jobs_offloaded() const { return jobs_returned_; }
+  std::int64_t jobs_local() const { return jobs_local_; }
+  // Throws std::runtime_error unless every run has arrived and every chunk is written.
   void check_complete() const;
 
  private:
   struct Chunk;
   struct Datasets;
   Chunk& chunk_for(std::int64_t run);
-  void write_chunk(const Chunk& c);
+  void complete_chunk(Chunk& c);
+  void write_encoded(std::string_view output);
   void attach_scales(hid_t file, Datasets& d);
 
   const CampaignContext& ctx_;
@@ -65,7 +89,14 @@ class ResultStore {
   std::vector<std::unique_ptr<Chunk>> spare_;              // written chunks, memory kept for reuse
   std::size_t peak_chunks_ = 0;
   std::unique_ptr<Datasets> ds_;
+  std::deque<std::string> jobs_;  // waiting encoding jobs
+  std::size_t jobs_bytes_ = 0, max_jobs_bytes_ = 0;
+  std::int64_t jobs_out_ = 0, jobs_returned_ = 0, jobs_local_ = 0;
 };
+
+// What a worker does with an encoding job: the job's chunk encoded (encode_chunk), framed so that
+// job_done knows where it goes.
+void encode_job_output(std::string_view job, std::string& out);
 
 // Reading the finished /runs back (statistics, sensitivity): a 1-D float64 column; columns
 // col0 .. col0 + cols - 1 of an n x width dataset, read in blocks of block_rows whole rows (whole

@@ -3,6 +3,8 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <malloc.h>
+
 #include <chrono>
 #include <ctime>
 #include <cstring>
@@ -67,7 +69,7 @@ void put(std::string& s, T v) {
   s.append(reinterpret_cast<const char*>(&v), sizeof(T));
 }
 template <class T>
-T get_at(const std::string& s, std::size_t at) {
+T get_at(std::string_view s, std::size_t at) {
   T v{};
   if (s.size() >= at + sizeof(T)) std::memcpy(&v, s.data() + at, sizeof(T));
   return v;
@@ -108,7 +110,7 @@ void restore_frame(Rank0& r0, const campaign::CampaignContext& ctx, FrameKind ki
   };
   if (kind == FrameKind::session) {
     need(sizeof(double) + sizeof(std::int32_t), "session");
-    if (st.session == 0) st.first_start = get_at<double>(std::string(payload), 0);
+    if (st.session == 0) st.first_start = get_at<double>(payload, 0);
     st.previous_wall_s += st.session_wall;
     st.session_wall = 0.0;
     ++st.session;
@@ -116,7 +118,7 @@ void restore_frame(Rank0& r0, const campaign::CampaignContext& ctx, FrameKind ki
   }
   if (kind == FrameKind::heartbeat) {
     need(sizeof(double), "heartbeat");
-    st.session_wall = get_at<double>(std::string(payload), 0);
+    st.session_wall = get_at<double>(payload, 0);
     return;
   }
   campaign::RunRecord rec;
@@ -133,14 +135,14 @@ void restore_frame(Rank0& r0, const campaign::CampaignContext& ctx, FrameKind ki
   if (r0.file->store().has(rec.run_index))
     throw io::InputError(fmt::format("error: --resume: {}: run {} recorded twice; the journal is inconsistent; start "
                                      "over with --force", where, rec.run_index));
-  r0.file->store().add(rec, std::max(0, st.session - 1));
+  r0.file->store().add_bytes(payload, std::max(0, st.session - 1));
 }
 
 // Rank 0: output and journal checks; creates the results file (a temporary name until the end)
 // and opens or creates the journal, restoring its runs into the file. Throws io::InputError for
 // anything the user must decide.
 void prepare_output(const CommandOptions& o, const std::string& campaign_text, const campaign::CampaignContext& ctx,
-                    Rank0& r0) {
+                    Rank0& r0, int size) {
   if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
   if (o.resume && fs::exists(o.output_path))
     throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
@@ -155,7 +157,7 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
   if (!o.resume && has_journal && !o.force)
     throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
                                      "(same campaign and --set options) or start over with --force", jpath));
-  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{kChunkRuns, o.compression});
+  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{kChunkRuns, o.compression, size > 1});
   if (o.resume) {
     try {
       auto on_frame = [&](FrameKind k, std::string_view p, std::size_t at) { restore_frame(r0, ctx, k, p, at); };
@@ -303,12 +305,16 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.end_utc = io::h5::utc_now_iso8601();
     info.wall_time_s = st.previous_wall_s + std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
     info.schedule = {sched.wall_s, sched.rank0_compute_s, sched.rank0_poll_s, sched.rank0_tick_s, sched.rank0_idle_s,
-                     sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s};
+                     sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s, sched.rank0_handle_cpu_s,
+                     sched.rank0_compute_cpu_s};
     info.write_extra = [&](hid_t file) { campaign::write_nominal_group(file, nominal, ctx.columns.n_bays_max); };
     const campaign::ResultStore& store = r0.file->store();
     const std::int64_t n_runs = store.n_runs();
     const campaign::StatusCounts counts = status_counts(store);
     const std::size_t peak_chunks = store.peak_chunks_in_memory();
+    const std::int64_t jobs_offloaded = store.jobs_offloaded();
+    r0.file->store().drain_jobs();
+    const std::int64_t jobs_local = store.jobs_local();
     r0.file->finish(histories, info, o.force);
     r0.journal->close_and_remove();
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n", sim::to_string(nominal.status),
@@ -316,13 +322,14 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     campaign::print_design_summary(stderr, design_values(o.output_path, ctx.columns, n_runs, nominal));
     const std::int64_t results = sched.runs_by_rank0 + sched.runs_by_workers;
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs ({}), {:.3g} s on {} rank{} "
-                             "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per result handled, "
-                             "at most {} chunks of {} runs in memory)\n",
+                             "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per result handled "
+                             "({:.3g} us CPU), at most {} chunks of {} runs in memory, {} of {} chunk encodings by workers)\n",
                              o.output_path, n_runs, campaign::format_status_counts(counts), info.wall_time_s, size, size > 1 ? "s" : "",
                              std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count(),
                              static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC, sched.runs_by_rank0,
                              results ? 1e6 * (sched.rank0_poll_s + sched.rank0_tick_s) / static_cast<double>(results) : 0.0,
-                             peak_chunks, kChunkRuns);
+                             results ? 1e6 * sched.rank0_handle_cpu_s / static_cast<double>(results) : 0.0, peak_chunks, kChunkRuns,
+                             jobs_offloaded, jobs_offloaded + jobs_local);
     return kExitOk;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
@@ -379,10 +386,11 @@ std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions&
 // Rank 0: the output and journal checks, agreed on by every rank.
 int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const std::string& campaign_text,
                        const campaign::CampaignContext& ctx, Rank0& r0) {
-  int status = kExitOk;
+  int status = kExitOk, size = 1;
+  MPI_Comm_size(comm, &size);
   if (root) {
     try {
-      prepare_output(o, campaign_text, ctx, r0);
+      prepare_output(o, campaign_text, ctx, r0, size);
     } catch (const io::InputError& e) {
       std::cerr << e.what() << '\n';
       status = kExitBadInput;
@@ -405,6 +413,9 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   // exit-time cleanup crashes (io/h5_util.cpp, write_file_atomically); every identifier is closed
   // by its owner, so the library's atexit cleanup is switched off.
   H5dont_atexit();
+  // Megabyte buffers (chunks, messages, jobs) stay in the heap: no page faults for each new one.
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);
@@ -433,20 +444,30 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
     r0.journal->flush();
     last_flush = std::chrono::steady_clock::now();
   };
+  // A result is the record's bytes and their journal CRC, computed where the run ran.
   auto compute = [&](std::int64_t run, std::string& out) {
     if (o.synthetic_run_cost_s >= 0.0) synthetic_run_record(*ctx, run, rank, o.synthetic_run_cost_s).append_bytes(out);
     else campaign::calc_run_record(*ctx, run, rank).append_bytes(out);
+    const std::uint32_t crc = campaign::Journal::frame_crc(FrameKind::run, out);
+    out.append(reinterpret_cast<const char*>(&crc), sizeof crc);
   };
   ScheduleOptions so;
   so.max_batch = o.max_batch;
   so.tick_interval_s = std::min(0.25, o.flush_interval_s);
+  // Workers encode the results file's chunks (campaign/result_store.hpp), rank 0 writes them.
+  so.take_job = [&](std::string& job) { return r0.file->store().take_job(job); };
+  so.on_job_done = [&](std::string_view out) { r0.file->store().job_done(out); };
+  so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
+  so.do_local_job = [&] { return r0.file->store().drain_one(); };
   ScheduleSummary sched;
   try {
     sched = run_schedule(
         comm, todo, compute,
-        [&](std::string_view bytes) {
-          r0.journal->append(FrameKind::run, bytes);
-          r0.file->store().add(campaign::RunRecord::from_bytes(bytes, ctx->columns), r0.st.session);
+        [&](std::string_view result) {
+          if (result.size() < sizeof(std::uint32_t)) throw std::runtime_error("a result without its CRC");
+          const std::string_view bytes = result.substr(0, result.size() - sizeof(std::uint32_t));
+          r0.journal->append(FrameKind::run, bytes, get_at<std::uint32_t>(result, bytes.size()));
+          r0.file->store().add_bytes(bytes, r0.st.session);
         },
         [&] {
           if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= o.flush_interval_s)

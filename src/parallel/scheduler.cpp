@@ -3,6 +3,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
+#include <ctime>
 #include <memory>
 
 #include <fmt/format.h>
@@ -23,9 +25,15 @@ struct Incoming {
   std::string bytes;
 };
 struct WorkOut {
-  std::vector<std::int64_t> runs;
+  std::string bytes;  // kTagWork layout
   MPI_Request req = MPI_REQUEST_NULL;
 };
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
 
 class Rank0 {
  public:
@@ -42,6 +50,7 @@ class Rank0 {
   void deliver(std::string_view one);
   void compute_one();
   void maybe_tick();
+  void dispatch_waiting();
 
   MPI_Comm comm_;
   const std::vector<std::int64_t>& todo_;
@@ -52,14 +61,25 @@ class Rank0 {
   int size_ = 1;
   std::size_t next_run_ = 0;  // todo_[next_run_] is the next run to hand out
   std::int64_t received_ = 0;
-  std::vector<std::uint8_t> stopped_;
+  std::vector<std::uint8_t> stopped_, waiting_;
+  bool final_ = false;         // sending stop messages: no more jobs
+  std::int64_t jobs_out_ = 0;  // side jobs sent whose output has not come back
   std::vector<MPI_Request> recv_reqs_;              // parallel to incoming_
   std::vector<std::unique_ptr<Incoming>> incoming_;  // buffers stay put while their receive is posted
   std::vector<std::unique_ptr<WorkOut>> sends_;
   std::vector<int> done_idx_;
-  std::string one_;
+  std::string one_, job_;
   Clock::time_point last_tick_ = Clock::now();
   ScheduleSummary sum_;
+  double compute_cpu_s_ = 0.0;  // rank 0's thread CPU time inside compute()
+  double local_jobs_cpu_ = 0.0;  // ... and in side jobs it ran itself while idle (not per-result work)
+  bool local_job() {
+    if (!opts_.do_local_job) return false;
+    const double c0 = thread_cpu_s();
+    const bool did = opts_.do_local_job();
+    local_jobs_cpu_ += thread_cpu_s() - c0;
+    return did;
+  }
 };
 
 Rank0::Rank0(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute, const ResultFn& on_result,
@@ -67,6 +87,15 @@ Rank0::Rank0(MPI_Comm comm, const std::vector<std::int64_t>& todo, const Compute
     : comm_(comm), todo_(todo), compute_(compute), on_result_(on_result), on_tick_(on_tick), opts_(opts) {
   MPI_Comm_size(comm, &size_);
   stopped_.assign(static_cast<std::size_t>(size_), 0);
+  waiting_.assign(static_cast<std::size_t>(size_), 0);
+}
+
+// Workers with no runs left to do get the side jobs that have appeared since they asked (at the
+// end: the encoding of the last chunk).
+void Rank0::dispatch_waiting() {
+  if (!opts_.take_job) return;
+  for (int w = 1; w < size_; ++w)
+    if (waiting_[static_cast<std::size_t>(w)] && !stopped_[static_cast<std::size_t>(w)]) send_batch(w);
 }
 
 // Guided batches: remaining / (batches_per_rank * ranks), at least 1, at most max_batch. An empty
@@ -76,11 +105,26 @@ void Rank0::send_batch(int w) {
   const std::size_t remaining = todo_.size() - next_run_;
   std::size_t k = remaining / static_cast<std::size_t>(opts_.batches_per_rank * size_);
   k = std::min(std::clamp<std::size_t>(k, 1, static_cast<std::size_t>(opts_.max_batch)), remaining);
-  const auto first = todo_.begin() + static_cast<std::ptrdiff_t>(next_run_);
-  out->runs.assign(first, first + static_cast<std::ptrdiff_t>(k));
+  job_.clear();
+  const bool job = !final_ && opts_.take_job && opts_.take_job(job_);
+  if (!job) job_.clear();
+  if (k == 0 && !job && !final_) {  // nothing to do now: it waits, and gets a job or the stop message later
+    waiting_[static_cast<std::size_t>(w)] = 1;
+    return;
+  }
+  waiting_[static_cast<std::size_t>(w)] = 0;
+  if (job) {
+    ++sum_.jobs_sent;
+    ++jobs_out_;
+  }
+  const std::uint32_t head[2] = {static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(job_.size())};
+  out->bytes.reserve(sizeof head + 8 * k + job_.size());
+  out->bytes.append(reinterpret_cast<const char*>(head), sizeof head);
+  out->bytes.append(reinterpret_cast<const char*>(todo_.data() + next_run_), 8 * k);
+  out->bytes += job_;
   next_run_ += k;
-  if (k == 0) stopped_[static_cast<std::size_t>(w)] = 1;
-  MPI_Isend(out->runs.data(), static_cast<int>(k), MPI_INT64_T, w, kTagWork, comm_, &out->req);
+  if (k == 0 && !job) stopped_[static_cast<std::size_t>(w)] = 1;
+  MPI_Isend(out->bytes.data(), static_cast<int>(out->bytes.size()), MPI_BYTE, w, kTagWork, comm_, &out->req);
   sends_.push_back(std::move(out));
   ++sum_.batches_sent;
 }
@@ -118,8 +162,18 @@ bool Rank0::complete_receives() {
   if (n_done <= 0) return false;
   for (int k = 0; k < n_done; ++k) {
     const auto before = received_;
-    for_each_framed(incoming_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])]->bytes,
-                    [&](std::string_view one) { deliver(one); });
+    std::string_view msg = incoming_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])]->bytes;
+    std::uint32_t job = 0;
+    std::memcpy(&job, msg.data(), sizeof job);
+    if (job > 0) {
+      --jobs_out_;
+      try {
+        opts_.on_job_done(msg.substr(sizeof job, job));
+      } catch (const std::exception& e) {
+        abort_job(comm_, "storing a side job's output", e);
+      }
+    }
+    for_each_framed(msg.substr(sizeof job + job), [&](std::string_view one) { deliver(one); });
     sum_.runs_by_workers += received_ - before;
   }
   // Drop the completed receives (MPI_Testsome set their requests to MPI_REQUEST_NULL).
@@ -168,11 +222,13 @@ void Rank0::compute_one() {
   const std::int64_t run = todo_[next_run_++];
   one_.clear();
   const auto t0 = Clock::now();
+  const double c0 = thread_cpu_s();
   try {
     compute_(run, one_);
   } catch (const std::exception& e) {
     abort_job(comm_, "a run", e);
   }
+  compute_cpu_s_ += thread_cpu_s() - c0;
   sum_.rank0_compute_s += seconds_since(t0);
   ++sum_.runs_by_rank0;
   const auto t1 = Clock::now();
@@ -190,17 +246,23 @@ void Rank0::maybe_tick() {
 
 ScheduleSummary Rank0::run() {
   const auto t0 = Clock::now();
+  const double cpu0 = thread_cpu_s();
   const auto total = static_cast<std::int64_t>(todo_.size());
   for (int w = 1; w < size_; ++w) send_batch(w);
   for (int w = 1; w < size_; ++w)
     if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
   if (opts_.on_started) opts_.on_started();
   Backoff backoff(200);  // rank 0 idles only at the very end, where latency matters
-  while (received_ < total) {
+  double handle_cpu = -1.0;
+  // Until every result is in and every side job given out is back; meanwhile rank 0 takes side
+  // jobs itself when it has nothing else to do.
+  while (received_ < total || jobs_out_ > 0) {
     const bool progressed = poll();
+    dispatch_waiting();
+    if (received_ == total && handle_cpu < 0) handle_cpu = thread_cpu_s() - cpu0 - compute_cpu_s_ - local_jobs_cpu_;
     if (next_run_ < todo_.size()) {
       compute_one();
-    } else if (received_ < total && !progressed) {
+    } else if (!progressed && !local_job()) {
       const auto ti = Clock::now();
       backoff.sleep();
       sum_.rank0_idle_s += seconds_since(ti);
@@ -210,12 +272,15 @@ ScheduleSummary Rank0::run() {
     maybe_tick();
   }
   // Workers still waiting for a batch get the stop message.
+  final_ = true;
   for (int w = 1; w < size_; ++w)
     if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
   for (auto& s : sends_) wait_idle(&s->req);
   sends_.clear();
   sum_.wall_s = seconds_since(t0);
   on_tick_();
+  sum_.rank0_handle_cpu_s = handle_cpu >= 0 ? handle_cpu : thread_cpu_s() - cpu0 - compute_cpu_s_ - local_jobs_cpu_;
+  sum_.rank0_compute_cpu_s = compute_cpu_s_;
   return sum_;
 }
 
@@ -225,6 +290,7 @@ std::string ScheduleOptions::validate() const {
   if (max_batch < 1) return fmt::format("max_batch: must be >= 1, got {}", max_batch);
   if (batches_per_rank < 1) return fmt::format("batches_per_rank: must be >= 1, got {}", batches_per_rank);
   if (!(tick_interval_s > 0.0)) return fmt::format("tick_interval_s: must be positive, got {}", tick_interval_s);
+  if (take_job && !on_job_done) return "take_job needs on_job_done";
   return {};
 }
 
@@ -233,7 +299,7 @@ ScheduleSummary run_schedule(MPI_Comm comm, const std::vector<std::int64_t>& tod
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   if (rank != 0) {
-    run_worker(comm, compute);
+    run_worker(comm, compute, opts);
     return {};
   }
   return Rank0(comm, todo, compute, on_result, on_tick, opts).run();

@@ -30,6 +30,15 @@ struct ScheduleOptions {
   // Rank 0, once every worker holds its first two batches: set-up that need not keep them waiting
   // (allocating the result store, restoring a journal). No result is delivered before it returns.
   std::function<void()> on_started;
+  // Side jobs (optional): rank 0's take_job fills a job that rides with the next non-empty batch a
+  // worker gets (false: none waiting); the worker runs do_job on it before the batch's runs and
+  // sends the output with the batch's results, which reach rank 0's on_job_done. The campaign
+  // uses them to have workers encode (compress) the results file's chunks.
+  std::function<bool(std::string& job)> take_job;
+  std::function<void(std::string_view output)> on_job_done;
+  std::function<void(std::string_view job, std::string& output)> do_job;
+  // Rank 0 with no runs left and nothing received: runs one waiting side job itself (false: none).
+  std::function<bool()> do_local_job;
   std::string validate() const;
 };
 
@@ -44,6 +53,9 @@ struct ScheduleSummary {
   double rank0_poll_s = 0.0;          // matching, receiving, on_result and answering (every poll, even empty)
   double rank0_tick_s = 0.0;          // inside on_tick (journal flushes, progress)
   double rank0_idle_s = 0.0;          // waiting for results with nothing left to compute
+  double rank0_handle_cpu_s = 0.0;    // rank 0's thread CPU time outside compute() until the last result: the per-result work
+  double rank0_compute_cpu_s = 0.0;   // rank 0's thread CPU time inside compute()
+  std::int64_t jobs_sent = 0;         // side jobs handed to workers
 };
 
 using ComputeFn = std::function<void(std::int64_t run_index, std::string& out)>;  // writes one run's bytes

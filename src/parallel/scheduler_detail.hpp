@@ -12,8 +12,8 @@
 
 namespace truss::parallel::detail {
 
-inline constexpr int kTagWork = 11;    // rank 0 -> worker: int64 run indices; empty = no more work
-inline constexpr int kTagResult = 12;  // worker -> rank 0: framed results of one batch (and a request)
+inline constexpr int kTagWork = 11;    // rank 0 -> worker: u32 n, u32 job bytes, n int64 run indices, the job; n = 0: no more work
+inline constexpr int kTagResult = 12;  // worker -> rank 0: u32 job output bytes, the output, framed results of one batch (and a request)
 
 // Results of a batch: for each run, u32 length then the bytes.
 inline void append_framed(std::string& msg, const std::string& one) {
@@ -47,6 +47,6 @@ class Backoff {
   long us_ = 20, max_us_;
 };
 
-void run_worker(MPI_Comm comm, const ComputeFn& compute);
+void run_worker(MPI_Comm comm, const ComputeFn& compute, const ScheduleOptions& opts);
 
 }  // namespace truss::parallel::detail

@@ -3,6 +3,7 @@
 // message forward when the transport has no single-copy path (TCP, shared memory without CMA).
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
 #include <deque>
 #include <list>
@@ -32,21 +33,31 @@ struct Outgoing {
   MPI_Request req = MPI_REQUEST_NULL;
 };
 
+struct Batch {
+  std::vector<std::int64_t> runs;
+  std::string job;  // a side job to run first (empty: none)
+};
+
 class Worker {
  public:
-  Worker(MPI_Comm comm, const ComputeFn& compute) : comm_(comm), compute_(compute) {}
+  Worker(MPI_Comm comm, const ComputeFn& compute, const ScheduleOptions& opts) : comm_(comm), compute_(compute), opts_(opts) {}
   void run();
 
  private:
-  void test_sends();       // progress: called after every run
+  void progress();         // called after every run: tests sends, posts and completes work receives
+  void test_sends();
+  void post_work();        // MPI_Improbe + MPI_Imrecv of every work message that has arrived
+  void complete_work();    // completed work receives (in order) become batches
   void receive_work();     // waits (sleeping) for at least one batch
-  void compute_batch(const std::vector<std::int64_t>& batch);
+  void compute_batch(const Batch& batch);
 
   MPI_Comm comm_;
   const ComputeFn& compute_;
-  std::deque<std::vector<std::int64_t>> batches_;
-  std::list<Outgoing> sends_;  // a list: the buffers must not move while a send is in flight
-  std::string one_;
+  const ScheduleOptions& opts_;
+  std::deque<Batch> batches_;
+  std::deque<Outgoing> posted_;  // work receives in flight, in arrival order (a deque: elements stay put)
+  std::list<Outgoing> sends_;    // a list: the buffers must not move while a send is in flight
+  std::string one_, job_out_;
 };
 
 void Worker::test_sends() {
@@ -58,41 +69,70 @@ void Worker::test_sends() {
   }
 }
 
-// Rank 0 sends two batches up front and one more per result message it matches, so the next
-// batch is normally here already. Work messages are received with a matched probe: once matched,
-// rank 0 (which tests its sends between runs) completes them within one of its runs.
-void Worker::receive_work() {
-  Backoff backoff;
+// A work message is received as soon as it is seen, not when the worker needs it: a large one
+// (with a side job) then moves while the worker computes, with rank 0 progressing it between its runs.
+void Worker::post_work() {
   for (;;) {
     int flag = 0;
     MPI_Message m;
     MPI_Status st;
     MPI_Improbe(0, kTagWork, comm_, &flag, &m, &st);
-    if (flag) {
-      int count = 0;
-      MPI_Get_count(&st, MPI_INT64_T, &count);
-      std::vector<std::int64_t> b(static_cast<std::size_t>(count));
-      MPI_Request r;
-      MPI_Imrecv(b.data(), count, MPI_INT64_T, &m, &r);
-      int done = 0;
-      while (!done) {
-        MPI_Test(&r, &done, MPI_STATUS_IGNORE);
-        if (!done) {
-          test_sends();
-          backoff.sleep();
-        }
-      }
-      batches_.push_back(std::move(b));
-      return;
-    }
-    test_sends();
+    if (!flag) return;
+    int count = 0;
+    MPI_Get_count(&st, MPI_BYTE, &count);
+    Outgoing& in = posted_.emplace_back();
+    in.bytes.resize(static_cast<std::size_t>(count));
+    MPI_Imrecv(in.bytes.data(), count, MPI_BYTE, &m, &in.req);
+  }
+}
+
+void Worker::complete_work() {
+  while (!posted_.empty()) {
+    int done = 0;
+    MPI_Test(&posted_.front().req, &done, MPI_STATUS_IGNORE);
+    if (!done) return;
+    const std::string& b = posted_.front().bytes;
+    std::uint32_t head[2] = {0, 0};
+    std::memcpy(head, b.data(), sizeof head);
+    Batch& batch = batches_.emplace_back();
+    batch.runs.resize(head[0]);
+    if (head[0] > 0) std::memcpy(batch.runs.data(), b.data() + sizeof head, 8 * std::size_t{head[0]});
+    batch.job.assign(b, sizeof head + 8 * std::size_t{head[0]}, head[1]);
+    posted_.pop_front();
+  }
+}
+
+void Worker::progress() {
+  test_sends();
+  post_work();
+  complete_work();
+}
+
+// Rank 0 sends two batches up front and one more per result message it matches, so the next
+// batch is normally here already.
+void Worker::receive_work() {
+  Backoff backoff;
+  for (;;) {
+    progress();
+    if (!batches_.empty()) return;
     backoff.sleep();
   }
 }
 
-void Worker::compute_batch(const std::vector<std::int64_t>& batch) {
+void Worker::compute_batch(const Batch& batch) {
+  job_out_.clear();
+  if (!batch.job.empty()) {
+    try {
+      opts_.do_job(batch.job, job_out_);
+    } catch (const std::exception& e) {
+      abort_job(comm_, "a side job", e);
+    }
+  }
   std::string bytes;
-  for (std::int64_t run : batch) {
+  const auto job = static_cast<std::uint32_t>(job_out_.size());
+  bytes.append(reinterpret_cast<const char*>(&job), sizeof job);
+  bytes += job_out_;
+  for (std::int64_t run : batch.runs) {
     one_.clear();
     try {
       compute_(run, one_);
@@ -100,7 +140,7 @@ void Worker::compute_batch(const std::vector<std::int64_t>& batch) {
       abort_job(comm_, "a run", e);
     }
     append_framed(bytes, one_);
-    test_sends();
+    progress();
   }
   Outgoing& out = sends_.emplace_back();
   out.bytes = std::move(bytes);
@@ -110,9 +150,9 @@ void Worker::compute_batch(const std::vector<std::int64_t>& batch) {
 void Worker::run() {
   for (;;) {
     if (batches_.empty()) receive_work();
-    const std::vector<std::int64_t> batch = std::move(batches_.front());
+    const Batch batch = std::move(batches_.front());
     batches_.pop_front();
-    if (batch.empty()) break;  // the stop message: rank 0 sends it after every batch
+    if (batch.runs.empty() && batch.job.empty()) break;  // the stop message: rank 0 sends it last
     compute_batch(batch);
   }
   for (auto& s : sends_) wait_idle(&s.req);
@@ -120,6 +160,6 @@ void Worker::run() {
 
 }  // namespace
 
-void run_worker(MPI_Comm comm, const ComputeFn& compute) { Worker(comm, compute).run(); }
+void run_worker(MPI_Comm comm, const ComputeFn& compute, const ScheduleOptions& opts) { Worker(comm, compute, opts).run(); }
 
 }  // namespace truss::parallel::detail

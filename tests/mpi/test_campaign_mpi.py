@@ -467,10 +467,10 @@ def case_transports(args):
     # scheduler whose rank 0 blocks until a computing worker's next MPI call (the old one) gave
     # rank 0 19 % (single-copy off) and 29 % (TCP) of the runs on 2 ranks. Floors: efficiency 0.85,
     # and rank 0 at least 0.6 of an even share (0.8 of it at 8 ranks, where its share is small).
-    # --compression 0: this checks the scheduler's progress; the writer's deflate (about 60 us a
-    # result, more than the rest of rank 0's per-result work: docs/benchmarks.md) is a separate,
-    # measured cost, and with 4 ms runs on 8 ranks of a loaded 2-core machine it alone takes
-    # the efficiency to the floor.
+    # --compression 0: this checks the scheduler's progress; the deflate of the file's chunks
+    # (about 60 us a result) is done by the workers as side jobs (docs/campaigns.md, "How it
+    # runs"), which with 4 ms runs on 8 ranks of a loaded 2-core machine costs the ranks' shared
+    # cores about 2 % more and is measured in docs/benchmarks.md.
     for name, mca in (("single-copy off", SINGLE_COPY_OFF), ("tcp", TCP)):
         for ranks, n_runs, floor, share in ((2, 600, 0.85, 0.6), (8, 1600, 0.85, 0.6)):
             out = os.path.join(d, f"synthetic_{ranks}.h5")

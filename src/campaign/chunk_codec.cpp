@@ -1,0 +1,98 @@
+#include "campaign/chunk_codec.hpp"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace truss::campaign {
+
+namespace {
+
+// H5Zshuffle.c: byte j of element i goes to j * n + i (n = nbytes / elem_size); a trailing
+// partial element (never here: chunks hold whole elements) stays in place. Sizes 1 and a single
+// element are left as they are.
+void shuffle(const unsigned char* src, std::size_t nbytes, std::size_t es, unsigned char* dst) {
+  const std::size_t n = nbytes / es;
+  if (es <= 1 || n <= 1) {
+    std::copy_n(src, nbytes, dst);
+    return;
+  }
+  if (es == 8) {  // the common case, unrolled by the compiler
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < 8; ++j) dst[j * n + i] = src[i * 8 + j];
+  } else {
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < es; ++j) dst[j * n + i] = src[i * es + j];
+  }
+  std::copy(src + n * es, src + nbytes, dst + n * es);
+}
+
+void unshuffle(const unsigned char* src, std::size_t nbytes, std::size_t es, unsigned char* dst) {
+  const std::size_t n = nbytes / es;
+  if (es <= 1 || n <= 1) {
+    std::copy_n(src, nbytes, dst);
+    return;
+  }
+  for (std::size_t j = 0; j < es; ++j)
+    for (std::size_t i = 0; i < n; ++i) dst[i * es + j] = src[j * n + i];
+  std::copy(src + n * es, src + nbytes, dst + n * es);
+}
+
+// H5Z_DEFLATE_SIZE_ADJUST of HDF5 1.10: the output buffer H5Z_filter_deflate gives compress2.
+std::size_t hdf5_deflate_buffer(std::size_t nbytes) {
+  return static_cast<std::size_t>(std::ceil(static_cast<double>(nbytes) * static_cast<double>(1.001f)) + 12.0);
+}
+
+}  // namespace
+
+std::uint32_t encode_chunk(std::string_view raw, std::size_t elem_size, int level, std::string& out) {
+  if (level <= 0) {
+    out.assign(raw);
+    return 0;
+  }
+  std::string shuffled(raw.size(), '\0');
+  shuffle(reinterpret_cast<const unsigned char*>(raw.data()), raw.size(), elem_size, reinterpret_cast<unsigned char*>(shuffled.data()));
+  const std::size_t cap = hdf5_deflate_buffer(raw.size());
+  out.resize(std::max<std::size_t>(cap, compressBound(static_cast<uLong>(raw.size()))));
+  auto z = static_cast<uLongf>(out.size());
+  const int rc = compress2(reinterpret_cast<Bytef*>(out.data()), &z, reinterpret_cast<const Bytef*>(shuffled.data()),
+                           static_cast<uLong>(shuffled.size()), level);
+  if (rc != Z_OK) throw std::runtime_error(fmt::format("zlib compress2 failed ({}) on a {}-byte chunk", rc, raw.size()));
+  if (z > cap) {  // HDF5's compress2 would have overflowed: the optional deflate filter is skipped
+    out = std::move(shuffled);
+    return kDeflateSkipped;
+  }
+  out.resize(z);
+  return 0;
+}
+
+void decode_chunk(std::string_view stored, std::uint32_t mask, std::size_t elem_size, int level, std::size_t raw_bytes,
+                  std::string& raw) {
+  raw.resize(raw_bytes);
+  if (level <= 0) {
+    if (stored.size() != raw_bytes) throw std::runtime_error(fmt::format("chunk of {} bytes, expected {}", stored.size(), raw_bytes));
+    raw.assign(stored);
+    return;
+  }
+  std::string shuffled;
+  std::string_view plain = stored;
+  if (!(mask & kDeflateSkipped)) {
+    shuffled.resize(raw_bytes);
+    auto z = static_cast<uLongf>(raw_bytes);
+    const int rc = uncompress(reinterpret_cast<Bytef*>(shuffled.data()), &z, reinterpret_cast<const Bytef*>(stored.data()),
+                              static_cast<uLong>(stored.size()));
+    if (rc != Z_OK || z != raw_bytes)
+      throw std::runtime_error(fmt::format("a deflated chunk does not inflate to {} bytes (zlib {})", raw_bytes, rc));
+    plain = shuffled;
+  } else if (stored.size() != raw_bytes) {
+    throw std::runtime_error(fmt::format("chunk of {} bytes, expected {}", stored.size(), raw_bytes));
+  }
+  if (mask & kShuffleSkipped) raw.assign(plain);
+  else unshuffle(reinterpret_cast<const unsigned char*>(plain.data()), raw_bytes, elem_size, reinterpret_cast<unsigned char*>(raw.data()));
+}
+
+}  // namespace truss::campaign

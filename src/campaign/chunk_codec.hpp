@@ -1,0 +1,32 @@
+// One HDF5 chunk as HDF5's filter pipeline stores it, computed outside HDF5: the byte shuffle
+// filter (H5Z_FILTER_SHUFFLE) then the deflate filter (H5Z_FILTER_DEFLATE, zlib compress2 at the
+// dataset's level), exactly as H5Zshuffle.c and H5Zdeflate.c of HDF5 1.10 compute them. The
+// campaign writes its per-run datasets chunk by chunk with H5Dwrite_chunk from these bytes, so the
+// encoding can run on any rank (a worker, or rank 0 itself) and the file holds the same bytes as
+// if H5Dwrite had filtered the chunk: readers (h5py, pandas, xarray) see an ordinary shuffled,
+// deflated dataset. A pure function of (bytes, element size, level).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+namespace truss::campaign {
+
+// Filter mask bits of H5Dwrite_chunk / H5Dread_chunk: bit i set = filter i of the pipeline skipped.
+inline constexpr std::uint32_t kShuffleSkipped = 1u << 0;
+inline constexpr std::uint32_t kDeflateSkipped = 1u << 1;
+
+// Encodes `raw` (a whole chunk, elements of elem_size bytes) for a dataset whose pipeline is
+// shuffle + deflate(level) (level 1..9) or no filter at all (level 0: the raw bytes, mask 0).
+// Returns the filter mask. As in HDF5, deflate is optional: a chunk whose compressed form would
+// exceed HDF5's output buffer (nbytes * 1.001 + 12, H5Z_DEFLATE_SIZE_ADJUST) is stored shuffled
+// only, with kDeflateSkipped.
+std::uint32_t encode_chunk(std::string_view raw, std::size_t elem_size, int level, std::string& out);
+
+// The inverse (reading a chunk back with H5Dread_chunk): `raw_bytes` is the chunk's size in
+// memory. Throws std::runtime_error for a chunk that does not inflate to raw_bytes.
+void decode_chunk(std::string_view stored, std::uint32_t mask, std::size_t elem_size, int level, std::size_t raw_bytes,
+                  std::string& raw);
+
+}  // namespace truss::campaign

@@ -1,0 +1,166 @@
+// The results file's chunks encoded outside HDF5 (campaign/chunk_codec) against HDF5's own filter
+// pipeline, and the result store's encoding jobs (run elsewhere, routed back) against the records'
+// values.
+#include <catch2/catch.hpp>
+
+#include <hdf5.h>
+
+#include <cstring>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "campaign/campaign.hpp"
+#include "campaign/campaign_h5.hpp"
+#include "campaign/chunk_codec.hpp"
+#include "campaign/result_store.hpp"
+#include "campaign/run_record.hpp"
+
+using namespace truss::campaign;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The chunk HDF5 stores for `raw` (n elements of `type`) in a 1-D dataset of one chunk, shuffled and
+// deflated at `level` by H5Dwrite: read back raw with H5Dread_chunk.
+std::string hdf5_filtered_chunk(const std::string& raw, hid_t type, std::size_t es, int level, std::uint32_t& mask) {
+  const std::string path = (fs::temp_directory_path() / "truss_test_chunk_codec.h5").string();
+  const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  const hsize_t n = raw.size() / es;
+  const hid_t space = H5Screate_simple(1, &n, nullptr);
+  const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+  H5Pset_chunk(dcpl, 1, &n);
+  H5Pset_shuffle(dcpl);
+  H5Pset_deflate(dcpl, static_cast<unsigned>(level));
+  const hid_t ds = H5Dcreate2(f, "x", type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  REQUIRE(H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()) >= 0);
+  H5Fflush(f, H5F_SCOPE_GLOBAL);
+  const hsize_t offset = 0;
+  hsize_t size = 0;
+  REQUIRE(H5Dget_chunk_storage_size(ds, &offset, &size) >= 0);
+  std::string stored(size, '\0');
+  REQUIRE(H5Dread_chunk(ds, H5P_DEFAULT, &offset, &mask, stored.data()) >= 0);
+  H5Dclose(ds);
+  H5Pclose(dcpl);
+  H5Sclose(space);
+  H5Fclose(f);
+  fs::remove(path);
+  return stored;
+}
+
+std::string random_doubles(std::size_t n, bool smooth, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(1.25, smooth ? 1e-3 : 1e3);
+  std::vector<double> v(n);
+  for (auto& x : v) x = g(rng);
+  return std::string(reinterpret_cast<const char*>(v.data()), n * 8);
+}
+
+}  // namespace
+
+TEST_CASE("chunk codec: the bytes of HDF5's shuffle + deflate filters, and back", "[campaign][codec]") {
+  struct Case {
+    std::string raw;
+    hid_t type;
+    std::size_t es;
+  };
+  std::string status(4096, '\0');
+  for (std::size_t i = 0; i < status.size(); ++i) status[i] = static_cast<char>(i % 97 == 0 ? 3 : 0);
+  const Case cases[] = {{random_doubles(4096, true, 1), H5T_NATIVE_DOUBLE, 8},    // a load column: narrow spread
+                        {random_doubles(4096, false, 2), H5T_NATIVE_DOUBLE, 8},   // wide spread, mostly incompressible
+                        {random_doubles(4096 * 30, true, 3), H5T_NATIVE_DOUBLE, 8},  // a per-bay chunk (983 kB)
+                        {status, H5T_NATIVE_INT8, 1}};                            // statuses: shuffle is a no-op
+  for (int level : {1, 6}) {
+    for (const Case& c : cases) {
+      std::uint32_t hdf5_mask = 99;
+      const std::string hdf5 = hdf5_filtered_chunk(c.raw, c.type, c.es, level, hdf5_mask);
+      std::string mine;
+      const std::uint32_t mask = encode_chunk(c.raw, c.es, level, mine);
+      CHECK(mask == hdf5_mask);
+      CHECK(mine.size() == hdf5.size());
+      CHECK(mine == hdf5);
+      std::string back;
+      decode_chunk(mine, mask, c.es, level, c.raw.size(), back);
+      CHECK(back == c.raw);
+    }
+  }
+  std::string plain;
+  CHECK(encode_chunk(cases[0].raw, 8, 0, plain) == 0);
+  CHECK(plain == cases[0].raw);  // level 0: no filter, the raw bytes
+  std::string back;
+  CHECK_THROWS(decode_chunk(std::string(100, 'x'), 0, 8, 1, 4096 * 8, back));
+}
+
+TEST_CASE("result store: encoding jobs run elsewhere land in the right dataset and rows", "[campaign][codec]") {
+  const std::string text = R"(
+[ensemble]
+n_runs = 150
+master_seed = 5
+[scene.mast]
+n_bays = 4
+[[dispersion]]
+key = "mast.strut_mass_kg"
+per = "bay"
+distribution = "normal"
+std = 0.02
+[[dispersion]]
+key = "drive.speed_m_per_s"
+apply = "relative"
+distribution = "uniform"
+lower = -0.1
+upper = 0.1
+)";
+  const CampaignContext ctx(parse_campaign_text(text, "codec.toml", "."));
+  const OutputColumns& cols = ctx.columns;
+  // Records with a distinct value in every cell: value = run + cell / 1000 (cell = place in the record).
+  auto record = [&](std::int64_t run) {
+    RunRecord r;
+    r.run_index = run;
+    r.rank = 1;
+    double cell = 0;
+    auto v = [&] { return static_cast<double>(run) + (cell++) / 1000.0; };
+    for (std::size_t k = 0; k < cols.f64.size(); ++k) r.f64.push_back(v());
+    for (std::size_t k = 0; k < cols.i64.size(); ++k) r.i64.push_back(run * 100 + static_cast<std::int64_t>(k));
+    for (std::size_t k = 0; k < cols.bay.size() * static_cast<std::size_t>(cols.n_bays_max); ++k) r.bays.push_back(v());
+    for (int k = 0; k < cols.n_inputs; ++k) r.inputs.push_back(v());
+    return r;
+  };
+  const std::string path = (fs::temp_directory_path() / "truss_test_store_jobs.h5").string();
+  fs::remove(path);
+  const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  {
+    // Chunks of 16 runs, offloaded: every job goes out and comes back in reverse order.
+    ResultStore store(f, ctx, StoreOptions{16, 1, true});
+    std::vector<std::string> outputs;
+    std::string job, out;
+    for (std::int64_t run = 149; run >= 0; --run) {  // any order of arrival
+      store.add(record(run), 2);
+      while (store.take_job(job)) {
+        encode_job_output(job, out);
+        outputs.push_back(out);
+      }
+    }
+    for (auto it = outputs.rbegin(); it != outputs.rend(); ++it) store.job_done(*it);
+    CHECK(store.jobs_offloaded() == static_cast<std::int64_t>(outputs.size()));
+    CHECK(store.jobs_local() == 0);
+    store.check_complete();
+  }
+  const std::int64_t n = 150;
+  const std::size_t nb = static_cast<std::size_t>(cols.n_bays_max);
+  const auto f64_0 = read_f64_column(f, "runs/" + std::string(cols.f64[0]->name), n);
+  const auto f64_last = read_f64_column(f, "runs/" + std::string(cols.f64.back()->name), n);
+  const auto bays = read_f64_columns(f, "runs/bays/" + std::string(cols.bay[1]->name), n, static_cast<std::int64_t>(nb), 0,
+                                     static_cast<std::int64_t>(nb), 16);
+  const auto speed = read_f64_column(f, "runs/inputs/drive.speed_m_per_s", n);
+  for (std::int64_t run = 0; run < n; ++run) {
+    const RunRecord r = record(run);
+    const auto i = static_cast<std::size_t>(run);
+    CHECK(f64_0[i] == r.f64.front());
+    CHECK(f64_last[i] == r.f64.back());
+    for (std::size_t b = 0; b < nb; ++b) CHECK(bays[b][i] == r.bays[nb + b]);
+    CHECK(speed[i] == r.inputs.back());  // the per-run dispersion's one dimension comes last
+  }
+  H5Fclose(f);
+  fs::remove(path);
+}
