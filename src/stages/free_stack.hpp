@@ -5,12 +5,19 @@
 // (model/free_impacts.hpp), and the lock (x = 0: bay m joins the locked part, dD/dt = 0 there).
 // Moving frames: phase A lo = 1 (frame 0 held on the floor, as in the paper), the driven frame m
 // on top; phase B lo = 1, or 0 in the stage of bay 1 (its rail lifts frame 0).
+// Stack contacts (`stack.contacts = true`, stages/free_contacts.hpp): every contact D_i >= 0 starts
+// closed; frames 0..k resting in closed contact on the floor (the resting block) are left out of
+// the phases (lo = k + 1), frames in closed contact above move as clusters. prepare_segment opens
+// every closed contact whose force pulls (before each integration segment), apply_contact_event
+// applies a landing (plastic impact of the phase's coordinates, model/free_impacts.hpp) or a
+// lift-off found by the phase's events.
 #pragma once
 #include <memory>
 #include <vector>
 
 #include "model/free_impacts.hpp"
 #include "model/params.hpp"
+#include "stages/free_contacts.hpp"
 #include "stages/phase.hpp"
 #include "stages/stage_plan.hpp"
 
@@ -21,15 +28,24 @@ struct FreeRailEntry {
   double hinge_x_m = 0;
 };
 
+// What a contact event did: a landing's energy loss and drive impulse work (velocity drive).
+struct FreeContactEvent {
+  bool handled = false;  // the stop event was a contact event
+  bool landing = false;
+  bool ok = true;        // false: the landing impact has no solution
+  double energy_loss_J = 0, drive_work_J = 0;
+  int bay = 0;
+};
+
 class FreeStack {
  public:
   // Baumgarte rate of the rail (and, in velocity mode, drive-speed) constraint on the rail (1/s):
   // about ten times the inverse of a stage's duration (~1 s at Table 1's 0.1 m/s), slow enough
   // for an explicit step of ~0.1 s to stay stable (DP5 stability ~3.3 / alpha).
   static constexpr double kBaumgarteRate_per_s = 10.0;
-  static int calc_lowest_frame(PhaseKind kind, int m) { return kind == PhaseKind::open || m >= 2 ? 1 : 0; }
+  int calc_lowest_frame(PhaseKind kind, int m) const;
 
-  explicit FreeStack(const model::MastParams& mast);
+  FreeStack(const model::MastParams& mast, bool contacts);
   // The phase model of ctx (ctx.kind, ctx.bay) on the current state; the open phase's watched
   // events (FreePhaseA::set_watch): the hinge above the rail top, the minimum of f.
   std::unique_ptr<PhaseModel> make_phase(const PhaseContext& ctx, bool watch_rail_top, bool watch_approach_min) const;
@@ -47,13 +63,30 @@ class FreeStack {
   // Hinge offset of bay i from the current heights (m), and the bay among 1..top with the smallest.
   double calc_hinge_offset_m(int i) const;
   int find_straightest_bay(int top) const;
+  // Stack contacts: at a stage start, bay m deploys (its contact is no longer watched); before an
+  // integration segment, open the pulling contacts (returns how many); after a stop event.
+  void start_stage(int m);
+  int prepare_segment(const PhaseContext& ctx);
+  FreeContactEvent apply_contact_event(const PhaseContext& ctx, int stop_event, bool drive_holds_speed);
+  int get_last_lowest_frame() const { return last_lo_; }
   double get_height_m(int k) const { return y_[static_cast<std::size_t>(k)]; }
   double get_speed_m_per_s(int k) const { return v_[static_cast<std::size_t>(k)]; }
 
  private:
   model::ActiveFrames make_active(const StageSpec& s, int lo) const;
+  ContactLayout make_layout(PhaseKind kind, int m, int lo) const;
+  // Frame-height system of frames lo..m (bay m regular), reduced to the clusters of phase `kind`
+  // with frame m alone; v: the cluster velocities.
+  void calc_cluster_system(const StageSpec& s, PhaseKind kind, int lo, model::FrameSystem& sys, Eigen::VectorXd& v) const;
+  void add_cluster_velocities(const ContactLayout& L, int lo, const Eigen::VectorXd& dv);
+  ContactWatch watch_at(const PhaseContext& ctx) const;  // the contact events at the current state
+  void open_contact(int j);
   const model::MastParams& mast_;
+  const bool contacts_;
   std::vector<double> y_, v_;  // frames 0..n (frames above the driven one: not used)
+  std::vector<char> closed_;   // contacts: closed_[i], bay i's contact D_i = 0 is closed
+  int block_top_ = 0;          // contacts: frames 0..block_top_ rest on the floor
+  mutable int last_lo_ = 1;    // lowest moving frame of the last phase built
   double x_ = 0, xi_ = 0;      // hinge offset of the deploying bay on the rail and its rate
 };
 

@@ -122,7 +122,7 @@ StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stage
   r_.drive_mode = to_string(opts.drive.mode);
   r_.bays.resize(static_cast<std::size_t>(n));
   for (int i = 1; i <= n; ++i) r_.bays[static_cast<std::size_t>(i - 1)].bay = i;
-  if (!stages.empty() && stages.front().free_stack) free_ = std::make_unique<FreeStack>(mast);
+  if (!stages.empty() && stages.front().free_stack) free_ = std::make_unique<FreeStack>(mast, stages.front().contacts);
   if (!kinematic_ || free_) integrator_ = make_integrator(opts.run.integrator, opts.calc_integrator_options());
   if (kinematic_) r_.motor_torque_at_speed_Nm = opts.drive.calc_motor_torque_Nm(opts.drive.speed_m_per_s);
 }
@@ -293,6 +293,7 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
 
 void StageLoop::start_free_stage(const StageSpec& s) {
   rail_top_time_s_ = kNaN;
+  free_->start_stage(s.bay);
   if (s.start != StageStart::from_rest_or_kick || !kinematic_) return;
   // Impulsive start (MODEL.md 2 "free"): the free frames take the momentum-consistent kick.
   const StackImpact k = free_->apply_start_kick(s, dir_ * opts_.drive.speed_m_per_s);
@@ -309,12 +310,23 @@ void StageLoop::run_free_phase(const StageSpec& s, const PhaseSpec& ph) {
   // first minimum of f (a grazing entry if f <= 0 there, else the phase goes on).
   bool watch = ph.kind == PhaseKind::open, watch_min = watch;
   for (;;) {
+    r_.contact_lift_offs += free_->prepare_segment(ctx);  // stack contacts: open the pulling ones
     const std::unique_ptr<PhaseModel> phase = free_->make_phase(ctx, watch, watch_min);
     std::vector<double> q0, qd0;
     free_->get_start(ctx, q0, qd0);
     const PhaseOutcome o = solve_dynamic(*phase, q0.data(), qd0.data());
     account(o, s, ph);
     if (!o.end_state.empty()) free_->set_end(ctx, o.end_state);
+    if (o.reason == PhaseEndReason::model_stop) {
+      const FreeContactEvent c = free_->apply_contact_event(ctx, o.stop_event, kinematic_);
+      if (c.handled && !c.ok) return fail(RunStatus::singular_configuration, fmt::format("singular configuration: the landing of frame {} "
+                                          "at t = {:.9g} s (stage of bay {}) has no plastic solution", c.bay, t_, s.bay));
+      (c.landing ? r_.contact_landings : r_.contact_lift_offs) += c.handled ? 1 : 0;
+      r_.contact_energy_loss_J += c.energy_loss_J;
+      ledger_.add_loss(c.energy_loss_J);
+      ledger_.add_impulse_work(c.drive_work_J);
+      if (c.handled) continue;
+    }
     if (o.reason == PhaseEndReason::model_stop && watch && o.stop_event == FreePhaseA::above_rail_top) {
       rail_top_time_s_ = t_;  // recorded; the phase goes on without this event
       watch = false;
@@ -428,7 +440,7 @@ void StageLoop::finish() {
   double U_end = 0.0;
   if (last_stage_ && last_phase_) {
     // The free stack's phases carry every bay below the driven frame.
-    const int first_moving = free_ ? 1 : last_phase_->kind == PhaseKind::on_rail ? std::max(last_stage_->bay - 1, 1) : last_stage_->bay;
+    const int first_moving = free_ ? std::max(free_->get_last_lowest_frame(), 1) : last_phase_->kind == PhaseKind::on_rail ? std::max(last_stage_->bay - 1, 1) : last_stage_->bay;
     if (failed_) U_end = ledger_.calc_total_potential_J(last_stage_->bay, first_moving, last_.potential_energy_J);
     else U_end = dir_ > 0 ? ledger_.get_deployed_potential_J() : ledger_.get_stowed_potential_J();
   }

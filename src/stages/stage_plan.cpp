@@ -80,7 +80,7 @@ std::string explain_start_past_entry(const MastParams& mast, int m, double y_sta
 
 }  // namespace
 
-std::string plan_free_stages(const MastParams& mast, double direction, std::vector<StageSpec>& out) {
+std::string plan_free_stages(const MastParams& mast, double direction, bool contacts, std::vector<StageSpec>& out) {
   out.clear();
   if (direction < 0) return "run.direction: retraction of a free stack (stack.mode = \"free\") is not available yet";
   const int n = mast.n_bays();
@@ -93,6 +93,7 @@ std::string plan_free_stages(const MastParams& mast, double direction, std::vect
     s.locked_mass_kg = locked[m];
     s.panel_height_offset_m = span[m];
     s.free_stack = true;
+    s.contacts = contacts;
     s.phases.push_back({PhaseKind::open, 0.0, 0.0, PhaseEnd::rail_entry, 0.0});
     s.phases.push_back({PhaseKind::on_rail, 0.0, 0.0, PhaseEnd::lock, 0.0});
     out.push_back(s);

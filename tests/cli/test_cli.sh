@@ -80,6 +80,19 @@ run free_retract 2 free_retract.toml -o free_retract.h5
 expect_in free_retract.err "free_retract.toml:2: stack.mode" "free_retract: message names key and line"
 nothing_written free_retract
 
+# stack contacts (issue 9): on a held stack, an unknown contact law, a non-boolean value
+scene contacts_held.toml '[stack]\nmode = "held"\ncontacts = true\n'
+run contacts_held 2 contacts_held.toml -o contacts_held.h5
+expect_in contacts_held.err "contacts_held.toml:3: stack.contacts" "contacts_held: message names key and line"
+nothing_written contacts_held
+scene contact_law.toml '[stack]\nmode = "free"\ncontacts = true\ncontact_law = "elastic"\n'
+run contact_law 2 contact_law.toml -o contact_law.h5
+expect_in contact_law.err "contact_law.toml:4: stack.contact_law" "contact_law: message names key and line"
+nothing_written contact_law
+run contacts_set 2 "$TABLE1" --set stack.mode='"free"' --set stack.contacts=yes -o contacts_set.h5
+expect_in contacts_set.err "stack.contacts" "contacts_set: message names the key"
+nothing_written contacts_set
+
 run set_unknown 2 "$TABLE1" --set mast.n_bay=3 -o set_unknown.h5
 expect_in set_unknown.err "--set mast.n_bay=3" "set_unknown: message quotes the --set"
 nothing_written set_unknown
