@@ -49,8 +49,6 @@ std::string SceneOptions::validate() const {
   CHECK(positive("drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s));
   if (stack.contacts == StackContacts::on && stack.mode != StackMode::free)
     return "stack.contacts: contacts between stowed frames apply to the free stack only (stack.mode = \"free\"); the held stack's canister holds them";
-  if (stack.mode == StackMode::free && run.direction == model::Direction::retract)
-    return "stack.mode: the retraction of a free stack is not available yet (deployment only); see docs/model-notes.md";
   if (panels.count < 0 || panels.count % 2 != 0)
     return fmt::format("panels.count: must be 0 (no panels) or a positive even number, got {}", panels.count);
   if (panels.count > 0) {

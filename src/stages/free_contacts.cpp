@@ -27,11 +27,14 @@ ContactWatch calc_contact_watch(const MastParams& mast, const ContactLayout& lay
   if (!layout.enabled) return w;
   auto y = [&](int k) { return ys[k - first]; };
   // Landing: every open contact at a cluster bottom (the lowest one rests on the block's top).
+  double closing = 0.0;
   for (int s : layout.starts) {
     const int i = lo + s;
-    if (i < 1 || i >= m) continue;  // frame 0 has no contact below; bay m is the deploying bay
-    const double g = -(y(i) - y(i - 1)) - ContactLayout::kGapTolerance * mast.bay(i).strut_length_m;
+    if (i < 1 || i > m || (i == m && !layout.driven_contact)) continue;  // frame 0: no contact below; bay m deploys
+    const double D = y(i) - y(i - 1), g = -D - ContactLayout::kGapTolerance * mast.bay(i).strut_length_m;
     if (w.landing_bay == 0 || g > w.landing_g) { w.landing_g = g; w.landing_bay = i; }
+    const double rate = vs[i - first] - (i - 1 >= lo ? vs[i - 1 - first] : 0.0);
+    if (D <= 0.0 && rate < 0.0 && (w.touching_bay == 0 || rate < closing)) { w.touching_bay = i; closing = rate; }
   }
   // Lift-off of the resting block's top frame lo - 1 (model/contacts.hpp).
   double lambda_min = __builtin_inf();

@@ -8,7 +8,8 @@
 //   velocity drive: y_m'' = 0 (the driven frame keeps the prescribed speed), the free block
 //     lo..m-1 is solved with y_m'' = 0, and F = M[m,m-1] y''_{m-1} - r_m - Q_m (inverse dynamics).
 // The phase ends when the hinge of bay m meets the rail: f = y_h - y_l + cot(beta)(x_h - x_l)
-// falls through 0 (end gap -f rises), with x_h = (1/2) sqrt(4 l^2 - D_m^2), y_h = (y_m + y_{m-1})/2.
+// falls through 0 (end gap -f rises), with x_h = (1/2) sqrt(4 l^2 - D_m^2), y_h = (y_m + y_{m-1})/2;
+// in a retraction (ctx.direction < 0) when the driven frame is back down at ctx.q_end.
 // Stopping rules (MODEL.md 2), as stop events rising through zero:
 //   past_miss_height   y_m - (y_r + 3 l_m): the driven frame passes the lock height y_r + l_m plus
 //                      one bay 2 l_m without rail entry (rail miss);
@@ -45,11 +46,16 @@ class FreePhaseA final : public PhaseModel {
   void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;
   PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
   double calc_driven_speed_m_per_s(const double*, const double* qdot) const override { return qdot[dof() - 1]; }
-  double calc_end_gap(const double* q) const override { return -calc_rail_function_m(q); }
+  // Deployment: rail entry (f falls to 0). Retraction: the driven frame back down at ctx.q_end.
+  double calc_end_gap(const double* q) const override {
+    return ctx_.direction > 0 ? -calc_rail_function_m(q) : ctx_.q_end - q[dof() - 1];
+  }
   // Used by the solver's start check only (can the drive move the mast from rest?): the driven
   // frame's acceleration along the drive's direction.
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.direction * qddot[dof() - 1]; }
-  void snap_to_end(double*) const override {}  // the event is located to the event tolerance
+  void snap_to_end(double* q) const override {  // deployment: the event is located to the event tolerance
+    if (ctx_.direction < 0) q[dof() - 1] = ctx_.q_end;
+  }
   enum StopEvent { past_miss_height, deploying_straight, singular_bay, rail_approach_min, above_rail_top, contact_landing, contact_lift_off };
   // A bay within this fraction of l_s of straight (hinge offset) is straight (MODEL.md 2: 1e-4 l_s).
   static constexpr double kStraightFraction = 1e-4;

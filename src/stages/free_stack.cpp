@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
 #include "model/bay.hpp"
 #include "model/contacts.hpp"
 #include "model/frames.hpp"
@@ -35,8 +37,9 @@ ContactLayout FreeStack::make_layout(PhaseKind kind, int m, int lo) const {
   L.enabled = contacts_;
   if (!contacts_) return L;
   L.block_liftable = lo - 1 >= 1;
+  L.driven_contact = retract_ && kind == PhaseKind::open;
   for (int i = lo; i <= top; ++i)
-    if (i == lo || i == m || !closed_[static_cast<std::size_t>(i)]) L.starts.push_back(i - lo);
+    if (i == lo || (i == m && !L.driven_contact) || !closed_[static_cast<std::size_t>(i)]) L.starts.push_back(i - lo);
   return L;
 }
 
@@ -177,40 +180,63 @@ void FreeStack::open_contact(int j) {
   if (j <= block_top_) block_top_ = j - 1;
 }
 
-int FreeStack::prepare_segment(const PhaseContext& ctx) {
-  if (!contacts_) return 0;
-  int opened = 0;
+FreeSegmentStart FreeStack::prepare_segment(const PhaseContext& ctx, bool drive_holds_speed) {
+  FreeSegmentStart p;
+  if (!contacts_) return p;
   // Active set: open the most pulling contact and look again (each pass opens one; at most n).
-  for (int it = 0; it <= mast_.n_bays(); ++it) {
+  for (int it = 0; it <= 2 * mast_.n_bays() + 2; ++it) {
     const ContactWatch w = watch_at(ctx);
-    if (!(w.lift_off_g > 0.0)) break;
-    open_contact(w.lift_off_bay);
-    ++opened;
+    if (w.lift_off_g > 0.0) {
+      open_contact(w.lift_off_bay);
+      ++p.lift_offs;
+    } else if (w.touching_bay > 0) {  // touching and closing: it lands now (its crossing began at 0)
+      const FreeContactEvent e = land(ctx, w.touching_bay, drive_holds_speed);
+      p.energy_loss_J += e.energy_loss_J;
+      p.drive_work_J += e.drive_work_J;
+      ++p.landings;
+      if (!e.ok) { p.ok = false; p.bay = e.bay; break; }
+    } else {
+      break;
+    }
   }
-  return opened;
+  return p;
 }
 
-FreeContactEvent FreeStack::apply_contact_event(const PhaseContext& ctx, int stop_event, bool drive_holds_speed) {
-  FreeContactEvent e;
+FreeSegmentStart FreeStack::apply_contact_event(const PhaseContext& ctx, int stop_event, bool drive_holds_speed) {
+  FreeSegmentStart r;
   const bool open = ctx.kind == PhaseKind::open;
   const int landing = open ? FreePhaseA::contact_landing : 1, lift = open ? FreePhaseA::contact_lift_off : 2;
-  if (!contacts_ || (stop_event != landing && stop_event != lift)) return e;
-  e.handled = true;
+  if (!contacts_ || (stop_event != landing && stop_event != lift)) return r;
+  r.handled = true;
   const ContactWatch w = watch_at(ctx);
   if (stop_event == lift) {
-    e.bay = w.lift_off_bay;
-    open_contact(e.bay);
-    return e;
+    open_contact(w.lift_off_bay);
+    r.lift_offs = 1;
+    return r;
   }
-  e.landing = true;
-  e.bay = w.landing_bay;
+  // The touching, closing contact (several may touch at one event), else the one that crossed.
+  const FreeContactEvent e = land(ctx, w.touching_bay > 0 ? w.touching_bay : w.landing_bay, drive_holds_speed);
+  r.landings = 1;
+  r.energy_loss_J = e.energy_loss_J;
+  r.drive_work_J = e.drive_work_J;
+  r.ok = e.ok;
+  r.bay = e.bay;
+  return r;
+}
+
+FreeContactEvent FreeStack::land(const PhaseContext& ctx, int bay, bool drive_holds_speed) {
+  FreeContactEvent e;
+  e.handled = e.landing = true;
+  e.bay = bay;
+  const bool open = ctx.kind == PhaseKind::open;
   const int m = ctx.bay, lo = calc_lowest_frame(ctx.kind, m);
   const ContactLayout L = make_layout(ctx.kind, m, lo);
   std::vector<double> q, qd;
   get_start(ctx, q, qd);
   const int n = static_cast<int>(q.size());
   int c = 0;
-  while (lo + L.starts[static_cast<std::size_t>(c)] != e.bay) ++c;
+  while (c < static_cast<int>(L.starts.size()) && lo + L.starts[static_cast<std::size_t>(c)] != e.bay) ++c;
+  if (c == static_cast<int>(L.starts.size())) { e.ok = false; return e; }  // not an open contact
   Eigen::VectorXd diag, sub;
   if (open) {
     FreePhaseA a(ctx, lo, y_[0]);
@@ -256,6 +282,95 @@ FreeContactEvent FreeStack::apply_contact_event(const PhaseContext& ctx, int sto
   return e;
 }
 
+void FreeStack::init_deployed() {
+  const double yr = mast_.rail.axis_height_m();
+  y_[0] = yr - mast_.bay(1).strut_length_m;
+  for (int k = 1; k <= mast_.n_bays(); ++k) y_[static_cast<std::size_t>(k)] = y_[static_cast<std::size_t>(k - 1)] + 2.0 * mast_.bay(k).strut_length_m;
+  std::fill(v_.begin(), v_.end(), 0.0);
+  std::fill(closed_.begin(), closed_.end(), 0);
+  block_top_ = 0;  // frame 0 is held wherever a phase does not move it (it lands on the floor in bay 1's stage)
+  retract_ = true;
+  x_ = xi_ = 0.0;
+}
+
+FreeContactEvent FreeStack::apply_unlock(const PhaseContext& ctx, double u, bool drive_holds_speed, bool from_rest) {
+  const int m = ctx.bay;
+  // Bay m was locked straight on frame m-1, which drove it.
+  y_[static_cast<std::size_t>(m)] = y_[static_cast<std::size_t>(m - 1)] + 2.0 * mast_.bay(m).strut_length_m;
+  v_[static_cast<std::size_t>(m)] = v_[static_cast<std::size_t>(m - 1)];
+  x_ = xi_ = 0.0;
+  const int lo = calc_lowest_frame(PhaseKind::on_rail, m);
+  FreePhaseB phase(ctx, lo, y_[0], kBaumgarteRate_per_s);
+  if (contacts_) phase.set_contacts(make_layout(PhaseKind::on_rail, m, lo));
+  std::vector<double> q, qd;
+  get_start(ctx, q, qd);
+  const int n = static_cast<int>(q.size());
+  Eigen::VectorXd diag, sub;
+  phase.calc_mass(q.data(), qd.data(), diag, sub);
+  // At x = 0: rail gradient a = (.., 1, cot beta), driven frame b = (.., 1, 0) (MODEL.md 3).
+  std::vector<Eigen::VectorXd> rows(1, Eigen::VectorXd::Zero(n));
+  rows[0][n - 2] = 1.0;
+  rows[0][n - 1] = mast_.rail.cot_beta();
+  const Eigen::Map<const Eigen::VectorXd> v0(qd.data(), n);
+  Eigen::Vector3d d(-rows[0].dot(v0), 0.0, 0.0);
+  if (drive_holds_speed) {
+    rows.emplace_back(Eigen::VectorXd::Unit(n, n - 2));
+    d[1] = from_rest ? u - v0[n - 2] : 0.0;
+  }
+  TridiagonalWork w;
+  const ConstrainedImpact imp = calc_constrained_impact(diag, sub, rows, d, w);
+  FreeContactEvent e;
+  e.handled = true;
+  e.bay = m;
+  e.ok = imp.ok;
+  if (!imp.ok) return e;
+  e.impulse_Ns = imp.impulses[0];
+  if (drive_holds_speed && from_rest) {
+    e.drive_work_J = imp.energy_loss_J;  // (1/2) dv' M dv: the energy the ramp gives (no loss)
+    e.impulse_Ns = imp.impulses[1];
+  } else {
+    e.energy_loss_J = imp.energy_loss_J;
+    if (drive_holds_speed) e.drive_work_J = imp.impulses[1] * u;
+  }
+  std::vector<double> st(q);
+  st.insert(st.end(), qd.begin(), qd.end());
+  for (int k = 0; k < n; ++k) st[static_cast<std::size_t>(n + k)] += imp.dv[k];
+  set_end(ctx, st);
+  return e;
+}
+
+FreeContactEvent FreeStack::apply_rail_exit(const StageSpec& s, bool drive_holds_speed) {
+  const int m = s.bay;
+  FreeContactEvent e;
+  e.bay = m - 1;
+  const double tol = 1e-6 * mast_.bay(std::max(m - 1, 1)).strut_length_m;  // f = 0 to the rail residual
+  const bool on_block = contacts_ && m >= 2 && block_top_ >= m - 2 &&
+                        std::abs(y_[static_cast<std::size_t>(m - 1)] - y_[static_cast<std::size_t>(m - 2)]) <= tol;
+  if (m >= 2 && !on_block) return e;  // leaves the rail with its velocity: no impact
+  e.handled = e.landing = true;
+  const int lo = m - 1;
+  if (m >= 2) block_top_ = m - 2;  // frames lo..m move in the impact, frame m - 1 alone in its cluster
+  FrameSystem sys;
+  Eigen::VectorXd v;
+  calc_cluster_system(s, PhaseKind::open, lo, sys, v);
+  const int n = static_cast<int>(v.size());
+  std::vector<Eigen::VectorXd> rows(1, Eigen::VectorXd::Unit(n, 0));
+  Eigen::Vector3d d(-v[0], 0.0, 0.0);
+  if (drive_holds_speed) rows.emplace_back(Eigen::VectorXd::Unit(n, n - 1));
+  TridiagonalWork w;
+  const ConstrainedImpact imp = calc_constrained_impact(sys.diag, sys.sub, rows, d, w);
+  e.ok = imp.ok;
+  if (!imp.ok) return e;
+  add_cluster_velocities(make_layout(PhaseKind::open, m, lo), lo, imp.dv);
+  v_[static_cast<std::size_t>(m - 1)] = 0.0;
+  y_[static_cast<std::size_t>(m - 1)] = m >= 2 ? y_[static_cast<std::size_t>(m - 2)] : 0.0;
+  if (m >= 2) { closed_[static_cast<std::size_t>(m - 1)] = 1; block_top_ = m - 1; }
+  e.energy_loss_J = imp.energy_loss_J;
+  e.impulse_Ns = imp.impulses[0];
+  if (drive_holds_speed) e.drive_work_J = imp.impulses[1] * v_[static_cast<std::size_t>(m)];
+  return e;
+}
+
 void FreeStack::start_stage(int m) {
   if (!contacts_) return;
   closed_[static_cast<std::size_t>(m)] = 0;  // bay m deploys: no longer a contact
@@ -283,6 +398,26 @@ void FreeStack::apply_lock(int m) {
   v_[static_cast<std::size_t>(m)] = v_[static_cast<std::size_t>(m - 1)];
   x_ = 0.0;
   xi_ = 0.0;
+}
+
+std::string FreeStack::describe_singular(int m, double t_s) const {
+  const int i = find_straightest_bay(m - 1);
+  return fmt::format("singular configuration: bay {} (not deploying) came within {:.3g} l_s of straight (hinge offset {:.6g} m) "
+                     "at t = {:.9g} s in the stage of bay {}",
+                     i, FreePhaseA::kStraightFraction, calc_hinge_offset_m(i), t_s, m);
+}
+
+std::string FreeStack::describe_rail_miss(int m, bool past_miss_height, double closest_m, double closest_t_s, double rail_top_t_s,
+                                          double t_s) const {
+  const std::string why = past_miss_height
+      ? fmt::format("the driven frame passed the lock height plus one bay (y = {:.9g} m)", get_height_m(m))
+      : fmt::format("bay {} straightened", m);
+  const std::string top = std::isfinite(rail_top_t_s)
+      ? fmt::format("above the rail top (y_r = {:.6g} m) from t = {:.9g} s", mast_.rail.axis_height_m(), rail_top_t_s)
+      : std::string("never above the rail top");
+  return fmt::format("rail miss: the hinge of bay {} never reached the rail; closest approach {:.6g} m at t = {:.9g} s; {}; "
+                     "stopped at t = {:.9g} s when {}",
+                     m, closest_m, closest_t_s, top, t_s, why);
 }
 
 }  // namespace truss::stages

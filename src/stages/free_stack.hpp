@@ -13,6 +13,7 @@
 // lift-off found by the phase's events.
 #pragma once
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "model/free_impacts.hpp"
@@ -28,6 +29,16 @@ struct FreeRailEntry {
   double hinge_x_m = 0;
 };
 
+// What the start of an integration segment did to the contacts: pulling contacts opened,
+// touching and closing ones landed (with the landings' loss and screw work).
+struct FreeSegmentStart {
+  int lift_offs = 0, landings = 0;
+  double energy_loss_J = 0, drive_work_J = 0;
+  bool ok = true;
+  int bay = 0;
+  bool handled = false;  // apply_contact_event: the stop event was a contact event
+};
+
 // What a contact event did: a landing's energy loss and drive impulse work (velocity drive).
 struct FreeContactEvent {
   bool handled = false;  // the stop event was a contact event
@@ -35,6 +46,7 @@ struct FreeContactEvent {
   bool ok = true;        // false: the landing impact has no solution
   double energy_loss_J = 0, drive_work_J = 0;
   int bay = 0;
+  double impulse_Ns = 0;  // the contact (landing) or rail (unlock) impulse; the drive's for a start ramp
 };
 
 class FreeStack {
@@ -66,9 +78,24 @@ class FreeStack {
   // Stack contacts: at a stage start, bay m deploys (its contact is no longer watched); before an
   // integration segment, open the pulling contacts (returns how many); after a stop event.
   void start_stage(int m);
-  int prepare_segment(const PhaseContext& ctx);
-  FreeContactEvent apply_contact_event(const PhaseContext& ctx, int stop_event, bool drive_holds_speed);
+  FreeSegmentStart prepare_segment(const PhaseContext& ctx, bool drive_holds_speed);
+  FreeSegmentStart apply_contact_event(const PhaseContext& ctx, int stop_event, bool drive_holds_speed);
   int get_last_lowest_frame() const { return last_lo_; }
+  // Retraction (MODEL.md 2, the reverse of deployment): the deployed mast at rest, frame 0 where
+  // bay 1's rail left it (y_r - l_1), every bay straight, no contact closed.
+  void init_deployed();
+  // Unlock of bay m at x = 0: the plastic impact with the rail of frames lo..m-1 and the hinge
+  // (MODEL.md 2: in velocity mode x' jumps to v tan(beta)); the screw keeps the driven speed, or
+  // (from_rest, velocity drive) brings it to u as a lossless ramp whose work is the energy given.
+  FreeContactEvent apply_unlock(const PhaseContext& ctx_on_rail, double u, bool drive_holds_speed, bool from_rest);
+  // Rail exit of bay m (the held entry point: frame m-1 back at the stowed height 0): frame 0 lands
+  // on the floor (m = 1) and, with contacts, frame m-1 on the resting stack (plastic); without
+  // contacts frame m-1 (m >= 2) leaves the rail with its velocity (the paper's literal model).
+  FreeContactEvent apply_rail_exit(const StageSpec& s, bool drive_holds_speed);
+  double calc_potential_energy_J() const { return model::calc_potential_energy_J(mast_, y_.data()); }
+  // Messages of the stopping rules (MODEL.md 2) at time t in the stage of bay m.
+  std::string describe_singular(int m, double t_s) const;
+  std::string describe_rail_miss(int m, bool past_miss_height, double closest_m, double closest_t_s, double rail_top_t_s, double t_s) const;
   double get_height_m(int k) const { return y_[static_cast<std::size_t>(k)]; }
   double get_speed_m_per_s(int k) const { return v_[static_cast<std::size_t>(k)]; }
 
@@ -80,6 +107,7 @@ class FreeStack {
   void calc_cluster_system(const StageSpec& s, PhaseKind kind, int lo, model::FrameSystem& sys, Eigen::VectorXd& v) const;
   void add_cluster_velocities(const ContactLayout& L, int lo, const Eigen::VectorXd& dv);
   ContactWatch watch_at(const PhaseContext& ctx) const;  // the contact events at the current state
+  FreeContactEvent land(const PhaseContext& ctx, int bay, bool drive_holds_speed);  // plastic landing of bay's contact
   void open_contact(int j);
   const model::MastParams& mast_;
   const bool contacts_;
@@ -87,6 +115,7 @@ class FreeStack {
   std::vector<char> closed_;   // contacts: closed_[i], bay i's contact D_i = 0 is closed
   int block_top_ = 0;          // contacts: frames 0..block_top_ rest on the floor
   mutable int last_lo_ = 1;    // lowest moving frame of the last phase built
+  bool retract_ = false;       // retraction (init_deployed): in phase A bay m is a contact too
   double x_ = 0, xi_ = 0;      // hinge offset of the deploying bay on the rail and its rate
 };
 

@@ -46,8 +46,9 @@ struct StageSpec {
 // geometry makes the held stack impossible (rail never met, next bay already past the rail).
 std::string plan_held_stages(const model::MastParams& mast, double direction, std::vector<StageSpec>& out);
 
-// Builds the stages of a free-stack run (deployment only, so far): bays n..1, each phase A until
-// rail entry and phase B until the lock. Returns "key: reason" for what the free stack cannot run.
+// Builds the stages of a free-stack run: deployment, bays n..1, each phase A until rail entry and
+// phase B until the lock; retraction, the held stack's retraction stages (whose rail geometry
+// must hold) run with free frames. Returns "key: reason" for what the free stack cannot run.
 std::string plan_free_stages(const model::MastParams& mast, double direction, bool contacts, std::vector<StageSpec>& out);
 
 }  // namespace truss::stages

@@ -226,3 +226,110 @@ TEST_CASE("contacts: energy ledger with landings closes at tight tolerance in ev
     CHECK(r.min_bay_opening_m > -2e-9 * 0.18);  // no overlap beyond the landing tolerance (1e-9 l_s, located to ~1e-13 s)
   }
 }
+
+// ---- Free-stack retraction (MODEL.md 2: the reverse of deployment; issue 9) ----
+
+namespace {
+sim::RunResult run_mode(sim::SceneOptions s, model::DriveMode mode) {
+  s.drive.mode = mode;
+  s.drive.torque_Nm = 0.002;
+  return sim::simulate(s);
+}
+// Linear interpolation of a history column at time t (the rows are on a grid of step h).
+double at(const std::vector<double>& t, const std::vector<double>& v, double tt) {
+  std::size_t k = 1;
+  while (k + 1 < t.size() && t[k] < tt) ++k;
+  const double w = (tt - t[k - 1]) / (t[k] - t[k - 1]);
+  return (1 - w) * v[k - 1] + w * v[k];
+}
+}  // namespace
+
+TEST_CASE("free retraction: a one-bay free stack retracts as the held stack (other coordinates and laws)", "[numeric][free][retract]") {
+  // Frame 0 is the only frame below the driven one: the free path (time-stepped bordered system,
+  // n-frame unlock and exit impacts) must give the held path's numbers (closed form in velocity
+  // mode, two-frame impact laws).
+  for (const auto mode : {model::DriveMode::velocity, model::DriveMode::torque, model::DriveMode::motor}) {
+    sim::SceneOptions s;
+    s.mast.n_bays = 1;
+    s.run.direction = model::Direction::retract;
+    s.run.rtol = 1e-11;
+    s.run.atol = 1e-13;
+    const sim::RunResult held = run_mode(s, mode);
+    s.stack.mode = sim::StackMode::free;
+    const sim::RunResult fr = run_mode(s, mode);
+    INFO(fr.message);
+    REQUIRE(held.status == sim::RunStatus::ok);
+    REQUIRE(fr.status == sim::RunStatus::ok);
+    const auto &bh = held.bays[0], &bf = fr.bays[0];
+    // As for the deployment: event times to ~1e-9 s after ~1e3 steps at rtol 1e-11.
+    CHECK(bf.entry_time_s == Approx(bh.entry_time_s).epsilon(1e-8));
+    CHECK(fr.end_time_s == Approx(held.end_time_s).epsilon(1e-8));
+    CHECK(bf.latch_energy_J == Approx(bh.latch_energy_J).epsilon(1e-7).margin(1e-15));
+    CHECK(bf.entry_energy_loss_J == Approx(bh.entry_energy_loss_J).epsilon(1e-7));
+    CHECK(bf.landing_impulse_Ns == Approx(bh.landing_impulse_Ns).epsilon(1e-7));
+    CHECK(fr.drive_work_J == Approx(held.drive_work_J).epsilon(1e-7));
+    CHECK(fr.energy_lost_J == Approx(held.energy_lost_J).epsilon(1e-7));
+    CHECK(fr.peak_drive_force_N == Approx(held.peak_drive_force_N).epsilon(1e-6));
+  }
+}
+
+TEST_CASE("free retraction in velocity mode is the time reverse of the deployment (one bay)", "[numeric][free][retract]") {
+  // MODEL.md 2: retraction is the exact time reverse. With the driven frame prescribed, the motion
+  // is kinematic: y_m(t) and the hinge path of the retraction are the deployment's at T - t.
+  // Compared through linear interpolation of 1 ms histories (error h^2 |x''| / 8 < 1e-6 m) away
+  // from the rail entry / exit, where the velocities jump.
+  sim::SceneOptions s;
+  s.mast.n_bays = 1;
+  s.stack.mode = sim::StackMode::free;
+  s.run.output_step_s = 1e-3;
+  s.run.rtol = 1e-11;
+  s.run.atol = 1e-13;
+  const sim::RunResult dep = sim::simulate(s);
+  s.run.direction = model::Direction::retract;
+  const sim::RunResult ret = sim::simulate(s);
+  REQUIRE(dep.status == sim::RunStatus::ok);
+  REQUIRE(ret.status == sim::RunStatus::ok);
+  const double T = dep.end_time_s;
+  CHECK(ret.end_time_s == Approx(T).epsilon(1e-9));
+  CHECK(ret.bays[0].entry_time_s == Approx(T - dep.bays[0].entry_time_s).epsilon(1e-8));  // rail exit mirrors entry
+  const auto &hd = dep.history, &hr = ret.history;
+  for (std::size_t k = 1; k + 1 < hr.size(); k += 17) {
+    const double t = hr.t_s[k];
+    // Not across the entry/exit kink (the velocities jump there: linear interpolation is O(h dv)).
+    if (std::abs(t - ret.bays[0].entry_time_s) < 2e-3) continue;
+    CHECK(hr.y_driven_m[k] == Approx(at(hd.t_s, hd.y_driven_m, T - t)).margin(1e-6));
+    CHECK(hr.hinge_x_m[k] == Approx(at(hd.t_s, hd.hinge_x_m, T - t)).margin(1e-6));
+    CHECK(hr.y_lower_m[k] == Approx(at(hd.t_s, hd.y_lower_m, T - t)).margin(1e-6));
+    CHECK(hr.driven_speed_m_per_s[k] == Approx(-at(hd.t_s, hd.driven_speed_m_per_s, T - t)).margin(1e-9));
+  }
+}
+
+TEST_CASE("free retraction: energy ledger at tight tolerance, contacts on and off, every drive mode", "[numeric][free][retract]") {
+  // Contacts on: the rail pushes each lower frame back onto the stack, frames bounce (landings
+  // and lift-offs), the final landing stops the stack. Contacts off: the paper's literal model.
+  // W - dT - dU - E_lost within 1e-8 of the energy scale at rtol 1e-12 (measured <= 2e-10).
+  for (const bool contacts : {true, false}) {
+    for (const auto mode : {model::DriveMode::velocity, model::DriveMode::torque, model::DriveMode::motor}) {
+      sim::SceneOptions s;
+      s.mast.n_bays = 4;
+      s.stack.mode = sim::StackMode::free;
+      s.stack.contacts = contacts ? sim::StackContacts::on : sim::StackContacts::off;
+      s.run.direction = model::Direction::retract;
+      s.run.rtol = 1e-12;
+      s.run.atol = 1e-14;
+      const sim::RunResult r = run_mode(s, mode);
+      INFO((contacts ? "contacts " : "no contacts ") << static_cast<int>(mode) << ": " << r.message);
+      REQUIRE(r.status == sim::RunStatus::ok);
+      CHECK(r.bays_completed == 4);
+      const double scale = std::abs(r.drive_work_J) + r.energy_lost_J + std::abs(r.potential_energy_start_J - r.potential_energy_end_J);
+      CHECK(r.energy_lost_J > 1e-3 * scale);  // impacts matter: not vacuous
+      CHECK(std::abs(r.energy_residual_J) < 1e-8 * scale);
+      if (contacts) {
+        CHECK(r.contact_landings > 0);
+        CHECK(r.min_bay_opening_m > -2e-9 * 0.18);  // never through each other
+      } else {
+        CHECK(r.contact_landings == 0);
+      }
+    }
+  }
+}
