@@ -93,3 +93,18 @@ TEST_CASE("free stack: a grazing approach that dips into the rail within a step 
   CHECK(r.bays_completed > 17);
   if (r.status == sim::RunStatus::rail_miss) CHECK(r.rail_miss_closest_approach_m > 0.0);
 }
+
+TEST_CASE("paper_free.toml retracts with stack contacts in every drive mode", "[regression][free][retract]") {
+  // The reverse of the rail miss scene: from the deployed mast the rail pushes each lower frame
+  // back onto the stack; frames bounce on it (landings, lift-offs) but never pass through it.
+  for (const char* mode : {"velocity", "torque", "motor"}) {
+    INFO(mode);
+    const sim::RunResult r = sim::simulate(load("paper_free.toml", {"run.direction=\"retract\"", std::string("drive.mode=\"") + mode + "\""}));
+    INFO(r.message);
+    REQUIRE(r.status == sim::RunStatus::ok);
+    CHECK(r.bays_completed == 30);
+    CHECK(r.contact_landings > 30);  // at least every rail exit onto the stack
+    CHECK(r.min_bay_opening_m > -2e-9 * 0.18);
+    CHECK(std::abs(r.energy_residual_J) < 1e-5 * (std::abs(r.drive_work_J) + r.energy_lost_J));  // rtol 1e-8 of the scene
+  }
+}
