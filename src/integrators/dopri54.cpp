@@ -175,7 +175,10 @@ int DormandPrince54::find_event(OdeSystem& sys, double t, double t_new, const De
     double ta = t, tb = t_new, ga = g0_[e], gb = g1_[e];
     int side = 0;
     double tc = tb;
-    for (int it = 0; it < 200 && (tb - ta) > opts_.event_time_tol; ++it) {
+    // Below a few ulps of t the bracket cannot shrink (t > 512 s: ulp > 1e-13 s); stop there
+    // instead of spending the 200 iterations.
+    const double tol = std::max(opts_.event_time_tol, 4.0 * std::numeric_limits<double>::epsilon() * std::abs(t_new));
+    for (int it = 0; it < 200 && (tb - ta) > tol; ++it) {
       tc = (ta * gb - tb * ga) / (gb - ga);
       if (!(tc > ta && tc < tb)) tc = 0.5 * (ta + tb);
       dense.calc_state(tc, yev_.data());

@@ -127,7 +127,13 @@ std::string apply_value(SceneOptions& s, const KeyDesc& d, const toml::node& v) 
       return fmt::format("{}: expected an integer, got {}", name, describe(v));
     }
     case Kind::enumeration: {
-      if (auto str = v.value_exact<std::string>()) {
+      // A yes/no key (allowed values "false", "true") takes the TOML booleans.
+      const bool yes_no = d.allowed.size() == 2 && d.allowed[0] == "false" && d.allowed[1] == "true";
+      if (auto b = v.value_exact<bool>(); b && yes_no) {
+        d.set_enum(s, *b ? 1 : 0);
+        return {};
+      }
+      if (auto str = v.value_exact<std::string>(); str && !yes_no) {
         for (std::size_t i = 0; i < d.allowed.size(); ++i) {
           if (d.allowed[i] == *str) {
             d.set_enum(s, i);
@@ -139,6 +145,7 @@ std::string apply_value(SceneOptions& s, const KeyDesc& d, const toml::node& v) 
         if (auto sug = suggest_value(*str, d.allowed)) msg += fmt::format(" (did you mean {}?)", quote(*sug));
         return msg;
       }
+      if (yes_no) return fmt::format("{}: expected true or false, got {}", name, describe(v));
       return fmt::format("{}: expected a string, one of {}; got {}", name, allowed_text(d.allowed),
                          describe(v));
     }
@@ -455,6 +462,7 @@ std::string resolved_scene_toml(const sim::SceneOptions& s) {
       case Kind::enumeration: {
         const std::size_t i = d.get_enum(s);
         value = i < d.allowed.size() ? quote(d.allowed[i]) : quote(fmt::format("<bad enum {}>", i));
+        if (d.allowed.size() == 2 && d.allowed[0] == "false" && d.allowed[1] == "true") value = i == 1 ? "true" : "false";
         break;
       }
     }

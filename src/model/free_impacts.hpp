@@ -15,9 +15,16 @@
 // Impulsive start from rest in velocity mode (MODEL.md 2 "free": the momentum-consistent kick):
 //   M dv = e_m P, dv_m = u  =>  P = u / (M^-1 e_m)_m, dv = P M^-1 e_m; a lossless ramp: the
 //   drive's work (1/2) P u equals the kinetic energy (1/2) dv' M dv it leaves.
-// Each is two tridiagonal solves at most: O(N), no dense matrix (model/tridiagonal.hpp).
+// Contact landing (model/contacts.hpp), and any plastic impact with up to three constraint rows
+// R_j (contact, rail, drive speed) that must change by d_j = R_j dv (a closing contact J v+ = 0,
+// so d = -J v; the rail and the screw keep their velocity conditions, d = 0):
+//   M dv = sum_j R_j Lambda_j,  z_j = M^-1 R_j,  S Lambda = d,  S_jk = R_j z_k;  dv = sum_j Lambda_j z_j.
+// Each is one tridiagonal solve per row: O(N), no dense matrix (model/tridiagonal.hpp).
 #pragma once
+#include <vector>
+
 #include <Eigen/Core>
+#include <Eigen/LU>
 
 #include "model/tridiagonal.hpp"
 
@@ -85,6 +92,35 @@ inline StackImpact calc_stack_start_kick(const Eigen::VectorXd& diag, const Eige
   r.dv[N - 1] = u;
   r.drive_work_J = 0.5 * r.drive_impulse_Ns * u;
   r.ok = true;
+  return r;
+}
+
+// Plastic impact with the rows R_j and required changes d_j (1 <= rows <= 3). impulses: Lambda_j.
+struct ConstrainedImpact {
+  bool ok = false;
+  Eigen::VectorXd dv;
+  Eigen::Vector3d impulses = Eigen::Vector3d::Zero();
+  double energy_loss_J = 0;  // (1/2) dv' M dv
+};
+inline ConstrainedImpact calc_constrained_impact(const Eigen::VectorXd& diag, const Eigen::VectorXd& sub,
+                                                 const std::vector<Eigen::VectorXd>& rows, const Eigen::Vector3d& d,
+                                                 TridiagonalWork& w) {
+  ConstrainedImpact r;
+  const int k = static_cast<int>(rows.size());
+  if (k < 1 || k > 3) return r;
+  std::vector<Eigen::VectorXd> z(static_cast<std::size_t>(k));
+  for (int j = 0; j < k; ++j)
+    if (!solve_tridiagonal(diag, sub, rows[static_cast<std::size_t>(j)], z[static_cast<std::size_t>(j)], w)) return r;
+  Eigen::MatrixXd S(k, k);
+  for (int i = 0; i < k; ++i)
+    for (int j = 0; j < k; ++j) S(i, j) = rows[static_cast<std::size_t>(i)].dot(z[static_cast<std::size_t>(j)]);
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(S);
+  if (!lu.isInvertible()) return r;
+  const Eigen::VectorXd L = lu.solve(d.head(k));
+  r.dv = Eigen::VectorXd::Zero(diag.size());
+  for (int j = 0; j < k; ++j) { r.dv += L[j] * z[static_cast<std::size_t>(j)]; r.impulses[j] = L[j]; }
+  r.energy_loss_J = calc_tridiagonal_energy_J(diag, sub, r.dv);
+  r.ok = r.dv.allFinite();
   return r;
 }
 

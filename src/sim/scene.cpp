@@ -47,11 +47,11 @@ std::string SceneOptions::validate() const {
   CHECK(positive("drive.torque_Nm", drive.torque_Nm));
   CHECK(positive("drive.stall_torque_Nm", drive.stall_torque_Nm));
   CHECK(positive("drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s));
-  if (stack.mode == StackMode::free && run.direction == model::Direction::retract)
-    return "stack.mode: the retraction of a free stack is not available yet (deployment only); see docs/model-notes.md";
   if (run.integrator == IntegratorKind::ida && stack.mode != StackMode::free)
     return "run.integrator: \"ida\" solves the free stack's phases only (stack.mode = \"free\"); the held stack "
            "has one coordinate per phase and no rail multiplier: use \"dopri54\", \"cvode\", \"cvode_adams\" or \"auto\"";
+  if (stack.contacts == StackContacts::on && stack.mode != StackMode::free)
+    return "stack.contacts: contacts between stowed frames apply to the free stack only (stack.mode = \"free\"); the held stack's canister holds them";
   if (panels.count < 0 || panels.count % 2 != 0)
     return fmt::format("panels.count: must be 0 (no panels) or a positive even number, got {}", panels.count);
   if (panels.count > 0) {
@@ -69,7 +69,8 @@ std::string SceneOptions::validate() const {
 
 std::string plan_stages(const SceneOptions& scene, const model::MastParams& mast, double direction,
                         std::vector<stages::StageSpec>& out) {
-  if (scene.stack.mode == StackMode::free) return stages::plan_free_stages(mast, direction, out);
+  if (scene.stack.mode == StackMode::free)
+    return stages::plan_free_stages(mast, direction, scene.stack.contacts == StackContacts::on, out);
   return stages::plan_held_stages(mast, direction, out);
 }
 

@@ -20,6 +20,8 @@ using model::Direction;
 using model::DriveMode;
 using integrators::IntegratorKind;
 enum class StackMode { held, free };
+enum class StackContacts { off, on };   // TOML false | true
+enum class ContactLaw { plastic };
 
 using model::to_string;
 using integrators::to_string;
@@ -55,6 +57,8 @@ using DriveOptions = model::DriveParams;
 
 struct StackOptions {
   StackMode mode = StackMode::held;  // MODEL.md 2: the canister holds stowed frames
+  StackContacts contacts = StackContacts::off;  // MODEL.md 2 "free": contacts optional; off = the paper's literal model
+  ContactLaw contact_law = ContactLaw::plastic;  // MODEL.md 2: plastic by default (the only law so far)
 };
 
 struct PanelOptions {

@@ -87,6 +87,8 @@ std::vector<SceneKey> make_table() {
       R(TRUSS_REAL(drive, stall_torque_Nm, "Nm", "N m, motor stall torque (motor mode)", kRun), P(1e4), C(1e-4, 1)),
       R(TRUSS_REAL(drive, no_load_speed_rad_per_s, "rad/s", "rad/s, motor no-load speed (motor mode)", kRun), P(1e6), C(1, 2000)),
       TRUSS_ENUM(stack, mode, "\"held\" | \"free\"", "held", "free"),
+      TRUSS_ENUM(stack, contacts, "false | true: unilateral stack contacts D_i >= 0 (free stack only)", "false", "true"),
+      TRUSS_ENUM(stack, contact_law, "\"plastic\" (landings lose the approach energy)", "plastic"),
       R(TRUSS_INT(panels, count, "1", "number of solar panels, 0 = none, else even", kFixed), C(0, 1e5), C(0, 200)),
       R(TRUSS_REAL(panels, length_m, "m", "m, l_p, panel length", kRun), P(1e3), C(0.05, 5)),
       R(TRUSS_REAL(panels, mass_kg, "kg", "kg, m_p, mass of one panel", kRun), P(1e4), C(0.01, 10)),

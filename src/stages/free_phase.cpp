@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "model/bay.hpp"
+#include "model/contacts.hpp"
 #include "model/rail.hpp"
 
 namespace truss::stages {
@@ -18,6 +19,36 @@ FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m)
   active_.m = ctx.bay;
   active_.locked_mass_kg = ctx.locked_mass_kg;
   active_.panel_height_offset_m = ctx.panel_height_offset_m;
+  layout_.frames = ctx.bay - lo + 1;
+}
+
+void FreePhaseA::expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const {
+  const int first = std::max(lo_ - 1, 0), off = lo_ - first;
+  ys.assign(static_cast<std::size_t>(ctx_.bay - first + 1), held_height_m_);
+  vs.assign(ys.size(), 0.0);
+  layout_.expand(q, ys.data() + off);
+  layout_.expand(qdot, vs.data() + off);
+}
+
+void FreePhaseA::calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const {
+  std::vector<double> ys, vs;
+  expand_frames(q, qdot, ys, vs);
+  PhaseScratch sys;
+  calc_frame_system(*ctx_.mast, active_, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys);
+  Eigen::VectorXd r;
+  if (layout_.reduces()) model::reduce_to_clusters(sys.diag, sys.sub, sys.spring_forces, layout_.starts, diag, sub, r);
+  else { diag = sys.diag; sub = sys.sub; }
+}
+
+ContactWatch FreePhaseA::calc_contact_watch(const double* q, const double* qdot) const {
+  thread_local PhaseScratch sys;
+  thread_local std::vector<double> acc, a, ys, vs;
+  acc.resize(static_cast<std::size_t>(dof()));
+  a.resize(static_cast<std::size_t>(layout_.frames));
+  calc_point(q, qdot, acc.data(), sys);
+  layout_.expand(acc.data(), a.data());
+  expand_frames(q, qdot, ys, vs);
+  return stages::calc_contact_watch(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys, a.data());
 }
 
 double FreePhaseA::calc_rail_function_m(const double* q) const {
@@ -35,12 +66,19 @@ void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g
   g[past_miss_height] = y_m - (yr + 3.0 * l);
   g[deploying_straight] = kStraightFraction * l - calc_hinge_offset_m(mast.bay(m), y_m - y_l);
   double worst = -kStraightFraction * l;  // no bay below m moves: never fires
+  thread_local std::vector<double> ys, vs;
+  expand_frames(q, qdot, ys, vs);
+  const int first = std::max(lo_ - 1, 0);
   for (int i = std::max(lo_, 1); i < m; ++i) {
-    const double lower = i - 1 >= lo_ ? q[i - 1 - lo_] : held_height_m_;
     const BayParams& b = mast.bay(i);
-    worst = std::max(worst, kStraightFraction * b.strut_length_m - calc_hinge_offset_m(b, q[i - lo_] - lower));
+    worst = std::max(worst, kStraightFraction * b.strut_length_m - calc_hinge_offset_m(b, ys[i - first] - ys[i - 1 - first]));
   }
   g[singular_bay] = worst;
+  if (layout_.enabled) {
+    const ContactWatch c = calc_contact_watch(q, qdot);
+    g[contact_landing] = c.landing_g;
+    g[contact_lift_off] = c.lift_off_g;
+  }
   g[above_rail_top] = watch_rail_top_ ? 0.5 * (y_m + y_l) - yr : -1.0;
   g[rail_approach_min] = -1.0;
   if (watch_approach_min_) {
@@ -50,25 +88,19 @@ void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g
   }
 }
 
-// Heights and velocities from frame lo - 1 (held) when it exists, so that bay lo sees it; returns
-// that first frame.
-int FreePhaseA::assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys,
-                         std::vector<double>& vs) const {
-  const int n = dof(), m = ctx_.bay, first = std::max(lo_ - 1, 0);
-  ys.assign(static_cast<std::size_t>(m - first + 1), held_height_m_);
-  vs.assign(ys.size(), 0.0);
-  for (int k = 0; k < n; ++k) { ys[static_cast<std::size_t>(lo_ - first + k)] = q[k]; vs[static_cast<std::size_t>(lo_ - first + k)] = qdot[k]; }
-  calc_frame_system(*ctx_.mast, active_, ys.data(), vs.data(), first, sys);
-  return first;
-}
-
 bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratch& sys, PhaseDaeTerms& t) const {
   thread_local std::vector<double> ys, vs;
-  assemble(q, qdot, sys, ys, vs);
+  expand_frames(q, qdot, ys, vs);
+  calc_frame_system(*ctx_.mast, active_, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys);
   const int n = dof();
-  t.diag = sys.diag;
-  t.sub = sys.sub;
   t.rhs = sys.velocity_terms + sys.spring_forces;
+  if (layout_.reduces()) {  // stack contacts: the clusters' system, as calc_point solves it
+    const Eigen::VectorXd r0 = t.rhs;
+    model::reduce_to_clusters(sys.diag, sys.sub, r0, layout_.starts, t.diag, t.sub, t.rhs);
+  } else {
+    t.diag = sys.diag;
+    t.sub = sys.sub;
+  }
   t.driven_speed_m_per_s = qdot[n - 1];
   t.num_multipliers = num_multipliers();
   if (ctx_.drive.mode == DriveMode::velocity) {
@@ -89,18 +121,31 @@ void FreePhaseA::fill_locked_heights(const MastParams& mast, int m, double* y) {
 }
 
 bool FreePhaseA::calc_frame_heights(const double* q, double* y) const {
-  for (int k = 0; k < lo_; ++k) y[k] = held_height_m_;
-  for (int k = 0; k < dof(); ++k) y[lo_ + k] = q[k];
-  fill_locked_heights(*ctx_.mast, ctx_.bay, y);
+  const int m = ctx_.bay, first = std::max(lo_ - 1, 0);
+  thread_local std::vector<double> ys, vs, zero;
+  zero.assign(static_cast<std::size_t>(dof()), 0.0);
+  expand_frames(q, zero.data(), ys, vs);  // frames first..m, clusters expanded
+  for (int k = 0; k < first; ++k) y[k] = held_height_m_;
+  for (int k = first; k <= m; ++k) y[k] = ys[static_cast<std::size_t>(k - first)];
+  fill_locked_heights(*ctx_.mast, m, y);
   return true;
 }
 
 PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
+  // Heights and velocities from frame lo - 1 (held) when it exists, so that bay lo sees it.
+  const int first = std::max(lo_ - 1, 0);
   thread_local std::vector<double> ys, vs;  // work space of the heights only; M, r, Q live in sys
-  const int first = assemble(q, qdot, sys, ys, vs);
+  expand_frames(q, qdot, ys, vs);
+  calc_frame_system(mast, active_, ys.data(), vs.data(), first, sys);
   Eigen::VectorXd rhs = sys.velocity_terms + sys.spring_forces;
+  // Stack contacts: frames in closed contact move as clusters (model/contacts.hpp).
+  thread_local Eigen::VectorXd dc, sc, rc;
+  const bool reduce = layout_.reduces();
+  if (reduce) { model::reduce_to_clusters(sys.diag, sys.sub, rhs, layout_.starts, dc, sc, rc); rhs = rc; }
+  const Eigen::VectorXd& Md = reduce ? dc : sys.diag;
+  const Eigen::VectorXd& Ms = reduce ? sc : sys.sub;
   PhasePoint p;
   const double u = qdot[n - 1];
   TridiagonalWork w;
@@ -112,14 +157,14 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
     acc.setZero();
     if (n > 1) {
       Eigen::VectorXd a;
-      solved = solve_tridiagonal(sys.diag.head(n - 1), sys.sub.head(n - 1), rhs.head(n - 1), a, w);
+      solved = solve_tridiagonal(Md.head(n - 1), Ms.head(n - 1), rhs.head(n - 1), a, w);
       if (solved) acc.head(n - 1) = a;
     }
-    p.drive_force_N = (n > 1 ? sys.sub[n - 1] * acc[n - 2] : 0.0) - rhs[n - 1];
+    p.drive_force_N = (n > 1 ? Ms[n - 1] * acc[n - 2] : 0.0) - rhs[n - 1];
   } else {
     p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
     rhs[n - 1] += p.drive_force_N;
-    solved = solve_tridiagonal(sys.diag, sys.sub, rhs, acc, w);
+    solved = solve_tridiagonal(Md, Ms, rhs, acc, w);
   }
   if (!solved) { acc.setConstant(n, std::numeric_limits<double>::quiet_NaN()); p.drive_force_N = acc[0]; }
   for (int k = 0; k < n; ++k) qddot[k] = acc[k];
@@ -134,8 +179,8 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   p.rail_distance_m = model::calc_rail_function_m(mast.rail, p.hinge_x_m, p.hinge_y_m) * std::sin(mast.rail.beta_rad);
   double T = 0.0, U = 0.0, tension = 0.0;
   for (int k = 0; k < n; ++k) {
-    T += 0.5 * sys.diag[k] * qdot[k] * qdot[k];
-    if (k > 0) T += sys.sub[k] * qdot[k] * qdot[k - 1];
+    T += 0.5 * Md[k] * qdot[k] * qdot[k];
+    if (k > 0) T += Ms[k] * qdot[k] * qdot[k - 1];
   }
   for (int i = std::max(lo_, 1); i <= m; ++i) {
     const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
@@ -147,7 +192,7 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   p.kinetic_energy_J = T;
   p.potential_energy_J = U;
   p.diagonal_tension_N = tension;
-  p.mass_yy = sys.diag[n - 1];
+  p.mass_yy = Md[n - 1];
   return p;
 }
 

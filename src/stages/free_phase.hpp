@@ -8,7 +8,8 @@
 //   velocity drive: y_m'' = 0 (the driven frame keeps the prescribed speed), the free block
 //     lo..m-1 is solved with y_m'' = 0, and F = M[m,m-1] y''_{m-1} - r_m - Q_m (inverse dynamics).
 // The phase ends when the hinge of bay m meets the rail: f = y_h - y_l + cot(beta)(x_h - x_l)
-// falls through 0 (end gap -f rises), with x_h = (1/2) sqrt(4 l^2 - D_m^2), y_h = (y_m + y_{m-1})/2.
+// falls through 0 (end gap -f rises), with x_h = (1/2) sqrt(4 l^2 - D_m^2), y_h = (y_m + y_{m-1})/2;
+// in a retraction (ctx.direction < 0) when the driven frame is back down at ctx.q_end.
 // Stopping rules (MODEL.md 2), as stop events rising through zero:
 //   past_miss_height   y_m - (y_r + 3 l_m): the driven frame passes the lock height y_r + l_m plus
 //                      one bay 2 l_m without rail entry (rail miss);
@@ -18,12 +19,16 @@
 //                      grazing approach can dip below f = 0 and back inside one step, which the
 //                      sign test at step ends misses; at the minimum the caller checks f <= 0;
 //   above_rail_top     y_h - y_r (watched only: the time the hinge rises above the rail's top, x = 0).
+//   contact_landing, contact_lift_off (stack contacts on, stages/free_contacts.hpp): the state is
+//                      then one height per cluster of frames in closed contact (q = (Y_c), frames
+//                      below lo rest on the floor), the mass matrix reduced by model/contacts.hpp.
 // An event not watched returns -1 (never rises).
 #pragma once
 #include <vector>
 
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
+#include "stages/free_contacts.hpp"
 #include "stages/phase.hpp"
 
 namespace truss::stages {
@@ -32,20 +37,30 @@ class FreePhaseA final : public PhaseModel {
  public:
   // ctx.bay = m; frames lo..m move; frames below lo are held at height held_height_m.
   FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m);
-  int dof() const override { return ctx_.bay - lo_ + 1; }
+  int dof() const override { return layout_.clusters(); }
   const PhaseContext& context() const override { return ctx_; }
+  // Stack contacts: clusters of frames lo..m (the driven frame m alone in the last one).
+  void set_contacts(ContactLayout layout) { layout_ = std::move(layout); }
+  ContactWatch calc_contact_watch(const double* q, const double* qdot) const;
+  // The mass matrix in the phase's coordinates (diag, sub; the contact impacts).
+  void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;
   PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
   double calc_driven_speed_m_per_s(const double*, const double* qdot) const override { return qdot[dof() - 1]; }
-  double calc_end_gap(const double* q) const override { return -calc_rail_function_m(q); }
+  // Deployment: rail entry (f falls to 0). Retraction: the driven frame back down at ctx.q_end.
+  double calc_end_gap(const double* q) const override {
+    return ctx_.direction > 0 ? -calc_rail_function_m(q) : ctx_.q_end - q[dof() - 1];
+  }
   // Used by the solver's start check only (can the drive move the mast from rest?): the driven
   // frame's acceleration along the drive's direction.
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.direction * qddot[dof() - 1]; }
-  void snap_to_end(double*) const override {}  // the event is located to the event tolerance
-  enum StopEvent { past_miss_height, deploying_straight, singular_bay, rail_approach_min, above_rail_top };
+  void snap_to_end(double* q) const override {  // deployment: the event is located to the event tolerance
+    if (ctx_.direction < 0) q[dof() - 1] = ctx_.q_end;
+  }
+  enum StopEvent { past_miss_height, deploying_straight, singular_bay, rail_approach_min, above_rail_top, contact_landing, contact_lift_off };
   // A bay within this fraction of l_s of straight (hinge offset) is straight (MODEL.md 2: 1e-4 l_s).
   static constexpr double kStraightFraction = 1e-4;
   void set_watch(bool rail_top, bool approach_min) { watch_rail_top_ = rail_top; watch_approach_min_ = approach_min; }
-  int num_stop_events() const override { return 5; }
+  int num_stop_events() const override { return layout_.enabled ? 7 : 5; }
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
@@ -58,12 +73,14 @@ class FreePhaseA final : public PhaseModel {
   static void fill_locked_heights(const model::MastParams& mast, int m, double* y);
 
  private:
-  int assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs) const;
   PhaseContext ctx_;
   model::ActiveFrames active_;
   int lo_;
   double held_height_m_;
   bool watch_rail_top_ = false, watch_approach_min_ = false;
+  ContactLayout layout_;
+  // Frame heights and velocities from frame max(lo - 1, 0) to m (the held frame lo - 1 included).
+  void expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const;
 };
 
 }  // namespace truss::stages

@@ -8,6 +8,7 @@
 #include <Eigen/LU>
 
 #include "model/bay.hpp"
+#include "model/contacts.hpp"
 #include "model/rail.hpp"
 #include "stages/free_phase.hpp"
 
@@ -22,6 +23,37 @@ FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, do
   active_.bay_m_in_hinge_coordinate = true;
   active_.locked_mass_kg = ctx.locked_mass_kg;
   active_.panel_height_offset_m = ctx.panel_height_offset_m;
+  layout_.frames = ctx.bay - lo;
+}
+
+void FreePhaseB::expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const {
+  const int n = dof(), m = ctx_.bay, first = std::max(lo_ - 1, 0), off = lo_ - first;
+  ys.assign(static_cast<std::size_t>(m - first + 1), held_height_m_);
+  vs.assign(ys.size(), 0.0);
+  layout_.expand(q, ys.data() + off);
+  layout_.expand(qdot, vs.data() + off);
+  const double x = q[n - 1], l = ctx_.mast->bay(m).strut_length_m, s = std::sqrt(l * l - x * x);
+  ys.back() = q[n - 2] + 2.0 * s;
+  vs.back() = qdot[n - 2] - 2.0 * x / s * qdot[n - 1];
+}
+
+void FreePhaseB::calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const {
+  thread_local std::vector<double> acc;
+  acc.resize(static_cast<std::size_t>(dof()));
+  PhaseScratch sys;
+  const PhasePoint p = evaluate(q, qdot, acc.data(), sys, &diag, &sub);
+  (void)p;
+}
+
+ContactWatch FreePhaseB::calc_contact_watch(const double* q, const double* qdot) const {
+  thread_local PhaseScratch sys;
+  thread_local std::vector<double> acc, a, ys, vs;
+  acc.resize(static_cast<std::size_t>(dof()));
+  a.resize(static_cast<std::size_t>(layout_.frames));
+  calc_point(q, qdot, acc.data(), sys);
+  layout_.expand(acc.data(), a.data());
+  expand_frames(q, qdot, ys, vs);
+  return stages::calc_contact_watch(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys, a.data());
 }
 
 double FreePhaseB::calc_rail_function_m(const double* q) const {
@@ -33,15 +65,22 @@ double FreePhaseB::calc_rail_function_m(const double* q) const {
   return q[n - 2 >= 0 ? n - 2 : 0] + s - r.axis_height_m() + r.cot_beta() * x;
 }
 
-void FreePhaseB::calc_stop_events(const double* q, const double*, double* g) const {
+void FreePhaseB::calc_stop_events(const double* q, const double* qdot, double* g) const {
   const MastParams& mast = *ctx_.mast;
   double worst = -FreePhaseA::kStraightFraction * mast.bay(ctx_.bay).strut_length_m;  // none: never fires
+  thread_local std::vector<double> ys, vs;
+  expand_frames(q, qdot, ys, vs);
+  const int first = std::max(lo_ - 1, 0);
   for (int i = std::max(lo_, 1); i < ctx_.bay; ++i) {
-    const double lower = i - 1 >= lo_ ? q[i - 1 - lo_] : held_height_m_;
     const BayParams& b = mast.bay(i);
-    worst = std::max(worst, FreePhaseA::kStraightFraction * b.strut_length_m - calc_hinge_offset_m(b, q[i - lo_] - lower));
+    worst = std::max(worst, FreePhaseA::kStraightFraction * b.strut_length_m - calc_hinge_offset_m(b, ys[i - first] - ys[i - 1 - first]));
   }
   g[0] = worst;
+  if (layout_.enabled) {
+    const ContactWatch c = calc_contact_watch(q, qdot);
+    g[1] = c.landing_g;
+    g[2] = c.lift_off_g;
+  }
 }
 
 double FreePhaseB::calc_driven_speed_m_per_s(const double* q, const double* qdot) const {
@@ -50,8 +89,8 @@ double FreePhaseB::calc_driven_speed_m_per_s(const double* q, const double* qdot
   return qdot[n - 2] - 2.0 * x / std::sqrt(l * l - x * x) * qdot[n - 1];
 }
 
-// The bordered system's terms at (q, q') (the header's equations), with the frame heights
-// first..m into ys, vs.
+// The bordered system's terms at (q, q') (the header's equations; with stack contacts the frame
+// system reduced to the clusters first), with the frame heights first..m into ys, vs.
 bool FreePhaseB::assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys,
                           std::vector<double>& vs, PhaseDaeTerms& t) const {
   const MastParams& mast = *ctx_.mast;
@@ -62,22 +101,22 @@ bool FreePhaseB::assemble(const double* q, const double* qdot, PhaseScratch& sys
   const double s = std::sqrt(l * l - x * x), k = 2.0 * x / s, kx = 2.0 * l * l / (s * s * s);
   // Frame heights first..m (frame lo - 1 held when it exists).
   const int first = std::max(lo_ - 1, 0);
-  ys.assign(static_cast<std::size_t>(m - first + 1), held_height_m_);
-  vs.assign(ys.size(), 0.0);
-  const int off = lo_ - first;
-  for (int k2 = 0; k2 < n - 1; ++k2) { ys[static_cast<std::size_t>(off + k2)] = q[k2]; vs[static_cast<std::size_t>(off + k2)] = qdot[k2]; }
-  const double y_l = q[n - 2], w = qdot[n - 2];
-  const double y_m = y_l + 2.0 * s, u = w - k * xi;
-  ys.back() = y_m;
-  vs.back() = u;
+  expand_frames(q, qdot, ys, vs);
+  const double y_l = q[n - 2], u = vs.back();
   calc_frame_system(mast, active_, ys.data(), vs.data(), first, sys);
-  const double A_ll = sys.diag[n - 2], A_ml = sys.sub[n - 1], A_mm = sys.diag[n - 1];
-  const double R_l = sys.velocity_terms[n - 2] + sys.spring_forces[n - 2];
-  const double R_m = sys.velocity_terms[n - 1] + sys.spring_forces[n - 1];
-  const double g = calc_g_hinge(bay, x), dg = calc_dg_hinge_dx(bay, x), h = -kx * xi2;
   t.diag = sys.diag;
   t.sub = sys.sub;
   t.rhs = sys.velocity_terms + sys.spring_forces;
+  if (layout_.reduces()) {
+    // Stack contacts: clusters of frames lo..m-1, frame m alone (model/contacts.hpp).
+    std::vector<int> starts = layout_.starts;
+    starts.push_back(layout_.frames);
+    const Eigen::VectorXd r0 = t.rhs;
+    model::reduce_to_clusters(sys.diag, sys.sub, r0, starts, t.diag, t.sub, t.rhs);
+  }
+  const double A_ll = t.diag[n - 2], A_ml = t.sub[n - 1], A_mm = t.diag[n - 1];
+  const double R_l = t.rhs[n - 2], R_m = t.rhs[n - 1];
+  const double g = calc_g_hinge(bay, x), dg = calc_dg_hinge_dx(bay, x), h = -kx * xi2;
   t.diag[n - 2] = A_ll + 2.0 * A_ml + A_mm;
   t.sub[n - 1] = -k * (A_ml + A_mm);
   t.diag[n - 1] = k * k * A_mm + 2.0 * g;
@@ -111,16 +150,18 @@ bool FreePhaseB::calc_dae_terms(const double* q, const double* qdot, PhaseScratc
 }
 
 bool FreePhaseB::calc_frame_heights(const double* q, double* y) const {
-  const int n = dof(), m = ctx_.bay;
-  const double l = ctx_.mast->bay(m).strut_length_m, x = q[n - 1];
-  for (int k = 0; k < lo_; ++k) y[k] = held_height_m_;
-  for (int k = 0; k < n - 1; ++k) y[lo_ + k] = q[k];
-  y[m] = y[m - 1] + 2.0 * std::sqrt(std::max(0.0, l * l - x * x));
+  const int m = ctx_.bay, first = std::max(lo_ - 1, 0);
+  thread_local std::vector<double> ys, vs, zero;
+  zero.assign(static_cast<std::size_t>(dof()), 0.0);
+  expand_frames(q, zero.data(), ys, vs);  // frames first..m, clusters expanded, frame m from x
+  for (int k = 0; k < first; ++k) y[k] = held_height_m_;
+  for (int k = first; k <= m; ++k) y[k] = ys[static_cast<std::size_t>(k - first)];
   FreePhaseA::fill_locked_heights(*ctx_.mast, m, y);
   return true;
 }
 
-PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+PhasePoint FreePhaseB::evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, Eigen::VectorXd* mass_diag,
+                                Eigen::VectorXd* mass_sub) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
   const double l = mast.bay(m).strut_length_m, c = mast.rail.cot_beta();
@@ -129,6 +170,7 @@ PhasePoint FreePhaseB::calc_point(const double* q, const double* qdot, double* q
   thread_local std::vector<double> ys, vs;
   thread_local PhaseDaeTerms t;
   assemble(q, qdot, sys, ys, vs, t);
+  if (mass_diag) { *mass_diag = t.diag; *mass_sub = t.sub; }
   const Eigen::VectorXd &diag = t.diag, &sub = t.sub, &a = t.c[0], &b = t.c[1];
   const double y_l = q[n - 2], w = qdot[n - 2], y_m = ys.back(), u = vs.back();
   const double f = calc_rail_function_m(q);

@@ -15,11 +15,15 @@
 // drive) is solved directly: two tridiagonal solves and a scalar (model/tridiagonal.hpp). In
 // velocity mode y_m'' = 0 is a second row b' p'' = k_x x'^2 - alpha (y_m' - v) with the drive force
 // as its multiplier: three solves and a 2x2 system. Pin force |lambda| / (3 sin beta).
+// Stack contacts on (stages/free_contacts.hpp): p = (Y_c of the clusters of frames lo..m-1, x),
+// the frame-height system reduced to the clusters (model/contacts.hpp) before the map to x; stop
+// events 1 and 2 are the contact landing and lift-off.
 #pragma once
 #include <vector>
 
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
+#include "stages/free_contacts.hpp"
 #include "stages/phase.hpp"
 
 namespace truss::stages {
@@ -29,16 +33,23 @@ class FreePhaseB final : public PhaseModel {
   // ctx.bay = m; frames lo..m-1 and x move; frames below lo are held at held_height_m.
   // alpha: Baumgarte rate (1/s) of the rail and drive-speed constraints.
   FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s);
-  int dof() const override { return ctx_.bay - lo_ + 1; }
+  int dof() const override { return layout_.clusters() + 1; }
+  // Stack contacts: clusters of frames lo..m-1.
+  void set_contacts(ContactLayout layout) { layout_ = std::move(layout); }
+  ContactWatch calc_contact_watch(const double* q, const double* qdot) const;
+  // The mass matrix in p (diag, sub; the contact impacts).
+  void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;
   const PhaseContext& context() const override { return ctx_; }
-  PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
+  PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override {
+    return evaluate(q, qdot, qddot, scratch, nullptr, nullptr);
+  }
   double calc_driven_speed_m_per_s(const double* q, const double* qdot) const override;
   double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[dof() - 1] - ctx_.q_end); }
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[dof() - 1]; }
   void snap_to_end(double* q) const override { q[dof() - 1] = ctx_.q_end; }
   // Stop event 0 (MODEL.md 2, singular configuration): a moving bay below m comes within
   // FreePhaseA::kStraightFraction l_s of straight (largest kStraightFraction l_i - x_i).
-  int num_stop_events() const override { return 1; }
+  int num_stop_events() const override { return layout_.enabled ? 3 : 1; }
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;
   // Rail function f (m) at p: 0 on the rail.
   double calc_rail_function_m(const double* q) const;
@@ -55,6 +66,11 @@ class FreePhaseB final : public PhaseModel {
   model::ActiveFrames active_;
   int lo_;
   double held_height_m_, alpha_;
+  ContactLayout layout_;
+  PhasePoint evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, Eigen::VectorXd* mass_diag,
+                      Eigen::VectorXd* mass_sub) const;
+  // Heights and velocities of frames max(lo - 1, 0)..m (frame m from x).
+  void expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const;
 };
 
 }  // namespace truss::stages

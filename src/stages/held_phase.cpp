@@ -136,4 +136,19 @@ PhasePoint HeldPhase::calc_on_rail(double x, double xi, PhaseScratch& sys) const
   return p;
 }
 
+TwoFrameMass calc_two_frame_mass(const MastParams& mast, int m, double locked_mass_kg, double panel_height_offset_m, double y_lower,
+                                 double y_driven) {
+  ActiveFrames a;
+  a.lo = m - 1;
+  a.m = m;
+  a.locked_mass_kg = locked_mass_kg;
+  a.panel_height_offset_m = panel_height_offset_m;
+  FrameSystem sys;
+  const double y[3] = {0.0, y_lower, y_driven};
+  const double v[3] = {0.0, 0.0, 0.0};
+  if (m >= 2) calc_frame_system(mast, a, y, v, m - 2, sys);
+  else calc_frame_system(mast, a, y + 1, v + 1, m - 1, sys);
+  return {sys.diag[0], sys.sub[1], sys.diag[1]};
+}
+
 }  // namespace truss::stages

@@ -14,6 +14,7 @@
 // drive force F (inverse dynamics). Every term is regular at x = 0.
 #pragma once
 #include "model/frames.hpp"
+#include "model/impacts.hpp"
 #include "model/params.hpp"
 #include "model/rail.hpp"
 #include "stages/phase.hpp"
@@ -56,5 +57,10 @@ class HeldPhase final : public PhaseModel {
   model::ActiveFrames active_;
   double b2_m_ = 0, b2_lower_ = 0;    // diagonal offsets^2 of bays m and m-1
 };
+
+// y-space mass matrix of frames (m-1, m) with bay m written in frame heights (regular off the
+// lock): the held stack's rail-entry and rail-exit impacts (model/impacts.hpp).
+model::TwoFrameMass calc_two_frame_mass(const model::MastParams& mast, int m, double locked_mass_kg, double panel_height_offset_m,
+                                        double y_lower, double y_driven);
 
 }  // namespace truss::stages

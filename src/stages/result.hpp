@@ -112,6 +112,11 @@ struct RunResult {
   double min_bay_opening_m = NAN_INIT();
   double min_bay_opening_time_s = NAN_INIT();
   int min_bay_opening_bay = 0;
+  // Free stack with stack contacts (stack.contacts = true): landings (plastic impacts of a frame
+  // on the one below it or on the resting stack), lift-offs, and the energy the landings lost.
+  long contact_landings = 0;
+  long contact_lift_offs = 0;
+  double contact_energy_loss_J = 0.0;
 
   long steps = 0;                         // accepted integrator steps (0 in closed-form mode)
   long rejected_steps = 0;

@@ -7,8 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "integrators/auto_integrator.hpp"
-#include "integrators/ida_integrator.hpp"
+#include "integrators/factory.hpp"
 #include "model/impacts.hpp"
 #include "model/rail.hpp"
 #include "stages/energy.hpp"
@@ -23,35 +22,6 @@ namespace truss::stages {
 using namespace truss::model;
 
 namespace {
-
-// y-space mass matrix of frames (m-1, m) with bay m written in frame heights (regular off the
-// lock): the rail-entry and rail-exit impacts.
-TwoFrameMass calc_two_frame_mass(const MastParams& mast, const StageSpec& s, double y_lower, double y_driven) {
-  ActiveFrames a;
-  a.lo = s.bay - 1;
-  a.m = s.bay;
-  a.locked_mass_kg = s.locked_mass_kg;
-  a.panel_height_offset_m = s.panel_height_offset_m;
-  FrameSystem sys;
-  const double y[3] = {0.0, y_lower, y_driven};
-  const double v[3] = {0.0, 0.0, 0.0};
-  if (s.bay >= 2) calc_frame_system(mast, a, y, v, s.bay - 2, sys);
-  else calc_frame_system(mast, a, y + 1, v + 1, s.bay - 1, sys);
-  return {sys.diag[0], sys.sub[1], sys.diag[1]};
-}
-
-std::unique_ptr<integrators::Integrator> make_integrator(integrators::IntegratorKind kind,
-                                                         const integrators::IntegratorOptions& io) {
-  using integrators::IntegratorKind;
-  switch (kind) {
-    case IntegratorKind::cvode: return std::make_unique<integrators::CvodeIntegrator>(io, integrators::CvodeMethod::bdf);
-    case IntegratorKind::cvode_adams: return std::make_unique<integrators::CvodeIntegrator>(io, integrators::CvodeMethod::adams);
-    case IntegratorKind::automatic: return std::make_unique<integrators::AutoIntegrator>(io);
-    case IntegratorKind::ida: return std::make_unique<integrators::IdaIntegrator>(io);
-    case IntegratorKind::dopri54: break;
-  }
-  return std::make_unique<integrators::DormandPrince54>(io);
-}
 
 class StageLoop {
  public:
@@ -87,6 +57,16 @@ class StageLoop {
     return DynamicPhaseSolver::kCreepSpeedFraction * std::max(std::abs(u_), std::isfinite(peak) ? peak : 0.0);
   }
   void fail(RunStatus st, std::string msg) { r_.status = st; r_.message = std::move(msg); failed_ = true; }
+  void book(double loss_J, double work_J) { ledger_.add_loss(loss_J); ledger_.add_impulse_work(work_J); }
+  bool book_contacts(const FreeSegmentStart& c, const StageSpec& s) {  // stack contacts: counts, losses, screw work
+    r_.contact_lift_offs += c.lift_offs;
+    r_.contact_landings += c.landings;
+    r_.contact_energy_loss_J += c.energy_loss_J;
+    book(c.energy_loss_J, c.drive_work_J);
+    if (!c.ok) fail(RunStatus::singular_configuration, fmt::format("singular configuration: the landing of frame {} at t = {:.9g} s "
+                                                                   "(stage of bay {}) has no plastic solution", c.bay, t_, s.bay));
+    return c.ok;
+  }
 
   const MastParams& mast_;
   const std::vector<StageSpec>& stages_;
@@ -125,10 +105,11 @@ StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stage
   r_.bays.resize(static_cast<std::size_t>(n));
   for (int i = 1; i <= n; ++i) r_.bays[static_cast<std::size_t>(i - 1)].bay = i;
   if (!stages.empty() && stages.front().free_stack) {
-    free_ = std::make_unique<FreeStack>(mast);
+    free_ = std::make_unique<FreeStack>(mast, stages.front().contacts);
     history_.enable_frames(n + 1);
+    if (dir_ < 0) free_->init_deployed();
   }
-  if (!kinematic_ || free_) integrator_ = make_integrator(opts.run.integrator, opts.calc_integrator_options());
+  if (!kinematic_ || free_) integrator_ = integrators::make_integrator(opts.run.integrator, opts.calc_integrator_options());
   if (kinematic_) r_.motor_torque_at_speed_Nm = opts.drive.calc_motor_torque_Nm(opts.drive.speed_m_per_s);
 }
 
@@ -244,7 +225,7 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
   switch (ph.end) {
     case PhaseEnd::rail_entry: {
       // Plastic impact of the held lower frame with the rail (MODEL.md 2), in frame heights.
-      const TwoFrameMass M = calc_two_frame_mass(mast_, s, ph.lower_held_height_m, p_end.y_driven_m);
+      const TwoFrameMass M = calc_two_frame_mass(mast_, s.bay, s.locked_mass_kg, s.panel_height_offset_m, ph.lower_held_height_m, p_end.y_driven_m);
       const double x = s.entry_hinge_x_m, D = p_end.y_driven_m - ph.lower_held_height_m;
       const FrameImpact imp = calc_rail_entry_impact(M, calc_rail_gradient(mast_.rail.cot_beta(), D, x), u_end, kinematic_);
       u_ = u_end + imp.du_m_per_s;
@@ -253,8 +234,7 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
       br.entry_impulse_Ns = calc_pin_force_N(mast_.rail, imp.rail_impulse_Ns);  // per pin, as the force
       br.entry_drive_impulse_Ns = imp.drive_impulse_Ns;
       br.entry_energy_loss_J = imp.energy_loss_J;
-      ledger_.add_loss(imp.energy_loss_J);
-      ledger_.add_impulse_work(imp.drive_work_J);
+      book(imp.energy_loss_J, imp.drive_work_J);
       break;
     }
     case PhaseEnd::lock: {
@@ -270,7 +250,7 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
     }
     case PhaseEnd::rail_exit: {
       // The lower frame lands on the stack: plastic, its velocity w -> 0.
-      const TwoFrameMass M = calc_two_frame_mass(mast_, s, p_end.y_lower_m, p_end.y_driven_m);
+      const TwoFrameMass M = calc_two_frame_mass(mast_, s.bay, s.locked_mass_kg, s.panel_height_offset_m, p_end.y_lower_m, p_end.y_driven_m);
       const FrameImpact imp = calc_rail_exit_impact(M, p_end.w_m_per_s, u_end, kinematic_);
       u_ = u_end + imp.du_m_per_s;
       br.entry_time_s = t_;
@@ -278,8 +258,7 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
       br.entry_impulse_Ns = 0.0;  // the pin leaves the rail: no rail impulse
       br.entry_drive_impulse_Ns = imp.drive_impulse_Ns;
       br.entry_energy_loss_J = imp.energy_loss_J;
-      ledger_.add_loss(imp.energy_loss_J);
-      ledger_.add_impulse_work(imp.drive_work_J);
+      book(imp.energy_loss_J, imp.drive_work_J);
       break;
     }
     case PhaseEnd::reach_height: {
@@ -300,6 +279,16 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
 
 void StageLoop::start_free_stage(const StageSpec& s) {
   rail_top_time_s_ = kNaN;
+  free_->start_stage(s.bay);
+  if (s.start == StageStart::unlock) {  // retraction: unlock of bay m with every moving frame (MODEL.md 2)
+    const bool from_rest = &s == &stages_.front();
+    const FreeContactEvent e = free_->apply_unlock(make_context(s, PhaseKind::on_rail, 0.0), dir_ * opts_.drive.speed_m_per_s, kinematic_, from_rest);
+    if (!e.ok) return fail(RunStatus::singular_configuration, fmt::format("singular configuration: the unlock of bay {} has no solution", s.bay));
+    if (from_rest && kinematic_) r_.start_drive_impulse_Ns = e.impulse_Ns;
+    r_.bays[static_cast<std::size_t>(s.bay - 1)].latch_energy_J = e.energy_loss_J;
+    r_.bays[static_cast<std::size_t>(s.bay - 1)].lock_time_s = t_;
+    return book(e.energy_loss_J, e.drive_work_J);
+  }
   if (s.start != StageStart::from_rest_or_kick || !kinematic_) return;
   // Impulsive start (MODEL.md 2 "free"): the free frames take the momentum-consistent kick.
   const StackImpact k = free_->apply_start_kick(s, dir_ * opts_.drive.speed_m_per_s);
@@ -310,18 +299,24 @@ void StageLoop::start_free_stage(const StageSpec& s) {
 
 void StageLoop::run_free_phase(const StageSpec& s, const PhaseSpec& ph) {
   PhaseContext ctx = make_context(s, ph.kind, 0.0);
-  ctx.q_end = 0.0;    // on the rail: the lock at x = 0, x falling
-  ctx.sign_q = -1.0;
+  ctx.q_end = dir_ > 0 ? 0.0 : ph.q_end;  // on the rail: the lock at x = 0 (x falling), or the exit
+  ctx.sign_q = ph.kind == PhaseKind::on_rail ? -dir_ : dir_;
   // Watched events of the open phase, each at most once: the rail-top crossing (recorded) and the
   // first minimum of f (a grazing entry if f <= 0 there, else the phase goes on).
-  bool watch = ph.kind == PhaseKind::open, watch_min = watch;
+  bool watch = ph.kind == PhaseKind::open && dir_ > 0, watch_min = watch;
   for (;;) {
+    if (!book_contacts(free_->prepare_segment(ctx, kinematic_), s)) return;  // open the pulling, land the touching
     const std::unique_ptr<PhaseModel> phase = free_->make_phase(ctx, watch, watch_min);
     std::vector<double> q0, qd0;
     free_->get_start(ctx, q0, qd0);
     const PhaseOutcome o = solve_dynamic(*phase, q0.data(), qd0.data());
     account(o, s, ph);
     if (!o.end_state.empty()) free_->set_end(ctx, o.end_state);
+    if (o.reason == PhaseEndReason::model_stop) {  // stack contacts: a landing or a lift-off, then on
+      const FreeSegmentStart c = free_->apply_contact_event(ctx, o.stop_event, kinematic_);
+      if (c.handled && !book_contacts(c, s)) return;
+      if (c.handled) continue;
+    }
     if (o.reason == PhaseEndReason::model_stop && watch && o.stop_event == FreePhaseA::above_rail_top) {
       rail_top_time_s_ = t_;  // recorded; the phase goes on without this event
       watch = false;
@@ -341,33 +336,33 @@ void StageLoop::run_free_phase(const StageSpec& s, const PhaseSpec& ph) {
 
 void StageLoop::fail_free_stop(const StageSpec& s, const PhaseSpec& ph, const PhaseOutcome& o) {
   const int m = s.bay;
-  const bool singular = ph.kind == PhaseKind::on_rail || o.stop_event == FreePhaseA::singular_bay;
-  if (singular) {
-    const int i = free_->find_straightest_bay(m - 1);
-    return fail(RunStatus::singular_configuration,
-                fmt::format("singular configuration: bay {} (not deploying) came within {:.3g} l_s of straight "
-                            "(hinge offset {:.6g} m) at t = {:.9g} s in the stage of bay {}",
-                            i, FreePhaseA::kStraightFraction, free_->calc_hinge_offset_m(i), t_, m));
-  }
+  if (ph.kind == PhaseKind::on_rail || o.stop_event == FreePhaseA::singular_bay)
+    return fail(RunStatus::singular_configuration, free_->describe_singular(m, t_));
   const Extremum& a = tracker_.stage_rail_approach;
   r_.rail_miss_bay = m;
   r_.rail_miss_closest_approach_m = -a.value;
   r_.rail_miss_closest_approach_time_s = a.t;
   r_.rail_miss_above_rail_top_time_s = rail_top_time_s_;
-  const std::string why = o.stop_event == FreePhaseA::past_miss_height
-      ? fmt::format("the driven frame passed the lock height plus one bay (y = {:.9g} m)", free_->get_height_m(m))
-      : std::string("bay ") + std::to_string(m) + " straightened";
-  fail(RunStatus::rail_miss,
-       fmt::format("rail miss: the hinge of bay {} never reached the rail; closest approach {:.6g} m at t = {:.9g} s; "
-                   "{}; stopped at t = {:.9g} s when {}",
-                   m, -a.value, a.t,
-                   std::isfinite(rail_top_time_s_) ? fmt::format("above the rail top (y_r = {:.6g} m) from t = {:.9g} s",
-                                                                 mast_.rail.axis_height_m(), rail_top_time_s_)
-                                                   : std::string("never above the rail top"),
-                   t_, why));
+  fail(RunStatus::rail_miss, free_->describe_rail_miss(m, o.stop_event == FreePhaseA::past_miss_height, -a.value, a.t, rail_top_time_s_, t_));
 }
 
 void StageLoop::end_free_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePoint& p_end, BayResult& br) {
+  if (ph.end == PhaseEnd::rail_exit) {  // retraction: frame m-1 lands on the floor or the resting stack
+    const FreeContactEvent e = free_->apply_rail_exit(s, kinematic_);
+    if (!e.ok) return fail(RunStatus::singular_configuration, fmt::format("singular configuration: the rail exit of bay {} has no solution", s.bay));
+    br.entry_time_s = t_;
+    br.landing_impulse_Ns = std::abs(e.impulse_Ns);
+    br.entry_impulse_Ns = br.entry_drive_impulse_Ns = 0.0;
+    br.entry_energy_loss_J = e.energy_loss_J;
+    book(e.energy_loss_J, e.drive_work_J);
+    return;
+  }
+  if (ph.end == PhaseEnd::reach_height) {  // retraction: frame m back at its deployment start height
+    ++r_.bays_completed;
+    ke_end_ = s.final_landing ? 0.0 : p_end.kinetic_energy_J;
+    if (s.final_landing) ledger_.add_loss(p_end.kinetic_energy_J);  // the whole stack stops on the floor
+    return;
+  }
   if (ph.end == PhaseEnd::rail_entry) {
     // Plastic impact of all moving frames with the rail (model/free_impacts.hpp).
     const FreeRailEntry e = free_->apply_rail_entry(s, kinematic_);
@@ -377,8 +372,7 @@ void StageLoop::end_free_phase(const StageSpec& s, const PhaseSpec& ph, const Ph
     br.entry_impulse_Ns = calc_pin_force_N(mast_.rail, e.impact.rail_impulse_Ns);  // per pin, as the force
     br.entry_drive_impulse_Ns = e.impact.drive_impulse_Ns;
     br.entry_energy_loss_J = e.impact.energy_loss_J;
-    ledger_.add_loss(e.impact.energy_loss_J);
-    ledger_.add_impulse_work(e.impact.drive_work_J);
+    book(e.impact.energy_loss_J, e.impact.drive_work_J);
     return;
   }
   // Lock: the latch stops the struts' radial motion, g(0) xi^2 is lost; y_m' is continuous.
@@ -438,8 +432,9 @@ void StageLoop::finish() {
   double U_end = 0.0;
   if (last_stage_ && last_phase_) {
     // The free stack's phases carry every bay below the driven frame.
-    const int first_moving = free_ ? 1 : last_phase_->kind == PhaseKind::on_rail ? std::max(last_stage_->bay - 1, 1) : last_stage_->bay;
+    const int first_moving = free_ ? std::max(free_->get_last_lowest_frame(), 1) : last_phase_->kind == PhaseKind::on_rail ? std::max(last_stage_->bay - 1, 1) : last_stage_->bay;
     if (failed_) U_end = ledger_.calc_total_potential_J(last_stage_->bay, first_moving, last_.potential_energy_J);
+    else if (free_ && dir_ < 0) U_end = free_->calc_potential_energy_J();  // the free frames need not end stowed
     else U_end = dir_ > 0 ? ledger_.get_deployed_potential_J() : ledger_.get_stowed_potential_J();
   }
   ledger_.set_start(0.0, U_start);

@@ -80,9 +80,16 @@ std::string explain_start_past_entry(const MastParams& mast, int m, double y_sta
 
 }  // namespace
 
-std::string plan_free_stages(const MastParams& mast, double direction, std::vector<StageSpec>& out) {
+std::string plan_free_stages(const MastParams& mast, double direction, bool contacts, std::vector<StageSpec>& out) {
   out.clear();
-  if (direction < 0) return "run.direction: retraction of a free stack (stack.mode = \"free\") is not available yet";
+  if (direction < 0) {
+    // Retraction: the held stack's stages (unlock, on the rail until the pin leaves it where a
+    // lower frame at the stowed height meets it, then down to the deployment's start height),
+    // with the frames below moving (stages/free_stack.hpp). The same geometry must hold.
+    if (std::string bad = plan_held_stages(mast, direction, out); !bad.empty()) return bad;
+    for (StageSpec& s : out) { s.free_stack = true; s.contacts = contacts; }
+    return {};
+  }
   const int n = mast.n_bays();
   std::vector<double> locked, span;
   calc_rigid_above(mast, locked, span);
@@ -93,6 +100,7 @@ std::string plan_free_stages(const MastParams& mast, double direction, std::vect
     s.locked_mass_kg = locked[m];
     s.panel_height_offset_m = span[m];
     s.free_stack = true;
+    s.contacts = contacts;
     s.phases.push_back({PhaseKind::open, 0.0, 0.0, PhaseEnd::rail_entry, 0.0});
     s.phases.push_back({PhaseKind::on_rail, 0.0, 0.0, PhaseEnd::lock, 0.0});
     out.push_back(s);

@@ -39,14 +39,16 @@ struct StageSpec {
   // values are not used (the state lives in stages/free_stack.hpp) and entry happens where the
   // motion takes the pin to the rail.
   bool free_stack = false;
+  bool contacts = false;            // free stack: unilateral stack contacts D_i >= 0 (MODEL.md 2)
 };
 
 // Builds the stages of a held-stack run. Returns an empty string, or "key: reason" if the
 // geometry makes the held stack impossible (rail never met, next bay already past the rail).
 std::string plan_held_stages(const model::MastParams& mast, double direction, std::vector<StageSpec>& out);
 
-// Builds the stages of a free-stack run (deployment only, so far): bays n..1, each phase A until
-// rail entry and phase B until the lock. Returns "key: reason" for what the free stack cannot run.
-std::string plan_free_stages(const model::MastParams& mast, double direction, std::vector<StageSpec>& out);
+// Builds the stages of a free-stack run: deployment, bays n..1, each phase A until rail entry and
+// phase B until the lock; retraction, the held stack's retraction stages (whose rail geometry
+// must hold) run with free frames. Returns "key: reason" for what the free stack cannot run.
+std::string plan_free_stages(const model::MastParams& mast, double direction, bool contacts, std::vector<StageSpec>& out);
 
 }  // namespace truss::stages

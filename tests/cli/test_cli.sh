@@ -74,11 +74,22 @@ run beta95_set 2 "$TABLE1" --set rail.beta_deg=95 -o beta95_set.h5
 expect_in beta95_set.err "rail.beta_deg" "beta95_set: message names the key"
 nothing_written beta95_set
 
-# free stack: retraction is not available yet; the message names the file, line and key
-scene free_retract.toml '[stack]\nmode = "free"\n[run]\ndirection = "retract"\n'
-run free_retract 2 free_retract.toml -o free_retract.h5
-expect_in free_retract.err "free_retract.toml:2: stack.mode" "free_retract: message names key and line"
-nothing_written free_retract
+# free stack: retraction runs (issue 9), here with stack contacts
+scene free_retract.toml '[mast]\nn_bays = 3\n[stack]\nmode = "free"\ncontacts = true\n[run]\ndirection = "retract"\n'
+run free_retract 0 free_retract.toml --json
+
+# stack contacts (issue 9): on a held stack, an unknown contact law, a non-boolean value
+scene contacts_held.toml '[stack]\nmode = "held"\ncontacts = true\n'
+run contacts_held 2 contacts_held.toml -o contacts_held.h5
+expect_in contacts_held.err "contacts_held.toml:3: stack.contacts" "contacts_held: message names key and line"
+nothing_written contacts_held
+scene contact_law.toml '[stack]\nmode = "free"\ncontacts = true\ncontact_law = "elastic"\n'
+run contact_law 2 contact_law.toml -o contact_law.h5
+expect_in contact_law.err "contact_law.toml:4: stack.contact_law" "contact_law: message names key and line"
+nothing_written contact_law
+run contacts_set 2 "$TABLE1" --set stack.mode='"free"' --set stack.contacts=yes -o contacts_set.h5
+expect_in contacts_set.err "stack.contacts" "contacts_set: message names the key"
+nothing_written contacts_set
 
 # run.integrator = "ida" solves the free stack only: refused on a held stack, naming file, line, key
 scene ida_held.toml '[run]\nintegrator = "ida"\n'

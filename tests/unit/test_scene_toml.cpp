@@ -99,6 +99,8 @@ no_load_speed_rad_per_s = 80.0
 
 [stack]
 mode = "free"
+contacts = true
+contact_law = "plastic"
 
 [panels]
 count = 4
@@ -143,6 +145,8 @@ TEST_CASE("a full scene file sets every key", "[scene]") {
   CHECK(s.drive.stall_torque_Nm == 0.04);
   CHECK(s.drive.no_load_speed_rad_per_s == 80.0);
   CHECK(s.stack.mode == StackMode::free);
+  CHECK(s.stack.contacts == truss::sim::StackContacts::on);
+  CHECK(s.stack.contact_law == truss::sim::ContactLaw::plastic);
   CHECK(s.panels.count == 4);
   CHECK(s.panels.length_m == 0.6);
   CHECK(s.panels.mass_kg == 0.3);
@@ -279,6 +283,12 @@ TEST_CASE("bad enumeration values list the allowed values", "[scene][errors]") {
   CHECK_THAT(parse_error("[stack]\nmode = \"loose\"\n"), Contains("\"held\", \"free\""));
   CHECK_THAT(parse_error("[run]\ndirection = \"up\"\n"), Contains("\"deploy\", \"retract\""));
   CHECK_THAT(parse_error("[run]\nintegrator = \"rk4\"\n"), Contains("\"dopri54\", \"cvode\""));
+  // Stack contacts: TOML booleans only; the contact law by name (issue 9).
+  CHECK_THAT(parse_error("[stack]\nmode = \"free\"\ncontacts = \"yes\"\n"), StartsWith("error: scene.toml:3: stack.contacts: expected true or false"));
+  CHECK_THAT(parse_error("[stack]\nmode = \"free\"\ncontacts = true\ncontact_law = \"elastic\"\n"),
+             StartsWith("error: scene.toml:4: stack.contact_law: unknown value \"elastic\""));
+  // Contacts on a held stack: validate() names the key and its line.
+  CHECK_THAT(parse_error("[stack]\nmode = \"held\"\n\ncontacts = true\n"), StartsWith("error: scene.toml:4: stack.contacts: "));
   // Enumerations are case-sensitive, like TOML keys.
   CHECK_THAT(parse_error("[drive]\nmode = \"Motor\"\n"), Contains("drive.mode"));
 }
@@ -411,6 +421,8 @@ TEST_CASE("resolved_scene_toml writes every key and reads back to the same optio
     CHECK(back.run.max_wall_time_s == 1e300);
     CHECK(back.drive.mode == DriveMode::motor);
     CHECK(back.stack.mode == StackMode::free);
+    CHECK(back.stack.contacts == truss::sim::StackContacts::on);
+    CHECK(line_of(text, "contacts = true") > 0);  // a TOML boolean, not a string
     CHECK(back.run.integrator == IntegratorKind::cvode);
     CHECK(back.run.max_steps == 5'000'000'000L);
     REQUIRE(back.panels.tip_height_m.has_value());
