@@ -241,6 +241,7 @@ def subsection_sobol(page, c):
              "(a per-bay "
              "dispersion moves all its bays together). Indices are dimensionless.</p>",
              out_of_range_note(outs),
+             design_correlation_note(c, len(factors)),
              page.figure(fig_sobol(page.plt, factors, outs), "sobol_indices.png",
                          "first-order and total Sobol' indices with their confidence intervals")]
     cells = []
@@ -256,6 +257,50 @@ def subsection_sobol(page, c):
                                      "ST high"], rows, "narrow") + "</div>")
     parts.append("<div class='grid'>" + "".join(cells) + "</div>")
     return "\n".join(parts)
+
+
+def calc_design_correlations(c, n_factors):
+    """Largest |rank correlation| between the A and B rows of each dispersion's columns (one per
+    bay or frame for per-bay/per-frame keys). Saltelli's design (block of G + 2 runs: A, B, AB_1
+    .. AB_G) assumes A and B independent; some pairs of Sobol' dimensions are strongly correlated
+    at small N (docs/campaigns.md), which biases that factor's indices. Returns {key: (rho, N)}."""
+    block = n_factors + 2
+    n_blocks = len(c.status) // block
+    res = {}
+    if n_blocks < 3:
+        return res, n_blocks
+    for d in c.dispersions:
+        v = np.asarray(d.values, dtype=float)
+        v = v[: n_blocks * block].reshape(n_blocks * block, -1)
+        worst = 0.0
+        for j in range(v.shape[1]):
+            a, b = v[0::block, j], v[1::block, j]
+            if np.ptp(a) == 0 or np.ptp(b) == 0:
+                continue
+            ra, rb = np.argsort(np.argsort(a)), np.argsort(np.argsort(b))
+            r = float(np.corrcoef(ra, rb)[0, 1])
+            if abs(r) > abs(worst):
+                worst = r
+        res[d.key] = worst
+    return res, n_blocks
+
+
+def design_correlation_note(c, n_factors):
+    """A warning naming the factors whose A and B columns correlate by more than 4 / sqrt(N)
+    (four standard deviations of the correlation of N independent pairs)."""
+    rho, n_blocks = calc_design_correlations(c, n_factors)
+    if not rho:
+        return ""
+    limit = 4.0 / np.sqrt(n_blocks)
+    bad = {k: r for k, r in rho.items() if abs(r) > limit}
+    if not bad:
+        return ""
+    return ("<p class='warn'>Design check: the A and B samples of "
+            + ", ".join(f"<code>{esc(k)}</code> (rank correlation {r:.2f})" for k, r in sorted(bad.items()))
+            + f" are correlated beyond 4/&radic;N = {limit:.2f} (N = {n_blocks} blocks). Saltelli's "
+              "estimators assume them independent: these factors' indices are biased at this N "
+              "(a property of the unscrambled Sobol' sequence's high dimensions, docs/campaigns.md). "
+              "Run more blocks before relying on them.</p>")
 
 
 def out_of_range_note(outs):

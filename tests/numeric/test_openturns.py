@@ -65,11 +65,14 @@
    master seeds of the campaign (N = 256) every assertion held.
 """
 import argparse
+import os
 import sys
 
 import h5py
 import numpy as np
 import openturns as ot
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "postproc"))
 
 U_SLACK = 1e-10
 failures = []
@@ -257,6 +260,17 @@ def check_additive(path):
     for g in np.nonzero(exempt)[0]:
         print(f"WARNING: design of {path}: the A and B columns of {factors[g]} correlate by {rho[g]:.3f} "
               f"(N = {n_blocks}): its Sobol' indices are biased at this N; not asserted below")
+    # The report warns of the same factors (postproc: rank correlations over every bay/frame
+    # column, so it may name more, never fewer, than this Pearson check on the first column's u).
+    from truss_report.h5read import H5, load_campaign
+    from truss_report.sections_margins import calc_design_correlations
+    with h5py.File(path, "r") as f:
+        camp = load_campaign(H5(f, path), "")
+    rep, rep_blocks = calc_design_correlations(camp, G)
+    flagged = {k for k, r in rep.items() if abs(r) > 4.0 / np.sqrt(rep_blocks)}
+    check(rep_blocks == n_blocks and {factors[g] for g in np.nonzero(exempt)[0]} <= flagged,
+          f"the report's design check flags {sorted(flagged)} (N = {rep_blocks}), this check "
+          f"{sorted(factors[g] for g in np.nonzero(exempt)[0])} (N = {n_blocks})")
     c = np.arange(1.0, G + 1.0)
     y = u @ c
     exact = c ** 2 / np.sum(c ** 2)
