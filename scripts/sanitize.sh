@@ -43,7 +43,7 @@ echo "[sanitize] build: $((t_build - t0)) s"
 
 if [ "$what" != fuzz ]; then
   export TRUSS_SANITIZED=1
-  (cd "$BUILD" && ctest --output-on-failure --timeout 900 -R "$SAN_TESTS")
+  (cd "$BUILD" && ctest --output-on-failure --timeout 900 -j"$(nproc)" -R "$SAN_TESTS")
   t_inproc=$(date +%s)
   echo "[sanitize] in-process and truss-sim tests (leaks checked): $((t_inproc - t_build)) s"
   (cd "$BUILD" && ASAN_OPTIONS=${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0} \
