@@ -12,6 +12,8 @@
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
+
+#include "integrators/sundials_checks.hpp"
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 namespace truss::integrators {
@@ -54,39 +56,15 @@ int root_fn(realtype t, N_Vector y, realtype* g, void* ud) {
   return 0;
 }
 
-void silent(int, const char*, const char*, char*, void*) {}
-
-// CVODE's name of a return flag ("CV_TOO_MUCH_WORK"); SUNDIALS allocates it with malloc.
-std::string flag_name(int flag) {
-  char* name = CVodeGetReturnFlagName(flag);
-  std::string s = name ? name : "?";
-  std::free(name);
-  return s;
-}
-
-// As check_flag in the SUNDIALS examples: a negative return flag of a CVODE function makes the
-// summary a failure naming the function and the flag. Returns false on failure.
+std::string flag_name(int flag) { return sunflags::flag_name(CVodeGetReturnFlagName, flag); }
 bool check_flag(int flag, const char* function, IntegratorSummary& sum) {
-  if (flag >= 0) return true;
-  sum.status = IntegratorStatus::failure;
-  sum.message = fmt::format("CVODE: {} failed with flag {} ({})", function, flag, flag_name(flag));
-  return false;
+  return sunflags::check_flag(flag, "CVODE", CVodeGetReturnFlagName, function, sum);
 }
-
-// The same for functions outside CVODE (SUNContext_Create: nonzero on failure) and for
-// constructors that return a null pointer.
 bool check_sundials(int flag, const char* function, IntegratorSummary& sum) {
-  if (flag == 0) return true;
-  sum.status = IntegratorStatus::failure;
-  sum.message = fmt::format("CVODE: {} failed with flag {}", function, flag);
-  return false;
+  return sunflags::check_sundials(flag, "CVODE", function, sum);
 }
-
 bool check_null(const void* p, const char* function, IntegratorSummary& sum) {
-  if (p) return true;
-  sum.status = IntegratorStatus::failure;
-  sum.message = fmt::format("CVODE: {} returned NULL", function);
-  return false;
+  return sunflags::check_null(p, "CVODE", function, sum);
 }
 
 class CvodeDense : public DenseOutput {
@@ -146,7 +124,7 @@ struct CvodeIntegrator::Solver {
     N_VConst(0.0, y);
     mem = CVodeCreate(method == CvodeMethod::bdf ? CV_BDF : CV_ADAMS, ctx);
     if (!check_null(mem, "CVodeCreate", sum)) return false;
-    if (!check_flag(CVodeSetErrHandlerFn(mem, silent, nullptr), "CVodeSetErrHandlerFn", sum)) return false;
+    if (!check_flag(CVodeSetErrHandlerFn(mem, sunflags::silent, nullptr), "CVodeSetErrHandlerFn", sum)) return false;
     if (!check_flag(CVodeInit(mem, rhs_fn, t0, y), "CVodeInit", sum)) return false;
     if (!check_flag(CVodeSetUserData(mem, &ud), "CVodeSetUserData", sum)) return false;
     if (method == CvodeMethod::bdf) {

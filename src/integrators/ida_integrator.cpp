@@ -14,6 +14,8 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include "integrators/sundials_checks.hpp"
+
 namespace truss::integrators {
 
 namespace {
@@ -57,35 +59,15 @@ int root_fn(realtype t, N_Vector yy, N_Vector, realtype* g, void* ud) {
   return 0;
 }
 
-void silent(int, const char*, const char*, char*, void*) {}
-
-std::string flag_name(int flag) {
-  char* name = IDAGetReturnFlagName(flag);
-  std::string s = name ? name : "?";
-  std::free(name);
-  return s;
-}
-
-// check_retval of the SUNDIALS examples: a negative IDA flag makes the summary a failure.
+std::string flag_name(int flag) { return sunflags::flag_name(IDAGetReturnFlagName, flag); }
 bool check_flag(int flag, const char* function, IntegratorSummary& sum) {
-  if (flag >= 0) return true;
-  sum.status = IntegratorStatus::failure;
-  sum.message = fmt::format("IDA: {} failed with flag {} ({})", function, flag, flag_name(flag));
-  return false;
+  return sunflags::check_flag(flag, "IDA", IDAGetReturnFlagName, function, sum);
 }
-
 bool check_sundials(int flag, const char* function, IntegratorSummary& sum) {
-  if (flag == 0) return true;
-  sum.status = IntegratorStatus::failure;
-  sum.message = fmt::format("IDA: {} failed with flag {}", function, flag);
-  return false;
+  return sunflags::check_sundials(flag, "IDA", function, sum);
 }
-
 bool check_null(const void* p, const char* function, IntegratorSummary& sum) {
-  if (p) return true;
-  sum.status = IntegratorStatus::failure;
-  sum.message = fmt::format("IDA: {} returned NULL", function);
-  return false;
+  return sunflags::check_null(p, "IDA", function, sum);
 }
 
 // Dense output of y (the first n_ode entries of IDA's vector).
@@ -143,7 +125,7 @@ struct IdaIntegrator::Solver {
     }
     mem = IDACreate(ctx);
     if (!check_null(mem, "IDACreate", sum)) return false;
-    if (!check_flag(IDASetErrHandlerFn(mem, silent, nullptr), "IDASetErrHandlerFn", sum)) return false;
+    if (!check_flag(IDASetErrHandlerFn(mem, sunflags::silent, nullptr), "IDASetErrHandlerFn", sum)) return false;
     if (!check_flag(IDAInit(mem, res_fn, t0, yy, yp), "IDAInit", sum)) return false;
     if (!check_flag(IDASetUserData(mem, &ud), "IDASetUserData", sum)) return false;
     A = SUNDenseMatrix(n_new, n_new, ctx);

@@ -9,6 +9,10 @@
 #include <string>
 #include <vector>
 
+#include <cvode/cvode.h>
+#include <ida/ida.h>
+
+#include "integrators/sundials_checks.hpp"
 #include "integrators/cvode_integrator.hpp"
 #include "integrators/dopri54.hpp"
 
@@ -327,4 +331,28 @@ TEST_CASE("a NaN right-hand side ends CVODE with failure and its flag", "[integr
   // After the failure the same object integrates as a fresh one.
   CvodeIntegrator fresh(IntegratorOptions{});
   check_identical(run(cv, osc, 0.0, 3.0, {1.0, 0.0}), run(fresh, osc, 0.0, 3.0, {1.0, 0.0}));
+}
+
+TEST_CASE("SUNDIALS flag checks name the solver, the function and the flag", "[integrators][sundials]") {
+  using namespace truss::integrators;
+  IntegratorSummary sum;
+  sum.status = IntegratorStatus::reached_end;
+  CHECK(sunflags::check_flag(0, "CVODE", CVodeGetReturnFlagName, "CVode", sum));
+  CHECK(sunflags::check_flag(2, "CVODE", CVodeGetReturnFlagName, "CVode", sum));  // CV_ROOT_RETURN: not a failure
+  CHECK(sum.status == IntegratorStatus::reached_end);  // untouched
+  CHECK(sum.message.empty());
+  // Flag -1 is CV_TOO_MUCH_WORK and IDA_TOO_MUCH_WORK (cvode.h, ida.h of SUNDIALS 6).
+  CHECK_FALSE(sunflags::check_flag(-1, "CVODE", CVodeGetReturnFlagName, "CVode", sum));
+  CHECK(sum.status == IntegratorStatus::failure);
+  CHECK(sum.message == "CVODE: CVode failed with flag -1 (CV_TOO_MUCH_WORK)");
+  IntegratorSummary s2;
+  CHECK_FALSE(sunflags::check_flag(-1, "IDA", IDAGetReturnFlagName, "IDASolve", s2));
+  CHECK(s2.message == "IDA: IDASolve failed with flag -1 (IDA_TOO_MUCH_WORK)");
+  IntegratorSummary s3;
+  CHECK_FALSE(sunflags::check_null(nullptr, "IDA", "N_VNew_Serial", s3));
+  CHECK(s3.message == "IDA: N_VNew_Serial returned NULL");
+  IntegratorSummary s4;
+  CHECK(sunflags::check_sundials(0, "CVODE", "SUNContext_Create", s4));
+  CHECK_FALSE(sunflags::check_sundials(3, "CVODE", "SUNContext_Create", s4));
+  CHECK(s4.message == "CVODE: SUNContext_Create failed with flag 3");
 }
