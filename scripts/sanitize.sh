@@ -21,7 +21,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$(pwd)
 BUILD=${SAN_BUILD_DIR:-build-san}
-FUZZ_SECONDS=${FUZZ_SECONDS:-45}
+FUZZ_SECONDS=${FUZZ_SECONDS:-30}
 SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|free_stack|free_contacts|free_retract|integrators|truss_tests_io|campaign_files|truss_tests_sampling|cli_bad_input|stress_reduced|end_to_end_figures|postproc_frame_heights|report_fixture_run)$'}
 SAN_MPI_TESTS=${SAN_MPI_TESTS:-'^(report_fixture_(table1_dispersed|motor_torque|free_rail_miss|retract)|openturns_fixture_.*|mpi_(ranks|resume|failures|saltelli|bad_input|paths|hostile|journal|faults|layout))$'}
 what=${1:-all}
