@@ -142,10 +142,12 @@ void write_input_attributes(hid_t file, const CampaignContext& ctx) {
   }
 }
 
-// /stats: statistics of the ok runs, per output and per bay; status counts. Each column is read
-// back from /runs (one column in memory at a time) and its statistics are the exact ones of
-// calc_stats, as if the whole table were in memory.
-void write_stats(hid_t file, const CampaignContext& ctx, const std::vector<std::int8_t>& status, std::int64_t chunk_rows) {
+// /stats: statistics of the ok runs, per output and per bay; status counts. The statistics are
+// the store's streamed ones (column_stats.hpp); a column whose percentiles could not be resolved
+// from the kept values is read back from /runs and its percentiles are calc_stats' (the same exact
+// order statistics either way). Returns the number of columns read back.
+std::int64_t write_stats(hid_t file, const CampaignContext& ctx, const std::vector<std::int8_t>& status, StreamedStats streamed,
+                         std::int64_t chunk_rows) {
   const OutputColumns& cols = ctx.columns;
   const auto n = static_cast<std::int64_t>(status.size());
   std::int64_t n_failed = 0;
@@ -159,7 +161,9 @@ void write_stats(hid_t file, const CampaignContext& ctx, const std::vector<std::
   write_int_attribute(stats.get(), "n_ok", n - n_failed);
   write_int_attribute(stats.get(), "n_failed", n_failed);
   write_string_attribute(stats.get(), "percentile_method",
-                         "linear interpolation between order statistics (Hyndman-Fan type 7, numpy.percentile default)");
+                         "linear interpolation between order statistics (Hyndman-Fan type 7, numpy.percentile default), exact");
+  write_string_attribute(stats.get(), "moments_method",
+                         "per chunk of runs, combined in run-index order (Chan, Golub and LeVeque 1979)");
   write_int_attribute(stats.get(), "std_ddof", 1);
   std::vector<std::string> names;
   std::vector<std::int64_t> counts(sim::kRunStatusCount, 0);
@@ -167,25 +171,26 @@ void write_stats(hid_t file, const CampaignContext& ctx, const std::vector<std::
   for (auto s : status) ++counts[static_cast<std::size_t>(s)];
   write_strings(stats.get(), "status_names", names);
   write_array(stats.get(), "status_counts", "1", counts.data(), counts.size());
-  for (const auto* f : cols.f64)
-    write_stats_group(stats.get(), f->name, f->units, {calc_stats(read_f64_column(file, "runs/" + std::string(f->name), n), ok)},
-                      false);
+  std::int64_t read_back = 0;
+  auto resolve = [&](Stats& st, const std::vector<double>& column) {
+    st.percentiles = calc_stats(column, ok).percentiles;
+    ++read_back;
+  };
+  for (std::size_t k = 0; k < cols.f64.size(); ++k) {
+    const std::string name = cols.f64[k]->name;
+    if (!streamed.f64_resolved[k]) resolve(streamed.f64[k], read_f64_column(file, "runs/" + name, n));
+    write_stats_group(stats.get(), name, cols.f64[k]->units, {streamed.f64[k]}, false);
+  }
   Handle bays = make_group(stats.get(), "bays");
   const std::int64_t nb = cols.n_bays_max;
-  std::vector<Stats> per_bay(static_cast<std::size_t>(nb));
-  // Bays a group at a time: at most kColumnBytes of columns in memory, each field read (and
-  // decompressed) ceil(n_bays_max / group) times.
-  constexpr std::int64_t kColumnBytes = std::int64_t{64} << 20;
-  const std::int64_t group = std::clamp<std::int64_t>(kColumnBytes / (8 * std::max<std::int64_t>(n, 1)), 1, std::max<std::int64_t>(nb, 1));
-  for (const auto* f : cols.bay) {
-    const std::string path = "runs/bays/" + std::string(f->name);
-    for (std::int64_t b0 = 0; b0 < nb; b0 += group) {
-      const std::int64_t g = std::min(group, nb - b0);
-      const auto columns = read_f64_columns(file, path, n, nb, b0, g, chunk_rows);
-      for (std::int64_t j = 0; j < g; ++j) per_bay[static_cast<std::size_t>(b0 + j)] = calc_stats(columns[static_cast<std::size_t>(j)], ok);
-    }
-    write_stats_group(bays.get(), f->name, f->units, per_bay, true);
+  for (std::size_t k = 0; k < cols.bay.size(); ++k) {
+    const std::string path = "runs/bays/" + std::string(cols.bay[k]->name);
+    for (std::int64_t b = 0; b < nb; ++b)
+      if (!streamed.bays_resolved[k][static_cast<std::size_t>(b)])
+        resolve(streamed.bays[k][static_cast<std::size_t>(b)], read_f64_columns(file, path, n, nb, b, 1, chunk_rows).front());
+    write_stats_group(bays.get(), cols.bay[k]->name, cols.bay[k]->units, streamed.bays[k], true);
   }
+  return read_back;
 }
 
 void write_sensitivity(hid_t file, const CampaignContext& ctx, const std::vector<std::int8_t>& status) {
@@ -230,7 +235,7 @@ void write_histories(hid_t file, const CampaignOptions& c, const std::vector<std
 }
 
 // /timing's per-run datasets are the ResultStore's; the schedule of this session as attributes.
-void write_timing_attributes(hid_t file, const CampaignFileInfo& info) {
+void write_timing_attributes(hid_t file, const CampaignFileInfo& info, std::int64_t stats_read_back) {
   Handle g(H5Gopen2(file, "timing", H5P_DEFAULT), H5Gclose, "open /timing");
   write_string_attribute(g.get(), "note", "not reproducible: depends on the machine, the ranks and the order of work");
   const ScheduleTiming& st = info.schedule;
@@ -243,6 +248,9 @@ void write_timing_attributes(hid_t file, const CampaignFileInfo& info) {
   write_double_attribute(g.get(), "rank0_compute_cpu_s", st.rank0_compute_cpu_s);
   write_int_attribute(g.get(), "runs_by_rank0", st.runs_by_rank0);
   write_int_attribute(g.get(), "runs_by_workers", st.runs_by_workers);
+  // Columns whose percentiles the end read back from /runs (their order statistics were outside
+  // the streamed windows): depends on which chunk completed first, hence here.
+  write_int_attribute(g.get(), "stats_columns_read_back", stats_read_back);
   if (st.synthetic_run_cost_s >= 0) write_double_attribute(g.get(), "synthetic_run_cost_s", st.synthetic_run_cost_s);
 }
 
@@ -287,14 +295,15 @@ void CampaignFile::finish(const std::vector<std::pair<std::int64_t, sim::RunResu
                           bool force) {
   store_->drain_jobs();
   store_->check_complete();
+  StreamedStats streamed = store_->calc_stats();
   store_.reset();  // closes the per-run datasets
   const std::vector<std::int8_t> status = read_status(file_, ctx_.options.ensemble.n_runs);
   write_root_attributes(file_, ctx_, info);
   write_input_attributes(file_, ctx_);
-  write_stats(file_, ctx_, status, chunk_rows_);
+  const std::int64_t read_back = write_stats(file_, ctx_, status, std::move(streamed), chunk_rows_);
   write_sensitivity(file_, ctx_, status);
   write_histories(file_, ctx_.options, histories);
-  write_timing_attributes(file_, info);
+  write_timing_attributes(file_, info, read_back);
   if (info.write_extra) info.write_extra(file_);
   check(H5Fflush(file_, H5F_SCOPE_GLOBAL), "flush " + tmp_);
   const hid_t f = file_;

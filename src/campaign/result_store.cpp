@@ -9,6 +9,7 @@
 #include <hdf5_hl.h>
 
 #include "campaign/chunk_codec.hpp"
+#include "campaign/column_stats.hpp"
 
 namespace truss::campaign {
 
@@ -73,35 +74,61 @@ void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, 
 
 namespace {
 
-// Encoding job (rank 0 -> encoder): one or more parts, each a header and one dataset chunk's raw
-// bytes; its output (encoder -> job_done): the same parts with the stored bytes. Little-endian.
+// Encoding job (rank 0 -> encoder): one or more parts, each a header, one dataset chunk's raw
+// bytes and, for an output column, a statistics request; its output (encoder -> job_done): the same
+// parts with the stored bytes and the columns' chunk summaries (column_stats.hpp). Little-endian.
+// A statistics request: u32 rows (runs in the chunk), u32 width (columns), rows bytes (1: an ok
+// run), width x Windows; its answer: width ChunkSummary.
 struct JobHeader {
   std::uint32_t dataset = 0;  // index into Datasets::direct
   std::uint32_t elem_size = 0;
   std::int64_t chunk = 0;     // chunk index (first row / chunk_runs)
   std::int32_t level = 0;
   std::uint32_t mask = 0;     // output: the filter mask of the stored bytes
-  std::uint64_t bytes = 0;    // bytes after the header
+  std::uint64_t bytes = 0;    // chunk bytes after the header
+  std::uint64_t stats_bytes = 0;  // statistics request (job) or summaries (output) after them
 };
 constexpr std::size_t kJobHeader = sizeof(JobHeader);
 // Small dataset chunks (the scalar columns, 32 kB each) are grouped into jobs of about this size,
 // so that a chunk of runs makes some twenty jobs: fewer than the batches that carry them.
 constexpr std::size_t kJobBytes = std::size_t{1} << 20;
 
-// Calls f(header, bytes) for each part of a job or of its output.
+// Calls f(header, bytes, stats) for each part of a job or of its output.
 template <class F>
 void for_each_part(std::string_view job, const char* what, F&& f) {
   while (!job.empty()) {
     JobHeader h;
     if (job.size() < kJobHeader) throw std::runtime_error(fmt::format("{}: a part of {} bytes, shorter than its header", what, job.size()));
     std::memcpy(&h, job.data(), kJobHeader);
-    if (h.bytes > job.size() - kJobHeader) throw std::runtime_error(fmt::format("{}: a part of {} bytes in {}", what, h.bytes, job.size()));
-    f(h, job.substr(kJobHeader, h.bytes));
-    job.remove_prefix(kJobHeader + h.bytes);
+    if (h.bytes > job.size() - kJobHeader || h.stats_bytes > job.size() - kJobHeader - h.bytes)
+      throw std::runtime_error(fmt::format("{}: a part of {} + {} bytes in {}", what, h.bytes, h.stats_bytes, job.size()));
+    f(h, job.substr(kJobHeader, h.bytes), job.substr(kJobHeader + h.bytes, h.stats_bytes));
+    job.remove_prefix(kJobHeader + h.bytes + h.stats_bytes);
   }
 }
 
+// The answer to a statistics request (JobHeader) for the chunk `raw` (rows x width float64).
+void append_summaries(std::string_view raw, std::string_view request, std::string& out) {
+  std::uint32_t rw[2] = {0, 0};
+  if (request.size() < sizeof rw) throw std::runtime_error("a statistics request cut short");
+  std::memcpy(rw, request.data(), sizeof rw);
+  const std::size_t rows = rw[0], width = rw[1];
+  request.remove_prefix(sizeof rw);
+  if (width == 0 || request.size() < rows || raw.size() < 8 * rows * width)
+    throw std::runtime_error(fmt::format("a statistics request for {} x {} values of a {}-byte chunk", rows, width, raw.size()));
+  const auto* use = reinterpret_cast<const std::uint8_t*>(request.data());
+  request.remove_prefix(rows);
+  for (std::size_t b = 0; b < width; ++b) append_summary(out, calc_chunk_summary(raw.data() + 8 * b, rows, width, use, read_windows(request)));
+}
+
 }  // namespace
+
+// Streaming statistics of the output columns (float64 per run, per bay): tracker k of dataset j
+// is first[j] + column; first[j] < 0 for the datasets without statistics.
+struct ResultStore::Tracking {
+  std::vector<ColumnStats> col;
+  std::vector<std::int64_t> first;
+};
 
 struct ResultStore::Chunk {
   std::int64_t first = 0, rows = 0, filled = 0;
@@ -174,6 +201,12 @@ ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, const StoreOpti
   std::size_t chunk_bytes = 0;
   for (const auto& x : d.direct) chunk_bytes += static_cast<std::size_t>(std::min(chunk_, n_)) * x.width * x.elem;
   max_jobs_bytes_ = opts.offload_encoding ? 2 * chunk_bytes : 0;
+  track_ = std::make_unique<Tracking>();
+  track_->first.assign(d.direct.size(), -1);
+  std::int64_t k = 0;
+  for (std::size_t j = d.f64_0; j < d.i64_0; ++j) track_->first[j] = k++;
+  for (std::size_t j = d.bays_0; j < d.inputs_0; ++j, k += nb) track_->first[j] = k;
+  track_->col.assign(static_cast<std::size_t>(k), ColumnStats((n_ + chunk_ - 1) / chunk_));
 }
 
 // Dimension scales, so that netCDF-4 readers (xarray) see named dimensions: /runs/run_index
@@ -221,7 +254,16 @@ ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
   c->buf.resize(d.direct.size());
   for (std::size_t j = 0; j < d.direct.size(); ++j) {
     const std::size_t bytes = kJobHeader + full * d.direct[j].width * d.direct[j].elem;
-    if (c->buf[j].size() != bytes || c->rows < chunk_) c->buf[j].assign(bytes, '\0');  // an edge chunk: zeros past n
+    std::string& b = c->buf[j];
+    if (b.size() >= bytes && c->rows == chunk_) {  // every row of a full chunk is overwritten
+      b.resize(bytes);
+      continue;
+    }
+    // Room for the statistics request (append_request) first, so that neither the zeros nor the
+    // request copy the chunk again; an edge chunk: zeros past n.
+    b.clear();
+    b.reserve(bytes + 8 + full + d.direct[j].width * sizeof(Windows));
+    b.assign(bytes, '\0');
   }
   c->message.assign(static_cast<std::size_t>(c->rows), {});
   Chunk& ref = *c;
@@ -304,6 +346,8 @@ void ResultStore::add_bytes(std::string_view rec, int session) {
 void ResultStore::complete_chunk(Chunk& c) {
   Datasets& d = *ds_;
   const auto r = static_cast<std::size_t>(c.rows);
+  std::vector<std::uint8_t> use(r);  // ok runs (status 0) feed the statistics
+  for (std::size_t i = 0; i < r; ++i) use[i] = c.buf[1][kJobHeader + i] == 0;
   std::vector<const char*> msg(r);
   for (std::size_t i = 0; i < r; ++i) msg[i] = c.message[i].c_str();
   write_rows(d.message->get(), d.str_type.get(), msg.data(), c.first, c.rows, 0,
@@ -311,11 +355,20 @@ void ResultStore::complete_chunk(Chunk& c) {
   std::string small;  // small chunks grouped into one job
   for (std::size_t j = 0; j < d.direct.size(); ++j) {
     std::string& b = c.buf[j];
-    const JobHeader h{static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(d.direct[j].elem), c.first / chunk_, deflate_, 0,
-                      b.size() - kJobHeader};
+    JobHeader h{static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(d.direct[j].elem), c.first / chunk_, deflate_, 0,
+                b.size() - kJobHeader, 0};
+    if (track_->first[j] >= 0) h.stats_bytes = append_request(b, j, use);
     std::memcpy(b.data(), &h, kJobHeader);
-    if (deflate_ == 0) {
-      write_encoded(b);  // the stored bytes are the raw bytes
+    if (deflate_ == 0) {  // the stored bytes are the raw bytes; the summaries are made here
+      std::string out(b, 0, kJobHeader + h.bytes);
+      JobHeader o = h;
+      o.stats_bytes = 0;
+      if (h.stats_bytes > 0) {
+        append_summaries(std::string_view(b).substr(kJobHeader, h.bytes), std::string_view(b).substr(kJobHeader + h.bytes), out);
+        o.stats_bytes = out.size() - kJobHeader - h.bytes;
+      }
+      std::memcpy(out.data(), &o, kJobHeader);
+      write_encoded(out);
       continue;
     }
     if (b.size() < kJobBytes / 4) {
@@ -372,25 +425,68 @@ bool ResultStore::drain_one() {
   return true;
 }
 
+// Appends the statistics request of dataset j's chunk to its job part: the rows, the ok runs and
+// each column's windows (first seeded from this chunk if it is the first to complete). Returns its size.
+std::uint64_t ResultStore::append_request(std::string& part, std::size_t j, const std::vector<std::uint8_t>& use) {
+  const std::size_t width = ds_->direct[j].width, rows = use.size(), before = part.size();
+  auto* first = &track_->col[static_cast<std::size_t>(track_->first[j])];
+  if (!first->seeded())
+    for (std::size_t b = 0; b < width; ++b) first[b].seed(part.data() + kJobHeader + 8 * b, rows, width, use.data());
+  const std::uint32_t rw[2] = {static_cast<std::uint32_t>(rows), static_cast<std::uint32_t>(width)};
+  part.append(reinterpret_cast<const char*>(rw), sizeof rw);
+  part.append(reinterpret_cast<const char*>(use.data()), rows);
+  for (std::size_t b = 0; b < width; ++b) append_windows(part, first[b].windows());
+  return part.size() - before;
+}
+
 void ResultStore::write_encoded(std::string_view output) {
   const Datasets& d = *ds_;
-  for_each_part(output, "an encoded chunk", [&](const JobHeader& h, std::string_view bytes) {
+  for_each_part(output, "an encoded chunk", [&](const JobHeader& h, std::string_view bytes, std::string_view stats) {
     if (h.dataset >= d.direct.size() || h.chunk < 0 || h.chunk * chunk_ >= n_)
       throw std::runtime_error(fmt::format("an encoded chunk for dataset {} chunk {}: no such chunk", h.dataset, h.chunk));
     const hsize_t offset[2] = {static_cast<hsize_t>(h.chunk * chunk_), 0};
     check(H5Dwrite_chunk(d.direct[h.dataset].ds.get(), H5P_DEFAULT, h.mask, offset, bytes.size(), bytes.data()),
           fmt::format("write chunk {} of dataset {}", h.chunk, h.dataset));
+    const std::int64_t first = track_->first[h.dataset];
+    if (first < 0) return;
+    for (std::size_t b = 0; b < d.direct[h.dataset].width; ++b)
+      track_->col[static_cast<std::size_t>(first) + b].add(h.chunk, read_summary(stats));
+    if (!stats.empty()) throw std::runtime_error(fmt::format("{} bytes past the summaries of dataset {}", stats.size(), h.dataset));
   });
+}
+
+StreamedStats ResultStore::calc_stats() const {
+  const Datasets& d = *ds_;
+  StreamedStats s;
+  auto one = [&](std::size_t k, std::vector<std::uint8_t>& resolved) {
+    bool ok = true;
+    const Stats st = track_->col[k].calc_stats(ok);
+    resolved.push_back(ok);
+    return st;
+  };
+  for (std::size_t j = d.f64_0; j < d.i64_0; ++j) s.f64.push_back(one(static_cast<std::size_t>(track_->first[j]), s.f64_resolved));
+  for (std::size_t j = d.bays_0; j < d.inputs_0; ++j) {
+    auto& st = s.bays.emplace_back();
+    auto& ok = s.bays_resolved.emplace_back();
+    for (std::size_t b = 0; b < d.direct[j].width; ++b) st.push_back(one(static_cast<std::size_t>(track_->first[j]) + b, ok));
+  }
+  for (const auto& c : track_->col) s.kept_values += c.kept_values();
+  return s;
 }
 
 void encode_job_output(std::string_view job, std::string& out) {
   out.clear();
   std::string enc;
-  for_each_part(job, "an encoding job", [&](JobHeader h, std::string_view raw) {
+  for_each_part(job, "an encoding job", [&](JobHeader h, std::string_view raw, std::string_view request) {
     h.mask = encode_chunk(raw, h.elem_size, h.level, enc);
     h.bytes = enc.size();
+    const std::size_t at = out.size();
     out.append(reinterpret_cast<const char*>(&h), kJobHeader);
     out += enc;
+    if (h.stats_bytes == 0) return;
+    append_summaries(raw, request, out);
+    h.stats_bytes = out.size() - at - kJobHeader - h.bytes;
+    std::memcpy(out.data() + at, &h, kJobHeader);
   });
 }
 
@@ -398,43 +494,6 @@ void ResultStore::check_complete() const {
   if (n_done_ != n_ || !open_.empty() || !jobs_.empty() || jobs_out_ != 0)
     throw std::runtime_error(fmt::format("internal: {} of {} runs stored, {} chunks unwritten, {} encoding jobs waiting, {} out",
                                          n_done_, n_, open_.size(), jobs_.size(), jobs_out_));
-}
-
-std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n) {
-  std::vector<double> v(static_cast<std::size_t>(n));
-  if (n == 0) return v;
-  Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
-  check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "read " + path);
-  return v;
-}
-
-std::vector<std::vector<double>> read_f64_columns(hid_t file, const std::string& path, std::int64_t n, std::int64_t width,
-                                                  std::int64_t col0, std::int64_t cols, std::int64_t block_rows) {
-  std::vector<std::vector<double>> out(static_cast<std::size_t>(cols), std::vector<double>(static_cast<std::size_t>(n)));
-  if (n == 0) return out;
-  Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
-  Handle fspace(H5Dget_space(ds.get()), H5Sclose, "space of " + path);
-  std::vector<double> buf(static_cast<std::size_t>(block_rows * width));
-  for (std::int64_t first = 0; first < n; first += block_rows) {
-    const std::int64_t rows = std::min(block_rows, n - first);
-    const hsize_t start[2] = {static_cast<hsize_t>(first), 0}, count[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(width)};
-    check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select " + path);
-    Handle mspace(H5Screate_simple(2, count, nullptr), H5Sclose, "memory space of " + path);
-    check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, buf.data()), "read " + path);
-    for (std::int64_t i = 0; i < rows; ++i)
-      for (std::int64_t j = 0; j < cols; ++j)
-        out[static_cast<std::size_t>(j)][static_cast<std::size_t>(first + i)] = buf[static_cast<std::size_t>(i * width + col0 + j)];
-  }
-  return out;
-}
-
-std::vector<std::int8_t> read_status(hid_t file, std::int64_t n) {
-  std::vector<std::int8_t> v(static_cast<std::size_t>(n), 0);
-  if (n == 0) return v;
-  Handle ds(H5Dopen2(file, "runs/status", H5P_DEFAULT), H5Dclose, "open /runs/status");
-  Handle type = status_enum_type();  // enum to enum: HDF5 does not convert an enum to an integer
-  check(H5Dread(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "read /runs/status");
-  return v;
 }
 
 }  // namespace truss::campaign

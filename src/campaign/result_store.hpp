@@ -17,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "campaign/results.hpp"
 #include "campaign/run_record.hpp"
 #include "io/h5_util.hpp"
 
@@ -28,6 +29,17 @@ struct StoreOptions {
   int deflate_level = 1;           // zlib level (0: no compression); 1: the fastest, most of level 9's ratio
   bool offload_encoding = false;   // jobs wait for take_job (other ranks encode them), up to two chunks' bytes
   std::string validate() const;
+};
+
+// The statistics of the output columns from the chunks' summaries (column_stats.hpp): per float64
+// column and per bay of each per-bay field. `resolved` 0: a percentile's order statistics were not
+// kept (its percentiles are NaN), compute them from the stored column.
+struct StreamedStats {
+  std::vector<Stats> f64;
+  std::vector<std::uint8_t> f64_resolved;
+  std::vector<std::vector<Stats>> bays;  // [field][bay - 1]
+  std::vector<std::vector<std::uint8_t>> bays_resolved;
+  std::size_t kept_values = 0;  // values held for the percentiles, all columns
 };
 
 // Encoding a completed chunk (shuffle + deflate, about 60 us of zlib per 4.4 kB record at level
@@ -70,10 +82,14 @@ class ResultStore {
   std::int64_t jobs_local() const { return jobs_local_; }
   // Throws std::runtime_error unless every run has arrived and every chunk is written.
   void check_complete() const;
+  // The output columns' statistics over the ok runs of the chunks written so far.
+  StreamedStats calc_stats() const;
 
  private:
   struct Chunk;
   struct Datasets;
+  struct Tracking;
+  std::uint64_t append_request(std::string& part, std::size_t j, const std::vector<std::uint8_t>& use);
   Chunk& chunk_for(std::int64_t run);
   void complete_chunk(Chunk& c);
   void write_encoded(std::string_view output);
@@ -89,6 +105,7 @@ class ResultStore {
   std::vector<std::unique_ptr<Chunk>> spare_;              // written chunks, memory kept for reuse
   std::size_t peak_chunks_ = 0;
   std::unique_ptr<Datasets> ds_;
+  std::unique_ptr<Tracking> track_;
   std::deque<std::string> jobs_;  // waiting encoding jobs
   std::size_t jobs_bytes_ = 0, max_jobs_bytes_ = 0;
   std::int64_t jobs_out_ = 0, jobs_returned_ = 0, jobs_local_ = 0;

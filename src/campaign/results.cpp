@@ -50,18 +50,6 @@ void ResultTable::add(const RunRecord& r, int sess) {
 
 namespace {
 
-// numpy 1.22+ "linear": virtual index h = q/100 (n - 1) between order statistics lo and hi,
-// lerp(a, b, t) = a + t (b - a) for t < 0.5 and b - (1 - t) (b - a) otherwise (exact at both ends).
-struct PercentileIndex {
-  std::size_t lo, hi;
-  double t;
-};
-PercentileIndex percentile_index(std::size_t n, double q) {
-  const double h = (q / 100.0) * static_cast<double>(n - 1);
-  const double fl = std::floor(h);
-  const auto lo = static_cast<std::size_t>(fl);
-  return {lo, std::min(lo + 1, n - 1), h - fl};
-}
 // Puts the order statistics ks[k] (sorted, all in [lo, hi)) of x[lo, hi) in place.
 void multi_select(std::vector<double>& x, std::size_t lo, std::size_t hi, const std::size_t* k0, const std::size_t* k1) {
   if (k0 == k1 || hi - lo < 2) return;
@@ -124,16 +112,23 @@ std::vector<double> select_order_stats(std::vector<double>& x, const std::vector
   return out;
 }
 
+}  // namespace
+
+PercentileIndex find_percentile_index(std::size_t n, double q) {
+  const double h = (q / 100.0) * static_cast<double>(n - 1);
+  const double fl = std::floor(h);
+  const auto lo = static_cast<std::size_t>(fl);
+  return {lo, std::min(lo + 1, n - 1), h - fl};
+}
+
 double lerp_numpy(double a, double b, double t) {
   const double d = b - a;
   return t >= 0.5 ? b - d * (1.0 - t) : a + d * t;
 }
 
-}  // namespace
-
 double calc_percentile_sorted(const std::vector<double>& x, double q) {
   if (x.empty()) return kNaN;
-  const PercentileIndex p = percentile_index(x.size(), q);
+  const PercentileIndex p = find_percentile_index(x.size(), q);
   return lerp_numpy(x[p.lo], x[p.hi], p.t);
 }
 
@@ -165,7 +160,7 @@ Stats calc_stats(const std::vector<double>& values, const std::vector<std::uint8
   std::array<PercentileIndex, kStatPercentiles.size()> idx{};
   std::vector<std::size_t> ks = {0, n - 1};
   for (std::size_t k = 0; k < kStatPercentiles.size(); ++k) {
-    idx[k] = percentile_index(n, kStatPercentiles[k]);
+    idx[k] = find_percentile_index(n, kStatPercentiles[k]);
     ks.push_back(idx[k].lo);
     ks.push_back(idx[k].hi);
   }

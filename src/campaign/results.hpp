@@ -57,6 +57,15 @@ struct Stats {
 Stats calc_stats(const std::vector<double>& values, const std::vector<std::uint8_t>& use);
 // The q-th percentile (0..100) of sorted values, as above.
 double calc_percentile_sorted(const std::vector<double>& sorted, double q);
+// numpy 1.22+ "linear": virtual index h = q/100 (n - 1) between order statistics lo and hi (0-based,
+// n > 0); lerp_numpy(a, b, t) = a + t (b - a) for t < 0.5 and b - (1 - t) (b - a) otherwise (exact at
+// both ends). The one definition of the interpolation, used by every percentile the tool writes.
+struct PercentileIndex {
+  std::size_t lo, hi;
+  double t;
+};
+PercentileIndex find_percentile_index(std::size_t n, double q);
+double lerp_numpy(double a, double b, double t);
 
 // Sensitivity of one output: Sobol' indices per dispersion from a Saltelli campaign.
 struct OutputSensitivity {

@@ -1,0 +1,174 @@
+// Streamed column statistics (campaign/column_stats) against calc_stats on the whole column:
+// chunks completing in any order, summaries made against windows that have narrowed since, ties,
+// unusable rows; a drifting column must come back unresolved, never wrong.
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "campaign/column_stats.hpp"
+#include "campaign/results.hpp"
+
+using namespace truss::campaign;
+
+namespace {
+
+struct Streamed {
+  Stats stats;
+  bool resolved = false;
+  std::size_t peak_kept = 0;
+};
+
+// Feeds `v` (use: ok rows) in chunks of `rows`, completing in a shuffled order; each summary is
+// made when its chunk completes but merged up to `lag` completions later (a worker's job in flight),
+// against the windows of the moment it was made.
+Streamed stream(const std::vector<double>& v, const std::vector<std::uint8_t>& use, std::size_t rows, std::size_t lag,
+                std::mt19937_64& rng) {
+  const std::size_t n_chunks = (v.size() + rows - 1) / rows;
+  std::vector<std::size_t> order(n_chunks);
+  for (std::size_t i = 0; i < n_chunks; ++i) order[i] = i;
+  std::shuffle(order.begin(), order.end(), rng);
+  ColumnStats cs(static_cast<std::int64_t>(n_chunks));
+  std::deque<std::pair<std::size_t, ChunkSummary>> in_flight;
+  Streamed out;
+  auto merge_one = [&] {
+    const std::size_t k = rng() % in_flight.size();
+    cs.add(static_cast<std::int64_t>(in_flight[k].first), std::move(in_flight[k].second));
+    in_flight.erase(in_flight.begin() + static_cast<std::ptrdiff_t>(k));
+    out.peak_kept = std::max(out.peak_kept, cs.kept_values());
+  };
+  for (std::size_t c : order) {
+    const std::size_t first = c * rows, r = std::min(rows, v.size() - first);
+    const char* bytes = reinterpret_cast<const char*>(v.data() + first);
+    if (!cs.seeded()) cs.seed(bytes, r, 1, use.data() + first);
+    in_flight.emplace_back(c, calc_chunk_summary(bytes, r, 1, use.data() + first, cs.windows()));
+    while (in_flight.size() > lag) merge_one();
+  }
+  while (!in_flight.empty()) merge_one();
+  out.stats = cs.calc_stats(out.resolved);
+  return out;
+}
+
+void check_equal(const Stats& s, const Stats& ref, bool percentiles) {
+  CHECK(s.count == ref.count);
+  CHECK(s.min == ref.min);
+  CHECK(s.max == ref.max);
+  // Moments: the same sums in another grouping (per chunk, combined by Chan's update). Both
+  // round by about sqrt(n) eps max|v| (at most n eps max|v|): 1e-12 max|v| is a hundred times
+  // that for n = 2e5 and also covers a mean that cancels between signs.
+  const double scale = std::max(std::abs(ref.min), std::abs(ref.max));
+  CHECK(s.mean == Approx(ref.mean).epsilon(1e-13).margin(1e-12 * scale));
+  if (ref.count > 1) CHECK(s.std == Approx(ref.std).epsilon(1e-10).margin(1e-12 * scale));
+  if (percentiles)
+    for (std::size_t k = 0; k < kStatTargets; ++k) {
+      INFO("percentile " << kStatPercentiles[k]);
+      CHECK(s.percentiles[k] == ref.percentiles[k]);  // the same order statistics, the same lerp
+    }
+}
+
+}  // namespace
+
+TEST_CASE("streamed statistics: exact percentiles of the whole column, any order of completion", "[campaign][stats]") {
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> g(1.25, 0.01);
+  const std::size_t n = 200000;
+  std::vector<std::vector<double>> columns(5, std::vector<double>(n));
+  std::vector<std::uint8_t> use(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    use[i] = rng() % 10 != 0;                                              // 10 % failed runs
+    columns[0][i] = g(rng);                                                // a load: narrow spread
+    columns[1][i] = static_cast<double>(rng() % 3) - 1.0;                  // heavy ties: -1, 0, 1
+    columns[2][i] = 4.5;                                                   // constant
+    columns[3][i] = (rng() % 2 ? 1.0 : -1.0) * std::exp(10 * g(rng));      // both signs, wide range
+    columns[4][i] = i % 997 == 5 ? std::numeric_limits<double>::quiet_NaN() : std::round(g(rng) * 1e4);  // NaN, discrete
+  }
+  for (std::size_t c = 0; c < columns.size(); ++c)
+    for (std::size_t lag : {std::size_t{0}, std::size_t{7}}) {
+      INFO("column " << c << ", lag " << lag);
+      const Streamed s = stream(columns[c], use, 4096, lag, rng);
+      CHECK(s.resolved);
+      check_equal(s.stats, calc_stats(columns[c], use), true);
+      // Kept values grow as sqrt(N): at 180,000 usable values, at most about 3 w + 1024 a target
+      // (w = 6 sqrt(N p (1 - p)) + 64): well under a tenth of the column.
+      CHECK(s.peak_kept < n / 10);
+    }
+}
+
+TEST_CASE("streamed statistics: small and empty columns", "[campaign][stats]") {
+  std::mt19937_64 rng(3);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double> v = {4.0, 100.0, 1.0, nan, 10.0, 2.0};
+  const std::vector<std::uint8_t> use = {1, 0, 1, 1, 1, 1};
+  for (std::size_t rows : {std::size_t{1}, std::size_t{2}, std::size_t{6}}) {
+    const Streamed s = stream(v, use, rows, 2, rng);
+    CHECK(s.resolved);
+    check_equal(s.stats, calc_stats(v, use), true);
+  }
+  const Streamed none = stream({nan, 3.0}, {1, 0}, 1, 0, rng);
+  CHECK(none.stats.count == 0);
+  CHECK(std::isnan(none.stats.mean));
+  CHECK(std::isnan(none.stats.percentiles[2]));
+  const Streamed one = stream({3.0}, {1}, 1, 0, rng);
+  CHECK(one.stats.percentiles[0] == 3.0);
+  CHECK(std::isnan(one.stats.std));
+}
+
+TEST_CASE("streamed statistics: a column that drifts with the run index comes back unresolved, not wrong", "[campaign][stats]") {
+  // Sorted values completing in index order: the first chunk's windows hold the lowest values only.
+  std::mt19937_64 rng(5);
+  const std::size_t n = 100000;
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<double>(i) * 0.5;
+  const std::vector<std::uint8_t> use(n, 1);
+  ColumnStats cs(static_cast<std::int64_t>(n / 1000));
+  const char* bytes = reinterpret_cast<const char*>(v.data());
+  cs.seed(bytes, 1000, 1, use.data());
+  std::size_t peak = 0;
+  for (std::size_t c = 0; c < n / 1000; ++c) {
+    cs.add(static_cast<std::int64_t>(c), calc_chunk_summary(bytes + 8000 * c, 1000, 1, use.data(), cs.windows()));
+    peak = std::max(peak, cs.kept_values());
+  }
+  bool resolved = true;
+  const Stats s = cs.calc_stats(resolved);
+  const Stats ref = calc_stats(v, use);
+  CHECK_FALSE(resolved);
+  CHECK(peak < n / 4);  // given-up targets keep nothing
+  check_equal(s, ref, false);
+  int unresolved = 0;
+  for (std::size_t k = 0; k < kStatTargets; ++k) {
+    if (std::isnan(s.percentiles[k])) ++unresolved;
+    else CHECK(s.percentiles[k] == ref.percentiles[k]);
+  }
+  CHECK(unresolved > 0);
+  (void)rng;
+}
+
+TEST_CASE("streamed statistics: the wire format round-trips and rejects a cut summary", "[campaign][stats]") {
+  std::vector<double> v = {1.0, 2.0, 2.0, 3.5, 7.0};
+  const std::vector<std::uint8_t> use(v.size(), 1);
+  Windows w;
+  w[2] = {2.0, 3.5};
+  const ChunkSummary s = calc_chunk_summary(reinterpret_cast<const char*>(v.data()), v.size(), 1, use.data(), w);
+  CHECK(s.below[2] == 1);
+  CHECK(s.at_lo[2] == 2);
+  CHECK(s.at_hi[2] == 1);
+  CHECK(s.kept[2].empty());
+  CHECK(s.kept[0].size() == 5);
+  std::string bytes;
+  append_summary(bytes, s);
+  std::string_view in = bytes;
+  const ChunkSummary r = read_summary(in);
+  CHECK(in.empty());
+  CHECK(r.moments.count == 5);
+  CHECK(r.moments.mean == s.moments.mean);
+  CHECK(r.window[2].lo == 2.0);
+  CHECK(r.kept[0] == s.kept[0]);
+  CHECK(r.at_lo[2] == 2);
+  std::string_view cut = std::string_view(bytes).substr(0, bytes.size() - 4);
+  CHECK_THROWS_AS(read_summary(cut), std::runtime_error);
+}
