@@ -1,5 +1,6 @@
 #include "campaign/campaign_h5.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
 
@@ -279,6 +280,13 @@ CampaignFile::CampaignFile(const std::string& path, const CampaignContext& ctx, 
 }
 
 CampaignFile::~CampaignFile() { discard(); }
+
+void CampaignFile::start_writeback() const {
+  void* handle = nullptr;
+  if (file_ < 0 || H5Fget_vfd_handle(file_, H5P_DEFAULT, &handle) < 0 || handle == nullptr) return;
+  // Advisory: a file system without it (or an error) only leaves more for the final sync.
+  (void)::sync_file_range(*static_cast<int*>(handle), 0, 0, SYNC_FILE_RANGE_WRITE);
+}
 
 void CampaignFile::discard() noexcept {
   store_.reset();

@@ -10,10 +10,10 @@
 //   percentiles: exact order statistics with numpy's linear interpolation (calc_stats). For each
 //     percentile p a window [lo, hi] of values is kept with the count of values below it. The
 //     windows start from the first chunk that completes and only ever narrow: once a window holds
-//     more than 3 w + 1024 values it is cut to w = 6 sqrt(N p (1 - p)) + 64 ranks on each side of the
+//     more than 3 w + 256 values it is cut to w = 6 sqrt(N p (1 - p)) + 16 ranks on each side of the
 //     running estimate p (N - 1) (N: values so far), six binomial standard deviations of where the
 //     final order statistic can still move for exchangeable runs. Kept values grow as sqrt(N): at
-//     most about 28,000 per column at 10^6 runs (0.23 MB).
+//     most about 25,000 per column at 10^6 runs (0.2 MB).
 //     Values equal to a window's ends are counted, not kept (a constant or discrete column then
 //     costs nothing), and a window whose cut does not shrink it is tried again only at twice its size.
 //     At the end the order statistics are selected among the kept values; if one lies outside its

@@ -256,27 +256,32 @@ campaign::StatusCounts status_counts(const campaign::ResultStore& store) {
   return n;
 }
 
-// The end summary's main design values: nominal, P99.865 and maximum over the ok runs, read back
-// from the finished file (rank 0 holds no result table: results stream to the file).
+// The end summary's main design values: nominal, P99.865 and maximum over the ok runs, as the
+// finished file's /stats holds them (rank 0 holds no result table, and the statistics were
+// streamed while the runs arrived: nothing is recomputed here).
 std::vector<campaign::DesignValue> design_values(const std::string& path, const campaign::OutputColumns& cols,
-                                                 std::int64_t n, const sim::RunResult& nominal) {
+                                                 const sim::RunResult& nominal) {
   static const std::pair<const char*, const char*> shown[] = {
       {"peak_drive_force_N", "peak drive force"}, {"peak_drive_torque_Nm", "peak drive torque"},
       {"peak_pin_force_N", "peak rail pin force"}, {"peak_diagonal_tension_N", "peak diagonal tension"},
       {"peak_latch_energy_J", "peak latch energy"}, {"deploy_time_s", "deployment time"}};
   const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   if (file < 0) return {};
+  auto read = [&](const std::string& ds_path) {
+    double v = 0.0;
+    const hid_t ds = H5Dopen2(file, ds_path.c_str(), H5P_DEFAULT);
+    const herr_t e = ds < 0 ? -1 : H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v);
+    if (ds >= 0) H5Dclose(ds);
+    if (e < 0) throw std::runtime_error("read " + ds_path);
+    return v;
+  };
   std::vector<campaign::DesignValue> res;
   try {
-    const std::vector<std::int8_t> status = campaign::read_status(file, n);
-    std::vector<std::uint8_t> ok(status.size());
-    for (std::size_t i = 0; i < ok.size(); ++i) ok[i] = status[i] == static_cast<std::int8_t>(sim::RunStatus::ok);
     for (const auto& [name, label] : shown)
       for (const auto* f : cols.f64)
-        if (std::string(f->name) == name) {
-          const campaign::Stats st = campaign::calc_stats(campaign::read_f64_column(file, std::string("runs/") + name, n), ok);
-          res.push_back({label, f->units, std::get<double>(f->get(nominal)), st.percentiles[5], st.max});
-        }
+        if (std::string(f->name) == name)
+          res.push_back({label, f->units, std::get<double>(f->get(nominal)), read(fmt::format("stats/{}/p99_865", name)),
+                         read(fmt::format("stats/{}/max", name))});
   } catch (const std::exception&) {
     res.clear();  // the summary is a convenience: the file itself is complete
   }
@@ -319,7 +324,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     r0.journal->close_and_remove();
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n", sim::to_string(nominal.status),
                              nominal.message.empty() ? "" : ": " + nominal.message);
-    campaign::print_design_summary(stderr, design_values(o.output_path, ctx.columns, n_runs, nominal));
+    campaign::print_design_summary(stderr, design_values(o.output_path, ctx.columns, nominal));
     const std::int64_t results = sched.runs_by_rank0 + sched.runs_by_workers;
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs ({}), {:.3g} s on {} rank{} "
                              "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per result handled "
@@ -442,6 +447,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
     put(s, std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count());
     r0.journal->append(FrameKind::heartbeat, s);
     r0.journal->flush();
+    r0.file->start_writeback();  // the results file's pages go to disk during the run, not in the tail
     last_flush = std::chrono::steady_clock::now();
   };
   // A result is the record's bytes and their journal CRC, computed where the run ran.
