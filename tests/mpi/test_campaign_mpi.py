@@ -200,6 +200,10 @@ def check_stats(f):
                     return f["stats/bays"][k][key][j:j + 1].reshape(())
             compare(Row(), allv[:, j])
     check(n_checked > 50, f"{n_checked} statistics equal numpy's on the ok runs (percentiles exactly)")
+    # The statistics were streamed while the runs arrived: no column had to be read back at the
+    # end (the read-back is the exact fallback for a column that drifts with the run index).
+    rb = int(f["timing"].attrs["stats_columns_read_back"])
+    check(rb == 0, f"/stats streamed: {rb} columns read back at the end")
 
 
 # ----------------------------------------------------------------------------------------------
