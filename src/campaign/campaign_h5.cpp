@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "campaign/progress.hpp"
 #include "campaign/result_store.hpp"
 
 #include "io/h5_util.hpp"
@@ -320,6 +321,39 @@ void CampaignFile::finish(const std::vector<std::pair<std::int64_t, sim::RunResu
   sync_file(tmp_);
   commit(tmp_, path_, force);
   tmp_.clear();
+}
+
+// The end summary's main design values: nominal, P99.865 and maximum over the ok runs, as the
+// finished file's /stats holds them (rank 0 holds no result table, and the statistics were
+// streamed while the runs arrived: nothing is recomputed here).
+std::vector<DesignValue> read_design_values(const std::string& path, const OutputColumns& cols,
+                                                 const sim::RunResult& nominal) {
+  static const std::pair<const char*, const char*> shown[] = {
+      {"peak_drive_force_N", "peak drive force"}, {"peak_drive_torque_Nm", "peak drive torque"},
+      {"peak_pin_force_N", "peak rail pin force"}, {"peak_diagonal_tension_N", "peak diagonal tension"},
+      {"peak_latch_energy_J", "peak latch energy"}, {"deploy_time_s", "deployment time"}};
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return {};
+  auto read = [&](const std::string& ds_path) {
+    double v = 0.0;
+    const hid_t ds = H5Dopen2(file, ds_path.c_str(), H5P_DEFAULT);
+    const herr_t e = ds < 0 ? -1 : H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v);
+    if (ds >= 0) H5Dclose(ds);
+    if (e < 0) throw std::runtime_error("read " + ds_path);
+    return v;
+  };
+  std::vector<DesignValue> res;
+  try {
+    for (const auto& [name, label] : shown)
+      for (const auto* f : cols.f64)
+        if (std::string(f->name) == name)
+          res.push_back({label, f->units, std::get<double>(f->get(nominal)), read(fmt::format("stats/{}/p99_865", name)),
+                         read(fmt::format("stats/{}/max", name))});
+  } catch (const std::exception&) {
+    res.clear();  // the summary is a convenience: the file itself is complete
+  }
+  H5Fclose(file);
+  return res;
 }
 
 std::vector<std::string> CampaignFile::remove_stale(const std::string& path) {

@@ -74,4 +74,10 @@ class CampaignFile {
   std::unique_ptr<ResultStore> store_;
 };
 
+// The end summary's main design values (campaign/progress.hpp) of a finished results file: the
+// nominal value, P99.865 and maximum over the ok runs as /stats holds them. Empty if the file
+// cannot be read (the summary is a convenience; the file is what counts).
+struct DesignValue;
+std::vector<DesignValue> read_design_values(const std::string& path, const OutputColumns& cols, const sim::RunResult& nominal);
+
 }  // namespace truss::campaign

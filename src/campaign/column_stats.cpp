@@ -312,6 +312,8 @@ Stats ColumnStats::calc_stats(bool& resolved) const {
   return s;
 }
 
+bool ColumnStats::complete() const { return std::all_of(have_.begin(), have_.end(), [](std::uint8_t h) { return h != 0; }); }
+
 std::size_t ColumnStats::kept_values() const {
   std::size_t k = 0;
   for (const auto& x : kept_) k += x.size();

@@ -86,6 +86,7 @@ class ColumnStats {
   // among the kept values (that percentile is then NaN).
   Stats calc_stats(bool& resolved) const;
   std::size_t kept_values() const;  // memory held, for benchmarks and tests
+  bool complete() const;            // every chunk merged
 
  private:
   void narrow(std::size_t t);

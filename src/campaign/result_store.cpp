@@ -89,6 +89,9 @@ struct JobHeader {
   std::uint64_t stats_bytes = 0;  // statistics request (job) or summaries (output) after them
 };
 constexpr std::size_t kJobHeader = sizeof(JobHeader);
+// JobHeader::level of a part that asks for the statistics only (--compression 0: the raw chunk is
+// already written; its output part has no bytes, only the summaries).
+constexpr std::int32_t kStatsOnly = -1;
 // Small dataset chunks (the scalar columns, 32 kB each) are grouped into jobs of about this size,
 // so that a chunk of runs makes some twenty jobs: fewer than the batches that carry them.
 constexpr std::size_t kJobBytes = std::size_t{1} << 20;
@@ -357,20 +360,15 @@ void ResultStore::complete_chunk(Chunk& c) {
     std::string& b = c.buf[j];
     JobHeader h{static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(d.direct[j].elem), c.first / chunk_, deflate_, 0,
                 b.size() - kJobHeader, 0};
-    if (track_->first[j] >= 0) h.stats_bytes = append_request(b, j, use);
-    std::memcpy(b.data(), &h, kJobHeader);
-    if (deflate_ == 0) {  // the stored bytes are the raw bytes; the summaries are made here
-      std::string out(b, 0, kJobHeader + h.bytes);
-      JobHeader o = h;
-      o.stats_bytes = 0;
-      if (h.stats_bytes > 0) {
-        append_summaries(std::string_view(b).substr(kJobHeader, h.bytes), std::string_view(b).substr(kJobHeader + h.bytes), out);
-        o.stats_bytes = out.size() - kJobHeader - h.bytes;
-      }
-      std::memcpy(out.data(), &o, kJobHeader);
-      write_encoded(out);
-      continue;
+    const bool stats = track_->first[j] >= 0;
+    if (deflate_ == 0) {  // the stored bytes are the raw bytes: written now; a job only for the statistics
+      std::memcpy(b.data(), &h, kJobHeader);
+      write_encoded(b);
+      if (!stats) continue;
+      h.level = kStatsOnly;
     }
+    if (stats) h.stats_bytes = append_request(b, j, use);
+    std::memcpy(b.data(), &h, kJobHeader);
     if (b.size() < kJobBytes / 4) {
       small += b;
       if (small.size() < kJobBytes && j + 1 < d.direct.size()) continue;
@@ -445,10 +443,11 @@ void ResultStore::write_encoded(std::string_view output) {
     if (h.dataset >= d.direct.size() || h.chunk < 0 || h.chunk * chunk_ >= n_)
       throw std::runtime_error(fmt::format("an encoded chunk for dataset {} chunk {}: no such chunk", h.dataset, h.chunk));
     const hsize_t offset[2] = {static_cast<hsize_t>(h.chunk * chunk_), 0};
-    check(H5Dwrite_chunk(d.direct[h.dataset].ds.get(), H5P_DEFAULT, h.mask, offset, bytes.size(), bytes.data()),
-          fmt::format("write chunk {} of dataset {}", h.chunk, h.dataset));
+    if (h.level != kStatsOnly)
+      check(H5Dwrite_chunk(d.direct[h.dataset].ds.get(), H5P_DEFAULT, h.mask, offset, bytes.size(), bytes.data()),
+            fmt::format("write chunk {} of dataset {}", h.chunk, h.dataset));
     const std::int64_t first = track_->first[h.dataset];
-    if (first < 0) return;
+    if (first < 0 || h.stats_bytes == 0) return;  // no statistics, or a raw chunk whose summaries come with its statistics-only job
     for (std::size_t b = 0; b < d.direct[h.dataset].width; ++b)
       track_->col[static_cast<std::size_t>(first) + b].add(h.chunk, read_summary(stats));
     if (!stats.empty()) throw std::runtime_error(fmt::format("{} bytes past the summaries of dataset {}", stats.size(), h.dataset));
@@ -459,6 +458,7 @@ StreamedStats ResultStore::calc_stats() const {
   const Datasets& d = *ds_;
   StreamedStats s;
   auto one = [&](std::size_t k, std::vector<std::uint8_t>& resolved) {
+    if (!track_->col[k].complete()) throw std::runtime_error(fmt::format("internal: statistics of column {} miss a chunk", k));
     bool ok = true;
     const Stats st = track_->col[k].calc_stats(ok);
     resolved.push_back(ok);
@@ -478,7 +478,8 @@ void encode_job_output(std::string_view job, std::string& out) {
   out.clear();
   std::string enc;
   for_each_part(job, "an encoding job", [&](JobHeader h, std::string_view raw, std::string_view request) {
-    h.mask = encode_chunk(raw, h.elem_size, h.level, enc);
+    enc.clear();
+    if (h.level != kStatsOnly) h.mask = encode_chunk(raw, h.elem_size, h.level, enc);
     h.bytes = enc.size();
     const std::size_t at = out.size();
     out.append(reinterpret_cast<const char*>(&h), kJobHeader);

@@ -256,39 +256,6 @@ campaign::StatusCounts status_counts(const campaign::ResultStore& store) {
   return n;
 }
 
-// The end summary's main design values: nominal, P99.865 and maximum over the ok runs, as the
-// finished file's /stats holds them (rank 0 holds no result table, and the statistics were
-// streamed while the runs arrived: nothing is recomputed here).
-std::vector<campaign::DesignValue> design_values(const std::string& path, const campaign::OutputColumns& cols,
-                                                 const sim::RunResult& nominal) {
-  static const std::pair<const char*, const char*> shown[] = {
-      {"peak_drive_force_N", "peak drive force"}, {"peak_drive_torque_Nm", "peak drive torque"},
-      {"peak_pin_force_N", "peak rail pin force"}, {"peak_diagonal_tension_N", "peak diagonal tension"},
-      {"peak_latch_energy_J", "peak latch energy"}, {"deploy_time_s", "deployment time"}};
-  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
-  if (file < 0) return {};
-  auto read = [&](const std::string& ds_path) {
-    double v = 0.0;
-    const hid_t ds = H5Dopen2(file, ds_path.c_str(), H5P_DEFAULT);
-    const herr_t e = ds < 0 ? -1 : H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &v);
-    if (ds >= 0) H5Dclose(ds);
-    if (e < 0) throw std::runtime_error("read " + ds_path);
-    return v;
-  };
-  std::vector<campaign::DesignValue> res;
-  try {
-    for (const auto& [name, label] : shown)
-      for (const auto* f : cols.f64)
-        if (std::string(f->name) == name)
-          res.push_back({label, f->units, std::get<double>(f->get(nominal)), read(fmt::format("stats/{}/p99_865", name)),
-                         read(fmt::format("stats/{}/max", name))});
-  } catch (const std::exception&) {
-    res.clear();  // the summary is a convenience: the file itself is complete
-  }
-  H5Fclose(file);
-  return res;
-}
-
 // Rank 0: histories, statistics and the results file; removes the journal. Returns the exit status.
 int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx, const std::string& campaign_text,
                   Rank0& r0, int size, std::chrono::steady_clock::time_point wall0, const ScheduleSummary& sched) {
@@ -324,7 +291,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     r0.journal->close_and_remove();
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n", sim::to_string(nominal.status),
                              nominal.message.empty() ? "" : ": " + nominal.message);
-    campaign::print_design_summary(stderr, design_values(o.output_path, ctx.columns, nominal));
+    campaign::print_design_summary(stderr, campaign::read_design_values(o.output_path, ctx.columns, nominal));
     const std::int64_t results = sched.runs_by_rank0 + sched.runs_by_workers;
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs ({}), {:.3g} s on {} rank{} "
                              "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per result handled "
