@@ -17,6 +17,7 @@
 #include <cstring>
 #include <vector>
 
+#include "bench_timing.hpp"
 #include "sim/simulate.hpp"
 #include "stages/free_phase.hpp"
 #include "stages/free_phase_b.hpp"
@@ -25,12 +26,7 @@ using namespace truss;
 using namespace truss::sim;
 
 namespace {
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using bench::median;
 SceneOptions slack_scene(int n) {
   SceneOptions s;
   s.mast.n_bays = n;
@@ -39,18 +35,7 @@ SceneOptions slack_scene(int n) {
   s.run.max_wall_time_s = 3600.0;
   return s;
 }
-double time_runs(const SceneOptions& s, int repeats, RunResult* out) {
-  const auto mast = build_mast(s);
-  std::vector<double> w;
-  for (int i = 0; i <= repeats; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    RunResult r = simulate(s, mast);
-    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (i > 0) w.push_back(dt);
-    if (out) *out = std::move(r);
-  }
-  return median(w);
-}
+double time_runs(const SceneOptions& s, int repeats, RunResult* out) { return bench::time_runs(s, build_mast(s), repeats, out); }
 double max_event_error(const RunResult& a, const RunResult& ref) {
   double e = 0.0;
   for (std::size_t i = 0; i < a.bays.size(); ++i) {

@@ -5,34 +5,17 @@
 //     versus wall time, for the own DP5(4) pair and for CVODE, at several tolerances.
 // Usage: bench_single_run [--quick]
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <vector>
 
+#include "bench_timing.hpp"
 #include "sim/simulate.hpp"
 
 using namespace truss::sim;
 
 namespace {
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-// Median wall time of `repeats` runs (the first, warming the caches, is dropped).
-double time_runs(const SceneOptions& s, const truss::model::MastParams& mast, int repeats, RunResult* out = nullptr) {
-  std::vector<double> w;
-  for (int i = 0; i <= repeats; ++i) {
-    const auto t0 = std::chrono::steady_clock::now();
-    RunResult r = simulate(s, mast);
-    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (i > 0) w.push_back(dt);
-    if (out) *out = std::move(r);
-  }
-  return median(w);
-}
+using truss::bench::time_runs;
 double max_lock_error(const RunResult& a, const RunResult& ref) {
   double e = std::abs(a.deploy_time_s - ref.deploy_time_s);
   for (std::size_t i = 0; i < a.bays.size(); ++i) {

@@ -1,6 +1,8 @@
 #include "stages/free_contacts.hpp"
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <vector>
 
 #include "model/bay.hpp"
 #include "model/contacts.hpp"
@@ -56,6 +58,18 @@ ContactWatch calc_contact_watch(const MastParams& mast, const ContactLayout& lay
   }
   if (w.lift_off_bay > 0) w.lift_off_g = -lambda_min - ContactLayout::kForceTolerance_N;
   return w;
+}
+
+ContactWatch calc_contact_watch(const PhaseModel& phase, const ContactLayout& layout, int lo, const double* q,
+                                const double* qdot, const double* ys, const double* vs) {
+  thread_local PhaseScratch sys;
+  thread_local std::vector<double> acc, a;
+  acc.resize(static_cast<std::size_t>(phase.dof()));
+  a.resize(static_cast<std::size_t>(layout.frames));
+  phase.calc_point(q, qdot, acc.data(), sys);
+  layout.expand(acc.data(), a.data());
+  const PhaseContext& ctx = phase.context();
+  return calc_contact_watch(*ctx.mast, layout, lo, ctx.bay, ys, vs, std::max(lo - 1, 0), sys, a.data());
 }
 
 }  // namespace truss::stages

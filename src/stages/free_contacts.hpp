@@ -16,6 +16,7 @@
 
 #include "model/frames.hpp"
 #include "model/params.hpp"
+#include "stages/phase.hpp"
 
 namespace truss::stages {
 
@@ -47,5 +48,10 @@ struct ContactWatch {
 ContactWatch calc_contact_watch(const model::MastParams& mast, const ContactLayout& layout, int lo, int m,
                                 const double* ys, const double* vs, int first, const model::FrameSystem& sys,
                                 const double* a);
+// The same for a free phase at (q, q'): the accelerations from the phase's own evaluation
+// (calc_point), so that the watched contact forces are those of the motion being integrated.
+// ys, vs: the phase's frame heights and velocities at (q, q') as above.
+ContactWatch calc_contact_watch(const PhaseModel& phase, const ContactLayout& layout, int lo, const double* q,
+                                const double* qdot, const double* ys, const double* vs);
 
 }  // namespace truss::stages

@@ -41,14 +41,9 @@ void FreePhaseA::calc_mass(const double* q, const double* qdot, Eigen::VectorXd&
 }
 
 ContactWatch FreePhaseA::calc_contact_watch(const double* q, const double* qdot) const {
-  thread_local PhaseScratch sys;
-  thread_local std::vector<double> acc, a, ys, vs;
-  acc.resize(static_cast<std::size_t>(dof()));
-  a.resize(static_cast<std::size_t>(layout_.frames));
-  calc_point(q, qdot, acc.data(), sys);
-  layout_.expand(acc.data(), a.data());
+  thread_local std::vector<double> ys, vs;
   expand_frames(q, qdot, ys, vs);
-  return stages::calc_contact_watch(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys, a.data());
+  return stages::calc_contact_watch(*this, layout_, lo_, q, qdot, ys.data(), vs.data());
 }
 
 double FreePhaseA::calc_rail_function_m(const double* q) const {
@@ -116,6 +111,25 @@ bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratc
   return true;
 }
 
+void FreePhaseA::fill_bay_energies(const MastParams& mast, int lo, int m, const double* ys, int first, const Eigen::VectorXd& diag,
+                                   const Eigen::VectorXd& sub, const double* qdot, PhasePoint& p) {
+  double T = 0.0, U = 0.0, tension = 0.0;
+  for (Eigen::Index k = 0; k < diag.size(); ++k) {
+    T += 0.5 * diag[k] * qdot[k] * qdot[k];
+    if (k > 0) T += sub[k] * qdot[k] * qdot[k - 1];
+  }
+  for (int i = std::max(lo, 1); i <= m; ++i) {
+    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    const double Di = ys[i - first] - ys[i - 1 - first];
+    U += calc_bay_potential_J(mast.bay(i), b2, Di);
+    p.min_bay_opening_m = std::min(p.min_bay_opening_m, Di);
+    tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
+  }
+  p.kinetic_energy_J = T;
+  p.potential_energy_J = U;
+  p.diagonal_tension_N = tension;
+}
+
 void FreePhaseA::fill_locked_heights(const MastParams& mast, int m, double* y) {
   for (int k = m + 1; k <= mast.n_bays(); ++k) y[k] = y[k - 1] + 2.0 * mast.bay(k).strut_length_m;
 }
@@ -177,21 +191,7 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   p.hinge_x_m = calc_hinge_offset_m(mast.bay(m), D);
   p.hinge_y_m = 0.5 * (p.y_driven_m + p.y_lower_m);
   p.rail_distance_m = model::calc_rail_function_m(mast.rail, p.hinge_x_m, p.hinge_y_m) * std::sin(mast.rail.beta_rad);
-  double T = 0.0, U = 0.0, tension = 0.0;
-  for (int k = 0; k < n; ++k) {
-    T += 0.5 * Md[k] * qdot[k] * qdot[k];
-    if (k > 0) T += Ms[k] * qdot[k] * qdot[k - 1];
-  }
-  for (int i = std::max(lo_, 1); i <= m; ++i) {
-    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
-    const double Di = ys[static_cast<std::size_t>(i - first)] - ys[static_cast<std::size_t>(i - 1 - first)];
-    U += calc_bay_potential_J(mast.bay(i), b2, Di);
-    p.min_bay_opening_m = std::min(p.min_bay_opening_m, Di);
-    tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
-  }
-  p.kinetic_energy_J = T;
-  p.potential_energy_J = U;
-  p.diagonal_tension_N = tension;
+  fill_bay_energies(mast, lo_, m, ys.data(), first, Md, Ms, qdot, p);
   p.mass_yy = Md[n - 1];
   return p;
 }

@@ -71,6 +71,12 @@ class FreePhaseA final : public PhaseModel {
   bool calc_frame_heights(const double* q, double* y) const override;
   // Frames above the driven frame m are locked, rigid with it: y_k = y_{k-1} + 2 l_k, k = m+1..n.
   static void fill_locked_heights(const model::MastParams& mast, int m, double* y);
+  // The point's kinetic energy (from the phase's mass matrix diag, sub), and the potential energy,
+  // smallest opening and largest diagonal tension of the moving bays max(lo, 1)..m (ys: heights of
+  // frames first..m). One computation for phases A and B, so that the energy ledger and the peaks
+  // see the same quantities on either side of rail entry.
+  static void fill_bay_energies(const model::MastParams& mast, int lo, int m, const double* ys, int first,
+                                const Eigen::VectorXd& diag, const Eigen::VectorXd& sub, const double* qdot, PhasePoint& p);
 
  private:
   PhaseContext ctx_;

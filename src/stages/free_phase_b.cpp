@@ -46,14 +46,9 @@ void FreePhaseB::calc_mass(const double* q, const double* qdot, Eigen::VectorXd&
 }
 
 ContactWatch FreePhaseB::calc_contact_watch(const double* q, const double* qdot) const {
-  thread_local PhaseScratch sys;
-  thread_local std::vector<double> acc, a, ys, vs;
-  acc.resize(static_cast<std::size_t>(dof()));
-  a.resize(static_cast<std::size_t>(layout_.frames));
-  calc_point(q, qdot, acc.data(), sys);
-  layout_.expand(acc.data(), a.data());
+  thread_local std::vector<double> ys, vs;
   expand_frames(q, qdot, ys, vs);
-  return stages::calc_contact_watch(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys, a.data());
+  return stages::calc_contact_watch(*this, layout_, lo_, q, qdot, ys.data(), vs.data());
 }
 
 double FreePhaseB::calc_rail_function_m(const double* q) const {
@@ -207,21 +202,7 @@ PhasePoint FreePhaseB::evaluate(const double* q, const double* qdot, double* qdd
   p.lambda_N = lambda;
   p.pin_force_N = calc_pin_force_N(mast.rail, lambda);
   p.rail_residual_m = std::abs(f);
-  double T = 0.0, U = 0.0, tension = 0.0;
-  for (int i = 0; i < n; ++i) {
-    T += 0.5 * diag[i] * qdot[i] * qdot[i];
-    if (i > 0) T += sub[i] * qdot[i] * qdot[i - 1];
-  }
-  for (int i = std::max(lo_, 1); i <= m; ++i) {
-    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
-    const double Di = ys[static_cast<std::size_t>(i - first)] - ys[static_cast<std::size_t>(i - 1 - first)];
-    U += calc_bay_potential_J(mast.bay(i), b2, Di);
-    p.min_bay_opening_m = std::min(p.min_bay_opening_m, Di);
-    tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
-  }
-  p.kinetic_energy_J = T;
-  p.potential_energy_J = U;
-  p.diagonal_tension_N = tension;
+  FreePhaseA::fill_bay_energies(mast, lo_, m, ys.data(), first, diag, sub, qdot, p);
   p.mass_yy = diag[n - 2]; p.mass_yx = sub[n - 1]; p.mass_xx = diag[n - 1];
   p.rail_slope = c - x / s;
   return p;

@@ -11,6 +11,7 @@
 #include "model/contacts.hpp"
 #include "model/free_impacts.hpp"
 #include "model/frames.hpp"
+#include "numeric/dense_frames.hpp"
 #include "sim/simulate.hpp"
 #include "test_helpers.hpp"
 
@@ -19,31 +20,13 @@ using Catch::Detail::Approx;
 
 namespace {
 
-// Frames 1..6 of an uneven mast (frame 0 held), M, r = velocity terms + springs as frames.hpp builds them.
-struct Chain {
-  model::MastParams mast = testing::make_uneven_mast(6, 0.1);
-  model::FrameSystem sys;
-  Eigen::VectorXd F;
-  Chain() {
-    model::ActiveFrames a;
-    a.lo = 1;
-    a.m = 6;
-    a.locked_mass_kg = 1.3;
-    // Bays 3 and 4 closed (frames 2, 3, 4 at one height): clusters {1}, {2,3,4}, {5}, {6}.
-    const double y[7] = {0.0, 0.05, 0.12, 0.12, 0.12, 0.31, 0.52};
-    const double w[7] = {0.0, 0.01, -0.02, -0.02, -0.02, 0.05, 0.1};
-    model::calc_frame_system(mast, a, y, w, 0, sys);
-    F = sys.velocity_terms + sys.spring_forces;
-  }
-  Eigen::MatrixXd dense() const {
-    const auto N = sys.diag.size();
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(N, N);
-    for (Eigen::Index k = 0; k < N; ++k) {
-      M(k, k) = sys.diag[k];
-      if (k > 0) M(k, k - 1) = M(k - 1, k) = sys.sub[k];
-    }
-    return M;
-  }
+// Bays 3 and 4 closed (frames 2, 3, 4 at one height): clusters {1}, {2,3,4}, {5}, {6}.
+constexpr double kChainY[7] = {0.0, 0.05, 0.12, 0.12, 0.12, 0.31, 0.52};
+constexpr double kChainW[7] = {0.0, 0.01, -0.02, -0.02, -0.02, 0.05, 0.1};
+// F = r = velocity terms + springs, as frames.hpp builds them.
+struct Chain : testing::SixMovingFrames {
+  Eigen::VectorXd F = sys.velocity_terms + sys.spring_forces;
+  Chain() : SixMovingFrames(kChainY, kChainW) {}
 };
 const std::vector<int> kStarts = {0, 1, 4, 5};  // local frames (frame - 1)
 

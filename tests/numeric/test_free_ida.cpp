@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "numeric/dense_frames.hpp"
 #include "sim/simulate.hpp"
 #include "stages/free_phase.hpp"
 #include "stages/free_phase_b.hpp"
@@ -30,12 +31,7 @@ struct Residual {
   Eigen::VectorXd dyn, con;
 };
 Residual calc_residual(const stages::PhaseDaeTerms& t, const Eigen::VectorXd& acc, const Eigen::VectorXd& mu) {
-  const auto n = t.diag.size();
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
-  for (Eigen::Index k = 0; k < n; ++k) {
-    M(k, k) = t.diag[k];
-    if (k > 0) M(k, k - 1) = M(k - 1, k) = t.sub[k];
-  }
+  const Eigen::MatrixXd M = testing::dense_tridiagonal(t.diag, t.sub);
   Residual r;
   r.dyn = M * acc - t.rhs;
   r.con.resize(t.num_multipliers);

@@ -11,6 +11,7 @@
 #include "model/free_impacts.hpp"
 #include "model/frames.hpp"
 #include "model/impacts.hpp"
+#include "numeric/dense_frames.hpp"
 #include "sim/simulate.hpp"
 #include "stages/free_phase.hpp"
 #include "test_helpers.hpp"
@@ -20,30 +21,12 @@ using Catch::Detail::Approx;
 
 namespace {
 
-// The moving frames lo..m of an uneven mast at spread heights, M as frames.hpp assembles it.
-struct Stack {
-  model::MastParams mast = testing::make_uneven_mast(6, 0.1);
-  model::FrameSystem sys;
-  Eigen::VectorXd v;
-  Eigen::MatrixXd dense() const {
-    const auto N = sys.diag.size();
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(N, N);
-    for (Eigen::Index k = 0; k < N; ++k) {
-      M(k, k) = sys.diag[k];
-      if (k > 0) M(k, k - 1) = M(k - 1, k) = sys.sub[k];
-    }
-    return M;
-  }
-  Stack() {
-    model::ActiveFrames a;
-    a.lo = 1;
-    a.m = 6;
-    a.locked_mass_kg = 1.3;
-    const double y[7] = {0.0, 0.05, 0.12, 0.2, 0.31, 0.45, 0.72};
-    const double w[7] = {0.0, 0.01, -0.02, 0.03, 0.05, 0.02, 0.1};
-    model::calc_frame_system(mast, a, y, w, 0, sys);
-    v = Eigen::Map<const Eigen::VectorXd>(w + 1, 6);
-  }
+// The moving frames at spread heights (no two at one height); v: their velocities.
+constexpr double kStackY[7] = {0.0, 0.05, 0.12, 0.2, 0.31, 0.45, 0.72};
+constexpr double kStackW[7] = {0.0, 0.01, -0.02, 0.03, 0.05, 0.02, 0.1};
+struct Stack : testing::SixMovingFrames {
+  Eigen::VectorXd v = Eigen::Map<const Eigen::VectorXd>(kStackW + 1, 6);
+  Stack() : SixMovingFrames(kStackY, kStackW) {}
 };
 
 }  // namespace
