@@ -175,6 +175,7 @@ ChunkSummary read_summary(std::string_view& in) {
     s.at_hi[t] = get<std::int64_t>(in);
     const auto k = get<std::uint64_t>(in);
     if (k > in.size() / 8) throw std::runtime_error(fmt::format("a column summary of {} values in {} bytes", k, in.size()));
+    if (k == 0) continue;  // (an empty vector's data() may be null: no memcpy)
     s.kept[t].resize(static_cast<std::size_t>(k));
     std::memcpy(s.kept[t].data(), in.data(), 8 * s.kept[t].size());
     in.remove_prefix(8 * s.kept[t].size());
