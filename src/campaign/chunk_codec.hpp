@@ -1,10 +1,10 @@
 // One HDF5 chunk as HDF5's filter pipeline stores it, computed outside HDF5: the byte shuffle
-// filter (H5Z_FILTER_SHUFFLE) then the deflate filter (H5Z_FILTER_DEFLATE, zlib compress2 at the
-// dataset's level), exactly as H5Zshuffle.c and H5Zdeflate.c of HDF5 1.10 compute them. The
-// campaign writes its per-run datasets chunk by chunk with H5Dwrite_chunk from these bytes, so the
-// encoding can run on any rank (a worker, or rank 0 itself) and the file holds the same bytes as
-// if H5Dwrite had filtered the chunk: readers (h5py, pandas, xarray) see an ordinary shuffled,
-// deflated dataset. A pure function of (bytes, element size, level).
+// filter (H5Z_FILTER_SHUFFLE, as H5Zshuffle.c) then the deflate filter (H5Z_FILTER_DEFLATE: a
+// zlib-format stream at the dataset's level, here from libdeflate, and HDF5 1.10's rule of
+// H5Zdeflate.c for a chunk that does not shrink). The campaign writes its per-run datasets chunk by
+// chunk with H5Dwrite_chunk from these bytes, so the encoding can run on any rank (a worker, or
+// rank 0 itself): readers (h5py, pandas, xarray) see an ordinary shuffled, deflated dataset. A pure
+// function of (bytes, element size, level): the same bytes on any rank.
 #pragma once
 #include <cstddef>
 #include <cstdint>

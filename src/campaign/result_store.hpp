@@ -31,6 +31,12 @@ struct StoreOptions {
   std::string validate() const;
 };
 
+// Rows per chunk for a campaign of n runs: 4,096 (32 kB a float64 column) from 65,536 runs up;
+// smaller campaigns get at least 16 chunks (at least 512 rows), so that encoding and summarising
+// the chunks overlaps the runs instead of all falling on the end with the last chunk. A function
+// of n alone: the file is the same on any number of ranks and after --resume.
+inline std::int64_t find_chunk_runs(std::int64_t n_runs) { return n_runs / 16 < 512 ? 512 : n_runs / 16 > 4096 ? 4096 : n_runs / 16; }
+
 // The statistics of the output columns from the chunks' summaries (column_stats.hpp): per float64
 // column and per bay of each per-bay field. `resolved` 0: a percentile's order statistics were not
 // kept (its percentiles are NaN), compute them from the stored column.

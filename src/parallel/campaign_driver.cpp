@@ -92,10 +92,6 @@ struct Rank0 {
   SessionState st;
 };
 
-// Results go to the file in chunks of this many runs: rank 0 holds only the chunks still filling
-// (around the scheduling front), and each chunk is one HDF5 chunk of every column (32 kB).
-constexpr std::int64_t kChunkRuns = 4096;
-
 // Rank 0, --resume: one journal frame into the session state or the results file. A frame that
 // passed its CRC but makes no sense (a short payload, a run index out of range, a run twice) is
 // not a crash's doing: the journal is refused (exit 2) with what is wrong and where.
@@ -157,7 +153,7 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
   if (!o.resume && has_journal && !o.force)
     throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
                                      "(same campaign and --set options) or start over with --force", jpath));
-  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{kChunkRuns, o.compression, size > 1});
+  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{campaign::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression, size > 1});
   if (o.resume) {
     try {
       auto on_frame = [&](FrameKind k, std::string_view p, std::size_t at) { restore_frame(r0, ctx, k, p, at); };
@@ -284,6 +280,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     const std::int64_t n_runs = store.n_runs();
     const campaign::StatusCounts counts = status_counts(store);
     const std::size_t peak_chunks = store.peak_chunks_in_memory();
+    const std::int64_t chunk_runs = store.chunk_runs();
     const std::int64_t jobs_offloaded = store.jobs_offloaded();
     r0.file->store().drain_jobs();
     const std::int64_t jobs_local = store.jobs_local();
@@ -300,7 +297,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
                              std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count(),
                              static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC, sched.runs_by_rank0,
                              results ? 1e6 * (sched.rank0_poll_s + sched.rank0_tick_s) / static_cast<double>(results) : 0.0,
-                             results ? 1e6 * sched.rank0_handle_cpu_s / static_cast<double>(results) : 0.0, peak_chunks, kChunkRuns,
+                             results ? 1e6 * sched.rank0_handle_cpu_s / static_cast<double>(results) : 0.0, peak_chunks, chunk_runs,
                              jobs_offloaded, jobs_offloaded + jobs_local);
     return kExitOk;
   } catch (const io::InputError& e) {
