@@ -225,7 +225,7 @@ def case_resume(args):
     out = os.path.join(d, "killed.h5")
     journal = out + ".journal"
     cmd = ["mpirun", "--oversubscribe", "-np", "2", args.driver, camp, "-o", out, *sets,
-           "--flush-interval", "0.05", "--progress", "none"]
+           "--flush-interval", "0.01", "--progress", "none"]
     proc = subprocess.Popen(cmd, env=ENV, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     t0 = time.time()
     # Kill once at least ~100 runs are on disk (a record is ~4.5 kB), well before the end.
@@ -237,8 +237,10 @@ def case_resume(args):
                 break
         time.sleep(0.01)
     t_kill = time.time() - t0
-    # The journal grows while runs are still being computed, by the periodic flush (every 0.05 s
-    # here): some observed size lies strictly between the first one seen (the header, or a flush)
+    # The journal grows while runs are still being computed, by the periodic flush (every 0.01 s
+    # here: at ~10 MB/s of records a flush adds ~100 kB, so a poller that the two busy ranks starve
+    # for a few tens of ms still sees a size below 500 kB; 0.05 s failed so, once in a few CI runs):
+    # some observed size lies strictly between the first one seen (the header, or a flush)
     # and the 1 MiB write-through
     # buffer, which a journal written only by full buffers or the final flush never shows.
     partial = [x for x in seen if seen[0] < x < (1 << 20)]
