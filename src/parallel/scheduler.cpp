@@ -6,6 +6,7 @@
 #include <cstring>
 #include <ctime>
 #include <memory>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -296,6 +297,7 @@ std::string ScheduleOptions::validate() const {
 
 ScheduleSummary run_schedule(MPI_Comm comm, const std::vector<std::int64_t>& todo, const ComputeFn& compute,
                              const ResultFn& on_result, const TickFn& on_tick, const ScheduleOptions& opts) {
+  if (const std::string e = opts.validate(); !e.empty()) throw std::invalid_argument("schedule options: " + e);  // same on every rank
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   if (rank != 0) {
