@@ -22,55 +22,52 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The chunk HDF5 stores for `raw` (n elements of `type`) in a 1-D dataset of one chunk, shuffled and
-// deflated at `level` by H5Dwrite: read back raw with H5Dread_chunk.
-std::string hdf5_filtered_chunk(const std::string& raw, hid_t type, std::size_t es, int level, std::uint32_t& mask) {
+// A file holding a 1-D dataset "x" of n elements of `type` in one chunk, shuffled and deflated at
+// `level`; f(dataset) runs on it, then everything is closed and the file removed.
+template <class F>
+void with_one_chunk_dataset(hid_t type, hsize_t n, int level, F&& f) {
   const std::string path = (fs::temp_directory_path() / "truss_test_chunk_codec.h5").string();
-  const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  const hsize_t n = raw.size() / es;
+  const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   const hid_t space = H5Screate_simple(1, &n, nullptr);
   const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
   H5Pset_chunk(dcpl, 1, &n);
   H5Pset_shuffle(dcpl);
   H5Pset_deflate(dcpl, static_cast<unsigned>(level));
-  const hid_t ds = H5Dcreate2(f, "x", type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-  REQUIRE(H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()) >= 0);
-  H5Fflush(f, H5F_SCOPE_GLOBAL);
-  const hsize_t offset = 0;
-  hsize_t size = 0;
-  REQUIRE(H5Dget_chunk_storage_size(ds, &offset, &size) >= 0);
-  std::string stored(size, '\0');
-  REQUIRE(H5Dread_chunk(ds, H5P_DEFAULT, &offset, &mask, stored.data()) >= 0);
+  const hid_t ds = H5Dcreate2(file, "x", type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+  f(file, ds);
   H5Dclose(ds);
   H5Pclose(dcpl);
   H5Sclose(space);
-  H5Fclose(f);
+  H5Fclose(file);
   fs::remove(path);
+}
+
+// The chunk HDF5 stores for `raw` (n elements of `type`) when H5Dwrite filters it: read back raw
+// with H5Dread_chunk.
+std::string hdf5_filtered_chunk(const std::string& raw, hid_t type, std::size_t es, int level, std::uint32_t& mask) {
+  std::string stored;
+  with_one_chunk_dataset(type, raw.size() / es, level, [&](hid_t file, hid_t ds) {
+    REQUIRE(H5Dwrite(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, raw.data()) >= 0);
+    H5Fflush(file, H5F_SCOPE_GLOBAL);
+    const hsize_t offset = 0;
+    hsize_t size = 0;
+    REQUIRE(H5Dget_chunk_storage_size(ds, &offset, &size) >= 0);
+    stored.assign(size, '\0');
+    REQUIRE(H5Dread_chunk(ds, H5P_DEFAULT, &offset, &mask, stored.data()) >= 0);
+  });
   return stored;
 }
 
-// HDF5 reading `stored` (mask) back from a shuffle + deflate dataset of one chunk, through its
-// own filter pipeline (H5Dwrite_chunk, then H5Dread): the values a reader of the file sees.
+// HDF5 reading `stored` (mask) back through its own filter pipeline (H5Dwrite_chunk, then
+// H5Dread): the values a reader of the file sees.
 std::string hdf5_read_back(const std::string& stored, std::uint32_t mask, hid_t type, std::size_t es, std::size_t raw_bytes,
                            int level) {
-  const std::string path = (fs::temp_directory_path() / "truss_test_chunk_read.h5").string();
-  const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-  const hsize_t n = raw_bytes / es;
-  const hid_t space = H5Screate_simple(1, &n, nullptr);
-  const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
-  H5Pset_chunk(dcpl, 1, &n);
-  H5Pset_shuffle(dcpl);
-  H5Pset_deflate(dcpl, static_cast<unsigned>(level));
-  const hid_t ds = H5Dcreate2(f, "x", type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-  const hsize_t offset = 0;
-  REQUIRE(H5Dwrite_chunk(ds, H5P_DEFAULT, mask, &offset, stored.size(), stored.data()) >= 0);
   std::string back(raw_bytes, '\0');
-  REQUIRE(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, back.data()) >= 0);
-  H5Dclose(ds);
-  H5Pclose(dcpl);
-  H5Sclose(space);
-  H5Fclose(f);
-  fs::remove(path);
+  with_one_chunk_dataset(type, raw_bytes / es, level, [&](hid_t, hid_t ds) {
+    const hsize_t offset = 0;
+    REQUIRE(H5Dwrite_chunk(ds, H5P_DEFAULT, mask, &offset, stored.size(), stored.data()) >= 0);
+    REQUIRE(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, back.data()) >= 0);
+  });
   return back;
 }
 
