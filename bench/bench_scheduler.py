@@ -70,6 +70,10 @@ def run(driver, ranks, mca, out, sets, extra=()):
             "n": n,
             "run_sum": float(runs.sum()),
             "h": handled / n,
+            # Parts of rank 0's poll time per result (wall, s): MPI calls, storing results (of which
+            # the journal), writing worker-encoded chunks and merging their statistics.
+            **{k: a.get(f"rank0_{k}_s", float("nan")) / n for k in ("mpi", "result", "journal", "job_output")},
+            "tick": a.get("rank0_tick_s", float("nan")) / n,
         }
 
 
@@ -102,6 +106,13 @@ def bench_real(a):
         h, hc, cc = med(rs, "h"), med(rs, "h_cpu"), med(rs, "c_cpu")
         print(f"| {P} | {'-' if P == 1 else name} | {w:.3f} | {t1 / (P * w):.2f} | {med(rs, 'rank0_runs'):.0f} "
               f"| {h * 1e6:.1f} | {hc * 1e6:.1f} | {cc * 1e6:.1f} | {hc / cc * 100:.2f} % |")
+    print("\nWhere rank 0's per-result wall time goes (us a result, medians; /timing's rank0_*_s over the results):\n")
+    print("| ranks | transport | MPI calls | storing results | of which journal | chunk writes + statistics | tick (journal sync, progress) |")
+    print("|---:|---|---:|---:|---:|---:|---:|")
+    for name, rs in rows.items():
+        P = 1 if name == "1 rank" else 2
+        print(f"| {P} | {'-' if P == 1 else name} | " + " | ".join(f"{med(rs, k) * 1e6:.1f}" for k in
+                                                               ("mpi", "result", "journal", "job_output", "tick")) + " |")
 
 
 def bench_synthetic(a):

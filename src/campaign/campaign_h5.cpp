@@ -245,6 +245,10 @@ void write_timing_attributes(hid_t file, const CampaignFileInfo& info, std::int6
   write_double_attribute(g.get(), "rank0_compute_s", st.rank0_compute_s);
   write_double_attribute(g.get(), "rank0_poll_s", st.rank0_poll_s);
   write_double_attribute(g.get(), "rank0_tick_s", st.rank0_tick_s);
+  write_double_attribute(g.get(), "rank0_mpi_s", st.rank0_mpi_s);
+  write_double_attribute(g.get(), "rank0_result_s", st.rank0_result_s);
+  write_double_attribute(g.get(), "rank0_journal_s", st.rank0_journal_s);
+  write_double_attribute(g.get(), "rank0_job_output_s", st.rank0_job_output_s);
   write_double_attribute(g.get(), "rank0_idle_s", st.rank0_idle_s);
   write_double_attribute(g.get(), "rank0_handle_cpu_s", st.rank0_handle_cpu_s);
   write_double_attribute(g.get(), "rank0_compute_cpu_s", st.rank0_compute_cpu_s);

@@ -27,6 +27,9 @@ struct ScheduleTiming {
   double synthetic_run_cost_s = -1;  // >= 0: a bench-only campaign of sleeping runs (no physics)
   double rank0_handle_cpu_s = 0;     // rank 0's thread CPU time outside its own runs (results, answers, journal)
   double rank0_compute_cpu_s = 0;    // rank 0's thread CPU time in its own runs
+  // Parts of rank0_poll_s (wall): MPI calls; storing results (journal and chunks), of which the
+  // journal's share; writing encoded chunks and merging their statistics.
+  double rank0_mpi_s = 0, rank0_result_s = 0, rank0_journal_s = 0, rank0_job_output_s = 0;
 };
 
 struct CampaignFileInfo {

@@ -90,6 +90,7 @@ struct Rank0 {
   std::string journal_path;
   campaign::JournalScan scan;
   SessionState st;
+  double journal_s = 0.0;  // appending results to the journal (part of the schedule's rank0_result_s)
 };
 
 // Rank 0, --resume: one journal frame into the session state or the results file. A frame that
@@ -275,6 +276,10 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.schedule = {sched.wall_s, sched.rank0_compute_s, sched.rank0_poll_s, sched.rank0_tick_s, sched.rank0_idle_s,
                      sched.runs_by_rank0, sched.runs_by_workers, o.synthetic_run_cost_s, sched.rank0_handle_cpu_s,
                      sched.rank0_compute_cpu_s};
+    info.schedule.rank0_mpi_s = sched.rank0_mpi_s;
+    info.schedule.rank0_result_s = sched.rank0_result_s;
+    info.schedule.rank0_journal_s = r0.journal_s;
+    info.schedule.rank0_job_output_s = sched.rank0_job_output_s;
     info.write_extra = [&](hid_t file) { campaign::write_nominal_group(file, nominal, ctx.columns.n_bays_max); };
     const campaign::ResultStore& store = r0.file->store();
     const std::int64_t n_runs = store.n_runs();
@@ -436,7 +441,9 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
         [&](std::string_view result) {
           if (result.size() < sizeof(std::uint32_t)) throw std::runtime_error("a result without its CRC");
           const std::string_view bytes = result.substr(0, result.size() - sizeof(std::uint32_t));
+          const auto t0 = std::chrono::steady_clock::now();
           r0.journal->append(FrameKind::run, bytes, get_at<std::uint32_t>(result, bytes.size()));
+          r0.journal_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
           r0.file->store().add_bytes(bytes, r0.st.session);
         },
         [&] {

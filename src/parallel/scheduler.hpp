@@ -53,6 +53,11 @@ struct ScheduleSummary {
   double rank0_poll_s = 0.0;          // matching, receiving, on_result and answering (every poll, even empty)
   double rank0_tick_s = 0.0;          // inside on_tick (journal flushes, progress)
   double rank0_idle_s = 0.0;          // waiting for results with nothing left to compute
+  // Where rank0_poll_s goes (wall): MPI calls (probe, receive, test, send), on_result (every
+  // result, its own runs' included) and on_job_done; the rest is bookkeeping and the clock.
+  double rank0_mpi_s = 0.0;
+  double rank0_result_s = 0.0;
+  double rank0_job_output_s = 0.0;
   double rank0_handle_cpu_s = 0.0;    // rank 0's thread CPU time outside compute() until the last result: the per-result work
   double rank0_compute_cpu_s = 0.0;   // rank 0's thread CPU time inside compute()
   std::int64_t jobs_sent = 0;         // side jobs handed to workers

@@ -451,6 +451,21 @@ def mpirun_mca(args, ranks, mca, extra):
     return subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600)
 
 
+def check_rank0_breakdown(path, what):
+    """/timing's parts of rank 0's poll time: each is timed inside a timed poll, so together they
+    cannot exceed it (the sums of steady-clock differences: 1e-9 relative covers their rounding),
+    and the journal is part of storing the results."""
+    with h5py.File(path, "r") as f:
+        a = f["timing"].attrs
+        parts = {k: float(a[k]) for k in ("rank0_mpi_s", "rank0_result_s", "rank0_job_output_s", "rank0_journal_s")}
+        poll = float(a["rank0_poll_s"])
+    check(all(np.isfinite(v) and v >= 0 for v in parts.values()), f"{what}: rank 0's time parts finite, >= 0 ({parts})")
+    check(parts["rank0_mpi_s"] > 0 and parts["rank0_result_s"] > 0, f"{what}: MPI calls and results timed ({parts})")
+    inner = parts["rank0_mpi_s"] + parts["rank0_result_s"] + parts["rank0_job_output_s"]
+    check(inner <= poll * (1 + 1e-9), f"{what}: MPI + results + job outputs {inner:.6f} s <= poll {poll:.6f} s")
+    check(parts["rank0_journal_s"] <= parts["rank0_result_s"], f"{what}: journal within storing results ({parts})")
+
+
 def case_transports(args):
     """The driver over TCP and over shared memory without single-copy (CMA): the same datasets as
     over shared memory, and a scheduler that keeps rank 0 computing. Efficiency uses sleeping
@@ -468,6 +483,7 @@ def case_transports(args):
         check(p.returncode == 0, f"{ranks} ranks, {name}: exit 0 ({p.stderr.strip()[-300:]})")
         same, why = same_values(a, datasets(out))
         check(same, f"{ranks} ranks, {name}: datasets identical to shared memory outside /timing ({len(a)}) {why}")
+        check_rank0_breakdown(out, f"{ranks} ranks, {name}")
     # Sleeping runs of 4 ms: 2 ranks, 600 runs (1.2 s ideal) and 8 ranks, 1600 runs (0.8 s ideal).
     # Measured on this 2-core machine under a load of 3 to 8 (other builds): 0.95 to 0.98. A
     # scheduler whose rank 0 blocks until a computing worker's next MPI call (the old one) gave
