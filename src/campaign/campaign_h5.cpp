@@ -293,6 +293,18 @@ void CampaignFile::start_writeback() const {
   (void)::sync_file_range(*static_cast<int*>(handle), 0, 0, SYNC_FILE_RANGE_WRITE);
 }
 
+std::function<void()> CampaignFile::writeback_task() const {
+  void* handle = nullptr;
+  if (file_ < 0 || H5Fget_vfd_handle(file_, H5P_DEFAULT, &handle) < 0 || handle == nullptr) return {};
+  const int fd = ::fcntl(*static_cast<int*>(handle), F_DUPFD_CLOEXEC, 0);
+  if (fd < 0) return {};  // advisory, as start_writeback
+  auto owned = std::shared_ptr<int>(new int(fd), [](int* p) {
+    ::close(*p);
+    delete p;
+  });
+  return [owned] { (void)::sync_file_range(*owned, 0, 0, SYNC_FILE_RANGE_WRITE); };
+}
+
 void CampaignFile::discard() noexcept {
   store_.reset();
   if (file_ >= 0) H5Fclose(file_);

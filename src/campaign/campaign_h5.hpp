@@ -58,8 +58,12 @@ class CampaignFile {
   CampaignFile& operator=(const CampaignFile&) = delete;
   ResultStore& store() { return *store_; }
   // Starts writing the file's dirty pages to disk without waiting (sync_file_range), so that the
-  // final sync in finish() has little left to wait for. Cheap; call it now and then.
+  // final sync in finish() has little left to wait for. Call it now and then: it submits the
+  // pages' I/O, milliseconds for a few MB.
   void start_writeback() const;
+  // The same as a task for another thread (the journal's writer): it holds its own descriptor of
+  // the file (dup), closed when the task is destroyed, run or not. Empty if there is no file.
+  std::function<void()> writeback_task() const;
   void finish(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info,
               bool force);
   // Removes the .NAME.tmp.PID files that killed sessions left next to `path`, except this

@@ -6,8 +6,13 @@
 #include <zlib.h>
 
 #include <cerrno>
+#include <condition_variable>
 #include <cstring>
+#include <deque>
+#include <exception>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -58,6 +63,99 @@ void lock_or_refuse(int fd, const std::string& path) {
 }
 
 }  // namespace
+
+// The background writer: write()s the buffers handed over, in order, and fdatasyncs after those
+// marked sync. After an error it writes nothing more (a gap would leave valid frames after a
+// missing one) and every later call of the owner rethrows the error.
+struct Journal::Writer {
+  Writer(int fd, std::string path) : fd_(fd), path_(std::move(path)), thread_([this] { loop(); }) {}
+  ~Writer() {
+    {
+      std::lock_guard<std::mutex> l(m_);
+      stop_ = true;
+    }
+    work_.notify_all();
+    thread_.join();
+  }
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  // Queues `bytes` and hands back an empty buffer in it (a written one, its memory kept); returns
+  // the ticket that wait() takes. Blocks while kMaxQueuedBytes wait.
+  std::uint64_t submit(std::string& bytes, bool sync, std::function<void()> then = {}) {
+    std::unique_lock<std::mutex> l(m_);
+    space_.wait(l, [&] { return queued_ < kMaxQueuedBytes || error_; });
+    if (error_) std::rethrow_exception(error_);
+    queued_ += bytes.size();
+    queue_.push_back({std::move(bytes), sync, std::move(then)});
+    bytes.clear();
+    if (!spare_.empty()) {
+      bytes = std::move(spare_.back());
+      spare_.pop_back();
+    }
+    work_.notify_one();
+    return ++submitted_;
+  }
+  void wait(std::uint64_t ticket) {
+    std::unique_lock<std::mutex> l(m_);
+    done_.wait(l, [&] { return completed_ >= ticket || error_; });
+    if (error_) std::rethrow_exception(error_);
+  }
+
+ private:
+  struct Item {
+    std::string bytes;
+    bool sync = false;
+    std::function<void()> then;
+  };
+  void loop() {
+    std::unique_lock<std::mutex> l(m_);
+    for (;;) {
+      work_.wait(l, [&] { return stop_ || !queue_.empty(); });
+      if (queue_.empty()) return;  // stopping, everything written
+      Item it = std::move(queue_.front());
+      queue_.pop_front();
+      l.unlock();
+      std::exception_ptr err;
+      try {
+        write_all(fd_, it.bytes, path_);
+        if (it.sync && ::fdatasync(fd_) != 0) fail_errno("cannot sync journal", path_);
+        if (it.then) it.then();
+      } catch (...) {
+        err = std::current_exception();
+      }
+      l.lock();
+      queued_ -= it.bytes.size();
+      if (err) {
+        error_ = err;
+        queue_.clear();
+        queued_ = 0;
+      } else {
+        ++completed_;
+        if (spare_.size() < 2) {
+          it.bytes.clear();
+          spare_.push_back(std::move(it.bytes));
+        }
+      }
+      space_.notify_all();
+      done_.notify_all();
+    }
+  }
+
+  int fd_;
+  std::string path_;
+  std::mutex m_;
+  std::condition_variable work_, space_, done_;
+  std::deque<Item> queue_;
+  std::vector<std::string> spare_;
+  std::size_t queued_ = 0;
+  std::uint64_t submitted_ = 0, completed_ = 0;
+  std::exception_ptr error_;
+  bool stop_ = false;
+  std::thread thread_;  // last: started once the members above exist
+};
+
+Journal::Journal(std::string path, int fd) : path_(std::move(path)), fd_(fd) {}
 
 void Journal::remove_unused(const std::string& path) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -233,7 +331,10 @@ Journal Journal::resume(const std::string& path, const std::string& campaign_tex
   return j;
 }
 
-Journal::Journal(Journal&& o) noexcept : path_(std::move(o.path_)), fd_(o.fd_), buffer_(std::move(o.buffer_)) { o.fd_ = -1; }
+Journal::Journal(Journal&& o) noexcept
+    : path_(std::move(o.path_)), fd_(o.fd_), buffer_(std::move(o.buffer_)), writer_(std::move(o.writer_)) {
+  o.fd_ = -1;
+}
 
 Journal::~Journal() {
   if (fd_ >= 0) {
@@ -241,6 +342,7 @@ Journal::~Journal() {
       flush();
     } catch (...) {
     }
+    writer_.reset();  // joins the thread before the descriptor goes
     ::close(fd_);
   }
 }
@@ -260,22 +362,25 @@ void Journal::append(FrameKind kind, std::string_view payload, std::uint32_t crc
   put(buffer_, static_cast<std::uint32_t>(payload.size()));
   put(buffer_, static_cast<std::uint32_t>(crc));
   buffer_.append(payload);
-  // Bounded memory: hand full buffers to the kernel (no sync; flush() syncs).
-  if (buffer_.size() >= kWriteThrough) {
-    write_all(fd_, buffer_, path_);
-    buffer_.clear();
-  }
+  // Bounded memory: full buffers go to the writer (no sync; flush() syncs).
+  if (buffer_.size() >= kWriteThrough) hand_over(false);
+}
+
+std::uint64_t Journal::hand_over(bool sync, std::function<void()> then) {
+  if (!writer_) writer_ = std::make_unique<Writer>(fd_, path_);
+  return writer_->submit(buffer_, sync, std::move(then));
 }
 
 void Journal::flush() {
-  if (buffer_.empty()) return;
-  write_all(fd_, buffer_, path_);
-  buffer_.clear();
-  if (::fdatasync(fd_) != 0) fail_errno("cannot sync journal", path_);
+  const std::uint64_t ticket = hand_over(true);
+  writer_->wait(ticket);
 }
+
+void Journal::flush_async(std::function<void()> then) { hand_over(true, std::move(then)); }
 
 void Journal::close_and_remove() {
   flush();
+  writer_.reset();
   ::close(fd_);
   fd_ = -1;
   if (::unlink(path_.c_str()) != 0) fail_errno("cannot remove journal", path_);

@@ -9,6 +9,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <stdexcept>
 #include <string_view>
@@ -73,23 +74,35 @@ class Journal {
   // Removes an unfinished journal (--force); JournalRefused if a live process holds it.
   static void remove_unused(const std::string& path);
 
-  // Buffered; a buffer of kWriteThrough bytes is written out (not synced) at once, so memory stays
-  // bounded however long the flush interval.
+  // Buffered; a buffer of kWriteThrough bytes goes to the background writer (below), which writes
+  // it out (not synced), so memory stays bounded however long the flush interval.
   void append(FrameKind kind, std::string_view payload);
   // The same with the frame's CRC-32 computed elsewhere (frame_crc: a worker computes it for its
   // records, which takes the CRC off rank 0's per-result work).
   void append(FrameKind kind, std::string_view payload, std::uint32_t crc);
   static std::uint32_t frame_crc(FrameKind kind, std::string_view payload);
   static constexpr std::size_t kWriteThrough = std::size_t{1} << 20;
-  void flush();           // write() the buffer and fdatasync: on disk from now on
+  // The kernel's copy of each record into the page cache and the fdatasync waits are rank 0's
+  // per-result work on the campaign's serial path (docs/benchmarks.md, fourth look): a background
+  // thread does them. Buffers are written in the order they were handed over; at most
+  // kMaxQueuedBytes wait (append then blocks), and a write or sync error is rethrown by the next
+  // append or flush of the owner.
+  static constexpr std::size_t kMaxQueuedBytes = std::size_t{8} << 20;
+  void flush();             // hands the buffer over and waits until it is written and fdatasync'ed: on disk from now on
+  // The same without waiting (periodic flushes): on disk shortly, or an error from the next call.
+  // `then` (optional, must not throw) runs on the writer thread once the buffer is synced.
+  void flush_async(std::function<void()> then = {});
   void close_and_remove();  // after the results file is in place
   const std::string& path() const { return path_; }
 
  private:
-  Journal(std::string path, int fd) : path_(std::move(path)), fd_(fd) {}
+  struct Writer;
+  Journal(std::string path, int fd);
+  std::uint64_t hand_over(bool sync, std::function<void()> then = {});  // the writer's ticket for this buffer
   std::string path_;
   int fd_ = -1;
   std::string buffer_;
+  std::unique_ptr<Writer> writer_;  // started at the first hand-over
 };
 
 std::uint32_t crc32_of(std::string_view bytes);
