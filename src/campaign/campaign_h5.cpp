@@ -287,17 +287,16 @@ CampaignFile::CampaignFile(const std::string& path, const CampaignContext& ctx, 
 CampaignFile::~CampaignFile() { discard(); }
 
 void CampaignFile::start_writeback() const {
-  void* handle = nullptr;
-  if (file_ < 0 || H5Fget_vfd_handle(file_, H5P_DEFAULT, &handle) < 0 || handle == nullptr) return;
-  // Advisory: a file system without it (or an error) only leaves more for the final sync.
-  (void)::sync_file_range(*static_cast<int*>(handle), 0, 0, SYNC_FILE_RANGE_WRITE);
+  if (const auto task = writeback_task()) task();
 }
 
 std::function<void()> CampaignFile::writeback_task() const {
+  // Advisory: a file system without sync_file_range (or any error here) only leaves more for the
+  // final sync.
   void* handle = nullptr;
   if (file_ < 0 || H5Fget_vfd_handle(file_, H5P_DEFAULT, &handle) < 0 || handle == nullptr) return {};
   const int fd = ::fcntl(*static_cast<int*>(handle), F_DUPFD_CLOEXEC, 0);
-  if (fd < 0) return {};  // advisory, as start_writeback
+  if (fd < 0) return {};
   auto owned = std::shared_ptr<int>(new int(fd), [](int* p) {
     ::close(*p);
     delete p;

@@ -61,8 +61,9 @@ class CampaignFile {
   // final sync in finish() has little left to wait for. Call it now and then: it submits the
   // pages' I/O, milliseconds for a few MB.
   void start_writeback() const;
-  // The same as a task for another thread (the journal's writer): it holds its own descriptor of
-  // the file (dup), closed when the task is destroyed, run or not. Empty if there is no file.
+  // The same as a task, for another thread (the journal's writer) or to run here: it holds its own
+  // descriptor of the file (dup), closed when the task is destroyed, run or not. Empty if there is
+  // no file.
   std::function<void()> writeback_task() const;
   void finish(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories, const CampaignFileInfo& info,
               bool force);
