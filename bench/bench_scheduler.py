@@ -14,6 +14,9 @@ synthetic:  P oversubscribed ranks whose runs sleep COST seconds (hidden --synth
             E = sum of run times / (P x schedule wall time) (/timing/run_wall_time_s,
             /timing@schedule_wall_s), rank 0's per-result cost h = (time rank 0 spends matching,
             receiving, storing, journalling and answering) / results, and the model's prediction.
+compare:    this build against another binary (--driver), 2 ranks, single-copy off and TCP, the
+            two interleaved in every repeat: rank 0's per-result and per-run CPU, the journal's
+            and the tick's wall time per result.
 
 Model (rank 0 computes runs and handles every result, serially): with per-run cost c and rank
 0's per-result cost h, the P - 1 workers deliver (P - 1)/c results per second, which take rank 0
@@ -24,6 +27,7 @@ So E stays near 1 - h/c up to P ~ c/h and falls as c/(P h) beyond.
 
   bench/bench_scheduler.py BUILD_DIR real [--runs 4000] [--repeats 3] [--driver OTHER_BINARY]
   bench/bench_scheduler.py BUILD_DIR synthetic [--ranks 32] [--cost 0.002] [--runs 20000] [--repeats 3]
+  bench/bench_scheduler.py BUILD_DIR compare --driver OLD/truss-campaign [--runs 20000] [--repeats 3]
   bench/bench_scheduler.py model --c C --h H [--ranks 2 16 32 64]
 """
 import argparse
@@ -154,13 +158,37 @@ def bench_synthetic(a):
               f"| {h * 1e6:.1f} | {med(rs, 'h_cpu') * 1e6:.1f} | {model_efficiency(P, c, h):.3f} |")
 
 
+def bench_compare(a):
+    """Two builds side by side: 2 ranks, single-copy off and TCP, the builds interleaved within each
+    repeat; medians of rank 0's per-result CPU h, h / c, the journal's and the tick's wall time."""
+    drivers = {"before": a.driver, "after": os.path.join(a.build, "truss-campaign")}
+    sets = [f"ensemble.n_runs={a.runs}"]
+    mcas = {k: TRANSPORTS[k] for k in ("shm, single-copy off", "tcp")}
+    rows = {}
+    with tempfile.TemporaryDirectory() as d:
+        out = os.path.join(d, "c.h5")
+        for rep in range(a.repeats):
+            for t, mca in mcas.items():
+                for b, drv in drivers.items():
+                    rows.setdefault((t, b), []).append(run(drv, 2, mca, out, sets))
+            print(f"repeat {rep + 1}/{a.repeats} done", file=sys.stderr)
+    print(f"before: {drivers['before']}\nafter: {drivers['after']}\n{a.runs} runs, 2 ranks, {a.repeats} repeats (medians)\n")
+    print("| transport | build | wall (s) | rank 0 per result, CPU (us) | per run, CPU (us) | h / c | journal (us, wall) "
+          "| tick (us, wall) |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|")
+    for (t, b), rs in rows.items():
+        hc = statistics.median(r["h_cpu"] / r["c_cpu"] for r in rs)
+        print(f"| {t} | {b} | {med(rs, 'wall'):.2f} | {med(rs, 'h_cpu') * 1e6:.2f} | {med(rs, 'c_cpu') * 1e6:.1f} "
+              f"| {hc * 100:.2f} % | {med(rs, 'journal') * 1e6:.2f} | {med(rs, 'tick') * 1e6:.2f} |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("build", help="build directory, or 'model'")
-    ap.add_argument("what", nargs="?", choices=["real", "synthetic"])
+    ap.add_argument("what", nargs="?", choices=["real", "synthetic", "compare"])
     ap.add_argument("--runs", type=int)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--driver", help="real: another truss-campaign binary (e.g. an older build)")
+    ap.add_argument("--driver", help="real: another truss-campaign binary (e.g. an older build); compare: the 'before' one")
     ap.add_argument("--ranks", type=int, nargs="+", default=[32])
     ap.add_argument("--cost", type=float, default=0.002)
     ap.add_argument("--c", type=float, help="model: per-run cost (s)")
@@ -173,6 +201,11 @@ def main():
     if a.what == "real":
         a.runs = a.runs or 4000
         bench_real(a)
+    elif a.what == "compare":
+        if not a.driver:
+            ap.error("compare needs --driver (the build to compare against)")
+        a.runs = a.runs or 20000
+        bench_compare(a)
     else:
         a.runs = a.runs or 20000
         a.ranks = a.ranks[0]
