@@ -10,6 +10,7 @@
 
 #include "campaign/chunk_codec.hpp"
 #include "campaign/column_stats.hpp"
+#include "campaign/store_jobs.hpp"
 
 namespace truss::campaign {
 
@@ -68,60 +69,6 @@ void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, 
   check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, fstart, nullptr, fcount, nullptr), "select " + what);
   Handle mspace(H5Screate_simple(width > 0 ? 2 : 1, fcount, nullptr), H5Sclose, "memory space of " + what);
   check(H5Dwrite(ds, mem_type, mspace.get(), fspace.get(), H5P_DEFAULT, data), "write " + what);
-}
-
-}  // namespace
-
-namespace {
-
-// Encoding job (rank 0 -> encoder): one or more parts, each a header, one dataset chunk's raw
-// bytes and, for an output column, a statistics request; its output (encoder -> job_done): the same
-// parts with the stored bytes and the columns' chunk summaries (column_stats.hpp). Little-endian.
-// A statistics request: u32 rows (runs in the chunk), u32 width (columns), rows bytes (1: an ok
-// run), width x Windows; its answer: width ChunkSummary.
-struct JobHeader {
-  std::uint32_t dataset = 0;  // index into Datasets::direct
-  std::uint32_t elem_size = 0;
-  std::int64_t chunk = 0;     // chunk index (first row / chunk_runs)
-  std::int32_t level = 0;
-  std::uint32_t mask = 0;     // output: the filter mask of the stored bytes
-  std::uint64_t bytes = 0;    // chunk bytes after the header
-  std::uint64_t stats_bytes = 0;  // statistics request (job) or summaries (output) after them
-};
-constexpr std::size_t kJobHeader = sizeof(JobHeader);
-// JobHeader::level of a part that asks for the statistics only (--compression 0: the raw chunk is
-// already written; its output part has no bytes, only the summaries).
-constexpr std::int32_t kStatsOnly = -1;
-// Small dataset chunks (the scalar columns, 32 kB each) are grouped into jobs of about this size,
-// so that a chunk of runs makes some twenty jobs: fewer than the batches that carry them.
-constexpr std::size_t kJobBytes = std::size_t{1} << 20;
-
-// Calls f(header, bytes, stats) for each part of a job or of its output.
-template <class F>
-void for_each_part(std::string_view job, const char* what, F&& f) {
-  while (!job.empty()) {
-    JobHeader h;
-    if (job.size() < kJobHeader) throw std::runtime_error(fmt::format("{}: a part of {} bytes, shorter than its header", what, job.size()));
-    std::memcpy(&h, job.data(), kJobHeader);
-    if (h.bytes > job.size() - kJobHeader || h.stats_bytes > job.size() - kJobHeader - h.bytes)
-      throw std::runtime_error(fmt::format("{}: a part of {} + {} bytes in {}", what, h.bytes, h.stats_bytes, job.size()));
-    f(h, job.substr(kJobHeader, h.bytes), job.substr(kJobHeader + h.bytes, h.stats_bytes));
-    job.remove_prefix(kJobHeader + h.bytes + h.stats_bytes);
-  }
-}
-
-// The answer to a statistics request (JobHeader) for the chunk `raw` (rows x width float64).
-void append_summaries(std::string_view raw, std::string_view request, std::string& out) {
-  std::uint32_t rw[2] = {0, 0};
-  if (request.size() < sizeof rw) throw std::runtime_error("a statistics request cut short");
-  std::memcpy(rw, request.data(), sizeof rw);
-  const std::size_t rows = rw[0], width = rw[1];
-  request.remove_prefix(sizeof rw);
-  if (width == 0 || request.size() < rows || raw.size() < 8 * rows * width)
-    throw std::runtime_error(fmt::format("a statistics request for {} x {} values of a {}-byte chunk", rows, width, raw.size()));
-  const auto* use = reinterpret_cast<const std::uint8_t*>(request.data());
-  request.remove_prefix(rows);
-  for (std::size_t b = 0; b < width; ++b) append_summary(out, calc_chunk_summary(raw.data() + 8 * b, rows, width, use, read_windows(request)));
 }
 
 }  // namespace
@@ -204,6 +151,8 @@ ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, const StoreOpti
   std::size_t chunk_bytes = 0;
   for (const auto& x : d.direct) chunk_bytes += static_cast<std::size_t>(std::min(chunk_, n_)) * x.width * x.elem;
   max_jobs_bytes_ = opts.offload_encoding ? 2 * chunk_bytes : 0;
+  pool_.set_limit(2 * chunk_bytes);
+  headroom_ = opts.job_headroom_bytes;
   track_ = std::make_unique<Tracking>();
   track_->first.assign(d.direct.size(), -1);
   std::int64_t k = 0;
@@ -257,16 +206,13 @@ ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
   c->buf.resize(d.direct.size());
   for (std::size_t j = 0; j < d.direct.size(); ++j) {
     const std::size_t bytes = kJobHeader + full * d.direct[j].width * d.direct[j].elem;
+    // Room for the statistics request (append_request) and the job's carrier, so that neither
+    // copies the chunk again.
+    const std::size_t room = bytes + 8 + full + d.direct[j].width * sizeof(Windows) + headroom_;
     std::string& b = c->buf[j];
-    if (b.size() >= bytes && c->rows == chunk_) {  // every row of a full chunk is overwritten
-      b.resize(bytes);
-      continue;
-    }
-    // Room for the statistics request (append_request) first, so that neither the zeros nor the
-    // request copy the chunk again; an edge chunk: zeros past n.
-    b.clear();
-    b.reserve(bytes + 8 + full + d.direct[j].width * sizeof(Windows));
-    b.assign(bytes, '\0');
+    if (b.capacity() < room) b = pool_.take(room);
+    if (b.size() >= bytes && c->rows == chunk_) b.resize(bytes);  // every row of a full chunk is overwritten
+    else b.assign(bytes, '\0');  // an edge chunk: zeros past n
   }
   c->message.assign(static_cast<std::size_t>(c->rows), {});
   Chunk& ref = *c;
@@ -355,7 +301,8 @@ void ResultStore::complete_chunk(Chunk& c) {
   for (std::size_t i = 0; i < r; ++i) msg[i] = c.message[i].c_str();
   write_rows(d.message->get(), d.str_type.get(), msg.data(), c.first, c.rows, 0,
              fmt::format("/runs/message (runs {} to {})", c.first, c.first + c.rows - 1));
-  std::string small;  // small chunks grouped into one job
+  std::string small = pool_.take(kJobBytes + kJobBytes / 4 + headroom_);  // small chunks grouped into one job
+  small.clear();
   for (std::size_t j = 0; j < d.direct.size(); ++j) {
     std::string& b = c.buf[j];
     JobHeader h{static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(d.direct[j].elem), c.first / chunk_, deflate_, 0,
@@ -369,11 +316,14 @@ void ResultStore::complete_chunk(Chunk& c) {
     }
     if (stats) h.stats_bytes = append_request(b, j, use);
     std::memcpy(b.data(), &h, kJobHeader);
-    if (b.size() < kJobBytes / 4) {
+    if (b.size() < kJobBytes / 4) {  // copied into the group: the chunk keeps its buffer
       small += b;
       if (small.size() < kJobBytes && j + 1 < d.direct.size()) continue;
-      b = std::move(small);
+      jobs_bytes_ += small.size();
+      jobs_.push_back(std::move(small));
+      small = pool_.take(kJobBytes + kJobBytes / 4 + headroom_);
       small.clear();
+      continue;
     }
     jobs_bytes_ += b.size();
     jobs_.push_back(std::move(b));
@@ -381,16 +331,14 @@ void ResultStore::complete_chunk(Chunk& c) {
   if (!small.empty()) {
     jobs_bytes_ += small.size();
     jobs_.push_back(std::move(small));
+  } else {
+    pool_.give(std::move(small));
   }
-  std::string out;
-  while (!jobs_.empty() && jobs_bytes_ > max_jobs_bytes_) {
-    jobs_bytes_ -= jobs_.front().size();
-    encode_job_output(jobs_.front(), out);
-    jobs_.pop_front();
-    write_encoded(out);
-    ++jobs_local_;
+  while (jobs_bytes_ > max_jobs_bytes_ && drain_one()) {
   }
 }
+
+void ResultStore::recycle(std::string&& buffer) { pool_.give(std::move(buffer)); }
 
 bool ResultStore::take_job(std::string& job) {
   if (jobs_.empty()) return false;
@@ -417,6 +365,7 @@ bool ResultStore::drain_one() {
   std::string out;
   encode_job_output(jobs_.front(), out);
   jobs_bytes_ -= jobs_.front().size();
+  pool_.give(std::move(jobs_.front()));
   jobs_.pop_front();
   write_encoded(out);
   ++jobs_local_;
@@ -472,23 +421,6 @@ StreamedStats ResultStore::calc_stats() const {
   }
   for (const auto& c : track_->col) s.kept_values += c.kept_values();
   return s;
-}
-
-void encode_job_output(std::string_view job, std::string& out) {
-  out.clear();
-  std::string enc;
-  for_each_part(job, "an encoding job", [&](JobHeader h, std::string_view raw, std::string_view request) {
-    enc.clear();
-    if (h.level != kStatsOnly) h.mask = encode_chunk(raw, h.elem_size, h.level, enc);
-    h.bytes = enc.size();
-    const std::size_t at = out.size();
-    out.append(reinterpret_cast<const char*>(&h), kJobHeader);
-    out += enc;
-    if (h.stats_bytes == 0) return;
-    append_summaries(raw, request, out);
-    h.stats_bytes = out.size() - at - kJobHeader - h.bytes;
-    std::memcpy(out.data() + at, &h, kJobHeader);
-  });
 }
 
 void ResultStore::check_complete() const {

@@ -154,7 +154,10 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
   if (!o.resume && has_journal && !o.force)
     throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
                                      "(same campaign and --set options) or start over with --force", jpath));
-  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, campaign::StoreOptions{campaign::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression, size > 1});
+  // A job travels in a work message with up to max_batch run indices and the trailer after it.
+  const campaign::StoreOptions store{campaign::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression, size > 1,
+                                     8 * static_cast<std::size_t>(o.max_batch) + 64};
+  r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, store);
   if (o.resume) {
     try {
       auto on_frame = [&](FrameKind k, std::string_view p, std::size_t at) { restore_frame(r0, ctx, k, p, at); };
@@ -441,6 +444,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   so.on_job_done = [&](std::string_view out) { r0.file->store().job_done(out); };
   so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
   so.do_local_job = [&] { return r0.file->store().drain_one(); };
+  so.on_job_sent = [&](std::string&& buffer) { r0.file->store().recycle(std::move(buffer)); };
   ScheduleSummary sched;
   try {
     sched = run_schedule(

@@ -41,6 +41,7 @@ struct Incoming {
 struct WorkOut {
   std::string bytes;  // kTagWork layout
   MPI_Request req = MPI_REQUEST_NULL;
+  bool job = false;   // bytes is a side job's buffer (handed back through on_job_sent)
 };
 
 double thread_cpu_s() {
@@ -65,6 +66,9 @@ class Rank0 {
   void compute_one();
   void maybe_tick();
   void dispatch_waiting();
+  void job_sent(WorkOut& s) {
+    if (s.job && opts_.on_job_sent) opts_.on_job_sent(std::move(s.bytes));
+  }
 
   MPI_Comm comm_;
   const std::vector<std::int64_t>& todo_;
@@ -131,11 +135,13 @@ void Rank0::send_batch(int w) {
     ++sum_.jobs_sent;
     ++jobs_out_;
   }
-  const std::uint32_t head[2] = {static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(job_.size())};
-  out->bytes.reserve(sizeof head + 8 * k + job_.size());
-  out->bytes.append(reinterpret_cast<const char*>(head), sizeof head);
+  // The job's own buffer becomes the message: the runs and the trailer are appended to it.
+  const std::uint32_t trailer[2] = {static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(job_.size())};
+  out->job = job;
+  out->bytes = std::move(job_);
+  job_ = std::string();
   out->bytes.append(reinterpret_cast<const char*>(todo_.data() + next_run_), 8 * k);
-  out->bytes += job_;
+  out->bytes.append(reinterpret_cast<const char*>(trailer), sizeof trailer);
   next_run_ += k;
   if (k == 0 && !job) stopped_[static_cast<std::size_t>(w)] = 1;
   {
@@ -219,9 +225,10 @@ bool Rank0::complete_receives() {
 void Rank0::test_sends() {
   if (sends_.empty()) return;
   ScopeTimer t(sum_.rank0_mpi_s);
-  auto done = [](std::unique_ptr<WorkOut>& s) {
+  auto done = [&](std::unique_ptr<WorkOut>& s) {
     int flag = 0;
     MPI_Test(&s->req, &flag, MPI_STATUS_IGNORE);
+    if (flag) job_sent(*s);
     return flag != 0;
   };
   sends_.erase(std::remove_if(sends_.begin(), sends_.end(), done), sends_.end());
@@ -310,7 +317,10 @@ ScheduleSummary Rank0::run() {
     for (int w = 1; w < size_; ++w)
       if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
   }
-  for (auto& s : sends_) wait_idle(&s->req);
+  for (auto& s : sends_) {
+    wait_idle(&s->req);
+    job_sent(*s);
+  }
   sends_.clear();
   sum_.wall_s = seconds_since(t0);
   on_tick_();

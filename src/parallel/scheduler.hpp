@@ -39,6 +39,8 @@ struct ScheduleOptions {
   std::function<void(std::string_view job, std::string& output)> do_job;
   // Rank 0 with no runs left and nothing received: runs one waiting side job itself (false: none).
   std::function<bool()> do_local_job;
+  // Rank 0: a job's buffer once its message has gone (optional): take_job's memory back for reuse.
+  std::function<void(std::string&& buffer)> on_job_sent;
   std::string validate() const;
 };
 

@@ -12,7 +12,10 @@
 
 namespace truss::parallel::detail {
 
-inline constexpr int kTagWork = 11;    // rank 0 -> worker: u32 n, u32 job bytes, n int64 run indices, the job; n = 0: no more work
+// rank 0 -> worker: the job, n int64 run indices, then u32 n and u32 job bytes (a trailer, so that
+// rank 0 sends a side job from its own buffer without copying it); n = 0 and no job: no more work
+inline constexpr int kTagWork = 11;
+inline constexpr std::size_t kWorkTrailer = 2 * sizeof(std::uint32_t);
 inline constexpr int kTagResult = 12;  // worker -> rank 0: u32 job output bytes, the output, framed results of one batch (and a request)
 
 // Results of a batch: for each run, u32 length then the bytes.

@@ -7,6 +7,7 @@
 #include <ctime>
 #include <deque>
 #include <list>
+#include <stdexcept>
 #include <vector>
 
 #include "parallel/scheduler_detail.hpp"
@@ -35,7 +36,8 @@ struct Outgoing {
 
 struct Batch {
   std::vector<std::int64_t> runs;
-  std::string job;  // a side job to run first (empty: none)
+  std::string message;       // the work message: its first job_bytes are a side job to run first
+  std::size_t job_bytes = 0;
 };
 
 class Worker {
@@ -91,13 +93,17 @@ void Worker::complete_work() {
     int done = 0;
     MPI_Test(&posted_.front().req, &done, MPI_STATUS_IGNORE);
     if (!done) return;
-    const std::string& b = posted_.front().bytes;
-    std::uint32_t head[2] = {0, 0};
-    std::memcpy(head, b.data(), sizeof head);
+    std::string& b = posted_.front().bytes;
+    std::uint32_t trailer[2] = {0, 0};
+    if (b.size() < kWorkTrailer) abort_job(comm_, "a work message", std::runtime_error("shorter than its trailer"));
+    std::memcpy(trailer, b.data() + b.size() - kWorkTrailer, kWorkTrailer);
+    if (std::size_t{trailer[1]} + 8 * std::size_t{trailer[0]} + kWorkTrailer != b.size())
+      abort_job(comm_, "a work message", std::runtime_error("its trailer does not match its size"));
     Batch& batch = batches_.emplace_back();
-    batch.runs.resize(head[0]);
-    if (head[0] > 0) std::memcpy(batch.runs.data(), b.data() + sizeof head, 8 * std::size_t{head[0]});
-    batch.job.assign(b, sizeof head + 8 * std::size_t{head[0]}, head[1]);
+    batch.runs.resize(trailer[0]);
+    if (trailer[0] > 0) std::memcpy(batch.runs.data(), b.data() + trailer[1], 8 * std::size_t{trailer[0]});
+    batch.job_bytes = trailer[1];
+    batch.message = std::move(b);
     posted_.pop_front();
   }
 }
@@ -121,9 +127,9 @@ void Worker::receive_work() {
 
 void Worker::compute_batch(const Batch& batch) {
   job_out_.clear();
-  if (!batch.job.empty()) {
+  if (batch.job_bytes > 0) {
     try {
-      opts_.do_job(batch.job, job_out_);
+      opts_.do_job(std::string_view(batch.message).substr(0, batch.job_bytes), job_out_);
     } catch (const std::exception& e) {
       abort_job(comm_, "a side job", e);
     }
@@ -152,7 +158,7 @@ void Worker::run() {
     if (batches_.empty()) receive_work();
     const Batch batch = std::move(batches_.front());
     batches_.pop_front();
-    if (batch.runs.empty() && batch.job.empty()) break;  // the stop message: rank 0 sends it last
+    if (batch.runs.empty() && batch.job_bytes == 0) break;  // the stop message: rank 0 sends it last
     compute_batch(batch);
   }
   for (auto& s : sends_) wait_idle(&s.req);
