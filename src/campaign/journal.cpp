@@ -2,10 +2,13 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/uio.h>
 #include <unistd.h>
 #include <zlib.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
@@ -40,14 +43,22 @@ bool get(std::string_view b, std::size_t& at, T& v) {
   return true;
 }
 
-void write_all(int fd, std::string_view data, const std::string& path) {
-  while (!data.empty()) {
-    const ssize_t n = ::write(fd, data.data(), data.size());
+// Writes every piece, in order, with as few writev calls as the kernel allows (a short write
+// resumes inside the piece it stopped in).
+void writev_all(int fd, std::vector<iovec>& v, const std::string& path) {
+  std::size_t first = 0;
+  while (first < v.size()) {
+    const int count = static_cast<int>(std::min<std::size_t>(v.size() - first, IOV_MAX));
+    ssize_t n = ::writev(fd, v.data() + first, count);
     if (n < 0) {
       if (errno == EINTR) continue;
       fail_errno("cannot write journal", path);
     }
-    data.remove_prefix(static_cast<std::size_t>(n));
+    while (first < v.size() && static_cast<std::size_t>(n) >= v[first].iov_len) n -= static_cast<ssize_t>(v[first++].iov_len);
+    if (first < v.size()) {
+      v[first].iov_base = static_cast<char*>(v[first].iov_base) + n;
+      v[first].iov_len -= static_cast<std::size_t>(n);
+    }
   }
 }
 
@@ -86,8 +97,9 @@ struct Journal::Writer {
     std::unique_lock<std::mutex> l(m_);
     space_.wait(l, [&] { return queued_ < kMaxQueuedBytes || error_; });
     if (error_) std::rethrow_exception(error_);
-    queued_ += bytes.size();
-    queue_.push_back({std::move(bytes), sync, std::move(then)});
+    const std::size_t size = bytes.size();
+    queued_ += size;
+    queue_.push_back({std::move(bytes), {}, {}, size, sync, std::move(then)});
     bytes.clear();
     if (!spare_.empty()) {
       bytes = std::move(spare_.back());
@@ -95,6 +107,19 @@ struct Journal::Writer {
     }
     work_.notify_one();
     return ++submitted_;
+  }
+  // Queues frames that live in `owner` (kept until they are written): no copy.
+  void submit_owned(std::shared_ptr<const void> owner, std::vector<iovec> pieces, std::size_t bytes) {
+    std::unique_lock<std::mutex> l(m_);
+    space_.wait(l, [&] { return queued_ < kMaxQueuedBytes || error_; });
+    if (error_) std::rethrow_exception(error_);
+    queued_ += bytes;
+    Item& it = queue_.emplace_back();
+    it.owner = std::move(owner);
+    it.pieces = std::move(pieces);
+    it.size = bytes;
+    work_.notify_one();
+    ++submitted_;
   }
   void wait(std::uint64_t ticket) {
     std::unique_lock<std::mutex> l(m_);
@@ -104,39 +129,57 @@ struct Journal::Writer {
 
  private:
   struct Item {
-    std::string bytes;
+    std::string bytes;                   // a buffer of the journal's own frames, or
+    std::shared_ptr<const void> owner;  // ... memory holding frames elsewhere (pieces point into it)
+    std::vector<iovec> pieces;
+    std::size_t size = 0;
     bool sync = false;
     std::function<void()> then;
   };
+  // The items waiting, up to the first that syncs (or kMaxBatch of them): written together.
+  static constexpr std::size_t kMaxBatch = 64;
   void loop() {
     std::unique_lock<std::mutex> l(m_);
+    std::vector<Item> batch;
+    std::vector<iovec> v;
     for (;;) {
       work_.wait(l, [&] { return stop_ || !queue_.empty(); });
       if (queue_.empty()) return;  // stopping, everything written
-      Item it = std::move(queue_.front());
-      queue_.pop_front();
+      batch.clear();
+      while (!queue_.empty() && batch.size() < kMaxBatch) {
+        batch.push_back(std::move(queue_.front()));
+        queue_.pop_front();
+        if (batch.back().sync) break;
+      }
       l.unlock();
       std::exception_ptr err;
       try {
-        write_all(fd_, it.bytes, path_);
-        if (it.sync && ::fdatasync(fd_) != 0) fail_errno("cannot sync journal", path_);
-        if (it.then) it.then();
+        v.clear();
+        for (Item& it : batch) {
+          if (it.owner) v.insert(v.end(), it.pieces.begin(), it.pieces.end());
+          else if (!it.bytes.empty()) v.push_back({it.bytes.data(), it.bytes.size()});
+        }
+        writev_all(fd_, v, path_);
+        if (batch.back().sync && ::fdatasync(fd_) != 0) fail_errno("cannot sync journal", path_);
+        if (batch.back().then) batch.back().then();
       } catch (...) {
         err = std::current_exception();
       }
       l.lock();
-      queued_ -= it.bytes.size();
+      for (Item& it : batch) queued_ -= it.size;
       if (err) {
         error_ = err;
         queue_.clear();
         queued_ = 0;
       } else {
-        ++completed_;
-        if (spare_.size() < 2) {
+        completed_ += batch.size();
+        for (Item& it : batch) {
+          if (it.owner || spare_.size() >= 2) continue;
           it.bytes.clear();
           spare_.push_back(std::move(it.bytes));
         }
       }
+      batch.clear();  // owners released
       space_.notify_all();
       done_.notify_all();
     }
@@ -364,6 +407,44 @@ void Journal::append(FrameKind kind, std::string_view payload, std::uint32_t crc
   buffer_.append(payload);
   // Bounded memory: full buffers go to the writer (no sync; flush() syncs).
   if (buffer_.size() >= kWriteThrough) hand_over(false);
+}
+
+void Journal::seal_frame(std::string& frame, FrameKind kind) {
+  if (frame.size() < kFrameHeader) throw std::logic_error("a journal frame shorter than its header");
+  const std::string_view payload = std::string_view(frame).substr(kFrameHeader);
+  const std::uint32_t size = static_cast<std::uint32_t>(payload.size()), crc = frame_crc(kind, payload);
+  frame[0] = static_cast<char>(kind);
+  std::memcpy(frame.data() + 1, &size, 4);
+  std::memcpy(frame.data() + 5, &crc, 4);
+}
+
+std::string_view Journal::check_frame(std::string_view frame) {
+  std::uint32_t size = 0;
+  if (frame.size() >= kFrameHeader) std::memcpy(&size, frame.data() + 1, 4);
+  if (frame.size() < kFrameHeader || size != frame.size() - kFrameHeader)
+    throw std::runtime_error(fmt::format("a result of {} bytes is not a sealed journal frame", frame.size()));
+  return frame.substr(kFrameHeader);
+}
+
+void Journal::append_frame(std::string_view frame) {
+  check_frame(frame);
+  buffer_.append(frame);
+  if (buffer_.size() >= kWriteThrough) hand_over(false);
+}
+
+void Journal::append_frames(std::shared_ptr<const void> owner, const std::vector<std::string_view>& frames) {
+  if (frames.empty()) return;
+  if (!buffer_.empty()) hand_over(false);  // the frames before these go first
+  std::vector<iovec> pieces;
+  pieces.reserve(frames.size());
+  std::size_t bytes = 0;
+  for (std::string_view f : frames) {
+    check_frame(f);
+    pieces.push_back({const_cast<char*>(f.data()), f.size()});
+    bytes += f.size();
+  }
+  if (!writer_) writer_ = std::make_unique<Writer>(fd_, path_);
+  writer_->submit_owned(std::move(owner), std::move(pieces), bytes);
 }
 
 std::uint64_t Journal::hand_over(bool sync, std::function<void()> then) {

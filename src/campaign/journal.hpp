@@ -81,6 +81,17 @@ class Journal {
   // records, which takes the CRC off rank 0's per-result work).
   void append(FrameKind kind, std::string_view payload, std::uint32_t crc);
   static std::uint32_t frame_crc(FrameKind kind, std::string_view payload);
+  // Frames made where the record is made (a worker): kFrameHeader bytes, then the payload;
+  // seal_frame fills the header (kind, length, CRC). check_frame returns the payload of a sealed
+  // frame, or throws std::runtime_error if its length field does not match (not its CRC: that is
+  // checked when the journal is read back).
+  static constexpr std::size_t kFrameHeader = 9;
+  static void seal_frame(std::string& frame, FrameKind kind);
+  static std::string_view check_frame(std::string_view frame);
+  void append_frame(std::string_view frame);  // a sealed frame, copied
+  // Sealed frames that live in `owner` (a received message): the writer writes them from there
+  // and then releases it, so rank 0 copies nothing. They follow every frame appended before.
+  void append_frames(std::shared_ptr<const void> owner, const std::vector<std::string_view>& frames);
   static constexpr std::size_t kWriteThrough = std::size_t{1} << 20;
   // The kernel's copy of each record into the page cache and the fdatasync waits are rank 0's
   // per-result work on the campaign's serial path (docs/benchmarks.md, fourth look): a background

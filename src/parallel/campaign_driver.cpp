@@ -429,12 +429,13 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
     }
     last_flush = std::chrono::steady_clock::now();
   };
-  // A result is the record's bytes and their journal CRC, computed where the run ran.
+  // A result is the record as a sealed journal frame (its CRC computed where the run ran): rank 0
+  // journals it as it came and stores the record inside it.
   auto compute = [&](std::int64_t run, std::string& out) {
+    out.assign(campaign::Journal::kFrameHeader, '\0');
     if (o.synthetic_run_cost_s >= 0.0) synthetic_run_record(*ctx, run, rank, o.synthetic_run_cost_s).append_bytes(out);
     else campaign::calc_run_record(*ctx, run, rank).append_bytes(out);
-    const std::uint32_t crc = campaign::Journal::frame_crc(FrameKind::run, out);
-    out.append(reinterpret_cast<const char*>(&crc), sizeof crc);
+    campaign::Journal::seal_frame(out, FrameKind::run);
   };
   ScheduleOptions so;
   so.max_batch = o.max_batch;
@@ -445,17 +446,22 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
   so.do_local_job = [&] { return r0.file->store().drain_one(); };
   so.on_job_sent = [&](std::string&& buffer) { r0.file->store().recycle(std::move(buffer)); };
+  // A worker's message: its records stored, then its frames journaled from the message itself.
+  so.on_message = [&](std::shared_ptr<const char[]> message, const std::vector<std::string_view>& frames) {
+    for (std::string_view f : frames) r0.file->store().add_bytes(campaign::Journal::check_frame(f), r0.st.session);
+    const auto t0 = std::chrono::steady_clock::now();
+    r0.journal->append_frames(std::move(message), frames);
+    r0.journal_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
   ScheduleSummary sched;
   try {
     sched = run_schedule(
         comm, todo, compute,
-        [&](std::string_view result) {
-          if (result.size() < sizeof(std::uint32_t)) throw std::runtime_error("a result without its CRC");
-          const std::string_view bytes = result.substr(0, result.size() - sizeof(std::uint32_t));
+        [&](std::string_view frame) {  // rank 0's own runs
           const auto t0 = std::chrono::steady_clock::now();
-          r0.journal->append(FrameKind::run, bytes, get_at<std::uint32_t>(result, bytes.size()));
+          r0.journal->append_frame(frame);
           r0.journal_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          r0.file->store().add_bytes(bytes, r0.st.session);
+          r0.file->store().add_bytes(campaign::Journal::check_frame(frame), r0.st.session);
         },
         [&] {
           if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= o.flush_interval_s)

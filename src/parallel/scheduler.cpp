@@ -36,7 +36,8 @@ class ScopeTimer {
 
 struct Incoming {
   int source = 0;
-  std::string bytes;
+  std::shared_ptr<char[]> bytes;  // not zeroed: MPI writes every byte (and on_message may keep it)
+  std::size_t size = 0;
 };
 struct WorkOut {
   std::string bytes;  // kTagWork layout
@@ -86,6 +87,7 @@ class Rank0 {
   std::vector<std::unique_ptr<Incoming>> incoming_;  // buffers stay put while their receive is posted
   std::vector<std::unique_ptr<WorkOut>> sends_;
   std::vector<int> done_idx_;
+  std::vector<std::string_view> views_;  // the results of one message (on_message)
   std::string one_, job_;
   Clock::time_point last_tick_ = Clock::now();
   ScheduleSummary sum_;
@@ -168,11 +170,12 @@ bool Rank0::match_new() {
     MPI_Get_count(&st, MPI_BYTE, &count);
     auto in = std::make_unique<Incoming>();
     in->source = st.MPI_SOURCE;
-    in->bytes.resize(static_cast<std::size_t>(count));
+    in->size = static_cast<std::size_t>(count);
+    in->bytes = std::make_shared_for_overwrite<char[]>(in->size);
     MPI_Request r;
     {
       ScopeTimer t(sum_.rank0_mpi_s);
-      MPI_Imrecv(in->bytes.data(), count, MPI_BYTE, &m, &r);
+      MPI_Imrecv(in->bytes.get(), count, MPI_BYTE, &m, &r);
     }
     recv_reqs_.push_back(r);
     incoming_.push_back(std::move(in));
@@ -194,7 +197,8 @@ bool Rank0::complete_receives() {
   if (n_done <= 0) return false;
   for (int k = 0; k < n_done; ++k) {
     const auto before = received_;
-    std::string_view msg = incoming_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])]->bytes;
+    Incoming& in = *incoming_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])];
+    const std::string_view msg(in.bytes.get(), in.size);
     std::uint32_t job = 0;
     std::memcpy(&job, msg.data(), sizeof job);
     if (job > 0) {
@@ -206,7 +210,19 @@ bool Rank0::complete_receives() {
         abort_job(comm_, "storing a side job's output", e);
       }
     }
-    for_each_framed(msg.substr(sizeof job + job), [&](std::string_view one) { deliver(one); });
+    if (opts_.on_message) {
+      views_.clear();
+      for_each_framed(msg.substr(sizeof job + job), [&](std::string_view one) { views_.push_back(one); });
+      try {
+        ScopeTimer t(sum_.rank0_result_s);
+        opts_.on_message(std::move(in.bytes), views_);
+      } catch (const std::exception& e) {
+        abort_job(comm_, "storing results", e);
+      }
+      received_ += static_cast<std::int64_t>(views_.size());
+    } else {
+      for_each_framed(msg.substr(sizeof job + job), [&](std::string_view one) { deliver(one); });
+    }
     sum_.runs_by_workers += received_ - before;
   }
   // Drop the completed receives (MPI_Testsome set their requests to MPI_REQUEST_NULL).

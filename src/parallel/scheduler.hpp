@@ -17,6 +17,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -39,6 +40,10 @@ struct ScheduleOptions {
   std::function<void(std::string_view job, std::string& output)> do_job;
   // Rank 0 with no runs left and nothing received: runs one waiting side job itself (false: none).
   std::function<bool()> do_local_job;
+  // Rank 0 (optional): a worker's results message as a whole, in place of one on_result call per
+  // result (rank 0's own runs still go through on_result): `results` point into `message`, which
+  // the callee may keep (the journal writes the results from it: no copy on rank 0).
+  std::function<void(std::shared_ptr<const char[]> message, const std::vector<std::string_view>& results)> on_message;
   // Rank 0: a job's buffer once its message has gone (optional): take_job's memory back for reuse.
   std::function<void(std::string&& buffer)> on_job_sent;
   std::string validate() const;

@@ -7,10 +7,12 @@
 
 #include <atomic>
 #include <csignal>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <random>
 #include <algorithm>
 
@@ -208,6 +210,81 @@ TEST_CASE("the journal's writer keeps every frame, in order, past its queue limi
   int wrong = 0;
   for (int i = 0; i < n; ++i) wrong += frames[static_cast<std::size_t>(i)].payload != payloads[static_cast<std::size_t>(i)];
   CHECK(wrong == 0);
+  fs::remove(path);
+}
+
+TEST_CASE("frames journaled from the memory they arrived in: in order, that memory released once written",
+          "[campaign][journal]") {
+  const std::string path = scratch("owned.journal").string();
+  const std::string text = "campaign O";
+  auto sealed = [](int i, std::size_t len) {
+    std::string f(Journal::kFrameHeader, '\0');
+    f += payload(i, len);
+    Journal::seal_frame(f, FrameKind::run);
+    return f;
+  };
+  // 300 messages as a worker sends them (a prefix, then per frame a u32 length and the frame), of
+  // 10 frames of 3,000 bytes: 9 MB, past the writer's queue limit; between them a frame appended
+  // (copied) and a heartbeat, as rank 0's own runs and its flushes.
+  const int messages = 300, per = 10;
+  const std::size_t len = 3000;
+  std::vector<std::string> want;
+  std::vector<std::weak_ptr<const char[]>> held;
+  {
+    Journal j = Journal::create(path, text);
+    int id = 0;
+    for (int m = 0; m < messages; ++m) {
+      std::string bytes = "PREFIX";
+      std::vector<std::size_t> at;
+      for (int k = 0; k < per; ++k, ++id) {
+        const std::string f = sealed(id, len);
+        const auto n = static_cast<std::uint32_t>(f.size());
+        bytes.append(reinterpret_cast<const char*>(&n), 4);
+        at.push_back(bytes.size());
+        bytes += f;
+        want.push_back(payload(id, len));
+      }
+      std::shared_ptr<char[]> msg(new char[bytes.size()]);
+      std::memcpy(msg.get(), bytes.data(), bytes.size());
+      std::vector<std::string_view> views;
+      for (std::size_t a : at) views.emplace_back(msg.get() + a, Journal::kFrameHeader + len);
+      held.push_back(msg);
+      j.append_frames(std::move(msg), views);
+      j.append_frame(sealed(id, 100));
+      want.push_back(payload(id++, 100));
+      j.append(FrameKind::heartbeat, "beat");
+      if (m % 50 == 49) j.flush_async();
+    }
+    j.flush();
+    int alive = 0;
+    for (const auto& w : held) alive += !w.expired();
+    CHECK(alive == 0);  // the writer let go of every message once written
+    // A frame whose length field does not match what it is: refused, nothing queued.
+    std::string bad = sealed(0, 10);
+    bad.pop_back();
+    CHECK_THROWS_WITH(j.append_frame(bad), Catch::Contains("not a sealed journal frame"));
+    std::shared_ptr<char[]> owner(new char[bad.size()]);
+    std::memcpy(owner.get(), bad.data(), bad.size());
+    CHECK_THROWS_WITH(j.append_frames(owner, {std::string_view(owner.get(), bad.size())}), Catch::Contains("not a sealed journal frame"));
+  }
+  std::vector<JournalFrame> frames;
+  std::size_t dropped = 1;
+  Journal::resume(path, text, frames, dropped);
+  CHECK(dropped == 0);
+  std::vector<std::string> runs;
+  int beats = 0;
+  for (const auto& f : frames) {
+    if (f.kind == FrameKind::run) runs.push_back(f.payload);
+    beats += f.kind == FrameKind::heartbeat;
+  }
+  CHECK(beats == messages);
+  REQUIRE(runs.size() == want.size());
+  int wrong = 0;
+  for (std::size_t i = 0; i < runs.size(); ++i) wrong += runs[i] != want[i];
+  CHECK(wrong == 0);
+  // Order across kinds: each heartbeat right after its message's frames and the copied frame.
+  REQUIRE(frames.size() > static_cast<std::size_t>(per + 1));
+  CHECK(frames[static_cast<std::size_t>(per + 1)].kind == FrameKind::heartbeat);
   fs::remove(path);
 }
 
