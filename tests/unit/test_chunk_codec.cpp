@@ -16,6 +16,7 @@
 #include "campaign/chunk_codec.hpp"
 #include "campaign/result_store.hpp"
 #include "campaign/run_record.hpp"
+#include "store_records.hpp"
 
 using namespace truss::campaign;
 namespace fs = std::filesystem;
@@ -121,39 +122,9 @@ TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as sm
 }
 
 TEST_CASE("result store: encoding jobs run elsewhere land in the right dataset and rows", "[campaign][codec]") {
-  const std::string text = R"(
-[ensemble]
-n_runs = 150
-master_seed = 5
-[scene.mast]
-n_bays = 4
-[[dispersion]]
-key = "mast.strut_mass_kg"
-per = "bay"
-distribution = "normal"
-std = 0.02
-[[dispersion]]
-key = "drive.speed_m_per_s"
-apply = "relative"
-distribution = "uniform"
-lower = -0.1
-upper = 0.1
-)";
-  const CampaignContext ctx(parse_campaign_text(text, "codec.toml", "."));
+  const CampaignContext ctx(parse_campaign_text(test::store_campaign_text(150), "codec.toml", "."));
   const OutputColumns& cols = ctx.columns;
-  // Records with a distinct value in every cell: value = run + cell / 1000 (cell = place in the record).
-  auto record = [&](std::int64_t run) {
-    RunRecord r;
-    r.run_index = run;
-    r.rank = 1;
-    double cell = 0;
-    auto v = [&] { return static_cast<double>(run) + (cell++) / 1000.0; };
-    for (std::size_t k = 0; k < cols.f64.size(); ++k) r.f64.push_back(v());
-    for (std::size_t k = 0; k < cols.i64.size(); ++k) r.i64.push_back(run * 100 + static_cast<std::int64_t>(k));
-    for (std::size_t k = 0; k < cols.bay.size() * static_cast<std::size_t>(cols.n_bays_max); ++k) r.bays.push_back(v());
-    for (int k = 0; k < cols.n_inputs; ++k) r.inputs.push_back(v());
-    return r;
-  };
+  auto record = [&](std::int64_t run) { return test::distinct_record(cols, run); };
   const std::string path = (fs::temp_directory_path() / "truss_test_store_jobs.h5").string();
   fs::remove(path);
   const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);

@@ -17,6 +17,7 @@
 #include "campaign/chunk_codec.hpp"
 #include "campaign/result_store.hpp"
 #include "campaign/run_record.hpp"
+#include "store_records.hpp"
 
 using namespace truss::campaign;
 namespace fs = std::filesystem;
@@ -73,34 +74,11 @@ std::string raw_chunk(hid_t file, const std::string& path, std::int64_t k, std::
 TEST_CASE("result store: chunks built in reused job buffers hold the runs' values and zeros past n", "[campaign][store]") {
   // Chunks of 1,024 runs: each dataset chunk is small, so they travel as grouped jobs of about
   // 1 MB, which the pool keeps; 3,000 runs make the last chunk an edge chunk (zeros past n).
-  const std::string text = R"(
-[ensemble]
-n_runs = 3000
-master_seed = 5
-[scene.mast]
-n_bays = 4
-[[dispersion]]
-key = "mast.strut_mass_kg"
-per = "bay"
-distribution = "normal"
-std = 0.02
-)";
-  const CampaignContext ctx(parse_campaign_text(text, "buffers.toml", "."));
+  const CampaignContext ctx(parse_campaign_text(test::store_campaign_text(3000), "buffers.toml", "."));
   const OutputColumns& cols = ctx.columns;
   const std::int64_t n = 3000, chunk = 1024;
   const auto nb = static_cast<std::size_t>(cols.n_bays_max);
-  auto record = [&](std::int64_t run) {
-    RunRecord r;
-    r.run_index = run;
-    r.rank = 1;
-    double cell = 0;
-    auto v = [&] { return static_cast<double>(run) + (cell++) / 1000.0; };
-    for (std::size_t k = 0; k < cols.f64.size(); ++k) r.f64.push_back(v());
-    for (std::size_t k = 0; k < cols.i64.size(); ++k) r.i64.push_back(run * 100 + static_cast<std::int64_t>(k));
-    for (std::size_t k = 0; k < cols.bay.size() * nb; ++k) r.bays.push_back(v());
-    for (int k = 0; k < cols.n_inputs; ++k) r.inputs.push_back(v());
-    return r;
-  };
+  auto record = [&](std::int64_t run) { return test::distinct_record(cols, run); };
   // Nearly in order, as a campaign's results arrive: chunks complete one after another, so the
   // later ones are built in the buffers of the earlier ones.
   std::vector<std::int64_t> order(static_cast<std::size_t>(n));
