@@ -23,8 +23,10 @@
 #include "campaign/results.hpp"
 #include "campaign/run_record.hpp"
 #include "io/scene_toml.hpp"
+#include "campaign_fixtures.hpp"
 
 using namespace truss::campaign;
+using truss::campaign::test::small_campaign;
 namespace fs = std::filesystem;
 
 namespace {
@@ -63,36 +65,6 @@ class FileSizeLimit {
   rlimit old_{};
   void (*old_handler_)(int) = SIG_DFL;
 };
-
-CampaignOptions small_campaign(const std::string& sampling = "latin_hypercube", std::int64_t n_runs = 24) {
-  const std::string text = fmt::format(R"(
-[ensemble]
-n_runs = {}
-master_seed = 11
-sampling = "{}"
-[scene.mast]
-n_bays = 5
-[[dispersion]]
-key = "mast.strut_mass_kg"
-per = "bay"
-distribution = "normal"
-std = 0.02
-[[dispersion]]
-key = "mast.frame_side_m"
-per = "frame"
-apply = "offset"
-distribution = "uniform"
-lower = -0.0005
-upper = 0.0005
-[[dispersion]]
-key = "drive.speed_m_per_s"
-apply = "relative"
-distribution = "uniform"
-lower = -0.1
-upper = 0.1
-)", n_runs, sampling);
-  return parse_campaign_text(text, "small.toml", ".");
-}
 
 std::string bytes_of(RunRecord r) {
   r.wall_time_s = 0.0;

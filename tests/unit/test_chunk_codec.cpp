@@ -16,7 +16,7 @@
 #include "campaign/chunk_codec.hpp"
 #include "campaign/result_store.hpp"
 #include "campaign/run_record.hpp"
-#include "store_records.hpp"
+#include "campaign_fixtures.hpp"
 
 using namespace truss::campaign;
 namespace fs = std::filesystem;
@@ -122,7 +122,7 @@ TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as sm
 }
 
 TEST_CASE("result store: encoding jobs run elsewhere land in the right dataset and rows", "[campaign][codec]") {
-  const CampaignContext ctx(parse_campaign_text(test::store_campaign_text(150), "codec.toml", "."));
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", 150));
   const OutputColumns& cols = ctx.columns;
   auto record = [&](std::int64_t run) { return test::distinct_record(cols, run); };
   const std::string path = (fs::temp_directory_path() / "truss_test_store_jobs.h5").string();

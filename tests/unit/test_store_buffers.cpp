@@ -17,7 +17,7 @@
 #include "campaign/chunk_codec.hpp"
 #include "campaign/result_store.hpp"
 #include "campaign/run_record.hpp"
-#include "store_records.hpp"
+#include "campaign_fixtures.hpp"
 
 using namespace truss::campaign;
 namespace fs = std::filesystem;
@@ -74,7 +74,7 @@ std::string raw_chunk(hid_t file, const std::string& path, std::int64_t k, std::
 TEST_CASE("result store: chunks built in reused job buffers hold the runs' values and zeros past n", "[campaign][store]") {
   // Chunks of 1,024 runs: each dataset chunk is small, so they travel as grouped jobs of about
   // 1 MB, which the pool keeps; 3,000 runs make the last chunk an edge chunk (zeros past n).
-  const CampaignContext ctx(parse_campaign_text(test::store_campaign_text(3000), "buffers.toml", "."));
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", 3000));
   const OutputColumns& cols = ctx.columns;
   const std::int64_t n = 3000, chunk = 1024;
   const auto nb = static_cast<std::size_t>(cols.n_bays_max);

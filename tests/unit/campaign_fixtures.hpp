@@ -1,6 +1,6 @@
-// Shared by the result-store tests: a small campaign with a per-bay and a per-run dispersion, and
-// records whose every cell holds a distinct value (value = run + cell / 1000, cell = place in the
-// record), so that a value in the wrong row or column shows.
+// Shared by the campaign tests: a small campaign (5 bays; per-bay, per-frame and per-run
+// dispersions, in that order), and records whose every cell holds a distinct value (value = run +
+// cell / 1000, cell = place in the record), so that a value in the wrong row or column shows.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -12,26 +12,34 @@
 
 namespace truss::campaign::test {
 
-inline std::string store_campaign_text(std::int64_t n_runs) {
-  return fmt::format(R"(
+inline CampaignOptions small_campaign(const std::string& sampling = "latin_hypercube", std::int64_t n_runs = 24) {
+  const std::string text = fmt::format(R"(
 [ensemble]
 n_runs = {}
-master_seed = 5
+master_seed = 11
+sampling = "{}"
 [scene.mast]
-n_bays = 4
+n_bays = 5
 [[dispersion]]
 key = "mast.strut_mass_kg"
 per = "bay"
 distribution = "normal"
 std = 0.02
 [[dispersion]]
+key = "mast.frame_side_m"
+per = "frame"
+apply = "offset"
+distribution = "uniform"
+lower = -0.0005
+upper = 0.0005
+[[dispersion]]
 key = "drive.speed_m_per_s"
 apply = "relative"
 distribution = "uniform"
 lower = -0.1
 upper = 0.1
-)",
-                     n_runs);
+)", n_runs, sampling);
+  return parse_campaign_text(text, "small.toml", ".");
 }
 
 inline RunRecord distinct_record(const OutputColumns& cols, std::int64_t run) {
