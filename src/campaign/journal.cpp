@@ -62,6 +62,14 @@ void writev_all(int fd, std::vector<iovec>& v, const std::string& path) {
   }
 }
 
+// A sealed frame's length field against its size.
+void check_frame(std::string_view frame) {
+  std::uint32_t size = 0;
+  if (frame.size() >= Journal::kFrameHeader) std::memcpy(&size, frame.data() + 1, 4);
+  if (frame.size() < Journal::kFrameHeader || size != frame.size() - Journal::kFrameHeader)
+    throw std::runtime_error(fmt::format("a result of {} bytes is not a sealed journal frame", frame.size()));
+}
+
 void lock_or_refuse(int fd, const std::string& path) {
   if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return;
   const int err = errno;
@@ -413,12 +421,10 @@ std::uint32_t Journal::frame_crc(FrameKind kind, std::string_view payload) {
   return static_cast<std::uint32_t>(crc);
 }
 
-void Journal::append(FrameKind kind, std::string_view payload) { append(kind, payload, frame_crc(kind, payload)); }
-
-void Journal::append(FrameKind kind, std::string_view payload, std::uint32_t crc) {
+void Journal::append(FrameKind kind, std::string_view payload) {
   put(buffer_, static_cast<std::uint8_t>(kind));
   put(buffer_, static_cast<std::uint32_t>(payload.size()));
-  put(buffer_, static_cast<std::uint32_t>(crc));
+  put(buffer_, frame_crc(kind, payload));
   buffer_.append(payload);
   // Bounded memory: full buffers go to the writer (no sync; flush() syncs).
   if (buffer_.size() >= kWriteThrough) hand_over(false);
@@ -431,14 +437,6 @@ void Journal::seal_frame(std::string& frame, FrameKind kind) {
   frame[0] = static_cast<char>(kind);
   std::memcpy(frame.data() + 1, &size, 4);
   std::memcpy(frame.data() + 5, &crc, 4);
-}
-
-std::string_view Journal::check_frame(std::string_view frame) {
-  std::uint32_t size = 0;
-  if (frame.size() >= kFrameHeader) std::memcpy(&size, frame.data() + 1, 4);
-  if (frame.size() < kFrameHeader || size != frame.size() - kFrameHeader)
-    throw std::runtime_error(fmt::format("a result of {} bytes is not a sealed journal frame", frame.size()));
-  return frame.substr(kFrameHeader);
 }
 
 void Journal::append_frame(std::string_view frame) {
@@ -457,16 +455,21 @@ void Journal::append_frames(std::shared_ptr<const void> owner, const std::vector
     pieces.push_back({const_cast<char*>(f.data()), f.size()});
     bytes += f.size();
   }
+  Writer& w = writer();
+  if (!buffer_.empty()) w.stage(buffer_);  // the frames before these go first
+  w.stage_owned(std::move(owner), std::move(pieces), bytes);
+  if (w.staged_bytes() >= kWriteThrough) w.submit(false);
+}
+
+Journal::Writer& Journal::writer() {
   if (!writer_) writer_ = std::make_unique<Writer>(fd_, path_);
-  if (!buffer_.empty()) writer_->stage(buffer_);  // the frames before these go first
-  writer_->stage_owned(std::move(owner), std::move(pieces), bytes);
-  if (writer_->staged_bytes() >= kWriteThrough) writer_->submit(false);
+  return *writer_;
 }
 
 std::uint64_t Journal::hand_over(bool sync, std::function<void()> then) {
-  if (!writer_) writer_ = std::make_unique<Writer>(fd_, path_);
-  if (!buffer_.empty()) writer_->stage(buffer_);
-  return writer_->submit(sync, std::move(then));
+  Writer& w = writer();
+  if (!buffer_.empty()) w.stage(buffer_);
+  return w.submit(sync, std::move(then));
 }
 
 void Journal::flush() {

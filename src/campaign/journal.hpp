@@ -77,20 +77,17 @@ class Journal {
   // Buffered; a buffer of kWriteThrough bytes goes to the background writer (below), which writes
   // it out (not synced), so memory stays bounded however long the flush interval.
   void append(FrameKind kind, std::string_view payload);
-  // The same with the frame's CRC-32 computed elsewhere (frame_crc: a worker computes it for its
-  // records, which takes the CRC off rank 0's per-result work).
-  void append(FrameKind kind, std::string_view payload, std::uint32_t crc);
   static std::uint32_t frame_crc(FrameKind kind, std::string_view payload);
-  // Frames made where the record is made (a worker): kFrameHeader bytes, then the payload;
-  // seal_frame fills the header (kind, length, CRC). check_frame returns the payload of a sealed
-  // frame, or throws std::runtime_error if its length field does not match (not its CRC: that is
-  // checked when the journal is read back).
+  // Frames made where the record is made (a worker, which takes the CRC off rank 0's per-result
+  // work): kFrameHeader bytes, then the payload; seal_frame fills the header (kind, length, CRC).
   static constexpr std::size_t kFrameHeader = 9;
   static void seal_frame(std::string& frame, FrameKind kind);
-  static std::string_view check_frame(std::string_view frame);
-  void append_frame(std::string_view frame);  // a sealed frame, copied
+  // A sealed frame, copied. Throws std::runtime_error, appending nothing, if its length field does
+  // not match its size (its CRC is checked when the journal is read back).
+  void append_frame(std::string_view frame);
   // Sealed frames that live in `owner` (a received message): the writer writes them from there
-  // and then releases it, so rank 0 copies nothing. They follow every frame appended before.
+  // and then releases its reference, so rank 0 copies nothing. They follow every frame appended
+  // before. Checked as append_frame's, all before any is queued.
   void append_frames(std::shared_ptr<const void> owner, const std::vector<std::string_view>& frames);
   static constexpr std::size_t kWriteThrough = std::size_t{1} << 20;
   // The kernel's copy of each record into the page cache and the fdatasync waits are rank 0's
@@ -110,10 +107,11 @@ class Journal {
   struct Writer;
   Journal(std::string path, int fd);
   std::uint64_t hand_over(bool sync, std::function<void()> then = {});  // the writer's ticket for this buffer
+  Writer& writer();  // started at the first use
   std::string path_;
   int fd_ = -1;
   std::string buffer_;
-  std::unique_ptr<Writer> writer_;  // started at the first hand-over
+  std::unique_ptr<Writer> writer_;
 };
 
 std::uint32_t crc32_of(std::string_view bytes);

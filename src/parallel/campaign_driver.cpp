@@ -431,8 +431,9 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   };
   // A result is the record as a sealed journal frame (its CRC computed where the run ran): rank 0
   // journals it as it came and stores the record inside it.
+  constexpr std::size_t kFrameHeader = campaign::Journal::kFrameHeader;
   auto compute = [&](std::int64_t run, std::string& out) {
-    out.assign(campaign::Journal::kFrameHeader, '\0');
+    out.assign(kFrameHeader, '\0');
     if (o.synthetic_run_cost_s >= 0.0) synthetic_run_record(*ctx, run, rank, o.synthetic_run_cost_s).append_bytes(out);
     else campaign::calc_run_record(*ctx, run, rank).append_bytes(out);
     campaign::Journal::seal_frame(out, FrameKind::run);
@@ -446,12 +447,13 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
   so.do_local_job = [&] { return r0.file->store().drain_one(); };
   so.on_job_sent = [&](std::string&& buffer) { r0.file->store().recycle(std::move(buffer)); };
-  // A worker's message: its records stored, then its frames journaled from the message itself.
+  // A worker's message: its frames journaled from the message itself (the journal checks them),
+  // then its records stored; `message` keeps the bytes alive here while the writer may free its copy.
   so.on_message = [&](std::shared_ptr<const char[]> message, const std::vector<std::string_view>& frames) {
-    for (std::string_view f : frames) r0.file->store().add_bytes(campaign::Journal::check_frame(f), r0.st.session);
     const auto t0 = std::chrono::steady_clock::now();
-    r0.journal->append_frames(std::move(message), frames);
+    r0.journal->append_frames(message, frames);
     r0.journal_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    for (std::string_view f : frames) r0.file->store().add_bytes(f.substr(kFrameHeader), r0.st.session);
   };
   ScheduleSummary sched;
   try {
@@ -461,7 +463,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
           const auto t0 = std::chrono::steady_clock::now();
           r0.journal->append_frame(frame);
           r0.journal_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          r0.file->store().add_bytes(campaign::Journal::check_frame(frame), r0.st.session);
+          r0.file->store().add_bytes(frame.substr(kFrameHeader), r0.st.session);  // checked by the journal
         },
         [&] {
           if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= o.flush_interval_s)
