@@ -26,7 +26,7 @@ a fraction u = (P - 1) h / c of its time; it computes its own runs (cost c + h e
 So E stays near 1 - h/c up to P ~ c/h and falls as c/(P h) beyond.
 
   bench/bench_scheduler.py BUILD_DIR real [--runs 4000] [--repeats 3] [--driver OTHER_BINARY]
-  bench/bench_scheduler.py BUILD_DIR synthetic [--ranks 32] [--cost 0.002] [--runs 20000] [--repeats 3]
+  bench/bench_scheduler.py BUILD_DIR synthetic [--ranks 32] [--cost 0.002] [--runs 20000] [--repeats 3] [--driver OLD]
   bench/bench_scheduler.py BUILD_DIR compare --driver OLD/truss-campaign [--runs 20000] [--repeats 3]
   bench/bench_scheduler.py model --c C --h H [--ranks 2 16 32 64]
 """
@@ -134,27 +134,31 @@ def bench_real(a):
 
 def bench_synthetic(a):
     load0 = os.getloadavg()
-    driver = os.path.join(a.build, "truss-campaign")
+    drivers = {"": os.path.join(a.build, "truss-campaign")}
+    if a.driver:  # another build, interleaved with this one in every repeat
+        drivers = {"before": a.driver, "after": drivers[""]}
     sets = [f"ensemble.n_runs={a.runs}"]
     extra = ["--synthetic-run-cost-s", str(a.cost)]
-    rows = {k: [] for k in ("shm (CMA)", "tcp")}
+    rows = {(t, b): [] for t in ("shm (CMA)", "tcp") for b in drivers}
     with tempfile.TemporaryDirectory() as d:
         out = os.path.join(d, "s.h5")
         for rep in range(a.repeats):
-            for name in rows:
-                rows[name].append(run(driver, a.ranks, TRANSPORTS[name], out, sets, extra))
+            for (name, b) in rows:
+                rows[(name, b)].append(run(drivers[b], a.ranks, TRANSPORTS[name], out, sets, extra))
             print(f"repeat {rep + 1}/{a.repeats} done", file=sys.stderr)
     P = a.ranks
     print(f"{P} ranks, {a.runs} sleeping runs of {a.cost * 1e3:g} ms, {a.repeats} repeats (medians); "
-          f"load average before / after: {load0} / {os.getloadavg()}\n")
-    print("| transport | schedule wall (s) | mean run (ms) | efficiency | runs by rank 0 | rank 0 per result, wall (us) "
+          f"load average before / after: {load0} / {os.getloadavg()}")
+    for b, drv in drivers.items():
+        print(f"{b or 'driver'}: {drv}")
+    print("\n| transport | build | schedule wall (s) | mean run (ms) | efficiency | runs by rank 0 | rank 0 per result, wall (us) "
           "| rank 0 per result, CPU (us) | model E (wall h) |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|")
-    for name, rs in rows.items():
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    for (name, b), rs in rows.items():
         E = statistics.median(r["run_sum"] / (P * r["sched"]) for r in rs)
         c = statistics.median(r["run_sum"] / r["n"] for r in rs)
         h = med(rs, "h")
-        print(f"| {name} | {med(rs, 'sched'):.3f} | {c * 1e3:.3f} | {E:.3f} | {med(rs, 'rank0_runs'):.0f} "
+        print(f"| {name} | {b or '-'} | {med(rs, 'sched'):.3f} | {c * 1e3:.3f} | {E:.3f} | {med(rs, 'rank0_runs'):.0f} "
               f"| {h * 1e6:.1f} | {med(rs, 'h_cpu') * 1e6:.1f} | {model_efficiency(P, c, h):.3f} |")
 
 
@@ -188,7 +192,7 @@ def main():
     ap.add_argument("what", nargs="?", choices=["real", "synthetic", "compare"])
     ap.add_argument("--runs", type=int)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--driver", help="real: another truss-campaign binary (e.g. an older build); compare: the 'before' one")
+    ap.add_argument("--driver", help="real: another truss-campaign binary (e.g. an older build); compare, synthetic: the 'before' one")
     ap.add_argument("--ranks", type=int, nargs="+", default=[32])
     ap.add_argument("--cost", type=float, default=0.002)
     ap.add_argument("--c", type=float, help="model: per-run cost (s)")

@@ -41,9 +41,23 @@ struct Incoming {
 };
 struct WorkOut {
   std::string bytes;  // kTagWork layout
-  MPI_Request req = MPI_REQUEST_NULL;
   bool job = false;   // bytes is a side job's buffer (handed back through on_job_sent)
 };
+
+// Drops the entries whose requests MPI_Testsome completed (set to MPI_REQUEST_NULL) from two
+// parallel vectors, keeping the order of the rest.
+template <class T>
+void drop_completed(std::vector<MPI_Request>& reqs, std::vector<T>& items) {
+  std::size_t w = 0;
+  for (std::size_t i = 0; i < reqs.size(); ++i) {
+    if (reqs[i] == MPI_REQUEST_NULL) continue;
+    reqs[w] = reqs[i];
+    items[w] = std::move(items[i]);
+    ++w;
+  }
+  reqs.resize(w);
+  items.resize(w);
+}
 
 double thread_cpu_s() {
   timespec ts{};
@@ -85,7 +99,11 @@ class Rank0 {
   std::int64_t jobs_out_ = 0;  // side jobs sent whose output has not come back
   std::vector<MPI_Request> recv_reqs_;              // parallel to incoming_
   std::vector<std::unique_ptr<Incoming>> incoming_;  // buffers stay put while their receive is posted
+  // Sends in flight and their requests, in parallel: one MPI_Testsome tests them all. An MPI_Test
+  // per send would run the progress engine once per pending send (up to two per worker at P ranks).
   std::vector<std::unique_ptr<WorkOut>> sends_;
+  std::vector<MPI_Request> send_reqs_;
+  std::int64_t n_waiting_ = 0;  // workers with waiting_ set
   std::vector<int> done_idx_;
   std::vector<std::string_view> views_;  // the results of one message (on_message)
   std::string one_, job_;
@@ -113,7 +131,7 @@ Rank0::Rank0(MPI_Comm comm, const std::vector<std::int64_t>& todo, const Compute
 // Workers with no runs left to do get the side jobs that have appeared since they asked (at the
 // end: the encoding of the last chunk).
 void Rank0::dispatch_waiting() {
-  if (!opts_.take_job) return;
+  if (!opts_.take_job || n_waiting_ == 0) return;
   for (int w = 1; w < size_; ++w)
     if (waiting_[static_cast<std::size_t>(w)] && !stopped_[static_cast<std::size_t>(w)]) send_batch(w);
 }
@@ -129,9 +147,11 @@ void Rank0::send_batch(int w) {
   const bool job = !final_ && opts_.take_job && opts_.take_job(job_);
   if (!job) job_.clear();
   if (k == 0 && !job && !final_) {  // nothing to do now: it waits, and gets a job or the stop message later
+    if (!waiting_[static_cast<std::size_t>(w)]) ++n_waiting_;
     waiting_[static_cast<std::size_t>(w)] = 1;
     return;
   }
+  if (waiting_[static_cast<std::size_t>(w)]) --n_waiting_;
   waiting_[static_cast<std::size_t>(w)] = 0;
   if (job) {
     ++sum_.jobs_sent;
@@ -148,7 +168,9 @@ void Rank0::send_batch(int w) {
   if (k == 0 && !job) stopped_[static_cast<std::size_t>(w)] = 1;
   {
     ScopeTimer t(sum_.rank0_mpi_s);
-    MPI_Isend(out->bytes.data(), static_cast<int>(out->bytes.size()), MPI_BYTE, w, kTagWork, comm_, &out->req);
+    MPI_Request r;
+    MPI_Isend(out->bytes.data(), static_cast<int>(out->bytes.size()), MPI_BYTE, w, kTagWork, comm_, &r);
+    send_reqs_.push_back(r);
   }
   sends_.push_back(std::move(out));
   ++sum_.batches_sent;
@@ -225,29 +247,21 @@ bool Rank0::complete_receives() {
     }
     sum_.runs_by_workers += received_ - before;
   }
-  // Drop the completed receives (MPI_Testsome set their requests to MPI_REQUEST_NULL).
-  std::size_t w = 0;
-  for (std::size_t i = 0; i < recv_reqs_.size(); ++i) {
-    if (recv_reqs_[i] == MPI_REQUEST_NULL) continue;
-    recv_reqs_[w] = recv_reqs_[i];
-    incoming_[w] = std::move(incoming_[i]);
-    ++w;
-  }
-  recv_reqs_.resize(w);
-  incoming_.resize(w);
+  drop_completed(recv_reqs_, incoming_);
   return true;
 }
 
 void Rank0::test_sends() {
-  if (sends_.empty()) return;
-  ScopeTimer t(sum_.rank0_mpi_s);
-  auto done = [&](std::unique_ptr<WorkOut>& s) {
-    int flag = 0;
-    MPI_Test(&s->req, &flag, MPI_STATUS_IGNORE);
-    if (flag) job_sent(*s);
-    return flag != 0;
-  };
-  sends_.erase(std::remove_if(sends_.begin(), sends_.end(), done), sends_.end());
+  if (send_reqs_.empty()) return;
+  int n_done = 0;
+  done_idx_.resize(send_reqs_.size());
+  {
+    ScopeTimer t(sum_.rank0_mpi_s);
+    MPI_Testsome(static_cast<int>(send_reqs_.size()), send_reqs_.data(), &n_done, done_idx_.data(), MPI_STATUSES_IGNORE);
+  }
+  if (n_done <= 0) return;
+  for (int k = 0; k < n_done; ++k) job_sent(*sends_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])]);
+  drop_completed(send_reqs_, sends_);
 }
 
 bool Rank0::poll() {
@@ -333,11 +347,12 @@ ScheduleSummary Rank0::run() {
     for (int w = 1; w < size_; ++w)
       if (!stopped_[static_cast<std::size_t>(w)]) send_batch(w);
   }
-  for (auto& s : sends_) {
-    wait_idle(&s->req);
-    job_sent(*s);
+  for (std::size_t i = 0; i < sends_.size(); ++i) {
+    wait_idle(&send_reqs_[i]);
+    job_sent(*sends_[i]);
   }
   sends_.clear();
+  send_reqs_.clear();
   sum_.wall_s = seconds_since(t0);
   on_tick_();
   sum_.rank0_handle_cpu_s = handle_cpu >= 0 ? handle_cpu : thread_cpu_s() - cpu0 - compute_cpu_s_ - local_jobs_cpu_;
