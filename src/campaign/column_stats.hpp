@@ -91,6 +91,7 @@ class ColumnStats {
  private:
   void narrow(std::size_t t);
   void put(std::size_t t, double v, std::int64_t k);
+  void classify_kept(std::size_t t, std::size_t from);
   std::vector<Moments> chunks_;
   std::vector<std::uint8_t> have_;
   std::int64_t count_ = 0;

@@ -146,6 +146,43 @@ TEST_CASE("streamed statistics: a column that drifts with the run index comes ba
   CHECK(unresolved > 0);
 }
 
+TEST_CASE("streamed statistics: a window cut down to a tie block counts the ties once", "[campaign][stats]") {
+  // In index order: ten chunks of a column with 10 % zeros among continuous values of both signs.
+  // The first windows (from 2,048 values) reach past the zeros, so zeros are kept; as N grows the
+  // median's window is cut to [0, 0] and the kept zeros become copies of its one end. Then values
+  // far above (drift): the final median lies just past the zeros, so it must come back unresolved
+  // (NaN), which it does only if each kept zero was counted once when the window collapsed.
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const std::size_t rows = 4096, n_a = 10 * rows, n = n_a + rows + 819;
+  std::vector<double> v(n);
+  for (std::size_t i = 0; i < n_a; ++i) v[i] = rng() % 10 == 0 ? 0.0 : g(rng);
+  for (std::size_t i = n_a; i < n; ++i) v[i] = 1000.0 + static_cast<double>(i);
+  const std::vector<std::uint8_t> use(n, 1);
+  const std::size_t n_chunks = (n + rows - 1) / rows;
+  ColumnStats cs(static_cast<std::int64_t>(n_chunks));
+  const char* bytes = reinterpret_cast<const char*>(v.data());
+  cs.seed(bytes, rows, 1, use.data());
+  REQUIRE(cs.windows()[2].lo < 0.0);  // the median's first window holds zeros strictly inside
+  REQUIRE(cs.windows()[2].hi > 0.0);
+  for (std::size_t c = 0; c < n_chunks; ++c) {
+    const std::size_t r = std::min(rows, n - c * rows);
+    cs.add(static_cast<std::int64_t>(c), calc_chunk_summary(bytes + 8 * rows * c, r, 1, use.data(), cs.windows()));
+    if (c + 1 == 10) {
+      REQUIRE(cs.windows()[2].lo == 0.0);  // cut down to the zeros
+      REQUIRE(cs.windows()[2].hi == 0.0);
+    }
+  }
+  bool resolved = true;
+  const Stats s = cs.calc_stats(resolved);
+  const Stats ref = calc_stats(v, use);
+  REQUIRE(ref.percentiles[2] > 0.0);  // past the zeros
+  CHECK(std::isnan(s.percentiles[2]));
+  CHECK_FALSE(resolved);
+  for (std::size_t k = 0; k < kStatTargets; ++k)
+    if (!std::isnan(s.percentiles[k])) CHECK(s.percentiles[k] == ref.percentiles[k]);
+}
+
 TEST_CASE("streamed statistics: the wire format round-trips and rejects a cut summary", "[campaign][stats]") {
   std::vector<double> v = {1.0, 2.0, 2.0, 3.5, 7.0};
   const std::vector<std::uint8_t> use(v.size(), 1);
