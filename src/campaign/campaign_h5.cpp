@@ -252,6 +252,7 @@ void write_timing_attributes(hid_t file, const CampaignFileInfo& info, std::int6
   write_double_attribute(g.get(), "rank0_idle_s", st.rank0_idle_s);
   write_double_attribute(g.get(), "rank0_handle_cpu_s", st.rank0_handle_cpu_s);
   write_double_attribute(g.get(), "rank0_compute_cpu_s", st.rank0_compute_cpu_s);
+  write_double_attribute(g.get(), "rank0_write_thread_cpu_s", st.rank0_write_thread_cpu_s);
   write_int_attribute(g.get(), "runs_by_rank0", st.runs_by_rank0);
   write_int_attribute(g.get(), "runs_by_workers", st.runs_by_workers);
   // Columns whose percentiles the end read back from /runs (their order statistics were outside

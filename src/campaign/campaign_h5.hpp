@@ -30,6 +30,9 @@ struct ScheduleTiming {
   // Parts of rank0_poll_s (wall): MPI calls; storing results (journal and chunks), of which the
   // journal's share; writing encoded chunks and merging their statistics.
   double rank0_mpi_s = 0, rank0_result_s = 0, rank0_journal_s = 0, rank0_job_output_s = 0;
+  // The CPU time of rank 0's write thread (returned chunks written, their statistics merged), not
+  // in rank0_handle_cpu_s; 0 without one (one rank, --no-write-thread, an HDF5 that is not thread-safe).
+  double rank0_write_thread_cpu_s = 0;
 };
 
 struct CampaignFileInfo {

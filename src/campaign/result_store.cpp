@@ -159,6 +159,12 @@ ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, const StoreOpti
   for (std::size_t j = d.f64_0; j < d.i64_0; ++j) track_->first[j] = k++;
   for (std::size_t j = d.bays_0; j < d.inputs_0; ++j, k += nb) track_->first[j] = k;
   track_->col.assign(static_cast<std::size_t>(k), ColumnStats((n_ + chunk_ - 1) / chunk_));
+  hbool_t threadsafe = 0;
+  if (opts.write_thread && H5is_library_threadsafe(&threadsafe) >= 0 && threadsafe) {
+    writes_ = std::make_unique<TaskThread>(2 * chunk_bytes);  // encoded chunks are smaller than raw ones
+    // A thread-safe HDF5 keeps the error-stack settings per thread: errors come back as exceptions here too.
+    writes_->post([] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }, 0);
+  }
 }
 
 // Dimension scales, so that netCDF-4 readers (xarray) see named dimensions: /runs/run_index
@@ -185,7 +191,7 @@ void ResultStore::attach_scales(hid_t file, Datasets& d) {
   }
 }
 
-ResultStore::~ResultStore() = default;
+ResultStore::~ResultStore() { writes_.reset(); }  // before the datasets close
 
 ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
   const std::int64_t k = run / chunk_;
@@ -355,6 +361,22 @@ void ResultStore::job_done(std::string_view output) {
   ++jobs_returned_;
 }
 
+void ResultStore::job_done(std::shared_ptr<const char[]> owner, std::string_view output) {
+  if (!writes_) {
+    job_done(output);
+    return;
+  }
+  writes_->post([this, owner = std::move(owner), output] { write_encoded(output); }, output.size());
+  --jobs_out_;
+  ++jobs_returned_;
+}
+
+void ResultStore::finish_writes() {
+  if (writes_) writes_->drain();
+}
+
+double ResultStore::calc_write_thread_cpu_s() const { return writes_ ? writes_->calc_cpu_s() : 0.0; }
+
 void ResultStore::drain_jobs() {
   while (drain_one()) {
   }
@@ -376,6 +398,7 @@ bool ResultStore::drain_one() {
 // each column's windows (first seeded from this chunk if it is the first to complete). Returns its size.
 std::uint64_t ResultStore::append_request(std::string& part, std::size_t j, const std::vector<std::uint8_t>& use) {
   const std::size_t width = ds_->direct[j].width, rows = use.size(), before = part.size();
+  std::lock_guard<std::mutex> lock(stats_m_);  // the write thread may be merging into these columns
   auto* first = &track_->col[static_cast<std::size_t>(track_->first[j])];
   if (!first->seeded())
     for (std::size_t b = 0; b < width; ++b) first[b].seed(part.data() + kJobHeader + 8 * b, rows, width, use.data());
@@ -397,13 +420,15 @@ void ResultStore::write_encoded(std::string_view output) {
             fmt::format("write chunk {} of dataset {}", h.chunk, h.dataset));
     const std::int64_t first = track_->first[h.dataset];
     if (first < 0 || h.stats_bytes == 0) return;  // no statistics, or a raw chunk whose summaries come with its statistics-only job
+    std::lock_guard<std::mutex> lock(stats_m_);  // HDF5 (thread-safe build) serialises itself; the statistics are ours
     for (std::size_t b = 0; b < d.direct[h.dataset].width; ++b)
       track_->col[static_cast<std::size_t>(first) + b].add(h.chunk, read_summary(stats));
     if (!stats.empty()) throw std::runtime_error(fmt::format("{} bytes past the summaries of dataset {}", stats.size(), h.dataset));
   });
 }
 
-StreamedStats ResultStore::calc_stats() const {
+StreamedStats ResultStore::calc_stats() {
+  finish_writes();
   const Datasets& d = *ds_;
   StreamedStats s;
   auto one = [&](std::size_t k, std::vector<std::uint8_t>& resolved) {
@@ -423,7 +448,8 @@ StreamedStats ResultStore::calc_stats() const {
   return s;
 }
 
-void ResultStore::check_complete() const {
+void ResultStore::check_complete() {
+  finish_writes();
   if (n_done_ != n_ || !open_.empty() || !jobs_.empty() || jobs_out_ != 0)
     throw std::runtime_error(fmt::format("internal: {} of {} runs stored, {} chunks unwritten, {} encoding jobs waiting, {} out",
                                          n_done_, n_, open_.size(), jobs_.size(), jobs_out_));

@@ -13,11 +13,13 @@
 #include <deque>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "campaign/buffer_pool.hpp"
+#include "campaign/task_thread.hpp"
 #include "campaign/results.hpp"
 #include "campaign/run_record.hpp"
 #include "io/h5_util.hpp"
@@ -30,6 +32,9 @@ struct StoreOptions {
   int deflate_level = 1;           // zlib level (0: no compression); 1: the fastest, most of level 9's ratio
   bool offload_encoding = false;   // jobs wait for take_job (other ranks encode them), up to two chunks' bytes
   std::size_t job_headroom_bytes = 1024;  // spare room after each job for what carries it (a work message: 8 bytes a run)
+  // Encoded chunks that come back (job_done with an owner) written, and their statistics merged, on
+  // a thread of their own, not by the thread that answers the workers (only with a thread-safe HDF5).
+  bool write_thread = false;
   std::string validate() const;
 };
 
@@ -84,6 +89,12 @@ class ResultStore {
   // every job still waiting. Counters for the end summary.
   bool take_job(std::string& job);
   void job_done(std::string_view output);
+  // The same for an output inside memory that `owner` keeps alive: on the write thread if there is one.
+  void job_done(std::shared_ptr<const char[]> owner, std::string_view output);
+  // Waits until the write thread has written everything handed to it; rethrows its error.
+  void finish_writes();
+  bool has_write_thread() const { return writes_ != nullptr; }
+  double calc_write_thread_cpu_s() const;  // 0 without a write thread
   void drain_jobs();
   bool drain_one();  // encodes and writes the next waiting job here; false if none
   // A job's buffer back once it has been sent: the next chunks reuse its memory (no page faults,
@@ -91,10 +102,11 @@ class ResultStore {
   void recycle(std::string&& buffer);
   std::int64_t jobs_offloaded() const { return jobs_returned_; }
   std::int64_t jobs_local() const { return jobs_local_; }
-  // Throws std::runtime_error unless every run has arrived and every chunk is written.
-  void check_complete() const;
-  // The output columns' statistics over the ok runs of the chunks written so far.
-  StreamedStats calc_stats() const;
+  // Throws std::runtime_error unless every run has arrived and every chunk is written (after
+  // finish_writes).
+  void check_complete();
+  // The output columns' statistics over the ok runs of the chunks written so far (after finish_writes).
+  StreamedStats calc_stats();
 
  private:
   struct Chunk;
@@ -122,6 +134,8 @@ class ResultStore {
   std::size_t headroom_ = 0;
   BufferPool pool_;  // buffers of sent and encoded jobs, for the next chunks
   std::int64_t jobs_out_ = 0, jobs_returned_ = 0, jobs_local_ = 0;
+  std::mutex stats_m_;                 // track_: seeded and read here, merged on the write thread
+  std::unique_ptr<TaskThread> writes_;  // last: stopped first
 };
 
 // What a worker does with an encoding job: the job's chunk encoded (encode_chunk), framed so that

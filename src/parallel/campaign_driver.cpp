@@ -5,6 +5,7 @@
 
 #include <malloc.h>
 
+#include <algorithm>
 #include <chrono>
 #include <ctime>
 #include <cstring>
@@ -49,6 +50,7 @@ struct CommandOptions {
   int max_batch = 32;
   int compression = 1;                 // zlib level of the results file's datasets (0: none)
   double synthetic_run_cost_s = -1.0;  // bench only (hidden): runs sleep this long and simulate nothing
+  bool write_thread = true;            // rank 0 writes returned chunks on a thread of its own (hidden --no-write-thread: A/B)
 };
 
 // The error state of all ranks: true on every rank if any rank failed.
@@ -156,7 +158,7 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
                                      "(same campaign and --set options) or start over with --force", jpath));
   // A job travels in a work message with up to max_batch run indices and the trailer after it.
   const campaign::StoreOptions store{campaign::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression, size > 1,
-                                     8 * static_cast<std::size_t>(o.max_batch) + 64};
+                                     8 * static_cast<std::size_t>(o.max_batch) + 64, size > 1 && o.write_thread};
   r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, store);
   if (o.resume) {
     try {
@@ -209,6 +211,7 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
                  "them uncompressed (largest file, least work for rank 0)")->check(CLI::Range(0, 9));
   // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
   app.add_option("--synthetic-run-cost-s", o.synthetic_run_cost_s, "")->check(CLI::Range(0.0, 60.0))->group("");
+  app.add_flag("--no-write-thread{false}", o.write_thread, "")->group("");
   app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
   app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
              "3 I/O or internal error.");
@@ -249,13 +252,6 @@ std::vector<std::int64_t> start_session(Rank0& r0, std::int64_t n_runs, double t
 }
 
 // Runs per status so far (restored and new), from the results store.
-campaign::StatusCounts status_counts(const campaign::ResultStore& store) {
-  campaign::StatusCounts n{};
-  const auto& c = store.status_counts();
-  std::copy(c.begin(), c.end(), n.begin());
-  return n;
-}
-
 // Rank 0: histories, statistics and the results file; removes the journal. Returns the exit status.
 int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx, const std::string& campaign_text,
                   Rank0& r0, int size, std::chrono::steady_clock::time_point wall0, const ScheduleSummary& sched) {
@@ -283,13 +279,16 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.schedule.rank0_result_s = sched.rank0_result_s;
     info.schedule.rank0_journal_s = r0.journal_s;
     info.schedule.rank0_job_output_s = sched.rank0_job_output_s;
+    r0.file->store().finish_writes();
+    info.schedule.rank0_write_thread_cpu_s = r0.file->store().calc_write_thread_cpu_s();
     info.write_extra = [&](hid_t file) { campaign::write_nominal_group(file, nominal, ctx.columns.n_bays_max); };
     const campaign::ResultStore& store = r0.file->store();
     const std::int64_t n_runs = store.n_runs();
-    const campaign::StatusCounts counts = status_counts(store);
+    const campaign::StatusCounts counts = store.status_counts();
     const std::size_t peak_chunks = store.peak_chunks_in_memory();
     const std::int64_t chunk_runs = store.chunk_runs();
     const std::int64_t jobs_offloaded = store.jobs_offloaded();
+    const bool write_thread = store.has_write_thread();  // (the store is gone after finish)
     r0.file->store().drain_jobs();
     const std::int64_t jobs_local = store.jobs_local();
     r0.file->finish(histories, info, o.force);
@@ -297,16 +296,18 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n", sim::to_string(nominal.status),
                              nominal.message.empty() ? "" : ": " + nominal.message);
     campaign::print_design_summary(stderr, campaign::read_design_values(o.output_path, ctx.columns, nominal));
-    const std::int64_t results = sched.runs_by_rank0 + sched.runs_by_workers;
+    const double results = std::max(1.0, static_cast<double>(sched.runs_by_rank0 + sched.runs_by_workers));
+    auto us = [&](double s) { return 1e6 * s / results; };  // a result
+    const std::string thread_cpu =
+        write_thread ? fmt::format(" + {:.3g} us CPU on the write thread", us(info.schedule.rank0_write_thread_cpu_s)) : "";
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs ({}), {:.3g} s on {} rank{} "
                              "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per result handled "
-                             "({:.3g} us CPU), at most {} chunks of {} runs in memory, {} of {} chunk encodings by workers)\n",
+                             "({:.3g} us CPU{}), at most {} chunks of {} runs in memory, {} of {} chunk encodings by workers)\n",
                              o.output_path, n_runs, campaign::format_status_counts(counts), info.wall_time_s, size, size > 1 ? "s" : "",
                              std::chrono::duration<double>(std::chrono::steady_clock::now() - t_finish).count(),
                              static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC, sched.runs_by_rank0,
-                             results ? 1e6 * (sched.rank0_poll_s + sched.rank0_tick_s) / static_cast<double>(results) : 0.0,
-                             results ? 1e6 * sched.rank0_handle_cpu_s / static_cast<double>(results) : 0.0, peak_chunks, chunk_runs,
-                             jobs_offloaded, jobs_offloaded + jobs_local);
+                             us(sched.rank0_poll_s + sched.rank0_tick_s), us(sched.rank0_handle_cpu_s), thread_cpu, peak_chunks,
+                             chunk_runs, jobs_offloaded, jobs_offloaded + jobs_local);
     return kExitOk;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
@@ -443,7 +444,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   so.tick_interval_s = std::min(0.25, o.flush_interval_s);
   // Workers encode the results file's chunks (campaign/result_store.hpp), rank 0 writes them.
   so.take_job = [&](std::string& job) { return r0.file->store().take_job(job); };
-  so.on_job_done = [&](std::string_view out) { r0.file->store().job_done(out); };
+  so.on_job_done = [&](auto owner, std::string_view out) { r0.file->store().job_done(std::move(owner), out); };
   so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
   so.do_local_job = [&] { return r0.file->store().drain_one(); };
   so.on_job_sent = [&](std::string&& buffer) { r0.file->store().recycle(std::move(buffer)); };
@@ -468,7 +469,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
         [&] {
           if (std::chrono::duration<double>(std::chrono::steady_clock::now() - last_flush).count() >= o.flush_interval_s)
             flush_journal(false);
-          progress.update(r0.file->store().n_done(), [&] { return status_counts(r0.file->store()); });
+          progress.update(r0.file->store().n_done(), [&] { return r0.file->store().status_counts(); });
         },
         so);
   } catch (const std::exception& e) {
@@ -479,7 +480,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   if (root) {
     try {
       flush_journal(true);
-      progress.finish(r0.file->store().n_done(), status_counts(r0.file->store()));
+      progress.finish(r0.file->store().n_done(), r0.file->store().status_counts());
       status = write_results(o, *ctx, campaign_text, r0, size, wall0, sched);
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";

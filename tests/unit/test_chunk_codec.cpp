@@ -126,39 +126,87 @@ TEST_CASE("result store: encoding jobs run elsewhere land in the right dataset a
   const OutputColumns& cols = ctx.columns;
   auto record = [&](std::int64_t run) { return test::distinct_record(cols, run); };
   const std::string path = (fs::temp_directory_path() / "truss_test_store_jobs.h5").string();
+  std::vector<StreamedStats> stats;
+  // Returned outputs written where they arrive, then on the store's write thread (rank 0's, with
+  // a thread-safe HDF5): the same rows and the same statistics.
+  for (const bool threaded : {false, true}) {
+    INFO((threaded ? "on the write thread" : "where they arrive"));
+    fs::remove(path);
+    const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    {
+      // Chunks of 16 runs, offloaded: every job goes out and comes back in reverse order.
+      ResultStore store(f, ctx, StoreOptions{16, 1, true, 1024, threaded});
+      hbool_t threadsafe = 0;
+      H5is_library_threadsafe(&threadsafe);
+      CHECK(store.has_write_thread() == (threaded && threadsafe));
+      std::vector<std::string> outputs;
+      std::string job, out;
+      for (std::int64_t run = 149; run >= 0; --run) {  // any order of arrival
+        store.add(record(run), 2);
+        while (store.take_job(job)) {
+          encode_job_output(job, out);
+          outputs.push_back(out);
+        }
+      }
+      for (auto it = outputs.rbegin(); it != outputs.rend(); ++it) {
+        if (!threaded) {
+          store.job_done(*it);
+          continue;
+        }
+        std::shared_ptr<char[]> owner(new char[it->size() + 8]);  // the output inside a larger message
+        std::memcpy(owner.get() + 8, it->data(), it->size());
+        store.job_done(owner, std::string_view(owner.get() + 8, it->size()));
+      }
+      CHECK(store.jobs_offloaded() == static_cast<std::int64_t>(outputs.size()));
+      CHECK(store.jobs_local() == 0);
+      store.check_complete();
+      stats.push_back(store.calc_stats());
+    }
+    const std::int64_t n = 150;
+    const std::size_t nb = static_cast<std::size_t>(cols.n_bays_max);
+    const auto f64_0 = read_f64_column(f, "runs/" + std::string(cols.f64[0]->name), n);
+    const auto f64_last = read_f64_column(f, "runs/" + std::string(cols.f64.back()->name), n);
+    const auto bays = read_f64_columns(f, "runs/bays/" + std::string(cols.bay[1]->name), n, static_cast<std::int64_t>(nb), 0,
+                                       static_cast<std::int64_t>(nb), 16);
+    const auto speed = read_f64_column(f, "runs/inputs/drive.speed_m_per_s", n);
+    for (std::int64_t run = 0; run < n; ++run) {
+      const RunRecord r = record(run);
+      const auto i = static_cast<std::size_t>(run);
+      CHECK(f64_0[i] == r.f64.front());
+      CHECK(f64_last[i] == r.f64.back());
+      for (std::size_t b = 0; b < nb; ++b) CHECK(bays[b][i] == r.bays[nb + b]);
+      CHECK(speed[i] == r.inputs.back());  // the per-run dispersion's one dimension comes last
+    }
+    H5Fclose(f);
+    fs::remove(path);
+  }
+  REQUIRE(stats.size() == 2);
+  REQUIRE(stats[0].f64.size() == cols.f64.size());
+  for (std::size_t k = 0; k < cols.f64.size(); ++k) {
+    CHECK(stats[1].f64[k].count == stats[0].f64[k].count);
+    CHECK(stats[1].f64[k].max == stats[0].f64[k].max);
+    CHECK(stats[1].f64[k].percentiles == stats[0].f64[k].percentiles);
+  }
+}
+
+TEST_CASE("result store: an error on the write thread reaches the caller, nothing hangs", "[campaign][codec]") {
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", 40));
+  const std::string path = (fs::temp_directory_path() / "truss_test_store_thread_error.h5").string();
   fs::remove(path);
   const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   {
-    // Chunks of 16 runs, offloaded: every job goes out and comes back in reverse order.
-    ResultStore store(f, ctx, StoreOptions{16, 1, true});
-    std::vector<std::string> outputs;
-    std::string job, out;
-    for (std::int64_t run = 149; run >= 0; --run) {  // any order of arrival
-      store.add(record(run), 2);
-      while (store.take_job(job)) {
-        encode_job_output(job, out);
-        outputs.push_back(out);
-      }
+    ResultStore store(f, ctx, StoreOptions{16, 1, true, 1024, true});
+    if (store.has_write_thread()) {
+      std::string job, out;
+      for (std::int64_t run = 0; run < 16; ++run) store.add(test::distinct_record(ctx.columns, run), 0);
+      REQUIRE(store.take_job(job));
+      encode_job_output(job, out);
+      std::shared_ptr<char[]> owner(new char[out.size()]);
+      std::memcpy(owner.get(), out.data(), out.size());
+      store.job_done(owner, std::string_view(owner.get(), out.size() / 2));  // cut short: refused on the thread
+      CHECK_THROWS_AS(store.finish_writes(), std::runtime_error);
+      CHECK_THROWS_AS(store.job_done(owner, std::string_view(owner.get(), out.size())), std::runtime_error);
     }
-    for (auto it = outputs.rbegin(); it != outputs.rend(); ++it) store.job_done(*it);
-    CHECK(store.jobs_offloaded() == static_cast<std::int64_t>(outputs.size()));
-    CHECK(store.jobs_local() == 0);
-    store.check_complete();
-  }
-  const std::int64_t n = 150;
-  const std::size_t nb = static_cast<std::size_t>(cols.n_bays_max);
-  const auto f64_0 = read_f64_column(f, "runs/" + std::string(cols.f64[0]->name), n);
-  const auto f64_last = read_f64_column(f, "runs/" + std::string(cols.f64.back()->name), n);
-  const auto bays = read_f64_columns(f, "runs/bays/" + std::string(cols.bay[1]->name), n, static_cast<std::int64_t>(nb), 0,
-                                     static_cast<std::int64_t>(nb), 16);
-  const auto speed = read_f64_column(f, "runs/inputs/drive.speed_m_per_s", n);
-  for (std::int64_t run = 0; run < n; ++run) {
-    const RunRecord r = record(run);
-    const auto i = static_cast<std::size_t>(run);
-    CHECK(f64_0[i] == r.f64.front());
-    CHECK(f64_last[i] == r.f64.back());
-    for (std::size_t b = 0; b < nb; ++b) CHECK(bays[b][i] == r.bays[nb + b]);
-    CHECK(speed[i] == r.inputs.back());  // the per-run dispersion's one dimension comes last
   }
   H5Fclose(f);
   fs::remove(path);
