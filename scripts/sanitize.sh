@@ -10,8 +10,8 @@
 #      and every tests/mpi case but one), with leak detection off: Open MPI's components are
 #      dlclose()d at MPI_Finalize and their never-freed start-up blocks show as leaks in
 #      "<unknown module>" frames that no suppression can name.
-# Then the journal's tests under ThreadSanitizer (build-tsan/, journal_tsan): its writer thread
-# is the only thread the campaign starts.
+# Then the tests of the campaign's two threads (the journal's writer, rank 0's write thread) under
+# ThreadSanitizer (build-tsan/, journal_tsan).
 # Left out (docs/reliability.md): the Python-only tests that read files the fixtures above wrote
 # (postproc_*, openturns_crosscheck), the source scans (layering, code_size), the install
 # consumer (packaging: it compiles another project), and mpi_transports, whose efficiency floors
@@ -54,15 +54,15 @@ fi
 t_tests=$(date +%s)
 echo "[sanitize] tests under ASan+UBSan: $((t_tests - t_build)) s"
 
-# ThreadSanitizer on the journal, whose writer is the one thread the campaign starts: its source
-# and its tests alone (truss_tests_journal_tsan), in build-tsan/; any report fails.
+# ThreadSanitizer on the threads the campaign starts (the journal's writer, rank 0's write thread):
+# their sources and tests alone (truss_tests_journal_tsan), in build-tsan/; any report fails.
 if [ "$what" != fuzz ]; then
   TSAN_BUILD=${TSAN_BUILD_DIR:-build-tsan}
   cmake -S . -B "$TSAN_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
     -DTRUSS_TSAN=ON > "$TSAN_BUILD.log" 2>&1 || { cat "$TSAN_BUILD.log"; exit 1; }
   cmake --build "$TSAN_BUILD" -j"$(nproc)" --target truss_tests_journal_tsan >> "$TSAN_BUILD.log" 2>&1 || { tail -50 "$TSAN_BUILD.log"; exit 1; }
   (cd "$TSAN_BUILD" && ctest --output-on-failure --timeout 900 -R '^journal_tsan$')
-  echo "[sanitize] journal under ThreadSanitizer: $(( $(date +%s) - t_tests )) s"
+  echo "[sanitize] journal and write thread under ThreadSanitizer: $(( $(date +%s) - t_tests )) s"
 fi
 
 # Fuzzers: the committed corpus is the seed; new inputs go to a scratch copy (CI does not change

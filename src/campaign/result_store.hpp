@@ -59,7 +59,8 @@ struct StreamedStats {
 // 1) is the only heavy part of storing a result. It is packaged as jobs, one per dataset chunk
 // (encode_job_output is a pure function of the job's bytes): the scheduler hands them to workers
 // with their next batch and the encoded bytes come back with the batch's results (take_job,
-// job_done), so rank 0 only copies values and writes finished chunks with H5Dwrite_chunk. Jobs
+// job_done), so rank 0 only copies values and writes finished chunks with H5Dwrite_chunk (on its
+// write thread, StoreOptions::write_thread, with the statistics merge). Jobs
 // that nobody takes (one rank, the end of the schedule, a backlog beyond two chunks) are encoded
 // on rank 0 (drain_jobs). The bytes are the same whoever encodes them.
 class ResultStore {
