@@ -161,7 +161,7 @@ ResultStore::ResultStore(hid_t file, const CampaignContext& ctx, const StoreOpti
   track_->col.assign(static_cast<std::size_t>(k), ColumnStats((n_ + chunk_ - 1) / chunk_));
   hbool_t threadsafe = 0;
   if (opts.write_thread && H5is_library_threadsafe(&threadsafe) >= 0 && threadsafe) {
-    writes_ = std::make_unique<TaskThread>(2 * chunk_bytes);  // encoded chunks are smaller than raw ones
+    writes_ = std::make_unique<TaskThread>(2 * chunk_bytes);  // the messages held: encoded chunks and the records around them
     // A thread-safe HDF5 keeps the error-stack settings per thread: errors come back as exceptions here too.
     writes_->post([] { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }, 0);
   }
@@ -361,12 +361,12 @@ void ResultStore::job_done(std::string_view output) {
   ++jobs_returned_;
 }
 
-void ResultStore::job_done(std::shared_ptr<const char[]> owner, std::string_view output) {
+void ResultStore::job_done(std::shared_ptr<const char[]> owner, std::size_t owner_bytes, std::string_view output) {
   if (!writes_) {
     job_done(output);
     return;
   }
-  writes_->post([this, owner = std::move(owner), output] { write_encoded(output); }, output.size());
+  writes_->post([this, owner = std::move(owner), output] { write_encoded(output); }, std::max(owner_bytes, output.size()));
   --jobs_out_;
   ++jobs_returned_;
 }

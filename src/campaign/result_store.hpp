@@ -90,8 +90,9 @@ class ResultStore {
   // every job still waiting. Counters for the end summary.
   bool take_job(std::string& job);
   void job_done(std::string_view output);
-  // The same for an output inside memory that `owner` keeps alive: on the write thread if there is one.
-  void job_done(std::shared_ptr<const char[]> owner, std::string_view output);
+  // The same for an output inside the owner_bytes that `owner` keeps alive (what the write thread
+  // holds until it has written the output, counted against its limit): on the write thread if any.
+  void job_done(std::shared_ptr<const char[]> owner, std::size_t owner_bytes, std::string_view output);
   // Waits until the write thread has written everything handed to it; rethrows its error.
   void finish_writes();
   bool has_write_thread() const { return writes_ != nullptr; }

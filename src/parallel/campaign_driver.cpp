@@ -444,7 +444,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   so.tick_interval_s = std::min(0.25, o.flush_interval_s);
   // Workers encode the results file's chunks (campaign/result_store.hpp), rank 0 writes them.
   so.take_job = [&](std::string& job) { return r0.file->store().take_job(job); };
-  so.on_job_done = [&](auto owner, std::string_view out) { r0.file->store().job_done(std::move(owner), out); };
+  so.on_job_done = [&](auto owner, std::size_t n, std::string_view out) { r0.file->store().job_done(std::move(owner), n, out); };
   so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
   so.do_local_job = [&] { return r0.file->store().drain_one(); };
   so.on_job_sent = [&](std::string&& buffer) { r0.file->store().recycle(std::move(buffer)); };

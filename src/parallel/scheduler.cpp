@@ -227,7 +227,7 @@ bool Rank0::complete_receives() {
       --jobs_out_;
       try {
         ScopeTimer t(sum_.rank0_job_output_s);
-        opts_.on_job_done(in.bytes, msg.substr(sizeof job, job));
+        opts_.on_job_done(in.bytes, in.size, msg.substr(sizeof job, job));
       } catch (const std::exception& e) {
         abort_job(comm_, "storing a side job's output", e);
       }

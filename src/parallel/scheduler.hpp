@@ -36,7 +36,8 @@ struct ScheduleOptions {
   // sends the output with the batch's results, which reach rank 0's on_job_done. The campaign
   // uses them to have workers encode (compress) the results file's chunks.
   std::function<bool(std::string& job)> take_job;
-  std::function<void(std::shared_ptr<const char[]> owner, std::string_view output)> on_job_done;  // output: inside owner's bytes
+  // output lies inside owner's owner_bytes (the whole message, which a deferred write keeps alive)
+  std::function<void(std::shared_ptr<const char[]> owner, std::size_t owner_bytes, std::string_view output)> on_job_done;
   std::function<void(std::string_view job, std::string& output)> do_job;
   // Rank 0 with no runs left and nothing received: runs one waiting side job itself (false: none).
   std::function<bool()> do_local_job;

@@ -155,7 +155,7 @@ TEST_CASE("result store: encoding jobs run elsewhere land in the right dataset a
         }
         std::shared_ptr<char[]> owner(new char[it->size() + 8]);  // the output inside a larger message
         std::memcpy(owner.get() + 8, it->data(), it->size());
-        store.job_done(owner, std::string_view(owner.get() + 8, it->size()));
+        store.job_done(owner, it->size() + 8, std::string_view(owner.get() + 8, it->size()));
       }
       CHECK(store.jobs_offloaded() == static_cast<std::int64_t>(outputs.size()));
       CHECK(store.jobs_local() == 0);
@@ -203,9 +203,9 @@ TEST_CASE("result store: an error on the write thread reaches the caller, nothin
       encode_job_output(job, out);
       std::shared_ptr<char[]> owner(new char[out.size()]);
       std::memcpy(owner.get(), out.data(), out.size());
-      store.job_done(owner, std::string_view(owner.get(), out.size() / 2));  // cut short: refused on the thread
+      store.job_done(owner, out.size(), std::string_view(owner.get(), out.size() / 2));  // cut short: refused on the thread
       CHECK_THROWS_AS(store.finish_writes(), std::runtime_error);
-      CHECK_THROWS_AS(store.job_done(owner, std::string_view(owner.get(), out.size())), std::runtime_error);
+      CHECK_THROWS_AS(store.job_done(owner, out.size(), std::string_view(owner.get(), out.size())), std::runtime_error);
     }
   }
   H5Fclose(f);
