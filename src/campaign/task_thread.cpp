@@ -25,7 +25,7 @@ void TaskThread::rethrow_locked() {
 void TaskThread::post(std::function<void()> task, std::size_t bytes) {
   {
     std::unique_lock<std::mutex> l(m_);
-    // One task always fits, however large: the queue holds at most max_ bytes beyond it.
+    // At most max_ bytes wait, or a single task of any size on its own (so that none waits forever).
     space_.wait(l, [&] { return queued_ == 0 || queued_ + bytes <= max_ || error_; });
     rethrow_locked();
     queue_.emplace_back(std::move(task), bytes);
