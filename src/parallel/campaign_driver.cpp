@@ -50,7 +50,7 @@ struct CommandOptions {
   int max_batch = 32;
   int compression = 1;                 // zlib level of the results file's datasets (0: none)
   double synthetic_run_cost_s = -1.0;  // bench only (hidden): runs sleep this long and simulate nothing
-  bool write_thread = true;            // rank 0 writes returned chunks on a thread of its own (hidden --no-write-thread: A/B)
+  bool no_write_thread = false;        // hidden --no-write-thread: rank 0 writes returned chunks itself (A/B benchmarks)
 };
 
 // The error state of all ranks: true on every rank if any rank failed.
@@ -158,7 +158,7 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
                                      "(same campaign and --set options) or start over with --force", jpath));
   // A job travels in a work message with up to max_batch run indices and the trailer after it.
   const campaign::StoreOptions store{campaign::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression, size > 1,
-                                     8 * static_cast<std::size_t>(o.max_batch) + 64, size > 1 && o.write_thread};
+                                     8 * static_cast<std::size_t>(o.max_batch) + 64, size > 1 && !o.no_write_thread};
   r0.file = std::make_unique<campaign::CampaignFile>(o.output_path, ctx, store);
   if (o.resume) {
     try {
@@ -211,7 +211,7 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
                  "them uncompressed (largest file, least work for rank 0)")->check(CLI::Range(0, 9));
   // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
   app.add_option("--synthetic-run-cost-s", o.synthetic_run_cost_s, "")->check(CLI::Range(0.0, 60.0))->group("");
-  app.add_flag("--no-write-thread{false}", o.write_thread, "")->group("");
+  app.add_flag("--no-write-thread", o.no_write_thread, "bench only: rank 0 writes returned chunks itself")->group("");
   app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
   app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
              "3 I/O or internal error.");
