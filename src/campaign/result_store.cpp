@@ -10,6 +10,7 @@
 
 #include "campaign/chunk_codec.hpp"
 #include "campaign/column_stats.hpp"
+#include "campaign/result_store_parts.hpp"
 #include "campaign/store_jobs.hpp"
 
 namespace truss::campaign {
@@ -73,34 +74,6 @@ void write_rows(hid_t ds, hid_t mem_type, const void* data, std::int64_t first, 
 
 }  // namespace
 
-// Streaming statistics of the output columns (float64 per run, per bay): tracker k of dataset j
-// is first[j] + column; first[j] < 0 for the datasets without statistics.
-struct ResultStore::Tracking {
-  std::vector<ColumnStats> col;
-  std::vector<std::int64_t> first;
-};
-
-struct ResultStore::Chunk {
-  std::int64_t first = 0, rows = 0, filled = 0;
-  std::vector<std::string> buf;  // per direct dataset: a job header, then chunk rows x width values (zero past rows)
-  std::vector<std::string> message;
-};
-
-// The per-run datasets written with H5Dwrite_chunk ("direct"), in record order, and /runs/message
-// (variable-length strings go through H5Dwrite).
-struct ResultStore::Datasets {
-  std::vector<Handle> keep;  // groups
-  Handle status_type = status_enum_type();
-  Handle str_type = string_type();
-  struct Direct {
-    Handle ds;
-    std::size_t elem = 8, width = 1;  // bytes per value, values per row
-    int rank = 1;                     // dataspace rank (1: a column, 2: rows x width)
-  };
-  std::vector<Direct> direct;  // run_index, status, run_wall_time_s, rank, session, f64, i64, bays, inputs
-  std::size_t f64_0 = 0, i64_0 = 0, bays_0 = 0, inputs_0 = 0;  // first index of each group in `direct`
-  std::unique_ptr<Handle> message;
-};
 
 std::string StoreOptions::validate() const {
   if (chunk_runs < 1) return fmt::format("chunk_runs: must be >= 1, got {}", chunk_runs);
@@ -193,108 +166,6 @@ void ResultStore::attach_scales(hid_t file, Datasets& d) {
 
 ResultStore::~ResultStore() { writes_.reset(); }  // before the datasets close
 
-ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
-  const std::int64_t k = run / chunk_;
-  auto it = open_.find(k);
-  if (it != open_.end()) return *it->second;
-  std::unique_ptr<Chunk> c;
-  if (!spare_.empty()) {
-    c = std::move(spare_.back());
-    spare_.pop_back();
-  } else {
-    c = std::make_unique<Chunk>();
-  }
-  const Datasets& d = *ds_;
-  c->first = k * chunk_;
-  c->rows = std::min(chunk_, n_ - c->first);
-  c->filled = 0;
-  const auto full = static_cast<std::size_t>(std::min(chunk_, n_));
-  c->buf.resize(d.direct.size());
-  for (std::size_t j = 0; j < d.direct.size(); ++j) {
-    const std::size_t bytes = kJobHeader + full * d.direct[j].width * d.direct[j].elem;
-    // Room for the statistics request (append_request) and the job's carrier, so that neither
-    // copies the chunk again.
-    const std::size_t room = bytes + 8 + full + d.direct[j].width * sizeof(Windows) + headroom_;
-    std::string& b = c->buf[j];
-    if (b.capacity() < room) b = pool_.take(room);
-    if (b.size() >= bytes && c->rows == chunk_) b.resize(bytes);  // every row of a full chunk is overwritten
-    else b.assign(bytes, '\0');  // an edge chunk: zeros past n
-  }
-  c->message.assign(static_cast<std::size_t>(c->rows), {});
-  Chunk& ref = *c;
-  open_.emplace(k, std::move(c));
-  peak_chunks_ = std::max(peak_chunks_, open_.size());
-  return ref;
-}
-
-void ResultStore::add(const RunRecord& r, int session) {
-  std::string bytes;
-  r.append_bytes(bytes);
-  add_bytes(bytes, session);
-}
-
-// The record layout of RunRecord::append_bytes: i64 run, i8 status, i32 rank, f64 wall time,
-// u32 message length and message, then the f64, i64, per-bay and input arrays.
-void ResultStore::add_bytes(std::string_view rec, int session) {
-  const OutputColumns& cols = ctx_.columns;
-  const Datasets& d = *ds_;
-  constexpr std::size_t kHead = 8 + 1 + 4 + 8 + 4;
-  std::int64_t run = -1;
-  std::uint32_t len = 0;
-  if (rec.size() >= kHead) {
-    std::memcpy(&run, rec.data(), 8);
-    std::memcpy(&len, rec.data() + 21, 4);
-  }
-  const auto nb = static_cast<std::size_t>(cols.n_bays_max);
-  const std::size_t values = cols.f64.size() + cols.i64.size() + cols.bay.size() * nb + static_cast<std::size_t>(cols.n_inputs);
-  if (rec.size() < kHead || rec.size() != kHead + len + 4 * 4 + 8 * values)
-    throw std::runtime_error(fmt::format("a record of {} bytes is not a run record of this campaign", rec.size()));
-  // Each array is prefixed by its length (u32): checked against the columns.
-  const std::size_t counts[4] = {cols.f64.size(), cols.i64.size(), cols.bay.size() * nb, static_cast<std::size_t>(cols.n_inputs)};
-  for (std::size_t k = 0, at = kHead + len; k < 4; at += 4 + 8 * counts[k], ++k) {
-    std::uint32_t m = 0;
-    std::memcpy(&m, rec.data() + at, 4);
-    if (m != counts[k]) throw std::runtime_error(fmt::format("record has {} values where {} are expected", m, counts[k]));
-  }
-  const auto status = static_cast<std::int8_t>(rec[8]);
-  if (status < 0 || status >= sim::kRunStatusCount) throw std::runtime_error(fmt::format("record has an unknown status {}", status));
-  if (run < 0 || run >= n_) throw std::runtime_error(fmt::format("run index {} out of range", run));
-  if (done_[static_cast<std::size_t>(run)]) throw std::runtime_error(fmt::format("run {} received twice", run));
-  Chunk& c = chunk_for(run);
-  const auto i = static_cast<std::size_t>(run - c.first);
-  done_[static_cast<std::size_t>(run)] = 1;
-  ++n_done_;
-  if (status != 0) ++n_failed_;
-  ++status_counts_[static_cast<std::size_t>(status)];
-  auto put = [&](std::size_t ds, const void* src, std::size_t bytes) {
-    std::memcpy(c.buf[ds].data() + kJobHeader + i * bytes, src, bytes);
-  };
-  std::int32_t rank = 0;
-  std::memcpy(&rank, rec.data() + 9, 4);
-  const std::int64_t rank64 = rank, session64 = session;
-  put(0, &run, 8);
-  put(1, &status, 1);
-  put(2, rec.data() + 13, 8);
-  put(3, &rank64, 8);
-  put(4, &session64, 8);
-  c.message[i].assign(rec.data() + kHead, len);
-  const char* p = rec.data() + kHead + len + 4;
-  for (std::size_t k = 0; k < cols.f64.size(); ++k, p += 8) put(d.f64_0 + k, p, 8);
-  p += 4;
-  for (std::size_t k = 0; k < cols.i64.size(); ++k, p += 8) put(d.i64_0 + k, p, 8);
-  p += 4;
-  for (std::size_t k = 0; k < cols.bay.size(); ++k, p += 8 * nb) put(d.bays_0 + k, p, 8 * nb);
-  p += 4;
-  const DimensionLayout& L = ctx_.sampler.layout();
-  for (std::size_t k = 0; k < L.count.size(); ++k)
-    put(d.inputs_0 + k, p + 8 * static_cast<std::size_t>(L.offset[k]), 8 * static_cast<std::size_t>(L.count[k]));
-  if (++c.filled < c.rows) return;
-  complete_chunk(c);
-  auto it = open_.find(c.first / chunk_);
-  spare_.push_back(std::move(it->second));
-  open_.erase(it);
-  if (spare_.size() > 2) spare_.resize(2);
-}
 
 // A complete chunk: the messages through H5Dwrite, every other dataset's chunk written raw
 // (level 0) or queued as an encoding job; a backlog past two chunks is encoded here.
@@ -307,8 +178,14 @@ void ResultStore::complete_chunk(Chunk& c) {
   for (std::size_t i = 0; i < r; ++i) msg[i] = c.message[i].c_str();
   write_rows(d.message->get(), d.str_type.get(), msg.data(), c.first, c.rows, 0,
              fmt::format("/runs/message (runs {} to {})", c.first, c.first + c.rows - 1));
-  std::string small = pool_.take(kJobBytes + kJobBytes / 4 + headroom_);  // small chunks grouped into one job
-  small.clear();
+  auto take_small = [&] {
+    std::lock_guard<std::mutex> lock(jobs_m_);
+    std::string b = pool_.take(kJobBytes + kJobBytes / 4 + headroom_);
+    b.clear();
+    return b;
+  };
+  std::vector<std::string> made;  // queued together, once the chunk is done
+  std::string small = take_small();  // small chunks grouped into one job
   for (std::size_t j = 0; j < d.direct.size(); ++j) {
     std::string& b = c.buf[j];
     JobHeader h{static_cast<std::uint32_t>(j), static_cast<std::uint32_t>(d.direct[j].elem), c.first / chunk_, deflate_, 0,
@@ -325,32 +202,44 @@ void ResultStore::complete_chunk(Chunk& c) {
     if (b.size() < kJobBytes / 4) {  // copied into the group: the chunk keeps its buffer
       small += b;
       if (small.size() < kJobBytes && j + 1 < d.direct.size()) continue;
-      jobs_bytes_ += small.size();
-      jobs_.push_back(std::move(small));
-      small = pool_.take(kJobBytes + kJobBytes / 4 + headroom_);
-      small.clear();
+      made.push_back(std::move(small));
+      small = take_small();
       continue;
     }
-    jobs_bytes_ += b.size();
-    jobs_.push_back(std::move(b));
+    made.push_back(std::move(b));
   }
-  if (!small.empty()) {
-    jobs_bytes_ += small.size();
-    jobs_.push_back(std::move(small));
-  } else {
-    pool_.give(std::move(small));
+  const bool spare_small = small.empty();
+  if (!spare_small) made.push_back(std::move(small));
+  {
+    std::lock_guard<std::mutex> lock(jobs_m_);
+    if (spare_small) pool_.give(std::move(small));
+    for (std::string& job : made) {
+      jobs_bytes_ += job.size();
+      jobs_.push_back(std::move(job));
+    }
   }
-  while (jobs_bytes_ > max_jobs_bytes_ && drain_one()) {
+  while (over_backlog() && drain_one()) {
   }
 }
 
-void ResultStore::recycle(std::string&& buffer) { pool_.give(std::move(buffer)); }
+bool ResultStore::over_backlog() {
+  std::lock_guard<std::mutex> lock(jobs_m_);
+  return jobs_bytes_ > max_jobs_bytes_;
+}
+
+void ResultStore::recycle(std::string&& buffer) {
+  std::lock_guard<std::mutex> lock(jobs_m_);
+  pool_.give(std::move(buffer));
+}
 
 bool ResultStore::take_job(std::string& job) {
-  if (jobs_.empty()) return false;
-  job = std::move(jobs_.front());
-  jobs_.pop_front();
-  jobs_bytes_ -= job.size();
+  {
+    std::lock_guard<std::mutex> lock(jobs_m_);
+    if (jobs_.empty()) return false;
+    job = std::move(jobs_.front());
+    jobs_.pop_front();
+    jobs_bytes_ -= job.size();
+  }
   ++jobs_out_;
   return true;
 }
@@ -372,23 +261,34 @@ void ResultStore::job_done(std::shared_ptr<const char[]> owner, std::size_t owne
 }
 
 void ResultStore::finish_writes() {
-  if (writes_) writes_->drain();
+  if (!writes_) return;
+  post_staged();
+  writes_->drain();
 }
 
 double ResultStore::calc_write_thread_cpu_s() const { return writes_ ? writes_->calc_cpu_s() : 0.0; }
 
 void ResultStore::drain_jobs() {
+  finish_writes();  // the last chunks may still be completing on the write thread
   while (drain_one()) {
   }
 }
 
 bool ResultStore::drain_one() {
-  if (jobs_.empty()) return false;
+  std::string job;
+  {
+    std::lock_guard<std::mutex> lock(jobs_m_);
+    if (jobs_.empty()) return false;
+    job = std::move(jobs_.front());
+    jobs_.pop_front();
+    jobs_bytes_ -= job.size();
+  }
   std::string out;
-  encode_job_output(jobs_.front(), out);
-  jobs_bytes_ -= jobs_.front().size();
-  pool_.give(std::move(jobs_.front()));
-  jobs_.pop_front();
+  encode_job_output(job, out);
+  {
+    std::lock_guard<std::mutex> lock(jobs_m_);
+    pool_.give(std::move(job));
+  }
   write_encoded(out);
   ++jobs_local_;
   return true;

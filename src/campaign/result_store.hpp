@@ -7,6 +7,7 @@
 // any number of ranks and after --resume.
 #pragma once
 #include <array>
+#include <atomic>
 #include <hdf5.h>
 
 #include <cstdint>
@@ -72,10 +73,20 @@ class ResultStore {
   ResultStore(const ResultStore&) = delete;
   ResultStore& operator=(const ResultStore&) = delete;
 
-  // A record's bytes (RunRecord::append_bytes) straight into the chunk buffers. Throws
+  // A record's bytes (RunRecord::append_bytes), checked and counted here. They go into the chunk
+  // buffers here, or, with a write thread, are staged (copied) and put in on that thread. Throws
   // std::runtime_error for a bad or repeated index or bytes that are not a record of these columns.
   void add_bytes(std::string_view record, int session);
   void add(const RunRecord& r, int session);
+  // Records inside `owner` (a worker's message): each view from byte `skip` on is a record. Checked
+  // and counted here, as add_bytes; put into the chunk buffers on the write thread, which keeps
+  // `owner` until then (without one: here, before returning).
+  void add_records(std::shared_ptr<const char[]> owner, const std::vector<std::string_view>& views, std::size_t skip,
+                   int session);
+  // True while encoding jobs may still appear (records handed to the write thread and not yet in
+  // their chunks: staged ones are handed over now) or wait to be taken. The schedule does not end
+  // while it says so: the last chunk's jobs still go to the workers.
+  bool jobs_pending();
   bool has(std::int64_t run) const { return done_[static_cast<std::size_t>(run)] != 0; }
   std::int64_t n_runs() const { return n_; }
   std::int64_t n_done() const { return n_done_; }
@@ -83,7 +94,7 @@ class ResultStore {
   // Runs per RunStatus value so far (restored and new), for progress lines by status name.
   const std::array<std::int64_t, sim::kRunStatusCount>& status_counts() const { return status_counts_; }
   std::int64_t chunk_runs() const { return chunk_; }
-  std::size_t peak_chunks_in_memory() const { return peak_chunks_; }
+  std::size_t peak_chunks_in_memory() const { return peak_chunks_; }  // (after finish_writes)
 
   // Encoding jobs: take_job moves the next one into `job` (false when none is waiting);
   // job_done writes an encoded chunk (encode_job_output of a job); drain_jobs encodes and writes
@@ -93,7 +104,8 @@ class ResultStore {
   // The same for an output inside the owner_bytes that `owner` keeps alive (what the write thread
   // holds until it has written the output, counted against its limit): on the write thread if any.
   void job_done(std::shared_ptr<const char[]> owner, std::size_t owner_bytes, std::string_view output);
-  // Waits until the write thread has written everything handed to it; rethrows its error.
+  // Hands over the staged records and waits until the write thread has done everything handed to
+  // it; rethrows its error.
   void finish_writes();
   bool has_write_thread() const { return writes_ != nullptr; }
   double calc_write_thread_cpu_s() const;  // 0 without a write thread
@@ -103,7 +115,7 @@ class ResultStore {
   // no zeroing of 18 MB a chunk). Kept up to two chunks' bytes; beyond that it is freed.
   void recycle(std::string&& buffer);
   std::int64_t jobs_offloaded() const { return jobs_returned_; }
-  std::int64_t jobs_local() const { return jobs_local_; }
+  std::int64_t jobs_local() const { return jobs_local_.load(); }
   // Throws std::runtime_error unless every run has arrived and every chunk is written (after
   // finish_writes).
   void check_complete();
@@ -115,8 +127,12 @@ class ResultStore {
   struct Datasets;
   struct Tracking;
   std::uint64_t append_request(std::string& part, std::size_t j, const std::vector<std::uint8_t>& use);
+  void accept(std::string_view rec);                   // checks and counts a record (rank 0's thread)
+  void store_record(std::string_view rec, int session);  // puts it into its chunk (the write thread, if any)
+  void post_staged();
   Chunk& chunk_for(std::int64_t run);
   void complete_chunk(Chunk& c);
+  bool over_backlog();
   void write_encoded(std::string_view output);
   void attach_scales(hid_t file, Datasets& d);
 
@@ -131,11 +147,20 @@ class ResultStore {
   std::size_t peak_chunks_ = 0;
   std::unique_ptr<Datasets> ds_;
   std::unique_ptr<Tracking> track_;
+  // Made where chunks complete (the write thread, if any), taken and recycled by rank 0's thread:
+  std::mutex jobs_m_;             // jobs_, jobs_bytes_ and pool_
   std::deque<std::string> jobs_;  // waiting encoding jobs
   std::size_t jobs_bytes_ = 0, max_jobs_bytes_ = 0;
   std::size_t headroom_ = 0;
   BufferPool pool_;  // buffers of sent and encoded jobs, for the next chunks
-  std::int64_t jobs_out_ = 0, jobs_returned_ = 0, jobs_local_ = 0;
+  std::int64_t jobs_out_ = 0, jobs_returned_ = 0;
+  std::atomic<std::int64_t> jobs_local_{0};  // drain_one runs on either thread
+  // Records for the write thread: copies of the ones add_bytes gets (u32 length, i32 session,
+  // bytes), handed over in groups; and how many were handed over and how many are in their chunks.
+  std::string staged_;
+  std::int64_t staged_n_ = 0;
+  std::int64_t records_posted_ = 0;
+  std::atomic<std::int64_t> records_stored_{0};
   std::mutex stats_m_;                 // track_: seeded and read here, merged on the write thread
   std::unique_ptr<TaskThread> writes_;  // last: stopped first
 };

@@ -448,13 +448,14 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
   so.do_job = [](std::string_view job, std::string& out) { campaign::encode_job_output(job, out); };
   so.do_local_job = [&] { return r0.file->store().drain_one(); };
   so.on_job_sent = [&](std::string&& buffer) { r0.file->store().recycle(std::move(buffer)); };
+  so.side_jobs_pending = [&] { return r0.file->store().jobs_pending(); };
   // A worker's message: its frames journaled from the message itself (the journal checks them),
-  // then its records stored; `message` keeps the bytes alive here while the writer may free its copy.
+  // then its records stored from it too (on the write thread, if any): both keep `message` alive.
   so.on_message = [&](std::shared_ptr<const char[]> message, const std::vector<std::string_view>& frames) {
     const auto t0 = std::chrono::steady_clock::now();
     r0.journal->append_frames(message, frames);
     r0.journal_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    for (std::string_view f : frames) r0.file->store().add_bytes(f.substr(kFrameHeader), r0.st.session);
+    r0.file->store().add_records(std::move(message), frames, kFrameHeader, r0.st.session);
   };
   ScheduleSummary sched;
   try {

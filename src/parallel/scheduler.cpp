@@ -324,9 +324,10 @@ ScheduleSummary Rank0::run() {
   if (opts_.on_started) opts_.on_started();
   Backoff backoff(200);  // rank 0 idles only at the very end, where latency matters
   double handle_cpu = -1.0;
-  // Until every result is in and every side job given out is back; meanwhile rank 0 takes side
-  // jobs itself when it has nothing else to do.
-  while (received_ < total || jobs_out_ > 0) {
+  // Until every result is in, every side job given out is back and none is still to appear (made
+  // from delivered results elsewhere); meanwhile rank 0 takes side jobs itself when it has
+  // nothing else to do.
+  while (received_ < total || jobs_out_ > 0 || (opts_.side_jobs_pending && opts_.side_jobs_pending())) {
     const bool progressed = poll();
     if (received_ == total && handle_cpu < 0) handle_cpu = thread_cpu_s() - cpu0 - compute_cpu_s_ - local_jobs_cpu_;
     if (next_run_ < todo_.size()) {

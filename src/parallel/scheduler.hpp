@@ -41,6 +41,9 @@ struct ScheduleOptions {
   std::function<void(std::string_view job, std::string& output)> do_job;
   // Rank 0 with no runs left and nothing received: runs one waiting side job itself (false: none).
   std::function<bool()> do_local_job;
+  // Rank 0 (optional): side jobs may still appear from results already delivered (made on another
+  // thread), or wait: the schedule goes on until they are out and back, as for the ones given out.
+  std::function<bool()> side_jobs_pending;
   // Rank 0 (optional): a worker's results message as a whole, in place of one on_result call per
   // result (rank 0's own runs still go through on_result): `results` point into `message`, which
   // the callee may keep (the journal writes the results from it: no copy on rank 0).

@@ -10,6 +10,7 @@ check raises (exit 1).
 """
 import argparse
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -466,6 +467,15 @@ def check_rank0_breakdown(path, what):
     check(parts["rank0_journal_s"] <= parts["rank0_result_s"], f"{what}: journal within storing results ({parts})")
 
 
+def check_last_chunk_offloaded(stderr, what):
+    """240 runs are one chunk, which completes with the last result (on rank 0's write thread): the
+    workers, which wait for jobs once the runs are out, still get some of its encodings. A schedule
+    that ended as soon as the results were in would leave them all to rank 0."""
+    m = re.search(r"(\d+) of (\d+) chunk encodings by workers", stderr)
+    check(m is not None, f"{what}: the summary says who encoded the chunks ({stderr.strip()[-300:]})")
+    check(int(m.group(1)) >= 1, f"{what}: workers encoded {m.group(1)} of the last chunk's {m.group(2)} encodings (>= 1)")
+
+
 def case_transports(args):
     """The driver over TCP and over shared memory without single-copy (CMA): the same datasets as
     over shared memory, and a scheduler that keeps rank 0 computing. Efficiency uses sleeping
@@ -484,6 +494,7 @@ def case_transports(args):
         same, why = same_values(a, datasets(out))
         check(same, f"{ranks} ranks, {name}: datasets identical to shared memory outside /timing ({len(a)}) {why}")
         check_rank0_breakdown(out, f"{ranks} ranks, {name}")
+        check_last_chunk_offloaded(p.stderr, f"{ranks} ranks, {name}")
     # Sleeping runs of 4 ms: 2 ranks, 600 runs (1.2 s ideal) and 8 ranks, 1600 runs (0.8 s ideal).
     # Measured on this 2-core machine under a load of 3 to 8 (other builds): 0.95 to 0.98. A
     # scheduler whose rank 0 blocks until a computing worker's next MPI call (the old one) gave

@@ -141,13 +141,43 @@ TEST_CASE("result store: encoding jobs run elsewhere land in the right dataset a
       CHECK(store.has_write_thread() == (threaded && threadsafe));
       std::vector<std::string> outputs;
       std::string job, out;
-      for (std::int64_t run = 149; run >= 0; --run) {  // any order of arrival
-        store.add(record(run), 2);
+      auto take_jobs = [&] {
+        if (threaded) store.finish_writes();  // the chunks complete on the write thread
         while (store.take_job(job)) {
           encode_job_output(job, out);
           outputs.push_back(out);
         }
+      };
+      // Any order of arrival; every third run added alone (rank 0's own, staged for the thread),
+      // the others in messages of up to four records behind an 8-byte frame head each (a worker's).
+      std::vector<std::int64_t> message_runs;
+      auto send_message = [&] {
+        std::string bytes;
+        std::vector<std::size_t> at;
+        for (std::int64_t run : message_runs) {
+          at.push_back(bytes.size());
+          bytes.append(8, 'F');
+          record(run).append_bytes(bytes);
+        }
+        at.push_back(bytes.size());
+        std::shared_ptr<char[]> owner(new char[bytes.size()]);
+        std::memcpy(owner.get(), bytes.data(), bytes.size());
+        std::vector<std::string_view> views;
+        for (std::size_t k = 0; k + 1 < at.size(); ++k) views.emplace_back(owner.get() + at[k], at[k + 1] - at[k]);
+        store.add_records(std::move(owner), views, 8, 2);
+        message_runs.clear();
+      };
+      for (std::int64_t run = 149; run >= 0; --run) {
+        if (run % 3 == 0) {
+          store.add(record(run), 2);
+        } else {
+          message_runs.push_back(run);
+          if (message_runs.size() == 4 || run < 3) send_message();
+        }
+        take_jobs();
       }
+      CHECK(store.n_done() == 150);
+      CHECK_FALSE(store.jobs_pending());
       for (auto it = outputs.rbegin(); it != outputs.rend(); ++it) {
         if (!threaded) {
           store.job_done(*it);
@@ -199,6 +229,8 @@ TEST_CASE("result store: an error on the write thread reaches the caller, nothin
     if (store.has_write_thread()) {
       std::string job, out;
       for (std::int64_t run = 0; run < 16; ++run) store.add(test::distinct_record(ctx.columns, run), 0);
+      CHECK(store.jobs_pending());  // staged: the chunk completes on the thread
+      store.finish_writes();
       REQUIRE(store.take_job(job));
       encode_job_output(job, out);
       std::shared_ptr<char[]> owner(new char[out.size()]);
