@@ -55,14 +55,15 @@ t_tests=$(date +%s)
 echo "[sanitize] tests under ASan+UBSan: $((t_tests - t_build)) s"
 
 # ThreadSanitizer on the threads the campaign starts (the journal's writer, rank 0's write thread):
-# their sources and tests alone (truss_tests_journal_tsan), in build-tsan/; any report fails.
+# their sources and tests (truss_tests_journal_tsan; truss_tests_store_tsan: the result store with
+# its write thread, the campaign library instrumented), in build-tsan/; any report fails.
 if [ "$what" != fuzz ]; then
   TSAN_BUILD=${TSAN_BUILD_DIR:-build-tsan}
   cmake -S . -B "$TSAN_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
     -DTRUSS_TSAN=ON > "$TSAN_BUILD.log" 2>&1 || { cat "$TSAN_BUILD.log"; exit 1; }
-  cmake --build "$TSAN_BUILD" -j"$(nproc)" --target truss_tests_journal_tsan >> "$TSAN_BUILD.log" 2>&1 || { tail -50 "$TSAN_BUILD.log"; exit 1; }
-  (cd "$TSAN_BUILD" && ctest --output-on-failure --timeout 900 -R '^journal_tsan$')
-  echo "[sanitize] journal and write thread under ThreadSanitizer: $(( $(date +%s) - t_tests )) s"
+  cmake --build "$TSAN_BUILD" -j"$(nproc)" --target truss_tests_journal_tsan truss_tests_store_tsan >> "$TSAN_BUILD.log" 2>&1 || { tail -50 "$TSAN_BUILD.log"; exit 1; }
+  (cd "$TSAN_BUILD" && ctest --output-on-failure --timeout 900 -R '^(journal|store)_tsan$')
+  echo "[sanitize] journal, write thread and result store under ThreadSanitizer: $(( $(date +%s) - t_tests )) s"
 fi
 
 # Fuzzers: the committed corpus is the seed; new inputs go to a scratch copy (CI does not change

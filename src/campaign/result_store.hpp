@@ -33,8 +33,9 @@ struct StoreOptions {
   int deflate_level = 1;           // zlib level (0: no compression); 1: the fastest, most of level 9's ratio
   bool offload_encoding = false;   // jobs wait for take_job (other ranks encode them), up to two chunks' bytes
   std::size_t job_headroom_bytes = 1024;  // spare room after each job for what carries it (a work message: 8 bytes a run)
-  // Encoded chunks that come back (job_done with an owner) written, and their statistics merged, on
-  // a thread of their own, not by the thread that answers the workers (only with a thread-safe HDF5).
+  // Records copied into the chunks, chunks completed, encoded chunks that come back (job_done with
+  // an owner) written and their statistics merged on a thread of their own, not by the thread that
+  // answers the workers (only with a thread-safe HDF5).
   bool write_thread = false;
   std::string validate() const;
 };
@@ -60,8 +61,9 @@ struct StreamedStats {
 // 1) is the only heavy part of storing a result. It is packaged as jobs, one per dataset chunk
 // (encode_job_output is a pure function of the job's bytes): the scheduler hands them to workers
 // with their next batch and the encoded bytes come back with the batch's results (take_job,
-// job_done), so rank 0 only copies values and writes finished chunks with H5Dwrite_chunk (on its
-// write thread, StoreOptions::write_thread, with the statistics merge). Jobs
+// job_done), so rank 0 only copies values and writes finished chunks with H5Dwrite_chunk (both on
+// its write thread, StoreOptions::write_thread, with the statistics merge: the thread that answers
+// the workers only checks and counts each record). Jobs
 // that nobody takes (one rank, the end of the schedule, a backlog beyond two chunks) are encoded
 // on rank 0 (drain_jobs). The bytes are the same whoever encodes them.
 class ResultStore {

@@ -5,7 +5,9 @@
 
 #include <hdf5.h>
 
+#include <cmath>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -242,4 +244,90 @@ TEST_CASE("result store: an error on the write thread reaches the caller, nothin
   }
   H5Fclose(f);
   fs::remove(path);
+}
+
+// The same feed of results with and without the write thread, and no waiting between the two
+// threads: the thread stores records and completes chunks while this one checks records, takes
+// jobs, returns their outputs a few steps later (a worker's round trip) and recycles the buffers.
+// ThreadSanitizer runs this (store_tsan); here it checks that nothing is lost or changed.
+TEST_CASE("result store: records, jobs and outputs crossing the write thread as a campaign does", "[campaign][codec]") {
+  const std::int64_t n = 1000;
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", n));
+  const OutputColumns& cols = ctx.columns;
+  const std::string path = (fs::temp_directory_path() / "truss_test_store_cross.h5").string();
+  std::vector<StreamedStats> stats;
+  for (const bool threaded : {false, true}) {
+    INFO((threaded ? "write thread" : "one thread"));
+    fs::remove(path);
+    const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    {
+      ResultStore store(f, ctx, StoreOptions{32, 1, true, 1024, threaded});
+      std::deque<std::pair<std::shared_ptr<char[]>, std::size_t>> returning;  // outputs on their way back
+      std::int64_t jobs = 0;
+      auto step = [&](bool all) {  // jobs taken and encoded; outputs three steps old (or all) returned
+        std::string job, out;
+        while (store.take_job(job)) {
+          encode_job_output(job, out);
+          std::shared_ptr<char[]> owner(new char[out.size() + 16]);
+          std::memcpy(owner.get() + 16, out.data(), out.size());
+          returning.emplace_back(std::move(owner), out.size());
+          store.recycle(std::move(job));
+          job = std::string();
+          ++jobs;
+        }
+        while (returning.size() > (all ? 0u : 3u)) {
+          auto [owner, size] = std::move(returning.front());
+          returning.pop_front();
+          store.job_done(owner, size + 16, std::string_view(owner.get() + 16, size));
+        }
+      };
+      std::mt19937_64 rng(5);
+      std::int64_t run = 0;
+      while (run < n) {
+        if (rng() % 3 == 0) {  // one of rank 0's own runs
+          store.add(test::distinct_record(cols, run++), 1);
+        } else {  // a worker's message of 1 to 8 records, each behind an 8-byte frame head
+          std::string bytes;
+          std::vector<std::size_t> at;
+          for (std::uint64_t k = 1 + rng() % 8; k > 0 && run < n; --k) {
+            at.push_back(bytes.size());
+            bytes.append(8, 'F');
+            test::distinct_record(cols, run++).append_bytes(bytes);
+          }
+          at.push_back(bytes.size());
+          std::shared_ptr<char[]> owner(new char[bytes.size()]);
+          std::memcpy(owner.get(), bytes.data(), bytes.size());
+          std::vector<std::string_view> views;
+          for (std::size_t k = 0; k + 1 < at.size(); ++k) views.emplace_back(owner.get() + at[k], at[k + 1] - at[k]);
+          store.add_records(std::move(owner), views, 8, 1);
+        }
+        step(false);
+      }
+      while (store.jobs_pending() || !returning.empty()) step(true);
+      CHECK(store.jobs_offloaded() == jobs);
+      store.drain_jobs();
+      store.check_complete();
+      stats.push_back(store.calc_stats());
+    }
+    const auto last = read_f64_column(f, "runs/" + std::string(cols.f64.back()->name), n);
+    const auto status = read_status(f, n);
+    for (std::int64_t r = 0; r < n; ++r) {
+      const RunRecord rec = test::distinct_record(cols, r);
+      CHECK(last[static_cast<std::size_t>(r)] == rec.f64.back());
+      CHECK(status[static_cast<std::size_t>(r)] == static_cast<std::int8_t>(rec.status));
+    }
+    H5Fclose(f);
+    fs::remove(path);
+  }
+  REQUIRE(stats.size() == 2);
+  CHECK(stats[1].f64_resolved == stats[0].f64_resolved);
+  CHECK(stats[1].kept_values == stats[0].kept_values);
+  for (std::size_t k = 0; k < cols.f64.size(); ++k) {
+    CHECK(stats[1].f64[k].count == stats[0].f64[k].count);
+    CHECK(stats[1].f64[k].mean == stats[0].f64[k].mean);
+    for (std::size_t q = 0; q < stats[0].f64[k].percentiles.size(); ++q) {  // NaN: left to the end (unresolved)
+      const double a = stats[0].f64[k].percentiles[q], b = stats[1].f64[k].percentiles[q];
+      CHECK(((std::isnan(a) && std::isnan(b)) || a == b));
+    }
+  }
 }
