@@ -123,6 +123,26 @@ TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as sm
   CHECK_THROWS(decode_chunk(std::string(100, 'x'), 0, 8, 1, 4096 * 8, back));
 }
 
+// The records of `runs` as a worker's message: each behind an 8-byte frame head (as the journal's
+// frames are), handed to the store with the message as their owner.
+namespace {
+void add_message(ResultStore& store, const OutputColumns& cols, const std::vector<std::int64_t>& runs, int session) {
+  std::string bytes;
+  std::vector<std::size_t> at;
+  for (std::int64_t run : runs) {
+    at.push_back(bytes.size());
+    bytes.append(8, 'F');
+    test::distinct_record(cols, run).append_bytes(bytes);
+  }
+  at.push_back(bytes.size());
+  std::shared_ptr<char[]> owner(new char[bytes.size()]);
+  std::memcpy(owner.get(), bytes.data(), bytes.size());
+  std::vector<std::string_view> views;
+  for (std::size_t k = 0; k + 1 < at.size(); ++k) views.emplace_back(owner.get() + at[k], at[k + 1] - at[k]);
+  store.add_records(std::move(owner), views, 8, session);
+}
+}  // namespace
+
 TEST_CASE("result store: encoding jobs run elsewhere land in the right dataset and rows", "[campaign][codec]") {
   const CampaignContext ctx(test::small_campaign("latin_hypercube", 150));
   const OutputColumns& cols = ctx.columns;
@@ -153,28 +173,15 @@ TEST_CASE("result store: encoding jobs run elsewhere land in the right dataset a
       // Any order of arrival; every third run added alone (rank 0's own, staged for the thread),
       // the others in messages of up to four records behind an 8-byte frame head each (a worker's).
       std::vector<std::int64_t> message_runs;
-      auto send_message = [&] {
-        std::string bytes;
-        std::vector<std::size_t> at;
-        for (std::int64_t run : message_runs) {
-          at.push_back(bytes.size());
-          bytes.append(8, 'F');
-          record(run).append_bytes(bytes);
-        }
-        at.push_back(bytes.size());
-        std::shared_ptr<char[]> owner(new char[bytes.size()]);
-        std::memcpy(owner.get(), bytes.data(), bytes.size());
-        std::vector<std::string_view> views;
-        for (std::size_t k = 0; k + 1 < at.size(); ++k) views.emplace_back(owner.get() + at[k], at[k + 1] - at[k]);
-        store.add_records(std::move(owner), views, 8, 2);
-        message_runs.clear();
-      };
       for (std::int64_t run = 149; run >= 0; --run) {
         if (run % 3 == 0) {
           store.add(record(run), 2);
         } else {
           message_runs.push_back(run);
-          if (message_runs.size() == 4 || run < 3) send_message();
+          if (message_runs.size() == 4 || run < 3) {
+            add_message(store, cols, message_runs, 2);
+            message_runs.clear();
+          }
         }
         take_jobs();
       }
@@ -286,20 +293,10 @@ TEST_CASE("result store: records, jobs and outputs crossing the write thread as 
       while (run < n) {
         if (rng() % 3 == 0) {  // one of rank 0's own runs
           store.add(test::distinct_record(cols, run++), 1);
-        } else {  // a worker's message of 1 to 8 records, each behind an 8-byte frame head
-          std::string bytes;
-          std::vector<std::size_t> at;
-          for (std::uint64_t k = 1 + rng() % 8; k > 0 && run < n; --k) {
-            at.push_back(bytes.size());
-            bytes.append(8, 'F');
-            test::distinct_record(cols, run++).append_bytes(bytes);
-          }
-          at.push_back(bytes.size());
-          std::shared_ptr<char[]> owner(new char[bytes.size()]);
-          std::memcpy(owner.get(), bytes.data(), bytes.size());
-          std::vector<std::string_view> views;
-          for (std::size_t k = 0; k + 1 < at.size(); ++k) views.emplace_back(owner.get() + at[k], at[k + 1] - at[k]);
-          store.add_records(std::move(owner), views, 8, 1);
+        } else {  // a worker's message of 1 to 8 records
+          std::vector<std::int64_t> runs;
+          for (std::uint64_t k = 1 + rng() % 8; k > 0 && run < n; --k) runs.push_back(run++);
+          add_message(store, cols, runs, 1);
         }
         step(false);
       }
