@@ -23,12 +23,14 @@ Model (rank 0 computes runs and handles every result, serially): with per-run co
 a fraction u = (P - 1) h / c of its time; it computes its own runs (cost c + h each) in the rest.
   u < 1: throughput X = (P - 1)/c + (1 - u)/(c + h);   u >= 1: X = 1/h (rank 0 saturated)
   E(P) = X c / P.
-So E stays near 1 - h/c up to P ~ c/h and falls as c/(P h) beyond.
+So E stays near 1 - h/c up to P ~ c/h and falls as c/(P h) beyond. Rank 0's write thread (w a
+result, beside h): on a core of its own it caps X at 1/w; on the ranks' cores it takes X w of
+their time (--w; docs/benchmarks.md, "Tenth step").
 
   bench/bench_scheduler.py BUILD_DIR real [--runs 4000] [--repeats 3] [--driver OTHER_BINARY]
   bench/bench_scheduler.py BUILD_DIR synthetic [--ranks 32] [--cost 0.002] [--runs 20000] [--repeats 3] [--driver OLD]
   bench/bench_scheduler.py BUILD_DIR compare --driver OLD/truss-campaign [--runs 20000] [--repeats 3]
-  bench/bench_scheduler.py model --c C --h H [--ranks 2 16 32 64]
+  bench/bench_scheduler.py model --c C --h H [--w W] [--ranks 2 16 32 64]
 """
 import argparse
 import os
@@ -49,9 +51,19 @@ TRANSPORTS = {
 }
 
 
-def model_efficiency(P, c, h):
-    u = (P - 1) * h / c
-    X = (P - 1) / c + (1 - u) / (c + h) if u < 1 else 1 / h
+def model_efficiency(P, c, h, w=0.0, spare_core=True):
+    """E(P) of the model; w > 0: rank 0's write thread spends w a result beside it, on a core of
+    its own (spare_core: throughput at most 1/w) or on the ranks' cores (its CPU, X w per second,
+    is taken from them: the model with P - X w ranks, solved by fixed-point iteration)."""
+    def throughput(ranks):
+        u = (ranks - 1) * h / c
+        return (ranks - 1) / c + (1 - u) / (c + h) if u < 1 else 1 / h
+    X = throughput(P)
+    if w > 0 and not spare_core:
+        for _ in range(200):
+            X = throughput(P - X * w)
+    if w > 0:
+        X = min(X, 1 / w)
     return min(1.0, X * c / P)
 
 
@@ -201,10 +213,15 @@ def main():
     ap.add_argument("--cost", type=float, default=0.002)
     ap.add_argument("--c", type=float, help="model: per-run cost (s)")
     ap.add_argument("--h", type=float, help="model: rank 0's per-result cost (s)")
+    ap.add_argument("--w", type=float, default=0.0, help="model: rank 0's write thread's per-result cost (s)")
     a = ap.parse_args()
     if a.build == "model":
         for P in a.ranks:
-            print(f"P = {P:4d}: E = {model_efficiency(P, a.c, a.h):.3f}")
+            line = f"P = {P:4d}: E = {model_efficiency(P, a.c, a.h):.3f}"
+            if a.w > 0:
+                line += (f"; with the write thread on a spare core {model_efficiency(P, a.c, a.h, a.w, True):.3f},"
+                         f" on the ranks' cores {model_efficiency(P, a.c, a.h, a.w, False):.3f}")
+            print(line)
         return
     if a.what == "real":
         a.runs = a.runs or 4000
