@@ -317,14 +317,23 @@ TEST_CASE("result store: records, jobs and outputs crossing the write thread as 
     fs::remove(path);
   }
   REQUIRE(stats.size() == 2);
-  CHECK(stats[1].f64_resolved == stats[0].f64_resolved);
-  CHECK(stats[1].kept_values == stats[0].kept_values);
+  // Which percentiles the kept values resolve depends on when the chunks' summaries were merged
+  // (the windows narrow as they come), so it may differ between the two; a resolved one is exact:
+  // the one calc_stats finds from all the values (the end's read-back of an unresolved column).
+  std::vector<std::uint8_t> use(static_cast<std::size_t>(n));
+  std::vector<std::vector<double>> values(cols.f64.size(), std::vector<double>(static_cast<std::size_t>(n)));
+  for (std::int64_t r = 0; r < n; ++r) {
+    const RunRecord rec = test::distinct_record(cols, r);
+    use[static_cast<std::size_t>(r)] = rec.status == truss::sim::RunStatus::ok;
+    for (std::size_t k = 0; k < cols.f64.size(); ++k) values[k][static_cast<std::size_t>(r)] = rec.f64[k];
+  }
   for (std::size_t k = 0; k < cols.f64.size(); ++k) {
+    const Stats exact = calc_stats(values[k], use);
     CHECK(stats[1].f64[k].count == stats[0].f64[k].count);
-    CHECK(stats[1].f64[k].mean == stats[0].f64[k].mean);
-    for (std::size_t q = 0; q < stats[0].f64[k].percentiles.size(); ++q) {  // NaN: left to the end (unresolved)
-      const double a = stats[0].f64[k].percentiles[q], b = stats[1].f64[k].percentiles[q];
-      CHECK(((std::isnan(a) && std::isnan(b)) || a == b));
-    }
+    CHECK(stats[1].f64[k].mean == stats[0].f64[k].mean);  // chunks combined in run-index order: the same bits
+    CHECK(stats[1].f64[k].max == stats[0].f64[k].max);
+    for (const StreamedStats& s : stats)
+      for (std::size_t q = 0; q < exact.percentiles.size(); ++q)
+        CHECK((std::isnan(s.f64[k].percentiles[q]) || s.f64[k].percentiles[q] == exact.percentiles[q]));
   }
 }
