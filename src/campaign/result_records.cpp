@@ -129,12 +129,9 @@ bool ResultStore::jobs_pending() {
 // u32 message length and message, then the f64, i64, per-bay and input arrays.
 void ResultStore::accept(std::string_view rec) {
   const OutputColumns& cols = ctx_.columns;
-  std::int64_t run = -1;
-  std::uint32_t len = 0;
-  if (rec.size() >= kRecordHead) {
-    std::memcpy(&run, rec.data(), 8);
-    std::memcpy(&len, rec.data() + 21, 4);
-  }
+  const RecordHead h = rec.size() >= kRecordHead ? read_record_head(rec) : RecordHead{};
+  const std::int64_t run = h.run;
+  const std::uint32_t len = h.message_bytes;
   const auto nb = static_cast<std::size_t>(cols.n_bays_max);
   const std::size_t values = cols.f64.size() + cols.i64.size() + cols.bay.size() * nb + static_cast<std::size_t>(cols.n_inputs);
   if (rec.size() < kRecordHead || rec.size() != kRecordHead + len + 4 * 4 + 8 * values)
@@ -146,7 +143,7 @@ void ResultStore::accept(std::string_view rec) {
     std::memcpy(&m, rec.data() + at, 4);
     if (m != counts[k]) throw std::runtime_error(fmt::format("record has {} values where {} are expected", m, counts[k]));
   }
-  const auto status = static_cast<std::int8_t>(rec[8]);
+  const std::int8_t status = h.status;
   if (status < 0 || status >= sim::kRunStatusCount) throw std::runtime_error(fmt::format("record has an unknown status {}", status));
   if (run < 0 || run >= n_) throw std::runtime_error(fmt::format("run index {} out of range", run));
   if (done_[static_cast<std::size_t>(run)]) throw std::runtime_error(fmt::format("run {} received twice", run));
@@ -160,27 +157,22 @@ void ResultStore::accept(std::string_view rec) {
 void ResultStore::store_record(std::string_view rec, int session) {
   const OutputColumns& cols = ctx_.columns;
   const Datasets& d = *ds_;
-  std::int64_t run = 0;
-  std::uint32_t len = 0;
-  std::memcpy(&run, rec.data(), 8);
-  std::memcpy(&len, rec.data() + 21, 4);
-  const auto status = static_cast<std::int8_t>(rec[8]);
+  const RecordHead h = read_record_head(rec);
+  const std::int64_t run = h.run;
   const auto nb = static_cast<std::size_t>(cols.n_bays_max);
   Chunk& c = chunk_for(run);
   const auto i = static_cast<std::size_t>(run - c.first);
   auto put = [&](std::size_t ds, const void* src, std::size_t bytes) {
     std::memcpy(c.buf[ds].data() + kJobHeader + i * bytes, src, bytes);
   };
-  std::int32_t rank = 0;
-  std::memcpy(&rank, rec.data() + 9, 4);
-  const std::int64_t rank64 = rank, session64 = session;
+  const std::int64_t rank64 = h.rank, session64 = session;
   put(0, &run, 8);
-  put(1, &status, 1);
-  put(2, rec.data() + 13, 8);
+  put(1, &h.status, 1);
+  put(2, rec.data() + kRecordWall, 8);
   put(3, &rank64, 8);
   put(4, &session64, 8);
-  c.message[i].assign(rec.data() + kRecordHead, len);
-  const char* p = rec.data() + kRecordHead + len + 4;
+  c.message[i].assign(rec.data() + kRecordHead, h.message_bytes);
+  const char* p = rec.data() + kRecordHead + h.message_bytes + 4;
   for (std::size_t k = 0; k < cols.f64.size(); ++k, p += 8) put(d.f64_0 + k, p, 8);
   p += 4;
   for (std::size_t k = 0; k < cols.i64.size(); ++k, p += 8) put(d.i64_0 + k, p, 8);

@@ -232,14 +232,17 @@ void ResultStore::recycle(std::string&& buffer) {
   pool_.give(std::move(buffer));
 }
 
+bool ResultStore::pop_job(std::string& job) {
+  std::lock_guard<std::mutex> lock(jobs_m_);
+  if (jobs_.empty()) return false;
+  job = std::move(jobs_.front());
+  jobs_.pop_front();
+  jobs_bytes_ -= job.size();
+  return true;
+}
+
 bool ResultStore::take_job(std::string& job) {
-  {
-    std::lock_guard<std::mutex> lock(jobs_m_);
-    if (jobs_.empty()) return false;
-    job = std::move(jobs_.front());
-    jobs_.pop_front();
-    jobs_bytes_ -= job.size();
-  }
+  if (!pop_job(job)) return false;
   ++jobs_out_;
   return true;
 }
@@ -276,13 +279,7 @@ void ResultStore::drain_jobs() {
 
 bool ResultStore::drain_one() {
   std::string job;
-  {
-    std::lock_guard<std::mutex> lock(jobs_m_);
-    if (jobs_.empty()) return false;
-    job = std::move(jobs_.front());
-    jobs_.pop_front();
-    jobs_bytes_ -= job.size();
-  }
+  if (!pop_job(job)) return false;
   std::string out;
   encode_job_output(job, out);
   {

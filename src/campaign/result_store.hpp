@@ -135,6 +135,7 @@ class ResultStore {
   Chunk& chunk_for(std::int64_t run);
   void complete_chunk(Chunk& c);
   bool over_backlog();
+  bool pop_job(std::string& job);  // the next waiting job, under jobs_m_ (false: none)
   void write_encoded(std::string_view output);
   void attach_scales(hid_t file, Datasets& d);
 

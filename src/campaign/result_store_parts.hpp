@@ -2,8 +2,10 @@
 // and result_records.cpp (records in, chunk buffers) share. Internal to those two files.
 #pragma once
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "campaign/column_stats.hpp"
@@ -12,8 +14,25 @@
 
 namespace truss::campaign {
 
-// i64 run, i8 status, i32 rank, f64 wall time, u32 message length: a record's head (RunRecord::append_bytes).
+// A record's head (RunRecord::append_bytes): i64 run, i8 status, i32 rank, f64 wall time at byte
+// kRecordWall, u32 message length; the message follows it.
 inline constexpr std::size_t kRecordHead = 8 + 1 + 4 + 8 + 4;
+inline constexpr std::size_t kRecordWall = 13;
+struct RecordHead {
+  std::int64_t run = -1;
+  std::int8_t status = 0;
+  std::int32_t rank = 0;
+  std::uint32_t message_bytes = 0;
+};
+// The head of rec, which must hold at least kRecordHead bytes.
+inline RecordHead read_record_head(std::string_view rec) {
+  RecordHead h;
+  std::memcpy(&h.run, rec.data(), 8);
+  h.status = static_cast<std::int8_t>(rec[8]);
+  std::memcpy(&h.rank, rec.data() + 9, 4);
+  std::memcpy(&h.message_bytes, rec.data() + kRecordWall + 8, 4);
+  return h;
+}
 
 // Streaming statistics of the output columns (float64 per run, per bay): tracker k of dataset j
 // is first[j] + column; first[j] < 0 for the datasets without statistics.
