@@ -337,3 +337,38 @@ TEST_CASE("result store: records, jobs and outputs crossing the write thread as 
         CHECK((std::isnan(s.f64[k].percentiles[q]) || s.f64[k].percentiles[q] == exact.percentiles[q]));
   }
 }
+
+// The checks stay on the calling thread when the copy moves to the write thread: a repeated run,
+// a run out of range, an unknown status and a cut record are refused at once, by add and by
+// add_records alike, and are not counted.
+TEST_CASE("result store: bad records are refused where they are handed over", "[campaign][codec]") {
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", 40));
+  const OutputColumns& cols = ctx.columns;
+  const std::string path = (fs::temp_directory_path() / "truss_test_store_refuse.h5").string();
+  for (const bool threaded : {false, true}) {
+    INFO((threaded ? "write thread" : "one thread"));
+    fs::remove(path);
+    const hid_t f = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    {
+      ResultStore store(f, ctx, StoreOptions{16, 1, true, 1024, threaded});
+      store.add(test::distinct_record(cols, 3), 0);
+      add_message(store, cols, {4, 5}, 0);
+      CHECK_THROWS_WITH(store.add(test::distinct_record(cols, 3), 0), Catch::Contains("run 3 received twice"));
+      CHECK_THROWS_WITH(add_message(store, cols, {6, 5}, 0), Catch::Contains("run 5 received twice"));
+      CHECK_THROWS_WITH(store.add(test::distinct_record(cols, 40), 0), Catch::Contains("run index 40 out of range"));
+      RunRecord bad = test::distinct_record(cols, 7);
+      std::string bytes;
+      bad.append_bytes(bytes);
+      bytes[8] = static_cast<char>(truss::sim::kRunStatusCount);
+      CHECK_THROWS_WITH(store.add_bytes(bytes, 0), Catch::Contains("unknown status"));
+      bytes.pop_back();
+      CHECK_THROWS_WITH(store.add_bytes(bytes, 0), Catch::Contains("is not a run record of this campaign"));
+      CHECK(store.n_done() == 4);  // 3, 4, 5 and the 6 of the refused message (checked before the 5)
+      CHECK_FALSE(store.has(7));
+      CHECK_FALSE(store.has(40 - 1));
+      store.finish_writes();
+    }
+    H5Fclose(f);
+    fs::remove(path);
+  }
+}
