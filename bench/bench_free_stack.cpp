@@ -1,4 +1,4 @@
-// Benchmark (not a test): the free stack (issue 9; MODEL.md 2 "free") on this machine.
+// Benchmark (not a test): the free stack (issue 9; docs/model.md §2 "free") on this machine.
 //  1. Cost of one right-hand side of phase A and of phase B (the bordered solve) against the
 //     number of moving frames, n = 10 .. 1000: median time per evaluation and per frame (the
 //     solve is O(n): the time per frame must stay flat).

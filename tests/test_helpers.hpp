@@ -1,5 +1,5 @@
 // Shared test helpers: an independent transcription of the paper's energies (eq. 1, 2, 4 as
-// corrected in MODEL.md), used to check the model's matrices by finite differences.
+// corrected in docs/model.md), used to check the model's matrices by finite differences.
 #pragma once
 #include <cmath>
 #include <vector>
@@ -16,7 +16,7 @@ inline double paper_bay_T(const model::BayParams& b, double mf_upper, double yi,
          3.0 * Jc * (u - w) * (u - w) / den + 0.5 * mf_upper * u * u;
 }
 
-// Panel kinetic energy from MODEL.md 3 (eq. 2 corrected), dH/dt = u.
+// Panel kinetic energy from docs/model.md §3 (eq. 2 corrected), dH/dt = u.
 inline double paper_panel_T(const model::PanelParams& p, double H, double u) {
   const double np = p.count, P = np * np * p.length_m * p.length_m;
   double sum = 0;

@@ -1,4 +1,4 @@
-"""truss_report.sections_free: the rail-miss probability of a free-stack campaign (MODEL.md 2
+"""truss_report.sections_free: the rail-miss probability of a free-stack campaign (docs/model.md §2
 "free"): the share of runs whose pin never reached the rail, with its exact (Clopper-Pearson)
 95 % interval, and the distribution of the missing hinge's closest approach to the rail."""
 import numpy as np
@@ -28,7 +28,7 @@ def section_rail_miss(c):
             rows.append([f"closest approach of the hinge to the rail, {name}",
                          num(f"railmiss.approach.{name}", percentile(x, q), u)])
     return ('<section id="railmiss"><h3>Rail miss (free stack)</h3><p>A run misses the rail '
-            "when the pin of its deploying bay never reaches it (MODEL.md 2). The probability is "
+            "when the pin of its deploying bay never reaches it (docs/model.md §2). The probability is "
             "rail-miss runs / all runs, with an exact (Clopper-Pearson) 95 % interval. The closest "
             "approach is the smallest distance of the missing hinge from the rail line before "
             "the run stopped (<code>/runs/rail_miss_closest_approach_m</code>); its percentiles "

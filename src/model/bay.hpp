@@ -1,14 +1,14 @@
-// One bay of the mast as pure functions of its opening D = y_i - y_{i-1} (MODEL.md sections 1, 3).
+// One bay of the mast as pure functions of its opening D = y_i - y_{i-1} (docs/model.md §1, 3).
 //
-// Kinetic energy of bay i (paper eq. 1, MODEL.md 3), u = dy_i/dt, w = dy_{i-1}/dt:
+// Kinetic energy of bay i (paper eq. 1, docs/model.md §3), u = dy_i/dt, w = dy_{i-1}/dt:
 //   T_i = G(D) (u - w)^2 + (3/32) m_s (10 u^2 + 12 u w + 10 w^2) + (1/2) m_f,i u^2
 //   G(D)  = (3/16 m_s D^2 + 3 J_c) / (4 l_s^2 - D^2)
-//   G'(D) = D (3/2 m_s l_s^2 + 6 J_c) / (4 l_s^2 - D^2)^2   (MODEL.md misprint 1: not 2 m_s l_s^2)
+//   G'(D) = D (3/2 m_s l_s^2 + 6 J_c) / (4 l_s^2 - D^2)^2   (docs/model.md §3.1 (1): not 2 m_s l_s^2)
 // Hinge offset x = (1/2) sqrt(4 l_s^2 - D^2) (paper eq. 18). Near the lock G blows up like 1/x^2,
 // but G dD/dt^2 is regular in x: with s = sqrt(l_s^2 - x^2), D = 2 s, dD/dt = -(2x/s) dx/dt,
 //   G (dD/dt)^2 = g(x) (dx/dt)^2,   g(x) = 3/4 m_s + 3 J_c / s^2,   g'(x) = 6 J_c x / s^4,
-// and g(0) (dx/dt)^2 is the latch energy of MODEL.md section 2.
-// Diagonals (MODEL.md 1): six per bay, tension only, length L = sqrt(b^2 + D^2) with
+// and g(0) (dx/dt)^2 is the latch energy of docs/model.md §2.
+// Diagonals (docs/model.md §1): six per bay, tension only, length L = sqrt(b^2 + D^2) with
 //   b^2 = (b_lo^2 + b_lo b_up + b_up^2) / 3,
 // the horizontal distance between a vertex of the lower frame and the next vertex of the upper
 // frame (exactly b_f^2 when both frames have side b_f; the project's reading for frames of
@@ -21,7 +21,7 @@
 
 namespace truss::model {
 
-// Mass-matrix constants of one bay (MODEL.md 3): its regular part on the upper and lower frame
+// Mass-matrix constants of one bay (docs/model.md §3): its regular part on the upper and lower frame
 // and their coupling; a locked bay moves rigidly with 6 m_s + m_f.
 inline double calc_regular_upper_mass_kg(const BayParams& b) { return 15.0 / 8.0 * b.strut_mass_kg; }
 inline double calc_regular_lower_mass_kg(const BayParams& b) { return 15.0 / 8.0 * b.strut_mass_kg; }

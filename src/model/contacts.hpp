@@ -1,4 +1,4 @@
-// Unilateral stack contacts of the free stack (MODEL.md 2 "free": optional contacts D_i >= 0,
+// Unilateral stack contacts of the free stack (docs/model.md §2 "free": optional contacts D_i >= 0,
 // plastic). Frames in closed contact (D = 0) move as one rigid cluster; a cluster is a run of
 // consecutive frames p..q, so with v_i = V_c for every frame i of cluster c the kinetic energy
 // (1/2) v' M v of the tridiagonal M (model/frames.hpp) becomes (1/2) V' M_c V with
@@ -11,7 +11,7 @@
 // bottom p, whose own contact is open (lambda_p = 0):
 //   lambda_j = sum_{i = p..j-1} (F_i - (M a)_i),   j = p+1..q.
 // A frame resting on the canister's resting block (frames 0..k at rest on the floor, D = 0) feels
-//   lambda_k = M[k,k+1] a_{k+1} - F_k,  F_k = G'(D) (dD/dt)^2 + dU/dD of bay k+1 (MODEL.md 3),
+//   lambda_k = M[k,k+1] a_{k+1} - F_k,  F_k = G'(D) (dD/dt)^2 + dU/dD of bay k+1 (docs/model.md §3),
 // the same force on every contact of the block (each frame of the block is at rest with D = 0 on
 // both sides, where G'(0) = 0 and dU/dD(0) = 0). Landing (D_i falls to 0) is a plastic impact
 // (model/free_impacts.hpp, calc_stack_impact); lift-off is lambda falling through 0.

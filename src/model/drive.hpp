@@ -1,4 +1,4 @@
-// The three drive laws of the lead screws (MODEL.md section 2, "Drive modes"):
+// The three drive laws of the lead screws (docs/model.md §2, "Drive modes"):
 //   velocity: the driven frame moves at the constant speed v; the drive force is an output;
 //   torque:   constant screw torque M_d along the run direction, force F = 2 pi M_d / h;
 //   motor:    M = M_stall (1 - omega / omega_0), omega = 2 pi (dy/dt) / h along the run direction.

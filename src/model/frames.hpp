@@ -1,10 +1,10 @@
-// Equations of motion of the moving frames in frame heights (MODEL.md section 3, paper eqs. 6-16
+// Equations of motion of the moving frames in frame heights (docs/model.md §3, paper eqs. 6-16
 // corrected), written as M y'' = r + Q:
 //   bay i adds 2G + 15/8 m_s + m_f,i to M[i,i], 2G + 15/8 m_s to M[i-1,i-1], -2G + 9/8 m_s to
 //   M[i,i-1]; -G'(D) (dD/dt)^2 to r[i] and +G'(D) (dD/dt)^2 to r[i-1];
 //   diagonals: -dU/dD on Q[i], +dU/dD on Q[i-1];
 //   frame 0 moving: + m_f,0 on M[0,0];
-//   driven frame m: + locked bays and tip (rigid, MODEL.md 1) + panel mass M_p(H) on M[m,m],
+//   driven frame m: + locked bays and tip (rigid, docs/model.md §1) + panel mass M_p(H) on M[m,m],
 //   -(1/2) M_p'(H) (dH/dt)^2 on r[m].
 // Frames below `lo` are held at rest (the held stack, or y_0 before the rail takes it). Bay m may
 // be excluded from the G terms when the caller writes it in its hinge coordinate x (bay.hpp).

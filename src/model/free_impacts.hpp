@@ -1,9 +1,9 @@
-// Impacts of the free stack (MODEL.md section 2, "free"): the laws of model/impacts.hpp for any
+// Impacts of the free stack (docs/model.md §2, "free"): the laws of model/impacts.hpp for any
 // number of moving frames. v: velocities of the moving frames lo..m in frame heights, M their
 // tridiagonal mass matrix (model/frames.hpp; diag, sub), the driven frame m last (index N-1).
 //
 // Rail entry of bay m (plastic, through the rail impulse Lambda on the row
-//   J = df/dy = (.., 0, J_l, J_m),  J_l = 1/2 + c D/(4x),  J_m = 1/2 - c D/(4x)  (MODEL.md 3, misprint 4),
+//   J = df/dy = (.., 0, J_l, J_m),  J_l = 1/2 + c D/(4x),  J_m = 1/2 - c D/(4x)  (docs/model.md §3, misprint 4),
 // the impulse equations M dv = J Lambda [+ e_m P_d] with J (v + dv) = 0 after the impact):
 //   torque / motor (finite drive force, no drive impulse):
 //     z = M^-1 J,  Lambda = -(J v) / (J z),  dv = Lambda z;
@@ -12,7 +12,7 @@
 //     dv = Lambda z_J + P_d z_e.
 //   Energy lost (1/2) dv' M dv (Carnot: J v+ = 0 and dv_m P_d = 0 make the constraint impulses
 //   workless on the post-impact motion); drive impulse work P_d u.
-// Impulsive start from rest in velocity mode (MODEL.md 2 "free": the momentum-consistent kick):
+// Impulsive start from rest in velocity mode (docs/model.md §2 "free": the momentum-consistent kick):
 //   M dv = e_m P, dv_m = u  =>  P = u / (M^-1 e_m)_m, dv = P M^-1 e_m; a lossless ramp: the
 //   drive's work (1/2) P u equals the kinetic energy (1/2) dv' M dv it leaves.
 // Contact landing (model/contacts.hpp), and any plastic impact with up to three constraint rows

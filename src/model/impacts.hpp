@@ -1,4 +1,4 @@
-// Impact laws of a stage (MODEL.md section 2): plastic impacts of the moving frames, each as a
+// Impact laws of a stage (docs/model.md §2): plastic impacts of the moving frames, each as a
 // pure function of the pre-impact state. Notation: v = (w, u) the velocities of the lower frame
 // m-1 and the driven frame m, M their 2x2 mass matrix in frame heights (model/frames.hpp, bay m
 // with its G terms: regular away from the lock), J = grad f the rail row.
@@ -8,7 +8,7 @@
 //     Lambda = -(J v-) / (J M^-1 J^T),  dv = M^-1 J^T Lambda            (plastic: J v+ = 0)
 //   velocity drive (the screw keeps u: du = 0, the drive takes an impulse P_d):
 //     J_l (w + dw) + J_m u = 0,  Lambda = M_ll dw / J_l,  P_d = M_ml dw - J_m Lambda
-//   with J = (1/2 + c D/(4x), 1/2 - c D/(4x)) (MODEL.md 3, misprint 4 corrected: df/dy_{m-1},
+//   with J = (1/2 + c D/(4x), 1/2 - c D/(4x)) (docs/model.md §3, misprint 4 corrected: df/dy_{m-1},
 //   df/dy_m). Energy lost: (1/2) dv^T M dv (Carnot); drive impulse work P_d u.
 // Latch (x -> 0): the struts' radial motion stops, (1/2) M_xx xi^2 = g(0) xi^2 is lost, y_m' is
 //   continuous.
@@ -21,7 +21,7 @@
 //   velocity drive du = 0, P_d = M_ml dw; torque / motor du = -M_ml dw / M_mm;
 //   stack impulse M_ll dw + M_ml du, lost (1/2) dv^T M dv.
 // Start of the driven part from rest in velocity mode: a lossless drive ramp, impulse M u, work
-//   (1/2) M u^2 (MODEL.md 4). Final landing of the stowed mast: all its kinetic energy is lost.
+//   (1/2) M u^2 (docs/model.md §4). Final landing of the stowed mast: all its kinetic energy is lost.
 #pragma once
 #include <Eigen/Cholesky>
 #include <Eigen/Core>

@@ -1,9 +1,9 @@
-// Solar-array blanket (paper eq. 2 corrected, MODEL.md sections 1 and 3).
+// Solar-array blanket (paper eq. 2 corrected, docs/model.md §1 and 3).
 //   H = y_m + sum_{locked} 2 l_s + h_tip,  P = n_p^2 l_p^2
 //   M_p(H) = m_p/n_p^2 sum_{k=1..n_p} (k - 1/2)^2 + m_p H^2 / (4 n_p (P - H^2))
 //            + n_p m_p l_p^2 / (12 (P - H^2))
 //   T_p = (1/2) M_p(H) (dH/dt)^2, velocity term on the driven frame -(1/2) M_p'(H) (dH/dt)^2,
-//   (1/2) M_p'(H) = m_p n_p l_p^2 H / (3 (P - H^2)^2)   (paper eq. 16 misprint: MODEL.md 2).
+//   (1/2) M_p'(H) = m_p n_p l_p^2 H / (3 (P - H^2)^2)   (paper eq. 16 misprint: docs/model.md §2).
 // Only called when PanelParams::enabled(): a scene without panels computes no panel terms.
 #pragma once
 #include "model/params.hpp"

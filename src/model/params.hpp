@@ -1,4 +1,4 @@
-// Parameters of one mast, bay by bay and frame by frame (MODEL.md section 1).
+// Parameters of one mast, bay by bay and frame by frame (docs/model.md §1).
 // Plain data; the model functions in this folder are pure functions of these and of the state.
 #pragma once
 #include <cmath>
@@ -6,7 +6,7 @@
 
 namespace truss::model {
 
-// The one place for the paper's Table 1 (MODEL.md 4) and the project's derived defaults; the
+// The one place for the paper's Table 1 (docs/model.md §4) and the project's derived defaults; the
 // scene options (sim/scene.hpp) and the parameter structs below read them from here.
 namespace table1 {
 inline constexpr int n_bays = 30;
@@ -21,7 +21,7 @@ inline constexpr double rail_y_m = 0.15;                  // y_l
 inline constexpr double rail_beta_deg = 20.85;            // beta
 }  // namespace table1
 
-// Derived defaults (MODEL.md 1 and 4; project defaults named as such there).
+// Derived defaults (docs/model.md §1 and 4; project defaults named as such there).
 // J_c of a slender rod: m_s l_s^2 / 12.
 constexpr double calc_default_strut_inertia_kg_m2(double strut_mass_kg, double strut_length_m) {
   return strut_mass_kg * strut_length_m * strut_length_m / 12.0;

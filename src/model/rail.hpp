@@ -1,13 +1,13 @@
-// Guide rail and the hinge on it (paper eqs. 17-18, MODEL.md sections 1-3).
+// Guide rail and the hinge on it (paper eqs. 17-18, docs/model.md §1-§3).
 //   f(x_h, y_h) = y_h - y_l + cot(beta) (x_h - x_l)          (rail function, eq. 17)
 // with c = cot(beta) and y_r = y_l + c x_l (rail height on the longeron line), f = 0 reads
 //   y_h = y_r - c x_h.
 // A bay of strut length l with the hinge at offset x has its frames at y_h +- s, s = sqrt(l^2 - x^2).
-// On the rail the deploying bay is parametrised by x (regular at the lock x = 0, MODEL.md 3):
+// On the rail the deploying bay is parametrised by x (regular at the lock x = 0, docs/model.md §3):
 //   Y(x) = y_r - c x + s   (upper, driven frame)      Y' = -c - x/s,  Y'' = -l^2/s^3
 //   Z(x) = y_r - c x - s   (lower frame)              Z' = -c + x/s,  Z'' =  l^2/s^3
 // In coordinates (y_m, x) the rail function is f = y_m - s(x) - y_r + c x, with gradient
-//   (1, c + x/s): regular at the lock, unlike df/dy in frame heights (MODEL.md misprint 4).
+//   (1, c + x/s): regular at the lock, unlike df/dy in frame heights (docs/model.md §3.1 (4)).
 // Rail normal force on one of the three pins: |lambda| / (3 sin beta).
 #pragma once
 #include <cmath>
@@ -74,7 +74,7 @@ inline double calc_x_on_rail_from_travel(const RailParams& r, double strut_lengt
   return num / (c * d + std::sqrt((1.0 + c * c) * l * l - d * d));
 }
 
-// Rail entry of a bay whose lower frame is held at height z0 (MODEL.md 2, held stack).
+// Rail entry of a bay whose lower frame is held at height z0 (docs/model.md §2, held stack).
 // The hinge runs on the quarter circle (l cos th, z0 + l sin th), th in [0, pi/2], and
 //   f(th) = R sin(th + phi) - (y_r - z0),  R = l sqrt(1 + c^2),  phi = atan(c),
 // which rises then falls on that arc; the pin meets the rail once, from f > 0, iff
@@ -104,12 +104,12 @@ inline HeldRailEntry calc_held_rail_entry(const RailParams& r, double strut_leng
   return e;
 }
 
-// Well-posed held entry (MODEL.md 2; docs/model-notes.md "Rail geometry"). With h = y_r - z0,
+// Well-posed held entry (docs/model.md §2; docs/model-notes.md "Rail geometry"). With h = y_r - z0,
 // f(0) = c l - h is the stowed pin's clearance to the rail and the pin meets the rail on the
 // falling branch of f. As h -> l the entry moves to the straight bay (x -> 0): the struts' radial
 // speed x' = -D D' / (4 x) grows without bound before the rail takes the pin, and the drive force
 // with it (a singular configuration of the held stack). The entry is kept 1e-4 l_s from straight,
-// MODEL.md's "singular configuration" margin:
+// docs/model.md's "singular configuration" margin:
 //   cos(th_e) >= delta  <=>  h >= l (c delta + r),  r = sqrt(1 - delta^2),
 // and the stowed pin must clear the rail, h < c l (at h = c l it touches it; beyond, the rail
 // passes below the stowed hinge and never takes it). The range is empty iff c <= 1 + O(delta),

@@ -1,4 +1,4 @@
-// Linear solves with the mast's mass matrix, which is symmetric tridiagonal (MODEL.md 3: bay i
+// Linear solves with the mast's mass matrix, which is symmetric tridiagonal (docs/model.md §3: bay i
 // couples only frames i-1 and i), in O(n) and without a dense matrix:
 //   solve_tridiagonal:  M x = r  (Thomas algorithm; M is symmetric positive definite, so no
 //                                 pivoting is needed and the elimination is stable)

@@ -124,7 +124,7 @@ std::string validate_panels(const model::MastParams& mast) {
   const double reach = mast.panels.count * mast.panels.length_m;
   if (!(H < reach))
     return fmt::format("panels.length_m: the blanket ({} panels x {} m = {} m) must stay longer than the mast "
-                       "height H, which reaches {:.6g} m (MODEL.md 1: H < n_p l_p)",
+                       "height H, which reaches {:.6g} m (docs/model.md §1: H < n_p l_p)",
                        mast.panels.count, mast.panels.length_m, reach, H);
   return {};
 }

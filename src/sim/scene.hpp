@@ -1,5 +1,5 @@
 // Scene options: what a user writes in a scene TOML file, parsed once into plain structs.
-// Every field has a default (the paper's Table 1, MODEL.md section 4, or a project default named
+// Every field has a default (the paper's Table 1, docs/model.md §4, or a project default named
 // as such) and a one-line reason. validate() names the first bad field.
 #pragma once
 #include <cmath>
@@ -37,7 +37,7 @@ struct MastOptions {
   double diagonal_stiffness_N_per_m = model::table1::diagonal_stiffness_N_per_m;  // Table 1: K
   double diagonal_free_length_m = model::table1::diagonal_free_length_m;          // Table 1: l_0
   std::optional<double> tip_mass_kg;          // unset = model::calc_default_tip_mass_kg (paper eq. 3)
-  // Resolved defaults (MODEL.md 1, 4), the one place the optional keys are filled in.
+  // Resolved defaults (docs/model.md §1, 4), the one place the optional keys are filled in.
   double calc_strut_inertia_kg_m2() const {
     return strut_inertia_kg_m2.value_or(model::calc_default_strut_inertia_kg_m2(strut_mass_kg, strut_length_m));
   }
@@ -56,9 +56,9 @@ struct RailOptions {
 using DriveOptions = model::DriveParams;
 
 struct StackOptions {
-  StackMode mode = StackMode::held;  // MODEL.md 2: the canister holds stowed frames
-  StackContacts contacts = StackContacts::off;  // MODEL.md 2 "free": contacts optional; off = the paper's literal model
-  ContactLaw contact_law = ContactLaw::plastic;  // MODEL.md 2: plastic by default (the only law so far)
+  StackMode mode = StackMode::held;  // docs/model.md §2: the canister holds stowed frames
+  StackContacts contacts = StackContacts::off;  // docs/model.md §2 "free": contacts optional; off = the paper's literal model
+  ContactLaw contact_law = ContactLaw::plastic;  // docs/model.md §2: plastic by default (the only law so far)
 };
 
 struct PanelOptions {

@@ -1,4 +1,4 @@
-// Energy ledger of a run (MODEL.md 5): drive work (smooth part and impulses), the energy lost in
+// Energy ledger of a run (docs/model.md §5): drive work (smooth part and impulses), the energy lost in
 // every impact, the kinetic and potential energies at start and end, and the residual
 //   W - (T_end - T_start) - (U_end - U_start) - E_lost,
 // which closes to the integration error. The potential of the bays that do not move in a stage

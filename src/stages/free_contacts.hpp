@@ -1,4 +1,4 @@
-// Stack contacts of the free phases (MODEL.md 2 "free", `stack.contacts = true`; equations in
+// Stack contacts of the free phases (docs/model.md §2 "free", `stack.contacts = true`; equations in
 // model/contacts.hpp). The frames lo..top of a phase (top = m in phase A, m - 1 in phase B) form
 // clusters of frames in closed contact; frames 0..lo-1 rest on the floor in closed contact (the
 // resting block, at height 0) and are not in the system at all: a phase costs O(moving frames).

@@ -1,4 +1,4 @@
-// Phase A of the free stack (MODEL.md 2 "free", paper eq. 6 corrected in MODEL.md 3): every
+// Phase A of the free stack (docs/model.md §2 "free", paper eq. 6 corrected in docs/model.md §3): every
 // frame below the driven frame m is a generalized coordinate, frame 0 is held at its height until
 // bay 1's rail takes it. Coordinates q = (y_lo, .., y_m), lo = 1 (or the lowest frame the
 // stage moves); the tridiagonal system
@@ -10,7 +10,7 @@
 // The phase ends when the hinge of bay m meets the rail: f = y_h - y_l + cot(beta)(x_h - x_l)
 // falls through 0 (end gap -f rises), with x_h = (1/2) sqrt(4 l^2 - D_m^2), y_h = (y_m + y_{m-1})/2;
 // in a retraction (ctx.direction < 0) when the driven frame is back down at ctx.q_end.
-// Stopping rules (MODEL.md 2), as stop events rising through zero:
+// Stopping rules (docs/model.md §2), as stop events rising through zero:
 //   past_miss_height   y_m - (y_r + 3 l_m): the driven frame passes the lock height y_r + l_m plus
 //                      one bay 2 l_m without rail entry (rail miss);
 //   deploying_straight kStraightFraction l_m - x_m: bay m straightens without rail entry (rail miss);
@@ -57,7 +57,7 @@ class FreePhaseA final : public PhaseModel {
     if (ctx_.direction < 0) q[dof() - 1] = ctx_.q_end;
   }
   enum StopEvent { past_miss_height, deploying_straight, singular_bay, rail_approach_min, above_rail_top, contact_landing, contact_lift_off };
-  // A bay within this fraction of l_s of straight (hinge offset) is straight (MODEL.md 2: 1e-4 l_s).
+  // A bay within this fraction of l_s of straight (hinge offset) is straight (docs/model.md §2: 1e-4 l_s).
   static constexpr double kStraightFraction = 1e-4;
   void set_watch(bool rail_top, bool approach_min) { watch_rail_top_ = rail_top; watch_approach_min_ = approach_min; }
   int num_stop_events() const override { return layout_.enabled ? 7 : 5; }

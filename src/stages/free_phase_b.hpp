@@ -1,6 +1,6 @@
-// Phase B of the free stack (MODEL.md 2-3; paper eqs. 19-20, corrected): the pin of bay m slides
+// Phase B of the free stack (docs/model.md §2-§3; paper eqs. 19-20, corrected): the pin of bay m slides
 // in the rail. Coordinates p = (y_lo, .., y_{m-1}, x): the frame heights below the deploying bay
-// and its hinge offset x, regular at the lock (MODEL.md 3, numerical trap). With
+// and its hinge offset x, regular at the lock (docs/model.md §3, numerical trap). With
 //   y_m = y_{m-1} + 2 s(x),  s = sqrt(l^2 - x^2),  y_m' = y_{m-1}' - k x',  k = 2x/s,
 //   y_m'' = y_{m-1}'' - k x'' - k_x x'^2,  k_x = 2 l^2 / s^3,
 // the frame-height system A y'' = R (model/frames.hpp, bay m's strut term written as g(x) x'^2,
@@ -47,7 +47,7 @@ class FreePhaseB final : public PhaseModel {
   double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[dof() - 1] - ctx_.q_end); }
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[dof() - 1]; }
   void snap_to_end(double* q) const override { q[dof() - 1] = ctx_.q_end; }
-  // Stop event 0 (MODEL.md 2, singular configuration): a moving bay below m comes within
+  // Stop event 0 (docs/model.md §2, singular configuration): a moving bay below m comes within
   // FreePhaseA::kStraightFraction l_s of straight (largest kStraightFraction l_i - x_i).
   int num_stop_events() const override { return layout_.enabled ? 3 : 1; }
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;

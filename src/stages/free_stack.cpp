@@ -307,7 +307,7 @@ FreeContactEvent FreeStack::apply_unlock(const PhaseContext& ctx, double u, bool
   const int n = static_cast<int>(q.size());
   Eigen::VectorXd diag, sub;
   phase.calc_mass(q.data(), qd.data(), diag, sub);
-  // At x = 0: rail gradient a = (.., 1, cot beta), driven frame b = (.., 1, 0) (MODEL.md 3).
+  // At x = 0: rail gradient a = (.., 1, cot beta), driven frame b = (.., 1, 0) (docs/model.md §3).
   std::vector<Eigen::VectorXd> rows(1, Eigen::VectorXd::Zero(n));
   rows[0][n - 2] = 1.0;
   rows[0][n - 1] = mast_.rail.cot_beta();

@@ -1,4 +1,4 @@
-// The free stack's state between phases and stages (MODEL.md 2 "free"): every frame's height and
+// The free stack's state between phases and stages (docs/model.md §2 "free"): every frame's height and
 // velocity, and the deploying bay's hinge offset on the rail. It builds the free phase models
 // (free_phase.hpp, free_phase_b.hpp) with their start states, takes their end states back, and
 // applies the stage events to the n frames: the velocity-mode start kick and the rail entry
@@ -81,11 +81,11 @@ class FreeStack {
   FreeSegmentStart prepare_segment(const PhaseContext& ctx, bool drive_holds_speed);
   FreeSegmentStart apply_contact_event(const PhaseContext& ctx, int stop_event, bool drive_holds_speed);
   int get_last_lowest_frame() const { return last_lo_; }
-  // Retraction (MODEL.md 2, the reverse of deployment): the deployed mast at rest, frame 0 where
+  // Retraction (docs/model.md §2, the reverse of deployment): the deployed mast at rest, frame 0 where
   // bay 1's rail left it (y_r - l_1), every bay straight, no contact closed.
   void init_deployed();
   // Unlock of bay m at x = 0: the plastic impact with the rail of frames lo..m-1 and the hinge
-  // (MODEL.md 2: in velocity mode x' jumps to v tan(beta)); the screw keeps the driven speed, or
+  // (docs/model.md §2: in velocity mode x' jumps to v tan(beta)); the screw keeps the driven speed, or
   // (from_rest, velocity drive) brings it to u as a lossless ramp whose work is the energy given.
   FreeContactEvent apply_unlock(const PhaseContext& ctx_on_rail, double u, bool drive_holds_speed, bool from_rest);
   // Rail exit of bay m (the held entry point: frame m-1 back at the stowed height 0): frame 0 lands
@@ -93,7 +93,7 @@ class FreeStack {
   // contacts frame m-1 (m >= 2) leaves the rail with its velocity (the paper's literal model).
   FreeContactEvent apply_rail_exit(const StageSpec& s, bool drive_holds_speed);
   double calc_potential_energy_J() const { return model::calc_potential_energy_J(mast_, y_.data()); }
-  // Messages of the stopping rules (MODEL.md 2) at time t in the stage of bay m.
+  // Messages of the stopping rules (docs/model.md §2) at time t in the stage of bay m.
   std::string describe_singular(int m, double t_s) const;
   std::string describe_rail_miss(int m, bool past_miss_height, double closest_m, double closest_t_s, double rail_top_t_s, double t_s) const;
   double get_height_m(int k) const { return y_[static_cast<std::size_t>(k)]; }

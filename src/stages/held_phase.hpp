@@ -1,7 +1,7 @@
 // One phase of a held-stack stage, as a 1-DOF system in a regular coordinate q:
-//   open    (hinge off the rail, MODEL.md 2 phase A): q = y_m, lower frame held at rest;
+//   open    (hinge off the rail, docs/model.md §2 phase A): q = y_m, lower frame held at rest;
 //   on_rail (phase B): q = x, the hinge offset of bay m, with y_m = Y(x), y_{m-1} = Z(x)
-//            (rail.hpp) and frame m-2 held: regular at the lock x = 0 (MODEL.md 3, trap).
+//            (rail.hpp) and frame m-2 held: regular at the lock x = 0 (docs/model.md §3, trap).
 // On the rail the frame-height equations (model/frames.hpp) are mapped to coordinates (y_m, x):
 //   dy_{m-1}/dt = u + k xi,  k = 2x/s,  d2y_{m-1}/dt2 = du/dt + k dxi/dt + k' xi^2,  k' = 2 l^2/s^3,
 //   M_yy = A_mm + 2 A_ml + A_ll,  M_yx = k (A_ml + A_ll),  M_xx = k^2 A_ll + 2 g(x),

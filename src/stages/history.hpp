@@ -1,4 +1,4 @@
-// Optional time histories (MODEL.md 5): the phase points on the grid t_k = k * step, pushed in
+// Optional time histories (docs/model.md §5): the phase points on the grid t_k = k * step, pushed in
 // time order by the phase solvers, plus a last row at the end of the run.
 // Memory is bounded: when the rows reach run.max_history_rows, every other row is dropped and the
 // step doubles (the rows left are exactly the grid of the doubled step, t = 0, 2h, 4h, ...), so a

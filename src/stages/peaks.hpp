@@ -1,4 +1,4 @@
-// Peak tracking (MODEL.md 5: peaks with their time and bay; the earliest where one repeats).
+// Peak tracking (docs/model.md §5: peaks with their time and bay; the earliest where one repeats).
 // A phase's samples (step ends, or a grid in closed form) are fed in time order; for each tracked
 // quantity PhasePeaks keeps its best sample and the two neighbours that bracket it, and refine()
 // maximises between them, on the exact closed form or on a quintic Hermite interpolant of the

@@ -1,4 +1,4 @@
-// A phase of a stage as the solvers see it (MODEL.md 2: phase A open, phase B on the rail).
+// A phase of a stage as the solvers see it (docs/model.md §2: phase A open, phase B on the rail).
 // PhaseModel is the narrow interface between a phase's equations and the time-stepping solver:
 // any number of generalized coordinates q (the held stack has one, the free stack n - j),
 // accelerations and the reported loads at (q, q'), and the scalar functions the events need.

@@ -1,4 +1,4 @@
-// Closed-form solver of a held phase in velocity mode (MODEL.md 2; paper: constant speed):
+// Closed-form solver of a held phase in velocity mode (docs/model.md §2; paper: constant speed):
 // the driven frame moves at direction * v, so y_m is linear in time; on the rail x follows from
 // the remaining travel to the lock without cancellation (model/rail.hpp). The drive force comes
 // from inverse dynamics; its peaks are bracketed on a grid per smooth piece (split where bay m's

@@ -1,4 +1,4 @@
-// Run result (a layer below sim/, so that the stages fill it without a cycle): what one simulated deployment or retraction reports (MODEL.md section 5).
+// Run result (a layer below sim/, so that the stages fill it without a cycle): what one simulated deployment or retraction reports (docs/model.md §5).
 // Units are in the field names. Times are seconds from the start of the run.
 #pragma once
 #include <cstddef>
@@ -100,7 +100,7 @@ struct RunResult {
   double potential_energy_end_J = 0.0;
   double energy_residual_J = NAN_INIT();  // W - dT - dU - E_lost
   double max_rail_residual_m = 0.0;       // largest |f| on the rail (0 by construction when exact)
-  // Rail miss (free stack, MODEL.md 2): the bay that missed, the closest approach of its hinge to
+  // Rail miss (free stack, docs/model.md §2): the bay that missed, the closest approach of its hinge to
   // the rail line and its time, and the time the hinge rose above the rail's top y_r (NaN if not).
   int rail_miss_bay = 0;
   double rail_miss_closest_approach_m = NAN_INIT();

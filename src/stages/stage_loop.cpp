@@ -118,7 +118,7 @@ void StageLoop::start_stage(const StageSpec& s, BayResult& br) {
   const int m = s.bay;
   const double v = opts_.drive.speed_m_per_s;
   if (s.start == StageStart::from_rest_or_kick && kinematic_) {
-    // Impulsive start of the driven part from rest (MODEL.md 4): a lossless ramp of the drive.
+    // Impulsive start of the driven part from rest (docs/model.md §4): a lossless ramp of the drive.
     const PhasePoint p0 = HeldPhase(make_context(s, PhaseKind::open, 0.0)).calc_point(s.phases[0].q_start, dir_ * v);
     ++evals_;
     u_ = dir_ * v;
@@ -131,7 +131,7 @@ void StageLoop::start_stage(const StageSpec& s, BayResult& br) {
   ++evals_;
   if (kinematic_ && m == stages_.front().bay) {
     // The mast starts from rest: the drive ramps the driven frame and, through the rail, the
-    // hinge (x' = -u / c) up together, lossless; no impact, so no latch energy (MODEL.md 2 charges
+    // hinge (x' = -u / c) up together, lossless; no impact, so no latch energy (docs/model.md §2 charges
     // it for the unlock of a moving mast only). Mass along the constrained motion, with
     // M_yx = 0 at x = 0: M_yy + M_xx / c^2.
     const double c = mast_.rail.cot_beta();
@@ -224,7 +224,7 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
   const double u_end = p_end.u_m_per_s;
   switch (ph.end) {
     case PhaseEnd::rail_entry: {
-      // Plastic impact of the held lower frame with the rail (MODEL.md 2), in frame heights.
+      // Plastic impact of the held lower frame with the rail (docs/model.md §2), in frame heights.
       const TwoFrameMass M = calc_two_frame_mass(mast_, s.bay, s.locked_mass_kg, s.panel_height_offset_m, ph.lower_held_height_m, p_end.y_driven_m);
       const double x = s.entry_hinge_x_m, D = p_end.y_driven_m - ph.lower_held_height_m;
       const FrameImpact imp = calc_rail_entry_impact(M, calc_rail_gradient(mast_.rail.cot_beta(), D, x), u_end, kinematic_);
@@ -280,7 +280,7 @@ void StageLoop::end_phase(const StageSpec& s, const PhaseSpec& ph, const PhasePo
 void StageLoop::start_free_stage(const StageSpec& s) {
   rail_top_time_s_ = kNaN;
   free_->start_stage(s.bay);
-  if (s.start == StageStart::unlock) {  // retraction: unlock of bay m with every moving frame (MODEL.md 2)
+  if (s.start == StageStart::unlock) {  // retraction: unlock of bay m with every moving frame (docs/model.md §2)
     const bool from_rest = &s == &stages_.front();
     const FreeContactEvent e = free_->apply_unlock(make_context(s, PhaseKind::on_rail, 0.0), dir_ * opts_.drive.speed_m_per_s, kinematic_, from_rest);
     if (!e.ok) return fail(RunStatus::singular_configuration, fmt::format("singular configuration: the unlock of bay {} has no solution", s.bay));
@@ -290,7 +290,7 @@ void StageLoop::start_free_stage(const StageSpec& s) {
     return book(e.energy_loss_J, e.drive_work_J);
   }
   if (s.start != StageStart::from_rest_or_kick || !kinematic_) return;
-  // Impulsive start (MODEL.md 2 "free"): the free frames take the momentum-consistent kick.
+  // Impulsive start (docs/model.md §2 "free"): the free frames take the momentum-consistent kick.
   const StackImpact k = free_->apply_start_kick(s, dir_ * opts_.drive.speed_m_per_s);
   if (!k.ok) return fail(RunStatus::singular_configuration, "singular configuration: the stowed stack's mass matrix is not positive definite");
   r_.start_drive_impulse_Ns = k.drive_impulse_Ns;

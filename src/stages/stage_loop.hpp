@@ -1,4 +1,4 @@
-// The one stage loop of a run (MODEL.md 2): for each stage of the plan (stage_plan.hpp), its
+// The one stage loop of a run (docs/model.md §2): for each stage of the plan (stage_plan.hpp), its
 // start event (impulsive start or unlock, model/impacts.hpp), its phases through a phase solver
 // (phase_solver.hpp: closed form in velocity mode, time stepping otherwise), and the impact that
 // ends each phase (rail entry, latch, rail exit, landing). Peaks go to the PeakTracker, energies

@@ -1,4 +1,4 @@
-// Stages are data (MODEL.md section 2): a stage has a start event, phases, and an end.
+// Stages are data (docs/model.md §2): a stage has a start event, phases, and an end.
 // The held-stack deployment of bay m (stage j = n - m): driven frame m starts at 0 (m = n) or at
 // y_r - l_{m+1} (its bay already open to that height), phase `open` until the pin meets the rail
 // (rail entry, an impact), phase `on_rail` until x = 0 (the latch). Retraction is the exact
@@ -35,11 +35,11 @@ struct StageSpec {
   double panel_height_offset_m = 0; // H = y_m + offset
   // Rail-entry geometry of this bay (held lower frame at 0).
   double entry_hinge_x_m = 0, entry_upper_height_m = 0;
-  // Free stack (MODEL.md 2 "free"): the frames below the driven one are free; the phases' q
+  // Free stack (docs/model.md §2 "free"): the frames below the driven one are free; the phases' q
   // values are not used (the state lives in stages/free_stack.hpp) and entry happens where the
   // motion takes the pin to the rail.
   bool free_stack = false;
-  bool contacts = false;            // free stack: unilateral stack contacts D_i >= 0 (MODEL.md 2)
+  bool contacts = false;            // free stack: unilateral stack contacts D_i >= 0 (docs/model.md §2)
 };
 
 // Builds the stages of a held-stack run. Returns an empty string, or "key: reason" if the

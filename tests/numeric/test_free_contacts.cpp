@@ -1,6 +1,6 @@
-// Stack contacts of the free stack (MODEL.md 2 "free", issue 9 item 3): the cluster reduction,
+// Stack contacts of the free stack (docs/model.md §2 "free", issue 9 item 3): the cluster reduction,
 // contact forces and landing impact against dense constrained solves (Eigen, a second method);
-// resting lower frames against the held stack and a contact force computed here from MODEL.md 3;
+// resting lower frames against the held stack and a contact force computed here from docs/model.md §3;
 // the energy ledger with landings at tight tolerance; no overlap with contacts on.
 #include <catch2/catch.hpp>
 
@@ -112,7 +112,7 @@ sim::SceneOptions contact_scene(model::DriveMode mode) {
   return s;
 }
 
-// Contact force on a lower frame resting on the stack while the driven frame m moves (MODEL.md 3,
+// Contact force on a lower frame resting on the stack while the driven frame m moves (docs/model.md §3,
 // written out here): lambda = (9/8 m_s - 2G) a_m - G'(D) (dD/dt)^2 - dU/dD, Table 1 values.
 double calc_resting_force_N(double D, double u, double a) {
   const double ms = 0.1, l = 0.18, Jc = ms * l * l / 12.0, K = 20.0, l0 = 0.45, b = 0.36;
@@ -210,7 +210,7 @@ TEST_CASE("contacts: energy ledger with landings closes at tight tolerance in ev
   }
 }
 
-// ---- Free-stack retraction (MODEL.md 2: the reverse of deployment; issue 9) ----
+// ---- Free-stack retraction (docs/model.md §2: the reverse of deployment; issue 9) ----
 
 namespace {
 sim::RunResult run_mode(sim::SceneOptions s, model::DriveMode mode) {
@@ -257,7 +257,7 @@ TEST_CASE("free retraction: a one-bay free stack retracts as the held stack (oth
 }
 
 TEST_CASE("free retraction in velocity mode is the time reverse of the deployment (one bay)", "[numeric][free][retract]") {
-  // MODEL.md 2: retraction is the exact time reverse. With the driven frame prescribed, the motion
+  // docs/model.md §2: retraction is the exact time reverse. With the driven frame prescribed, the motion
   // is kinematic: y_m(t) and the hinge path of the retraction are the deployment's at T - t.
   // Compared through linear interpolation of 1 ms histories (error h^2 |x''| / 8 < 1e-6 m) away
   // from the rail entry / exit, where the velocities jump.

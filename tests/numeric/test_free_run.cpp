@@ -1,4 +1,4 @@
-// The free stack run end to end (MODEL.md 2 "free"; issue 9): the n-frame impact laws against a
+// The free stack run end to end (docs/model.md §2 "free"; issue 9): the n-frame impact laws against a
 // dense KKT solve (Eigen, a second method), a one-bay free stack against the held stack (whose
 // phases are written in other coordinates and whose impacts use the two-frame laws), the energy
 // ledger at tight tolerance in every drive mode, and the stopping rules' event functions.
@@ -156,7 +156,7 @@ TEST_CASE("free stack energy ledger closes at tight tolerance in every drive mod
   }
 }
 
-TEST_CASE("free stack stopping rules: the event functions of MODEL.md 2", "[numeric][free]") {
+TEST_CASE("free stack stopping rules: the event functions of docs/model.md §2", "[numeric][free]") {
   sim::SceneOptions s;
   s.mast.n_bays = 4;
   const model::MastParams mast = sim::build_mast(s);

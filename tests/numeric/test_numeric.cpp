@@ -233,7 +233,7 @@ TEST_CASE("rail formulation in (y_m, x) equals the frame-height formulation away
       model::FrameSystem sys;
       model::calc_frame_system(mast, a, y, v, 1, sys);
       const double D = k.Y - k.Z;
-      const double Jl = 0.5 + c * D / (4 * x), Jm = 0.5 - c * D / (4 * x);  // MODEL.md misprint 4
+      const double Jl = 0.5 + c * D / (4 * x), Jm = 0.5 - c * D / (4 * x);  // docs/model.md §3.1 (4)
       const double yl_dd = k.dZ * p.qddot + k.d2Z * xi * xi;
       const double ym_dd = k.dY * p.qddot + k.d2Y * xi * xi;
       // rows: M y'' = r + Q + F e_m + lambda J
@@ -288,7 +288,7 @@ TEST_CASE("reported peaks bound and match a dense sampling of the history", "[nu
 TEST_CASE("velocity-mode retraction starts from rest without a latch impact", "[numeric][retract][impulses]") {
   // At retraction start bay 1 is straight (x = 0) and everything from frame 0 up is at rest. The
   // drive ramps frame 1 to -v; at x = 0 dD/dt = 0, so frame 0 moves with it, and the rail ties
-  // the hinge's radial speed to x' = v tan(beta). Lossless ramp (no latch energy, MODEL.md 2
+  // the hinge's radial speed to x' = v tan(beta). Lossless ramp (no latch energy, docs/model.md §2
   // charges it only when a moving mast unlocks): the drive's impulse along the constrained
   // motion is 2 T / v with, from the struts' kinematics alone (not the model's mass matrix),
   //   T = (1/2) M_axial v^2 + (3/4 m_s + 3 J_c / l_s^2) (v tan beta)^2,

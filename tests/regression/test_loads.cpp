@@ -76,9 +76,9 @@ TEST_CASE("diagonal tension: its peak is the spring at the straight bay", "[load
 }
 
 TEST_CASE("panels: the blanket's mass at the start is M_p(h_tip), the height offset included", "[loads][panels]") {
-  // Velocity mode starts the driven part from rest by an impulse J = M_yy v (MODEL.md 4). With a
+  // Velocity mode starts the driven part from rest by an impulse J = M_yy v (docs/model.md §4). With a
   // blanket the driven coordinate carries M_p(H) more, H = y_m + h_tip = h_tip at the start
-  // (frame n stowed at 0, nothing locked): MODEL.md 1 / paper eq. 2 corrected,
+  // (frame n stowed at 0, nothing locked): docs/model.md §1 / paper eq. 2 corrected,
   //   M_p(H) = m_p/n^2 sum_k (k - 1/2)^2 + m_p H^2 / (4 n (P - H^2)) + n m_p l_p^2 / (12 (P - H^2)),
   // P = n^2 l_p^2. So J(panels) - J(none) = v M_p(h_tip), everything else being equal.
   SceneOptions bare = scene(DriveMode::velocity, 3);

@@ -44,7 +44,7 @@ TEST_CASE("Table 1 velocity deployment: rail entry and lock times of every bay",
     y_start = yr - l;
   }
   CHECK(std::abs(r.deploy_time_s - t_start) < 1e-9);
-  // MODEL.md 4: lock at 0.540049126 m, so the first lock at 5.40049126 s
+  // docs/model.md §4: lock at 0.540049126 m, so the first lock at 5.40049126 s
   CHECK(std::abs(r.bays[29].lock_time_s - 5.40049126) < 1e-8);
 }
 
@@ -58,7 +58,7 @@ TEST_CASE("Table 1 velocity deployment: impacts at rail entry and latch", "[regr
   const double latch = (0.75 * ms + 3 * Jc / (l * l)) * std::pow(v * std::tan(beta), 2);
   for (int m = 1; m <= 30; ++m) CHECK(r.bays[m - 1].latch_energy_J == Approx(latch).epsilon(1e-12));
   // Entry of bay 30 (held lower frame at rest, driven frame kept at v): the lower frame jumps to
-  // w = Z'(x)/Y'(x) v = 0.0704 m/s (MODEL.md 2); Carnot: loss = 1/2 M_ll w^2 with M_ll the
+  // w = Z'(x)/Y'(x) v = 0.0704 m/s (docs/model.md §2); Carnot: loss = 1/2 M_ll w^2 with M_ll the
   // coefficient of the lower frame in the paper's T (bays 30 and 29 at the entry opening).
   const double Ye = entry_height_by_bisection(l, 0.08, 0.15, beta);
   const double x = 0.5 * std::sqrt(4 * l * l - Ye * Ye), sq = std::sqrt(l * l - x * x);
@@ -75,7 +75,7 @@ TEST_CASE("Table 1 velocity deployment: impacts at rail entry and latch", "[regr
   CHECK(r.bays[29].entry_impulse_Ns == Approx(Mll * w / Jl / (3 * std::sin(beta))).epsilon(1e-10));
 }
 
-TEST_CASE("Table 1 drive force shape (MODEL.md 4)", "[regression][table1]") {
+TEST_CASE("Table 1 drive force shape (docs/model.md §4)", "[regression][table1]") {
   SceneOptions s;
   s.mast.n_bays = 3;
   s.run.output_step_s = 1e-3;
@@ -123,7 +123,7 @@ TEST_CASE("retraction ends in the stowed stack, in every drive mode", "[regressi
       SceneOptions d = s;
       d.run.direction = Direction::deploy;
       CHECK(r.deploy_time_s == Approx(simulate(d).deploy_time_s).epsilon(1e-12));  // time reverse
-      // unlocking a moving mast costs the latch energy again (MODEL.md 2); the first unlock,
+      // unlocking a moving mast costs the latch energy again (docs/model.md §2); the first unlock,
       // from rest, costs nothing (issue 10 item 7)
       const RunResult rd = simulate(d);
       CHECK(r.bays[0].latch_energy_J == 0.0);

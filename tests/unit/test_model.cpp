@@ -1,5 +1,5 @@
 // Unit tests of src/model: each function alone, against independent transcriptions of the
-// paper's equations (tests/test_helpers.hpp) and against Table 1 geometry (MODEL.md 2 and 4).
+// paper's equations (tests/test_helpers.hpp) and against Table 1 geometry (docs/model.md §2 and 4).
 #include <catch2/catch.hpp>
 #include <cmath>
 
@@ -44,7 +44,7 @@ double paper_U(const MastParams& mast, const std::vector<double>& y, int top) {
 }  // namespace
 
 TEST_CASE("mass matrix, velocity terms and spring forces match finite differences of the paper's energies", "[model]") {
-  // J_c = 2.7 m_s l_s^2/12 (make_uneven_mast): misprint 1 of MODEL.md would show here.
+  // J_c = 2.7 m_s l_s^2/12 (make_uneven_mast): misprint 1 of docs/model.md would show here.
   for (bool panels : {false, true}) {
     MastParams mast = make_uneven_mast(6);
     if (panels) mast.panels = PanelParams{12, 0.9, 0.3, 0.36};
@@ -117,18 +117,18 @@ TEST_CASE("the hinge-coordinate strut energy g(x) equals G(D) (dD/dx)^2 and stay
     const double h = 1e-7;
     CHECK(calc_dg_hinge_dx(b, x) == Approx((calc_g_hinge(b, x + h) - calc_g_hinge(b, x - h)) / (2 * h)).epsilon(1e-5).margin(1e-9));
   }
-  // at x = 0: (3/4 m_s + 3 J_c / l_s^2), the latch energy factor of MODEL.md 2
+  // at x = 0: (3/4 m_s + 3 J_c / l_s^2), the latch energy factor of docs/model.md §2
   CHECK(calc_g_hinge(b, 0.0) == Approx(0.75 * b.strut_mass_kg + 3 * b.strut_inertia_kg_m2 / (l * l)).epsilon(1e-15));
   CHECK(calc_dg_hinge_dx(b, 0.0) == 0.0);
 }
 
-TEST_CASE("Table 1 rail geometry: entry and lock heights (MODEL.md 2)", "[model][table1]") {
+TEST_CASE("Table 1 rail geometry: entry and lock heights (docs/model.md §2)", "[model][table1]") {
   RailParams rail;  // Table 1 defaults
   const double l = 0.18;
   const HeldRailEntry e = calc_held_rail_entry(rail, l, 0.0);
   REQUIRE(e.reachable);
   CHECK(std::abs(e.upper_height_m - 0.327473474) < 1e-9);
-  CHECK(std::abs(e.hinge_x_m - 0.0747682) < 1e-7);   // MODEL.md gives 7 digits
+  CHECK(std::abs(e.hinge_x_m - 0.0747682) < 1e-7);   // docs/model.md gives 7 digits
   CHECK(std::abs(e.hinge_y_m - 0.1637367) < 1e-7);
   CHECK(std::abs(calc_rail_function_m(rail, e.hinge_x_m, e.hinge_y_m)) < 1e-15);
   CHECK(std::abs(calc_lock_upper_height_m(rail, l) - 0.540049126) < 1e-9);
@@ -168,7 +168,7 @@ TEST_CASE("on-rail kinematics: derivatives, rail function and inverse without ca
   CHECK(calc_x_on_rail_from_travel(rail, l, 0.0) == 0.0);
 }
 
-TEST_CASE("panel mass and slope (MODEL.md 3)", "[model]") {
+TEST_CASE("panel mass and slope (docs/model.md §3)", "[model]") {
   PanelParams p{8, 0.6, 0.25, 0.36};
   const double H = 2.1, h = 1e-6;
   // T = 1/2 M_p u^2 equals the independent transcription

@@ -58,7 +58,7 @@ TEST_CASE("rail-entry impact: velocity drive keeps u, hand-derived", "[unit][imp
   CHECK(r.energy_loss_J == Approx(0.25).epsilon(kRel));
 }
 
-TEST_CASE("rail gradient is MODEL.md's corrected eq. 19 (misprint 4)", "[unit][impacts]") {
+TEST_CASE("rail gradient is docs/model.md §3.1's corrected eq. 19 (correction 4)", "[unit][impacts]") {
   const double l = 0.18, D = 0.3, c = 1.0 / std::tan(20.85 * M_PI / 180.0);
   const double root = std::sqrt(4 * l * l - D * D), x = 0.5 * root;
   const Eigen::Vector2d J = model::calc_rail_gradient(c, D, x);
@@ -135,7 +135,7 @@ TEST_CASE("peak tracker: bracketed grid maximum refined on the closed form", "[u
   CHECK(tr.run[stages::kNegForce].t == 1.0);
   tr.close_stage();
   CHECK(tr.run[stages::kForce].value == tr.stage_force.value);
-  // A later equal value does not replace the earliest occurrence (MODEL.md 5).
+  // A later equal value does not replace the earliest occurrence (docs/model.md §5).
   CHECK_FALSE(tr.run[stages::kForce].offer(tr.stage_force.value, 5.0, 1));
   CHECK(tr.run[stages::kForce].bay == 7);
 }
