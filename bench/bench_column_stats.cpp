@@ -1,9 +1,9 @@
-// Benchmark (not a test): rank 0's merge of chunk summaries into a column's streamed statistics
-// (ColumnStats::add, column_stats.hpp), the part of a chunk's statistics that stays on rank 0.
-// A normal column of N values in chunks of 4,096; each summary is made when its chunk completes
-// (against the windows of that moment) and merged LAG chunks later, as a worker's job in flight.
-// Only the merges are timed (steady clock); median over REPEATS of the mean per merge.
-//   bench_column_stats [N=100000] [REPEATS=200] [LAG=2]
+// Benchmark (not a test): the merge of chunk summaries into a column's streamed statistics
+// (ColumnStats::add, sampling/column_stats.hpp). A normal column of N values in chunks of 4,096;
+// each summary is made when its chunk is written (against the windows of that moment) and merged
+// LAG chunks later (0: at once, as rank 0 does). Only the merges are timed (steady clock); median
+// over REPEATS of the mean per merge.
+//   bench_column_stats [N=100000] [REPEATS=200] [LAG=0]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -12,14 +12,14 @@
 #include <random>
 #include <vector>
 
-#include "campaign/column_stats.hpp"
+#include "sampling/column_stats.hpp"
 
-using namespace truss::campaign;
+using namespace truss::sampling;
 
 int main(int argc, char** argv) {
   const std::size_t n = argc > 1 ? std::strtoull(argv[1], nullptr, 10) : 100000;
   const int repeats = argc > 2 ? std::atoi(argv[2]) : 200;
-  const std::size_t lag = argc > 3 ? std::strtoull(argv[3], nullptr, 10) : 2;
+  const std::size_t lag = argc > 3 ? std::strtoull(argv[3], nullptr, 10) : 0;
   const std::size_t rows = 4096, n_chunks = (n + rows - 1) / rows;
   std::mt19937_64 rng(1);
   std::normal_distribution<double> g(1.0, 0.1);
@@ -29,7 +29,7 @@ int main(int argc, char** argv) {
   std::size_t kept = 0;
   for (int rep = 0; rep < repeats; ++rep) {
     for (double& x : v) x = g(rng);
-    ColumnStats cs(static_cast<std::int64_t>(n_chunks));
+    ColumnStats cs;
     std::deque<std::pair<std::size_t, ChunkSummary>> in_flight;
     const char* bytes = reinterpret_cast<const char*>(v.data());
     double merge_s = 0.0;

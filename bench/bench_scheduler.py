@@ -27,7 +27,7 @@ So E stays near 1 - h/c up to P ~ c/h and falls as c/(P h) beyond. Rank 0's writ
 result, beside h): on a core of its own it caps X at 1/w; on the ranks' cores it takes X w of
 their time (--w; docs/benchmarks.md, "Tenth step").
 
-  bench/bench_scheduler.py BUILD_DIR real [--runs 4000] [--repeats 3] [--driver OTHER_BINARY]
+  bench/bench_scheduler.py BUILD_DIR real [--runs 4000] [--repeats 3] [--driver BEFORE_BINARY]
   bench/bench_scheduler.py BUILD_DIR synthetic [--ranks 32] [--cost 0.002] [--runs 20000] [--repeats 3] [--driver OLD]
   bench/bench_scheduler.py BUILD_DIR compare --driver OLD/truss-campaign [--runs 20000] [--repeats 3]
   bench/bench_scheduler.py model --c C --h H [--w W] [--ranks 2 16 32 64]
@@ -78,7 +78,7 @@ def run(driver, ranks, mca, out, sets, extra=()):
         a = dict(t.attrs)
         runs = t["run_wall_time_s"][:]
         n = runs.size
-        handled = a.get("rank0_poll_s", float("nan")) + a.get("rank0_tick_s", 0.0)
+        handled = a.get("rank0_poll_s", float("nan")) + a.get("rank0_tick_s", 0.0) + a.get("rank0_write_s", 0.0)
         r0 = max(1, int(a.get("runs_by_rank0", 1)))
         return {
             "h_cpu": a.get("rank0_handle_cpu_s", float("nan")) / n,
@@ -91,9 +91,11 @@ def run(driver, ranks, mca, out, sets, extra=()):
             "n": n,
             "run_sum": float(runs.sum()),
             "h": handled / n,
-            # Parts of rank 0's poll time per result (wall, s): MPI calls, storing results (of which
-            # the journal), writing worker-encoded chunks and merging their statistics.
-            **{k: a.get(f"rank0_{k}_s", float("nan")) / n for k in ("mpi", "result", "journal", "job_output")},
+            # Parts of rank 0's time per result (wall, s): MPI calls, storing results (of which the
+            # journal), writing the chunks and merging their statistics (an older build's
+            # rank0_job_output_s: writing worker-encoded chunks).
+            **{k: a.get(f"rank0_{k}_s", float("nan")) / n for k in ("mpi", "result", "journal")},
+            "write": a.get("rank0_write_s", a.get("rank0_job_output_s", float("nan"))) / n,
             "tick": a.get("rank0_tick_s", float("nan")) / n,
         }
 
@@ -103,47 +105,56 @@ def med(rows, key):
 
 
 def bench_real(a):
+    """1 rank and 2 ranks over the three transports; with --driver, that build ("before") and this
+    one ("after") interleaved in every repeat, each build's efficiency against its own 1-rank time."""
     load0 = os.getloadavg()
-    driver = a.driver or os.path.join(a.build, "truss-campaign")
+    drivers = {"": os.path.join(a.build, "truss-campaign")}
+    if a.driver:
+        drivers = {"before": a.driver, "after": drivers[""]}
     sets = [f"ensemble.n_runs={a.runs}"]
-    rows = {k: [] for k in ["1 rank", *TRANSPORTS]}
+    names = ["1 rank", *TRANSPORTS]
+    rows = {(k, b): [] for b in drivers for k in names}
     with tempfile.TemporaryDirectory() as d:
         out = os.path.join(d, "r.h5")
         for rep in range(a.repeats):
-            rows["1 rank"].append(run(driver, 1, [], out, sets))
-            for name, mca in TRANSPORTS.items():
-                rows[name].append(run(driver, 2, mca, out, sets))
+            for k in names:
+                for b, drv in drivers.items():
+                    rows[(k, b)].append(run(drv, 1 if k == "1 rank" else 2, TRANSPORTS.get(k, []), out, sets))
             print(f"repeat {rep + 1}/{a.repeats} done", file=sys.stderr)
-    t1 = med(rows["1 rank"], "wall")
-    c = statistics.median(r["run_sum"] / r["n"] for r in rows["1 rank"])
-    print(f"driver: {driver}\n{a.runs} runs, {a.repeats} repeats (medians); per-run cost on 1 rank c = {c * 1e3:.3f} ms wall; "
-          f"load average before / after: {load0} / {os.getloadavg()}\n")
+    for b, drv in drivers.items():
+        print(f"{b or 'driver'}: {drv}")
+    print(f"{a.runs} runs, {a.repeats} repeats (medians); load average before / after: {load0} / {os.getloadavg()}\n")
     # The efficiency T(1) / (P T(P)) is about the ratio of two factors, both against 1 rank: how
     # much longer a run's simulation takes when every core computes (the machine: shared caches and
     # memory bandwidth, the VM's vCPUs) and the share of the ranks' time spent in simulations,
     # sum of run_wall_time_s / (P schedule_wall_s) (the scheduler: rank 0's per-result work,
-    # waiting, the start and the tail; on 1 rank it is below 1 by the encoding and each run's
-    # sampling and record outside the simulation).
-    print("| ranks | transport | campaign wall (s) | efficiency | run time vs 1 rank | time in runs vs 1 rank "
+    # waiting, the start and the tail; on 1 rank it is below 1 by the file's chunk writes and each
+    # run's sampling and record outside the simulation).
+    print("| ranks | transport | build | campaign wall (s) | efficiency | run time vs 1 rank | time in runs vs 1 rank "
           "| runs by rank 0 | rank 0 per result, wall (us) | rank 0 per result, CPU (us) | rank 0 per run, CPU (us) "
           "| h / c (CPU) |")
-    print("|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-    busy1 = statistics.median(r["run_sum"] / r["sched"] for r in rows["1 rank"])
-    for name, rs in rows.items():
-        P = 1 if name == "1 rank" else 2
-        w = med(rs, "wall")
-        h, hc, cc = med(rs, "h"), med(rs, "h_cpu"), med(rs, "c_cpu")
-        slow = statistics.median(r["run_sum"] / r["n"] for r in rs) / c
-        busy = statistics.median(r["run_sum"] / (P * r["sched"]) for r in rs) / busy1
-        print(f"| {P} | {'-' if P == 1 else name} | {w:.3f} | {t1 / (P * w):.2f} | {slow:.3f} | {busy:.3f} "
-              f"| {med(rs, 'rank0_runs'):.0f} | {h * 1e6:.1f} | {hc * 1e6:.1f} | {cc * 1e6:.1f} | {hc / cc * 100:.2f} % |")
+    print("|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for k in names:
+        for b in drivers:
+            rs, one = rows[(k, b)], rows[("1 rank", b)]
+            t1, c = med(one, "wall"), statistics.median(r["run_sum"] / r["n"] for r in one)
+            busy1 = statistics.median(r["run_sum"] / r["sched"] for r in one)
+            P = 1 if k == "1 rank" else 2
+            w = med(rs, "wall")
+            h, hc, cc = med(rs, "h"), med(rs, "h_cpu"), med(rs, "c_cpu")
+            slow = statistics.median(r["run_sum"] / r["n"] for r in rs) / c
+            busy = statistics.median(r["run_sum"] / (P * r["sched"]) for r in rs) / busy1
+            print(f"| {P} | {'-' if P == 1 else k} | {b or '-'} | {w:.3f} | {t1 / (P * w):.3f} | {slow:.3f} | {busy:.3f} "
+                  f"| {med(rs, 'rank0_runs'):.0f} | {h * 1e6:.1f} | {hc * 1e6:.1f} | {cc * 1e6:.1f} | {hc / cc * 100:.2f} % |")
     print("\nWhere rank 0's per-result wall time goes (us a result, medians; /timing's rank0_*_s over the results):\n")
-    print("| ranks | transport | MPI calls | storing results | of which journal | chunk writes + statistics | tick (journal sync, progress) |")
-    print("|---:|---|---:|---:|---:|---:|---:|")
-    for name, rs in rows.items():
-        P = 1 if name == "1 rank" else 2
-        print(f"| {P} | {'-' if P == 1 else name} | " + " | ".join(f"{med(rs, k) * 1e6:.1f}" for k in
-                                                               ("mpi", "result", "journal", "job_output", "tick")) + " |")
+    print("| ranks | transport | build | MPI calls | storing results | of which journal | chunk writes + statistics "
+          "| tick (journal sync, progress) |")
+    print("|---:|---|---|---:|---:|---:|---:|---:|")
+    for k in names:
+        for b in drivers:
+            rs = rows[(k, b)]
+            print(f"| {1 if k == '1 rank' else 2} | {'-' if k == '1 rank' else k} | {b or '-'} | " +
+                  " | ".join(f"{med(rs, x) * 1e6:.1f}" for x in ("mpi", "result", "journal", "write", "tick")) + " |")
 
 
 def bench_synthetic(a):
@@ -208,7 +219,8 @@ def main():
     ap.add_argument("what", nargs="?", choices=["real", "synthetic", "compare"])
     ap.add_argument("--runs", type=int)
     ap.add_argument("--repeats", type=int, default=3)
-    ap.add_argument("--driver", help="real: another truss-campaign binary (e.g. an older build); compare, synthetic: the 'before' one")
+    ap.add_argument("--driver", help="real, compare, synthetic: another truss-campaign binary (the 'before' one), "
+                                     "interleaved with this build's in every repeat")
     ap.add_argument("--ranks", type=int, nargs="+", default=[32])
     ap.add_argument("--cost", type=float, default=0.002)
     ap.add_argument("--c", type=float, help="model: per-run cost (s)")

@@ -1,10 +1,11 @@
 #!/usr/bin/python3
-"""Where rank 0's per-result time goes (not a test; docs/benchmarks.md, "Seventh step").
+"""Where rank 0's per-result time goes (not a test; docs/benchmarks.md).
 
 Runs the Table-1 campaign on 2 ranks with rank 0 under `perf record --call-graph dwarf` and
-splits rank 0's samples: runs (inside calc_run_record, its own runs' CRC included), side jobs it
-encoded itself, and the per-result path (everything under run_schedule), the last broken down by
-the function run_schedule called (and the one that called), and by leaf function.
+splits rank 0's samples: runs (inside append_run_record, its own runs' CRC included) and the
+per-result path (everything else under run_engine: receiving, journalling, storing, writing the
+chunks), the last broken down by the function run_engine's round called (and the one that
+called), and by leaf function.
 
   bench/profile_rank0.py BUILD_DIR [--runs 100000] [--mca single-copy-off|tcp|cma] [--freq 1000]
 """
@@ -17,8 +18,8 @@ import tempfile
 
 MCA = {"single-copy-off": ["--mca", "btl_vader_single_copy_mechanism", "none"],
        "tcp": ["--mca", "btl", "self,tcp"], "cma": []}
-COMPUTE = ("calc_run_record", "seal_frame", "frame_crc", "append_bytes")
-# Frames of the simulation: a deep solver stack is cut by perf's 8 kB copy before calc_run_record.
+COMPUTE = ("append_run_record", "seal_frame", "calc_uniforms")
+# Frames of the simulation: a deep solver stack is cut by perf's 8 kB copy before append_run_record.
 SIMULATION = ("truss::stages::", "truss::model::", "truss::sim::", "truss::numerics::", "truss::integrators::")
 
 
@@ -34,16 +35,14 @@ def split(script):
         stack = " | ".join(frames)
         if any(k in stack for k in COMPUTE) or any(k in stack for k in SIMULATION):
             cat["runs"] += 1
-        elif "encode_job_output" in stack:
-            cat["side jobs encoded by rank 0"] += 1
-        elif "run_schedule" in stack:
+        elif "Rank0Round::run" in stack:
             cat["per-result path"] += 1
-            i = max(k for k, f in enumerate(frames) if "run_schedule" in f)
-            callee[frames[i - 1][:70] if i > 0 else "run_schedule"] += 1
-            two[" > ".join(f[:50] for f in frames[max(0, i - 2):i][::-1]) or "run_schedule"] += 1
+            i = max(k for k, f in enumerate(frames) if "Rank0Round::run" in f)
+            callee[frames[i - 1][:70] if i > 0 else "Rank0Round::run"] += 1
+            two[" > ".join(f[:50] for f in frames[max(0, i - 2):i][::-1]) or "Rank0Round::run"] += 1
             leaf[frames[0][:70]] += 1
         else:
-            cat["other (start-up, writer thread, MPI threads)"] += 1
+            cat["other (start-up, the tail, MPI threads)"] += 1
     return cat, callee, two, leaf
 
 
@@ -75,7 +74,7 @@ def main():
     print(f"{total} samples of rank 0 ({a.runs} runs, 2 ranks, {a.mca})")
     for k, v in cat.most_common():
         print(f"  {v:6d}  {100 * v / total:5.1f} %  {k}")
-    for title, c in (("per-result path by the function run_schedule called", callee),
+    for title, c in (("per-result path by the function the round's loop called", callee),
                      ("... and the one that called", two), ("per-result path by leaf", leaf)):
         print(f"{title} ({path} samples):")
         for k, v in c.most_common(15):

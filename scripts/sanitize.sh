@@ -10,8 +10,6 @@
 #      and every tests/mpi case but one), with leak detection off: Open MPI's components are
 #      dlclose()d at MPI_Finalize and their never-freed start-up blocks show as leaks in
 #      "<unknown module>" frames that no suppression can name.
-# Then the tests of the campaign's two threads (the journal's writer, rank 0's write thread) under
-# ThreadSanitizer (build-tsan/, journal_tsan).
 # Left out (docs/reliability.md): the Python-only tests that read files the fixtures above wrote
 # (postproc_*, openturns_crosscheck), the source scans (layering, code_size), the install
 # consumer (packaging: it compiles another project), and mpi_transports, whose efficiency floors
@@ -24,8 +22,8 @@ cd "$(dirname "$0")/.."
 ROOT=$(pwd)
 BUILD=${SAN_BUILD_DIR:-build-san}
 FUZZ_SECONDS=${FUZZ_SECONDS:-30}
-SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|free_stack|free_contacts|free_retract|integrators|truss_tests_io|campaign_files|truss_tests_sampling|cli_bad_input|stress_reduced|end_to_end_figures|postproc_frame_heights|report_fixture_run)$'}
-SAN_MPI_TESTS=${SAN_MPI_TESTS:-'^(report_fixture_(table1_dispersed|motor_torque|free_rail_miss|retract)|openturns_fixture_.*|mpi_(ranks|resume|failures|saltelli|bad_input|paths|hostile|journal|faults|layout))$'}
+SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|free_stack|free_contacts|free_retract|integrators|truss_tests_io|campaign_files|util_units|truss_tests_sampling|cli_bad_input|stress_reduced|end_to_end_figures|postproc_frame_heights|report_fixture_run)$'}
+SAN_MPI_TESTS=${SAN_MPI_TESTS:-'^(report_fixture_(table1_dispersed|motor_torque|free_rail_miss|retract)|openturns_fixture_.*|mpi_(ranks|resume|failures|saltelli|bad_input|paths|hostile|journal|faults|layout|rounds_rounds|rounds_resume))$'}
 what=${1:-all}
 t0=$(date +%s)
 
@@ -37,7 +35,7 @@ cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clan
 targets=(fuzz_scene fuzz_campaign)
 if [ "$what" != fuzz ]; then
   targets+=(truss_tests_model truss_tests_stages truss_tests_free truss_tests_integrators truss_tests_io
-            truss_tests_campaign truss_tests_sampling truss-sim truss-campaign)
+            truss_tests_campaign truss_tests_util truss_tests_sampling truss-sim truss-campaign truss_campaign_two_round)
 fi
 cmake --build "$BUILD" -j"$(nproc)" --target "${targets[@]}" >> "$BUILD.log" 2>&1 || { tail -50 "$BUILD.log"; exit 1; }
 t_build=$(date +%s)
@@ -53,18 +51,6 @@ if [ "$what" != fuzz ]; then
 fi
 t_tests=$(date +%s)
 echo "[sanitize] tests under ASan+UBSan: $((t_tests - t_build)) s"
-
-# ThreadSanitizer on the threads the campaign starts (the journal's writer, rank 0's write thread):
-# their sources and tests (truss_tests_journal_tsan; truss_tests_store_tsan: the result store with
-# its write thread, the campaign library instrumented), in build-tsan/; any report fails.
-if [ "$what" != fuzz ]; then
-  TSAN_BUILD=${TSAN_BUILD_DIR:-build-tsan}
-  cmake -S . -B "$TSAN_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
-    -DTRUSS_TSAN=ON > "$TSAN_BUILD.log" 2>&1 || { cat "$TSAN_BUILD.log"; exit 1; }
-  cmake --build "$TSAN_BUILD" -j"$(nproc)" --target truss_tests_journal_tsan truss_tests_store_tsan >> "$TSAN_BUILD.log" 2>&1 || { tail -50 "$TSAN_BUILD.log"; exit 1; }
-  (cd "$TSAN_BUILD" && ctest --output-on-failure --timeout 900 -R '^(journal|store)_tsan$')
-  echo "[sanitize] journal, write thread and result store under ThreadSanitizer: $(( $(date +%s) - t_tests )) s"
-fi
 
 # Fuzzers: the committed corpus is the seed; new inputs go to a scratch copy (CI does not change
 # the tree). The campaign fuzzer runs in campaigns/ so that the seeds' scene.file paths resolve.

@@ -1,8 +1,7 @@
 #!/usr/bin/env bash
 # Installs what the project needs (Debian 12), builds it in build/, and runs every test with ctest;
 # then the sanitizer and fuzzing stage (scripts/sanitize.sh: tests under ASan+UBSan in build-san/,
-# the tests of rank 0's threads and its result store under ThreadSanitizer in build-tsan/, each libFuzzer target for FUZZ_SECONDS,
-# 30 by default). SKIP_SANITIZE=1 skips that stage.
+# each libFuzzer target for FUZZ_SECONDS, 30 by default). SKIP_SANITIZE=1 skips that stage.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install-deps.sh

@@ -3,6 +3,7 @@
 
 
 SCHEMA_VERSION = 1
+CAMPAIGN_SCHEMA_VERSION = 2  # 2: /runs/round, rounds of runs (docs/hdf5-schema.md); 1 is read too
 
 
 EXIT_INPUT_ERROR = 2

@@ -12,7 +12,6 @@
 
 #include "campaign/dispersion.hpp"
 #include "io/scene_toml.hpp"
-#include "campaign/sampling.hpp"
 #include "sim/scene_keys.hpp"
 
 namespace truss::campaign {
@@ -21,8 +20,9 @@ using io::InputError;
 
 namespace {
 
-const std::vector<std::string> kDistributions(std::begin(kDistributionNames), std::end(kDistributionNames));
-const std::vector<std::string> kSampling(std::begin(kSamplingNames), std::end(kSamplingNames));
+const std::vector<std::string> kDistributions(std::begin(sampling::kDistributionNames),
+                                              std::end(sampling::kDistributionNames));
+const std::vector<std::string> kSampling(std::begin(sampling::kSamplingNames), std::end(sampling::kSamplingNames));
 
 // Index of a name already checked against `names`.
 int index_of(const std::vector<std::string>& names, const std::string& s) {
@@ -33,8 +33,10 @@ struct Ctx {
   std::string file;
   std::map<const toml::node*, std::string> set_by;  // values put in the tree by --set: the argument
   [[noreturn]] void fail(const toml::node* at, const std::string& what) const {
-    if (const auto it = set_by.find(at); it != set_by.end()) throw InputError(fmt::format("error: --set {}: {}", it->second, what));
-    if (at && at->source().begin.line > 0) throw InputError(fmt::format("error: {}:{}: {}", file, at->source().begin.line, what));
+    if (const auto it = set_by.find(at); it != set_by.end())
+      throw InputError(fmt::format("error: --set {}: {}", it->second, what));
+    if (at && at->source().begin.line > 0)
+      throw InputError(fmt::format("error: {}:{}: {}", file, at->source().begin.line, what));
     throw InputError(fmt::format("error: {}: {}", file, what));
   }
 };
@@ -51,7 +53,8 @@ double get_number(const Ctx& c, const toml::node& n, const std::string& key) {
   c.fail(&n, fmt::format("{}: expected a number", key));
 }
 
-std::string get_string(const Ctx& c, const toml::node& n, const std::string& key, const std::vector<std::string>& allowed = {}) {
+std::string get_string(const Ctx& c, const toml::node& n, const std::string& key,
+                       const std::vector<std::string>& allowed = {}) {
   auto s = n.value_exact<std::string>();
   if (!s) c.fail(&n, fmt::format("{}: expected a string", key));
   if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), *s) == allowed.end())
@@ -94,7 +97,6 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
     if (k == "n_runs") {
       auto i = v.value_exact<std::int64_t>();
       if (!i) c.fail(&v, key + ": expected an integer");
-      if (*i < 1) c.fail(&v, fmt::format("{}: must be a positive number of runs, got {}", key, *i));
       o.ensemble.n_runs = *i;
     } else if (k == "master_seed") {
       auto i = v.value_exact<std::int64_t>();
@@ -104,9 +106,7 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
     } else if (k == "sampling") {
       o.ensemble.sampling = static_cast<SamplingMethod>(index_of(kSampling, get_string(c, v, key, kSampling)));
     } else if (k == "max_run_wall_time_s") {
-      const double w = get_number(c, v, key);
-      if (!(w > 0.0 && std::isfinite(w))) c.fail(&v, fmt::format("{}: must be positive, got {}", key, w));
-      o.ensemble.max_run_wall_time_s = w;
+      o.ensemble.max_run_wall_time_s = get_number(c, v, key);
     } else {
       c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
                              "ensemble.max_run_wall_time_s)", key));
@@ -129,7 +129,8 @@ std::string where_of(const Ctx& c, const toml::node& n) {
 void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
   const auto tables = io::known_scene_keys();
   auto is_scene_table = [&](std::string_view name) {
-    return std::any_of(tables.begin(), tables.end(), [&](const std::string& k) { return k.substr(0, k.find('.')) == name; });
+    return std::any_of(tables.begin(), tables.end(),
+                       [&](const std::string& k) { return k.substr(0, k.find('.')) == name; });
   };
   std::vector<io::SceneSetting> inline_settings, override_settings;
   for (const auto& [k, v] : t) {
@@ -145,7 +146,8 @@ void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
       const toml::table* st = v.as_table();
       if (!st) c.fail(&v, fmt::format("{}: expected a table ([{}])", key, key));
       for (const auto& [sk, sv] : *st)
-        inline_settings.push_back({std::string(k.str()) + "." + std::string(sk.str()) + "=" + toml_value_text(sv), where_of(c, sv)});
+        inline_settings.push_back(
+            {std::string(k.str()) + "." + std::string(sk.str()) + "=" + toml_value_text(sv), where_of(c, sv)});
     } else {
       c.fail(&v, fmt::format("unknown key '{}' (known: scene.file, scene.overrides, and scene tables [scene.mast], "
                              "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run])", key));
@@ -164,13 +166,11 @@ void parse_output_table(const Ctx& c, const toml::table& t, CampaignOptions& o) 
       o.output.history_runs.clear();
       for (const auto& e : *a) {
         auto i = e.value_exact<std::int64_t>();
-        if (!i || *i < 0) c.fail(&e, key + ": run indices are integers >= 0");
+        if (!i) c.fail(&e, key + ": run indices are integers");
         o.output.history_runs.push_back(*i);
       }
     } else if (k == "history_step_s") {
-      const double h = get_number(c, v, key);
-      if (!(h > 0.0 && std::isfinite(h))) c.fail(&v, fmt::format("{}: must be positive, got {}", key, h));
-      o.output.history_step_s = h;
+      o.output.history_step_s = get_number(c, v, key);
     } else {
       c.fail(&v, fmt::format("unknown key '{}' (known: output.history_runs, output.history_step_s)", key));
     }
@@ -184,15 +184,19 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
   bool has_key = false, has_dist = false;
   for (const auto& [k, v] : t) {
     const std::string key = where + "." + std::string(k.str());
-    if (k == "key") { d.key = get_string(c, v, key); has_key = true; }
-    else if (k == "per") {
+    if (k == "key") {
+      d.key = get_string(c, v, key);
+      has_key = true;
+    } else if (k == "per") {
       const std::string p = get_string(c, v, key, {"run", "bay", "frame"});
       d.per = p == "run" ? Per::run : p == "bay" ? Per::bay : Per::frame;
     } else if (k == "apply") {
       const std::string a = get_string(c, v, key, {"absolute", "relative", "offset"});
       d.apply = a == "absolute" ? Apply::absolute : a == "relative" ? Apply::relative : Apply::offset;
-    } else if (k == "distribution") { d.distribution = static_cast<DistributionKind>(index_of(kDistributions, get_string(c, v, key, kDistributions))); has_dist = true; }
-    else if (k == "mean") d.mean = get_number(c, v, key);
+    } else if (k == "distribution") {
+      d.distribution = static_cast<DistributionKind>(index_of(kDistributions, get_string(c, v, key, kDistributions)));
+      has_dist = true;
+    } else if (k == "mean") d.mean = get_number(c, v, key);
     else if (k == "std") d.std = get_number(c, v, key);
     else if (k == "lower") d.lower = get_number(c, v, key);
     else if (k == "upper") d.upper = get_number(c, v, key);
@@ -200,52 +204,77 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
     else if (k == "sigma") d.sigma = get_number(c, v, key);
     else if (k == "values") d.values = get_numbers(c, v, key);
     else if (k == "weights") d.weights = get_numbers(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: key, per, apply, distribution, mean, std, lower, upper, mu, "
-                                "sigma, values, weights)", key));
+    else c.fail(&v, fmt::format("unknown key '{}' (known: key, per, apply, distribution, mean, std, lower, upper, "
+                                "mu, sigma, values, weights)", key));
   }
   if (!has_key) c.fail(&t, where + ": missing 'key' (the scene key to disperse, e.g. \"mast.strut_mass_kg\")");
   if (!has_dist) c.fail(&t, where + ": missing 'distribution' (one of " + join(kDistributions) + ")");
-  // The key and the distribution's parameters.
-  const std::string& K = d.key;
-  if (!is_dispersible_key(K))
-    c.fail(&t, fmt::format("{}.key: \"{}\" is not a scene key that can be dispersed (per bay: {}; per frame: {}; "
-                           "per run: the other numeric keys)", where, K, "mast.strut_*, mast.diagonal_*",
-                           "mast.frame_side_m, mast.frame_mass_kg"));
-  if (d.per == Per::bay && !is_bay_key(K)) c.fail(&t, fmt::format("{}.per: \"{}\" is not a per-bay key", where, K));
-  if (d.per == Per::frame && !is_frame_key(K)) c.fail(&t, fmt::format("{}.per: \"{}\" is not a per-frame key", where, K));
-  auto bad = [&](const std::string& what) { c.fail(&t, fmt::format("{}: {} distribution: {}", where, to_string(d.distribution), what)); };
-  // The distribution's parameters: the sampling library's one set of checks, with this entry's file and line.
-  if (const std::string e = make_distribution(d).validate(); !e.empty()) bad(e);
-  if (K == "mast.n_bays") {
-    if (d.distribution != DistributionKind::discrete || d.apply != Apply::absolute || d.per != Per::run)
-      c.fail(&t, where + ": mast.n_bays is an integer: disperse it with distribution = \"discrete\", apply = \"absolute\", per = \"run\"");
-    for (double v : d.values)
-      if (!(v >= 1.0 && v <= 100000.0 && v == std::floor(v))) bad(fmt::format("bay counts must be integers >= 1, got {}", v));
-  }
   return d;
+}
+
+// The rules of one dispersion (index i): "" or "dispersion[i + 1]...: reason".
+std::string validate_dispersion(const CampaignOptions& o, std::size_t i) {
+  const DispersionOptions& d = o.dispersions[i];
+  const std::string where = fmt::format("dispersion[{}]", i + 1);
+  if (!is_dispersible_key(d.key))
+    return fmt::format("{}.key: \"{}\" is not a scene key that can be dispersed (per bay: mast.strut_*, "
+                       "mast.diagonal_*; per frame: mast.frame_side_m, mast.frame_mass_kg; per run: the other numeric "
+                       "keys)", where, d.key);
+  if (d.per == Per::bay && !is_bay_key(d.key)) return fmt::format("{}.per: \"{}\" is not a per-bay key", where, d.key);
+  if (d.per == Per::frame && !is_frame_key(d.key))
+    return fmt::format("{}.per: \"{}\" is not a per-frame key", where, d.key);
+  // The distribution's parameters: the sampling library's one set of checks.
+  const std::string dist = fmt::format("{}: {} distribution: ", where, to_string(d.distribution));
+  if (const std::string e = make_distribution(d).validate(); !e.empty()) return dist + e;
+  if (d.key == "mast.n_bays") {
+    if (d.distribution != DistributionKind::discrete || d.apply != Apply::absolute || d.per != Per::run)
+      return where + ": mast.n_bays is an integer: disperse it with distribution = \"discrete\", "
+                     "apply = \"absolute\", per = \"run\"";
+    for (double v : d.values)
+      if (!(v >= 1.0 && v <= 100000.0 && v == std::floor(v)))
+        return dist + fmt::format("bay counts must be integers >= 1, got {}", v);
+  }
+  for (std::size_t j = 0; j < i; ++j)  // two dispersions of one key would silently overwrite each other
+    if (o.dispersions[j].key == d.key)
+      return fmt::format("{}.key: \"{}\" is already dispersed at {}", where, d.key,
+                         o.dispersions[j].line > 0 ? fmt::format("line {}", o.dispersions[j].line)
+                                                   : fmt::format("dispersion[{}]", j + 1));
+  return {};
+}
+
+// The rules of the sampling method: a Saltelli design's blocks, and each plan's limits.
+std::string validate_sampling(const CampaignOptions& o) {
+  const std::int64_t n = o.ensemble.n_runs;
+  if (o.ensemble.sampling != SamplingMethod::saltelli) {
+    const sampling::SamplePlan plan(o.ensemble.sampling, n, std::max(1, calc_layout(o).total), o.ensemble.master_seed);
+    const std::string e = plan.validate();  // "n_runs: ..." or about the dimensions ("d: ...")
+    if (e.empty()) return {};
+    return e.rfind("n_runs:", 0) == 0 ? "ensemble." + e : "ensemble.sampling: " + e;
+  }
+  if (o.dispersions.empty()) return "ensemble.sampling: saltelli needs at least one [[dispersion]]";
+  const std::int64_t b = saltelli_block_runs(o);
+  if (n % b != 0 || n < 2 * b)
+    return fmt::format("ensemble.n_runs: saltelli sampling runs blocks of {} runs (A, B and one per dispersion); "
+                       "n_runs must be a multiple of {} and at least {}, got {} (e.g. {})",
+                       b, b, 2 * b, n, std::max<std::int64_t>(2, n / b) * b);
+  return {};
 }
 
 }  // namespace
 
 std::string CampaignOptions::validate() const {
-  if (ensemble.n_runs < 1) return fmt::format("ensemble.n_runs: must be >= 1, got {}", ensemble.n_runs);
-  if (!(ensemble.max_run_wall_time_s > 0.0))
+  if (ensemble.n_runs < 1)
+    return fmt::format("ensemble.n_runs: must be a positive number of runs, got {}", ensemble.n_runs);
+  if (!(ensemble.max_run_wall_time_s > 0.0 && std::isfinite(ensemble.max_run_wall_time_s)))
     return fmt::format("ensemble.max_run_wall_time_s: must be positive, got {}", ensemble.max_run_wall_time_s);
-  if (!(output.history_step_s > 0.0)) return fmt::format("output.history_step_s: must be positive, got {}", output.history_step_s);
+  if (!(output.history_step_s > 0.0 && std::isfinite(output.history_step_s)))
+    return fmt::format("output.history_step_s: must be positive, got {}", output.history_step_s);
   for (std::int64_t r : output.history_runs)
-    if (r < 0 || r >= ensemble.n_runs) return fmt::format("output.history_runs: run {} is not in [0, {})", r, ensemble.n_runs);
-  if (std::string e = base.validate(); !e.empty()) return "scene." + e;
-  if (ensemble.sampling == SamplingMethod::saltelli &&
-      (dispersions.empty() || ensemble.n_runs % saltelli_block_runs(*this) != 0))
-    return fmt::format("ensemble.n_runs: saltelli needs dispersions and a multiple of {} runs", saltelli_block_runs(*this));
-  for (std::size_t i = 0; i < dispersions.size(); ++i) {
-    const DispersionOptions& d = dispersions[i];
-    if (!is_dispersible_key(d.key)) return fmt::format("dispersion[{}].key: \"{}\" cannot be dispersed", i + 1, d.key);
-    if ((d.per == Per::bay && !is_bay_key(d.key)) || (d.per == Per::frame && !is_frame_key(d.key)))
-      return fmt::format("dispersion[{}].per: \"{}\" is not dispersible per {}", i + 1, d.key, d.per == Per::bay ? "bay" : "frame");
-    if (std::string e = make_distribution(d).validate(); !e.empty()) return fmt::format("dispersion[{}]: {}", i + 1, e);
-  }
-  return {};
+    if (r < 0 || r >= ensemble.n_runs)
+      return fmt::format("output.history_runs: run {} does not exist (n_runs = {})", r, ensemble.n_runs);
+  for (std::size_t i = 0; i < dispersions.size(); ++i)
+    if (std::string e = validate_dispersion(*this, i); !e.empty()) return e;
+  return validate_sampling(*this);
 }
 
 // Which keys may be dispersed, and how: the scene key table (sim/scene_keys.hpp).
@@ -264,6 +293,22 @@ bool is_dispersible_key(const std::string& key) {
 
 namespace {
 
+// The node that the field of a validate() message ("ensemble.n_runs: ...", "dispersion[2].per: ...")
+// was read from: the value, its table, or null (the file as a whole).
+const toml::node* node_of_field(const toml::table& root, const std::string& message) {
+  const std::string field = message.substr(0, message.find(':'));
+  if (field.rfind("dispersion[", 0) == 0) {
+    const std::size_t i = std::stoul(field.substr(11)) - 1;
+    const toml::array* a = root["dispersion"].as_array();
+    return a && i < a->size() ? a->get(i) : nullptr;
+  }
+  const auto dot = field.find('.');
+  if (dot == std::string::npos) return nullptr;
+  const auto table = root[field.substr(0, dot)];
+  if (const toml::node* n = table[field.substr(dot + 1)].node()) return n;
+  return table.node();
+}
+
 CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string& base_dir,
                                     const std::vector<std::string>& overrides) {
   const std::string& path = c.file;
@@ -272,7 +317,8 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
   std::vector<io::SceneSetting> scene_sets;
   for (const std::string& arg : overrides) {
     const auto eq = arg.find('=');
-    if (eq == std::string::npos || eq == 0) throw InputError(fmt::format("error: --set {}: expected table.key=value", arg));
+    if (eq == std::string::npos || eq == 0)
+      throw InputError(fmt::format("error: --set {}: expected table.key=value", arg));
     const std::string key = arg.substr(0, eq), value = arg.substr(eq + 1);
     if (key.rfind("scene.", 0) == 0) { scene_sets.push_back({key.substr(6) + "=" + value, {}}); continue; }
     const auto dot = key.find('.');
@@ -313,7 +359,8 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
     } else if (k == "dispersion") {
       const toml::array* a = v.as_array();
       if (!a || !a->is_array_of_tables()) c.fail(&v, "'dispersion' must be an array of tables: [[dispersion]]");
-      for (std::size_t i = 0; i < a->size(); ++i) o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
+      for (std::size_t i = 0; i < a->size(); ++i)
+        o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
     } else {
       c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, output, scene, [[dispersion]])", k.str()));
     }
@@ -328,7 +375,8 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
     try {
       text = io::read_input_file(p.string(), "scene file");
     } catch (const InputError& e) {  // blame the campaign line that names the file
-      c.fail(root["scene"]["file"].node(), fmt::format("scene.file = \"{}\": {}", o.scene_file, std::string(e.what()).substr(7)));
+      c.fail(root["scene"]["file"].node(),
+             fmt::format("scene.file = \"{}\": {}", o.scene_file, std::string(e.what()).substr(7)));
     }
     o.base = io::parse_scene_text_with(text, p.string(), sets, &o.warnings);
   } else {
@@ -336,29 +384,8 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
   }
   // Campaign runs never record histories (only [output] history_runs do): work nobody reads.
   o.base.run.output_step_s = 0.0;
-  // Two dispersions of one key would silently overwrite each other.
-  for (std::size_t i = 0; i < o.dispersions.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j)
-      if (o.dispersions[i].key == o.dispersions[j].key)
-        throw InputError(fmt::format("error: {}:{}: dispersion[{}].key: \"{}\" is already dispersed at line {}", path,
-                                     o.dispersions[i].line, i + 1, o.dispersions[i].key, o.dispersions[j].line));
-  const toml::node* n_runs_node = root["ensemble"]["n_runs"].node();
-  if (o.ensemble.sampling == SamplingMethod::saltelli) {
-    if (o.dispersions.empty()) c.fail(root["ensemble"]["sampling"].node(), "ensemble.sampling: saltelli needs at least one [[dispersion]]");
-    const std::int64_t b = saltelli_block_runs(o);
-    if (o.ensemble.n_runs % b != 0 || o.ensemble.n_runs < 2 * b)
-      c.fail(n_runs_node, fmt::format("ensemble.n_runs: saltelli sampling runs blocks of {} runs (A, B and one per dispersion); "
-                                      "n_runs must be a multiple of {} and at least {}, got {} (e.g. {})",
-                                      b, b, 2 * b, o.ensemble.n_runs, std::max<std::int64_t>(2, o.ensemble.n_runs / b) * b));
-  }
-  if (o.ensemble.sampling != SamplingMethod::saltelli) {
-    const SamplePlan plan(o.ensemble.sampling, o.ensemble.n_runs, std::max(1, calc_layout(o).total), o.ensemble.master_seed);
-    if (const std::string e = plan.validate(); !e.empty()) c.fail(n_runs_node, "ensemble: " + e);
-  }
-  for (std::int64_t r : o.output.history_runs)
-    if (r >= o.ensemble.n_runs)
-      c.fail(root["output"]["history_runs"].node(),
-             fmt::format("output.history_runs: run {} does not exist (n_runs = {})", r, o.ensemble.n_runs));
+  // Every rule, once: a broken one is reported at the line (or --set) of the field it names.
+  if (const std::string e = o.validate(); !e.empty()) c.fail(node_of_field(root, e), e);
   return o;
 }
 
@@ -388,62 +415,6 @@ CampaignOptions parse_campaign_file(const std::string& path, const std::vector<s
     throw InputError(fmt::format("error: {}:{}:{}: {}", path, b.line, b.column, e.description()));
   }
   return parse_campaign_root(std::move(root), c, std::filesystem::path(path).parent_path().string(), overrides);
-}
-
-namespace {
-
-std::string toml_str(const std::string& s) {
-  std::ostringstream ss;
-  ss << toml::value<std::string>(s);
-  return ss.str();
-}
-
-// Shortest text that reads back to the same double, always with a '.' or an exponent.
-std::string toml_num(double v) {
-  std::string t = fmt::format("{}", v);
-  if (t.find_first_of(".eEni") == std::string::npos) t += ".0";
-  return t;
-}
-
-std::string toml_nums(const std::vector<double>& v) {
-  std::string t = "[";
-  for (std::size_t i = 0; i < v.size(); ++i) t += (i ? ", " : "") + toml_num(v[i]);
-  return t + "]";
-}
-
-const char* per_name(Per p) { return p == Per::run ? "run" : p == Per::bay ? "bay" : "frame"; }
-const char* apply_name(Apply a) { return a == Apply::absolute ? "absolute" : a == Apply::relative ? "relative" : "offset"; }
-
-}  // namespace
-
-std::string resolved_campaign_toml(const CampaignOptions& c) {
-  std::string t = "# Resolved campaign: every value used, the base scene inline.\n[campaign]\n";
-  t += fmt::format("name = {}\ndescription = {}\n\n[ensemble]\n", toml_str(c.name), toml_str(c.description));
-  t += fmt::format("n_runs = {}\nmaster_seed = {}\nsampling = {}\nmax_run_wall_time_s = {}\n\n", c.ensemble.n_runs,
-                   c.ensemble.master_seed, toml_str(to_string(c.ensemble.sampling)), toml_num(c.ensemble.max_run_wall_time_s));
-  t += "[output]\nhistory_runs = [";
-  for (std::size_t i = 0; i < c.output.history_runs.size(); ++i) t += fmt::format("{}{}", i ? ", " : "", c.output.history_runs[i]);
-  t += fmt::format("]\nhistory_step_s = {}\n\n", toml_num(c.output.history_step_s));
-  // The scene in the single-run format, its tables moved under [scene.].
-  std::istringstream scene(io::resolved_scene_toml(c.base));
-  for (std::string line; std::getline(scene, line);) {
-    if (!line.empty() && line[0] == '[') line = "[scene." + line.substr(1);
-    t += line + "\n";
-  }
-  for (const auto& d : c.dispersions) {
-    t += fmt::format("\n[[dispersion]]\nkey = {}\nper = \"{}\"\napply = \"{}\"\ndistribution = {}\n", toml_str(d.key),
-                     per_name(d.per), apply_name(d.apply), toml_str(to_string(d.distribution)));
-    if (d.distribution == DistributionKind::normal || d.distribution == DistributionKind::truncated_normal)
-      t += fmt::format("mean = {}\nstd = {}\n", toml_num(d.mean), toml_num(d.std));
-    if (d.distribution == DistributionKind::truncated_normal || d.distribution == DistributionKind::uniform)
-      t += fmt::format("lower = {}\nupper = {}\n", toml_num(d.lower), toml_num(d.upper));
-    if (d.distribution == DistributionKind::lognormal) t += fmt::format("mu = {}\nsigma = {}\n", toml_num(d.mu), toml_num(d.sigma));
-    if (d.distribution == DistributionKind::discrete) {
-      t += "values = " + toml_nums(d.values) + "\n";
-      if (!d.weights.empty()) t += "weights = " + toml_nums(d.weights) + "\n";
-    }
-  }
-  return t;
 }
 
 }  // namespace truss::campaign

@@ -19,19 +19,24 @@
 #include <vector>
 
 #include "io/scene_toml.hpp"
-#include "campaign/sampling.hpp"
+#include "sampling/sampling.hpp"
 #include "sim/scene.hpp"
 
 namespace truss::campaign {
 
+using sampling::DistributionKind;
+using sampling::SamplingMethod;
+
 enum class Per { run, bay, frame };
 enum class Apply { absolute, relative, offset };
+const char* to_string(Per p);      // as campaign files write them: "run", "bay", "frame"
+const char* to_string(Apply a);    // "absolute", "relative", "offset"
 
 struct DispersionOptions {
   std::string key;                  // scene key, "table.key"
   Per per = Per::run;               // one draw per run, or one per bay / per frame
   Apply apply = Apply::relative;    // how the draw changes the nominal value
-  DistributionKind distribution = DistributionKind::normal;  // parsed from its name (kDistributionNames)
+  DistributionKind distribution = DistributionKind::normal;  // parsed from its name (sampling::kDistributionNames)
   double mean = 0, std = 0, lower = 0, upper = 0, mu = 0, sigma = 0;
   std::vector<double> values, weights;  // discrete table
   int line = 0;                     // line of the [[dispersion]] entry, for messages
@@ -40,7 +45,7 @@ struct DispersionOptions {
 struct EnsembleOptions {
   std::int64_t n_runs = 100;                 // number of deployments
   std::uint64_t master_seed = 1;             // with the run index, the only source of randomness
-  SamplingMethod sampling = SamplingMethod::monte_carlo;  // parsed from its name (kSamplingNames)
+  SamplingMethod sampling = SamplingMethod::monte_carlo;  // parsed from its name (sampling::kSamplingNames)
   double max_run_wall_time_s = 60.0;         // a run longer than this is stopped and recorded
 };
 
@@ -59,29 +64,33 @@ struct CampaignOptions {
   sim::SceneOptions base;                     // the resolved base scene
   std::vector<DispersionOptions> dispersions;
   std::vector<std::string> warnings;          // plausibility warnings of the base scene (not written back)
-  // Empty, or "field: reason" naming the first inconsistent field. The parser reports the same
-  // problems with file and line; this check guards options built in code, where they are used
-  // (CampaignContext).
+  // Every rule of a campaign, in one place: empty, or "field: reason" naming the first field that
+  // breaks one ("ensemble.n_runs: ...", "output.history_runs: ...", "dispersion[2].per: ...").
+  // The parser calls it once on what it built and reports the field's file and line; options built
+  // in code are checked by their builder. The base scene is not checked here: it is validated
+  // where it is built (the scene parser, or sim::SceneOptions::validate by a builder in code).
   std::string validate() const;
 };
 
 // Reads, parses and validates a campaign file; `overrides` are --set arguments ("table.key=value"
 // for campaign keys such as ensemble.n_runs, or a base-scene key as truss-sim takes it,
 // "mast.n_bays=12", also written "scene.mast.n_bays=12").
-// Throws io::InputError with a message naming the file, key and line.
+// Throws io::InputError with a message naming the file, key and line (or the --set).
 CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides = {});
 
 // Same, for campaign text in memory; source_name names it in messages, and a relative scene.file is
 // resolved against base_dir.
-CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name, const std::string& base_dir,
-                                    const std::vector<std::string>& overrides = {});
+CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name,
+                                    const std::string& base_dir, const std::vector<std::string>& overrides = {});
 
 // The campaign with everything resolved, as TOML that parse_campaign_text reads back to the same
 // options: the base scene inline (every key), every dispersion with all its parameters.
 std::string resolved_campaign_toml(const CampaignOptions& c);
 
 // Runs per Saltelli block: A, B and one AB matrix per dispersion (a dispersion is one factor).
-inline std::int64_t saltelli_block_runs(const CampaignOptions& c) { return static_cast<std::int64_t>(c.dispersions.size()) + 2; }
+inline std::int64_t saltelli_block_runs(const CampaignOptions& c) {
+  return static_cast<std::int64_t>(c.dispersions.size()) + 2;
+}
 
 // Keys that can be dispersed, and how: per-bay keys (strut and diagonal parameters), per-frame
 // keys (frame side and mass), or once per run (everything numeric).

@@ -45,7 +45,8 @@ double applied(const DispersionOptions& d, double nominal_value, double draw) {
 
 Distribution make_distribution(const DispersionOptions& d) {
   if (d.distribution == DistributionKind::normal) return Distribution::normal(d.mean, d.std);
-  if (d.distribution == DistributionKind::truncated_normal) return Distribution::truncated_normal(d.mean, d.std, d.lower, d.upper);
+  if (d.distribution == DistributionKind::truncated_normal)
+    return Distribution::truncated_normal(d.mean, d.std, d.lower, d.upper);
   if (d.distribution == DistributionKind::uniform) return Distribution::uniform(d.lower, d.upper);
   if (d.distribution == DistributionKind::lognormal) return Distribution::lognormal(d.mu, d.sigma);
   std::vector<double> w = d.weights;
@@ -105,11 +106,13 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
     }
   }
   // A dispersed strut mass or length keeps the slender-rod inertia unless J_c is set or dispersed.
-  const bool inertia_given = c.base.mast.strut_inertia_kg_m2.has_value() ||
-                             std::any_of(c.dispersions.begin(), c.dispersions.end(),
-                                         [](const DispersionOptions& d) { return d.key == "mast.strut_inertia_kg_m2"; });
+  const bool inertia_given =
+      c.base.mast.strut_inertia_kg_m2.has_value() ||
+      std::any_of(c.dispersions.begin(), c.dispersions.end(),
+                  [](const DispersionOptions& d) { return d.key == "mast.strut_inertia_kg_m2"; });
   if (!inertia_given)
-    for (auto& b : in.mast.bays) b.strut_inertia_kg_m2 = model::calc_default_strut_inertia_kg_m2(b.strut_mass_kg, b.strut_length_m);
+    for (auto& b : in.mast.bays)
+      b.strut_inertia_kg_m2 = model::calc_default_strut_inertia_kg_m2(b.strut_mass_kg, b.strut_length_m);
   return in;
 }
 

@@ -6,10 +6,12 @@
 #include <vector>
 
 #include "campaign/campaign.hpp"
-#include "campaign/sampling.hpp"
+#include "sampling/sampling.hpp"
 #include "model/params.hpp"
 
 namespace truss::campaign {
+
+using sampling::Distribution;
 
 struct DimensionLayout {
   std::vector<int> offset;  // first dimension of each dispersion

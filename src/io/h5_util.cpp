@@ -95,6 +95,51 @@ void write_int_attribute(hid_t obj, const char* name, std::int64_t value) {
   check(H5Awrite(attr.get(), H5T_NATIVE_INT64, &value), fmt::format("write attribute {}", name));
 }
 
+Handle create_group(hid_t loc, const std::string& name) {
+  return Handle(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose,
+                "create group " + name);
+}
+
+namespace {
+void write_f64_attribute(hid_t obj, const char* name, hid_t space, const double* values) {
+  Handle attr(H5Acreate2(obj, name, H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+              fmt::format("create attribute {}", name));
+  if (values) check(H5Awrite(attr.get(), H5T_NATIVE_DOUBLE, values), fmt::format("write attribute {}", name));
+}
+}  // namespace
+
+void write_double_attribute(hid_t obj, const char* name, double value) {
+  write_f64_attribute(obj, name, scalar_space().get(), &value);
+}
+
+void write_doubles_attribute(hid_t obj, const char* name, const std::vector<double>& values) {
+  write_f64_attribute(obj, name, vector_space(values.size()).get(), values.empty() ? nullptr : values.data());
+}
+
+void write_scalar(hid_t loc, const std::string& name, const std::string& units, double value) {
+  Handle space = scalar_space();
+  Handle ds = create_dataset(loc, name, H5T_IEEE_F64LE, space.get());
+  check(H5Dwrite(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, &value), "write " + name);
+  write_string_attribute(ds.get(), "units", units);
+}
+
+void write_scalar(hid_t loc, const std::string& name, const std::string& units, std::int64_t value) {
+  Handle space = scalar_space();
+  Handle ds = create_dataset(loc, name, H5T_STD_I64LE, space.get());
+  check(H5Dwrite(ds.get(), H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, &value), "write " + name);
+  write_string_attribute(ds.get(), "units", units);
+}
+
+void write_strings(hid_t loc, const std::string& name, const std::vector<std::string>& values) {
+  Handle type = string_type();
+  Handle space = vector_space(values.size());
+  Handle ds = create_dataset(loc, name, type.get(), space.get());
+  std::vector<const char*> p;
+  for (const auto& s : values) p.push_back(s.c_str());
+  if (!p.empty()) check(H5Dwrite(ds.get(), type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()), "write " + name);
+  write_string_attribute(ds.get(), "units", "1");
+}
+
 Handle create_dataset(hid_t loc, const std::string& path, hid_t file_type, hid_t space) {
   return Handle(H5Dcreate2(loc, path.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT,
                            H5P_DEFAULT),

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace truss::stages {
 struct TimeHistory;
@@ -48,8 +49,15 @@ class Handle {
 Handle scalar_space();
 Handle vector_space(std::size_t n);
 Handle string_type();
+Handle create_group(hid_t loc, const std::string& name);
 void write_string_attribute(hid_t obj, const char* name, const std::string& value);
 void write_int_attribute(hid_t obj, const char* name, std::int64_t value);
+void write_double_attribute(hid_t obj, const char* name, double value);
+void write_doubles_attribute(hid_t obj, const char* name, const std::vector<double>& values);
+// Scalar datasets and a 1-D string dataset, with their units ("1" for the strings).
+void write_scalar(hid_t loc, const std::string& name, const std::string& units, double value);
+void write_scalar(hid_t loc, const std::string& name, const std::string& units, std::int64_t value);
+void write_strings(hid_t loc, const std::string& name, const std::vector<std::string>& values);
 // A float64 / int64 dataset of rows (cols == 0) or rows x cols values, with its units.
 void write_array(hid_t loc, const std::string& name, const char* units, const double* data, std::size_t rows,
                  std::size_t cols = 0);

@@ -2,18 +2,18 @@
 
 #include <chrono>
 #include <ctime>
+#include <limits>
+
+#include "sampling/sampling.hpp"
 
 namespace truss::parallel {
 
 namespace {
 
-// splitmix64 of (run, column) to a double in [0, 1).
+// A double in [0, 1) from (run, column): SplitMix64's finaliser of both.
 double pseudo_value(std::int64_t run, std::uint64_t column) {
-  std::uint64_t z = static_cast<std::uint64_t>(run) * 0x9E3779B97F4A7C15ULL + column * 0xD1B54A32D192ED03ULL + 1;
-  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
-  z ^= z >> 31;
-  return static_cast<double>(z >> 11) * 0x1.0p-53;
+  return static_cast<double>(sampling::mix64(static_cast<std::uint64_t>(run) * sampling::kGoldenGamma +
+                                             column * 0xD1B54A32D192ED03ULL + 1) >> 11) * 0x1.0p-53;
 }
 
 void sleep_for(double s) {
@@ -27,23 +27,39 @@ void sleep_for(double s) {
 
 }  // namespace
 
-campaign::RunRecord synthetic_run_record(const campaign::CampaignContext& ctx, std::int64_t run_index, int rank,
-                                         double cost_s) {
+void append_synthetic_record(const campaign::CampaignContext& ctx, const double* u, const campaign::RecordHead& head,
+                             double cost_s, std::string& out) {
   const auto t0 = std::chrono::steady_clock::now();
   sleep_for(cost_s);
-  const campaign::OutputColumns& cols = ctx.columns;
-  campaign::RunRecord r;
-  r.run_index = run_index;
-  r.rank = rank;
-  std::uint64_t col = 0;
-  for (std::size_t k = 0; k < cols.f64.size(); ++k) r.f64.push_back(pseudo_value(run_index, col++));
-  for (std::size_t k = 0; k < cols.i64.size(); ++k)
-    r.i64.push_back(static_cast<std::int64_t>(1000.0 * pseudo_value(run_index, col++)));
-  const std::size_t n_bays = cols.bay.size() * static_cast<std::size_t>(cols.n_bays_max);
-  for (std::size_t k = 0; k < n_bays; ++k) r.bays.push_back(pseudo_value(run_index, col++));
-  for (int k = 0; k < cols.n_inputs; ++k) r.inputs.push_back(pseudo_value(run_index, col++));
-  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return r;
+  std::vector<double> inputs;
+  try {
+    for (const auto& values : campaign::calc_run_inputs(ctx.options, ctx.dims, u).values)
+      inputs.insert(inputs.end(), values.begin(), values.end());
+  } catch (const std::exception&) {
+    inputs.assign(static_cast<std::size_t>(ctx.dims.total), std::numeric_limits<double>::quiet_NaN());
+  }
+  const campaign::RecordLayout& L = ctx.record;
+  campaign::RecordWriter w(L, out);
+  w.set_i64(campaign::RecordLayout::kRun, head.run);
+  w.set_i64(campaign::RecordLayout::kRound, head.round);
+  w.set_i64(campaign::RecordLayout::kRank, head.rank);
+  std::uint64_t column = 0;
+  std::size_t k = 0;
+  for (std::size_t f = campaign::RecordLayout::kWallTime + 1; f < L.fields().size(); ++f) {
+    const campaign::Field& fd = L.fields()[f];
+    for (int j = 0; j < fd.width; ++j) {
+      if (fd.dispersion >= 0) {
+        w.set_f64(f, inputs[k++], j);
+      } else if (fd.type == campaign::ValueType::i64) {
+        w.set_i64(f, static_cast<std::int64_t>(1000.0 * pseudo_value(head.run, column++)), j);
+      } else {
+        w.set_f64(f, pseudo_value(head.run, column++), j);
+      }
+    }
+  }
+  w.set_f64(campaign::RecordLayout::kWallTime,
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  w.finish({});
 }
 
 }  // namespace truss::parallel

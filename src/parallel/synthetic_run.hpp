@@ -1,17 +1,19 @@
 // Bench only: a run that costs a given wall time and simulates nothing (truss-campaign
 // --synthetic-run-cost-s, a hidden option). It sleeps, so that 2 cores can host 32 or 64 ranks
-// and the scheduler and rank 0's result handling are measured alone, and it returns a record of
-// the campaign's real size (every column present, so a result message is as long as a real one)
-// whose values are a pure function of (run index, column): files stay comparable across rank
-// counts and transports. Nothing in it is physics.
+// and the engine's scheduling and rank 0's result handling are measured alone, and it returns a
+// record of the campaign's real size: the inputs are the dispersions' values at the run's point,
+// so a method's points show in the file as with real runs, and the outputs are pseudo-random
+// numbers, a pure function of (run index, column), so files stay comparable across rank counts,
+// transports and resumes. Nothing in it is physics.
 #pragma once
 #include <cstdint>
+#include <string>
 
-#include "campaign/run_record.hpp"
+#include "campaign/evaluate.hpp"
 
 namespace truss::parallel {
 
-campaign::RunRecord synthetic_run_record(const campaign::CampaignContext& ctx, std::int64_t run_index, int rank,
-                                         double cost_s);
+void append_synthetic_record(const campaign::CampaignContext& ctx, const double* u, const campaign::RecordHead& head,
+                             double cost_s, std::string& out);
 
 }  // namespace truss::parallel

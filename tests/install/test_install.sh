@@ -17,8 +17,8 @@ fail() { echo "FAIL: $*" >&2; exit 1; }
 
 cmake --install "$build" --prefix "$prefix" > "$scratch/install.log"
 for f in bin/truss-sim bin/truss-campaign \
-         lib/libtruss_core.a lib/libtruss_io.a lib/libtruss_sampling.a lib/libtruss_campaign.a lib/libtruss_parallel.a \
-         include/truss_deploy/sim/simulate.hpp include/truss_deploy/campaign/sampling.hpp include/truss_deploy/model/bay.hpp \
+         lib/libtruss_core.a lib/libtruss_io.a lib/libtruss_util.a lib/libtruss_sampling.a lib/libtruss_campaign.a lib/libtruss_results.a lib/libtruss_methods.a lib/libtruss_parallel.a \
+         include/truss_deploy/sim/simulate.hpp include/truss_deploy/sampling/sampling.hpp include/truss_deploy/model/bay.hpp \
          lib/cmake/truss_deploy/truss_deployConfig.cmake lib/cmake/truss_deploy/truss_deployConfigVersion.cmake \
          lib/cmake/truss_deploy/truss_deployTargets.cmake share/truss_deploy/campaigns/scenes/table1.toml; do
   [ -e "$prefix/$f" ] || fail "not installed: $f"

@@ -10,7 +10,6 @@ check raises (exit 1).
 """
 import argparse
 import os
-import re
 import shutil
 import signal
 import subprocess
@@ -114,8 +113,9 @@ def case_ranks(args):
     same, why = same_values(a, b)
     check(same, f"1 and 3 ranks give identical datasets outside /timing ({len(a)} datasets) {why}")
     with h5py.File(outs[3], "r") as f:
-        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 1 and f.attrs["kind"] == "campaign",
-              "root attributes: n_ranks, schema_version, kind")
+        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 2 and f.attrs["kind"] == "campaign"
+              and f.attrs["n_rounds"] == 1 and not f["runs/round"][:].any(),
+              "root attributes: n_ranks, schema_version, kind, one round (every /runs/round 0)")
         check(set(np.unique(f["timing/rank"][:])) == {0, 1, 2}, "all 3 ranks computed runs (dynamic scheduling)")
         missing = []
         f.visititems(lambda n, o: missing.append(n) if isinstance(o, h5py.Dataset) and not o.attrs.get("units") else None)
@@ -455,25 +455,16 @@ def mpirun_mca(args, ranks, mca, extra):
 def check_rank0_breakdown(path, what):
     """/timing's parts of rank 0's poll time: each is timed inside a timed poll, so together they
     cannot exceed it (the sums of steady-clock differences: 1e-9 relative covers their rounding),
-    and the journal is part of storing the results."""
+    and the journal is part of storing the results; the chunk writes are timed apart."""
     with h5py.File(path, "r") as f:
         a = f["timing"].attrs
-        parts = {k: float(a[k]) for k in ("rank0_mpi_s", "rank0_result_s", "rank0_job_output_s", "rank0_journal_s")}
+        parts = {k: float(a[k]) for k in ("rank0_mpi_s", "rank0_result_s", "rank0_journal_s", "rank0_write_s")}
         poll = float(a["rank0_poll_s"])
     check(all(np.isfinite(v) and v >= 0 for v in parts.values()), f"{what}: rank 0's time parts finite, >= 0 ({parts})")
     check(parts["rank0_mpi_s"] > 0 and parts["rank0_result_s"] > 0, f"{what}: MPI calls and results timed ({parts})")
-    inner = parts["rank0_mpi_s"] + parts["rank0_result_s"] + parts["rank0_job_output_s"]
-    check(inner <= poll * (1 + 1e-9), f"{what}: MPI + results + job outputs {inner:.6f} s <= poll {poll:.6f} s")
+    inner = parts["rank0_mpi_s"] + parts["rank0_result_s"]
+    check(inner <= poll * (1 + 1e-9), f"{what}: MPI + results {inner:.6f} s <= poll {poll:.6f} s")
     check(parts["rank0_journal_s"] <= parts["rank0_result_s"], f"{what}: journal within storing results ({parts})")
-
-
-def check_last_chunk_offloaded(stderr, what):
-    """240 runs are one chunk, which completes with the last result (on rank 0's write thread): the
-    workers, which wait for jobs once the runs are out, still get some of its encodings. A schedule
-    that ended as soon as the results were in would leave them all to rank 0."""
-    m = re.search(r"(\d+) of (\d+) chunk encodings by workers", stderr)
-    check(m is not None, f"{what}: the summary says who encoded the chunks ({stderr.strip()[-300:]})")
-    check(int(m.group(1)) >= 1, f"{what}: workers encoded {m.group(1)} of the last chunk's {m.group(2)} encodings (>= 1)")
 
 
 def case_transports(args):
@@ -494,16 +485,14 @@ def case_transports(args):
         same, why = same_values(a, datasets(out))
         check(same, f"{ranks} ranks, {name}: datasets identical to shared memory outside /timing ({len(a)}) {why}")
         check_rank0_breakdown(out, f"{ranks} ranks, {name}")
-        check_last_chunk_offloaded(p.stderr, f"{ranks} ranks, {name}")
     # Sleeping runs of 4 ms: 2 ranks, 600 runs (1.2 s ideal) and 8 ranks, 1600 runs (0.8 s ideal).
     # Measured on this 2-core machine under a load of 3 to 8 (other builds): 0.95 to 0.98. A
     # scheduler whose rank 0 blocks until a computing worker's next MPI call (the old one) gave
     # rank 0 19 % (single-copy off) and 29 % (TCP) of the runs on 2 ranks. Floors: efficiency 0.85,
     # and rank 0 at least 0.6 of an even share (0.8 of it at 8 ranks, where its share is small).
     # --compression 0: this checks the scheduler's progress; the deflate of the file's chunks
-    # (about 60 us a result) is done by the workers as side jobs (docs/campaigns.md, "How it
-    # runs"), which with 4 ms runs on 8 ranks of a loaded 2-core machine costs the ranks' shared
-    # cores about 2 % more and is measured in docs/benchmarks.md.
+    # (rank 0's, about 30 us a result on these incompressible synthetic records) is measured in
+    # docs/benchmarks.md.
     for name, mca in (("single-copy off", SINGLE_COPY_OFF), ("tcp", TCP)):
         for ranks, n_runs, floor, share in ((2, 600, 0.85, 0.6), (8, 1600, 0.85, 0.6)):
             out = os.path.join(d, f"synthetic_{ranks}.h5")

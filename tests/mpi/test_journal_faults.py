@@ -42,12 +42,12 @@ def campaign_args(args, out, cost):
             "--synthetic-run-cost-s", str(cost), "--flush-interval", "0.02", "--progress", "none"]
 
 
-# --- the journal format (src/campaign/journal.hpp), parsed independently of the C++ code --------
+# --- the journal format (src/results/journal.hpp), parsed independently of the C++ code ---------
 def parse_journal(blob):
     """Header bytes and the frames [(offset, kind, payload)] up to the first bad one."""
     assert blob[:8] == b"TRUSSJNL"
     version, n = struct.unpack_from("<II", blob, 8)
-    assert version == 1
+    assert version == 2
     text = blob[16:16 + n]
     (crc,) = struct.unpack_from("<I", blob, 16 + n)
     assert crc == zlib.crc32(text)
@@ -232,7 +232,7 @@ def case_layout(args):
     with h5py.File(out, "r") as f:
         n_f64 = sum(1 for v in f["runs"].values() if isinstance(v, h5py.Dataset) and v.dtype.kind == "f")
         n_i64 = sum(1 for k, v in f["runs"].items() if isinstance(v, h5py.Dataset) and v.dtype.kind == "i"
-                    and k != "run_index" and h5py.check_enum_dtype(v.dtype) is None)
+                    and k not in ("run_index", "round") and h5py.check_enum_dtype(v.dtype) is None)
         nb = int(f.attrs["n_bays_max"])
         i = np.arange(n, dtype=np.uint64)
         check(np.array_equal(f["runs/deploy_time_s"][:], splitmix_unit(i, 0)), "/runs/deploy_time_s row by row")

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Size limits of the C++ sources (issue 8): no function in src/ over 120 lines, no source file
-over 500 lines (generated tables, *.inc, aside). Functions are found by brace matching on the
-source with comments and string literals removed: a top-level or namespace/class-level block
-opened by a line that looks like a definition (ends with ')' [const/override/...] '{').
-Python modules under --py-dir: at most 400 lines each.
-Usage: check_sizes.py SRC_DIR [--max-function 120] [--max-file 500] [--py-dir postproc]; exit 1 on a
-violation."""
+over 500 lines (generated tables, *.inc, aside), and in the folders given to --narrow no line over
+120 columns (so that no file gets under its limit by packing lines). Functions are found by brace
+matching on the source with comments and string literals removed: a top-level or
+namespace/class-level block opened by a line that looks like a definition (ends with ')'
+[const/override/...] '{'). Python modules under --py-dir: at most 400 lines each.
+Usage: check_sizes.py SRC_DIR [--max-function 120] [--max-file 500] [--narrow FOLDER ...]
+[--max-columns 120] [--py-dir postproc]; exit 1 on a violation."""
 import argparse
 import pathlib
 import re
@@ -52,6 +53,8 @@ def main():
     ap.add_argument("src")
     ap.add_argument("--max-function", type=int, default=120)
     ap.add_argument("--max-file", type=int, default=500)
+    ap.add_argument("--narrow", nargs="*", default=[], help="folders of SRC_DIR whose lines are checked too")
+    ap.add_argument("--max-columns", type=int, default=120)
     ap.add_argument("--py-dir", help="also check the Python modules under this folder")
     ap.add_argument("--max-py-file", type=int, default=400)
     a = ap.parse_args()
@@ -64,6 +67,11 @@ def main():
         if n > a.max_file:
             print(f"{p}: {n} lines (limit {a.max_file})")
             bad += 1
+        if p.relative_to(a.src).parts[0] in a.narrow:
+            for i, line in enumerate(text.split("\n"), 1):
+                if len(line) > a.max_columns:
+                    print(f"{p}:{i}: a line of {len(line)} columns (limit {a.max_columns})")
+                    bad += 1
         for head, start, length in functions(text):
             if length > longest[0]:
                 longest = (length, f"{p}:{start}")

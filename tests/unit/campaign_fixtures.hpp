@@ -1,6 +1,7 @@
 // Shared by the campaign tests: a small campaign (5 bays; per-bay, per-frame and per-run
 // dispersions, in that order), and records whose every cell holds a distinct value (value = run +
 // cell / 1000, cell = place in the record), so that a value in the wrong row or column shows.
+// Every seventh run (run % 7 == 3) is a stall with a message.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -8,7 +9,7 @@
 #include <fmt/format.h>
 
 #include "campaign/campaign.hpp"
-#include "campaign/run_record.hpp"
+#include "campaign/evaluate.hpp"
 
 namespace truss::campaign::test {
 
@@ -42,17 +43,28 @@ upper = 0.1
   return parse_campaign_text(text, "small.toml", ".");
 }
 
-inline RunRecord distinct_record(const OutputColumns& cols, std::int64_t run) {
-  RunRecord r;
-  r.run_index = run;
-  r.rank = 1;
-  double cell = 0;
-  auto v = [&] { return static_cast<double>(run) + (cell++) / 1000.0; };
-  for (std::size_t k = 0; k < cols.f64.size(); ++k) r.f64.push_back(v());
-  for (std::size_t k = 0; k < cols.i64.size(); ++k) r.i64.push_back(run * 100 + static_cast<std::int64_t>(k));
-  for (std::size_t k = 0; k < cols.bay.size() * static_cast<std::size_t>(cols.n_bays_max); ++k) r.bays.push_back(v());
-  for (int k = 0; k < cols.n_inputs; ++k) r.inputs.push_back(v());
-  return r;
+inline bool stalls(std::int64_t run) { return run % 7 == 3; }
+inline double cell_value(std::int64_t run, int cell) { return static_cast<double>(run) + cell / 1000.0; }
+
+// The record of `run`: f64 cells numbered in layout order (cell 0 is the first output's first value).
+inline std::string distinct_record(const RecordLayout& L, std::int64_t run, std::int64_t round = 0) {
+  std::string out;
+  RecordWriter w(L, out);
+  w.set_i64(RecordLayout::kRun, run);
+  w.set_i64(RecordLayout::kRound, round);
+  w.set_i64(RecordLayout::kRank, 1);
+  w.set_f64(RecordLayout::kWallTime, 0.5 * static_cast<double>(run));
+  w.set_status(stalls(run) ? sim::RunStatus::stall : sim::RunStatus::ok);
+  int cell = 0;
+  for (std::size_t i = RecordLayout::kWallTime + 1; i < L.fields().size(); ++i) {
+    const Field& f = L.fields()[i];
+    for (int j = 0; j < f.width; ++j) {
+      if (f.type == ValueType::i64) w.set_i64(i, run * 100 + static_cast<std::int64_t>(i), j);
+      else w.set_f64(i, cell_value(run, cell++), j);
+    }
+  }
+  w.finish(stalls(run) ? fmt::format("stall: run {}", run) : "");
+  return out;
 }
 
 }  // namespace truss::campaign::test

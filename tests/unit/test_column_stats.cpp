@@ -1,4 +1,4 @@
-// Streamed column statistics (campaign/column_stats) against calc_stats on the whole column:
+// Streamed column statistics (sampling/column_stats) against calc_stats on the whole column:
 // chunks completing in any order, summaries made against windows that have narrowed since, ties,
 // unusable rows; a drifting column must come back unresolved, never wrong.
 #include <catch2/catch.hpp>
@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "campaign/column_stats.hpp"
-#include "campaign/results.hpp"
+#include "sampling/column_stats.hpp"
+#include "sampling/stats.hpp"
 
-using namespace truss::campaign;
+using namespace truss::sampling;
 
 namespace {
 
@@ -25,15 +25,15 @@ struct Streamed {
 };
 
 // Feeds `v` (use: ok rows) in chunks of `rows`, completing in a shuffled order; each summary is
-// made when its chunk completes but merged up to `lag` completions later (a worker's job in flight),
-// against the windows of the moment it was made.
+// made when its chunk completes but merged up to `lag` completions later, against the windows of
+// the moment it was made (which may have narrowed since).
 Streamed stream(const std::vector<double>& v, const std::vector<std::uint8_t>& use, std::size_t rows, std::size_t lag,
                 std::mt19937_64& rng) {
   const std::size_t n_chunks = (v.size() + rows - 1) / rows;
   std::vector<std::size_t> order(n_chunks);
   for (std::size_t i = 0; i < n_chunks; ++i) order[i] = i;
   std::shuffle(order.begin(), order.end(), rng);
-  ColumnStats cs(static_cast<std::int64_t>(n_chunks));
+  ColumnStats cs;
   std::deque<std::pair<std::size_t, ChunkSummary>> in_flight;
   Streamed out;
   auto merge_one = [&] {
@@ -50,6 +50,8 @@ Streamed stream(const std::vector<double>& v, const std::vector<std::uint8_t>& u
     while (in_flight.size() > lag) merge_one();
   }
   while (!in_flight.empty()) merge_one();
+  CHECK(cs.complete(static_cast<std::int64_t>(n_chunks)));
+  CHECK_FALSE(cs.complete(static_cast<std::int64_t>(n_chunks) + 1));
   out.stats = cs.calc_stats(out.resolved);
   return out;
 }
@@ -124,7 +126,7 @@ TEST_CASE("streamed statistics: a column that drifts with the run index comes ba
   std::vector<double> v(n);
   for (std::size_t i = 0; i < n; ++i) v[i] = static_cast<double>(i) * 0.5;
   const std::vector<std::uint8_t> use(n, 1);
-  ColumnStats cs(static_cast<std::int64_t>(n / 1000));
+  ColumnStats cs;
   const char* bytes = reinterpret_cast<const char*>(v.data());
   cs.seed(bytes, 1000, 1, use.data());
   std::size_t peak = 0;
@@ -160,7 +162,7 @@ TEST_CASE("streamed statistics: a window cut down to a tie block counts the ties
   for (std::size_t i = n_a; i < n; ++i) v[i] = 1000.0 + static_cast<double>(i);
   const std::vector<std::uint8_t> use(n, 1);
   const std::size_t n_chunks = (n + rows - 1) / rows;
-  ColumnStats cs(static_cast<std::int64_t>(n_chunks));
+  ColumnStats cs;
   const char* bytes = reinterpret_cast<const char*>(v.data());
   cs.seed(bytes, rows, 1, use.data());
   REQUIRE(cs.windows()[2].lo < 0.0);  // the median's first window holds zeros strictly inside
@@ -183,27 +185,24 @@ TEST_CASE("streamed statistics: a window cut down to a tie block counts the ties
     if (!std::isnan(s.percentiles[k])) CHECK(s.percentiles[k] == ref.percentiles[k]);
 }
 
-TEST_CASE("streamed statistics: the wire format round-trips and rejects a cut summary", "[campaign][stats]") {
-  std::vector<double> v = {1.0, 2.0, 2.0, 3.5, 7.0};
-  const std::vector<std::uint8_t> use(v.size(), 1);
+TEST_CASE("streamed statistics: a chunk summary counts the values below, at the ends and inside a window",
+          "[campaign][stats]") {
+  std::vector<double> v = {1.0, 2.0, 2.0, 3.5, 7.0, std::numeric_limits<double>::quiet_NaN(), 100.0};
+  std::vector<std::uint8_t> use(v.size(), 1);
+  use[6] = 0;  // a failed run's value: not used
   Windows w;
   w[2] = {2.0, 3.5};
   const ChunkSummary s = calc_chunk_summary(reinterpret_cast<const char*>(v.data()), v.size(), 1, use.data(), w);
+  CHECK(s.moments.count == 5);  // NaN and the unused row left out
+  CHECK(s.moments.mean == Approx(15.5 / 5).epsilon(1e-15));
   CHECK(s.below[2] == 1);
   CHECK(s.at_lo[2] == 2);
   CHECK(s.at_hi[2] == 1);
   CHECK(s.kept[2].empty());
-  CHECK(s.kept[0].size() == 5);
-  std::string bytes;
-  append_summary(bytes, s);
-  std::string_view in = bytes;
-  const ChunkSummary r = read_summary(in);
-  CHECK(in.empty());
-  CHECK(r.moments.count == 5);
-  CHECK(r.moments.mean == s.moments.mean);
-  CHECK(r.window[2].lo == 2.0);
-  CHECK(r.kept[0] == s.kept[0]);
-  CHECK(r.at_lo[2] == 2);
-  std::string_view cut = std::string_view(bytes).substr(0, bytes.size() - 4);
-  CHECK_THROWS_AS(read_summary(cut), std::runtime_error);
+  CHECK(s.kept[0].size() == 5);  // an infinite window keeps every usable value
+  ColumnStats cs;
+  CHECK_THROWS_AS(cs.add(-1, s), std::runtime_error);
+  cs.add(1, s);
+  CHECK_THROWS_AS(cs.add(1, s), std::runtime_error);  // twice
+  CHECK_FALSE(cs.complete(2));                        // chunk 0 missing
 }

@@ -5,10 +5,11 @@
 #include <vector>
 
 #include "campaign/dispersion.hpp"
-#include "campaign/sampling.hpp"
+#include "sampling/sampling.hpp"
 #include "sim/simulate.hpp"
 
 using namespace truss::campaign;
+using truss::sampling::SamplePlan;
 
 TEST_CASE("dimension layout: per-bay and per-frame keys own n_max and n_max + 1 dimensions", "[dispersion]") {
   const std::string root = TRUSS_SOURCE_DIR;

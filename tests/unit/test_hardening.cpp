@@ -13,8 +13,9 @@
 #include <fmt/format.h>
 
 #include "campaign/campaign.hpp"
-#include "campaign/resources.hpp"
-#include "campaign/run_record.hpp"
+#include "campaign/evaluate.hpp"
+#include "results/resources.hpp"
+#include "sampling/sampling.hpp"
 #include "io/scene_toml.hpp"
 #include "sim/scene_keys.hpp"
 
@@ -37,6 +38,13 @@ std::vector<std::string> warnings_of(const std::string& text, const std::vector<
   std::vector<std::string> w;
   truss::io::parse_scene_text_with(text, "scene.toml", s, &w);
   return w;
+}
+// The record of a Monte Carlo run (uniforms counter_uniform(seed, run, j)).
+void record_of(const truss::campaign::CampaignContext& ctx, std::int64_t run, std::string& out) {
+  std::vector<double> u(static_cast<std::size_t>(ctx.dims.total));
+  for (std::size_t j = 0; j < u.size(); ++j)
+    u[j] = truss::sampling::counter_uniform(ctx.options.ensemble.master_seed, run, static_cast<std::int64_t>(j));
+  truss::campaign::append_run_record(ctx, u.data(), {run, 0, 0}, out);
 }
 }  // namespace
 
@@ -138,10 +146,11 @@ TEST_CASE("a dispersed value outside its hard range is a named failed run", "[ha
       "apply = \"absolute\"\ndistribution = \"uniform\"\nlower = 2e5\nupper = 3e5\n";
   const truss::campaign::CampaignContext ctx(truss::campaign::parse_campaign_text(text, "c.toml", "."));
   for (std::int64_t run = 0; run < 4; ++run) {
-    truss::campaign::RunRecord r;
-    REQUIRE_NOTHROW(r = truss::campaign::calc_run_record(ctx, run, 0));
-    CHECK(r.status == sim::RunStatus::invalid_input);
-    CHECK_THAT(r.message, Contains("mast.frame_mass_kg: must lie in (0, 100000] kg") && Contains("(frame 0)"));
+    std::string rec;
+    REQUIRE_NOTHROW(record_of(ctx, run, rec));
+    const truss::campaign::RecordView r(rec, ctx.record);
+    CHECK(r.status() == static_cast<std::int8_t>(sim::RunStatus::invalid_input));
+    CHECK_THAT(std::string(r.message()), Contains("mast.frame_mass_kg: must lie in (0, 100000] kg") && Contains("(frame 0)"));
   }
   // a per-run draw (speed in [1001, 2000] m/s, hard limit 1000 m/s): the scene check names it
   const std::string per_run =
@@ -149,9 +158,11 @@ TEST_CASE("a dispersed value outside its hard range is a named failed run", "[ha
       "apply = \"absolute\"\ndistribution = \"uniform\"\nlower = 1001\nupper = 2000\n";
   const truss::campaign::CampaignContext ctx2(truss::campaign::parse_campaign_text(per_run, "c.toml", "."));
   for (std::int64_t run = 0; run < 4; ++run) {
-    const auto r = truss::campaign::calc_run_record(ctx2, run, 0);
-    CHECK(r.status == sim::RunStatus::invalid_input);
-    CHECK_THAT(r.message, Contains("drive.speed_m_per_s: must lie in (0, 1000] m/s"));
+    std::string rec;
+    record_of(ctx2, run, rec);
+    const truss::campaign::RecordView r(rec, ctx2.record);
+    CHECK(r.status() == static_cast<std::int8_t>(sim::RunStatus::invalid_input));
+    CHECK_THAT(std::string(r.message()), Contains("drive.speed_m_per_s: must lie in (0, 1000] m/s"));
   }
 }
 
@@ -162,15 +173,15 @@ TEST_CASE("resource check: n_runs against memory and disk, estimates in the mess
         truss::campaign::parse_campaign_text(text, "c.toml", ".", {fmt::format("ensemble.n_runs={}", n)}));
   };
   const auto small = ctx_for(10);
-  CHECK(truss::campaign::check_resources(small, "out.h5").empty());
-  const auto e10 = truss::campaign::estimate_resources(small);
+  CHECK(truss::results::check_resources(small, "out.h5").empty());
+  const auto e10 = truss::results::estimate_resources(small);
   // The estimate is linear in n_runs (it holds no per-campaign constant).
   const auto big = ctx_for(100000000000);
-  const auto e11 = truss::campaign::estimate_resources(big);
+  const auto e11 = truss::results::estimate_resources(big);
   CHECK(e11.memory_bytes == Catch::Detail::Approx(e10.memory_bytes * 1e10));
   // each run holds at least its ~20 f64 summary values: > 100 bytes
   CHECK(e10.bytes_per_run < 64.0);  // results stream to the file: flags, to-do entry and one read-back column per run
-  const std::string msg = truss::campaign::check_resources(big, "out.h5");
+  const std::string msg = truss::results::check_resources(big, "out.h5");
   CHECK_THAT(msg, Contains("ensemble.n_runs = 100000000000") && Contains("in memory") && Contains("bytes per run"));
   // 2^63 - 1 runs: refused the same way (no overflow in the estimate)
   for (const char* sampling : {"monte_carlo", "sobol", "latin_hypercube"}) {
@@ -178,7 +189,7 @@ TEST_CASE("resource check: n_runs against memory and disk, estimates in the mess
     const std::string err = error_of([&] {
       const truss::campaign::CampaignContext c(truss::campaign::parse_campaign_text(
           text, "c.toml", ".", {"ensemble.n_runs=9223372036854775807", std::string("ensemble.sampling=") + sampling}));
-      if (const std::string m = truss::campaign::check_resources(c, "out.h5"); !m.empty()) throw InputError(m);
+      if (const std::string m = truss::results::check_resources(c, "out.h5"); !m.empty()) throw InputError(m);
     });
     CHECK_THAT(err, Contains("9223372036854775807") || Contains("at most 2^"));
   }

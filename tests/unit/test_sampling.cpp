@@ -10,7 +10,7 @@
 // marked "scipy" were printed by scipy 1.10.1 scipy.stats.qmc.Sobol(
 // scramble=False), an independent implementation reading its own copy of the
 // Joe-Kuo table.
-#include "campaign/sampling.hpp"
+#include "sampling/sampling.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -25,7 +25,7 @@
 #include <thread>
 #include <vector>
 
-using namespace truss::campaign;
+using namespace truss::sampling;
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;
 

@@ -3,7 +3,7 @@
 #include <cstdio>
 #include <exception>
 
-#include "campaign/sampling.hpp"
+#include "sampling/sampling.hpp"
 #include "io/scene_toml.hpp"
 #include "sim/simulate.hpp"
 
@@ -16,7 +16,7 @@ int main(int argc, char** argv) {
     const truss::sim::SceneOptions scene = truss::io::parse_scene_file(argv[1], {"mast.n_bays=4"});
     const truss::sim::RunResult r = truss::sim::simulate(scene);
     std::printf("%s %.17g %.17g %.17g\n", truss::sim::to_string(r.status), r.peak_drive_force_N, r.deploy_time_s,
-                truss::campaign::normal_quantile(0.975));
+                truss::sampling::normal_quantile(0.975));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 2;

@@ -1,0 +1,44 @@
+// The one-shot methods: a design fixed before the first run (sampling/sampling.hpp's SamplePlan
+// over the campaign's dimensions), n_runs runs in one round. Monte Carlo, Latin hypercube and
+// Sobol' are FixedDesign; Saltelli adds the Sobol' indices of its design to the results file.
+#pragma once
+#include "methods/method.hpp"
+#include "sampling/sampling.hpp"
+
+namespace truss::methods {
+
+class FixedDesign : public Method {
+ public:
+  // The campaign's SamplePlan: ensemble.sampling over every dimension; saltelli: one factor per
+  // dispersion, spanning all its dimensions (bays, frames), so AB_g takes every dimension of
+  // dispersion g from B. Throws std::invalid_argument for a plan the campaign's validate() refuses.
+  explicit FixedDesign(const campaign::CampaignContext& ctx);
+  Proposal propose(std::int64_t round, const RoundRecords& previous) override;
+  void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const override;
+
+ protected:
+  const campaign::CampaignContext& ctx_;
+  sampling::SamplePlan plan_;
+};
+
+// Sensitivity of one output: Sobol' indices per dispersion from a Saltelli design.
+struct OutputSensitivity {
+  std::string output;
+  sampling::SobolIndices indices;
+  std::int64_t n_blocks = 0, n_blocks_dropped = 0;
+};
+
+class Saltelli : public FixedDesign {
+ public:
+  using FixedDesign::FixedDesign;
+  // /sensitivity: the indices of the peak loads and the deployment time (docs/hdf5-schema.md).
+  void write_results(hid_t file, std::int64_t n_runs) const override;
+  // The outputs whose sensitivity is computed.
+  static const std::vector<std::string>& outputs();
+  // Blocks with a failed run or a non-finite output are left out; fewer than 2 usable blocks give
+  // NaN indices. `y`: the output of every run, `status` their statuses.
+  OutputSensitivity calc_sensitivity(const std::string& output, const std::vector<std::int8_t>& status,
+                                     const std::vector<double>& y) const;
+};
+
+}  // namespace truss::methods

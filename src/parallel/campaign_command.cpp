@@ -1,0 +1,356 @@
+#include "parallel/campaign_command.hpp"
+
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <malloc.h>
+
+#include <chrono>
+#include <ctime>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "io/h5_output.hpp"
+#include "io/h5_util.hpp"
+#include "io/scene_toml.hpp"
+#include "parallel/engine.hpp"
+#include "parallel/progress.hpp"
+#include "parallel/synthetic_run.hpp"
+#include "results/resources.hpp"
+
+namespace truss::parallel {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CommandOptions {
+  std::string campaign_path;
+  std::string output_path;
+  std::vector<std::string> sets;
+  bool resume = false;
+  bool force = false;
+  bool dry_run = false;
+  std::string progress = "auto";
+  double progress_interval_s = 2.0;    // a person watching a log sees it move
+  int compression = 1;                 // zlib level of the results file's datasets (0: none)
+  double synthetic_run_cost_s = -1.0;  // bench only (hidden): runs sleep this long and simulate nothing
+  EngineOptions engine;                // --max-batch, --flush-interval
+};
+
+// The error state of all ranks: true on every rank if any rank failed.
+bool any_rank(MPI_Comm comm, bool mine) {
+  int in = mine ? 1 : 0, out = 0;
+  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, comm);
+  return out != 0;
+}
+
+double unix_now() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Rank 0's state between the checks and the end.
+struct Rank0 {
+  std::unique_ptr<results::CampaignFile> file;  // the results file being written (a temporary name)
+  std::unique_ptr<results::Journal> journal;
+  std::unique_ptr<Progress> progress;
+  std::unique_ptr<Collector> collector;
+  results::JournalScan scan;
+  // Nothing written: no results file (its temporary one removed), and the journal as it was.
+  void drop() {
+    collector.reset();
+    journal.reset();
+    file.reset();
+  }
+};
+
+// Rank 0: output and journal checks; creates the results file (a temporary name until the end)
+// and opens or creates the journal, restoring its rounds and runs into the file. Throws
+// io::InputError for anything the user must decide.
+void prepare_output(const CommandOptions& o, const std::string& campaign_text, const campaign::CampaignContext& ctx,
+                    methods::Method& method, Rank0& r0) {
+  if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
+  if (o.resume && fs::exists(o.output_path))
+    throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
+  io::check_output_path(o.output_path, o.force);
+  // Memory and disk for every run, before the journal exists (a refusal leaves nothing behind).
+  if (const std::string e = results::check_resources(ctx, o.output_path); !e.empty()) throw io::InputError(e);
+  const std::string jpath = o.output_path + ".journal";
+  const bool has_journal = fs::exists(fs::symlink_status(jpath));
+  if (o.resume && !has_journal)
+    throw io::InputError(
+        fmt::format("error: --resume: no journal {} to resume from (run without --resume to start)", jpath));
+  if (!o.resume && has_journal && !o.force)
+    throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
+                                     "(same campaign and --set options) or start over with --force", jpath));
+  const results::StoreOptions store{results::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression};
+  r0.file = std::make_unique<results::CampaignFile>(o.output_path, ctx, store);
+  try {
+    if (!o.resume && has_journal) results::Journal::remove_unused(jpath);
+    r0.journal = std::make_unique<results::Journal>(o.resume ? results::Journal::open_existing(jpath, campaign_text)
+                                                             : results::Journal::create(jpath, campaign_text));
+  } catch (const std::runtime_error& e) {  // JournalRefused included: held by a live campaign, another campaign
+    throw io::InputError(std::string(o.resume ? "error: --resume: " : has_journal ? "error: --force: " : "error: ") +
+                         e.what());
+  }
+  r0.progress = std::make_unique<Progress>(ctx.options.ensemble.n_runs, 0, ProgressMode::none, 1.0);
+  r0.collector = std::make_unique<Collector>(ctx.record, method, *r0.journal, *r0.file, *r0.progress, o.engine);
+  if (o.resume) r0.scan = r0.collector->restore();
+  // Temporary files of killed sessions: no live session of this campaign exists (we hold the lock).
+  for (const auto& stale : results::CampaignFile::remove_stale(o.output_path))
+    std::cerr << fmt::format("[truss-campaign] removed {}, left by an interrupted session\n", stale);
+}
+
+ProgressMode progress_mode(const std::string& s) {
+  if (s == "tty") return ProgressMode::terminal;
+  if (s == "lines") return ProgressMode::lines;
+  if (s == "none") return ProgressMode::none;
+  return ProgressMode::automatic;
+}
+
+// The command line (identical on every rank). Returns an exit status when the command is done
+// (--help, --version, a parse error), nothing when the campaign is to run.
+std::optional<int> parse_command(int argc, char** argv, bool root, CommandOptions& o) {
+  CLI::App app{"Runs an uncertainty campaign of folding truss mast deployments over MPI ranks.", "truss-campaign"};
+  app.add_option("campaign", o.campaign_path, "Campaign file (TOML), e.g. campaigns/table1_dispersed.toml")
+      ->required();
+  app.add_option("-o,--output", o.output_path, "Results file (HDF5, docs/hdf5-schema.md); required unless --dry-run");
+  app.add_option("--set", o.sets, "Override a campaign key (ensemble.n_runs=40) or a base-scene key "
+                                  "(drive.mode=motor, also scene.drive.mode=motor); repeatable")
+      ->type_name("KEY=VALUE")->expected(1)->allow_extra_args(false)->take_all();
+  app.add_flag("--resume", o.resume, "Finish an interrupted campaign from its journal (OUTPUT.journal)");
+  app.add_flag("--force", o.force, "Overwrite an existing output file and discard an unfinished journal");
+  app.add_flag("--dry-run", o.dry_run, "Validate the campaign, print it resolved, run nothing");
+  app.add_option("--flush-interval", o.engine.flush_interval_s, "Seconds between journal flushes to disk")
+      ->check(CLI::Range(0.01, 3600.0));
+  app.add_option("--progress", o.progress, "Progress display: auto (in place when stderr is a terminal, lines "
+                                           "otherwise; under mpirun stderr is a pipe, so pass tty there), tty, "
+                                           "lines, none")
+      ->check(CLI::IsMember({"auto", "tty", "lines", "none"}));
+  app.add_option("--progress-interval", o.progress_interval_s, "Seconds between progress lines when not in place")
+      ->check(CLI::Range(0.01, 1e6));
+  app.add_option("--max-batch", o.engine.max_batch, "Largest batch of runs handed to a rank at once")
+      ->check(CLI::Range(1, 100000));
+  app.add_option("--compression", o.compression, "zlib level (0-9) of the results file's per-run datasets; 0 stores "
+                 "them uncompressed (largest file, least work for rank 0)")->check(CLI::Range(0, 9));
+  // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
+  app.add_option("--synthetic-run-cost-s", o.synthetic_run_cost_s, "")->check(CLI::Range(0.0, 60.0))->group("");
+  app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
+  app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
+             "3 I/O or internal error.");
+  try {
+    app.parse(argc, argv);
+    if (o.output_path.empty() && !o.dry_run) throw CLI::RequiredError("--output");
+  } catch (const CLI::ParseError& e) {
+    int rc = 0;
+    if (root) {
+      rc = app.exit(e);
+    } else {
+      std::ostringstream sink;
+      rc = app.exit(e, sink, sink);
+    }
+    return rc == 0 ? kExitOk : kExitBadInput;
+  }
+  o.engine.tick_interval_s = std::min(0.25, o.engine.flush_interval_s);
+  return std::nullopt;
+}
+
+// Rank 0, every run in: histories, the nominal run, statistics, the method's results, the file
+// committed and the journal removed. Returns the exit status.
+int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx, const methods::Method& method,
+                  const std::string& campaign_text, Rank0& r0, int size, std::chrono::steady_clock::time_point wall0,
+                  const EngineResult& done) {
+  const SessionState& st = r0.collector->session();
+  const campaign::CampaignOptions& c = ctx.options;
+  try {
+    const auto t_finish = std::chrono::steady_clock::now();
+    const std::clock_t cpu_finish = std::clock();  // rank 0's CPU time: the tail without the other processes' share
+    std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
+    std::vector<double> u(static_cast<std::size_t>(ctx.dims.total));
+    for (std::int64_t run : c.output.history_runs)
+      for (const methods::RoundPlan& plan : done.plans)
+        if (plan.contains(run)) {
+          method.calc_uniforms(plan, run, u.data());
+          histories.emplace_back(run, campaign::calc_run_with_history(ctx, u.data(), c.output.history_step_s));
+        }
+    const sim::RunResult nominal = campaign::calc_nominal_run(c, c.output.history_step_s);
+    results::CampaignFileInfo info;
+    info.campaign_toml = campaign_text;
+    info.base_scene_toml = io::resolved_scene_toml(c.base);
+    info.n_ranks = size;
+    info.n_sessions = static_cast<int>(st.session) + 1;
+    info.n_rounds = static_cast<std::int64_t>(done.plans.size());
+    info.start_utc = io::h5::utc_iso8601(st.first_start);
+    info.end_utc = io::h5::utc_now_iso8601();
+    info.wall_time_s = st.previous_wall_s + seconds_since(wall0);
+    info.schedule = done.schedule;
+    info.schedule.rank0_journal_s = r0.collector->journal_s();
+    info.schedule.synthetic_run_cost_s = o.synthetic_run_cost_s;
+    const results::ResultStore& store = r0.file->store();
+    const std::int64_t n_runs = store.n_runs(), chunk_runs = store.chunk_runs();
+    const results::StatusCounts counts = store.status_counts();
+    r0.file->write_summary(histories, nominal, info);  // the store is gone after this
+    method.write_results(r0.file->handle(), n_runs);
+    r0.file->commit(o.force);
+    r0.journal->close_and_remove();
+    std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n",
+                             sim::to_string(nominal.status), nominal.message.empty() ? "" : ": " + nominal.message);
+    print_design_summary(stderr, results::read_design_values(o.output_path, ctx.record, nominal));
+    const results::ScheduleSummary& s = done.schedule;
+    const double per = 1e6 / std::max(1.0, static_cast<double>(s.runs_by_rank0 + s.runs_by_workers));  // us a result
+    std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs in {} round{} ({}), {:.3g} s on {} rank{} "
+                             "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per "
+                             "result handled ({:.3g} us CPU), chunks of {} runs)\n",
+                             o.output_path, n_runs, info.n_rounds, info.n_rounds > 1 ? "s" : "",
+                             format_status_counts(counts), info.wall_time_s, size, size > 1 ? "s" : "",
+                             seconds_since(t_finish), static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC,
+                             s.runs_by_rank0, per * (s.rank0_poll_s + s.rank0_write_s + s.rank0_tick_s),
+                             per * s.rank0_handle_cpu_s, chunk_runs);
+    return kExitOk;
+  } catch (const io::InputError& e) {
+    std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
+    return kExitIoError;
+  }
+}
+
+// Rank 0 reads the campaign file (and its scene file) and sends the resolved campaign text, which
+// holds everything inline, to the other ranks: only rank 0 needs the input files, as only it
+// needs the output and journal paths (a multi-host run needs them on rank 0's host alone). Errors
+// are agreed on and reported once. Returns an exit status when the command is done (bad input,
+// --dry-run).
+std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions& o,
+                                 std::optional<campaign::CampaignContext>& ctx, std::string& campaign_text) {
+  std::string error;
+  try {
+    if (root) {
+      ctx.emplace(campaign::parse_campaign_file(o.campaign_path, o.sets));
+      for (const auto& w : ctx->options.warnings) std::cerr << w << '\n';
+      campaign_text = campaign::resolved_campaign_toml(ctx->options);
+    }
+  } catch (const io::InputError& e) {
+    error = e.what();
+  } catch (const std::exception& e) {
+    error = fmt::format("error: {}: {}", o.campaign_path, e.what());
+  }
+  if (any_rank(comm, !error.empty())) {
+    if (root) std::cerr << error << '\n';
+    return kExitBadInput;
+  }
+  if (o.dry_run) {
+    if (root) std::cout << campaign_text;
+    return kExitOk;
+  }
+  auto len = static_cast<long long>(campaign_text.size());
+  MPI_Bcast(&len, 1, MPI_LONG_LONG, 0, comm);
+  campaign_text.resize(static_cast<std::size_t>(len));
+  MPI_Bcast(campaign_text.data(), static_cast<int>(len), MPI_CHAR, 0, comm);
+  try {
+    if (!root) ctx.emplace(campaign::parse_campaign_text(campaign_text, "resolved campaign from rank 0", ".", {}));
+  } catch (const std::exception& e) {
+    error = fmt::format("error: the resolved campaign does not parse on rank {}: {}", root ? 0 : 1, e.what());
+  }
+  if (any_rank(comm, !error.empty())) {
+    std::cerr << error << '\n';  // an internal error: every rank that has one reports it
+    return kExitIoError;
+  }
+  return std::nullopt;
+}
+
+// Rank 0: the output and journal checks, agreed on by every rank.
+int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const std::string& campaign_text,
+                       const campaign::CampaignContext& ctx, methods::Method& method, Rank0& r0) {
+  int status = kExitOk;
+  if (root) {
+    try {
+      prepare_output(o, campaign_text, ctx, method, r0);
+    } catch (const io::InputError& e) {
+      std::cerr << e.what() << '\n';
+      status = kExitBadInput;
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << '\n';
+      status = kExitIoError;
+    }
+    if (status != kExitOk) r0.drop();
+  }
+  return broadcast_int_idle(comm, status);
+}
+
+// Rank 0: the session's start in the journal, and the banner.
+void start_session(const CommandOptions& o, const campaign::CampaignContext& ctx, Rank0& r0, double t_start,
+                   int size) {
+  const results::ResultStore& store = r0.file->store();
+  if (r0.collector->session().session > 0) {
+    std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}\n", store.n_done(),
+                             store.n_runs(), r0.journal->path());
+    if (const std::string d = r0.scan.describe(r0.journal->path()); !d.empty())
+      std::cerr << "[truss-campaign] " << d << '\n';
+  }
+  r0.collector->start_session(t_start, size);
+  *r0.progress = Progress(std::max(ctx.options.ensemble.n_runs, store.n_runs()), store.n_done(),
+                          progress_mode(o.progress), o.progress_interval_s);
+  r0.progress->banner(ctx.options.name, size, o.output_path);
+}
+
+}  // namespace
+
+int run_campaign_command(int argc, char** argv, MPI_Comm comm, const MakeMethod& make_method) {
+  // Before any HDF5 call: a write that fails (disk full) leaves HDF5 1.10 an identifier whose
+  // exit-time cleanup crashes (io/h5_util.cpp, write_file_atomically); every identifier is closed
+  // by its owner, so the library's atexit cleanup is switched off.
+  H5dont_atexit();
+  // Megabyte buffers (chunks, messages) stay in the heap: no page faults for each new one.
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);
+  int rank = 0, size = 1;
+  MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
+  const bool root = rank == 0;
+  const double t_start = unix_now();
+  const auto wall0 = std::chrono::steady_clock::now();
+  CommandOptions o;
+  if (auto rc = parse_command(argc, argv, root, o)) return *rc;
+  std::optional<campaign::CampaignContext> ctx;
+  std::string campaign_text;
+  if (auto rc = load_campaign(comm, root, o, ctx, campaign_text)) return *rc;
+  const std::unique_ptr<methods::Method> method = make_method(*ctx);
+  Rank0 r0;
+  if (int rc = prepare_output_all(comm, root, o, campaign_text, *ctx, *method, r0); rc != kExitOk) return rc;
+  if (root) start_session(o, *ctx, r0, t_start, size);
+
+  std::vector<double> u(static_cast<std::size_t>(ctx->dims.total));
+  const Evaluate evaluate = [&](const methods::RoundPlan& plan, std::int64_t run, std::string& out) {
+    method->calc_uniforms(plan, run, u.data());
+    const std::size_t start = results::begin_frame(out);
+    const campaign::RecordHead head{run, plan.round, rank};
+    if (o.synthetic_run_cost_s >= 0.0) append_synthetic_record(*ctx, u.data(), head, o.synthetic_run_cost_s, out);
+    else campaign::append_run_record(*ctx, u.data(), head, out);
+    results::seal_frame(out, start, results::FrameKind::run);
+  };
+  const EngineResult done = run_engine(comm, evaluate, r0.collector.get(), o.engine);
+  int status = kExitOk;
+  if (root) {
+    try {
+      r0.collector->tick(true);
+      r0.progress->finish(r0.file->store().n_done(), r0.file->store().status_counts());
+      status = write_results(o, *ctx, *method, campaign_text, r0, size, wall0, done);
+    } catch (const std::exception& e) {
+      std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
+      status = kExitIoError;
+    }
+    if (status != kExitOk) r0.drop();
+  }
+  return broadcast_int_idle(comm, status);
+}
+
+}  // namespace truss::parallel

@@ -1,0 +1,34 @@
+// truss-campaign: the whole campaign job on every rank (mpi_driver/ only initialises MPI).
+//
+//   mpirun -np N truss-campaign CAMPAIGN.toml -o RESULTS.h5 [--set key=value]... [--resume] [--force]
+//
+// Every rank parses the command line; rank 0 parses the campaign and sends its resolved text to
+// the others; any error is reported once (rank 0) and every rank exits with status 2 before a
+// single run starts. Rank 0 checks the output and the journal (restoring an interrupted session
+// with --resume); then the engine (engine.hpp) evaluates the method's rounds, and rank 0 writes
+// the end of the HDF5 file.
+//
+// Exit status: 0 the results file is written (failed runs are data in it); 2 bad input (command
+// line, campaign file, an existing output or journal), nothing written; 3 an I/O or internal error.
+#pragma once
+#include <mpi.h>
+
+#include <functional>
+#include <memory>
+
+#include "methods/method.hpp"
+
+namespace truss::parallel {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitBadInput = 2;
+inline constexpr int kExitIoError = 3;
+
+// The campaign's method, made on every rank from the same campaign (methods::make_method: the one
+// of ensemble.sampling; a test passes one of its own).
+using MakeMethod = std::function<std::unique_ptr<methods::Method>(const campaign::CampaignContext&)>;
+
+// Collective over comm; returns the exit status (the same on every rank).
+int run_campaign_command(int argc, char** argv, MPI_Comm comm, const MakeMethod& make_method = methods::make_method);
+
+}  // namespace truss::parallel

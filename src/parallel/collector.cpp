@@ -1,0 +1,170 @@
+// Rank 0's Collector (engine.hpp): a result's frame into the journal, the results file and the
+// method's round records; the round plans; --resume from the journal.
+#include <fmt/format.h>
+
+#include <limits>
+
+#include "io/scene_toml.hpp"
+#include "parallel/engine.hpp"
+#include "util/bytes.hpp"
+
+namespace truss::parallel {
+
+using results::FrameKind;
+
+Collector::Collector(const campaign::RecordLayout& layout, methods::Method& method, results::Journal& journal,
+                     results::CampaignFile& file, Progress& progress, const EngineOptions& opts)
+    : L_(layout), method_(method), journal_(journal), file_(file), progress_(progress), opts_(opts) {
+  for (const std::string& name : method.observed_outputs()) {
+    const int f = layout.find_output(name);
+    if (f < 0)
+      throw std::invalid_argument(fmt::format("the method reads an output that records do not hold: {}", name));
+    observed_.push_back(static_cast<std::size_t>(f));
+  }
+}
+
+results::JournalScan Collector::restore() {
+  FrameKind kind{};
+  std::string_view payload;
+  std::size_t offset = 0;
+  while (journal_.next_frame(kind, payload, offset)) restore_frame(kind, payload, offset);
+  st_.previous_wall_s += st_.session_wall;
+  st_.session_wall = 0.0;
+  n_journaled_ = plans_.size();
+  for (std::size_t r = 0; r < n_journaled_; ++r) {  // a journaled round follows a round that is complete
+    const methods::RoundPlan p = propose(static_cast<std::int64_t>(r), plans_[r].first_run);
+    if (!(p == plans_[r]))
+      throw io::InputError(fmt::format("error: --resume: {}: round {} of the journal is not the round the method "
+                                       "proposes now from the same records (another program?); start over with "
+                                       "--force", journal_.path(), r));
+  }
+  return journal_.finish_reading();
+}
+
+methods::RoundPlan Collector::propose(std::int64_t round, std::int64_t first_run) {
+  methods::RoundRecords previous;
+  if (const auto it = records_.find(round - 1); it != records_.end()) {
+    previous = std::move(it->second);
+    records_.erase(it);
+  }
+  methods::Proposal p = method_.propose(round, previous);
+  return {round, first_run, p.n_runs, std::move(p.state)};
+}
+
+// One journal frame into the session state, the plans or the results file.
+void Collector::restore_frame(FrameKind kind, std::string_view payload, std::size_t offset) {
+  const std::string where = fmt::format("{}: record at byte {}", journal_.path(), offset);
+  auto refuse = [&](const std::string& what) {
+    throw io::InputError(fmt::format("error: --resume: {}: {}; the journal is inconsistent; start over with --force",
+                                     where, what));
+  };
+  auto need = [&](std::size_t n, const char* what) {
+    if (payload.size() != n) refuse(fmt::format("a {} record of {} bytes (expected {})", what, payload.size(), n));
+  };
+  if (kind == FrameKind::session) {
+    need(sizeof(double) + sizeof(std::int32_t), "session");
+    if (st_.session == 0) st_.first_start = util::get_at<double>(payload.data());
+    st_.previous_wall_s += st_.session_wall;
+    st_.session_wall = 0.0;
+    ++st_.session;
+  } else if (kind == FrameKind::heartbeat) {
+    need(sizeof(double), "heartbeat");
+    st_.session_wall = util::get_at<double>(payload.data());
+  } else if (kind == FrameKind::plan) {
+    methods::RoundPlan p;
+    try {
+      p = methods::RoundPlan::from_bytes(payload);
+    } catch (const std::exception& e) {
+      refuse(e.what());
+    }
+    const std::int64_t first = plans_.empty() ? 0 : plans_.back().end_run();
+    if (p.round != static_cast<std::int64_t>(plans_.size()) || p.first_run != first || p.n_runs < 0)
+      refuse(fmt::format("round {} (runs {} to {}) does not follow round {}", p.round, p.first_run,
+                         p.end_run() - 1, static_cast<std::int64_t>(plans_.size()) - 1));
+    plans_.push_back(p);
+    file_.store().extend(p.end_run());
+  } else {
+    if (const std::string e = L_.check(payload); !e.empty())
+      refuse(fmt::format("not a run record of this campaign ({}, {} bytes)", e, payload.size()));
+    const campaign::RecordView rec(payload, L_);
+    const std::int64_t run = rec.run(), round = rec.round();
+    if (round < 0 || round >= static_cast<std::int64_t>(plans_.size()) ||
+        !plans_[static_cast<std::size_t>(round)].contains(run))
+      refuse(fmt::format("run index {} out of range (round {}; the journal's rounds have runs 0 to {})", run, round,
+                         plans_.empty() ? -1 : plans_.back().end_run() - 1));
+    if (file_.store().has(run)) refuse(fmt::format("run {} recorded twice", run));
+    file_.store().add(rec, std::max<std::int64_t>(0, st_.session - 1));
+    observe(rec);
+  }
+}
+
+void Collector::start_session(double unix_start, int n_ranks) {
+  if (st_.session == 0) st_.first_start = unix_start;
+  std::string s;
+  util::put(s, unix_start);
+  util::put(s, static_cast<std::int32_t>(n_ranks));
+  journal_.append(FrameKind::session, s);
+  journal_.flush();
+}
+
+methods::RoundPlan Collector::plan_round(std::int64_t round, std::int64_t first_run) {
+  const bool journaled = round < static_cast<std::int64_t>(n_journaled_);  // restore() proposed it again
+  const methods::RoundPlan plan = journaled ? plans_[static_cast<std::size_t>(round)] : propose(round, first_run);
+  if (!journaled) {
+    journal_.append(FrameKind::plan, plan.to_bytes());
+    plans_.push_back(plan);
+  }
+  if (plan.n_runs > 0) {
+    file_.store().extend(plan.end_run());
+    progress_.set_total(plan.end_run());
+  }
+  return plan;
+}
+
+void Collector::observe(const campaign::RecordView& rec) {
+  if (observed_.empty()) return;
+  const std::int64_t round = rec.round();
+  methods::RoundRecords& r = records_[round];
+  if (r.status.empty()) {  // the round's first record: its table, every status -1 (not in yet)
+    const methods::RoundPlan& plan = plans_.at(static_cast<std::size_t>(round));
+    const auto n = static_cast<std::size_t>(plan.n_runs);
+    r.first_run = plan.first_run;
+    r.status.assign(n, -1);
+    r.outputs.assign(observed_.size(), std::vector<double>(n, std::numeric_limits<double>::quiet_NaN()));
+  }
+  const auto i = static_cast<std::size_t>(rec.run() - r.first_run);
+  r.status[i] = rec.status();
+  for (std::size_t k = 0; k < observed_.size(); ++k) r.outputs[k][i] = rec.f64(observed_[k]);
+}
+
+void Collector::add_frame(std::string_view frame, const methods::RoundPlan& plan) {
+  const results::Frame f = results::read_frame(frame);
+  if (f.kind != FrameKind::run || f.bytes.size() != frame.size())
+    throw std::runtime_error(fmt::format("a result of {} bytes is not one run frame", frame.size()));
+  if (const std::string e = L_.check(f.payload); !e.empty()) throw std::runtime_error(e);
+  const campaign::RecordView rec(f.payload, L_);
+  if (rec.round() != plan.round || !plan.contains(rec.run()))
+    throw std::runtime_error(fmt::format("a record of run {} (round {}) in round {} (runs {} to {})", rec.run(),
+                                         rec.round(), plan.round, plan.first_run, plan.end_run() - 1));
+  const auto t0 = std::chrono::steady_clock::now();
+  journal_.append_frame(frame);
+  journal_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  file_.store().add(rec, st_.session);
+  observe(rec);
+}
+
+void Collector::tick(bool sync) {
+  const auto now = std::chrono::steady_clock::now();
+  if (sync || std::chrono::duration<double>(now - last_sync_).count() >= opts_.flush_interval_s) {
+    std::string s;
+    util::put(s, std::chrono::duration<double>(now - wall0_).count());
+    journal_.append(FrameKind::heartbeat, s);
+    journal_.flush();
+    file_.start_writeback();  // the results file's pages go to disk during the run, not in the tail
+    last_sync_ = std::chrono::steady_clock::now();
+  }
+  const results::ResultStore& store = file_.store();
+  progress_.update(store.n_done(), [&] { return store.status_counts(); });
+}
+
+}  // namespace truss::parallel

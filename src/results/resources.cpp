@@ -1,0 +1,93 @@
+#include "results/resources.hpp"
+
+#include <sys/resource.h>
+#include <sys/statvfs.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+#include <fmt/format.h>
+
+#include "results/journal.hpp"
+
+namespace truss::results {
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+std::string human(double bytes) {
+  if (!std::isfinite(bytes)) return "unlimited";
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB", "ZiB"};
+  int u = 0;
+  while (bytes >= 1024.0 && u < 7) { bytes /= 1024.0; ++u; }
+  return fmt::format("{:.3g} {}", bytes, units[u]);
+}
+}  // namespace
+
+ResourceEstimate estimate_resources(const campaign::CampaignContext& ctx) {
+  const double n = static_cast<double>(ctx.options.ensemble.n_runs);
+  // One run's record (campaign/record.hpp) and its session column: a row of the file.
+  const double row = static_cast<double>(ctx.record.fixed_bytes()) + 8.0;
+  ResourceEstimate e;
+  // Results stream to the file in chunks (result_store.hpp): rank 0 keeps per run only a done
+  // byte, and at the end one column read back for the statistics with its sorted copy and the ok
+  // mask (8 + 8 + 1 bytes); per-bay columns are read in bounded groups. The chunks in flight are
+  // a constant, not a per-run cost.
+  e.bytes_per_run = 1.0 + 17.0;
+  e.memory_bytes = n * e.bytes_per_run;
+  e.output_bytes = n * row;                                                   // /runs and /timing, uncompressed
+  e.journal_bytes = n * (row + 4.0 + static_cast<double>(results::kFrameHeader));  // a frame per record
+  return e;
+}
+
+double available_memory_bytes() {
+  double avail = kInf;
+  std::ifstream mi("/proc/meminfo");
+  for (std::string line; std::getline(mi, line);)
+    if (line.rfind("MemAvailable:", 0) == 0) {
+      std::istringstream ss(line.substr(13));
+      double kib = 0;
+      if (ss >> kib) avail = kib * 1024.0;
+    }
+  std::ifstream cg("/sys/fs/cgroup/memory.max");
+  std::string v;
+  if (cg >> v && v != "max") {
+    try { avail = std::min(avail, std::stod(v)); } catch (const std::exception&) {}
+  }
+  rlimit rl{};
+  if (::getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY)
+    avail = std::min(avail, static_cast<double>(rl.rlim_cur));
+  return avail;
+}
+
+double free_disk_bytes(const std::string& dir) {
+  struct statvfs st{};
+  if (::statvfs(dir.c_str(), &st) != 0) return kInf;
+  return static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
+}
+
+std::string check_resources(const campaign::CampaignContext& ctx, const std::string& output_path) {
+  const ResourceEstimate e = estimate_resources(ctx);
+  const std::int64_t n = ctx.options.ensemble.n_runs;
+  const double mem = available_memory_bytes();
+  if (e.memory_bytes > 0.8 * mem)
+    return fmt::format("error: ensemble.n_runs = {}: rank 0 would need about {} in memory ({} bytes per run: run "
+                       "flags, one column for the statistics), more than 80 % of the {} available; use fewer runs "
+                       "(at most about {})",
+                       n, human(e.memory_bytes), e.bytes_per_run, human(mem),
+                       static_cast<std::int64_t>(std::floor(0.8 * mem / e.bytes_per_run)));
+  const std::filesystem::path p(output_path);
+  const std::string dir = p.has_parent_path() ? p.parent_path().string() : ".";
+  const double disk = free_disk_bytes(dir);
+  const double need = e.output_bytes + e.journal_bytes;
+  if (need > disk)
+    return fmt::format("error: ensemble.n_runs = {}: the results file (about {}) and the journal (about {}) need "
+                       "more than the {} free in {}; free space or use fewer runs",
+                       n, human(e.output_bytes), human(e.journal_bytes), human(disk), dir);
+  return {};
+}
+
+}  // namespace truss::results

@@ -1,0 +1,287 @@
+// Streaming column statistics: the equations and the window rule are in column_stats.hpp.
+#include "sampling/column_stats.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace truss::sampling {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kSigmas = 6.0;        // half-width of a window in binomial standard deviations of rank
+// The first windows hold about 40 % of a chunk's values summed over the six targets (2,048 seed
+// values); most of the merging and narrowing happens while they are that wide, so margin and slack
+// are small (a miss costs a read-back at the end, never a wrong number).
+constexpr std::int64_t kMargin = 16;   // ... plus this many ranks (small N, ties)
+constexpr std::size_t kSeedValues = 2048;  // values of the first chunk that set the first windows
+constexpr std::size_t kSlack = 256;    // narrow only past 3 w + kSlack kept values: amortised O(1) a value
+
+double target_p(std::size_t t) { return kStatPercentiles[t] / 100.0; }
+
+std::int64_t half_width(std::int64_t n, double p) {
+  return static_cast<std::int64_t>(std::ceil(kSigmas * std::sqrt(static_cast<double>(n) * p * (1.0 - p)))) + kMargin;
+}
+
+// The values of a window, in order: at_lo copies of lo, kept (unordered), at_hi copies of hi.
+struct WindowValues {
+  Window w;
+  std::int64_t at_lo, at_hi;
+  std::vector<double>& kept;
+  bool sorted = false;  // kept is in order: no selection needed
+  std::int64_t size() const { return at_lo + static_cast<std::int64_t>(kept.size()) + at_hi; }
+  // The i-th smallest; reorders kept. `below_of` (> i): an index whose order statistic is already
+  // in place, so only the part before it is searched.
+  double at(std::int64_t i, std::int64_t below_of = -1) {
+    if (i < at_lo) return w.lo;
+    i -= at_lo;
+    if (i >= static_cast<std::int64_t>(kept.size())) return w.hi;
+    const auto n = static_cast<std::int64_t>(kept.size());
+    const std::int64_t end = below_of > at_lo && below_of - at_lo < n ? below_of - at_lo : n;
+    if (!sorted) std::nth_element(kept.begin(), kept.begin() + i, kept.begin() + end);
+    return kept[static_cast<std::size_t>(i)];
+  }
+};
+
+// The window around the estimate of target p (`below` values under v's window, n in all): cut to
+// w ranks past the estimate on each side that holds more. The current window when the estimate is
+// not among v's values.
+Window calc_window(WindowValues v, std::int64_t below, std::int64_t n, double p) {
+  const std::int64_t size = v.size();
+  const double r = p * static_cast<double>(n - 1) - static_cast<double>(below);
+  Window cur = v.w;
+  if (size == 0 || r < 0.0 || r > static_cast<double>(size - 1)) return cur;
+  const std::int64_t w = half_width(n, p);
+  const std::int64_t i_lo = static_cast<std::int64_t>(std::floor(r)) - w;
+  const std::int64_t i_hi = static_cast<std::int64_t>(std::ceil(r)) + w;
+  if (i_hi < size - 1) cur.hi = std::min(cur.hi, v.at(i_hi));
+  if (i_lo > 0) cur.lo = std::max(cur.lo, v.at(i_lo, i_hi < size - 1 ? i_hi : size));
+  return cur;
+}
+
+}  // namespace
+
+Moments combine(const Moments& a, const Moments& b) {
+  if (a.count == 0) return b;
+  if (b.count == 0) return a;
+  Moments m;
+  m.count = a.count + b.count;
+  const auto na = static_cast<double>(a.count), nb = static_cast<double>(b.count), n = static_cast<double>(m.count);
+  const double d = b.mean - a.mean;
+  m.mean = a.mean + d * (nb / n);
+  m.m2 = a.m2 + b.m2 + d * d * (na * nb / n);
+  m.min = std::min(a.min, b.min);
+  m.max = std::max(a.max, b.max);
+  return m;
+}
+
+ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
+                                const Windows& w) {
+  thread_local std::vector<double> x, scratch;
+  x.clear();
+  scratch.resize(rows);
+  for (std::size_t i = 0; i < rows; ++i) {
+    double v;
+    std::memcpy(&v, values + 8 * i * stride, 8);
+    if (use[i] && std::isfinite(v)) x.push_back(v);
+  }
+  ChunkSummary s;
+  s.window = w;
+  Moments& m = s.moments;
+  m.count = static_cast<std::int64_t>(x.size());
+  if (x.empty()) return s;
+  // Shifted by the first value: exact for a constant chunk, no cancellation for a tiny spread.
+  const double x0 = x.front();
+  double sum = 0.0;
+  for (double v : x) sum += v - x0;
+  const double dm = sum / static_cast<double>(x.size());
+  m.mean = x0 + dm;
+  for (double v : x) {
+    m.m2 += (v - x0 - dm) * (v - x0 - dm);
+    m.min = std::min(m.min, v);
+    m.max = std::max(m.max, v);
+  }
+  // Per target: a branch-free counting pass (double counters, exact below 2^53), then a
+  // branch-free copy of the values strictly inside. About 30 ns a value on this machine's cores
+  // (six targets; a single pass with a binary search over the windows' ends measured only 10 %
+  // faster), paid by rank 0 as it writes the chunk (docs/benchmarks.md).
+  for (std::size_t t = 0; t < kStatTargets; ++t) {
+    const double lo = w[t].lo, hi = w[t].hi;
+    double below = 0, at_lo = 0, at_hi = 0, inside = 0;
+    for (const double v : x) {
+      below += v < lo ? 1.0 : 0.0;
+      at_lo += v == lo ? 1.0 : 0.0;
+      at_hi += v == hi ? 1.0 : 0.0;
+      inside += v > lo && v < hi ? 1.0 : 0.0;
+    }
+    s.below[t] = static_cast<std::int64_t>(below);
+    s.at_lo[t] = static_cast<std::int64_t>(at_lo);
+    s.at_hi[t] = lo == hi ? 0 : static_cast<std::int64_t>(at_hi);  // one end: its copies are at_lo
+    if (inside == 0) continue;
+    double* out = scratch.data();
+    std::size_t k = 0;
+    for (const double v : x) {
+      out[k] = v;
+      k += v > lo && v < hi;
+    }
+    s.kept[t].assign(out, out + k);
+  }
+  return s;
+}
+
+void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use) {
+  if (seeded_ || count_ > 0) return;
+  seeded_ = true;
+  // Every step-th row, at most about kSeedValues of them: the windows' half-width is in ranks of
+  // this sample, so a smaller sample only makes the first windows wider (rank 0 pays this once,
+  // serially: 260 columns of the Table-1 campaign).
+  const std::size_t step = (rows + kSeedValues - 1) / kSeedValues;
+  std::vector<double> x;
+  for (std::size_t i = 0; i < rows; i += step) {
+    double v;
+    std::memcpy(&v, values + 8 * i * stride, 8);
+    if (use[i] && std::isfinite(v)) x.push_back(v);
+  }
+  // Sorted once: each window end is then a look-up.
+  std::sort(x.begin(), x.end());
+  const auto n = static_cast<std::int64_t>(x.size());
+  for (std::size_t t = 0; t < kStatTargets; ++t) win_[t] = calc_window({win_[t], 0, 0, x, true}, 0, n, target_p(t));
+}
+
+// k copies of v (of a summary made against a wider window, or of a window being cut) into target
+// t's window; values above it are dropped.
+void ColumnStats::put(std::size_t t, double v, std::int64_t k) {
+  const Window& w = win_[t];
+  if (v < w.lo) below_[t] += k;
+  else if (v == w.lo) at_lo_[t] += k;
+  else if (v < w.hi) kept_[t].insert(kept_[t].end(), static_cast<std::size_t>(k), v);
+  else if (v == w.hi) at_hi_[t] += k;
+}
+
+// put(t, v, 1) for each of kept_[t][from..], in place: the values inside stay, in their order,
+// the others are counted or dropped. Branch-free (a value's side of the window ends is not
+// predictable): about 1 ns a value where the branches of put cost several.
+void ColumnStats::classify_kept(std::size_t t, std::size_t from) {
+  std::vector<double>& x = kept_[t];
+  const double lo = win_[t].lo, hi = win_[t].hi;
+  const bool two_ends = hi != lo;  // one end: its copies are at_lo (as put)
+  std::int64_t below = 0, at_lo = 0, at_hi = 0;
+  std::size_t k = from;
+  for (std::size_t i = from; i < x.size(); ++i) {
+    const double v = x[i];
+    below += v < lo;
+    at_lo += v == lo;
+    at_hi += two_ends & (v == hi);
+    x[k] = v;
+    k += (v > lo) & (v < hi);
+  }
+  x.resize(k);
+  below_[t] += below;
+  at_lo_[t] += at_lo;
+  at_hi_[t] += at_hi;
+}
+
+void ColumnStats::add(std::int64_t chunk, ChunkSummary s) {
+  if (chunk < 0) throw std::runtime_error(fmt::format("column statistics: chunk {} out of range", chunk));
+  const auto c = static_cast<std::size_t>(chunk);
+  if (c >= chunks_.size()) {
+    chunks_.resize(c + 1);
+    have_.resize(c + 1, 0);
+  }
+  if (have_[c]) throw std::runtime_error(fmt::format("column statistics: chunk {} merged twice", chunk));
+  have_[c] = 1;
+  chunks_[c] = s.moments;
+  count_ += s.moments.count;
+  seeded_ = true;
+  for (std::size_t t = 0; t < kStatTargets; ++t) {
+    // The summary's window contains this one (windows only narrow): its ends and its kept values
+    // are re-classified here; its values above hi are gone, as they would be here.
+    below_[t] += s.below[t];
+    if (s.at_lo[t] > 0) put(t, s.window[t].lo, s.at_lo[t]);
+    if (s.at_hi[t] > 0) put(t, s.window[t].hi, s.at_hi[t]);
+    const std::size_t from = kept_[t].size();
+    kept_[t].insert(kept_[t].end(), s.kept[t].begin(), s.kept[t].end());
+    // Made against this very window (the usual case): every kept value is inside it.
+    if (s.window[t].lo != win_[t].lo || s.window[t].hi != win_[t].hi) classify_kept(t, from);
+    narrow(t);
+  }
+}
+
+void ColumnStats::narrow(std::size_t t) {
+  std::vector<double>& x = kept_[t];
+  const double p = target_p(t);
+  const auto limit = static_cast<std::size_t>(3 * half_width(count_, p)) + kSlack;
+  if (x.size() <= std::max(limit, next_cut_[t])) return;
+  next_cut_[t] = 2 * x.size();
+  const Window old = win_[t];
+  const std::int64_t old_lo = at_lo_[t], old_hi = at_hi_[t];
+  const double r = p * static_cast<double>(count_ - 1) - static_cast<double>(below_[t]);
+  if (r < 0.0 || r > static_cast<double>(old_lo + static_cast<std::int64_t>(x.size()) + old_hi - 1)) {
+    // The estimate has left the window (values drift with the run index): give the target up
+    // rather than keep a growing window; the end reads the column back. Every value now counts
+    // as below an empty window at +infinity.
+    win_[t] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity()};
+    below_[t] += old_lo + static_cast<std::int64_t>(x.size()) + old_hi;
+    at_lo_[t] = at_hi_[t] = 0;
+    std::vector<double>().swap(x);
+    return;
+  }
+  const Window w = calc_window({old, old_lo, old_hi, x}, below_[t], count_, p);
+  if (w.lo == old.lo && w.hi == old.hi) return;
+  win_[t] = w;
+  at_lo_[t] = at_hi_[t] = 0;
+  put(t, old.lo, old_lo);  // the old ends' copies: below the new lo, at an end, or gone (never inside)
+  put(t, old.hi, old_hi);
+  classify_kept(t, 0);
+  next_cut_[t] = std::max(next_cut_[t] / 2, 2 * x.size());
+}
+
+Stats ColumnStats::calc_stats(bool& resolved) const {
+  resolved = true;
+  Moments m;
+  for (std::size_t c = 0; c < chunks_.size(); ++c)
+    if (have_[c]) m = combine(m, chunks_[c]);
+  Stats s;
+  s.count = m.count;
+  if (m.count == 0) {
+    s.mean = s.std = s.min = s.max = kNaN;
+    s.percentiles.fill(kNaN);
+    return s;
+  }
+  s.mean = m.mean;
+  s.std = m.count > 1 ? std::sqrt(m.m2 / static_cast<double>(m.count - 1)) : kNaN;
+  s.min = m.min;
+  s.max = m.max;
+  std::vector<double> x;
+  for (std::size_t t = 0; t < kStatTargets; ++t) {
+    const PercentileIndex idx = find_percentile_index(static_cast<std::size_t>(m.count), kStatPercentiles[t]);
+    const auto lo = static_cast<std::int64_t>(idx.lo) - below_[t], hi = static_cast<std::int64_t>(idx.hi) - below_[t];
+    x = kept_[t];
+    WindowValues v{win_[t], at_lo_[t], at_hi_[t], x};
+    if (lo < 0 || hi >= v.size()) {
+      resolved = false;
+      s.percentiles[t] = kNaN;
+      continue;
+    }
+    const double a = v.at(lo);
+    s.percentiles[t] = lerp_numpy(a, hi == lo ? a : v.at(hi), idx.t);
+  }
+  return s;
+}
+
+bool ColumnStats::complete(std::int64_t n_chunks) const {
+  return static_cast<std::int64_t>(have_.size()) == n_chunks &&
+         std::all_of(have_.begin(), have_.end(), [](std::uint8_t h) { return h != 0; });
+}
+
+std::size_t ColumnStats::kept_values() const {
+  std::size_t k = 0;
+  for (const auto& x : kept_) k += x.size();
+  return k;
+}
+
+}  // namespace truss::sampling

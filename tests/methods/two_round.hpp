@@ -1,0 +1,71 @@
+// A toy method with two rounds, written against methods/method.hpp alone (no change to the engine,
+// the journal or the results file), to show that a method can choose its next points from the
+// outputs of earlier runs:
+//   round 0: ensemble.n_runs Monte Carlo runs;
+//   round 1: if the 95 % confidence interval of the mean of `output` over round 0's ok runs,
+//            +- 1.96 s / sqrt(n), is wider than rel_half_width |mean|, the runs that would bring it
+//            there, n (h / (rel_half_width |mean|))^2 - n, between 1 and 3 n0; their points are
+//            keyed by a digest of round 0's mean (the round's state), so they depend on round 0's
+//            outputs and a resume that re-planned from other records would give other points;
+//   round 2: done.
+#pragma once
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "methods/method.hpp"
+#include "sampling/sampling.hpp"
+#include "util/bytes.hpp"
+
+namespace truss::test {
+
+class TwoRound : public methods::Method {
+ public:
+  TwoRound(const campaign::CampaignContext& ctx, std::string output, double rel_half_width)
+      : ctx_(ctx), output_(std::move(output)), rel_(rel_half_width) {}
+
+  std::vector<std::string> observed_outputs() const override { return {output_}; }
+
+  methods::Proposal propose(std::int64_t round, const methods::RoundRecords& previous) override {
+    const std::int64_t n0 = ctx_.options.ensemble.n_runs;
+    if (round == 0) return {n0, {}};
+    if (round > 1) return {};
+    double sum = 0.0, sum2 = 0.0;
+    std::int64_t n = 0;
+    const std::vector<double>& y = previous.outputs.at(0);
+    for (std::size_t i = 0; i < y.size(); ++i)
+      if (previous.status[i] == 0 && std::isfinite(y[i])) {
+        sum += y[i];
+        ++n;
+      }
+    if (n < 2) return {};
+    const double mean = sum / static_cast<double>(n);
+    for (std::size_t i = 0; i < y.size(); ++i)
+      if (previous.status[i] == 0 && std::isfinite(y[i])) sum2 += (y[i] - mean) * (y[i] - mean);
+    const double half = 1.96 * std::sqrt(sum2 / static_cast<double>(n - 1) / static_cast<double>(n));
+    const double target = rel_ * std::abs(mean);
+    if (half <= target) return {};
+    const double wanted = static_cast<double>(n) * (half / target) * (half / target) - static_cast<double>(n);
+    const auto more = static_cast<std::int64_t>(std::clamp(std::ceil(wanted), 1.0, 3.0 * static_cast<double>(n0)));
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &mean, sizeof bits);
+    std::string state;
+    util::put(state, sampling::mix64(bits));
+    return {more, state};
+  }
+
+  void calc_uniforms(const methods::RoundPlan& plan, std::int64_t run, double* u) const override {
+    std::uint64_t key = ctx_.options.ensemble.master_seed;
+    if (plan.state.size() == 8) key ^= util::get_at<std::uint64_t>(plan.state.data());
+    for (int j = 0; j < ctx_.dims.total; ++j) u[j] = sampling::counter_uniform(key, run, j);
+  }
+
+ private:
+  const campaign::CampaignContext& ctx_;
+  std::string output_;
+  double rel_;
+};
+
+}  // namespace truss::test
