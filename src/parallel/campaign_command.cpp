@@ -196,6 +196,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.schedule.synthetic_run_cost_s = o.synthetic_run_cost_s;
     const results::ResultStore& store = r0.file->store();
     const std::int64_t n_runs = store.n_runs(), chunk_runs = store.chunk_runs();
+    const std::size_t peak_chunks = store.peak_chunks_in_memory();
     const results::StatusCounts counts = store.status_counts();
     r0.file->write_summary(histories, nominal, info);  // the store is gone after this
     method.write_results(r0.file->handle(), n_runs);
@@ -208,12 +209,12 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     const double per = 1e6 / std::max(1.0, static_cast<double>(s.runs_by_rank0 + s.runs_by_workers));  // us a result
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs in {} round{} ({}), {:.3g} s on {} rank{} "
                              "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per "
-                             "result handled ({:.3g} us CPU), chunks of {} runs)\n",
+                             "result handled ({:.3g} us CPU), at most {} chunks of {} runs in memory)\n",
                              o.output_path, n_runs, info.n_rounds, info.n_rounds > 1 ? "s" : "",
                              format_status_counts(counts), info.wall_time_s, size, size > 1 ? "s" : "",
                              seconds_since(t_finish), static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC,
                              s.runs_by_rank0, per * (s.rank0_poll_s + s.rank0_write_s + s.rank0_tick_s),
-                             per * s.rank0_handle_cpu_s, chunk_runs);
+                             per * s.rank0_handle_cpu_s, peak_chunks, chunk_runs);
     return kExitOk;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";

@@ -95,6 +95,7 @@ void Collector::restore_frame(FrameKind kind, std::string_view payload, std::siz
     if (file_.store().has(run)) refuse(fmt::format("run {} recorded twice", run));
     file_.store().add(rec, std::max<std::int64_t>(0, st_.session - 1));
     observe(rec);
+    while (file_.store().write_pending()) file_.store().write_next();  // memory bounded as in a session
   }
 }
 
@@ -146,6 +147,7 @@ void Collector::add_frame(std::string_view frame, const methods::RoundPlan& plan
   if (rec.round() != plan.round || !plan.contains(rec.run()))
     throw std::runtime_error(fmt::format("a record of run {} (round {}) in round {} (runs {} to {})", rec.run(),
                                          rec.round(), plan.round, plan.first_run, plan.end_run() - 1));
+  if (file_.store().has(rec.run())) throw std::runtime_error(fmt::format("run {} received twice", rec.run()));
   const auto t0 = std::chrono::steady_clock::now();
   journal_.append_frame(frame);
   journal_s_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
