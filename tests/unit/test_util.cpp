@@ -46,4 +46,10 @@ TEST_CASE("byte images: values back as they were put, any alignment; a short rea
   CHECK_THROWS_WITH(r.get<double>(), "a test image cut short: 4 bytes left, 8 needed");
   CHECK(r.get_bytes(4) == "tail");
   CHECK_NOTHROW(r.expect_end());
+  // At the boundary: 7 bytes hold no double, 8 do.
+  ByteReader seven(std::string_view(s).substr(1, 7), "seven bytes");
+  CHECK_THROWS_WITH(seven.get<double>(), "seven bytes cut short: 7 bytes left, 8 needed");
+  ByteReader eight(std::string_view(s).substr(1, 8), "eight bytes");
+  CHECK(eight.get<std::int64_t>() == -5);
+  CHECK_THROWS(eight.get_bytes(1));
 }
