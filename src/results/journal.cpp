@@ -282,8 +282,9 @@ void Journal::flush() {
   }
 }
 
+// Not written out nor synced first: the results file, committed before, holds every record.
 void Journal::close_and_remove() {
-  flush();
+  buffer_.clear();
   ::close(fd_);
   fd_ = -1;
   if (::unlink(path_.c_str()) != 0) fail_errno("cannot remove journal", path_);

@@ -88,7 +88,7 @@ class Journal {
   void append_frame(std::string_view sealed_frame);
   static constexpr std::size_t kWriteThrough = std::size_t{1} << 20;
   void flush();             // writes the buffer out and fdatasyncs: on disk from now on
-  void close_and_remove();  // after the results file is in place
+  void close_and_remove();  // after the results file is in place (nothing written or synced first)
   const std::string& path() const { return path_; }
 
  private:
