@@ -34,6 +34,7 @@ their time (--w; docs/benchmarks.md, "Tenth step").
 """
 import argparse
 import os
+import re
 import statistics
 import subprocess
 import sys
@@ -72,7 +73,10 @@ def run(driver, ranks, mca, out, sets, extra=()):
         os.remove(out)
     cmd = ["mpirun", "--oversubscribe", "-np", str(ranks), *mca, driver, TABLE1, "-o", out, "--progress", "none",
            *[a for s in sets for a in ("--set", s)], *extra]
-    subprocess.run(cmd, env=ENV, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=3600)
+    p = subprocess.run(cmd, env=ENV, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, timeout=3600,
+                       text=True)
+    # The end after the last result (the last chunk, /stats, close, sync, rename): the summary line.
+    tail = re.search(r"statistics and file: ([0-9.e+-]+) s, ([0-9.e+-]+) s CPU", p.stderr)
     with h5py.File(out, "r") as f:
         t = f["timing"]
         a = dict(t.attrs)
@@ -81,6 +85,8 @@ def run(driver, ranks, mca, out, sets, extra=()):
         handled = a.get("rank0_poll_s", float("nan")) + a.get("rank0_tick_s", 0.0) + a.get("rank0_write_s", 0.0)
         r0 = max(1, int(a.get("runs_by_rank0", 1)))
         return {
+            "tail": float(tail.group(1)) if tail else float("nan"),
+            "tail_cpu": float(tail.group(2)) if tail else float("nan"),
             "h_cpu": a.get("rank0_handle_cpu_s", float("nan")) / n,
             # rank 0's write thread (returned chunks written, statistics merged): beside h, not in it
             "w_cpu": a.get("rank0_write_thread_cpu_s", 0.0) / n,
@@ -132,8 +138,8 @@ def bench_real(a):
     # run's sampling and record outside the simulation).
     print("| ranks | transport | build | campaign wall (s) | efficiency | run time vs 1 rank | time in runs vs 1 rank "
           "| runs by rank 0 | rank 0 per result, wall (us) | rank 0 per result, CPU (us) | rank 0 per run, CPU (us) "
-          "| h / c (CPU) |")
-    print("|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "| h / c (CPU) | tail wall / CPU (s) |")
+    print("|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for k in names:
         for b in drivers:
             rs, one = rows[(k, b)], rows[("1 rank", b)]
@@ -145,7 +151,8 @@ def bench_real(a):
             slow = statistics.median(r["run_sum"] / r["n"] for r in rs) / c
             busy = statistics.median(r["run_sum"] / (P * r["sched"]) for r in rs) / busy1
             print(f"| {P} | {'-' if P == 1 else k} | {b or '-'} | {w:.3f} | {t1 / (P * w):.3f} | {slow:.3f} | {busy:.3f} "
-                  f"| {med(rs, 'rank0_runs'):.0f} | {h * 1e6:.1f} | {hc * 1e6:.1f} | {cc * 1e6:.1f} | {hc / cc * 100:.2f} % |")
+                  f"| {med(rs, 'rank0_runs'):.0f} | {h * 1e6:.1f} | {hc * 1e6:.1f} | {cc * 1e6:.1f} | {hc / cc * 100:.2f} % "
+                  f"| {med(rs, 'tail'):.3f} / {med(rs, 'tail_cpu'):.3f} |")
     print("\nWhere rank 0's per-result wall time goes (us a result, medians; /timing's rank0_*_s over the results):\n")
     print("| ranks | transport | build | MPI calls | storing results | of which journal | chunk writes + statistics "
           "| tick (journal sync, progress) |")
