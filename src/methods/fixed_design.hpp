@@ -11,7 +11,7 @@ class FixedDesign : public Method {
  public:
   // The campaign's SamplePlan: ensemble.sampling over every dimension; saltelli: one factor per
   // dispersion, spanning all its dimensions (bays, frames), so AB_g takes every dimension of
-  // dispersion g from B. Throws std::invalid_argument for a plan the campaign's validate() refuses.
+  // dispersion g from B. The campaign's validate() has checked the plan (SamplePlan::validate).
   explicit FixedDesign(const campaign::CampaignContext& ctx);
   Proposal propose(std::int64_t round, const RoundRecords& previous) override;
   void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const override;

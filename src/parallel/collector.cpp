@@ -48,6 +48,7 @@ methods::RoundPlan Collector::propose(std::int64_t round, std::int64_t first_run
     records_.erase(it);
   }
   methods::Proposal p = method_.propose(round, previous);
+  if (p.n_runs < 0) throw std::logic_error(fmt::format("the method proposes {} runs for round {}", p.n_runs, round));
   return {round, first_run, p.n_runs, std::move(p.state)};
 }
 
