@@ -2,7 +2,9 @@
 
 
 
-SCHEMA_VERSION = 1
+# The schema versions this report reads, per file kind (docs/hdf5-schema.md). Campaign files of
+# version 1 and 2 have the same layout; 2 changed how a Saltelli design draws A and B.
+SCHEMA_VERSIONS = {"single_run": (1,), "campaign": (1, 2)}
 
 
 EXIT_INPUT_ERROR = 2

@@ -262,8 +262,9 @@ def subsection_sobol(page, c):
 def calc_design_correlations(c, n_factors):
     """Largest |rank correlation| between the A and B rows of each dispersion's columns (one per
     bay or frame for per-bay/per-frame keys). Saltelli's design (block of G + 2 runs: A, B, AB_1
-    .. AB_G) assumes A and B independent; some pairs of Sobol' dimensions are strongly correlated
-    at small N (docs/campaigns.md), which biases that factor's indices. Returns {key: (rho, N)}."""
+    .. AB_G) assumes A and B independent; a correlated pair biases that factor's indices. Campaign
+    files of schema_version 1 drew A and B from one Sobol' point, some of whose pairs of dimensions
+    correlate strongly at small N (docs/campaigns.md). Returns {key: (rho, N)}."""
     block = n_factors + 2
     n_blocks = len(c.status) // block
     res = {}
@@ -298,9 +299,9 @@ def design_correlation_note(c, n_factors):
     return ("<p class='warn'>Design check: the A and B samples of "
             + ", ".join(f"<code>{esc(k)}</code> (rank correlation {r:.2f})" for k, r in sorted(bad.items()))
             + f" are correlated beyond 4/&radic;N = {limit:.2f} (N = {n_blocks} blocks). Saltelli's "
-              "estimators assume them independent: these factors' indices are biased at this N "
-              "(a property of the unscrambled Sobol' sequence's high dimensions, docs/campaigns.md). "
-              "Run more blocks before relying on them.</p>")
+              "estimators assume them independent: these factors' indices may be biased at this N "
+              "(files of schema_version 1 drew A and B from one Sobol' point, whose high dimensions "
+              "do this; docs/campaigns.md). Run more blocks before relying on them.</p>")
 
 
 def out_of_range_note(outs):

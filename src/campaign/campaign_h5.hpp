@@ -14,7 +14,9 @@
 
 namespace truss::campaign {
 
-inline constexpr std::int64_t kCampaignSchemaVersion = 1;
+// 2: a Saltelli design draws A and B from the Monte Carlo generator beyond 2d = 8 dimensions
+// (kSaltelliSobolMaxDims); 1 drew them from one shifted Sobol' point up to 2d = 2048. Same layout.
+inline constexpr std::int64_t kCampaignSchemaVersion = 2;
 
 // How the last session's schedule went (rank 0's view), for /timing: not reproducible.
 struct ScheduleTiming {

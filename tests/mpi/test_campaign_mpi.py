@@ -114,7 +114,7 @@ def case_ranks(args):
     same, why = same_values(a, b)
     check(same, f"1 and 3 ranks give identical datasets outside /timing ({len(a)} datasets) {why}")
     with h5py.File(outs[3], "r") as f:
-        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 1 and f.attrs["kind"] == "campaign",
+        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 2 and f.attrs["kind"] == "campaign",
               "root attributes: n_ranks, schema_version, kind")
         check(set(np.unique(f["timing/rank"][:])) == {0, 1, 2}, "all 3 ranks computed runs (dynamic scheduling)")
         missing = []

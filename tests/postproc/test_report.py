@@ -16,7 +16,7 @@ result), and checks:
   - every <img> the report references exists and is a PNG with a sane IHDR header;
   - failed runs are reported with the right counts, grouped runs matching their status;
   - bad input stops with exit code 2, one `error:` line naming the file, and nothing written:
-    schema_version 2, a truncated file, a text file, a wrong kind, a missing dataset, a
+    schema_version 3, a truncated file, a text file, a wrong kind, a missing dataset, a
     non-empty output directory without --force.
 Prints one line per check; exits 0 when all pass, 1 otherwise.
 """
@@ -661,8 +661,8 @@ def main():
                           f"fig5_bay{nb}_zoom.png"] if has_history else [])
 
     # Bad input: exit 2, one error line naming the file, nothing written.
-    expect_error(repo, scratch, "schema_version_2",
-                 fake(repo, S("schema2.h5"), "--schema-version", "2"), "schema_version")
+    expect_error(repo, scratch, "schema_version_3",
+                 fake(repo, S("schema3.h5"), "--schema-version", "3"), "schema_version")
     expect_error(repo, scratch, "truncated", fake(repo, S("trunc.h5"), "--truncate"), "trunc.h5")
     with open(S("text.h5"), "w") as fh:
         fh.write("this is not an HDF5 file\n")
