@@ -4,6 +4,7 @@
 #pragma once
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace truss::integrators {
 
@@ -12,8 +13,9 @@ namespace truss::integrators {
 //   cvode        SUNDIALS CVODE, BDF with Newton iteration and a dense direct solver (stiff)
 //   cvode_adams  SUNDIALS CVODE, Adams-Moulton with fixed-point iteration (non-stiff)
 //   automatic    dopri54 until Hairer's stiffness test fires, then cvode for the rest of the run
-//   ida          SUNDIALS IDA (variable-order BDF on a residual F(t, y, y', z) = 0, dense direct
-//                linear solver) on the system's DaeForm: the free stack's cross-check solver
+//   ida          SUNDIALS IDA (variable-order BDF on a residual F(t, y, y', z) = 0, banded direct
+//                linear solver in the order the DaeForm gives, else dense) on the system's
+//                DaeForm: the free stack's cross-check solver
 enum class IntegratorKind { dopri54, cvode, cvode_adams, automatic, ida };
 inline const char* to_string(IntegratorKind k) {
   constexpr const char* names[] = {"dopri54", "cvode", "cvode_adams", "auto", "ida"};
@@ -31,6 +33,10 @@ class DaeForm {
   virtual bool calc_residual(double t, const double* y, const double* yp, const double* z, double* res) = 0;
   // A guess of y' and z at (t, y) for the consistent start (IDACalcIC); false: zeros.
   virtual bool calc_initial_guess(double /*t*/, const double* /*y*/, double* /*yp*/, double* /*z*/) { return false; }
+  // An order of the unknowns w = (y, z), and of the residual rows likewise, in which the Jacobian
+  // dF/dw + c dF/dw' is banded: order[p] is the index in w of the unknown (and the row) at
+  // position p, lower and upper the half-bandwidths. false: no band (a dense solver).
+  virtual bool find_band_order(std::vector<int>& /*order*/, int& /*lower*/, int& /*upper*/) const { return false; }
 };
 
 class OdeSystem {

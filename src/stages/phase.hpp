@@ -64,6 +64,10 @@ using PhaseScratch = model::FrameSystem;
 // motor modes, multipliers mu_j: the rail's lambda (on the rail) and, in velocity mode, the drive
 // force F (its constraint keeps the driven frame's speed). The drive force is the multiplier
 // drive_multiplier, or drive_force_N (torque, motor) when that is -1.
+// Every term is local, so that the DAE's Jacobian is banded (IDA's banded solver): diag[i], sub[i]
+// and rhs[i] depend on q and q' of coordinates i-1..i+1 only; the c_j are zero but on the last two
+// coordinates, and c_j, s_j, driven_speed_m_per_s and drive_force_N depend on q and q' of those
+// two only (tests/numeric/test_free_ida.cpp checks the band by perturbation).
 struct PhaseDaeTerms {
   static constexpr int kMaxMultipliers = 2;
   Eigen::VectorXd diag, sub, rhs;

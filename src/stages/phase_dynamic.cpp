@@ -51,6 +51,22 @@ class PhaseOde final : public integrators::OdeSystem, public integrators::DaeFor
     for (int j = 0; j < terms_.num_multipliers; ++j) mu[j] = j == terms_.drive_multiplier ? p.drive_force_N : p.lambda_N;
     return std::isfinite(yp[0]);
   }
+  // Each coordinate's q_i and v_i side by side, then W and the multipliers: positions 2i, 2i + 1,
+  // 2n, 2n + 1 + j. By PhaseDaeTerms' locality (phase.hpp) row i of M v' - r couples q, v, v' of
+  // coordinates i-1..i+1 (offsets -3..+2) and, for i >= n-2, the multipliers (up to +3 + k); the
+  // rows of W and of the constraints couple q, v of coordinates n-2, n-1 (down to -4 - k).
+  bool find_band_order(std::vector<int>& order, int& lower, int& upper) const override {
+    const int k = m_.num_multipliers();
+    order.resize(static_cast<std::size_t>(2 * n_ + 1 + k));
+    for (int i = 0; i < n_; ++i) {
+      order[static_cast<std::size_t>(2 * i)] = i;
+      order[static_cast<std::size_t>(2 * i + 1)] = n_ + i;
+    }
+    for (int p = 2 * n_; p < 2 * n_ + 1 + k; ++p) order[static_cast<std::size_t>(p)] = p;
+    lower = 4 + k;
+    upper = k > 0 ? 3 + k : 2;
+    return true;
+  }
   void calc_rhs(double, const double* y, double* dy) override {
     const PhasePoint p = m_.calc_point(y, y + n_, dy + n_, scratch_);
     std::copy(y + n_, y + 2 * n_, dy);
@@ -113,6 +129,10 @@ class PhaseObserver final : public integrators::StepObserver {
 };
 
 }  // namespace
+
+std::unique_ptr<integrators::OdeSystem> make_phase_ode(const PhaseModel& model, double creep_speed_m_per_s) {
+  return std::make_unique<PhaseOde>(model, creep_speed_m_per_s);
+}
 
 double DynamicPhaseSolver::calc_creep_speed_m_per_s(const model::DriveParams& d) {
   return kCreepSpeedFraction * d.no_load_speed_rad_per_s * d.screw_lead_m / (2.0 * std::numbers::pi);
