@@ -125,6 +125,7 @@ TEST_CASE("Subset state: save/load anywhere and go on gives the same bytes", "[s
     states.push_back(whole.save());
   }
   const std::string final_bytes = whole.save();
+  const SubsetSummary final_summary = whole.calc_summary();
   REQUIRE(states.size() > 20);
   for (std::size_t at : {std::size_t{0}, std::size_t{1}, std::size_t{5}, std::size_t{9}, std::size_t{10},
                          states.size() / 2, states.size() - 1}) {
@@ -133,6 +134,12 @@ TEST_CASE("Subset state: save/load anywhere and go on gives the same bytes", "[s
     CHECK(resumed.save() == states[at]);
     while (!resumed.done()) resumed.add_margins(calc_margins(resumed, c));
     CHECK(resumed.save() == final_bytes);
+    const SubsetSummary r = resumed.calc_summary();  // what is derived from the state, not only its bytes
+    CHECK(r.p == final_summary.p);
+    CHECK(r.cov == final_summary.cov);
+    CHECK(r.cov_lineage == final_summary.cov_lineage);
+    CHECK(r.lineages == final_summary.lineages);
+    CHECK(r.runs == final_summary.runs);
   }
   const std::string& mid = states[states.size() / 2];
   for (std::size_t cut : {std::size_t{2}, mid.size() / 3, mid.size() - 1})
