@@ -18,3 +18,6 @@ add_test(NAME rare_failures COMMAND truss_tests_rare)
 add_executable(truss_subset_analytic ${CMAKE_SOURCE_DIR}/tests/numeric/subset_analytic.cpp)
 target_link_libraries(truss_subset_analytic PRIVATE truss_sampling CLI11::CLI11)
 target_include_directories(truss_subset_analytic PRIVATE ${CMAKE_SOURCE_DIR}/tests)
+# The same linear limit state through OpenTURNS' SubsetSampling: the 95 % intervals overlap (about 1 s).
+add_test(NAME subset_openturns COMMAND /usr/bin/python3 ${CMAKE_SOURCE_DIR}/tests/numeric/test_subset_openturns.py
+         --tool $<TARGET_FILE:truss_subset_analytic>)
