@@ -26,16 +26,6 @@ std::string RunOptions::validate() const {
   return positive("run.max_wall_time_s", max_wall_time_s);
 }
 
-std::string RunnerOptions::validate() const {
-  for (auto [key, v] : {std::pair{"drive.speed_m_per_s", drive.speed_m_per_s}, {"drive.screw_lead_m", drive.screw_lead_m},
-                        {"drive.torque_Nm", drive.torque_Nm}, {"drive.stall_torque_Nm", drive.stall_torque_Nm},
-                        {"drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s}})
-    if (std::string e = positive(key, v); !e.empty()) return e;
-  if (peak_samples_per_piece < 3)
-    return fmt::format("peak_samples_per_piece: must be >= 3, got {}", peak_samples_per_piece);
-  return run.validate();
-}
-
 integrators::IntegratorOptions RunnerOptions::calc_integrator_options() const {
   integrators::IntegratorOptions io;
   io.rtol = run.rtol;

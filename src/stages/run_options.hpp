@@ -1,6 +1,7 @@
 // Options of one run: the scene's [run] table (sim::RunOptions is this struct) and what the stage
-// loop needs besides. Plain structs with a default and a reason per field; validate() names the
-// first bad field and is called where the options are used (SceneOptions::validate, run_stages).
+// loop needs besides. Plain structs with a default and a reason per field. RunOptions::validate()
+// names the first bad field; it is part of SceneOptions::validate(), which the run's entry point
+// (sim::simulate) calls once: the stage loop does not check its options again.
 #pragma once
 #include <string>
 
@@ -30,8 +31,7 @@ struct RunOptions {
 struct RunnerOptions {
   model::DriveParams drive;                  // the scene's [drive] table
   RunOptions run;                            // the scene's [run] table
-  int peak_samples_per_piece = 9;            // velocity mode: bracketing grid per smooth piece
-  std::string validate() const;              // run.validate() and the drive's ranges
+  int peak_samples_per_piece = 9;            // velocity mode: bracketing grid per smooth piece (>= 3)
   // Integrator options of the run (tolerances; the step budget is set per phase).
   integrators::IntegratorOptions calc_integrator_options() const;
 };
