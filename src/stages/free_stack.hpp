@@ -59,8 +59,8 @@ class FreeStack {
 
   FreeStack(const model::MastParams& mast, bool contacts);
   // The phase model of ctx (ctx.kind, ctx.bay) on the current state; the open phase's watched
-  // events (FreePhaseA::set_watch): the hinge above the rail top, the minimum of f.
-  std::unique_ptr<PhaseModel> make_phase(const PhaseContext& ctx, bool watch_rail_top, bool watch_approach_min) const;
+  // event (FreePhaseA::set_watch_rail_top): the hinge above the rail top.
+  std::unique_ptr<PhaseModel> make_phase(const PhaseContext& ctx, bool watch_rail_top) const;
   // Rail function f of bay m's hinge at the current heights (m; > 0 before the rail).
   double calc_rail_function_m(int m) const;
   // Start state (q, q') of that phase, and its end state (q, q' concatenated) taken back.

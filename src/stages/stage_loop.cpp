@@ -173,7 +173,6 @@ void StageLoop::run_phase(const StageSpec& s, const PhaseSpec& ph) {
     if (!book(e.event)) return;
     switch (e.next) {
       case SegmentEnd::Next::next_segment: continue;
-      case SegmentEnd::Next::phase_end: return;
       case SegmentEnd::Next::failed: return fail_stop(e, s.bay);
       case SegmentEnd::Next::by_outcome: return fail_phase(o, s.bay);
     }

@@ -162,12 +162,12 @@ TEST_CASE("free stack stopping rules: the event functions of docs/model.md §2",
   const model::MastParams mast = sim::build_mast(s);
   stages::PhaseContext ctx{&mast, stages::PhaseKind::open, 4, 0.0, 1.1, 0.36, s.drive, 1.0, 0.0, 1.0};
   stages::FreePhaseA a(ctx, 1, 0.0);
-  a.set_watch(true, true);
-  REQUIRE(a.num_stop_events() == 5);
+  a.set_watch_rail_top(true);
+  REQUIRE(a.num_stop_events() == 4);
   const double l = 0.18, yr = mast.rail.axis_height_m(), eps = 1e-4 * l;
   // D for a hinge offset x: D = 2 sqrt(l^2 - x^2).
   auto D_of_x = [&](double x) { return 2.0 * std::sqrt(l * l - x * x); };
-  double g[5];
+  double g[4];
   const double qd[4] = {0, 0, 0, 0};
   {  // bay 2 (frames 1, 2) just inside / outside 1e-4 l of straight: singular
     const double q_in[4] = {0.0, D_of_x(0.9 * eps), D_of_x(0.9 * eps) + 0.05, D_of_x(0.9 * eps) + 0.1};
@@ -185,17 +185,30 @@ TEST_CASE("free stack stopping rules: the event functions of docs/model.md §2",
     CHECK(g[stages::FreePhaseA::past_miss_height] == Approx(0.3 + D_of_x(0.5 * eps) - (yr + 3 * l)).epsilon(1e-14));
     CHECK(g[stages::FreePhaseA::above_rail_top] == Approx(0.5 * (0.6 + D_of_x(0.5 * eps)) - yr).epsilon(1e-14));
   }
-  {  // rail_approach_min is f' along the motion: central difference of f (error O(h^2) ~ 1e-10)
+  {  // touches (phase.hpp): the rail, h = -f with rate -f', and bays 1..4, h = 1e-4 l - x_i with a
+     // rate of the sign of dh/dt; f' and x_i' by central differences along the motion (O(h^2) ~ 1e-10)
     const double q[4] = {0.0, 0.01, 0.05, 0.2}, v[4] = {0.0, 0.02, 0.07, 0.1};
-    a.calc_stop_events(q, v, g);
-    const double h = 1e-5;
+    REQUIRE(a.num_touches() == 5);
+    double h[5], rate[5];
+    a.calc_touches(q, v, h, rate);
+    const double dt = 1e-5;
     double qp[4], qm[4];
-    for (int k = 0; k < 4; ++k) { qp[k] = q[k] + h * v[k]; qm[k] = q[k] - h * v[k]; }
-    const double fd = (a.calc_rail_function_m(qp) - a.calc_rail_function_m(qm)) / (2 * h);
-    CHECK(g[stages::FreePhaseA::rail_approach_min] == Approx(fd).epsilon(1e-7));
-    a.set_watch(false, false);  // not watched: never rises
+    for (int k = 0; k < 4; ++k) { qp[k] = q[k] + dt * v[k]; qm[k] = q[k] - dt * v[k]; }
+    const double fd = (a.calc_rail_function_m(qp) - a.calc_rail_function_m(qm)) / (2 * dt);
+    CHECK(h[0] == Approx(-a.calc_rail_function_m(q)).epsilon(1e-15));
+    CHECK(rate[0] == Approx(-fd).epsilon(1e-7));
+    CHECK(a.find_touch_event(0) == -1);  // the rail: the end event (entry)
+    auto x_of = [&](const double* y, int i) { return 0.5 * std::sqrt(4 * l * l - (y[i] - y[i - 1]) * (y[i] - y[i - 1])); };
+    const double y[5] = {0.0, q[0], q[1], q[2], q[3]}, yp[5] = {0.0, qp[0], qp[1], qp[2], qp[3]}, ym[5] = {0.0, qm[0], qm[1], qm[2], qm[3]};
+    for (int i = 1; i <= 4; ++i) {
+      INFO("bay " << i);
+      CHECK(h[i] == Approx(eps - x_of(y, i)).epsilon(1e-14));
+      const double dh = -(x_of(yp, i) - x_of(ym, i)) / (2 * dt);
+      CHECK((rate[i] > 0.0) == (dh > 0.0));
+      CHECK(a.find_touch_event(i) == (i == 4 ? stages::FreePhaseA::deploying_straight : stages::FreePhaseA::singular_bay));
+    }
+    a.set_watch_rail_top(false);  // not watched: never rises
     a.calc_stop_events(q, v, g);
-    CHECK(g[stages::FreePhaseA::rail_approach_min] == -1.0);
     CHECK(g[stages::FreePhaseA::above_rail_top] == -1.0);
   }
 }
