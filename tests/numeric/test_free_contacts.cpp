@@ -250,6 +250,9 @@ TEST_CASE("free retraction: a one-bay free stack retracts as the held stack (oth
     CHECK(bf.latch_energy_J == Approx(bh.latch_energy_J).epsilon(1e-7).margin(1e-15));
     CHECK(bf.entry_energy_loss_J == Approx(bh.entry_energy_loss_J).epsilon(1e-7));
     CHECK(bf.landing_impulse_Ns == Approx(bh.landing_impulse_Ns).epsilon(1e-7));
+    // the rail's impulse at the unlock: the n-frame impulse solve against the two-frame law
+    REQUIRE(std::isfinite(bh.unlock_impulse_Ns));
+    CHECK(bf.unlock_impulse_Ns == Approx(bh.unlock_impulse_Ns).epsilon(1e-9));
     CHECK(fr.drive_work_J == Approx(held.drive_work_J).epsilon(1e-7));
     CHECK(fr.energy_lost_J == Approx(held.energy_lost_J).epsilon(1e-7));
     CHECK(fr.peak_drive_force_N == Approx(held.peak_drive_force_N).epsilon(1e-6));
@@ -307,6 +310,14 @@ TEST_CASE("free retraction: energy ledger at tight tolerance, contacts on and of
       const double scale = std::abs(r.drive_work_J) + r.energy_lost_J + std::abs(r.potential_energy_start_J - r.potential_energy_end_J);
       CHECK(r.energy_lost_J > 1e-3 * scale);  // impacts matter: not vacuous
       CHECK(std::abs(r.energy_residual_J) < 1e-8 * scale);
+      // Every bay unlocks: a moving mast with a rail impulse; the first from rest (none in torque
+      // and motor modes, where the drive starts the mast through the rail without an impact).
+      for (const auto& b : r.bays) {
+        INFO("bay " << b.bay);
+        REQUIRE(std::isfinite(b.unlock_impulse_Ns));
+        if (b.bay > 1 || mode == model::DriveMode::velocity) CHECK(b.unlock_impulse_Ns > 0);
+        else CHECK(b.unlock_impulse_Ns == 0);
+      }
       if (contacts) {
         CHECK(r.contact_landings > 0);
         CHECK(r.min_bay_opening_m > -2e-9 * 0.18);  // never through each other
