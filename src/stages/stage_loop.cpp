@@ -288,7 +288,8 @@ void StageLoop::finish() {
 // An `ok` run promises finite numbers and an energy balance within its tolerance (energy.hpp).
 void StageLoop::check_accuracy() {
   if (failed_) return;
-  std::string why = calc_accuracy_failure(r_, opts_.run.rtol, opts_.run.atol, mast_.bay(1).strut_length_m);
+  const bool contacts = !stages_.empty() && stages_.front().contacts;
+  std::string why = calc_accuracy_failure(r_, opts_.run.rtol, opts_.run.atol, mast_.bay(1).strut_length_m, contacts);
   if (!why.empty()) fail(RunStatus::inaccurate, std::move(why));
 }
 
