@@ -125,7 +125,7 @@ StackImpact FreeStack::apply_start_kick(const StageSpec& s, double u) {
   Eigen::VectorXd v;
   calc_cluster_system(s, PhaseKind::open, lo, sys, v);
   TridiagonalWork w;
-  StackImpact k = calc_stack_start_kick(sys.diag, sys.sub, u, w);
+  StackImpact k = s.start_kick ? calc_stack_start_kick(sys.diag, sys.sub, u, w) : calc_stack_start_rest(sys.diag, u);
   if (k.ok) add_cluster_velocities(make_layout(PhaseKind::open, s.bay, lo), lo, k.dv);
   return k;
 }

@@ -68,7 +68,8 @@ class FreeStack {
   // Start state (q, q') of that phase, and its end state (q, q' concatenated) taken back.
   void get_start(const PhaseContext& ctx, std::vector<double>& q, std::vector<double>& qdot) const;
   void set_end(const PhaseContext& ctx, const std::vector<double>& end_state);
-  // Velocity mode, t = 0: frames 1..m jump from rest with the driven frame at speed u.
+  // Velocity mode, t = 0: frames 1..m jump from rest with the driven frame at speed u (the kick),
+  // or the driven frame alone (s.start_kick false: the paper's literal start).
   model::StackImpact apply_start_kick(const StageSpec& s, double u);
   // End of phase A of bay m: the plastic rail entry of all moving frames.
   FreeRailEntry apply_rail_entry(const StageSpec& s, bool drive_holds_speed);

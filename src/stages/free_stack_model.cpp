@@ -42,7 +42,8 @@ StackEvent FreeStackModel::start_stage(const StageSpec& s, bool first_stage) {
     return e;
   }
   if (s.start != StageStart::from_rest_or_kick || !drive_holds_speed_) return e;
-  // Impulsive start (docs/model.md §2 "free"): the free frames take the momentum-consistent kick.
+  // Impulsive start (docs/model.md §2 "free"): the free frames take the momentum-consistent kick,
+  // or stay at rest (stack.start = "rest").
   const model::StackImpact k = stack_.apply_start_kick(s, u);
   if (!k.ok) e.failure = "singular configuration: the stowed stack's mass matrix is not positive definite";
   if (!k.ok) return e;

@@ -212,3 +212,44 @@ TEST_CASE("free stack stopping rules: the event functions of docs/model.md §2",
     CHECK(g[stages::FreePhaseA::above_rail_top] == -1.0);
   }
 }
+
+TEST_CASE("stack.start: the free frames at rest or kicked at the impulsive start", "[numeric][free]") {
+  // Velocity drive, 3 free bays, contacts off (the paper's literal model). "rest": the driven
+  // frame 3 jumps to v alone; its impulse is the driven row of the stowed mass matrix times v,
+  // M_33 = 2 G(0) + 15/8 m_s + m_f + m_tip (docs/model.md §3; G(0) = 3 J_c / (4 l_s^2)), and the
+  // frames below start at rest. Frame 2 then has no acceleration either at t = 0+ (its row of
+  // M y'' = r: y_3'' = 0, G'(0) = 0, slack diagonals), so it leaves the stack as t^3: its height at
+  // 2h is 8 times that at h. "kick": M dv = e_3 P moves frame 2 at once (height ~ t: a ratio of 2),
+  // with a smaller impulse P = v / (M^-1)_33 <= M_33 v. Both ramps are lossless: the ledger closes.
+  for (const bool rest : {true, false}) {
+    INFO((rest ? "rest" : "kick"));
+    sim::SceneOptions s;
+    s.mast.n_bays = 3;
+    s.mast.diagonal_free_length_m = 0.48;
+    s.stack.mode = sim::StackMode::free;
+    s.stack.start = rest ? sim::StackStart::rest : sim::StackStart::kick;
+    s.run.rtol = 1e-10;
+    s.run.atol = 1e-12;
+    s.run.output_step_s = 1e-4;
+    REQUIRE(s.validate().empty());
+    const sim::RunResult r = sim::simulate(s);
+    const double ls = 0.18, ms = 0.1, Jc = ms * ls * ls / 12.0, G0 = 3.0 * Jc / (4.0 * ls * ls);
+    const double M33 = 2.0 * G0 + 15.0 / 8.0 * ms + 0.5 + (6.0 * ms + 0.5);
+    if (rest) CHECK(r.start_drive_impulse_Ns == Approx(M33 * 0.1).epsilon(1e-14));
+    else CHECK(r.start_drive_impulse_Ns < M33 * 0.1 * (1.0 - 1e-4));
+    const auto& h = r.history;
+    const std::size_t frames = 4;  // frames 0..3 per row
+    REQUIRE(h.t_s.size() > 3);
+    REQUIRE(h.t_s[1] == Approx(1e-4));
+    const double y1 = h.frame_height_m[1 * frames + 2], y2 = h.frame_height_m[2 * frames + 2];
+    CHECK(std::abs(y2 / y1) == Approx(rest ? 8.0 : 2.0).epsilon(0.01));  // O(h) corrections: h = 1e-4 s
+    CHECK(std::abs(r.energy_residual_J) < 1e-7 * r.drive_work_J);
+    // The case: the literal start changes the outcome of this mast (kicked: every bay deploys;
+    // at rest the lower frames lag and the diagonals, taut from D = 0.27 m, pull frame 2 past bay 3's rail).
+    CHECK(r.status == (rest ? sim::RunStatus::rail_miss : sim::RunStatus::ok));
+  }
+  // The held stack holds its frames anyway: "rest" there is refused, naming the key.
+  sim::SceneOptions held;
+  held.stack.start = sim::StackStart::rest;
+  CHECK(held.validate().rfind("stack.start:", 0) == 0);
+}
