@@ -115,6 +115,8 @@ def fig4(plt, run, bay):
     ax.set_xlim(*xlim)
     ax.set_ylim(*ylim)
     ax.set_aspect("equal", adjustable="box")
+    from matplotlib.ticker import MaxNLocator
+    ax.xaxis.set_major_locator(MaxNLocator(5))   # the narrow axis: its labels would touch
     ax.set_xlabel(f"hinge radial offset x ({u['hinge_x_m']})")
     ax.set_ylabel(f"hinge height y ({u['hinge_y_m']})")
     ax.grid(True, alpha=0.3)

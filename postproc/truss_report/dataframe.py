@@ -1,7 +1,7 @@
 """truss_report.dataframe: a campaign file as a pandas DataFrame, and the run table as CSV.
 
     from truss_report import read_campaign
-    df = read_campaign("out/main/table1_dispersed.h5")
+    df = read_campaign("out/table1_dispersed/table1_dispersed.h5")
     df[df.status == "stall"]
     df.attrs["units"]["peak_drive_force_N"]      # "N"
 

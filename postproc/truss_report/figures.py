@@ -9,14 +9,14 @@ def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidenc
     """x sorted, in the display unit u (est, cis and nominal too)."""
     n = len(x)
     unit = f" ({u})" if u != "1" else ""
-    fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(15.0, 4.6))
+    # Histogram and exceedance probability (1 - ECDF, log scale: the tail that the design
+    # percentiles sit in; the ECDF itself adds nothing the two do not show).
+    fig, (a1, a3) = plt.subplots(1, 2, figsize=(13.0, 4.6))
     edges = np.histogram_bin_edges(x, bins="auto")
     if len(edges) > 81:
         edges = np.linspace(x[0], x[-1], 81)
     a1.hist(x, bins=edges, color="C0", alpha=0.8)
     a1.set_ylabel("runs")
-    a2.step(x, np.arange(1, n + 1) / n, where="post", color="C0")
-    a2.set_ylabel("empirical CDF")
     surv = 1.0 - np.arange(1, n + 1) / n
     a3.step(x[:-1], surv[:-1], where="post", color="C0")
     a3.set_yscale("log")
@@ -27,7 +27,6 @@ def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidenc
         style = dict(color=colors[name], lw=1.1, ls="--")
         a1.axvline(est[name], label=f"{lab} = {fmt(est[name])}{' ' + u if u != '1' else ''}",
                    **style)
-        a2.axvline(est[name], **style)
         # The bounds as a segment (it need not contain the estimate for very small n); a bound
         # the sample cannot give is drawn to the sample's extreme.
         ci, level = cis[name], 1.0 - q / 100.0
@@ -38,11 +37,11 @@ def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidenc
                 label=f"{lab}, {confidence * 100:g} % bounds" + ("" if np.isfinite(ci.lo) and
                                                           np.isfinite(ci.hi) else " (n too small)"))
     if np.isfinite(nominal):
-        for ax in (a1, a2, a3):
+        for ax in (a1, a3):
             ax.axvline(nominal, color="k", lw=1.4, ls="-",
                        label=f"nominal = {fmt(nominal)}{' ' + u if u != '1' else ''}"
                        if ax is a1 else None)
-    for ax in (a1, a2, a3):
+    for ax in (a1, a3):
         ax.set_xlabel(title + unit)
         ax.grid(True, alpha=0.3)
     # Keys outside the data: the histogram's to its right half is often empty, but not always.

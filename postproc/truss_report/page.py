@@ -1,5 +1,6 @@
 """truss_report.page: see the package docstring (postproc/truss_report/__init__.py)."""
 import datetime
+import gc
 import html
 import os
 import sys
@@ -83,6 +84,7 @@ class Page:
             self._reap(self.children.pop(0))
         sys.stdout.flush()
         sys.stderr.flush()
+        gc.freeze()        # the child's collector leaves the parent's objects (and pages) alone
         pid = os.fork()
         if pid == 0:       # child: draw, encode, leave without Python's exit handlers
             code = 0

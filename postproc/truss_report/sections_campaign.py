@@ -211,7 +211,7 @@ def section_loads(page, c, confidence=CONFIDENCE):
 
 
 def output_block(page, c, key, word, comparison, confidence):
-    """Histogram, ECDF, exceedance and tables of one output (its /stats compared into
+    """Histogram, exceedance probability and tables of one output (its /stats compared into
     `comparison`)."""
     x = np.sort(c.outputs[key][c.ok & np.isfinite(c.outputs[key])])
     mine = column_stats(x)
@@ -236,7 +236,7 @@ def output_block(page, c, key, word, comparison, confidence):
              f"<p>{num(f'{key}.count', len(x), tag='span')} ok runs with a finite value "
              f"(of {n_ok} ok runs and {c.n} runs).</p>",
              page.figure(fig, f"dist_{key}.png",
-                         f"{word}: histogram, empirical CDF and exceedance probability "
+                         f"{word}: histogram and exceedance probability "
                          f"(1 − ECDF, log scale) with P50, P95, P99, P99.865 and their one-sided "
                          f"{confidence * 100:g} % bounds")]
     summary = [[num(f"{key}.{s}", mine[s], u, factor=f) for s in ("mean", "std", "min", "max")],

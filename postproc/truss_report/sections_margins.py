@@ -4,7 +4,8 @@ from dataclasses import dataclass
 import numpy as np
 
 import run_figures as rf
-from .constants import AGREE_RTOL, MAX_HISTORY_FIGURES, OUTPUTS, TORNADO_TOP, TORQUE_RTOL
+from .constants import (AGREE_RTOL, MAX_HISTORY_FIGURES, OUTPUTS, TORNADO_TOP, TORQUE_RTOL,
+                        output_label)
 from .figures import fig_motor, fig_sobol, fig_tornado
 from .design import readable_unit
 from .page import esc, fmt, num, table
@@ -179,11 +180,12 @@ def rank_correlations(c):
     (the tornado charts and the scatter plots of the top inputs read the same table)."""
     if getattr(c, "rank_correlations", None) is None:
         cols = input_columns(c)
-        c.rank_correlations = {}
+        c.rank_correlations, ranks = {}, {}
         for key in OUTPUTS:
             y = np.where(c.ok, c.outputs[key], np.nan)
             c.rank_correlations[key] = dict(zip((col.label for col in cols),
-                                                spearman_table([col.values for col in cols], y)))
+                                                spearman_table([col.values for col in cols], y,
+                                                               ranks)))
     return c.rank_correlations
 
 
@@ -224,7 +226,7 @@ def section_sensitivity(page, c):
                         "correlation defined (no finite ok value, or a constant output).</p></div>")
             continue
         n_y = int(np.sum(c.ok & np.isfinite(c.outputs[key])))
-        fig = fig_tornado(page.plt, ranked, aggregate, f"{key} (n = {n_y})",
+        fig = fig_tornado(page.plt, ranked, aggregate, f"{output_label(key, c.attrs['direction'])} (n = {n_y})",
                           1.96 / np.sqrt(max(n_y - 1, 1)))
         detail = table(["input", "ρ", "runs"],
                        [[f"<code>{esc(lab)}</code>", num(f"spearman.{key}.{lab}", r, digits=3),

@@ -85,23 +85,32 @@ def spearman(x, y):
     return float(spearmanr(x[m], y[m])[0]), n
 
 
-def spearman_table(columns, y):
+def spearman_table(columns, y, ranks_cache=None):
     """[(rho, n)] of each input column with y, equal to [spearman(x, y) for x in columns] up to
     rounding: y is ranked once, and the columns that are finite wherever y is are ranked together
     and correlated with it in one matrix product (Pearson's r of the ranks); the others (NaN
-    inside y's runs: bays beyond a run's bay count) go through spearman() one by one."""
+    inside y's runs: bays beyond a run's bay count) go through spearman() one by one.
+    ranks_cache (a dict): the columns' centred ranks, kept per set of runs, for the next output
+    finite in the same runs (usually every output: the ok runs)."""
     from scipy.stats import rankdata
     m = np.isfinite(y)
     n = int(m.sum())
     res = [(float("nan"), n)] * len(columns)
     if not columns or n < 3 or np.ptp(y[m]) == 0:
         return [spearman(x, y) for x in columns]
-    X = np.column_stack([x[m] for x in columns])
-    full = np.all(np.isfinite(X), axis=0)
-    varies = full & (np.ptp(np.where(full, X, 0.0), axis=0) > 0)
-    if np.any(varies):
-        rx = rankdata(X[:, varies], axis=0)
-        rx -= rx.mean(axis=0)
+    key = m.tobytes()
+    if ranks_cache is None or key not in ranks_cache:
+        X = np.column_stack([x[m] for x in columns])
+        full = np.all(np.isfinite(X), axis=0)
+        varies = full & (np.ptp(np.where(full, X, 0.0), axis=0) > 0)
+        rx = rankdata(X[:, varies], axis=0) if np.any(varies) else None
+        if rx is not None:
+            rx -= rx.mean(axis=0)
+        if ranks_cache is not None:
+            ranks_cache[key] = (full, varies, rx)
+    else:
+        full, varies, rx = ranks_cache[key]
+    if rx is not None:
         ry = rankdata(y[m])
         ry -= ry.mean()
         rho = (ry @ rx) / np.sqrt((rx * rx).sum(axis=0) * (ry @ ry))
