@@ -112,10 +112,10 @@ bool print_campaign_verdict(std::FILE* out, const StatusCounts& counts, const st
   const std::int64_t invalid = counts[static_cast<std::size_t>(sim::RunStatus::invalid_input)];
   if (invalid == 0) return true;
   const bool most = 2 * invalid > total;
-  fmt::print(out, "[truss-campaign] {}: {} of {} runs are invalid input: the dispersions give scenes the model refuses{}\n"
-             "[truss-campaign]   e.g. {}\n",
-             most ? "error" : "warning", invalid, total, most ? "; the results file is written, but its statistics "
-                                                                "stand on the few other runs" : "", example);
+  fmt::print(out, "[truss-campaign] {}: {} of {} runs are invalid input: the dispersions give scenes the model refuses{}\n",
+             most ? "error" : "warning", invalid, total,
+             most ? "; the results file is written, but its statistics stand on the few other runs" : "");
+  if (!example.empty()) fmt::print(out, "[truss-campaign]   e.g. {}\n", example);
   if (most)
     fmt::print(out, "[truss-campaign]   check the [[dispersion]] entries (apply = \"relative\" takes a fraction: std = "
                     "0.05 is 5 %) and run again\n");
