@@ -308,30 +308,25 @@ void DeploymentRun::handleLatch(State& s, bool& terminate) {
   observe(s);
 }
 
-class RailEntryEvent : public TriggeredEventHandler {
+// The two stage events, each a witness falling through zero, localized to 1e-3 accuracy x timescale.
+class StageEvent : public TriggeredEventHandler {
  public:
-  explicit RailEntryEvent(DeploymentRun* run) : TriggeredEventHandler(Stage::Position), run_(run) {
+  enum class Kind { rail_entry, latch };
+  StageEvent(DeploymentRun* run, Kind kind) : TriggeredEventHandler(Stage::Position), run_(run), kind_(kind) {
     getTriggerInfo().setTriggerOnRisingSignTransition(false);
     getTriggerInfo().setRequiredLocalizationTimeWindow(1e-3);
   }
-  Real getValue(const State& s) const override { return run_->calcRailWitness(s); }
-  void handleEvent(State& s, Real, bool&) const override { run_->handleRailEntry(s); }
-
- private:
-  DeploymentRun* run_;
-};
-
-class LatchEvent : public TriggeredEventHandler {
- public:
-  explicit LatchEvent(DeploymentRun* run) : TriggeredEventHandler(Stage::Position), run_(run) {
-    getTriggerInfo().setTriggerOnRisingSignTransition(false);
-    getTriggerInfo().setRequiredLocalizationTimeWindow(1e-3);
+  Real getValue(const State& s) const override {
+    return kind_ == Kind::rail_entry ? run_->calcRailWitness(s) : run_->calcLatchWitness(s);
   }
-  Real getValue(const State& s) const override { return run_->calcLatchWitness(s); }
-  void handleEvent(State& s, Real, bool& terminate) const override { run_->handleLatch(s, terminate); }
+  void handleEvent(State& s, Real, bool& terminate) const override {
+    if (kind_ == Kind::rail_entry) run_->handleRailEntry(s);
+    else run_->handleLatch(s, terminate);
+  }
 
  private:
   DeploymentRun* run_;
+  Kind kind_;
 };
 
 }  // namespace
@@ -341,8 +336,8 @@ RunSummary run_deployment(const MastScene& scene, const RunOptions& options) {
   const std::clock_t cpu0 = std::clock();
   DeploymentRun run(scene, options);
   MultibodySystem& system = run.updMast().updSystem();
-  system.addEventHandler(new RailEntryEvent(&run));
-  system.addEventHandler(new LatchEvent(&run));
+  system.addEventHandler(new StageEvent(&run, StageEvent::Kind::rail_entry));
+  system.addEventHandler(new StageEvent(&run, StageEvent::Kind::latch));
   State start = run.makeStartState();
   std::unique_ptr<Integrator> integ = make_integrator(options.integrator, system);
   const double accuracy = options.accuracy > 0 ? options.accuracy : scene.rtol;
