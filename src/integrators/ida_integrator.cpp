@@ -11,10 +11,10 @@
 #include <ida/ida.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
+#include <numeric>
+
 #include <sunlinsol/sunlinsol_band.h>
-#include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_band.h>
-#include <sunmatrix/sunmatrix_dense.h>
 
 #include "integrators/sundials_checks.hpp"
 
@@ -23,21 +23,18 @@ namespace truss::integrators {
 namespace {
 
 // Where each unknown w = (y, z) of the system sits in IDA's vectors: position p holds w[order[p]]
-// (the residual rows likewise). Empty order: the system's own order.
+// (the residual rows likewise).
 struct Layout {
   std::vector<int> order;
   mutable std::vector<double> w, wp, r;  // the system's order (scratch of the callbacks)
-  bool permuted() const { return !order.empty(); }
-  // IDA's vector -> the system's order (a pointer to v itself when not permuted).
+  // IDA's vector -> the system's order.
   const double* gather(N_Vector v, std::vector<double>& out) const {
     const double* p = N_VGetArrayPointer(v);
-    if (!permuted()) return p;
     for (std::size_t k = 0; k < order.size(); ++k) out[static_cast<std::size_t>(order[k])] = p[k];
     return out.data();
   }
   void scatter(const double* in, N_Vector v) const {
     double* p = N_VGetArrayPointer(v);
-    if (!permuted()) { std::copy(in, in + N_VGetLength(v), p); return; }
     for (std::size_t k = 0; k < order.size(); ++k) p[k] = in[order[k]];
   }
 };
@@ -57,7 +54,7 @@ int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
   auto* d = static_cast<UserData*>(ud);
   const Layout& L = d->layout;
   const double* w = L.gather(yy, L.w);
-  double* r = L.permuted() ? L.r.data() : N_VGetArrayPointer(rr);
+  double* r = L.r.data();
   bool ok = false;
   try {
     ok = d->dae->calc_residual(t, w, L.gather(yp, L.wp), w + d->n_ode, r);
@@ -66,7 +63,7 @@ int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
     return -1;  // unrecoverable: IDA returns IDA_RES_FAIL, the exception is rethrown
   }
   ++d->res_evals;
-  if (L.permuted()) L.scatter(r, rr);
+  L.scatter(r, rr);
   const double* rp = N_VGetArrayPointer(rr);
   for (sunindextype i = 0; ok && i < N_VGetLength(rr); ++i) ok = std::isfinite(rp[i]);
   if (ok) return 0;
@@ -122,7 +119,7 @@ struct IdaIntegrator::Solver {
   SUNMatrix A = nullptr;
   SUNLinearSolver ls = nullptr;
   int n = -1, n_ode = -1;  // size of IDA's vectors and of y; -1: none
-  int lower = -1, upper = -1;  // half-bandwidths of the banded solver; -1: dense
+  int lower = -1, upper = -1;  // half-bandwidths of the banded solver
   bool guessed = false;    // the last start used the system's guess of y' and z
   UserData ud;
 
@@ -143,8 +140,8 @@ struct IdaIntegrator::Solver {
     n = n_ode = lower = upper = -1;
   }
 
-  // The solver for a system of n_new unknowns (n_ode_new of them y): banded with half-bandwidths
-  // lo, up when lo >= 0, else dense.
+  // The solver for a system of n_new unknowns (n_ode_new of them y), banded with half-bandwidths
+  // lo, up.
   bool create(int n_new, int n_ode_new, int lo, int up, double t0, IntegratorSummary& sum) {
     free_problem();
     if (!ctx && !check_sundials(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", sum)) return false;
@@ -158,17 +155,10 @@ struct IdaIntegrator::Solver {
     if (!check_flag(IDASetErrHandlerFn(mem, sunflags::silent, nullptr), "IDASetErrHandlerFn", sum)) return false;
     if (!check_flag(IDAInit(mem, res_fn, t0, yy, yp), "IDAInit", sum)) return false;
     if (!check_flag(IDASetUserData(mem, &ud), "IDASetUserData", sum)) return false;
-    if (lo >= 0) {
-      A = SUNBandMatrix(n_new, up, lo, ctx);
-      if (!check_null(A, "SUNBandMatrix", sum)) return false;
-      ls = SUNLinSol_Band(yy, A, ctx);
-      if (!check_null(ls, "SUNLinSol_Band", sum)) return false;
-    } else {
-      A = SUNDenseMatrix(n_new, n_new, ctx);
-      if (!check_null(A, "SUNDenseMatrix", sum)) return false;
-      ls = SUNLinSol_Dense(yy, A, ctx);
-      if (!check_null(ls, "SUNLinSol_Dense", sum)) return false;
-    }
+    A = SUNBandMatrix(n_new, up, lo, ctx);
+    if (!check_null(A, "SUNBandMatrix", sum)) return false;
+    ls = SUNLinSol_Band(yy, A, ctx);
+    if (!check_null(ls, "SUNLinSol_Band", sum)) return false;
     if (!check_flag(IDASetLinearSolver(mem, ls, A), "IDASetLinearSolver", sum)) return false;
     if (!check_flag(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", sum)) return false;
     // The residual is linear in the unknowns of IDACalcIC (y' and z at fixed y): full Newton steps
@@ -182,22 +172,20 @@ struct IdaIntegrator::Solver {
     return true;
   }
 
-  // The layout of dae's unknowns in IDA's vectors (ud.layout); lo, up: its half-bandwidths, -1
-  // when dense.
+  // The layout of dae's unknowns in IDA's vectors (ud.layout) and its half-bandwidths lo, up; a
+  // form without a band order keeps its own order with a full band.
   void set_layout(const DaeForm& dae, int n_sys, int& lo, int& up) {
     Layout& L = ud.layout;
-    lo = up = -1;
     if (!dae.find_band_order(L.order, lo, up) || static_cast<int>(L.order.size()) != n_sys) {
-      L.order.clear();
-      lo = up = -1;
-    } else {
-      lo = std::min(lo, n_sys - 1);
-      up = std::min(up, n_sys - 1);
+      L.order.resize(static_cast<std::size_t>(n_sys));
+      std::iota(L.order.begin(), L.order.end(), 0);
+      lo = up = n_sys - 1;
     }
-    const std::size_t size = L.permuted() ? static_cast<std::size_t>(n_sys) : 0;
-    L.w.assign(size, 0.0);
-    L.wp.assign(size, 0.0);
-    L.r.assign(size, 0.0);
+    lo = std::min(lo, n_sys - 1);
+    up = std::min(up, n_sys - 1);
+    L.w.assign(static_cast<std::size_t>(n_sys), 0.0);
+    L.wp.assign(L.w.size(), 0.0);
+    L.r.assign(L.w.size(), 0.0);
   }
 
   // Restart IDA on sys from (t0, y0). calc_ic: consistent z and y' by IDACalcIC (else the system's
@@ -205,7 +193,7 @@ struct IdaIntegrator::Solver {
   bool prepare(OdeSystem& sys, DaeForm& dae, double t0, double t_end, const double* y0,
                const IntegratorOptions& o, IntegratorSummary& sum, bool calc_ic, int& ic_flag) {
     const int n_ode_sys = sys.size(), n_sys = n_ode_sys + dae.num_algebraic();
-    int lo = -1, up = -1;
+    int lo = 0, up = 0;
     set_layout(dae, n_sys, lo, up);
     if ((n_sys != n || n_ode_sys != n_ode || lo != lower || up != upper) && !create(n_sys, n_ode_sys, lo, up, t0, sum))
       return false;

@@ -14,8 +14,8 @@ namespace truss::integrators {
 //   cvode_adams  SUNDIALS CVODE, Adams-Moulton with fixed-point iteration (non-stiff)
 //   automatic    dopri54 until Hairer's stiffness test fires, then cvode for the rest of the run
 //   ida          SUNDIALS IDA (variable-order BDF on a residual F(t, y, y', z) = 0, banded direct
-//                linear solver in the order the DaeForm gives, else dense) on the system's
-//                DaeForm: the free stack's cross-check solver
+//                linear solver in the order the DaeForm gives) on the system's DaeForm: the free
+//                stack's cross-check solver
 enum class IntegratorKind { dopri54, cvode, cvode_adams, automatic, ida };
 inline const char* to_string(IntegratorKind k) {
   constexpr const char* names[] = {"dopri54", "cvode", "cvode_adams", "auto", "ida"};
@@ -35,7 +35,7 @@ class DaeForm {
   virtual bool calc_initial_guess(double /*t*/, const double* /*y*/, double* /*yp*/, double* /*z*/) { return false; }
   // An order of the unknowns w = (y, z), and of the residual rows likewise, in which the Jacobian
   // dF/dw + c dF/dw' is banded: order[p] is the index in w of the unknown (and the row) at
-  // position p, lower and upper the half-bandwidths. false: no band (a dense solver).
+  // position p, lower and upper the half-bandwidths. false: no band (the full matrix).
   virtual bool find_band_order(std::vector<int>& /*order*/, int& /*lower*/, int& /*upper*/) const { return false; }
 };
 
