@@ -1,6 +1,7 @@
 #include "integrators/cvode_integrator.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -22,6 +23,9 @@ namespace truss::integrators {
 
 namespace {
 
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
 // What CVODE's callbacks need; the system changes with every integrate() call.
 struct UserData {
   void* mem = nullptr;       // CVODE's memory (the Jacobian reads the step size and error weights)
@@ -30,10 +34,24 @@ struct UserData {
   long rhs_evals = 0;
   long nonfinite_rhs = 0;    // evaluations that returned NaN or inf (CVODE retried smaller steps)
   std::exception_ptr error;  // thrown by the system inside a callback, rethrown after CVode returns
+  // The wall-time cap (StepObserver::deadline). A Newton-matrix set-up (the Jacobian's n
+  // right-hand sides and the dense LU, O(n^3): about 3 s at n = 4,000 here) is not started when the
+  // last one's duration would end past it.
+  Clock::time_point deadline = Clock::time_point::max();
+  Clock::time_point setup_start{};
+  bool setup_running = false;  // from jac_fn's start to the next right-hand side (after the LU)
+  double setup_s = 0.0;        // the last set-up's duration (s); 0 before the first
+  double setup_n = 0.0;        // ... at this system size: the prediction scales with n^3
+  bool deadline_hit = false;
 };
 
 int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
   auto* d = static_cast<UserData*>(ud);
+  if (d->setup_running) {  // the first right-hand side after a set-up: its Jacobian and LU are done
+    d->setup_s = seconds(Clock::now() - d->setup_start);
+    d->setup_n = static_cast<double>(N_VGetLength(y));
+    d->setup_running = false;
+  }
   try {
     d->sys->calc_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
   } catch (...) {
@@ -57,6 +75,15 @@ int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
 // region where the equations hold, and without this every Jacobian failed at any step size.
 int jac_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector ftemp, N_Vector, N_Vector) {
   auto* d = static_cast<UserData*>(ud);
+  const Clock::time_point now = Clock::now();
+  const double n_ratio = d->setup_n > 0 ? static_cast<double>(N_VGetLength(y)) / d->setup_n : 0.0;
+  const double predicted_s = d->setup_s * n_ratio * n_ratio * n_ratio;
+  if (d->deadline != Clock::time_point::max() &&
+      now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(predicted_s)) > d->deadline) {
+    d->deadline_hit = true;
+    return -1;  // unrecoverable: CVode returns CV_LSETUP_FAIL, reported as IntegratorStatus::deadline
+  }
+  d->setup_start = now;
   realtype h = 0.0;
   if (CVodeGetCurrentStep(d->mem, &h) < 0 || CVodeGetErrWeights(d->mem, d->ewt) < 0) return -1;
   const sunindextype n = N_VGetLength(y);
@@ -81,6 +108,7 @@ int jac_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector 
     yd[j] = yj;
     if (flag != 0) return flag;  // recoverable (1): CVODE cuts the step; an exception (-1): fatal
   }
+  d->setup_running = true;  // the LU follows; the next right-hand side ends the set-up's timing
   return 0;
 }
 
@@ -199,6 +227,8 @@ struct CvodeIntegrator::Solver {
     ud.rhs_evals = 0;
     ud.nonfinite_rhs = 0;
     ud.error = nullptr;
+    ud.deadline_hit = false;
+    ud.setup_running = false;
     double* p = N_VGetArrayPointer(y);
     for (int i = 0; i < n; ++i) p[i] = y0[i];
     // History, order, step counters and initial step choice start afresh.
@@ -249,6 +279,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
     solver_->method = method_;
   }
   Solver& cv = *solver_;
+  cv.ud.deadline = observer ? observer->deadline() : Clock::time_point::max();
   if (!cv.prepare(sys, t0, t_end, y0, opts_, sum)) {
     cv.free_problem();  // start from new SUNDIALS objects next time
     return sum;
@@ -293,6 +324,12 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
 
     sum.rhs_evals = cv.ud.rhs_evals;
     sum.t = t;
+    if (flag < 0 && cv.ud.deadline_hit) {
+      copy_state();
+      sum.status = IntegratorStatus::deadline;
+      sum.message = fmt::format("wall-clock deadline: the next Newton-matrix set-up (last {:.3g} s) would pass it", cv.ud.setup_s);
+      return failed();
+    }
     if (flag < 0) {
       copy_state();
       sum.status = flag == CV_TOO_MUCH_WORK ? IntegratorStatus::step_limit : IntegratorStatus::failure;

@@ -18,6 +18,7 @@ const char* to_string(IntegratorStatus s) {
     case IntegratorStatus::stopped_by_observer: return "stopped by observer";
     case IntegratorStatus::failure: return "failure";
     case IntegratorStatus::stiff: return "stiff";
+    case IntegratorStatus::deadline: return "wall-clock deadline";
   }
   return "?";
 }

@@ -2,6 +2,7 @@
 // Chrono's ChIntegrable and Boost.Odeint's system / stepper / observer split): a system gives
 // y' = f(t, y) and event functions; an observer sees every accepted step through its dense output.
 #pragma once
+#include <chrono>
 #include <limits>
 #include <string>
 #include <vector>
@@ -65,6 +66,11 @@ class StepObserver {
   virtual ~StepObserver() = default;
   // Called after every accepted step (truncated at an event). Return false to stop.
   virtual bool on_step(const DenseOutput& step) = 0;
+  // The wall-clock time by which the integration must have stopped (the run's wall-time cap;
+  // max(): none). The observer stops it after a step past it; an integrator whose single steps can
+  // take long (CVODE's dense Newton matrix, O(n^3) to factorize) also declines to start work it
+  // predicts would carry it past, and returns IntegratorStatus::deadline.
+  virtual std::chrono::steady_clock::time_point deadline() const { return std::chrono::steady_clock::time_point::max(); }
 };
 
 struct IntegratorOptions {
@@ -81,7 +87,7 @@ struct IntegratorOptions {
   std::string validate() const;   // empty or "field: reason"
 };
 
-enum class IntegratorStatus { reached_end, event, step_limit, stopped_by_observer, failure, stiff };
+enum class IntegratorStatus { reached_end, event, step_limit, stopped_by_observer, failure, stiff, deadline };
 const char* to_string(IntegratorStatus);
 
 struct IntegratorSummary {

@@ -155,6 +155,7 @@ class PhaseObserver final : public integrators::StepObserver {
   double touch_t_s = 0;
   std::vector<double> touch_state;   // (q, q', W) there
   void start(const double* q, const double* qdot) { touches_.start(q, qdot); }
+  std::chrono::steady_clock::time_point deadline() const override { return sinks_.deadline; }
   bool on_step(const integrators::DenseOutput& d) override {
     double have = NAN;  // the time whose state is in state_
     auto eval = [&](double t) {
@@ -265,7 +266,7 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
     out.stop_event = sum.event_index - ode.num_base_events();
   } else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 2) out.reason = PhaseEndReason::crept_to_rest;
   else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 1) out.reason = PhaseEndReason::stopped;
-  else if (obs.timed_out) out.reason = PhaseEndReason::wall_time;
+  else if (obs.timed_out || sum.status == integrators::IntegratorStatus::deadline) out.reason = PhaseEndReason::wall_time;
   else if (sum.status == integrators::IntegratorStatus::step_limit) out.reason = PhaseEndReason::step_limit;
   else if (sum.status == integrators::IntegratorStatus::reached_end) out.reason = PhaseEndReason::horizon;
   else out.reason = PhaseEndReason::failure;
