@@ -63,15 +63,6 @@ std::string quote(std::string_view s) {
   return r + "\"";
 }
 
-// A TOML float that reads back to exactly v.
-std::string toml_double(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  std::string s = fmt::format("{}", v);  // shortest round-trip representation
-  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
-  return s;
-}
-
 std::string describe(const toml::node& v) {
   switch (v.type()) {
     case toml::node_type::string: {
@@ -434,6 +425,14 @@ std::string read_input_file(const std::string& path, const char* what, std::size
 sim::SceneOptions parse_scene_file_with(const std::string& path, const std::vector<SceneSetting>& overrides,
                                         std::vector<std::string>* warnings) {
   return parse_scene(read_input_file(path, "scene file"), path, overrides, true, warnings);
+}
+
+std::string toml_double(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  std::string s = fmt::format("{}", v);  // shortest round-trip representation
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
 }
 
 std::vector<std::string> known_scene_keys() {

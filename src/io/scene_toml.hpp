@@ -65,6 +65,9 @@ sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
 // again gives the same options.
 std::string resolved_scene_toml(const sim::SceneOptions& scene);
 
+// A TOML float that reads back to exactly v ("12.0", "1e-05", "nan", "-inf").
+std::string toml_double(double v);
+
 // All known keys, "table.key", in the order resolved_scene_toml writes them.
 std::vector<std::string> known_scene_keys();
 
