@@ -168,15 +168,15 @@ pyb::dict many_settings(const Scene& base, const pyb::sequence& rows, int thread
   std::vector<std::vector<io::SceneSetting>> settings;
   settings.reserve(rows.size());
   for (const auto row : rows) {
-    auto s = base.settings;
+    std::vector<io::SceneSetting> s;
     for (auto [k, v] : pyb::dict(pyb::reinterpret_borrow<pyb::object>(row))) s.push_back({setting_text(pyb::str(k), v), {}});
     settings.push_back(std::move(s));
   }
-  const Scene b{base.text, base.source, {}, {}};
+  const Scene b = base;
   Outcome out(settings.size(), bays);
   const Failure f = run_parallel(settings.size(), threads, [&](std::size_t i) {
-    std::vector<std::string> warnings;
-    const sim::SceneOptions o = io::parse_scene_text_with(b.text, b.source, settings[i], &warnings);
+    std::vector<std::string> warnings;  // for the keys the row sets (the base's were given with it)
+    const sim::SceneOptions o = io::parse_scene_variant(b.options, b.text, b.source, b.settings, settings[i], &warnings);
     if (!warnings.empty()) out.warning[i] = warnings.front();
     out.store(i, run_one(o, b.source));
   });

@@ -63,12 +63,15 @@ def test_bad_setting(repo, truss_sim, key, value, typed):
     assert str(e.value) == cli_error(truss_sim, path, f"{key}={typed}")
 
 
-def test_bad_setting_in_simulate_many(repo, truss_sim):
+@pytest.mark.parametrize("key,value,typed", SETTINGS, ids=[s[0] + "=" + s[2] for s in SETTINGS])
+def test_bad_row_of_simulate_many(repo, truss_sim, key, value, typed):
+    """A batch's rows are variants of the base scene, checked without reading its file again; a
+    bad row's message is still the one truss-sim gives (with the file's lines of the keys involved)."""
     path = str(repo / "campaigns" / "scenes" / "table1.toml")
-    base = td.Scene.from_toml(path)
+    base = td.Scene.from_toml(path).with_(**{"mast.n_bays": 3})
     with pytest.raises(ValueError) as e:
-        td.simulate_many(base, {"rail.beta_deg": [20.0, 95.0, 96.0], "mast.n_bays": [3, 3, 3]}, threads=2)
-    assert str(e.value) == "simulate_many: run 1: " + cli_error(truss_sim, path, "rail.beta_deg=95.0", "mast.n_bays=3")
+        td.simulate_many(base, [{"rail.beta_deg": 20.0}, {key: value}, {"rail.beta_deg": 96.0}], threads=2)
+    assert str(e.value) == "simulate_many: run 1: " + cli_error(truss_sim, path, "mast.n_bays=3", f"{key}={typed}")
 
 
 def test_warnings_are_truss_sim_warnings(repo, truss_sim):
@@ -81,6 +84,13 @@ def test_warnings_are_truss_sim_warnings(repo, truss_sim):
         td.Scene.from_toml(path).with_(**sets)
     assert [str(x.message) for x in w] == err.splitlines() and len(w) == 1
     assert w[0].category is UserWarning
+    # A batch warns once, naming how many runs and the first one's warning.
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        td.simulate_many(td.Scene.from_toml(path).with_(**{"mast.n_bays": 3}),
+                         {"drive.torque_Nm": [0.01, 5.2, 6.0]}, bays=False)
+    assert [str(x.message) for x in w] == ["simulate_many: 2 of 3 runs set a key outside its typical range; run 1: "
+                                           + err.splitlines()[0]]
 
 
 def test_wrong_types():

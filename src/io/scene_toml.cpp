@@ -390,6 +390,26 @@ sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string
   return parse_scene(text, source_name, settings, true, warnings);
 }
 
+sim::SceneOptions parse_scene_variant(const sim::SceneOptions& base, std::string_view text, const std::string& source_name,
+                                      const std::vector<SceneSetting>& settings, const std::vector<SceneSetting>& more,
+                                      std::vector<std::string>* warnings) {
+  SceneOptions s = base;
+  std::vector<Diag> diags;
+  std::map<std::string, Origin> origins;
+  for (std::size_t i = 0; i < more.size(); ++i) apply_override(s, more[i], settings.size() + i, diags, origins);
+  if (diags.empty()) {
+    try {
+      check_scene(s, source_name, origins, warnings);
+      return s;
+    } catch (const InputError&) {
+      // worded below as the whole text gives it (a key of the file is named with its line there)
+    }
+  }
+  std::vector<SceneSetting> all = settings;
+  all.insert(all.end(), more.begin(), more.end());
+  return parse_scene(text, source_name, all, true);  // throws the InputError
+}
+
 sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
                                                const std::string& source_name,
                                                const std::vector<std::string>& overrides) {

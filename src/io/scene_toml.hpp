@@ -54,6 +54,14 @@ sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string
                                         const std::vector<SceneSetting>& settings,
                                         std::vector<std::string>* warnings = nullptr);
 
+// A variant of a scene that parse_scene_text_with(text, source_name, settings) gave as `base`: the
+// same options, checks and messages as parse_scene_text_with(text, source_name, settings + more),
+// at the cost of the `more` settings alone (the text is read again only to word an error, with the
+// lines its keys came from). Warnings: for the keys `more` sets. For batches of variants of one scene.
+sim::SceneOptions parse_scene_variant(const sim::SceneOptions& base, std::string_view text, const std::string& source_name,
+                                      const std::vector<SceneSetting>& settings, const std::vector<SceneSetting>& more,
+                                      std::vector<std::string>* warnings = nullptr);
+
 // As parse_scene_text but without SceneOptions::validate(): checks syntax, keys, types and
 // enumeration values only. For tools that change the options further and validate afterwards.
 sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
