@@ -1,0 +1,34 @@
+// Benchmark helper (not a test): the C++ cost of one run as truss-sim and the Python module make it
+// (sim::simulate(scene), the mast built inside the call), for bench/bench_python.py's side-by-side
+// ratios. Usage: bench_run_cost SCENE.toml RUNS [table.key=value ...]
+// Prints the mean wall time per run in seconds over RUNS runs (one more runs first, untimed).
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "io/scene_toml.hpp"
+#include "sim/simulate.hpp"
+
+int main(int argc, char** argv) {
+  if (argc < 3) {
+    std::fprintf(stderr, "usage: bench_run_cost SCENE.toml RUNS [table.key=value ...]\n");
+    return 2;
+  }
+  const std::vector<std::string> overrides(argv + 3, argv + argc);
+  truss::sim::SceneOptions scene;
+  try {
+    scene = truss::io::parse_scene_file(argv[1], overrides);
+  } catch (const truss::io::InputError& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 2;
+  }
+  const long runs = std::atol(argv[2]);
+  double sink = truss::sim::simulate(scene).deploy_time_s;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (long i = 0; i < runs; ++i) sink += truss::sim::simulate(scene).deploy_time_s;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("%.9e %g\n", s / static_cast<double>(runs), sink);
+  return 0;
+}
