@@ -20,9 +20,9 @@ namespace pyb = pybind11;
 // A parsed and validated scene: the TOML text it was read from, the name messages give it, the
 // settings applied on top (as truss-sim's --set), and the options they resolve to.
 struct Scene {
-  std::string text;                         // "" for Scene.table1()
-  std::string source;                       // the file path, or "Scene.table1()"
-  std::vector<io::SceneSetting> settings;   // "table.key=value", in order
+  std::string text;                        // "" for Scene.table1()
+  std::string source;                      // the file path, or "Scene.table1()"
+  std::vector<io::SceneSetting> settings;  // "table.key=value", in order
   sim::SceneOptions options;
 };
 

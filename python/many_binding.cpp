@@ -40,8 +40,9 @@ struct Outcome {
     status[i] = static_cast<std::int64_t>(r.status);
     const auto& table = io::run_result_fields();
     for (std::size_t k = 0; k < table.size(); ++k)
-      std::visit([&](auto& col) { col[i] = std::get<typename std::decay_t<decltype(col)>::value_type>(table[k].get(r)); },
-                 fields[k]);
+      std::visit(
+          [&](auto& col) { col[i] = std::get<typename std::decay_t<decltype(col)>::value_type>(table[k].get(r)); },
+          fields[k]);
     message[i] = std::move(r.message);
     if (!bays.empty()) bays[i] = std::move(r.bays);
   }
@@ -105,11 +106,15 @@ pyb::dict to_columns(Outcome& o) {
   d["message"] = pyb::cast(o.message);
   const auto& table = io::run_result_fields();
   for (std::size_t k = 0; k < table.size(); ++k)
-    std::visit([&](auto& col) {
-      using T = typename std::decay_t<decltype(col)>::value_type;
-      if constexpr (std::is_same_v<T, std::string>) d[table[k].name] = pyb::cast(col);
-      else d[table[k].name] = pyb::array_t<T>(static_cast<pyb::ssize_t>(col.size()), col.data());
-    }, o.fields[k]);
+    std::visit(
+        [&](auto& col) {
+          using T = typename std::decay_t<decltype(col)>::value_type;
+          if constexpr (std::is_same_v<T, std::string>)
+            d[table[k].name] = pyb::cast(col);
+          else
+            d[table[k].name] = pyb::array_t<T>(static_cast<pyb::ssize_t>(col.size()), col.data());
+        },
+        o.fields[k]);
   std::size_t max_bays = 0;
   for (const auto& b : o.bays) max_bays = std::max(max_bays, b.size());
   for (const auto& f : io::bay_result_fields()) {
@@ -117,7 +122,8 @@ pyb::dict to_columns(Outcome& o) {
     for (std::size_t j = 0; j < max_bays; ++j) {
       pyb::array_t<double> a(static_cast<pyb::ssize_t>(o.bays.size()));
       for (std::size_t i = 0; i < o.bays.size(); ++i)
-        a.mutable_at(i) = j < o.bays[i].size() ? std::get<double>(f.get(o.bays[i][j])) : std::numeric_limits<double>::quiet_NaN();
+        a.mutable_at(i) =
+            j < o.bays[i].size() ? std::get<double>(f.get(o.bays[i][j])) : std::numeric_limits<double>::quiet_NaN();
       d[pyb::str(fmt::format("{}[bay {}]", f.name, j + 1))] = a;
     }
   }
@@ -135,8 +141,8 @@ void finish(const Failure& f, const Outcome& o) {
   for (std::size_t i = o.warning.size(); i-- > 0;)
     if (!o.warning[i].empty()) ++warned, first = i;
   if (warned == 0) return;
-  const std::string w = fmt::format("simulate_many: {} of {} runs set a key outside its typical range; run {}: {}", warned,
-                                    o.warning.size(), first, o.warning[first]);
+  const std::string w = fmt::format("simulate_many: {} of {} runs set a key outside its typical range; run {}: {}",
+                                    warned, o.warning.size(), first, o.warning[first]);
   if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw pyb::error_already_set();
 }
 
@@ -157,9 +163,8 @@ pyb::dict many_scenes(const pyb::sequence& scenes, int threads, bool bays) {
     copies.push_back({{}, s.source, {}, s.options});
   }
   Outcome out(copies.size(), bays);
-  const Failure f = run_parallel(copies.size(), threads, [&](std::size_t i) {
-    out.store(i, run_one(copies[i].options, copies[i].source));
-  });
+  const Failure f = run_parallel(copies.size(), threads,
+                                 [&](std::size_t i) { out.store(i, run_one(copies[i].options, copies[i].source)); });
   finish(f, out);
   return to_columns(out);
 }
@@ -169,14 +174,16 @@ pyb::dict many_settings(const Scene& base, const pyb::sequence& rows, int thread
   settings.reserve(rows.size());
   for (const auto row : rows) {
     std::vector<io::SceneSetting> s;
-    for (auto [k, v] : pyb::dict(pyb::reinterpret_borrow<pyb::object>(row))) s.push_back({setting_text(pyb::str(k), v), {}});
+    for (auto [k, v] : pyb::dict(pyb::reinterpret_borrow<pyb::object>(row)))
+      s.push_back({setting_text(pyb::str(k), v), {}});
     settings.push_back(std::move(s));
   }
   const Scene b = base;
   Outcome out(settings.size(), bays);
   const Failure f = run_parallel(settings.size(), threads, [&](std::size_t i) {
     std::vector<std::string> warnings;  // for the keys the row sets (the base's were given with it)
-    const sim::SceneOptions o = io::parse_scene_variant(b.options, b.text, b.source, b.settings, settings[i], &warnings);
+    const sim::SceneOptions o =
+        io::parse_scene_variant(b.options, b.text, b.source, b.settings, settings[i], &warnings);
     if (!warnings.empty()) out.warning[i] = warnings.front();
     out.store(i, run_one(o, b.source));
   });

@@ -53,8 +53,10 @@ pyb::object history_dict(const Result& res) {
   const auto& h = res.run.history;
   pyb::dict d;
   for (const auto& f : io::history_fields()) {
-    if (f.get_double) d[f.name] = to_array(*f.get_double(h));
-    else d[f.name] = to_array(*f.get_int(h));
+    if (f.get_double)
+      d[f.name] = to_array(*f.get_double(h));
+    else
+      d[f.name] = to_array(*f.get_int(h));
   }
   if (h.n_frames > 0) {
     const auto rows = static_cast<pyb::ssize_t>(h.frame_height_m.size() / static_cast<std::size_t>(h.n_frames));
@@ -81,9 +83,9 @@ pyb::dict result_dict(const sim::RunResult& r) {
 }
 
 std::string result_repr(const sim::RunResult& r) {
-  return fmt::format("<Result {} {} {}: {}/{} bays, deploy_time_s={}, peak_drive_force_N={}{}>", sim::to_string(r.status),
-                     r.drive_mode, r.direction, r.bays_completed, r.n_bays, r.deploy_time_s, r.peak_drive_force_N,
-                     r.message.empty() ? "" : ", message=" + r.message);
+  return fmt::format("<Result {} {} {}: {}/{} bays, deploy_time_s={}, peak_drive_force_N={}{}>",
+                     sim::to_string(r.status), r.drive_mode, r.direction, r.bays_completed, r.n_bays, r.deploy_time_s,
+                     r.peak_drive_force_N, r.message.empty() ? "" : ", message=" + r.message);
 }
 
 Result simulate_scene(const Scene& scene, bool histories) {
@@ -119,11 +121,13 @@ pyb::object field_to_py(const io::FieldValue& v) {
 void bind_result(pyb::module_& m) {
   // Members named as the C++ enumerators (step_limit); str() is the name truss-sim --json, the HDF5
   // files and the DataFrames use ("step limit").
-  pyb::enum_<sim::RunStatus> status(m, "RunStatus", "How a run ended (ok, or the physical or numerical reason it stopped).");
+  pyb::enum_<sim::RunStatus> status(m, "RunStatus",
+                                    "How a run ended (ok, or the physical or numerical reason it stopped).");
   for (int i = 0; i < sim::kRunStatusCount; ++i) {
     const auto s = static_cast<sim::RunStatus>(i);
     std::string id = sim::to_string(s);
-    std::replace_if(id.begin(), id.end(), [](char c) { return c == ' ' || c == '-'; }, '_');
+    std::replace_if(
+        id.begin(), id.end(), [](char c) { return c == ' ' || c == '-'; }, '_');
     status.value(id.c_str(), s);
   }
   // Replaces (no sibling: a .def would only add an overload behind pybind11's own __str__).
@@ -135,12 +139,14 @@ same name (units in the names), status a RunStatus, bays a pandas DataFrame, his
   cls.def_property_readonly("status", [](const Result& r) { return r.run.status; })
       .def_property_readonly("message", [](const Result& r) { return r.run.message; })
       .def_property_readonly("history_samples", [](const Result& r) { return r.run.history.size(); })
-      .def_property_readonly("bays", [](const Result& r) { return bays_frame(r.run); },
-                             "One row per bay (bay, entry_time_s, lock_time_s, ...); units in df.attrs['units'].")
+      .def_property_readonly(
+          "bays", [](const Result& r) { return bays_frame(r.run); },
+          "One row per bay (bay, entry_time_s, lock_time_s, ...); units in df.attrs['units'].")
       .def_property_readonly("history", &history_dict,
                              "{name: numpy array} of the time histories (simulate(..., histories=True)), else None.")
-      .def("to_dict", [](const Result& r) { return result_dict(r.run); },
-           "The summary as truss-sim --json writes it (same keys and order; NaN for null).")
+      .def(
+          "to_dict", [](const Result& r) { return result_dict(r.run); },
+          "The summary as truss-sim --json writes it (same keys and order; NaN for null).")
       .def("__repr__", [](const Result& r) { return result_repr(r.run); });
   for (const auto& f : io::run_result_fields())
     cls.def_property_readonly(f.name, [get = f.get](const Result& r) { return field_to_py(get(r.run)); });

@@ -21,12 +21,14 @@ bool is_yes_no(const sim::SceneKey& k) {
 // keys), None (an optional key left unset: its default is computed from other keys).
 pyb::object key_to_py(const sim::SceneKey& k, const sim::SceneOptions& s) {
   switch (k.kind) {
-    case sim::KeyKind::real: return pyb::float_(k.get_real(s));
+    case sim::KeyKind::real:
+      return pyb::float_(k.get_real(s));
     case sim::KeyKind::opt_real: {
       const auto v = k.get_opt(s);
       return v ? pyb::object(pyb::float_(*v)) : pyb::object(pyb::none());
     }
-    case sim::KeyKind::integer: return pyb::int_(k.get_int(s));
+    case sim::KeyKind::integer:
+      return pyb::int_(k.get_int(s));
     case sim::KeyKind::enumeration: {
       const std::size_t i = k.get_enum(s);
       if (is_yes_no(k)) return pyb::bool_(i == 1);
@@ -44,20 +46,28 @@ const sim::SceneKey& find_key_or_raise(const std::string& key) {
 
 const char* kind_name(sim::KeyKind k) {
   switch (k) {
-    case sim::KeyKind::real: return "real";
-    case sim::KeyKind::opt_real: return "optional real";
-    case sim::KeyKind::integer: return "integer";
-    case sim::KeyKind::enumeration: return "enumeration";
+    case sim::KeyKind::real:
+      return "real";
+    case sim::KeyKind::opt_real:
+      return "optional real";
+    case sim::KeyKind::integer:
+      return "integer";
+    case sim::KeyKind::enumeration:
+      return "enumeration";
   }
   return "?";
 }
 
 const char* scope_name(sim::KeyScope s) {
   switch (s) {
-    case sim::KeyScope::fixed: return "fixed";
-    case sim::KeyScope::run: return "run";
-    case sim::KeyScope::bay: return "bay";
-    case sim::KeyScope::frame: return "frame";
+    case sim::KeyScope::fixed:
+      return "fixed";
+    case sim::KeyScope::run:
+      return "run";
+    case sim::KeyScope::bay:
+      return "bay";
+    case sim::KeyScope::frame:
+      return "frame";
   }
   return "?";
 }
@@ -96,10 +106,13 @@ std::vector<io::SceneSetting> settings_of(const pyb::args& args, const pyb::kwar
 }
 
 std::string scene_repr(const Scene& s) {
-  std::string r = s.source == kTable1Source ? "Scene.table1()" : fmt::format("Scene.from_toml({})", pyb::repr(pyb::str(s.source)).cast<std::string>());
+  std::string r = s.source == kTable1Source
+                      ? "Scene.table1()"
+                      : fmt::format("Scene.from_toml({})", pyb::repr(pyb::str(s.source)).cast<std::string>());
   if (s.settings.empty()) return r;
   std::string args;
-  for (const auto& set : s.settings) args += fmt::format("{}{}", args.empty() ? "" : ", ", pyb::repr(pyb::str(set.assignment)).cast<std::string>());
+  for (const auto& set : s.settings)
+    args += fmt::format("{}{}", args.empty() ? "" : ", ", pyb::repr(pyb::str(set.assignment)).cast<std::string>());
   return fmt::format("{}.with_settings([{}])", r, args);
 }
 
@@ -124,7 +137,8 @@ std::string setting_text(const std::string& key, pyb::handle value) {
   if (PyBool_Check(p) || type_name == "bool_") return key + "=" + (PyObject_IsTrue(p) ? "true" : "false");
   if (PyUnicode_Check(p)) return key + "=" + value.cast<std::string>();
   if (PyFloat_Check(p)) return key + "=" + io::toml_double(PyFloat_AsDouble(p));
-  if (PyIndex_Check(p)) return key + "=" + pyb::str(pyb::reinterpret_steal<pyb::object>(PyNumber_Index(p))).cast<std::string>();
+  if (PyIndex_Check(p))
+    return key + "=" + pyb::str(pyb::reinterpret_steal<pyb::object>(PyNumber_Index(p))).cast<std::string>();
   if (PyNumber_Check(p) && PyObject_HasAttrString(p, "__float__")) {  // numpy.float32 and the like
     const double v = PyFloat_AsDouble(p);
     if (v == -1.0 && PyErr_Occurred()) throw pyb::error_already_set();
@@ -146,8 +160,9 @@ checked as truss-sim reads them. Immutable: with_() returns a new scene.)")
             }
           },
           pyb::arg("path"), "A scene file (TOML), e.g. campaigns/scenes/table1.toml; ValueError as truss-sim's exit 2.")
-      .def_static("table1", [] { return make_scene("", kTable1Source, {}); },
-                  "The paper's Table 1 mast with every default (docs/model.md §4), no time histories.")
+      .def_static(
+          "table1", [] { return make_scene("", kTable1Source, {}); },
+          "The paper's Table 1 mast with every default (docs/model.md §4), no time histories.")
       .def(
           "with_",
           [](const Scene& s, const pyb::args& args, const pyb::kwargs& kwargs) {
@@ -165,8 +180,10 @@ scene.with_(**{"drive.mode": "motor"}). Unknown keys and bad values raise ValueE
             return make_scene(s.text, s.source, std::move(settings));
           },
           pyb::arg("assignments"), "A new scene with \"table.key=value\" settings, exactly as given to --set.")
-      .def("__getitem__", [](const Scene& s, const std::string& key) { return key_to_py(find_key_or_raise(key), s.options); },
-           "The resolved value of a key (\"mast.n_bays\"); None for an optional key left unset.")
+      .def(
+          "__getitem__",
+          [](const Scene& s, const std::string& key) { return key_to_py(find_key_or_raise(key), s.options); },
+          "The resolved value of a key (\"mast.n_bays\"); None for an optional key left unset.")
       .def(
           "to_dict",
           [](const Scene& s) {
@@ -175,14 +192,16 @@ scene.with_(**{"drive.mode": "motor"}). Unknown keys and bad values raise ValueE
             return d;
           },
           "Every key with its value, in the order of the key table.")
-      .def("to_toml", [](const Scene& s) { return io::resolved_scene_toml(s.options); },
-           "The resolved scene as TOML (every key, defaults included); reads back to the same scene.")
+      .def(
+          "to_toml", [](const Scene& s) { return io::resolved_scene_toml(s.options); },
+          "The resolved scene as TOML (every key, defaults included); reads back to the same scene.")
       .def_property_readonly("source", [](const Scene& s) { return s.source; })
-      .def_property_readonly("settings", [](const Scene& s) {
-        std::vector<std::string> v;
-        for (const auto& set : s.settings) v.push_back(set.assignment);
-        return v;
-      })
+      .def_property_readonly("settings",
+                             [](const Scene& s) {
+                               std::vector<std::string> v;
+                               for (const auto& set : s.settings) v.push_back(set.assignment);
+                               return v;
+                             })
       .def("__repr__", &scene_repr);
   m.def("scene_keys", &scene_key_rows,
         "The scene key table: one dict per key (key, kind, unit, comment, dispersible_per, allowed, hard_range, "

@@ -75,7 +75,8 @@ def test_sweep(repo, scratch, truss_sim):
     scene = str(repo / "campaigns" / "scenes" / "table1.toml")
     for i in (0, 29):
         torque = df["input:drive.stall_torque_Nm"].iloc[i]
-        ref = cli_json(truss_sim, scene, "drive.mode=motor", f"drive.stall_torque_Nm={float(torque)!r}", "run.output_step_s=0")
+        ref = cli_json(truss_sim, scene, "drive.mode=motor", f"drive.stall_torque_Nm={float(torque)!r}",
+                       "run.output_step_s=0")
         assert df.status.iloc[i] == ref["status"] and df.bays_completed.iloc[i] == ref["bays_completed"]
         for k in ("deploy_time_s", "end_time_s", "peak_latch_energy_J"):
             want = math.nan if ref[k] is None else ref[k]

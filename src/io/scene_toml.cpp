@@ -390,7 +390,8 @@ sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string
   return parse_scene(text, source_name, settings, true, warnings);
 }
 
-sim::SceneOptions parse_scene_variant(const sim::SceneOptions& base, std::string_view text, const std::string& source_name,
+sim::SceneOptions parse_scene_variant(const sim::SceneOptions& base, std::string_view text,
+                                      const std::string& source_name,
                                       const std::vector<SceneSetting>& settings, const std::vector<SceneSetting>& more,
                                       std::vector<std::string>* warnings) {
   SceneOptions s = base;

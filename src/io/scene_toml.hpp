@@ -58,7 +58,8 @@ sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string
 // same options, checks and messages as parse_scene_text_with(text, source_name, settings + more),
 // at the cost of the `more` settings alone (the text is read again only to word an error, with the
 // lines its keys came from). Warnings: for the keys `more` sets. For batches of variants of one scene.
-sim::SceneOptions parse_scene_variant(const sim::SceneOptions& base, std::string_view text, const std::string& source_name,
+sim::SceneOptions parse_scene_variant(const sim::SceneOptions& base, std::string_view text,
+                                      const std::string& source_name,
                                       const std::vector<SceneSetting>& settings, const std::vector<SceneSetting>& more,
                                       std::vector<std::string>* warnings = nullptr);
 
