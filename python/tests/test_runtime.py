@@ -2,6 +2,9 @@
 wall-time cap holds when called from Python (also on simulate_many's threads), the GIL is released
 while a run computes (other Python threads go on), and 100,000 calls leave resident memory flat."""
 import re
+import signal
+import subprocess
+import sys
 import threading
 import time
 import warnings
@@ -62,6 +65,23 @@ def test_gil_released_while_running():
     # empty call first imports pandas, which would let the main thread run during the call.)
     td.simulate_many([], bays=False)
     assert ticks_during(lambda: td.simulate_many([long_scene(0.15)], threads=1, bays=False)) > 100
+
+
+def test_ctrl_c_stops_a_batch():
+    """SIGINT during simulate_many: KeyboardInterrupt once the runs under way end (each capped at
+    0.5 s here), not after the whole batch (40 runs on 2 threads: 10 s)."""
+    code = ("import sys, warnings; warnings.simplefilter('ignore'); import truss_deploy as td; "
+            f"s = td.Scene.table1().with_(**{LONG!r}, **{{'run.max_wall_time_s': 0.5}}); "
+            "td.simulate_many([], bays=False); print('start', flush=True); "
+            "td.simulate_many([s] * 40, threads=2, bays=False); print('finished', flush=True)")
+    p = subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert p.stdout.readline() == "start\n"
+    time.sleep(0.3)
+    t0 = time.perf_counter()
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode != 0 and "KeyboardInterrupt" in err and "finished" not in out
+    assert time.perf_counter() - t0 < 4.0
 
 
 def rss_bytes():
