@@ -7,11 +7,12 @@ The Table-1 velocity deployment (30 bays, no histories) timed, in each of R inte
   many, scenes      simulate_many([scene] * N, threads=1)
   many, overrides   simulate_many(base, {"mast.diagonal_stiffness_N_per_m": [20.0] * N}, threads=1)
   many, 2 threads   simulate_many([scene] * N, threads=2)
-each as wall time / N for N runs; the medians over the rounds and their ratios to C++ (overhead
-target: under 5 % for simulate_many) and 1 thread / 2 threads (target: at least 1.8x on 2 cores).
+each as wall time and process CPU time / N for N runs; the medians over the rounds and their
+ratios to C++ (overhead target: under 5 % for simulate_many; CPU time is the steadier figure on a
+shared machine) and 1 thread / 2 threads in wall time (target: at least 1.8x on 2 idle cores).
 Then resident memory over 100,000 calls of simulate() (--leak-calls), read every 10,000.
 
-    PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py build [--runs 2000] [--rounds 7]
+    PYTHONPATH=build/python /usr/bin/python3 bench/bench_python.py build [--runs 1000] [--rounds 9]
 """
 import argparse
 import os
@@ -29,8 +30,8 @@ def rss_mib():
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("build", help="the build folder (bench/bench_run_cost, python/truss_deploy)")
-    ap.add_argument("--runs", type=int, default=2000, help="runs per timing (N)")
-    ap.add_argument("--rounds", type=int, default=7, help="interleaved rounds (R); medians over them")
+    ap.add_argument("--runs", type=int, default=1000, help="runs per timing (N)")
+    ap.add_argument("--rounds", type=int, default=9, help="interleaved rounds (R); medians over them")
     ap.add_argument("--leak-calls", type=int, default=100_000)
     a = ap.parse_args()
     sys.path.insert(0, os.path.join(a.build, "python"))
@@ -44,37 +45,48 @@ def main():
     overrides = {"mast.diagonal_stiffness_N_per_m": [20.0] * n}
     cpp = os.path.join(a.build, "bench", "bench_run_cost")
 
+    def cpp_run():
+        out = subprocess.run([cpp, path, str(n), "run.output_step_s=0"], capture_output=True, text=True, check=True)
+        wall, cpu, _ = out.stdout.split()
+        return float(wall), float(cpu)
+
     def per_run(fn):
-        t0 = time.perf_counter()
+        w0, c0 = time.perf_counter(), time.process_time()
         fn()
-        return (time.perf_counter() - t0) / n
+        return (time.perf_counter() - w0) / n, (time.process_time() - c0) / n
 
     cases = {
-        "C++": lambda: float(subprocess.run([cpp, path, str(n), "run.output_step_s=0"], capture_output=True,
-                                            text=True, check=True).stdout.split()[0]),
+        "C++": cpp_run,
         "simulate()": lambda: per_run(lambda: [td.simulate(scene) for _ in range(n)]),
         "many, scenes": lambda: per_run(lambda: td.simulate_many(scenes, threads=1)),
         "many, overrides": lambda: per_run(lambda: td.simulate_many(scene, overrides, threads=1)),
         "many, 2 threads": lambda: per_run(lambda: td.simulate_many(scenes, threads=2)),
     }
-    times = {k: [] for k in cases}
+    td.simulate_many(scenes[:10])  # pandas imported, caches warm
+    wall = {k: [] for k in cases}
+    cpu = {k: [] for k in cases}
     for _ in range(a.rounds):
         for k, fn in cases.items():
-            times[k].append(fn())
-    med = {k: statistics.median(v) for k, v in times.items()}
+            w, c = fn()
+            wall[k].append(w)
+            cpu[k].append(c)
+    mw = {k: statistics.median(v) for k, v in wall.items()}
+    mc = {k: statistics.median(v) for k, v in cpu.items()}
     print(f"## Table-1 velocity deployment, 30 bays: cost per run ({n} runs, median of {a.rounds} rounds)\n")
-    print("| path | per run (ms) | / C++ |\n|---|---:|---:|")
-    for k, v in med.items():
-        print(f"| {k} | {1e3 * v:.4f} | {v / med['C++']:.3f} |")
-    print(f"\nsimulate_many on 2 threads: {med['many, scenes'] / med['many, 2 threads']:.2f}x the speed of 1 thread")
-    ratios = [s / c for s, c in zip(times["many, scenes"], times["C++"])]
-    print(f"simulate_many / C++ per round: {', '.join(f'{r:.3f}' for r in ratios)}")
+    print("| path | wall (ms) | / C++ | CPU (ms) | / C++ |\n|---|---:|---:|---:|---:|")
+    for k in cases:
+        print(f"| {k} | {1e3 * mw[k]:.4f} | {mw[k] / mw['C++']:.3f} | {1e3 * mc[k]:.4f} | {mc[k] / mc['C++']:.3f} |")
+    speedups = [a / b for a, b in zip(wall["many, scenes"], wall["many, 2 threads"])]
+    print(f"\nsimulate_many on 2 threads: {mw['many, scenes'] / mw['many, 2 threads']:.2f}x the speed of 1 thread "
+          f"(wall time; per round: {', '.join(f'{x:.2f}' for x in speedups)})")
+    print("simulate_many / C++, CPU time per round: "
+          + ", ".join(f"{s / c:.3f}" for s, c in zip(cpu["many, scenes"], cpu["C++"])))
 
     small = scene.with_(**{"mast.n_bays": 1})
     print(f"\n## Resident memory over {a.leak_calls:,} calls of simulate() (1 bay)\n")
     print("| calls | RSS (MiB) |\n|---:|---:|")
     for i in range(a.leak_calls):
-        if i % 10_000 == 0:
+        if i % 20_000 == 0:
             print(f"| {i:,} | {rss_mib():.2f} |")
         td.simulate(small).peak_drive_force_N
     print(f"| {a.leak_calls:,} | {rss_mib():.2f} |")
