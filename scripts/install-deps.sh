@@ -22,6 +22,9 @@ done
 if [ "${#missing[@]}" -gt 0 ]; then
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   export DEBIAN_FRONTEND=noninteractive
+  echo "[deps] apt-get update, then installing ${#missing[@]} packages: ${missing[*]}"
   $SUDO apt-get update -qq
-  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  # -q: one line per package downloaded, unpacked and set up (progress without the bars).
+  $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+  echo "[deps] done"
 fi

@@ -90,5 +90,7 @@ class CampaignFile {
 // cannot be read (the summary is a convenience; the file is what counts).
 struct DesignValue;
 std::vector<DesignValue> read_design_values(const std::string& path, const OutputColumns& cols, const sim::RunResult& nominal);
+// "run i: message" of the first run with `status` in a finished results file ("" if none or unreadable).
+std::string read_example_message(const std::string& path, std::int64_t n_runs, sim::RunStatus status);
 
 }  // namespace truss::campaign

@@ -83,13 +83,14 @@ def col_stats(x):
 
 
 def order_ci(x_sorted, p, conf=0.95):
-    """Ranks (1-based) of the order-statistic CI from the binomial CDF table, the bounds (NaN
-    when the sample is too small), the coverage, and the n a missing bound needs."""
+    """Ranks (1-based) of the one-sided order-statistic bounds (each at conf) from the binomial
+    CDF table, the bounds (NaN when the sample is too small), the coverage of the interval they
+    make, and the n a missing bound needs."""
     n = len(x_sorted)
-    a = (1 - conf) / 2
+    a = 1 - conf
     cdf = stats.binom.cdf(np.arange(n + 1), n, p)
     r = int(np.searchsorted(cdf, a, side="left"))          # first k with F(k) >= a
-    s = int(np.searchsorted(cdf, 1 - a, side="left")) + 1  # 1 + first k with F(k) >= 1 - a
+    s = int(np.searchsorted(cdf, 1 - a, side="left")) + 1  # 1 + first k with F(k) >= conf
     F = lambda k: 0.0 if k < 0 else (1.0 if k >= n else float(cdf[k]))  # noqa: E731
     res = {"ci_coverage": F(min(s, n + 1) - 1) - F(r - 1)}
     if r >= 1:
