@@ -6,11 +6,14 @@ PKGS=(build-essential cmake pkg-config
       libeigen3-dev libopenmpi-dev openmpi-bin libhdf5-dev
       libsundials-dev catch2 libtomlplusplus-dev libcli11-dev libfmt-dev
       libdeflate-dev      # the results file's chunk compression (twice zlib's speed, same format)
+      libboost-dev        # Boost.Math headers: Clopper-Pearson intervals, binomial CDF (src/sampling/stopping.cpp)
       python3-numpy python3-h5py python3-matplotlib python3-scipy python3-pandas
       python3-venv        # the truss-report package installed into a venv (test postproc_install)
       python3-xarray python3-h5netcdf  # xarray opens the campaign file with named dimensions (mpi_layout)
       help2man            # man pages from --help (cmake --install)
-      python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests)
+      python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests); examples/openturns_form.py
+      pybind11-dev python3-pybind11 python3-dev python3-pytest  # the Python module truss_deploy (python/) and its tests
+      libsimbody-dev      # the cross-check against a general multibody engine (validation/simbody, docs/validation.md)
       clang libclang-rt-14-dev)  # the sanitizer and fuzzing stage (scripts/sanitize.sh)
 missing=()
 for p in "${PKGS[@]}"; do
@@ -19,6 +22,9 @@ done
 if [ "${#missing[@]}" -gt 0 ]; then
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   export DEBIAN_FRONTEND=noninteractive
+  echo "[deps] apt-get update, then installing ${#missing[@]} packages: ${missing[*]}"
   $SUDO apt-get update -qq
-  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  # -q: one line per package downloaded, unpacked and set up (progress without the bars).
+  $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+  echo "[deps] done"
 fi

@@ -62,6 +62,15 @@ std::string get_string(const Ctx& c, const toml::node& n, const std::string& key
   return *s;
 }
 
+// A campaign key that becomes a scene's [run] key in every run (ensemble.max_run_wall_time_s ->
+// run.max_wall_time_s, output.history_step_s -> run.output_step_s) takes that key's hard range from
+// the scene key table, so that no value the campaign accepts makes every run invalid input.
+std::string check_run_key_range(std::string_view run_key, const std::string& key, double v) {
+  const sim::SceneKey* k = sim::find_scene_key("run", run_key);
+  if (k == nullptr || k->hard.contains(v)) return {};
+  return fmt::format("{}: must lie in {} {} (the range of run.{}), got {}", key, k->hard.text(), k->unit, run_key, v);
+}
+
 std::vector<double> get_numbers(const Ctx& c, const toml::node& n, const std::string& key) {
   const toml::array* a = n.as_array();
   if (!a) c.fail(&n, fmt::format("{}: expected an array of numbers", key));
@@ -265,15 +274,28 @@ std::string validate_sampling(const CampaignOptions& o) {
 std::string CampaignOptions::validate() const {
   if (ensemble.n_runs < 1)
     return fmt::format("ensemble.n_runs: must be a positive number of runs, got {}", ensemble.n_runs);
-  if (!(ensemble.max_run_wall_time_s > 0.0 && std::isfinite(ensemble.max_run_wall_time_s)))
-    return fmt::format("ensemble.max_run_wall_time_s: must be positive, got {}", ensemble.max_run_wall_time_s);
-  if (!(output.history_step_s > 0.0 && std::isfinite(output.history_step_s)))
+  if (std::string e = check_run_key_range("max_wall_time_s", "ensemble.max_run_wall_time_s",
+                                          ensemble.max_run_wall_time_s);
+      !e.empty())
+    return e;
+  if (!(output.history_step_s > 0.0))
     return fmt::format("output.history_step_s: must be positive, got {}", output.history_step_s);
-  for (std::int64_t r : output.history_runs)
+  if (std::string e = check_run_key_range("output_step_s", "output.history_step_s", output.history_step_s); !e.empty())
+    return e;
+  for (std::size_t i = 0; i < output.history_runs.size(); ++i) {
+    const std::int64_t r = output.history_runs[i];
     if (r < 0 || r >= ensemble.n_runs)
       return fmt::format("output.history_runs: run {} does not exist (n_runs = {})", r, ensemble.n_runs);
+    if (std::find(output.history_runs.begin(), output.history_runs.begin() + static_cast<std::ptrdiff_t>(i), r) !=
+        output.history_runs.begin() + static_cast<std::ptrdiff_t>(i))
+      return fmt::format("output.history_runs: run {} is listed twice", r);
+  }
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = validate_dispersion(*this, i); !e.empty()) return e;
+  // Implausible dispersions (most runs would be invalid input), once every dispersion is well formed.
+  for (std::size_t i = 0; i < dispersions.size(); ++i)
+    if (std::string e = check_dispersion_draws(*this, i); !e.empty())
+      return fmt::format("dispersion[{}]: {}", i + 1, e);
   return validate_sampling(*this);
 }
 

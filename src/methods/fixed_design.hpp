@@ -11,7 +11,9 @@ class FixedDesign : public Method {
  public:
   // The campaign's SamplePlan: ensemble.sampling over every dimension; saltelli: one factor per
   // dispersion, spanning all its dimensions (bays, frames), so AB_g takes every dimension of
-  // dispersion g from B. The campaign's validate() has checked the plan (SamplePlan::validate).
+  // dispersion g from B; its base points are shifted Sobol' points of dimension 2d up to
+  // 2d = kSaltelliSobolMaxDims, Monte Carlo points beyond. The campaign's validate() has checked
+  // the plan (SamplePlan::validate).
   explicit FixedDesign(const campaign::CampaignContext& ctx);
   Proposal propose(std::int64_t round, const RoundRecords& previous) override;
   void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const override;

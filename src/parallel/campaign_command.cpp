@@ -145,7 +145,8 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
   app.add_option("--synthetic-run-cost-s", o.synthetic_run_cost_s, "")->check(CLI::Range(0.0, 60.0))->group("");
   app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
   app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
-             "3 I/O or internal error.");
+             "3 I/O or internal error; 4 results written, but most runs are invalid input (the dispersions give "
+             "scenes the model refuses).");
   try {
     app.parse(argc, argv);
     if (o.output_path.empty() && !o.dry_run) throw CLI::RequiredError("--output");
@@ -215,7 +216,8 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
                              seconds_since(t_finish), static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC,
                              s.runs_by_rank0, per * (s.rank0_poll_s + s.rank0_write_s + s.rank0_tick_s),
                              per * s.rank0_handle_cpu_s, peak_chunks, chunk_runs);
-    return kExitOk;
+    const std::string example = results::read_example_message(o.output_path, n_runs, sim::RunStatus::invalid_input);
+    return print_campaign_verdict(stderr, counts, example) ? kExitOk : kExitMostlyInvalid;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
     return kExitBadInput;
@@ -349,7 +351,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm, const MakeMethod&
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
       status = kExitIoError;
     }
-    if (status != kExitOk) r0.drop();
+    if (status != kExitOk && status != kExitMostlyInvalid) r0.drop();
   }
   return broadcast_int_idle(comm, status);
 }

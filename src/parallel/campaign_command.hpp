@@ -9,7 +9,8 @@
 // the end of the HDF5 file.
 //
 // Exit status: 0 the results file is written (failed runs are data in it); 2 bad input (command
-// line, campaign file, an existing output or journal), nothing written; 3 an I/O or internal error.
+// line, campaign file, an existing output or journal), nothing written; 3 an I/O or internal error;
+// 4 the results file is written, but most runs are invalid input (parallel/progress.hpp).
 #pragma once
 #include <mpi.h>
 
@@ -23,6 +24,7 @@ namespace truss::parallel {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitBadInput = 2;
 inline constexpr int kExitIoError = 3;
+inline constexpr int kExitMostlyInvalid = 4;  // the file is written, but most runs are invalid input
 
 // The campaign's method, made on every rank from the same campaign (methods::make_method: the one
 // of ensemble.sampling; a test passes one of its own).

@@ -13,8 +13,10 @@
 
 namespace truss::results {
 
-// 2: /runs/round, extendible per-run datasets (a method may add rounds of runs), root n_rounds.
-inline constexpr std::int64_t kCampaignSchemaVersion = 2;
+// 3: /runs/round, extendible per-run datasets (a method may add rounds of runs), root n_rounds.
+// 2: a Saltelli design draws A and B from the Monte Carlo generator beyond 2d = 8 dimensions
+// (kSaltelliSobolMaxDims); 1 drew them from one shifted Sobol' point up to 2d = 2048.
+inline constexpr std::int64_t kCampaignSchemaVersion = 3;
 
 // How the last session's schedule went (rank 0's view, steady clock and thread CPU seconds), as
 // /timing's attributes hold it: not reproducible. The engine fills it; the file writes it as it is.
@@ -87,13 +89,16 @@ class CampaignFile {
 void write_nominal_group(hid_t file, const sim::RunResult& r, int n_bays_max);
 
 // The end summary's main design values of a finished results file: each shown output's nominal
-// value, P99.865 and maximum over the ok runs, as /stats holds them. Empty if the file cannot be
-// read (the summary is a convenience; the file is what counts).
+// value, P99.865 and maximum over `count` ok runs with a finite value, as /stats holds them. Empty
+// if the file cannot be read (the summary is a convenience; the file is what counts).
 struct DesignValue {
   std::string label, units;
   double nominal, p99_865, max;
+  std::int64_t count = 0;
 };
 std::vector<DesignValue> read_design_values(const std::string& path, const campaign::RecordLayout& layout,
                                             const sim::RunResult& nominal);
+// "run i: message" of the first run with `status` in a finished results file ("" if none or unreadable).
+std::string read_example_message(const std::string& path, std::int64_t n_runs, sim::RunStatus status);
 
 }  // namespace truss::results

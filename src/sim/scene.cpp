@@ -7,6 +7,7 @@
 
 #include "model/bay.hpp"
 #include "sim/scene_keys.hpp"
+#include "stages/history.hpp"
 #include "stages/stage_plan.hpp"
 
 namespace truss::sim {
@@ -52,6 +53,8 @@ std::string SceneOptions::validate() const {
            "has one coordinate per phase and no rail multiplier: use \"dopri54\", \"cvode\", \"cvode_adams\" or \"auto\"";
   if (stack.contacts == StackContacts::on && stack.mode != StackMode::free)
     return "stack.contacts: contacts between stowed frames apply to the free stack only (stack.mode = \"free\"); the held stack's canister holds them";
+  if (stack.start == StackStart::rest && stack.mode != StackMode::free)
+    return "stack.start: \"rest\" applies to the free stack only (stack.mode = \"free\"); the held stack's canister holds the stowed frames at rest anyway";
   if (panels.count < 0 || panels.count % 2 != 0)
     return fmt::format("panels.count: must be 0 (no panels) or a positive even number, got {}", panels.count);
   if (panels.count > 0) {
@@ -60,6 +63,13 @@ std::string SceneOptions::validate() const {
     if (panels.tip_height_m) CHECK(positive("panels.tip_height_m", *panels.tip_height_m));
   }
   CHECK(run.validate());
+  if (run.output_step_s > 0.0) {  // two rows at least (stages/history.hpp), the frame heights included
+    const long row_B = stages::calc_history_row_bytes(stack.mode == StackMode::free ? mast.n_bays + 1 : 0);
+    if (run.max_history_bytes < 2 * row_B)
+      return fmt::format("run.max_history_bytes: {} B holds fewer than two history rows of {} B ({} bays, {} stack); "
+                         "raise it or set run.output_step_s = 0", run.max_history_bytes, row_B, mast.n_bays,
+                         stack.mode == StackMode::free ? "free" : "held");
+  }
   // Magnitudes: every numeric key against its hard range (sim/scene_keys.hpp), so that 1e308
   // never reaches the physics.
   CHECK(check_scene_ranges(*this));
@@ -70,7 +80,8 @@ std::string SceneOptions::validate() const {
 std::string plan_stages(const SceneOptions& scene, const model::MastParams& mast, double direction,
                         std::vector<stages::StageSpec>& out) {
   if (scene.stack.mode == StackMode::free)
-    return stages::plan_free_stages(mast, direction, scene.stack.contacts == StackContacts::on, out);
+    return stages::plan_free_stages(mast, direction, scene.stack.contacts == StackContacts::on,
+                                    scene.stack.start == StackStart::kick, out);
   return stages::plan_held_stages(mast, direction, out);
 }
 

@@ -20,7 +20,8 @@ RunResult simulate(const SceneOptions& scene, const model::MastParams& mast) {
     r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return r;
   };
-  // Each check once, in the order validate_mast gives them; the stage plan is built once.
+  // Each check once, in the order validate_mast gives them; the stage plan is built once, and
+  // run_stages trusts the options from here on.
   std::string e = scene.validate();
   if (e.empty()) e = validate_mast_params(mast);
   std::vector<stages::StageSpec> plan;

@@ -34,7 +34,11 @@ void HermiteSpan::calc(double t, double* q, double* qd) const {
 }
 
 void PhasePeaks::reset(double direction) {
-  for (Bracket& b : b_) { b.value = -kInf; b.want_next = false; }
+  for (Bracket& b : b_) {
+    b.top.value = b.first.value = -kInf;
+    b.top.want_next = b.first.want_next = false;
+    b.fell = false;
+  }
   has_last_ = false;
   direction_ = direction;
   max_rail_residual = 0.0;
@@ -44,17 +48,25 @@ void PhasePeaks::feed(double t, const PhasePoint& p, const double* state, int n)
   for (int q = 0; q < kQuantityCount; ++q) {
     Bracket& b = b_[static_cast<std::size_t>(q)];
     const double v = calc_peak_quantity(q, p, direction_);
-    if (v > b.value) {
-      b.value = v;
-      if (has_last_) b.prev = last_;
-      else b.prev.assign(t, p, state, n);
-      b.best.assign(t, p, state, n);
-      b.next = b.best;
-      b.want_next = true;
-    } else if (b.want_next) {
-      b.next.assign(t, p, state, n);
-      b.want_next = false;
-    }
+    auto take = [&](Hill& h, bool better) {
+      if (better) {
+        h.value = v;
+        if (has_last_) h.prev = last_;
+        else h.prev.assign(t, p, state, n);
+        h.best.assign(t, p, state, n);
+        h.next = h.best;
+        h.want_next = true;
+      } else if (h.want_next) {
+        h.next.assign(t, p, state, n);
+        h.want_next = false;
+      }
+    };
+    take(b.top, v > b.top.value);
+    // A rise after a fall is another local maximum: it replaces the first only beyond the tie
+    // tolerance (the earliest of equal peaks is kept).
+    const bool first = v > b.first.value && !(b.fell && is_tie(b.first.value, v, tie_tol_));
+    take(b.first, first);
+    b.fell = !first && (b.fell || v < b.first.value);
   }
   last_.assign(t, p, state, n);
   has_last_ = true;

@@ -1,4 +1,7 @@
 // Peak tracking (docs/model.md §5: peaks with their time and bay; the earliest where one repeats).
+// "Repeats" is read to the run's accuracy: peaks within a relative tie tolerance of the largest
+// (the run's allowed relative error, energy.hpp) are one peak, reported with the largest value at
+// the time and bay where it first occurs (docs/model-notes.md, "Equal peaks").
 // A phase's samples (step ends, or a grid in closed form) are fed in time order; for each tracked
 // quantity PhasePeaks keeps its best sample and the two neighbours that bracket it, and refine()
 // maximises between them, on the exact closed form or on a quintic Hermite interpolant of the
@@ -18,14 +21,41 @@ namespace truss::stages {
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// Two values are one peak when they differ by at most tol of the larger's magnitude.
+inline bool is_tie(double v, double larger, double tol) { return v >= larger - tol * std::abs(larger); }
+
+// The largest of values offered in time order (value), at the time and bay of the earliest offer
+// within the tie tolerance of it (t, bay).
 struct Extremum {
   double value = -kInf;
   double t = kNaN;
   int bay = 0;
+  double tie_tol = 0.0;  // relative
+  // True if the reported offer changed.
   bool offer(double v, double time, int b) {
-    if (v > value) { value = v; t = time; bay = b; return true; }
-    return false;
+    if (!(v > -kInf) || (!ties_.empty() && !is_tie(v, max_, tie_tol))) return false;
+    if (ties_.empty() || v > max_) {
+      max_ = v;
+      std::erase_if(ties_, [&](const Offer& o) { return !is_tie(o.v, max_, tie_tol); });
+    }
+    ties_.push_back({v, time, b});
+    const Offer& first = ties_.front();
+    const bool changed = max_ != value || !(first.t == t) || first.b != bay;
+    value = max_; t = first.t; bay = first.b;
+    return changed;
   }
+  void clear() {
+    value = max_ = -kInf;
+    t = kNaN;
+    bay = 0;
+    ties_.clear();
+  }
+  double largest() const { return max_; }
+
+ private:
+  struct Offer { double v, t; int b; };
+  double max_ = -kInf;
+  std::vector<Offer> ties_;  // the offers within the tie tolerance of max_, in time order
 };
 
 // Quantities whose extremes a run reports. kRailApproach is minus the hinge's distance from the
@@ -61,24 +91,38 @@ struct HermiteSpan {
 class PhasePeaks {
  public:
   void reset(double direction);
+  // Besides the highest sample, each quantity keeps the earliest local maximum that the later ones
+  // do not beat by more than this relative tolerance (the first of equal peaks; Extremum).
+  void set_tie_tolerance(double tol) { tie_tol_ = tol; }
   // state: (q, q', q'') of the sample, 3 dof values (nullptr, 0 in closed form).
   void feed(double t, const PhasePoint& p, const double* state = nullptr, int n = 0);
   // eval(t, span) gives the phase point at t inside the span [a, b] of two consecutive samples.
+  // first: the earliest of equal maxima, else the highest sample's.
   template <class Eval>
-  void refine(int q, Eval&& eval, double xtol, double& value, double& time) const;
-  double best(int q) const { return b_[static_cast<std::size_t>(q)].value; }
+  void refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time) const;
+  double best(int q) const { return b_[static_cast<std::size_t>(q)].top.value; }
+  // Whether the earliest of equal maxima is another than the highest sample's.
+  bool has_earlier_tie(int q) const {
+    const Bracket& b = b_[static_cast<std::size_t>(q)];
+    return b.first.best.t < b.top.best.t;
+  }
   double max_rail_residual = 0.0;
 
  private:
-  struct Bracket {
+  struct Hill {  // a local maximum's best sample and its neighbours
     double value = -kInf;
     Sample prev, best, next;
     bool want_next = false;
+  };
+  struct Bracket {
+    Hill top, first;
+    bool fell = false;  // a sample below first's best came after it: a later rise is another maximum
   };
   std::array<Bracket, kQuantityCount> b_;
   Sample last_;
   bool has_last_ = false;
   double direction_ = 1.0;
+  double tie_tol_ = 0.0;
 };
 
 class PeakTracker {
@@ -88,7 +132,11 @@ class PeakTracker {
   Extremum stage_rail_approach;              // per stage, not merged into the run's
   double max_rail_residual = 0.0;
   int bay = 0;
-  void start_stage(int b) { bay = b; stage_force = Extremum{}; stage_pin = Extremum{}; stage_rail_approach = Extremum{}; }
+  void set_tie_tolerance(double tol) {
+    for (Extremum& e : run) e.tie_tol = tol;
+    stage_force.tie_tol = stage_pin.tie_tol = stage_rail_approach.tie_tol = tol;
+  }
+  void start_stage(int b) { bay = b; stage_force.clear(); stage_pin.clear(); stage_rail_approach.clear(); }
   // The stage's force and pin records join the run's.
   void close_stage() {
     run[kForce].offer(stage_force.value, stage_force.t, stage_force.bay);
@@ -106,17 +154,21 @@ class PeakTracker {
     max_rail_residual = std::max(max_rail_residual, pp.max_rail_residual);
     for (int q = 0; q < kQuantityCount; ++q) {
       Extremum& tr = target(q);
-      if (!(pp.best(q) > tr.value) && std::isfinite(tr.value)) continue;
+      if (!(pp.best(q) > tr.largest()) && std::isfinite(tr.value)) continue;
       double v, t;
-      pp.refine(q, eval, xtol, v, t);
+      if (pp.has_earlier_tie(q)) {  // the first of equal maxima, then the highest
+        pp.refine(q, true, eval, xtol, v, t);
+        tr.offer(v, t, bay);
+      }
+      pp.refine(q, false, eval, xtol, v, t);
       tr.offer(v, t, bay);
     }
   }
 };
 
 template <class Eval>
-void PhasePeaks::refine(int q, Eval&& eval, double xtol, double& value, double& time) const {
-  const Bracket& b = b_[static_cast<std::size_t>(q)];
+void PhasePeaks::refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time) const {
+  const Hill& b = first ? b_[static_cast<std::size_t>(q)].first : b_[static_cast<std::size_t>(q)].top;
   value = b.value;
   time = b.best.t;
   if (!std::isfinite(b.value)) return;

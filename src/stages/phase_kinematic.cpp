@@ -20,11 +20,12 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   const double l = phase_.strut_length_m();
   const double dir = ctx.direction;
   const double v = ctx.drive.speed_m_per_s;
-  const bool open = spec_.kind == PhaseKind::open;
+  const bool open = ctx.kind == PhaseKind::open;
+  const double q_start = start.q[0];
   PhaseOutcome out;
   PhaseScratch scratch;
-  const double y_begin = open ? spec_.q_start : calc_on_rail(mast.rail, l, spec_.q_start).Y;
-  const double y_finish = open ? spec_.q_end : calc_on_rail(mast.rail, l, spec_.q_end).Y;
+  const double y_begin = open ? q_start : calc_on_rail(mast.rail, l, q_start).Y;
+  const double y_finish = open ? ctx.q_end : calc_on_rail(mast.rail, l, ctx.q_end).Y;
   const double t0 = start.t_s, t1 = t0 + std::abs(y_finish - y_begin) / v;
   // The run's wall-time cap (issue 13): checked at the start and every 1024 evaluations; past it,
   // evaluations return NaN (the quadrature stops on a non-finite piece) and the phase ends with
@@ -61,7 +62,7 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   const double Dt = calc_taut_opening_m(mast.bay(m), calc_diagonal_offset_sq_m2(mast.frame(m - 1), mast.frame(m)));
   if (Dt > 0.0) {
     double y_taut = kNaN;
-    if (open) y_taut = spec_.lower_held_height_m + Dt;
+    if (open) y_taut = ctx.lower_held_height_m + Dt;
     else if (Dt < 2.0 * l) y_taut = calc_on_rail(mast.rail, l, std::sqrt(l * l - 0.25 * Dt * Dt)).Y;
     if (std::isfinite(y_taut)) {
       const double tc = t0 + (y_taut - y_begin) / (dir * v);
@@ -93,7 +94,7 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   out.t_end_s = t1;
   out.end = eval_point(t1);
   ++out.evals;
-  out.end.q = spec_.q_end;  // the event is exact in closed form
+  out.end.q = ctx.q_end;  // the event is exact in closed form
   return out;
 }
 

@@ -7,19 +7,18 @@
 #pragma once
 #include "stages/held_phase.hpp"
 #include "stages/phase_solver.hpp"
-#include "stages/stage_plan.hpp"
 
 namespace truss::stages {
 
 class KinematicPhaseSolver final : public PhaseSolver {
  public:
-  KinematicPhaseSolver(const HeldPhase& phase, const PhaseSpec& spec, int samples_per_piece)
-      : phase_(phase), spec_(spec), samples_per_piece_(samples_per_piece) {}
+  KinematicPhaseSolver(const HeldPhase& phase, int samples_per_piece) : phase_(phase), samples_per_piece_(samples_per_piece) {}
+  // From start.q (the phase coordinate at its start; start.qdot is the prescribed kinematics) to
+  // the phase's end context().q_end.
   PhaseOutcome solve(const PhaseStart& start, PhaseSinks& sinks) override;
 
  private:
   const HeldPhase& phase_;
-  const PhaseSpec& spec_;
   int samples_per_piece_;
 };
 

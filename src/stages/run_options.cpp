@@ -20,20 +20,10 @@ std::string RunOptions::validate() const {
     return fmt::format("run.rtol: must lie in [{}, {}] (relative error per step), got {}", kMinRtol, kMaxRtol, rtol);
   if (!(atol > 0.0 && atol <= kMaxAtol))
     return fmt::format("run.atol: must lie in (0, {}] (m, m/s, J per step), got {}", kMaxAtol, atol);
-  if (!(max_history_rows >= 2))
-    return fmt::format("run.max_history_rows: must be >= 2, got {}", max_history_rows);
+  if (!(max_history_bytes >= 1000))
+    return fmt::format("run.max_history_bytes: must be >= 1000, got {}", max_history_bytes);
   if (max_steps < 1) return fmt::format("run.max_steps: must be positive, got {}", max_steps);
   return positive("run.max_wall_time_s", max_wall_time_s);
-}
-
-std::string RunnerOptions::validate() const {
-  for (auto [key, v] : {std::pair{"drive.speed_m_per_s", drive.speed_m_per_s}, {"drive.screw_lead_m", drive.screw_lead_m},
-                        {"drive.torque_Nm", drive.torque_Nm}, {"drive.stall_torque_Nm", drive.stall_torque_Nm},
-                        {"drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s}})
-    if (std::string e = positive(key, v); !e.empty()) return e;
-  if (peak_samples_per_piece < 3)
-    return fmt::format("peak_samples_per_piece: must be >= 3, got {}", peak_samples_per_piece);
-  return run.validate();
 }
 
 integrators::IntegratorOptions RunnerOptions::calc_integrator_options() const {

@@ -1,6 +1,7 @@
 // Options of one run: the scene's [run] table (sim::RunOptions is this struct) and what the stage
-// loop needs besides. Plain structs with a default and a reason per field; validate() names the
-// first bad field and is called where the options are used (SceneOptions::validate, run_stages).
+// loop needs besides. Plain structs with a default and a reason per field. RunOptions::validate()
+// names the first bad field; it is part of SceneOptions::validate(), which the run's entry point
+// (sim::simulate) calls once: the stage loop does not check its options again.
 #pragma once
 #include <string>
 
@@ -23,15 +24,14 @@ struct RunOptions {
   integrators::IntegratorKind integrator = integrators::IntegratorKind::automatic;  // dopri54, BDF once stiff (ode.hpp)
   long max_steps = 2'000'000;               // step cap over the whole run: a run never hangs
   double max_wall_time_s = 600.0;           // wall-time cap for one run
-  long max_history_rows = 200'000;          // history memory cap (86 B a row, 17 MB): beyond it the step doubles
+  long max_history_bytes = 16'000'000;      // history memory cap (B, stages/history.hpp): beyond it the step doubles
   std::string validate() const;             // empty, or "run.key: reason"
 };
 
 struct RunnerOptions {
   model::DriveParams drive;                  // the scene's [drive] table
   RunOptions run;                            // the scene's [run] table
-  int peak_samples_per_piece = 9;            // velocity mode: bracketing grid per smooth piece
-  std::string validate() const;              // run.validate() and the drive's ranges
+  int peak_samples_per_piece = 9;            // velocity mode: bracketing grid per smooth piece (>= 3)
   // Integrator options of the run (tolerances; the step budget is set per phase).
   integrators::IntegratorOptions calc_integrator_options() const;
 };

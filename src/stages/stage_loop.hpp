@@ -1,8 +1,10 @@
 // The one stage loop of a run (docs/model.md §2): for each stage of the plan (stage_plan.hpp), its
-// start event (impulsive start or unlock, model/impacts.hpp), its phases through a phase solver
-// (phase_solver.hpp: closed form in velocity mode, time stepping otherwise), and the impact that
-// ends each phase (rail entry, latch, rail exit, landing). Peaks go to the PeakTracker, energies
-// to the EnergyLedger, samples to the history; the result is a RunResult with one status.
+// start event (impulsive start or unlock), its phases in the segments the plan's stack mode gives
+// (stack_model.hpp: held or free), each through its phase solver (phase_solver.hpp: closed form
+// or time stepping), and the event that ends each phase (rail entry, latch, rail exit, landing).
+// The stack mode computes the events; the loop books them the same way for every mode. Peaks go
+// to the PeakTracker, energies to the EnergyLedger, samples to the history; the result is a
+// RunResult with one status.
 #pragma once
 #include <vector>
 
@@ -13,7 +15,8 @@
 
 namespace truss::stages {
 
-// Runs the planned stages. Invalid options come back as RunStatus::invalid_input.
+// Runs the planned stages. The options are not checked again here: they come validated from the
+// entry point that built them (sim::simulate, from SceneOptions::validate()).
 RunResult run_stages(const model::MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts);
 
 }  // namespace truss::stages

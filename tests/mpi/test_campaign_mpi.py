@@ -11,6 +11,7 @@ check raises (exit 1).
 import argparse
 import os
 import re
+import resource
 import shutil
 import signal
 import subprocess
@@ -114,7 +115,7 @@ def case_ranks(args):
     same, why = same_values(a, b)
     check(same, f"1 and 3 ranks give identical datasets outside /timing ({len(a)} datasets) {why}")
     with h5py.File(outs[3], "r") as f:
-        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 2 and f.attrs["kind"] == "campaign"
+        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 3 and f.attrs["kind"] == "campaign"
               and f.attrs["n_rounds"] == 1 and not f["runs/round"][:].any(),
               "root attributes: n_ranks, schema_version, kind, one round (every /runs/round 0)")
         check(set(np.unique(f["timing/rank"][:])) == {0, 1, 2}, "all 3 ranks computed runs (dynamic scheduling)")
@@ -127,6 +128,12 @@ def case_ranks(args):
     check_nominal(args, d, outs[3])
     check("[truss-campaign] campaign" in p.stderr and "design values" in p.stderr and " ok" in p.stderr,
           "start banner, outcomes by status name and end summary with design values on stderr")
+    # 90 ok runs: every P99.865 of the summary is flagged as standing on too few runs (an upper 95 %
+    # bound needs n with 1 - 0.99865^n >= 0.95, n >= 2218).
+    flagged = [ln for ln in p.stderr.splitlines() if "P99.865" in ln and "nominal" in ln]
+    check(len(flagged) == 6 and all("from 90 ok runs: too few for a P99.865 (its 95 % bound needs 2218)" in ln
+                                    for ln in flagged),
+          f"end summary: each P99.865 from 90 runs flagged as too few ({flagged[:1]})")
 
 
 def check_nominal(args, d, path):
@@ -419,6 +426,14 @@ BAD = {
     "inline_scene_key": ("[ensemble]\nn_runs = 10\n[scene.mast]\nn_bays = 6\nstrut_lenght_m = 0.2\n", ":5:", "strut_lenght_m"),
     "inline_scene_value": ("[ensemble]\nn_runs = 10\n[scene.mast]\nn_bays = -6\n", ":4:", "n_bays"),
     "toml_syntax": ("[ensemble\nn_runs = 10\n", ":1:", ""),
+    # Implausible dispersions, refused before any run (they would end most runs as invalid input):
+    # a percentage typed as a fraction (std = 2: 200 %), and millimetres typed as metres.
+    "percent_as_fraction": ("[ensemble]\nn_runs = 300\n[[dispersion]]\nkey = \"mast.strut_mass_kg\"\nper = \"bay\"\n"
+                            "apply = \"relative\"\ndistribution = \"normal\"\nstd = 2\n", ":3:",
+                            "mast.strut_mass_kg (relative normal) is implausible"),
+    "millimetres_as_metres": ("[ensemble]\nn_runs = 300\n[[dispersion]]\nkey = \"mast.frame_side_m\"\nper = \"frame\"\n"
+                              "apply = \"offset\"\ndistribution = \"uniform\"\nlower = -0.5\nupper = 0.5\n", ":3:",
+                              "mast.frame_side_m (offset uniform) is implausible"),
 }
 
 
@@ -443,6 +458,15 @@ def case_bad_input(args):
     check(p.returncode == 2 and "does not exist" in p.stderr, "output directory missing: exit 2")
     p = mpirun(args, 2, [os.path.join(args.repo, TABLE1), "-o", os.path.join(d, "x.h5"), "--resume"])
     check(p.returncode == 2 and "no journal" in p.stderr, "--resume without a journal: exit 2")
+    # A file-size limit (ulimit -f) below the journal's size: refused before any run. (Open MPI's
+    # PMIx needs PMIX_MCA_gds=hash to start at all under such a limit: docs/campaigns.md.)
+    def limit_file_size():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100 * 1024, 100 * 1024))
+    p = subprocess.run(["mpirun", "--oversubscribe", "-np", "2", args.driver, os.path.join(args.repo, TABLE1),
+                        "-o", os.path.join(d, "x.h5"), "--set", "ensemble.n_runs=300"],
+                       env=dict(ENV, PMIX_MCA_gds="hash"), preexec_fn=limit_file_size, capture_output=True,
+                       text=True, timeout=600)
+    check(p.returncode == 2 and "file-size limit" in p.stderr, "journal beyond the file-size limit: exit 2")
     written = [f for f in os.listdir(d) if not f.endswith(".toml")]
     check(written == [], f"nothing written by any refused run ({written})")
 
