@@ -26,7 +26,18 @@ namespace truss::stages {
 // Pure: the frame-system work space is the caller's.
 class HeldPhase final : public PhaseModel {
  public:
-  explicit HeldPhase(const PhaseContext& ctx);
+  explicit HeldPhase(const PhaseContext& ctx) : HeldPhase(ctx, model::calc_rail_constants(ctx.mast->rail)) {}
+  HeldPhase(const PhaseContext& ctx, const model::RailConstants& rail);  // the rail's constants, computed once
+  const model::RailConstants& get_rail_constants() const { return rail_; }
+  // In double, or in numerics::Dual (q, qdot seeded with their time derivatives: every field of
+  // the point then carries its time derivative).
+  template <class T>
+  PhasePointT<T> calc_point_t(T q, T qdot) const;
+  // Velocity mode: the point at q with the driven frame at speed u_m_per_s along +y (on the rail
+  // xi = u / Y'(x), from the same rail kinematics the point uses). loads_only: the loads, the
+  // speeds and the mass only (the energies, the hinge and the rail residual are left at 0).
+  template <class T>
+  PhasePointT<T> calc_point_at_speed_t(T q, double u_m_per_s, bool loads_only = false) const;
   PhasePoint calc_point(double q, double qdot, PhaseScratch& scratch) const;
   // Convenience for tests and one-off evaluations: allocates its own work space.
   PhasePoint calc_point(double q, double qdot) const;
@@ -50,8 +61,10 @@ class HeldPhase final : public PhaseModel {
   void snap_to_end(double* q) const override { q[0] = ctx_.q_end; }
 
  private:
-  PhasePoint calc_open(double y, double u, PhaseScratch& scratch) const;
-  PhasePoint calc_on_rail(double x, double xi, PhaseScratch& scratch) const;
+  template <class T>
+  PhasePointT<T> calc_open(T y, T u, bool loads_only = false) const;
+  template <class T>
+  PhasePointT<T> calc_on_rail(const model::OnRailKinematicsT<T>& kin, T xi, bool loads_only = false) const;
   PhaseContext ctx_;
   model::RailConstants rail_;
   model::ActiveFrames active_;

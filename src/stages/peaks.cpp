@@ -4,20 +4,6 @@
 
 namespace truss::stages {
 
-double calc_peak_quantity(int q, const PhasePoint& p, double direction) {
-  switch (q) {
-    case kForce: return p.drive_force_N;
-    case kNegForce: return -p.drive_force_N;
-    case kPin: return p.pin_force_N;
-    case kTension: return p.diagonal_tension_N;
-    case kRailApproach: return -p.rail_distance_m;
-    case kOverlap: return -p.min_bay_opening_m;
-    case kStaticForce: return direction * p.static_drive_force_N;
-    case kInertialForce: return direction * (p.drive_force_N - p.static_drive_force_N);
-    default: return direction * p.u_m_per_s;
-  }
-}
-
 void HermiteSpan::calc(double t, double* q, double* qd) const {
   const int n = dof();
   const double h = b->t - a->t, s = (t - a->t) / h, s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;

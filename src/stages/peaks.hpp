@@ -36,7 +36,21 @@ struct Extremum {
 // the static part is not defined).
 enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kRailApproach, kOverlap, kStaticForce, kInertialForce,
                     kQuantityCount };
-double calc_peak_quantity(int q, const PhasePoint& p, double direction);
+// In the point's number type (double, or a dual number: then with its time derivative).
+template <class T>
+T calc_peak_quantity(int q, const PhasePointT<T>& p, double direction) {
+  switch (q) {
+    case kForce: return p.drive_force_N;
+    case kNegForce: return -p.drive_force_N;
+    case kPin: return p.pin_force_N;
+    case kTension: return p.diagonal_tension_N;
+    case kRailApproach: return -p.rail_distance_m;
+    case kOverlap: return -p.min_bay_opening_m;
+    case kStaticForce: return direction * p.static_drive_force_N;
+    case kInertialForce: return direction * (p.drive_force_N - p.static_drive_force_N);
+    default: return direction * p.u_m_per_s;
+  }
+}
 
 struct Sample {
   double t = 0;
@@ -94,6 +108,8 @@ class PeakTracker {
     run[kForce].offer(stage_force.value, stage_force.t, stage_force.bay);
     run[kPin].offer(stage_pin.value, stage_pin.t, stage_pin.bay);
   }
+  // Whether a phase whose largest value of quantity q is `best` can change a record.
+  bool could_improve(int q, double best) { const Extremum& tr = target(q); return best > tr.value || !std::isfinite(tr.value); }
   Extremum& target(int q) {
     if (q == kForce) return stage_force;
     if (q == kPin) return stage_pin;
@@ -105,11 +121,10 @@ class PeakTracker {
   void absorb(const PhasePeaks& pp, Eval&& eval, double xtol) {
     max_rail_residual = std::max(max_rail_residual, pp.max_rail_residual);
     for (int q = 0; q < kQuantityCount; ++q) {
-      Extremum& tr = target(q);
-      if (!(pp.best(q) > tr.value) && std::isfinite(tr.value)) continue;
+      if (!could_improve(q, pp.best(q))) continue;
       double v, t;
       pp.refine(q, eval, xtol, v, t);
-      tr.offer(v, t, bay);
+      target(q).offer(v, t, bay);
     }
   }
 };
