@@ -7,6 +7,14 @@ once), in all three drive modes and both directions. For every run it checks the
   - the exit code is 0 (ok), 1 (a named non-ok status) or 2 (refused input); nothing else;
   - an `ok` run reports finite numbers (run-level loads, energies, times; per-bay event times);
   - no run exceeds its wall-time cap (run.max_wall_time_s plus the process's start and output).
+  - an `ok` free-stack run with stack contacts keeps its frames apart to 2e-9 l_s
+    (docs/model-notes.md, "Overlap bound");
+  - the process's resident memory stays under the history cap (run.max_history_bytes, three times
+    over: the columns, their JSON text, the output) plus 64 MB, and the dense Newton matrices of
+    cvode / ida (three (2n)^2 float64 copies);
+  - the run's wall time (its own clock) stays within its cap + 5 % (+ 0.05 s of timer slack).
+The free-stack cases cover contacts on and off, slack and Table-1 diagonals, dopri54, cvode and
+ida, with and without time histories (every 1 ms), and in the full grid 300 and 2,000 bays.
 It prints the counts by status, the NaN-in-ok count, timeouts, cap violations and wall-time
 percentiles, and exits 1 if a promise was broken.
 
@@ -27,6 +35,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 SCENE = os.path.join(HERE, "..", "campaigns", "scenes", "table1.toml")
+HISTORY_BYTES = 16_000_000  # run.max_history_bytes of every run (the default)
 
 # Table 1 values of the numeric keys (the scene file's), for the 1e-9 / 1e9 extremes.
 NOMINAL = {
@@ -78,11 +87,29 @@ def cases(reduced, seed):
     if reduced:
         rng.shuffle(out)
         out = out[:240]
+    return out + free_cases(reduced, rng)
+
+
+def free_cases(reduced, rng):
+    """The free stack: contacts on/off, slack (l_0 = 0.49 m) and Table-1 diagonals, three
+    integrators, histories on and off; the full grid adds 300- and 2,000-bay masts."""
+    out = []
+    bays = [1, 3, 10, 30] + ([] if reduced else [300, 2000])
+    for _ in range(40 if reduced else 400):
+        c = {"stack.mode": "free", "stack.contacts": rng.choice(["true", "false"]),
+             "drive.mode": rng.choice(MODES), "run.direction": rng.choice(DIRECTIONS),
+             "run.integrator": rng.choice(["dopri54", "cvode", "ida"]),
+             "mast.diagonal_free_length_m": rng.choice([0.45, 0.49]),
+             "mast.n_bays": rng.choice(bays), "run.output_step_s": rng.choice([0.0, 1e-3]),
+             "run.rtol": 10 ** rng.uniform(-12, -3), "drive.torque_Nm": 0.002}
+        out.append(c)
     return out
 
 
 def run_one(sim, case, cap_s):
-    args = [sim, SCENE, "--json", "--set", "run.output_step_s=0", "--set", f"run.max_wall_time_s={cap_s}"]
+    # GNU time's last stderr line: the process's peak resident memory (KiB)
+    args = ["/usr/bin/time", "-f", "maxrss_kib=%M", sim, SCENE, "--json", "--set", "run.output_step_s=0",
+            "--set", f"run.max_wall_time_s={cap_s}", "--set", f"run.max_history_bytes={HISTORY_BYTES}"]
     for k, v in case.items():
         value = v if isinstance(v, str) else str(int(v)) if k == "mast.n_bays" else repr(float(v))
         args += ["--set", f"{k}={value}"]
@@ -91,7 +118,10 @@ def run_one(sim, case, cap_s):
         p = subprocess.run(args, capture_output=True, text=True, timeout=cap_s * 3 + 20)
     except subprocess.TimeoutExpired:
         return {"case": case, "rc": "timeout", "wall": time.monotonic() - t0}
-    r = {"case": case, "rc": p.returncode, "wall": time.monotonic() - t0, "stderr": p.stderr[-300:]}
+    rss = [line for line in p.stderr.splitlines() if line.startswith("maxrss_kib=")]
+    stderr = "\n".join(line for line in p.stderr.splitlines() if not line.startswith("maxrss_kib="))
+    r = {"case": case, "rc": p.returncode, "wall": time.monotonic() - t0, "stderr": stderr[-300:],
+         "rss_bytes": 1024 * int(rss[-1].split("=")[1]) if rss else 0}
     if p.returncode in (0, 1) and p.stdout.strip():
         try:
             r["json"] = json.loads(p.stdout)
@@ -107,6 +137,26 @@ def nonfinite_fields(js):
             if not (isinstance(b.get(k), (int, float)) and math.isfinite(b[k])):
                 bad.append(f"bays[{b.get('bay')}].{k}")
     return bad
+
+
+def memory_bound_bytes(case):
+    n = int(case.get("mast.n_bays", 30))
+    dense = case.get("run.integrator") in ("cvode", "ida") and case.get("stack.mode") == "free"
+    return 64e6 + 3 * HISTORY_BYTES + (3 * 8 * (2 * n + 3) ** 2 if dense else 0)
+
+
+def promise_problems(r, js, cap):
+    """The overlap bound of contacts, the memory cap and the wall-time cap."""
+    out, case = [], r["case"]
+    l_s = float(case.get("mast.strut_length_m", 0.18))
+    if (js["status"] == "ok" and case.get("stack.contacts") == "true"
+            and js.get("min_bay_opening_m", 0.0) < -2e-9 * l_s):
+        out.append(f"ok run overlapping by {-js['min_bay_opening_m']:.3g} m with contacts on: {case}")
+    if r["rss_bytes"] > memory_bound_bytes(case):
+        out.append(f"resident memory {r['rss_bytes'] / 1e6:.0f} MB over {memory_bound_bytes(case) / 1e6:.0f} MB: {case}")
+    if js.get("wall_time_s", 0.0) > 1.05 * cap + 0.05:
+        out.append(f"over its cap ({js['wall_time_s']:.2f} s > {cap} s + 5 %): {case}")
+    return out
 
 
 def main():
@@ -139,9 +189,7 @@ def main():
             problems.append(f"status {js['status']} with exit {r['rc']}: {r['case']}")
         if js["status"] == "ok" and (bad := nonfinite_fields(js)):
             problems.append(f"NaN in ok run ({', '.join(bad[:4])}): {r['case']}")
-        # The cap bounds the run; the process adds its start, the stage plan and the output.
-        if js.get("wall_time_s", 0.0) > 1.5 * cap + 0.5:
-            problems.append(f"over its cap ({js['wall_time_s']:.2f} s > {cap} s): {r['case']}")
+        problems += promise_problems(r, js, cap)
     walls.sort()
     pct = lambda q: walls[min(len(walls) - 1, int(q * len(walls)))]
     print(f"stress grid: {len(results)} runs (seed {a.seed}, cap {cap} s, {a.jobs} jobs) in {time.monotonic() - t0:.1f} s")

@@ -7,6 +7,7 @@
 // file), nothing written; 3 the output file could not be written, or an internal error.
 #include <CLI/CLI.hpp>
 
+#include <csignal>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -26,6 +27,9 @@ constexpr int kExitInternal = 3;
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A write past the file-size limit (ulimit -f) fails with EFBIG, which the output code reports
+  // (exit 3, temporary file removed), instead of killing the process with SIGXFSZ mid-write.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"Simulates the deployment (or retraction) of a folding truss mast.", "truss-sim"};
   std::string scene_path;
   std::string out_path;

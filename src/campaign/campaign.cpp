@@ -59,6 +59,15 @@ std::string get_string(const Ctx& c, const toml::node& n, const std::string& key
   return *s;
 }
 
+// A campaign key that becomes a scene's [run] key in every run (ensemble.max_run_wall_time_s ->
+// run.max_wall_time_s, output.history_step_s -> run.output_step_s) takes that key's hard range from
+// the scene key table, so that no value the campaign accepts makes every run invalid input.
+std::string check_run_key_range(std::string_view run_key, const std::string& key, double v) {
+  const sim::SceneKey* k = sim::find_scene_key("run", run_key);
+  if (k == nullptr || k->hard.contains(v)) return {};
+  return fmt::format("{}: must lie in {} {} (the range of run.{}), got {}", key, k->hard.text(), k->unit, run_key, v);
+}
+
 std::vector<double> get_numbers(const Ctx& c, const toml::node& n, const std::string& key) {
   const toml::array* a = n.as_array();
   if (!a) c.fail(&n, fmt::format("{}: expected an array of numbers", key));
@@ -105,7 +114,7 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
       o.ensemble.sampling = static_cast<SamplingMethod>(index_of(kSampling, get_string(c, v, key, kSampling)));
     } else if (k == "max_run_wall_time_s") {
       const double w = get_number(c, v, key);
-      if (!(w > 0.0 && std::isfinite(w))) c.fail(&v, fmt::format("{}: must be positive, got {}", key, w));
+      if (const std::string e = check_run_key_range("max_wall_time_s", key, w); !e.empty()) c.fail(&v, e);
       o.ensemble.max_run_wall_time_s = w;
     } else {
       c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
@@ -165,11 +174,14 @@ void parse_output_table(const Ctx& c, const toml::table& t, CampaignOptions& o) 
       for (const auto& e : *a) {
         auto i = e.value_exact<std::int64_t>();
         if (!i || *i < 0) c.fail(&e, key + ": run indices are integers >= 0");
+        if (std::find(o.output.history_runs.begin(), o.output.history_runs.end(), *i) != o.output.history_runs.end())
+          c.fail(&e, fmt::format("{}: run {} is listed twice", key, *i));
         o.output.history_runs.push_back(*i);
       }
     } else if (k == "history_step_s") {
       const double h = get_number(c, v, key);
-      if (!(h > 0.0 && std::isfinite(h))) c.fail(&v, fmt::format("{}: must be positive, got {}", key, h));
+      if (!(h > 0.0)) c.fail(&v, fmt::format("{}: must be positive, got {}", key, h));
+      if (const std::string e = check_run_key_range("output_step_s", key, h); !e.empty()) c.fail(&v, e);
       o.output.history_step_s = h;
     } else {
       c.fail(&v, fmt::format("unknown key '{}' (known: output.history_runs, output.history_step_s)", key));

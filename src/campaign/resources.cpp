@@ -86,6 +86,13 @@ std::string check_resources(const CampaignContext& ctx, const std::string& outpu
     return fmt::format("error: ensemble.n_runs = {}: the results file (about {}) and the journal (about {}) need more than "
                        "the {} free in {}; free space or use fewer runs",
                        n, human(e.output_bytes), human(e.journal_bytes), human(disk), dir);
+  // A file-size limit (ulimit -f) would stop the journal mid-campaign (EFBIG, exit 3): refuse now.
+  rlimit fsize{};
+  if (::getrlimit(RLIMIT_FSIZE, &fsize) == 0 && fsize.rlim_cur != RLIM_INFINITY &&
+      e.journal_bytes > static_cast<double>(fsize.rlim_cur))
+    return fmt::format("error: ensemble.n_runs = {}: the journal (about {}) would pass the file-size limit of this "
+                       "process ({}, ulimit -f); raise the limit or use fewer runs",
+                       n, human(e.journal_bytes), human(static_cast<double>(fsize.rlim_cur)));
   return {};
 }
 

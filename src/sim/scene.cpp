@@ -7,6 +7,7 @@
 
 #include "model/bay.hpp"
 #include "sim/scene_keys.hpp"
+#include "stages/history.hpp"
 #include "stages/stage_plan.hpp"
 
 namespace truss::sim {
@@ -60,6 +61,13 @@ std::string SceneOptions::validate() const {
     if (panels.tip_height_m) CHECK(positive("panels.tip_height_m", *panels.tip_height_m));
   }
   CHECK(run.validate());
+  if (run.output_step_s > 0.0) {  // two rows at least (stages/history.hpp), the frame heights included
+    const long row_B = stages::calc_history_row_bytes(stack.mode == StackMode::free ? mast.n_bays + 1 : 0);
+    if (run.max_history_bytes < 2 * row_B)
+      return fmt::format("run.max_history_bytes: {} B holds fewer than two history rows of {} B ({} bays, {} stack); "
+                         "raise it or set run.output_step_s = 0", run.max_history_bytes, row_B, mast.n_bays,
+                         stack.mode == StackMode::free ? "free" : "held");
+  }
   // Magnitudes: every numeric key against its hard range (sim/scene_keys.hpp), so that 1e308
   // never reaches the physics.
   CHECK(check_scene_ranges(*this));

@@ -102,7 +102,10 @@ std::vector<SceneKey> make_table() {
       TRUSS_ENUM(run, integrator, "\"dopri54\" | \"cvode\" (BDF) | \"cvode_adams\" | \"auto\" | \"ida\" (free stack)", "dopri54", "cvode", "cvode_adams", "auto", "ida"),
       R(TRUSS_INT(run, max_steps, "1", "cap on accepted integrator steps over the run", kFixed), C(1, 1e15), C(1e3, 1e10)),
       R(TRUSS_REAL(run, max_wall_time_s, "s", "s, wall-time cap for one run", kFixed), P(1e7), C(0.01, 86400)),
-      R(TRUSS_INT(run, max_history_rows, "1", "cap on time-history rows kept in memory (86 B a row); beyond it the history step doubles and every other row is dropped", kFixed), C(2, 1e9), C(1e3, 1e7)),
+      R(TRUSS_INT(run, max_history_bytes, "B",
+                  "B, cap on the time-history memory (84 B a row, 8 B more per frame with a free stack); at the cap the "
+                  "history step doubles and every other row is dropped", kFixed),
+        C(1e3, 1e12), C(1e6, 1e10)),
   };
 }
 

@@ -39,7 +39,7 @@ double calc_allowed_energy_residual_J(const RunResult& r, double rtol, double at
   return std::min(1e-2 * E, 20.0 * phases * std::max(rtol, atol / length_m) * E + static_cast<double>(r.steps) * atol);
 }
 
-std::string calc_accuracy_failure(const RunResult& r, double rtol, double atol, double length_m) {
+std::string calc_accuracy_failure(const RunResult& r, double rtol, double atol, double length_m, bool contacts) {
   const std::pair<const char*, double> reported[] = {
       {"deploy_time_s", r.deploy_time_s}, {"peak_drive_force_N", r.peak_drive_force_N},
       {"min_drive_force_N", r.min_drive_force_N}, {"peak_pin_force_N", r.peak_pin_force_N},
@@ -47,6 +47,11 @@ std::string calc_accuracy_failure(const RunResult& r, double rtol, double atol, 
       {"energy_lost_J", r.energy_lost_J}, {"energy_residual_J", r.energy_residual_J}};
   for (const auto& [name, v] : reported)
     if (!std::isfinite(v)) return fmt::format("{} is not finite ({}) at the end of the run", name, v);
+  if (contacts && r.min_bay_opening_m < -kContactOverlapFraction * length_m)
+    return fmt::format("bay {} overlapped by {:.3g} m at t = {:.9g} s with stack contacts on, deeper than locating a "
+                       "contact leaves ({:g} l_s = {:.3g} m): a contact was crossed inside a step; tighten run.rtol",
+                       r.min_bay_opening_bay, -r.min_bay_opening_m, r.min_bay_opening_time_s, kContactOverlapFraction,
+                       kContactOverlapFraction * length_m);
   const double allowed = calc_allowed_energy_residual_J(r, rtol, atol, length_m), E = calc_energy_scale_J(r);
   if (std::abs(r.energy_residual_J) <= allowed) return {};
   return fmt::format("energy residual {:.3g} J exceeds the {:.3g} J that rtol = {:g}, atol = {:g} allow ({:.3g} of the "

@@ -26,9 +26,13 @@ namespace truss::stages {
 // its tolerance allows: status `inaccurate`.
 double calc_energy_scale_J(const RunResult& r);
 double calc_allowed_energy_residual_J(const RunResult& r, double rtol, double atol, double length_m);
+// With stack contacts (contacts = true) the frames may overlap only by what locating a contact event
+// leaves, kContactOverlapFraction l_s (measured: 1e-9 l_s at every tolerance from 1e-3 to 1e-12, the
+// root finder's position tolerance); a deeper overlap means a crossing was missed inside a step.
+inline constexpr double kContactOverlapFraction = 2e-9;
 // Empty if the run keeps the promise of `ok` (its reported numbers finite, its residual within
-// the bound above); otherwise the reason, for the `inaccurate` status.
-std::string calc_accuracy_failure(const RunResult& r, double rtol, double atol, double length_m);
+// the bound above, no overlap beyond the contacts' bound); otherwise the reason, for `inaccurate`.
+std::string calc_accuracy_failure(const RunResult& r, double rtol, double atol, double length_m, bool contacts);
 
 class EnergyLedger {
  public:

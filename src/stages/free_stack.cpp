@@ -325,6 +325,7 @@ FreeContactEvent FreeStack::apply_unlock(const PhaseContext& ctx, double u, bool
   e.ok = imp.ok;
   if (!imp.ok) return e;
   e.impulse_Ns = imp.impulses[0];
+  e.rail_impulse_Ns = imp.impulses[0];
   if (drive_holds_speed && from_rest) {
     e.drive_work_J = imp.energy_loss_J;  // (1/2) dv' M dv: the energy the ramp gives (no loss)
     e.impulse_Ns = imp.impulses[1];

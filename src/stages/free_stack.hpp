@@ -12,6 +12,7 @@
 // applies a landing (plastic impact of the phase's coordinates, model/free_impacts.hpp) or a
 // lift-off found by the phase's events.
 #pragma once
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -47,6 +48,7 @@ struct FreeContactEvent {
   double energy_loss_J = 0, drive_work_J = 0;
   int bay = 0;
   double impulse_Ns = 0;  // the contact (landing) or rail (unlock) impulse; the drive's for a start ramp
+  double rail_impulse_Ns = std::numeric_limits<double>::quiet_NaN();  // unlock: the rail's impulse Lambda on the pins together (N s)
 };
 
 class FreeStack {

@@ -36,6 +36,7 @@ StackEvent FreeStackModel::start_stage(const StageSpec& s, bool first_stage) {
     if (!c.ok) e.failure = fmt::format("singular configuration: the unlock of bay {} has no solution", s.bay);
     if (!c.ok) return e;
     if (first_stage && drive_holds_speed_) e.start_drive_impulse_Ns = c.impulse_Ns;
+    e.rail_impulse_Ns = c.rail_impulse_Ns;
     e.energy_loss_J = c.energy_loss_J;
     e.drive_work_J = c.drive_work_J;
     return e;

@@ -1,9 +1,11 @@
 // Optional time histories (docs/model.md §5): the phase points on the grid t_k = k * step, pushed in
 // time order by the phase solvers, plus a last row at the end of the run.
-// Memory is bounded: when the rows reach run.max_history_rows, every other row is dropped and the
-// step doubles (the rows left are exactly the grid of the doubled step, t = 0, 2h, 4h, ...), so a
-// long run keeps a coarser but complete history instead of exhausting memory. The step in force
-// is TimeHistory::step_s (written as the `step_s` attribute of every history).
+// Memory is bounded in bytes: a row is calc_history_row_bytes(n_frames) (84 B, and 8 B a frame for
+// the free stack's frame heights); when the rows reach run.max_history_bytes, every other row is
+// dropped and the step doubles (the rows left are exactly the grid of the doubled step, t = 0, 2h,
+// 4h, ...), so a long run keeps a coarser but complete history instead of exhausting memory. The
+// vectors never grow past the cap either (their capacity is managed here). The step in force is
+// TimeHistory::step_s (written as the `step_s` attribute of every history).
 #pragma once
 #include <algorithm>
 #include <chrono>
@@ -16,10 +18,14 @@
 
 namespace truss::stages {
 
+// Bytes of one history row: t, 9 float64 columns and the bay (int32), plus n_frames frame heights.
+inline constexpr long calc_history_row_bytes(int n_frames) { return 10 * 8 + 4 + 8L * n_frames; }
+
 class HistoryRecorder {
  public:
-  HistoryRecorder(TimeHistory* out, double step_s, const model::DriveParams& drive, long max_rows)
-      : out_(step_s > 0.0 ? out : nullptr), step_(step_s), drive_(drive), max_rows_(std::max(2L, max_rows)) {
+  HistoryRecorder(TimeHistory* out, double step_s, const model::DriveParams& drive, long max_bytes)
+      : out_(step_s > 0.0 ? out : nullptr), step_(step_s), drive_(drive), max_bytes_(max_bytes),
+        max_rows_(std::max(2L, max_bytes / calc_history_row_bytes(0))) {
     if (out_) out_->step_s = step_s;
   }
   bool enabled() const { return out_ != nullptr; }
@@ -29,6 +35,8 @@ class HistoryRecorder {
     if (!out_) return;
     out_->n_frames = n_frames;
     frames_.assign(static_cast<std::size_t>(n_frames), __builtin_nan(""));
+    // SceneOptions::validate() refuses a cap below two rows, so this keeps to it.
+    max_rows_ = std::max(2L, max_bytes_ / calc_history_row_bytes(n_frames));
   }
   bool records_frames() const { return out_ && out_->n_frames > 0; }
   double* frame_buffer() { return frames_.data(); }
@@ -54,7 +62,20 @@ class HistoryRecorder {
   }
 
  private:
+  // Every column's capacity grows in step (doubling, never past max_rows_): memory stays under the cap.
+  void reserve_rows() {
+    if (out_->t_s.size() < out_->t_s.capacity()) return;
+    const std::size_t rows = std::min<std::size_t>(static_cast<std::size_t>(max_rows_),
+                                                   std::max<std::size_t>(64, 2 * out_->t_s.size()));
+    for (auto* v : {&out_->t_s, &out_->y_driven_m, &out_->y_lower_m, &out_->hinge_x_m, &out_->hinge_y_m,
+                    &out_->drive_force_N, &out_->drive_torque_Nm, &out_->pin_force_N, &out_->diagonal_tension_N,
+                    &out_->driven_speed_m_per_s})
+      v->reserve(rows);
+    out_->bay.reserve(rows);
+    out_->frame_height_m.reserve(rows * static_cast<std::size_t>(out_->n_frames));
+  }
   void push(double t, const PhasePoint& p, int bay) {
+    reserve_rows();
     out_->t_s.push_back(t);
     out_->bay.push_back(bay);
     out_->y_driven_m.push_back(p.y_driven_m);
@@ -103,6 +124,7 @@ class HistoryRecorder {
   double step_;
   long next_ = 0;
   const model::DriveParams& drive_;
+  long max_bytes_;
   long max_rows_;
   std::vector<double> frames_;
 };

@@ -20,8 +20,8 @@ std::string RunOptions::validate() const {
     return fmt::format("run.rtol: must lie in [{}, {}] (relative error per step), got {}", kMinRtol, kMaxRtol, rtol);
   if (!(atol > 0.0 && atol <= kMaxAtol))
     return fmt::format("run.atol: must lie in (0, {}] (m, m/s, J per step), got {}", kMaxAtol, atol);
-  if (!(max_history_rows >= 2))
-    return fmt::format("run.max_history_rows: must be >= 2, got {}", max_history_rows);
+  if (!(max_history_bytes >= 1000))
+    return fmt::format("run.max_history_bytes: must be >= 1000, got {}", max_history_bytes);
   if (max_steps < 1) return fmt::format("run.max_steps: must be positive, got {}", max_steps);
   return positive("run.max_wall_time_s", max_wall_time_s);
 }

@@ -24,7 +24,7 @@ struct RunOptions {
   integrators::IntegratorKind integrator = integrators::IntegratorKind::automatic;  // dopri54, BDF once stiff (ode.hpp)
   long max_steps = 2'000'000;               // step cap over the whole run: a run never hangs
   double max_wall_time_s = 600.0;           // wall-time cap for one run
-  long max_history_rows = 200'000;          // history memory cap (86 B a row, 17 MB): beyond it the step doubles
+  long max_history_bytes = 16'000'000;      // history memory cap (B, stages/history.hpp): beyond it the step doubles
   std::string validate() const;             // empty, or "run.key: reason"
 };
 

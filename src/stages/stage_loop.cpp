@@ -79,7 +79,7 @@ std::unique_ptr<StackModel> make_stack_model(const MastParams& mast, const std::
 StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts)
     : mast_(mast), stages_(stages), opts_(opts), dir_(calc_direction_sign(opts.run.direction)),
       wall_start_(std::chrono::steady_clock::now()), ledger_(mast),
-      history_(&r_.history, opts.run.output_step_s, opts_.drive, opts.run.max_history_rows),
+      history_(&r_.history, opts.run.output_step_s, opts_.drive, opts.run.max_history_bytes),
       stack_(make_stack_model(mast, stages, opts)), steps_left_(opts.run.max_steps) {
   const int n = mast.n_bays();
   r_.n_bays = n;
@@ -288,7 +288,8 @@ void StageLoop::finish() {
 // An `ok` run promises finite numbers and an energy balance within its tolerance (energy.hpp).
 void StageLoop::check_accuracy() {
   if (failed_) return;
-  std::string why = calc_accuracy_failure(r_, opts_.run.rtol, opts_.run.atol, mast_.bay(1).strut_length_m);
+  const bool contacts = !stages_.empty() && stages_.front().contacts;
+  std::string why = calc_accuracy_failure(r_, opts_.run.rtol, opts_.run.atol, mast_.bay(1).strut_length_m, contacts);
   if (!why.empty()) fail(RunStatus::inaccurate, std::move(why));
 }
 

@@ -210,6 +210,12 @@ rc=$?
 if [ "$rc" -eq 3 ]; then ok "fsize: exit 3"; else bad "fsize: exit $rc, expected 3"; sed 's/^/     | /' fsize.err | head; fi
 expect_in fsize.err "File too large" "fsize: the system's reason"
 if [ -z "$(find . -maxdepth 1 \( -name 'fsize.h5' -o -name '.fsize.h5.tmp.*' \))" ]; then ok "fsize: nothing left"; else bad "fsize: files left"; fi
+# The same limit without the shell ignoring SIGXFSZ: truss-sim ignores it itself (EFBIG, exit 3,
+# nothing left), instead of being killed by the signal mid-write with its temporary file left.
+( ulimit -f 200; exec "$SIM" "$TABLE1" --set run.output_step_s=0.001 -o fsig.h5 ) >fsig.out 2>fsig.err
+rc=$?
+if [ "$rc" -eq 3 ]; then ok "fsize, signal not ignored by the shell: exit 3"; else bad "fsize, signal: exit $rc, expected 3"; fi
+if [ -z "$(find . -maxdepth 1 \( -name 'fsig.h5' -o -name '.fsig.h5.tmp.*' \))" ]; then ok "fsize, signal: nothing left"; else bad "fsize, signal: files left"; fi
 mkdir -p full
 if [ "$(id -u)" -eq 0 ] && mount -t tmpfs -o size=1m tmpfs full 2>/dev/null; then
   # data writes fail (0.0001, 0.001); with 800 KiB taken by another file, a smaller file (0.03)

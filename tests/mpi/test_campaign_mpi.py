@@ -11,6 +11,7 @@ check raises (exit 1).
 import argparse
 import os
 import re
+import resource
 import shutil
 import signal
 import subprocess
@@ -438,6 +439,15 @@ def case_bad_input(args):
     check(p.returncode == 2 and "does not exist" in p.stderr, "output directory missing: exit 2")
     p = mpirun(args, 2, [os.path.join(args.repo, TABLE1), "-o", os.path.join(d, "x.h5"), "--resume"])
     check(p.returncode == 2 and "no journal" in p.stderr, "--resume without a journal: exit 2")
+    # A file-size limit (ulimit -f) below the journal's size: refused before any run. (Open MPI's
+    # PMIx needs PMIX_MCA_gds=hash to start at all under such a limit: docs/campaigns.md.)
+    def limit_file_size():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (100 * 1024, 100 * 1024))
+    p = subprocess.run(["mpirun", "--oversubscribe", "-np", "2", args.driver, os.path.join(args.repo, TABLE1),
+                        "-o", os.path.join(d, "x.h5"), "--set", "ensemble.n_runs=300"],
+                       env=dict(ENV, PMIX_MCA_gds="hash"), preexec_fn=limit_file_size, capture_output=True,
+                       text=True, timeout=600)
+    check(p.returncode == 2 and "file-size limit" in p.stderr, "journal beyond the file-size limit: exit 2")
     written = [f for f in os.listdir(d) if not f.endswith(".toml")]
     check(written == [], f"nothing written by any refused run ({written})")
 

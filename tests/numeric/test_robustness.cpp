@@ -227,11 +227,22 @@ TEST_CASE("tolerances outside the sane range are refused, naming the key", "[rob
   CHECK_THAT(message(1e-8, 0.0), Contains("run.atol"));
 }
 
-TEST_CASE("histories are bounded: at the row cap the step doubles and the even grid rows stay", "[robust][history]") {
+namespace {
+// The bytes a history holds: every column's capacity (what is allocated, not just what is used).
+std::size_t held_bytes(const stages::TimeHistory& h) {
+  std::size_t b = 4 * h.bay.capacity() + 8 * h.frame_height_m.capacity();
+  for (const auto* v : {&h.t_s, &h.y_driven_m, &h.y_lower_m, &h.hinge_x_m, &h.hinge_y_m, &h.drive_force_N,
+                        &h.drive_torque_Nm, &h.pin_force_N, &h.diagonal_tension_N, &h.driven_speed_m_per_s})
+    b += 8 * v->capacity();
+  return b;
+}
+}  // namespace
+
+TEST_CASE("histories are bounded: at the byte cap the step doubles and the even grid rows stay", "[robust][history]") {
   SceneOptions s = table1(DriveMode::velocity, 3);
   s.run.output_step_s = 1e-3;
   const RunResult full = simulate(s);
-  s.run.max_history_rows = 50;
+  s.run.max_history_bytes = 50 * 84;  // 50 rows of 84 B (t, 9 columns, the bay)
   const RunResult cut = simulate(s);
   REQUIRE(full.status == RunStatus::ok);
   REQUIRE(cut.status == RunStatus::ok);
@@ -251,6 +262,27 @@ TEST_CASE("histories are bounded: at the row cap the step doubles and the even g
   }
   CHECK(cut.history.t_s.back() == full.history.t_s.back());
   CHECK(cut.deploy_time_s == full.deploy_time_s);
+  CHECK(held_bytes(cut.history) <= static_cast<std::size_t>(s.run.max_history_bytes));
+}
+
+// A free-stack row carries every frame's height: 8 (n + 1) B more. 300 bays at a 1 ms step would
+// hold about 165 MB uncapped (66 s of motion); the cap holds whatever the row size.
+TEST_CASE("free-stack histories are bounded in bytes, frame heights included", "[robust][history]") {
+  SceneOptions s = table1(DriveMode::torque, 300);
+  s.stack.mode = StackMode::free;
+  s.mast.diagonal_free_length_m = 0.49;
+  s.drive.torque_Nm = 0.002;
+  s.run.output_step_s = 1e-3;
+  s.run.max_history_bytes = 200'000;
+  const RunResult r = simulate(s);
+  INFO(r.message);
+  CHECK(r.history.n_frames == 301);
+  CHECK(r.history.size() >= 2);
+  CHECK(held_bytes(r.history) <= 200'000u);
+  CHECK(r.history.size() * (84 + 8 * 301) <= 200'000u);
+  // below two rows of 84 + 8 * 301 B: refused before the run, naming the key
+  s.run.max_history_bytes = 2 * (84 + 8 * 301) - 1;
+  CHECK_THAT(s.validate(), Contains("run.max_history_bytes"));
 }
 
 TEST_CASE("the wall-time cap holds in velocity mode (closed form with a long history)", "[robust][caps]") {
@@ -263,7 +295,7 @@ TEST_CASE("the wall-time cap holds in velocity mode (closed form with a long his
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   CHECK(r.status == RunStatus::wall_time_limit);
   CHECK(wall < 2.0);  // the cap plus one phase and the result's assembly, on a loaded machine
-  CHECK(r.history.size() <= static_cast<std::size_t>(s.run.max_history_rows));
+  CHECK(held_bytes(r.history) <= static_cast<std::size_t>(s.run.max_history_bytes));
 }
 
 namespace {

@@ -15,6 +15,9 @@ ALLOWED = {
     "io": {"io", "sim", "stages", "model", "integrators", "numerics"},
     "app": {"app", "io", "sim", "stages", "model", "integrators", "numerics"},
     "campaign": {"campaign", "io", "sim", "stages", "model", "integrators", "numerics"},
+    # sampling/: pure mathematics (subset simulation, stopping rules); it reuses the keyed
+    # generator and the normal law of campaign/sampling.hpp, itself pure (fmt only).
+    "sampling": {"sampling", "campaign"},
     "parallel": {"parallel", "campaign", "io", "sim", "stages", "model", "integrators", "numerics"},
 }
 EXTERNAL_OK = {"numerics": ("",), "model": ("Eigen/",)}  # besides the standard library

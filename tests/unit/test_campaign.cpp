@@ -73,6 +73,10 @@ TEST_CASE("bad campaign files name the key and the line", "[campaign][input]") {
       {head + "[[dispersion]]\nkey = \"mast.strut_mass_kg\"\ndistribution = \"normal\"\nstd = 0.1\nmean = \"zero\"\n", "expected a number", 8},
       {head + "[scene]\noverrides = { \"rail.beta_deg\" = 95 }\n", "rail.beta_deg", 0},
       {head + "[ensemble\n", "", 4},                                                    // syntax error
+      // campaign keys that become [run] keys of every run take those keys' ranges
+      {head + "max_run_wall_time_s = 1e308\n", "ensemble.max_run_wall_time_s: must lie in (0, 10000000] s", 4},
+      {head + "[output]\nhistory_step_s = 1e308\n", "output.history_step_s: must lie in [0, 1000] s", 5},
+      {head + "[output]\nhistory_runs = [3, 0, 3]\n", "output.history_runs: run 3 is listed twice", 5},
   };
   int i = 0;
   for (const Bad& b : cases) {

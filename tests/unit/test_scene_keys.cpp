@@ -25,7 +25,7 @@ std::vector<unsigned char> bytes_of(const sim::SceneOptions& s) {
   put(s.drive.stall_torque_Nm); put(s.drive.no_load_speed_rad_per_s); put(s.stack.mode); put(s.stack.contacts); put(s.stack.contact_law); put(s.panels.count);
   put(s.panels.length_m); put(s.panels.mass_kg); put(s.panels.tip_height_m.value_or(-1)); put(s.run.direction);
   put(s.run.output_step_s); put(s.run.rtol); put(s.run.atol); put(s.run.integrator); put(s.run.max_steps);
-  put(s.run.max_wall_time_s); put(s.run.max_history_rows);
+  put(s.run.max_wall_time_s); put(s.run.max_history_bytes);
   return b;
 }
 }  // namespace

@@ -1,0 +1,192 @@
+// subset_bytes.cpp — byte formats of subset simulation: a round's plan (the per-round blob every
+// rank reads) and the whole state (SubsetSimulation::save/load). Native little-endian integers and
+// IEEE-754 doubles (x86-64, AArch64), each format opened by a 4-byte tag with its version; a
+// reader refuses a cut, an overlong or an inconsistent buffer before allocating for it.
+#include <cstring>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "sampling/subset_simulation.hpp"
+
+namespace truss::sampling {
+
+namespace {
+
+constexpr std::uint32_t kRoundTag = 0x31525353;  // "SSR1"
+constexpr std::uint32_t kStateTag = 0x31535353;  // "SSS1"
+
+struct Writer {
+  std::string out;
+  template <class T>
+  void put(T v) {
+    out.append(reinterpret_cast<const char*>(&v), sizeof v);
+  }
+  template <class T>
+  void put_all(const std::vector<T>& v) {
+    put(static_cast<std::uint64_t>(v.size()));
+    out.append(reinterpret_cast<const char*>(v.data()), sizeof(T) * v.size());
+  }
+};
+
+struct Reader {
+  std::string_view in;
+  const char* what;
+  template <class T>
+  T get() {
+    if (in.size() < sizeof(T)) throw std::runtime_error(fmt::format("{}: cut short ({} bytes left)", what, in.size()));
+    T v;
+    std::memcpy(&v, in.data(), sizeof v);
+    in.remove_prefix(sizeof v);
+    return v;
+  }
+  // A count of items of `size` bytes each that the rest of the buffer can hold.
+  std::size_t get_count(std::size_t size) {
+    const auto n = get<std::uint64_t>();
+    if (n > in.size() / size) throw std::runtime_error(fmt::format("{}: {} items in {} bytes", what, n, in.size()));
+    return static_cast<std::size_t>(n);
+  }
+  template <class T>
+  std::vector<T> get_all() {
+    std::vector<T> v(get_count(sizeof(T)));
+    if (!v.empty()) std::memcpy(v.data(), in.data(), sizeof(T) * v.size());
+    in.remove_prefix(sizeof(T) * v.size());
+    return v;
+  }
+  void expect_end() {
+    if (!in.empty()) throw std::runtime_error(fmt::format("{}: {} bytes past the end", what, in.size()));
+  }
+};
+
+void put_level(Writer& w, const SubsetLevel& l) {
+  for (double v : {l.threshold, l.probability, l.gamma, l.cov}) w.put(v);
+  for (std::int64_t v : {l.runs, l.steps, l.moved, l.unusable, l.ties}) w.put(v);
+}
+
+SubsetLevel get_level(Reader& r) {
+  SubsetLevel l;
+  for (double* v : {&l.threshold, &l.probability, &l.gamma, &l.cov}) *v = r.get<double>();
+  for (std::int64_t* v : {&l.runs, &l.steps, &l.moved, &l.unusable, &l.ties}) *v = r.get<std::int64_t>();
+  return l;
+}
+
+}  // namespace
+
+std::string SubsetRound::encode() const {
+  Writer w;
+  w.put(kRoundTag);
+  w.put(index);
+  w.put(first_evaluation);
+  w.put(static_cast<std::int32_t>(level));
+  w.put(static_cast<std::int32_t>(step));
+  w.put(threshold);
+  w.put(n_points);
+  if (step > 0) {
+    w.put_all(chains);
+    w.put_all(z);
+  }
+  return std::move(w.out);
+}
+
+SubsetRound SubsetRound::decode(std::string_view bytes, int dims) {
+  Reader r{bytes, "subset round"};
+  if (r.get<std::uint32_t>() != kRoundTag) throw std::runtime_error("subset round: not an encoded round (tag)");
+  SubsetRound s;
+  s.index = r.get<std::int64_t>();
+  s.first_evaluation = r.get<std::int64_t>();
+  s.level = r.get<std::int32_t>();
+  s.step = r.get<std::int32_t>();
+  s.threshold = r.get<double>();
+  s.n_points = r.get<std::int64_t>();
+  if (s.step > 0) {
+    s.chains = r.get_all<std::int64_t>();
+    s.z = r.get_all<double>();
+  }
+  r.expect_end();
+  const bool sizes = s.step == 0 || (static_cast<std::int64_t>(s.chains.size()) == s.n_points &&
+                                     s.z.size() == s.chains.size() * static_cast<std::size_t>(dims));
+  if (s.index < 0 || s.first_evaluation < 0 || s.level < 0 || s.step < 0 || s.n_points < 0 || !sizes ||
+      (s.step == 0) != (s.level == 0))
+    throw std::runtime_error(fmt::format("subset round: inconsistent plan (level {}, step {}, {} points, {} chains, "
+                                         "{} coordinates for {} dimensions)", s.level, s.step, s.n_points,
+                                         s.chains.size(), s.z.size(), dims));
+  return s;
+}
+
+std::string SubsetSimulation::save() const {
+  Writer w;
+  w.put(kStateTag);
+  w.put(static_cast<std::int32_t>(opt_.dims));
+  w.put(opt_.n_per_level);
+  w.put(opt_.p0);
+  w.put(static_cast<std::int32_t>(opt_.max_levels));
+  w.put(opt_.proposal_half_width);
+  w.put(opt_.seed);
+  w.put(static_cast<std::int32_t>(status_));
+  w.put_all(std::vector<char>(message_.begin(), message_.end()));
+  const std::string round = round_.encode();
+  w.put_all(std::vector<char>(round.begin(), round.end()));
+  w.put(evaluations_);
+  w.put(rounds_);
+  w.put(domain_);
+  w.put(static_cast<std::uint64_t>(samples_.size()));
+  for (const Sample& s : samples_) {
+    w.put(s.margin);
+    for (std::int64_t v : {s.chain, s.step, s.evaluation, s.root}) w.put(v);
+  }
+  w.put_all(z_);
+  w.put_all(head_);
+  w.put(static_cast<std::uint64_t>(levels_.size()));
+  for (const SubsetLevel& l : levels_) put_level(w, l);
+  w.put_all(lineage_);
+  return std::move(w.out);
+}
+
+SubsetSimulation SubsetSimulation::load(std::string_view bytes) {
+  Reader r{bytes, "subset state"};
+  if (r.get<std::uint32_t>() != kStateTag) throw std::runtime_error("subset state: not a saved state (tag)");
+  SubsetSimulation s;
+  s.opt_.dims = r.get<std::int32_t>();
+  s.opt_.n_per_level = r.get<std::int64_t>();
+  s.opt_.p0 = r.get<double>();
+  s.opt_.max_levels = r.get<std::int32_t>();
+  s.opt_.proposal_half_width = r.get<double>();
+  s.opt_.seed = r.get<std::uint64_t>();
+  if (const std::string why = s.opt_.validate(); !why.empty()) throw std::runtime_error("subset state: " + why);
+  const auto status = r.get<std::int32_t>();
+  if (status < 0 || status > static_cast<int>(SubsetStatus::no_progress))
+    throw std::runtime_error(fmt::format("subset state: status {}", status));
+  s.status_ = static_cast<SubsetStatus>(status);
+  const auto message = r.get_all<char>();
+  s.message_.assign(message.begin(), message.end());
+  const auto round = r.get_all<char>();
+  s.round_ = SubsetRound::decode(std::string_view(round.data(), round.size()), s.opt_.dims);
+  s.evaluations_ = r.get<std::int64_t>();
+  s.rounds_ = r.get<std::int64_t>();
+  s.domain_ = r.get<double>();
+  s.samples_.resize(r.get_count(40));
+  for (Sample& x : s.samples_) {
+    x.margin = r.get<double>();
+    for (std::int64_t* v : {&x.chain, &x.step, &x.evaluation, &x.root}) *v = r.get<std::int64_t>();
+  }
+  s.z_ = r.get_all<double>();
+  s.head_ = r.get_all<std::int64_t>();
+  s.levels_.resize(r.get_count(72));
+  for (SubsetLevel& l : s.levels_) l = get_level(r);
+  s.lineage_ = r.get_all<double>();
+  r.expect_end();
+  const auto n = static_cast<std::int64_t>(s.samples_.size());
+  bool ok = s.z_.size() == s.samples_.size() * static_cast<std::size_t>(s.opt_.dims) && !s.levels_.empty() &&
+            n <= s.opt_.n_per_level &&
+            (s.head_.empty() || static_cast<std::int64_t>(s.head_.size()) == s.opt_.n_chains());
+  const auto chains = s.head_.empty() ? n : static_cast<std::int64_t>(s.head_.size());  // level 0: one per sample
+  for (const Sample& x : s.samples_) ok = ok && x.chain >= 0 && x.chain < chains;
+  for (std::int64_t h : s.head_) ok = ok && h >= 0 && h < n;
+  for (const Sample& x : s.samples_) ok = ok && x.root >= 0 && x.root < s.opt_.n_per_level;
+  ok = ok && (s.lineage_.empty() || static_cast<std::int64_t>(s.lineage_.size()) == s.opt_.n_per_level);
+  if (!ok) throw std::runtime_error(fmt::format("subset state: inconsistent ({} samples, {} coordinates, {} chains)",
+                                                n, s.z_.size(), s.head_.size()));
+  return s;
+}
+
+}  // namespace truss::sampling
