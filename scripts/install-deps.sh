@@ -12,6 +12,7 @@ PKGS=(build-essential cmake pkg-config
       python3-xarray python3-h5netcdf  # xarray opens the campaign file with named dimensions (mpi_layout)
       help2man            # man pages from --help (cmake --install)
       python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests)
+      libsimbody-dev      # the cross-check against a general multibody engine (validation/simbody, docs/validation.md)
       clang libclang-rt-14-dev)  # the sanitizer and fuzzing stage (scripts/sanitize.sh)
 missing=()
 for p in "${PKGS[@]}"; do
