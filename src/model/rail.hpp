@@ -48,6 +48,7 @@ T calc_rail_function_m(const RailParams& r, const RailConstants& rc, T hinge_x_m
 template <class T>
 struct OnRailKinematicsT {
   T x = 0, s = 0;          // hinge offset and half-opening sqrt(l^2 - x^2)
+  T x_over_s = 0;          // x / s
   T Y = 0, dY = 0, d2Y = 0;  // upper (driven) frame height and derivatives in x
   T Z = 0, dZ = 0, d2Z = 0;  // lower frame height and derivatives in x
 };
@@ -64,6 +65,7 @@ OnRailKinematicsT<T> calc_on_rail(const RailConstants& r, double strut_length_m,
   const T yh = r.axis_height_m - c * x;
   const T xs = x / k.s;
   const T curv = l * l / (k.s * k.s * k.s);
+  k.x_over_s = xs;
   k.Y = yh + k.s;
   k.dY = -c - xs;
   k.d2Y = -curv;

@@ -33,10 +33,26 @@ PhasePointT<T> HeldPhase::calc_point_t(T q, T qdot) const {
 }
 
 template <class T>
-PhasePointT<T> HeldPhase::calc_point_at_speed_t(T q, double u_m_per_s, bool loads_only) const {
-  if (ctx_.kind == PhaseKind::open) return calc_open(q, T(u_m_per_s), loads_only);
+PhasePointT<T> HeldPhase::calc_point_at_speed_t(T q, double u_m_per_s, PointFields fields) const {
+  if (ctx_.kind == PhaseKind::open) return calc_open(q, T(u_m_per_s), fields);
   const model::OnRailKinematicsT<T> kin = model::calc_on_rail(rail_, strut_length_m(), q);
-  return calc_on_rail(kin, T(u_m_per_s) / kin.dY, loads_only);
+  return calc_on_rail(kin, T(u_m_per_s) / kin.dY, fields);
+}
+
+double HeldPhase::calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& /*scratch*/) const {
+  const PhasePoint p = ctx_.kind == PhaseKind::open
+                           ? calc_open(q[0], qdot[0], PointFields::motion)
+                           : calc_on_rail(model::calc_on_rail(rail_, strut_length_m(), q[0]), qdot[0], PointFields::motion);
+  qddot[0] = p.qddot;
+  return p.drive_force_N * p.u_m_per_s;
+}
+
+PhasePoint HeldPhase::calc_loads(const double* q, const double* qdot, double* qddot, PhaseScratch& /*scratch*/) const {
+  const PhasePoint p = ctx_.kind == PhaseKind::open
+                           ? calc_open(q[0], qdot[0], PointFields::loads)
+                           : calc_on_rail(model::calc_on_rail(rail_, strut_length_m(), q[0]), qdot[0], PointFields::loads);
+  qddot[0] = p.qddot;
+  return p;
 }
 
 PhasePoint HeldPhase::calc_point(double q, double qdot, PhaseScratch& /*scratch*/) const { return calc_point_t(q, qdot); }
@@ -49,7 +65,7 @@ double HeldPhase::calc_driven_speed_m_per_s(double q, double qdot) const {
 }
 
 template <class T>
-PhasePointT<T> HeldPhase::calc_open(T y, T u, bool loads_only) const {
+PhasePointT<T> HeldPhase::calc_open(T y, T u, PointFields fields) const {
   const MastParams& mast = *ctx_.mast;
   const int m = ctx_.bay;
   const BayParams& bay = mast.bay(m);
@@ -61,7 +77,7 @@ PhasePointT<T> HeldPhase::calc_open(T y, T u, bool loads_only) const {
   p.y_driven_m = y; p.y_lower_m = ctx_.lower_held_height_m;
   p.u_m_per_s = u; p.w_m_per_s = 0.0;
   const T D = y - ctx_.lower_held_height_m;
-  if (!loads_only) p.hinge_x_m = calc_hinge_offset_m(bay, D);
+  if (fields == PointFields::all) p.hinge_x_m = calc_hinge_offset_m(bay, D);
   p.hinge_y_m = ctx_.lower_held_height_m + 0.5 * D;
   const T M = sys.diag[0];
   const T R = sys.velocity_terms[0] + sys.spring_forces[0];
@@ -73,21 +89,21 @@ PhasePointT<T> HeldPhase::calc_open(T y, T u, bool loads_only) const {
     p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
     p.qddot = (R + p.drive_force_N) / M;
   }
+  if (fields == PointFields::motion) return p;
   p.diagonal_tension_N = calc_diagonal_tension_N(bay, b2_m_, D);
   p.mass_yy = M;
-  if (loads_only) return p;
+  if (fields == PointFields::loads) return p;
   p.kinetic_energy_J = 0.5 * M * u * u;
   p.potential_energy_J = calc_bay_potential_J(bay, b2_m_, D);
   return p;
 }
 
 template <class T>
-PhasePointT<T> HeldPhase::calc_on_rail(const model::OnRailKinematicsT<T>& kin, T xi, bool loads_only) const {
+PhasePointT<T> HeldPhase::calc_on_rail(const model::OnRailKinematicsT<T>& kin, T xi, PointFields fields) const {
   using std::abs;
   const MastParams& mast = *ctx_.mast;
   const int m = ctx_.bay;
   const BayParams& bay = mast.bay(m);
-  const double l = bay.strut_length_m;
   const double c = rail_.cot_beta;
   const T x = kin.x;
   const T u = kin.dY * xi;
@@ -99,8 +115,9 @@ PhasePointT<T> HeldPhase::calc_on_rail(const model::OnRailKinematicsT<T>& kin, T
   const T A_ll = sys.diag[0], A_mm = sys.diag[1], A_ml = sys.sub[1];
   const T r_l = sys.velocity_terms[0] + sys.spring_forces[0];
   const T r_m = sys.velocity_terms[1] + sys.spring_forces[1];
-  const T k = 2.0 * x / kin.s;
-  const T dk = 2.0 * l * l / (kin.s * kin.s * kin.s);
+  // 2 x / s and 2 l^2 / s^3 from the kinematics' x / s and l^2 / s^3 (a factor 2 is exact).
+  const T k = 2.0 * kin.x_over_s;
+  const T dk = 2.0 * kin.d2Z;
   const T g = calc_g_hinge(bay, x);
   const T dg = calc_dg_hinge_dx(bay, x);
   const T xi2 = xi * xi;
@@ -109,7 +126,7 @@ PhasePointT<T> HeldPhase::calc_on_rail(const model::OnRailKinematicsT<T>& kin, T
   const T M_xx = k * k * A_ll + 2.0 * g;
   const T R_y0 = r_m + r_l - (A_ml + A_ll) * dk * xi2;  // without the drive force
   const T R_x = k * (r_l - A_ll * dk * xi2) - dg * xi2;
-  const T gamma = c + x / kin.s;  // = -Y'(x) = df/dx in (y_m, x)
+  const T gamma = c + kin.x_over_s;  // = -Y'(x) = df/dx in (y_m, x)
 
   PhasePointT<T> p;
   p.q = x; p.qdot = xi;
@@ -127,6 +144,7 @@ PhasePointT<T> HeldPhase::calc_on_rail(const model::OnRailKinematicsT<T>& kin, T
     const T R_y = R_y0 + p.drive_force_N;
     const T mu = M_xx - 2.0 * gamma * M_yx + gamma * gamma * M_yy;
     p.qddot = (R_x - gamma * R_y - (M_yx - gamma * M_yy) * kin.d2Y * xi2) / mu;
+    if (fields == PointFields::motion) return p;
     yddot = kin.dY * p.qddot + kin.d2Y * xi2;
     p.lambda_N = M_yy * yddot + M_yx * p.qddot - R_y;
   }
@@ -136,20 +154,20 @@ PhasePointT<T> HeldPhase::calc_on_rail(const model::OnRailKinematicsT<T>& kin, T
   p.static_drive_force_N = -(sys.spring_forces[1] + sys.spring_forces[0]) + k * sys.spring_forces[0] / gamma;
   const T D = 2.0 * kin.s;
   T tension = calc_diagonal_tension_N(bay, b2_m_, D);
-  if (!loads_only) p.potential_energy_J = calc_bay_potential_J(bay, b2_m_, D);
+  if (fields == PointFields::all) p.potential_energy_J = calc_bay_potential_J(bay, b2_m_, D);
   if (m >= 2) {
     const BayParams& lower = mast.bay(m - 1);
     const T Dl = kin.Z - ctx_.lower_held_height_m;
     const T tension_lower = calc_diagonal_tension_N(lower, b2_lower_, Dl);
     if (tension < tension_lower) tension = tension_lower;  // std::max
-    if (!loads_only) p.potential_energy_J += calc_bay_potential_J(lower, b2_lower_, Dl);
+    if (fields == PointFields::all) p.potential_energy_J += calc_bay_potential_J(lower, b2_lower_, Dl);
   }
   p.diagonal_tension_N = tension;
   p.mass_yy = M_yy; p.mass_yx = M_yx; p.mass_xx = M_xx;
   p.rail_slope = gamma;
-  if (loads_only) return p;
-  p.kinetic_energy_J = 0.5 * (M_yy * u * u + 2.0 * M_yx * u * xi + M_xx * xi2);
   p.rail_residual_m = abs(calc_rail_function_m(mast.rail, rail_, x, 0.5 * (kin.Y + kin.Z)));
+  if (fields == PointFields::loads) return p;
+  p.kinetic_energy_J = 0.5 * (M_yy * u * u + 2.0 * M_yx * u * xi + M_xx * xi2);
   return p;
 }
 
@@ -157,10 +175,10 @@ PhasePointT<T> HeldPhase::calc_on_rail(const model::OnRailKinematicsT<T>& kin, T
 // mode's closed-form solver).
 template PhasePointT<double> HeldPhase::calc_point_t(double, double) const;
 template PhasePointT<numerics::Dual> HeldPhase::calc_point_t(numerics::Dual, numerics::Dual) const;
-template PhasePointT<double> HeldPhase::calc_point_at_speed_t(double, double, bool) const;
-template PhasePointT<numerics::Dual> HeldPhase::calc_point_at_speed_t(numerics::Dual, double, bool) const;
+template PhasePointT<double> HeldPhase::calc_point_at_speed_t(double, double, PointFields) const;
+template PhasePointT<numerics::Dual> HeldPhase::calc_point_at_speed_t(numerics::Dual, double, PointFields) const;
 // In extended precision: the independent values of the tests (tests/numeric/test_closed_form.cpp).
-template PhasePointT<long double> HeldPhase::calc_point_at_speed_t(long double, double, bool) const;
+template PhasePointT<long double> HeldPhase::calc_point_at_speed_t(long double, double, PointFields) const;
 
 TwoFrameMass calc_two_frame_mass(const MastParams& mast, int m, double locked_mass_kg, double panel_height_offset_m, double y_lower,
                                  double y_driven) {

@@ -34,10 +34,9 @@ class HeldPhase final : public PhaseModel {
   template <class T>
   PhasePointT<T> calc_point_t(T q, T qdot) const;
   // Velocity mode: the point at q with the driven frame at speed u_m_per_s along +y (on the rail
-  // xi = u / Y'(x), from the same rail kinematics the point uses). loads_only: the loads, the
-  // speeds and the mass only (the energies, the hinge and the rail residual are left at 0).
+  // xi = u / Y'(x), from the same rail kinematics the point uses).
   template <class T>
-  PhasePointT<T> calc_point_at_speed_t(T q, double u_m_per_s, bool loads_only = false) const;
+  PhasePointT<T> calc_point_at_speed_t(T q, double u_m_per_s, PointFields fields = PointFields::all) const;
   PhasePoint calc_point(double q, double qdot, PhaseScratch& scratch) const;
   // Convenience for tests and one-off evaluations: allocates its own work space.
   PhasePoint calc_point(double q, double qdot) const;
@@ -59,12 +58,14 @@ class HeldPhase final : public PhaseModel {
   double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[0] - ctx_.q_end); }
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[0]; }
   void snap_to_end(double* q) const override { q[0] = ctx_.q_end; }
+  double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
+  PhasePoint calc_loads(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
 
  private:
   template <class T>
-  PhasePointT<T> calc_open(T y, T u, bool loads_only = false) const;
+  PhasePointT<T> calc_open(T y, T u, PointFields fields = PointFields::all) const;
   template <class T>
-  PhasePointT<T> calc_on_rail(const model::OnRailKinematicsT<T>& kin, T xi, bool loads_only = false) const;
+  PhasePointT<T> calc_on_rail(const model::OnRailKinematicsT<T>& kin, T xi, PointFields fields = PointFields::all) const;
   PhaseContext ctx_;
   model::RailConstants rail_;
   model::ActiveFrames active_;

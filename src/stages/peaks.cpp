@@ -20,30 +20,32 @@ void HermiteSpan::calc(double t, double* q, double* qd) const {
 }
 
 void PhasePeaks::reset(double direction) {
-  for (Bracket& b : b_) { b.value = -kInf; b.want_next = false; }
-  has_last_ = false;
+  for (Bracket& b : b_) { b.value = -kInf; b.want_next = false; b.sample = {-1, -1, -1}; }
+  count_ = 0;
   direction_ = direction;
   max_rail_residual = 0.0;
 }
 
 void PhasePeaks::feed(double t, const PhasePoint& p, const double* state, int n) {
+  const long i = count_++;
+  Sample& slot = ring_[static_cast<std::size_t>(i % kRing)];
+  if (i >= kRing)  // sample i - kRing leaves the ring: the brackets that refer to it copy it
+    for (Bracket& b : b_)
+      for (std::size_t w = 0; w < 3; ++w)
+        if (b.sample[w] == i - kRing) { b.own[w] = slot; b.sample[w] = -1; }
+  slot.assign(t, p, state, n);
   for (int q = 0; q < kQuantityCount; ++q) {
     Bracket& b = b_[static_cast<std::size_t>(q)];
     const double v = calc_peak_quantity(q, p, direction_);
     if (v > b.value) {
       b.value = v;
-      if (has_last_) b.prev = last_;
-      else b.prev.assign(t, p, state, n);
-      b.best.assign(t, p, state, n);
-      b.next = b.best;
+      b.sample = {i > 0 ? i - 1 : i, i, i};  // the previous sample (itself at the phase start), it, and the next to come
       b.want_next = true;
     } else if (b.want_next) {
-      b.next.assign(t, p, state, n);
+      b.sample[2] = i;
       b.want_next = false;
     }
   }
-  last_.assign(t, p, state, n);
-  has_last_ = true;
   max_rail_residual = std::max(max_rail_residual, p.rail_residual_m);
 }
 

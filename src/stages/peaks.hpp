@@ -84,14 +84,23 @@ class PhasePeaks {
   double max_rail_residual = 0.0;
 
  private:
+  // The last three samples stay in a ring; a bracket refers to them by their number in the
+  // phase and keeps its own copy only of a sample about to leave the ring (a quantity that keeps
+  // rising copies nothing; one that peaked copies its three samples once).
+  static constexpr int kRing = 3;
   struct Bracket {
     double value = -kInf;
-    Sample prev, best, next;
+    std::array<Sample, 3> own;        // prev, best, next, once they left the ring
+    std::array<long, 3> sample{-1, -1, -1};  // their numbers while in the ring, else -1
     bool want_next = false;
   };
+  const Sample& get(const Bracket& b, int which) const {
+    const long i = b.sample[static_cast<std::size_t>(which)];
+    return i >= 0 ? ring_[static_cast<std::size_t>(i % kRing)] : b.own[static_cast<std::size_t>(which)];
+  }
   std::array<Bracket, kQuantityCount> b_;
-  Sample last_;
-  bool has_last_ = false;
+  std::array<Sample, kRing> ring_;
+  long count_ = 0;  // samples fed this phase
   double direction_ = 1.0;
 };
 
@@ -133,14 +142,19 @@ template <class Eval>
 void PhasePeaks::refine(int q, Eval&& eval, double xtol, double& value, double& time) const {
   const Bracket& b = b_[static_cast<std::size_t>(q)];
   value = b.value;
-  time = b.best.t;
+  time = kNaN;
+  if (b.sample[1] < 0 && !(b.value > -kInf)) return;  // no sample this phase
+  const Sample& prev = get(b, 0);
+  const Sample& best = get(b, 1);
+  const Sample& next = get(b, 2);
+  time = best.t;
   if (!std::isfinite(b.value)) return;
-  for (const HermiteSpan span : {HermiteSpan{&b.prev, &b.best}, HermiteSpan{&b.best, &b.next}}) {
+  for (const HermiteSpan span : {HermiteSpan{&prev, &best}, HermiteSpan{&best, &next}}) {
     const double len = span.b->t - span.a->t;
     if (!(len > 0.0)) continue;
     // A best sample at a kink or at the phase end is often the maximum itself: if the quantity
     // falls just inside the span, the span holds nothing higher (it is bracketed by the grid).
-    const bool best_is_a = span.a == &b.best;
+    const bool best_is_a = span.a == &best;
     const double probe_t = best_is_a ? span.a->t + 1e-6 * len : span.b->t - 1e-6 * len;
     if (calc_peak_quantity(q, eval(probe_t, span), direction_) < b.value) continue;
     auto [tm, vm] = numerics::maximize_brent([&](double t) { return calc_peak_quantity(q, eval(t, span), direction_); },

@@ -59,6 +59,11 @@ struct PhasePointT {
 };
 using PhasePoint = PhasePointT<double>;
 
+// Which fields of a point an evaluation fills (the rest keep their defaults): all of them; the
+// loads, speeds, masses and rail residual (what the peaks need); or what time stepping needs, the
+// accelerations, the drive force and the speeds.
+enum class PointFields { all, loads, motion };
+
 // Work space of a model evaluation, owned by the caller (the model functions stay pure).
 using PhaseScratch = model::FrameSystem;
 
@@ -86,6 +91,17 @@ class PhaseModel {
   virtual const PhaseContext& context() const = 0;
   // Accelerations (dof values into qddot) and the reported point at (q, q').
   virtual PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const = 0;
+  // Accelerations (dof values into qddot) at (q, q') and the drive's power F dy_m/dt (W): what
+  // time stepping needs of a point (PointFields::motion), nothing else computed.
+  virtual double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const {
+    const PhasePoint p = calc_point(q, qdot, qddot, scratch);
+    return p.drive_force_N * p.u_m_per_s;
+  }
+  // The point as the peak tracker needs it at a step end (PointFields::loads: the loads, speeds,
+  // masses and rail residual; the energies and the hinge may be left out); by default all of it.
+  virtual PhasePoint calc_loads(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const {
+    return calc_point(q, qdot, qddot, scratch);
+  }
   // Driven-frame velocity dy_m/dt (m/s).
   virtual double calc_driven_speed_m_per_s(const double* q, const double* qdot) const = 0;
   // Rises through zero at the phase's end event; and its second time derivative (from q'').

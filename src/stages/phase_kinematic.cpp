@@ -75,16 +75,16 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
     return out;
   }
   // The phase at time tt, in dual numbers seeded with d/dt (T = Dual) or in double.
-  auto eval_t = [&]<class T>(double tt, T, bool loads_only) {
+  auto eval_t = [&]<class T>(double tt, T, PointFields fields) {
     tt = std::clamp(tt, t0, t1);
     if (open) {
       // distance from the phase end, measured from the nearer end for exactness
       const double y = (tt - t0 <= t1 - tt) ? y_begin + dir * v * (tt - t0) : y_finish - dir * v * (t1 - tt);
-      return phase_.calc_point_at_speed_t(numerics::make_variable<T>(y, dir * v), dir * v, loads_only);
+      return phase_.calc_point_at_speed_t(numerics::make_variable<T>(y, dir * v), dir * v, fields);
     }
     // travel to the lock, exact near it: deploy ends at the lock, retraction starts there
     const T e = dir > 0 ? numerics::make_variable<T>(v * (t1 - tt), -v) : numerics::make_variable<T>(v * (tt - t0), v);
-    return phase_.calc_point_at_speed_t(calc_x_on_rail_from_travel(rail, l, e), dir * v, loads_only);
+    return phase_.calc_point_at_speed_t(calc_x_on_rail_from_travel(rail, l, e), dir * v, fields);
   };
   // Inside the phase the loads suffice; its end points carry the energies and the end state.
   PhasePoint p0, p1;
@@ -92,7 +92,7 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
     ++out.evals;
     tt = std::clamp(tt, t0, t1);
     const bool end = tt == t0 || tt == t1;
-    const PhasePointT<Dual> d = eval_t(tt, Dual(), !end);
+    const PhasePointT<Dual> d = eval_t(tt, Dual(), end ? PointFields::all : PointFields::loads);
     if (tt == t0) p0 = calc_values(d);
     if (tt == t1) p1 = calc_values(d);
     return make_rated_sample(tt, d, dir);
@@ -138,7 +138,7 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   sinks.peaks.max_rail_residual = std::max({sinks.peaks.max_rail_residual, p0.rail_residual_m, p1.rail_residual_m});
   // The history and the end point use the plain evaluation.
   if (sinks.history.enabled()) {
-    const bool in_time = sinks.history.sample([&](double tt) { ++out.evals; return eval_t(tt, 0.0, false); }, t0, t1, m, sinks.deadline);
+    const bool in_time = sinks.history.sample([&](double tt) { ++out.evals; return eval_t(tt, 0.0, PointFields::all); }, t0, t1, m, sinks.deadline);
     if (!in_time || std::chrono::steady_clock::now() > sinks.deadline) out.reason = PhaseEndReason::wall_time;
   }
   out.t_end_s = t1;
