@@ -132,8 +132,9 @@ void absorb_rated_peaks(const std::vector<RatedSample>& samples, PeakTracker& tr
         else continue;
       }
       RatedSample root;
-      const bool near_lo = t_est - lo <= hi - t_est;
-      detail::refine_rated_root(k, lo, glo, hi, ghi, std::clamp(t_est, lo, hi), near_lo ? lo : hi, near_lo ? glo : ghi, eval, root);
+      const bool near_lo = t_est - lo <= hi - t_est;  // the secant's first partner: the nearer end
+      detail::refine_rated_root(k, lo, glo, hi, ghi, std::clamp(t_est, lo, hi), near_lo ? lo : hi,
+                                near_lo ? glo : ghi, eval, root);
       if (root.q[ki] > best || (root.q[ki] == best && root.t < best_t)) { best = root.q[ki]; best_t = root.t; }
     }
     tracker.target(k).offer(best, best_t, tracker.bay);

@@ -40,22 +40,22 @@ PhasePointT<T> HeldPhase::calc_point_at_speed_t(T q, double u_m_per_s, PointFiel
 }
 
 double HeldPhase::calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& /*scratch*/) const {
-  const PhasePoint p = ctx_.kind == PhaseKind::open
-                           ? calc_open(q[0], qdot[0], PointFields::motion)
-                           : calc_on_rail(model::calc_on_rail(rail_, strut_length_m(), q[0]), qdot[0], PointFields::motion);
+  const PhasePoint p = ctx_.kind == PhaseKind::open ? calc_open(q[0], qdot[0], PointFields::motion)
+                                                    : calc_on_rail(calc_kinematics(q[0]), qdot[0], PointFields::motion);
   qddot[0] = p.qddot;
   return p.drive_force_N * p.u_m_per_s;
 }
 
 PhasePoint HeldPhase::calc_loads(const double* q, const double* qdot, double* qddot, PhaseScratch& /*scratch*/) const {
-  const PhasePoint p = ctx_.kind == PhaseKind::open
-                           ? calc_open(q[0], qdot[0], PointFields::loads)
-                           : calc_on_rail(model::calc_on_rail(rail_, strut_length_m(), q[0]), qdot[0], PointFields::loads);
+  const PhasePoint p = ctx_.kind == PhaseKind::open ? calc_open(q[0], qdot[0], PointFields::loads)
+                                                    : calc_on_rail(calc_kinematics(q[0]), qdot[0], PointFields::loads);
   qddot[0] = p.qddot;
   return p;
 }
 
-PhasePoint HeldPhase::calc_point(double q, double qdot, PhaseScratch& /*scratch*/) const { return calc_point_t(q, qdot); }
+PhasePoint HeldPhase::calc_point(double q, double qdot, PhaseScratch& /*scratch*/) const {
+  return calc_point_t(q, qdot);
+}
 
 PhasePoint HeldPhase::calc_point(double q, double qdot) const { return calc_point_t(q, qdot); }
 

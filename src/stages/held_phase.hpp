@@ -65,7 +65,9 @@ class HeldPhase final : public PhaseModel {
   template <class T>
   PhasePointT<T> calc_open(T y, T u, PointFields fields = PointFields::all) const;
   template <class T>
-  PhasePointT<T> calc_on_rail(const model::OnRailKinematicsT<T>& kin, T xi, PointFields fields = PointFields::all) const;
+  PhasePointT<T> calc_on_rail(const model::OnRailKinematicsT<T>& kin, T xi,
+                              PointFields fields = PointFields::all) const;
+  model::OnRailKinematics calc_kinematics(double x) const { return model::calc_on_rail(rail_, strut_length_m(), x); }
   PhaseContext ctx_;
   model::RailConstants rail_;
   model::ActiveFrames active_;

@@ -12,7 +12,8 @@ using namespace truss::model;
 
 HeldStack::HeldStack(const MastParams& mast, const RunnerOptions& opts)
     : StackModel(mast, opts), rail_(calc_rail_constants(mast.rail)) {
-  if (!drive_holds_speed_) integrator_ = integrators::make_integrator(opts.run.integrator, opts.calc_integrator_options());
+  if (!drive_holds_speed_)
+    integrator_ = integrators::make_integrator(opts.run.integrator, opts.calc_integrator_options());
 }
 
 StackEvent HeldStack::start_stage(const StageSpec& s, bool first_stage) {
@@ -20,7 +21,8 @@ StackEvent HeldStack::start_stage(const StageSpec& s, bool first_stage) {
   const double v = opts_.drive.speed_m_per_s;
   if (s.start == StageStart::from_rest_or_kick && drive_holds_speed_) {
     // Impulsive start of the driven part from rest (docs/model.md §4): a lossless ramp of the drive.
-    const PhasePoint p0 = HeldPhase(make_context(s, PhaseKind::open, 0.0), rail_).calc_point(s.phases[0].q_start, dir_ * v);
+    const HeldPhase open(make_context(s, PhaseKind::open, 0.0), rail_);
+    const PhasePoint p0 = open.calc_point(s.phases[0].q_start, dir_ * v);
     e.evals = 1;
     u_ = dir_ * v;
     const DriveRamp ramp = calc_drive_ramp(p0.mass_yy, u_);

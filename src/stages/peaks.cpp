@@ -39,7 +39,8 @@ void PhasePeaks::feed(double t, const PhasePoint& p, const double* state, int n)
     const double v = calc_peak_quantity(q, p, direction_);
     if (v > b.value) {
       b.value = v;
-      b.sample = {i > 0 ? i - 1 : i, i, i};  // the previous sample (itself at the phase start), it, and the next to come
+      // The previous sample (itself at the phase start), this one, and the next to come.
+      b.sample = {i > 0 ? i - 1 : i, i, i};
       b.want_next = true;
     } else if (b.want_next) {
       b.sample[2] = i;

@@ -118,7 +118,10 @@ class PeakTracker {
     run[kPin].offer(stage_pin.value, stage_pin.t, stage_pin.bay);
   }
   // Whether a phase whose largest value of quantity q is `best` can change a record.
-  bool could_improve(int q, double best) { const Extremum& tr = target(q); return best > tr.value || !std::isfinite(tr.value); }
+  bool could_improve(int q, double best) {
+    const Extremum& tr = target(q);
+    return best > tr.value || !std::isfinite(tr.value);
+  }
   Extremum& target(int q) {
     if (q == kForce) return stage_force;
     if (q == kPin) return stage_pin;

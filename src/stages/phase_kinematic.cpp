@@ -51,13 +51,24 @@ RatedSample make_rated_sample(double t, const PhasePointT<Dual>& d, double direc
   return s;
 }
 
+// Driven-frame height at which bay m's diagonals become taut in this phase (NaN: never).
+double calc_taut_height_m(const HeldPhase& phase) {
+  const PhaseContext& ctx = phase.context();
+  const MastParams& mast = *ctx.mast;
+  const int m = ctx.bay;
+  const double l = phase.strut_length_m();
+  const double Dt = calc_taut_opening_m(mast.bay(m), calc_diagonal_offset_sq_m2(mast.frame(m - 1), mast.frame(m)));
+  if (!(Dt > 0.0)) return kNaN;
+  if (ctx.kind == PhaseKind::open) return ctx.lower_held_height_m + Dt;
+  if (!(Dt < 2.0 * l)) return kNaN;
+  return calc_on_rail(phase.get_rail_constants(), l, std::sqrt(l * l - 0.25 * Dt * Dt)).Y;
+}
+
 }  // namespace
 
 PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sinks) {
   const PhaseContext& ctx = phase_.context();
-  const MastParams& mast = *ctx.mast;
   const RailConstants& rail = phase_.get_rail_constants();
-  const int m = ctx.bay;
   const double l = phase_.strut_length_m();
   const double dir = ctx.direction;
   const double v = ctx.drive.speed_m_per_s;
@@ -99,15 +110,10 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   };
   // Smooth pieces: split where bay m's diagonals become taut (a kink of the force).
   double cut = kNaN;
-  const double Dt = calc_taut_opening_m(mast.bay(m), calc_diagonal_offset_sq_m2(mast.frame(m - 1), mast.frame(m)));
-  if (Dt > 0.0) {
-    double y_taut = kNaN;
-    if (open) y_taut = ctx.lower_held_height_m + Dt;
-    else if (Dt < 2.0 * l) y_taut = calc_on_rail(rail, l, std::sqrt(l * l - 0.25 * Dt * Dt)).Y;
-    if (std::isfinite(y_taut)) {
-      const double tc = t0 + (y_taut - y_begin) / (dir * v);
-      if (tc > t0 && tc < t1) cut = tc;
-    }
+  const double y_taut = calc_taut_height_m(phase_);
+  if (std::isfinite(y_taut)) {
+    const double tc = t0 + (y_taut - y_begin) / (dir * v);
+    if (tc > t0 && tc < t1) cut = tc;
   }
   thread_local std::vector<RatedSample> samples;  // work space: no allocation per phase
   samples.clear();
@@ -124,7 +130,8 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
       k.kink_before = true;
       samples.push_back(k);
     }
-    for (int i = (piece == 0 ? 0 : 1); i < ns; ++i) samples.push_back(rated(i + 1 == ns ? b : a + (b - a) * i / (ns - 1)));
+    for (int i = (piece == 0 ? 0 : 1); i < ns; ++i)
+      samples.push_back(rated(i + 1 == ns ? b : a + (b - a) * i / (ns - 1)));
   }
   // Drive work of the smooth motion from the energies at the phase ends: in velocity mode the
   // rail (ideal) and the held frames (at rest) do no work, so W = dT + dU of the moving bays.
@@ -135,10 +142,12 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   search[kRailApproach] = search[kOverlap] = PeakSearch::none;
   search[kSpeed] = PeakSearch::samples;
   absorb_rated_peaks(samples, sinks.peaks, rated, search);
-  sinks.peaks.max_rail_residual = std::max({sinks.peaks.max_rail_residual, p0.rail_residual_m, p1.rail_residual_m});
+  sinks.peaks.max_rail_residual =
+      std::max({sinks.peaks.max_rail_residual, p0.rail_residual_m, p1.rail_residual_m});
   // The history and the end point use the plain evaluation.
   if (sinks.history.enabled()) {
-    const bool in_time = sinks.history.sample([&](double tt) { ++out.evals; return eval_t(tt, 0.0, PointFields::all); }, t0, t1, m, sinks.deadline);
+    auto plain = [&](double tt) { ++out.evals; return eval_t(tt, 0.0, PointFields::all); };
+    const bool in_time = sinks.history.sample(plain, t0, t1, ctx.bay, sinks.deadline);
     if (!in_time || std::chrono::steady_clock::now() > sinks.deadline) out.reason = PhaseEndReason::wall_time;
   }
   out.t_end_s = t1;

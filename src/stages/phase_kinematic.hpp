@@ -17,7 +17,8 @@ namespace truss::stages {
 
 class KinematicPhaseSolver final : public PhaseSolver {
  public:
-  KinematicPhaseSolver(const HeldPhase& phase, int samples_per_piece) : phase_(phase), samples_per_piece_(samples_per_piece) {}
+  KinematicPhaseSolver(const HeldPhase& phase, int samples_per_piece)
+      : phase_(phase), samples_per_piece_(samples_per_piece) {}
   // From start.q (the phase coordinate at its start; start.qdot is the prescribed kinematics) to
   // the phase's end context().q_end.
   PhaseOutcome solve(const PhaseStart& start, PhaseSinks& sinks) override;

@@ -68,7 +68,8 @@ stages::Extremum find_peak(Load& load, const std::vector<double>& times) {
 
 TEST_CASE("closed-form peaks: an interior maximum is the root of Q', to the rounding of t", "[closed_form][peaks]") {
   // Q = 2 + sin(3 t + 0.4): maximum 3 at t* = (pi/2 - 0.4) / 3 = 0.3902654, between samples 1/3 apart.
-  AnalyticLoad load{[](double t) { return 2.0 + std::sin(3.0 * t + 0.4); }, [](double t) { return 3.0 * std::cos(3.0 * t + 0.4); }};
+  AnalyticLoad load{[](double t) { return 2.0 + std::sin(3.0 * t + 0.4); },
+                    [](double t) { return 3.0 * std::cos(3.0 * t + 0.4); }};
   const stages::Extremum e = find_peak(load, {0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0});
   const double t_star = (M_PI / 2 - 0.4) / 3.0;
   CHECK(e.value == Approx(3.0).epsilon(4 * kEps));
@@ -102,7 +103,8 @@ TEST_CASE("closed-form peaks: a maximum at a sample or a phase end is the sample
   CHECK(flat.evals == 0);
   CHECK(e.t == 0.5);
   // Equal maxima: the earliest (docs/model.md §5).
-  AnalyticLoad twin{[](double t) { return std::cos(2.0 * M_PI * t); }, [](double t) { return -2.0 * M_PI * std::sin(2.0 * M_PI * t); }};
+  AnalyticLoad twin{[](double t) { return std::cos(2.0 * M_PI * t); },
+                    [](double t) { return -2.0 * M_PI * std::sin(2.0 * M_PI * t); }};
   e = find_peak(twin, {0.0, 0.25, 0.5, 0.75, 1.0});
   CHECK(e.t == 0.0);
   CHECK(e.value == 1.0);
@@ -198,7 +200,9 @@ TEST_CASE("velocity mode: peak pin-force times are the roots of its derivative (
       // Fourth-order central difference, h = 1e-5 s: truncation h^4 Q^(5) / 30 and rounding
       // 1e-19 Q / h both move the sign change by far less than 1e-14 s.
       const long double h = 1e-5L;
-      auto slope = [&](long double t) { return (8.0L * (pin(t + h) - pin(t - h)) - (pin(t + 2 * h) - pin(t - 2 * h))) / (12.0L * h); };
+      auto slope = [&](long double t) {
+        return (8.0L * (pin(t + h) - pin(t - h)) - (pin(t + 2 * h) - pin(t - 2 * h))) / (12.0L * h);
+      };
       long double lo = b.peak_pin_force_time_s - 1e-4, hi = b.peak_pin_force_time_s + 1e-4;
       REQUIRE(slope(lo) > 0.0L);
       REQUIRE(slope(hi) < 0.0L);
@@ -212,7 +216,8 @@ TEST_CASE("velocity mode: peak pin-force times are the roots of its derivative (
   }
 }
 
-TEST_CASE("velocity mode: the Table-1 deployment evaluates its closed form fewer than 40 times a bay", "[closed_form][cost]") {
+TEST_CASE("velocity mode: the Table-1 deployment evaluates its closed form fewer than 40 times a bay",
+          "[closed_form][cost]") {
   // A grid of 4 samples a smooth piece, the kink's one-sided slope, and a few secant steps per
   // interior peak: about 15 a bay. Histories off: nothing else is computed.
   SceneOptions s;
