@@ -84,7 +84,7 @@ def fig4(plt, run, bay):
     xl, yl = run["rail_x"], run["rail_y"]
     cot = 1.0 / np.tan(np.radians(run["rail_beta_deg"]))
 
-    fig, ax = plt.subplots(figsize=(6.0, 7.5))
+    fig, ax = plt.subplots(figsize=(6.5, 9.5))
     ax.plot(x, y, "-", color="C0", lw=1.8, label=f"hinge of bay {bay}")
     ax.plot(x[0], y[0], "o", color="C2", ms=7, label=f"stage start (t = {t[0]:.3f} s)")
     ax.plot(x[-1], y[-1], "s", color="C3", ms=7,
@@ -115,13 +115,15 @@ def fig4(plt, run, bay):
     ax.set_xlim(*xlim)
     ax.set_ylim(*ylim)
     ax.set_aspect("equal", adjustable="box")
+    from matplotlib.ticker import MaxNLocator
+    ax.xaxis.set_major_locator(MaxNLocator(5))   # the narrow axis: its labels would touch
     ax.set_xlabel(f"hinge radial offset x ({u['hinge_x_m']})")
     ax.set_ylabel(f"hinge height y ({u['hinge_y_m']})")
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
-    ax.set_title(f"Mid-hinge trajectory, bay {bay} stage (cf. paper Fig. 4)\n{_title(run)}",
-                 fontsize=9)
-    fig.tight_layout()
+    # The key below the axes: inside, it hides part of the trajectory or the rail.
+    ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.09), frameon=False)
+    ax.set_title(f"Mid-hinge trajectory, bay {bay} stage (cf. paper Fig. 4)\n{_title(run)}")
+    fig.set_layout_engine("tight")   # applied when drawn
     return fig
 
 
@@ -138,8 +140,8 @@ def _force_panels(plt, run, sel, title, markers):
         for tm, style in markers:
             ax.axvline(tm, **style)
         ax.grid(True, alpha=0.3)
-    a1.set_title(title, fontsize=9)
-    fig.tight_layout()
+    a1.set_title(title)
+    fig.set_layout_engine("tight")   # applied when drawn
     return fig, (a1, a2)
 
 
@@ -155,7 +157,7 @@ def fig5(plt, run):
         [(tm, style) for tm in locks])
     if len(locks):
         a1.plot([], [], color="C4", lw=0.7, ls="--", alpha=0.6, label=f"{w['lock']} times")
-        a1.legend(loc="upper right", fontsize=8)
+        a1.legend(loc="upper right")
     return fig
 
 
@@ -181,7 +183,7 @@ def fig5_zoom(plt, run, bay):
     for text, style in labels:
         a1.plot([], [], label=text, **style)
     if labels:
-        a1.legend(loc="best", fontsize=8)
+        a1.legend(loc="best")
     return fig
 
 
@@ -205,8 +207,8 @@ def fig_frame_heights(plt, run):
     fig, (a1, a2) = plt.subplots(2, 1, sharex=True, figsize=(10.0, 7.5))
     cmap = plt.get_cmap("viridis")
     below = np.arange(Y.shape[1])[None, :] < h["bay"][:, None]  # frame k below the driven frame
-    for j, k in enumerate(idx):
-        c = cmap(j / max(1, len(idx) - 1))
+    for k in idx:
+        c = cmap(k / max(1, Y.shape[1] - 1))   # the colour bar's scale
         a1.plot(h["t_s"], Y[:, k], lw=0.9, color=c, label=f"frame {k}")
         a2.plot(h["t_s"], np.where(below[:, k], Y[:, k], np.nan), lw=0.9, color=c)
     for ax in (a1, a2):
@@ -217,11 +219,13 @@ def fig_frame_heights(plt, run):
     a1.set_ylabel(f"frame height ({u['frame_height_m']})")
     a2.set_ylabel(f"lower frames ({u['frame_height_m']})")
     shown = "all frames" if len(idx) == Y.shape[1] else f"{len(idx)} of {Y.shape[1]} frames"
-    a1.set_title(f"Frame heights against time ({shown}; dotted: {_words(run)['lock']} times); "
-                 f"bottom: frames below the driven frame\n{_title(run)}", fontsize=9)
-    if len(idx) <= 12:
-        a1.legend(loc="upper left", fontsize=7, ncol=2)
-    fig.tight_layout()
+    a1.set_title(f"Frame heights against time ({shown}; dotted: {_words(run)['lock']} times)\n"
+                 f"bottom: frames below the driven frame; {_title(run)}")
+    # The key: frame index by colour, for any number of frames (a legend of 31 lines would not fit).
+    from matplotlib.colors import Normalize
+    key = plt.cm.ScalarMappable(norm=Normalize(0, Y.shape[1] - 1), cmap=cmap)
+    fig.colorbar(key, ax=[a1, a2], label="frame index k (0: root frame)")
+    fig.set_layout_engine("constrained")   # applied when drawn (tight cannot place a shared bar)
     return fig
 
 

@@ -11,7 +11,8 @@ PKGS=(build-essential cmake pkg-config
       python3-venv        # the truss-report package installed into a venv (test postproc_install)
       python3-xarray python3-h5netcdf  # xarray opens the campaign file with named dimensions (mpi_layout)
       help2man            # man pages from --help (cmake --install)
-      python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests)
+      python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests); examples/openturns_form.py
+      pybind11-dev python3-pybind11 python3-dev python3-pytest  # the Python module truss_deploy (python/) and its tests
       libsimbody-dev      # the cross-check against a general multibody engine (validation/simbody, docs/validation.md)
       clang libclang-rt-14-dev)  # the sanitizer and fuzzing stage (scripts/sanitize.sh)
 missing=()
@@ -21,6 +22,9 @@ done
 if [ "${#missing[@]}" -gt 0 ]; then
   SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
   export DEBIAN_FRONTEND=noninteractive
+  echo "[deps] apt-get update, then installing ${#missing[@]} packages: ${missing[*]}"
   $SUDO apt-get update -qq
-  $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  # -q: one line per package downloaded, unpacked and set up (progress without the bars).
+  $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+  echo "[deps] done"
 fi

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# CI stage (issue 13): the tests under AddressSanitizer + UndefinedBehaviorSanitizer, and the two
+# CI stage: the tests under AddressSanitizer + UndefinedBehaviorSanitizer, and the two
 # libFuzzer targets for a bounded time. Builds with clang in build-san/ (-DTRUSS_SANITIZE=ON
 # -DTRUSS_FUZZ=ON); every sanitizer report is fatal (halt_on_error, -fno-sanitize-recover).
 #   scripts/sanitize.sh            # sanitized tests, then each fuzzer for FUZZ_SECONDS (60)
@@ -21,6 +21,7 @@
 # the free-stack fixture 60 instead of 300, in tests/CMakeLists.txt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/progress.sh
 ROOT=$(pwd)
 BUILD=${SAN_BUILD_DIR:-build-san}
 FUZZ_SECONDS=${FUZZ_SECONDS:-30}
@@ -32,24 +33,25 @@ t0=$(date +%s)
 export ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 
-cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
-  -DTRUSS_SANITIZE=ON -DTRUSS_FUZZ=ON > "$BUILD.log" 2>&1 || { cat "$BUILD.log"; exit 1; }
+watch_step build sanitize-configure "$BUILD.log" cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTRUSS_SANITIZE=ON -DTRUSS_FUZZ=ON
 targets=(fuzz_scene fuzz_campaign)
 if [ "$what" != fuzz ]; then
   targets+=(truss_tests_model truss_tests_stages truss_tests_free truss_tests_integrators truss_tests_io
             truss_tests_campaign truss_tests_sampling truss-sim truss-campaign)
 fi
-cmake --build "$BUILD" -j"$(nproc)" --target "${targets[@]}" >> "$BUILD.log" 2>&1 || { tail -50 "$BUILD.log"; exit 1; }
+watch_step build sanitize-build "$BUILD.log" cmake --build "$BUILD" -j"$(nproc)" --target "${targets[@]}"
 t_build=$(date +%s)
 echo "[sanitize] build: $((t_build - t0)) s"
 
 if [ "$what" != fuzz ]; then
   export TRUSS_SANITIZED=1
-  (cd "$BUILD" && ctest --output-on-failure --timeout 900 -j"$(nproc)" -R "$SAN_TESTS")
+  watch_step stream sanitize-ctest "$BUILD/ctest.log" ctest --test-dir "$BUILD" --output-on-failure --timeout 900 \
+    -j"$(nproc)" -R "$SAN_TESTS"
   t_inproc=$(date +%s)
   echo "[sanitize] in-process and truss-sim tests (leaks checked): $((t_inproc - t_build)) s"
-  (cd "$BUILD" && ASAN_OPTIONS=${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0} \
-     ctest --output-on-failure --timeout 900 -R "$SAN_MPI_TESTS")
+  ASAN_OPTIONS=${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0} watch_step stream sanitize-ctest-mpi "$BUILD/ctest.log" \
+    ctest --test-dir "$BUILD" --output-on-failure --timeout 900 -R "$SAN_MPI_TESTS"
 fi
 t_tests=$(date +%s)
 echo "[sanitize] tests under ASan+UBSan: $((t_tests - t_build)) s"
@@ -59,10 +61,12 @@ echo "[sanitize] tests under ASan+UBSan: $((t_tests - t_build)) s"
 # its write thread, the campaign library instrumented), in build-tsan/; any report fails.
 if [ "$what" != fuzz ]; then
   TSAN_BUILD=${TSAN_BUILD_DIR:-build-tsan}
-  cmake -S . -B "$TSAN_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
-    -DTRUSS_TSAN=ON > "$TSAN_BUILD.log" 2>&1 || { cat "$TSAN_BUILD.log"; exit 1; }
-  cmake --build "$TSAN_BUILD" -j"$(nproc)" --target truss_tests_journal_tsan truss_tests_store_tsan >> "$TSAN_BUILD.log" 2>&1 || { tail -50 "$TSAN_BUILD.log"; exit 1; }
-  (cd "$TSAN_BUILD" && ctest --output-on-failure --timeout 900 -R '^(journal|store)_tsan$')
+  watch_step build tsan-configure "$TSAN_BUILD.log" cmake -S . -B "$TSAN_BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTRUSS_TSAN=ON
+  watch_step build tsan-build "$TSAN_BUILD.log" cmake --build "$TSAN_BUILD" -j"$(nproc)" \
+    --target truss_tests_journal_tsan truss_tests_store_tsan
+  watch_step stream tsan-ctest "$TSAN_BUILD/ctest.log" ctest --test-dir "$TSAN_BUILD" --output-on-failure \
+    --timeout 900 -R '^(journal|store)_tsan$'
   echo "[sanitize] journal, write thread and result store under ThreadSanitizer: $(( $(date +%s) - t_tests )) s"
 fi
 
@@ -72,9 +76,10 @@ for target in scene campaign; do
   work="$BUILD/fuzz_$target"
   rm -rf "$work" && mkdir -p "$work/corpus" "$work/artifacts"
   cp "$ROOT/tests/fuzz/corpus/$target/"* "$work/corpus/"
-  (cd "$ROOT/campaigns" && "$ROOT/$BUILD/tests/fuzz/fuzz_$target" -max_total_time="$FUZZ_SECONDS" -max_len=4096 -timeout=10 \
+  (cd "$ROOT/campaigns" && watch_step build "fuzz_$target" "$ROOT/$work/log" "$ROOT/$BUILD/tests/fuzz/fuzz_$target" \
+      -max_total_time="$FUZZ_SECONDS" -max_len=4096 -timeout=10 \
       -rss_limit_mb=2048 -dict="$ROOT/tests/fuzz/toml.dict" -artifact_prefix="$ROOT/$work/artifacts/" -print_final_stats=1 \
-      "$ROOT/$work/corpus" 2> "$ROOT/$work/log") || { tail -60 "$work/log"; echo "[sanitize] fuzz_$target FAILED"; exit 1; }
+      "$ROOT/$work/corpus") || { tail -60 "$work/log"; echo "[sanitize] fuzz_$target FAILED"; exit 1; }
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$work/log" | grep -o '[0-9]*$' || echo "?")
   echo "[sanitize] fuzz_$target: $runs inputs in ${FUZZ_SECONDS} s, corpus $(ls "$work/corpus" | wc -l) files, no finding"
 done

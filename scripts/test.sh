@@ -2,14 +2,27 @@
 # Installs what the project needs (Debian 12), builds it in build/, and runs every test with ctest;
 # then the sanitizer and fuzzing stage (scripts/sanitize.sh: tests under ASan+UBSan in build-san/,
 # the tests of rank 0's threads and its result store under ThreadSanitizer in build-tsan/, each libFuzzer target for FUZZ_SECONDS,
-# 30 by default). SKIP_SANITIZE=1 skips that stage.
+# 30 by default). SKIP_SANITIZE=1 skips that stage. CI runs this (.ci/run).
+#   scripts/test.sh [ctest options]     everything (about 26 min on 2 cores from a fresh clone)
+#   scripts/test.sh --quick             everyday check: build, then the tests labelled quick (the
+#                                       unit, command-line, report and small MPI tests), no
+#                                       sanitizers (under 8 min on 2 cores from a fresh clone)
+# Progress: a line at least every 10 s during the build, each test as it ends.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+source scripts/progress.sh
+quick=0
+if [ "${1:-}" = --quick ]; then quick=1; shift; fi
+t0=$SECONDS
+echo "[test] checking the Debian packages (scripts/install-deps.sh)"
 scripts/install-deps.sh
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release > build.log 2>&1 || { cat build.log; exit 1; }
-cmake --build build -j"$(nproc)" >> build.log 2>&1 || { tail -50 build.log; exit 1; }
+watch_step build configure build.log cmake -S . -B build -DCMAKE_BUILD_TYPE=Release ${CMAKE_ARGS:-}
+watch_step build build build.log cmake --build build -j"$(nproc)"
 # -j: tests that need both cores (the MPI tests, timing floors) say so with PROCESSORS 2 and run alone.
-(cd build && ctest --output-on-failure --timeout 900 -j"$(nproc)" "$@")
-if [ "${SKIP_SANITIZE:-0}" != 1 ]; then
+labels=(); [ "$quick" = 1 ] && labels=(-L quick)
+watch_step stream ctest build/ctest.log ctest --test-dir build --output-on-failure --timeout 900 -j"$(nproc)" \
+  "${labels[@]}" "$@"
+if [ "$quick" = 0 ] && [ "${SKIP_SANITIZE:-0}" != 1 ]; then
   scripts/sanitize.sh
 fi
+echo "[test] all passed in $(elapsed_text $((SECONDS - t0)))"

@@ -26,45 +26,97 @@ def check_outdir(outdir, force):
             raise InputError(f"{outdir}: directory is not empty; use --force to write into it")
 
 
-def build(path, outdir, force, opts=None):
-    """Validate, then render into a staging directory beside OUTDIR and move the files in."""
+# Text in the figures: 10 pt (9 pt ticks and keys). A figure row is at most 15 inches at 150 dpi
+# and shows at about 0.6 of that on the page, so that 9 pt is still about 11 px on screen.
+FIGURE_STYLE = {"font.size": 10, "axes.titlesize": 10, "axes.labelsize": 10, "legend.fontsize": 9,
+                "xtick.labelsize": 9, "ytick.labelsize": 9, "figure.titlesize": 11}
+
+
+class Progress:
+    """'[report] ...' lines on stderr with the time since the start (silent until the input is
+    read and checked: a refused input gets its one error line only)."""
+
+    def __init__(self, quiet=False):
+        import time
+        self.t0, self.quiet, self.clock = time.monotonic(), quiet, time.monotonic
+
+    def __call__(self, what):
+        if not self.quiet:
+            sys.stderr.write(f"[report] {what} ({self.clock() - self.t0:.1f} s)\n")
+            sys.stderr.flush()
+
+
+def _write_csv(path, out):
+    """Child process: the run table as CSV (exit 1 on any error, said on stderr)."""
+    try:
+        from .dataframe import read_campaign, write_run_table
+        write_run_table(read_campaign(path), out)
+    except Exception as e:       # noqa: BLE001 - reported by the parent as a failed CSV
+        sys.stderr.write(f"error: {out}: {e}\n")
+        os._exit(1)
+    os._exit(0)
+
+
+def start_csv(path, staging):
+    """Writes DIR/runs.csv in a child process while this one draws the report (formatting six
+    million numbers is the report's largest single cost). Forked before this process opens the
+    HDF5 file (the child opens its own)."""
+    import multiprocessing
+    proc = multiprocessing.get_context("fork").Process(
+        target=_write_csv, args=(path, os.path.join(staging, CSV_NAME)), daemon=True)
+    proc.start()
+    return proc
+
+
+def build(path, outdir, force, opts=None, progress=None):
+    """Validate, then render into a staging directory beside OUTDIR and move the files in.
+    Returns (path of report.html, the verdict's lines for the terminal: empty for a single run)."""
     opts = opts or parse_args([path, "-o", outdir])
+    progress = progress or Progress(quiet=True)
     check_outdir(outdir, force)
     sha256 = file_sha256(path) if os.path.isfile(path) else ""
     with rf.open_h5(path) as f:
-        h5 = H5(f, path)
-        try:
-            kind = read_kind(h5)
-            data = load_campaign(h5, sha256) if kind == "campaign" else load_single_run(h5, sha256)
-            extras = load_extras(h5, data) if kind == "campaign" else None
-        except (OSError, RuntimeError) as e:
-            raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
-
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        parent = os.path.dirname(os.path.abspath(outdir))
-        os.makedirs(parent, exist_ok=True)
-        staging = tempfile.mkdtemp(prefix=f".{os.path.basename(outdir)}.", dir=parent)
-        try:
-            page = Page(staging, plt)
+        kind = read_kind(H5(f, path))
+    parent = os.path.dirname(os.path.abspath(outdir))
+    os.makedirs(parent, exist_ok=True)
+    staging = tempfile.mkdtemp(prefix=f".{os.path.basename(outdir)}.", dir=parent)
+    csv = start_csv(path, staging) if kind == "campaign" and opts.csv else None
+    try:
+        with rf.open_h5(path) as f:
+            h5 = H5(f, path)
+            try:
+                data = load_campaign(h5, sha256) if kind == "campaign" else load_single_run(h5, sha256)
+                extras = load_extras(h5, data) if kind == "campaign" else None
+            except (OSError, RuntimeError) as e:
+                raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
+            progress(f"{path}: {kind.replace('_', ' ')}"
+                     + (f", {data.n} runs" if kind == "campaign" else "") + ", read and checked"
+                     + (f"; writing {CSV_NAME} beside" if csv else ""))
+            import matplotlib
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+            plt.rcParams.update(FIGURE_STYLE)
+            page = Page(staging, plt, progress)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
                 text = (campaign_report(page, data, extras, opts) if kind == "campaign"
                         else single_run_report(page, data))
-            if kind == "campaign" and opts.csv:
-                from .dataframe import read_campaign, write_tabular
-                write_tabular(read_campaign(path), os.path.join(staging, CSV_NAME))
-                page.files.append(CSV_NAME)
-            with open(os.path.join(staging, REPORT_NAME), "w", encoding="utf-8") as fh:
-                fh.write(text)
-            os.makedirs(outdir, exist_ok=True)
-            for name in page.files + [REPORT_NAME]:   # report.html last
-                os.replace(os.path.join(staging, name), os.path.join(outdir, name))
-        finally:
-            shutil.rmtree(staging, ignore_errors=True)
-    return os.path.join(outdir, REPORT_NAME)
+        page.finish()
+        if csv is not None:
+            csv.join()
+            if csv.exitcode != 0:
+                raise RuntimeError(f"writing {CSV_NAME} failed (exit {csv.exitcode})")
+            page.files.append(CSV_NAME)
+        with open(os.path.join(staging, REPORT_NAME), "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.makedirs(outdir, exist_ok=True)
+        for name in page.files + [REPORT_NAME]:   # report.html last
+            os.replace(os.path.join(staging, name), os.path.join(outdir, name))
+    finally:
+        if csv is not None and csv.is_alive():
+            csv.terminate()
+        shutil.rmtree(staging, ignore_errors=True)
+    return os.path.join(outdir, REPORT_NAME), getattr(page, "summary", [])
 
 
 def parse_args(argv=None):
@@ -93,7 +145,9 @@ def parse_args(argv=None):
                         f"{DEFAULT_INERTIA}: clause 4.7.5.3.1)")
     p.add_argument("--revision", default="draft", help="revision shown in the sign-off block")
     p.add_argument("--csv", action="store_true",
-                   help=f"also write DIR/{CSV_NAME}: the run table, Dakota-style tabular (campaigns)")
+                   help=f"also write DIR/{CSV_NAME}: the run table, one row per run (campaigns)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress lines on stderr (errors and the verdict are still printed)")
     a = p.parse_args(argv)
     if not 0.0 < a.confidence < 1.0:
         p.error(f"--confidence {a.confidence}: must be between 0 and 1 (exclusive)")
@@ -110,9 +164,14 @@ def parse_args(argv=None):
 
 def main(argv=None):
     args = parse_args(argv)
+    progress = Progress(quiet=args.quiet)
     try:
-        print(build(args.results, args.outdir, args.force, args))
+        report, summary = build(args.results, args.outdir, args.force, args, progress)
     except InputError as e:
         sys.stderr.write(f"error: {e}\n")
         return EXIT_INPUT_ERROR
+    progress(f"written: {report}")
+    for line in summary:
+        print(line)
+    print(report)
     return 0

@@ -2,7 +2,9 @@
 
 
 
-SCHEMA_VERSION = 1
+# The schema versions this report reads, per file kind (docs/hdf5-schema.md). Campaign files of
+# version 1 and 2 have the same layout; 2 changed how a Saltelli design draws A and B.
+SCHEMA_VERSIONS = {"single_run": (1,), "campaign": (1, 2)}
 
 
 EXIT_INPUT_ERROR = 2
@@ -17,12 +19,21 @@ REPORT_NAME = "report.html"
 # The outputs whose distributions are reported, with a readable name.
 OUTPUTS = {
     "peak_drive_force_N": "peak drive force",
-    "peak_drive_torque_Nm": "peak drive (screw) torque",
+    "peak_drive_torque_Nm": "peak drive torque",
     "peak_pin_force_N": "peak rail pin force",
     "peak_diagonal_tension_N": "peak diagonal tension",
-    "peak_latch_energy_J": "peak latch impact energy",
+    "peak_latch_energy_J": "peak latch energy",
     "deploy_time_s": "deployment time",
 }
+# The same datasets name other events in a retraction.
+RETRACT_LABELS = {"deploy_time_s": "retraction time", "peak_latch_energy_J": "peak unlock energy"}
+
+
+def output_label(key, direction):
+    """Readable name of an output for the campaign's direction (deploy or retract)."""
+    if direction == "retract" and key in RETRACT_LABELS:
+        return RETRACT_LABELS[key]
+    return OUTPUTS.get(key, key)
 
 
 # Reported percentiles: (percent, name in /stats, label).

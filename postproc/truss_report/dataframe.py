@@ -1,8 +1,7 @@
-"""truss_report.dataframe: a campaign file as a pandas DataFrame, and the run table as a
-Dakota-style tabular CSV.
+"""truss_report.dataframe: a campaign file as a pandas DataFrame, and the run table as CSV.
 
     from truss_report import read_campaign
-    df = read_campaign("out/main/table1_dispersed.h5")
+    df = read_campaign("out/table1_dispersed/table1_dispersed.h5")
     df[df.status == "stall"]
     df.attrs["units"]["peak_drive_force_N"]      # "N"
 
@@ -70,18 +69,22 @@ def read_campaign(path):
     return df
 
 
-def write_tabular(df, path, interface="truss_campaign"):
-    """Dakota-style tabular data, comma-separated: `%eval_id` (run index + 1), `interface`, the
-    inputs, then `status` and every numeric response (per-run columns; per-bay columns last).
-    Strings have their spaces replaced by underscores (Dakota reads whitespace-free tokens);
-    NaN is written as `nan`. Units are in the column names (`_N`, `_s`, ...), as in the file."""
+def write_run_table(df, path):
+    """The run table as CSV, one row per run: `run_index` (the 0-based row of /runs), `status`
+    (its name), the inputs (`input:<key>`, `input:<key>[bay j]`), the per-run outputs, the per-bay
+    outputs (`<field>[bay j]`) and last `message` (quoted). Units are in the column names (`_N`,
+    `_s`, ...), as in the file; NaN is written as `nan`; numbers with 17 significant digits, so
+    that they read back to the file's float64 values exactly."""
     inputs = [c for c in df.columns if c.startswith("input:")]
     per_bay = [c for c in df.columns if "[bay " in c and not c.startswith("input:")]
     responses = [c for c in df.columns if c not in inputs and c not in per_bay
                  and c not in ("status", "message")]
     order = inputs + responses + per_bay
-    out = df[order].copy()
-    out.insert(0, "status", df["status"].astype(str).str.replace(" ", "_"))
-    out.insert(0, "interface", interface)
-    out.insert(0, "%eval_id", df.index.to_numpy() + 1)
-    out.to_csv(path, index=False, na_rep="nan", float_format="%.17g")
+    values = df[order].to_numpy(dtype=np.float64)
+    # One %-format per row: about four times faster than DataFrame.to_csv on 10,000 x 600 values.
+    row_format = "%d,%s," + ",".join(["%.17g"] * len(order)) + ',"%s"\n'
+    status = df["status"].astype(str).tolist()
+    with open(path, "w", encoding="utf-8", newline="") as fh:
+        fh.write(",".join(["run_index", "status", *order, "message"]) + "\n")
+        for i, (run, row) in enumerate(zip(df.index.tolist(), values.tolist())):
+            fh.write(row_format % (run, status[i], *row, df["message"].iat[i].replace('"', '""')))

@@ -11,38 +11,59 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .stats import percentile
+from .constants import RETRACT_LABELS
+from .stats import percentile, quantile_ci
 
-# (key, label, source, definition). source: "runs" = a /runs column; "bays_max" = the largest
-# over the bays of a /runs/bays field (per run).
+# (key, label, source, definition when deploying, definition when retracting). source: "runs" =
+# a /runs column; "bays_max" = the largest over the bays of a /runs/bays field (per run). A load
+# whose file column holds no finite nonzero value (an impulse of the other direction or drive
+# mode) is left out of the table.
+TOTAL = "total of the three screws, = one motor driving them 1:1; one screw carries a third"
 LOADS = [
     ("peak_drive_force_N", "peak drive force", "runs",
-     "smooth part of the force on the driven frame, total (all drive units); impulses excluded"),
-    ("peak_drive_torque_Nm", "peak drive (screw) torque", "runs",
-     "screw torque of the smooth drive force, total; impulses excluded"),
+     "smooth part of the axial force on the driven frame, total of the three screws; impulses "
+     "excluded", None),
+    ("peak_drive_torque_Nm", "peak drive torque", "runs",
+     f"screw torque of that force ({TOTAL}); impulses excluded", None),
     ("peak_pin_force_N", "peak rail pin force", "runs",
-     "smooth rail normal force on one pin; the rail-entry impulse excluded"),
+     "smooth rail normal force on one pin; the rail-entry impulse excluded",
+     "smooth rail normal force on one pin; the unlock and rail-exit impulses excluded"),
     ("peak_diagonal_tension_N", "peak diagonal tension", "runs",
-     "tension in one diagonal of the deploying bay, smooth part"),
+     "tension in one diagonal of the deploying bay, smooth part",
+     "tension in one diagonal of the retracting bay, smooth part"),
     ("peak_latch_energy_J", "peak latch energy", "runs",
-     "strut radial kinetic energy lost at one latch (paid at one unlock in retraction), "
-     "largest over the bays"),
+     "strut radial kinetic energy lost at one latch, largest over the bays",
+     "strut radial kinetic energy given at one unlock (paid by the drive), largest over the bays"),
     ("start_drive_impulse_Ns", "start drive impulse", "runs",
-     "impulse, total: the drive impulse that starts the driven part from rest (velocity mode)"),
+     "impulse, total: the drive impulse that starts the driven part from rest (velocity drive)",
+     None),
     ("entry_impulse_Ns", "rail-entry impulse per pin", "bays_max",
-     "impulse on one pin when a bay's pins enter the rail, largest over the bays"),
+     "impulse on one pin when a bay's pins enter the rail, largest over the bays", None),
     ("entry_drive_impulse_Ns", "rail-entry drive impulse", "bays_max",
-     "impulse, total: drive impulse at a rail entry (exit), largest over the bays (velocity mode)"),
-    ("landing_impulse_Ns", "landing impulse", "bays_max",
-     "impulse, total: stack impulse on the lower frame at rail exit (retraction), largest over "
-     "the bays"),
-    ("unlock_impulse_Ns", "unlock impulse per pin", "bays_max",
-     "impulse on one pin when a bay unlocks (retraction): the rail gives the hinge its radial "
-     "speed; largest over the bays"),
+     "impulse, total: drive impulse at a rail entry, largest over the bays (velocity drive)",
+     "impulse, total: drive impulse at a rail exit, largest over the bays (velocity drive)"),
+    ("landing_impulse_Ns", "landing impulse", "bays_max", None,
+     "impulse, total: stack impulse on the lower frame at rail exit, largest over the bays"),
+    ("unlock_impulse_Ns", "unlock impulse per pin", "bays_max", None,
+     "impulse on one pin when a bay unlocks: the rail gives the hinge its radial speed; largest "
+     "over the bays"),
     ("drive_work_impulses_J", "drive work of the impulses", "runs",
-     "work of the start, rail-entry and unlock drive impulses, summed over the run"),
-    ("deploy_time_s", "deployment time", "runs", "time of the last lock (end of retraction)"),
+     "work of the start and rail-entry drive impulses, summed over the run",
+     "work of the start, rail-exit and unlock drive impulses, summed over the run"),
+    ("deploy_time_s", "deployment time", "runs", "time of the last lock (bay 1 locks)", None),
 ]
+
+RETRACT_DEFINITIONS = {"deploy_time_s": "time at which frame n lands on the stack: the end of "
+                                        "the retraction (the file's deploy_time_s)"}
+
+
+def load_text(key, label, deploy_def, retract_def, direction):
+    """(label, definition) of a load for this direction; None for a load it does not have."""
+    if direction == "retract":
+        definition = RETRACT_DEFINITIONS.get(key, retract_def or deploy_def)
+        return RETRACT_LABELS.get(key, label), definition
+    return (label, deploy_def) if deploy_def else (label, None)
+
 
 IMPULSE_KEYS = {"start_drive_impulse_Ns", "entry_impulse_Ns", "entry_drive_impulse_Ns",
                 "landing_impulse_Ns", "unlock_impulse_Ns", "drive_work_impulses_J"}
@@ -50,7 +71,8 @@ IMPULSE_KEYS = {"start_drive_impulse_Ns", "entry_impulse_Ns", "entry_drive_impul
 # Readable units: base unit -> [(label, factor)] in increasing order of size.
 PREFIXES = {"N": [("mN", 1e-3), ("N", 1.0)], "Nm": [("µN m", 1e-6), ("mN m", 1e-3), ("N m", 1.0)],
             "J": [("µJ", 1e-6), ("mJ", 1e-3), ("J", 1.0)],
-            "Ns": [("mN s", 1e-3), ("N s", 1.0)], "s": [("s", 1.0)]}
+            "Ns": [("mN s", 1e-3), ("N s", 1.0)], "s": [("s", 1.0)],
+            "m": [("mm", 1e-3), ("m", 1.0)], "kg": [("g", 1e-3), ("kg", 1.0)]}
 
 
 def readable_unit(unit, magnitude):
@@ -66,24 +88,31 @@ def readable_unit(unit, magnitude):
     return best
 
 
-def upper_bound_rank(n, p, confidence):
-    """Smallest rank k (1-based) with F_Binom(k - 1; n, p) >= confidence, or None if k > n."""
-    from scipy.stats import binom
-    if n < 1:
-        return None
-    cdf = binom.cdf(np.arange(n), n, p)       # F(k - 1) for k = 1 .. n
-    hit = np.nonzero(cdf >= confidence)[0]
-    return int(hit[0]) + 1 if len(hit) else None
+class DisplayUnits:
+    """One display unit per quantity for the whole report: the design table, section 2, the
+    margins, the plots and the terminal summary show a load in the same unit (chosen once, from
+    its largest typical value). Related quantities share their load's unit: the per-bay fields,
+    and every torque of the margins (the drive torque's)."""
+    ALIASES = {"latch_energy_J": "peak_latch_energy_J",
+               "peak_static_drive_torque_Nm": "peak_drive_torque_Nm",
+               "peak_inertial_drive_torque_Nm": "peak_drive_torque_Nm",
+               "motor_torque_at_speed_Nm": "peak_drive_torque_Nm",
+               "drive.stall_torque_Nm": "peak_drive_torque_Nm", "torque": "peak_drive_torque_Nm"}
 
+    def __init__(self):
+        self.chosen = {}
 
-def runs_needed_for_bound(p, confidence):
-    """Smallest n that has an upper bound: 1 - p^n >= confidence."""
-    n = max(1, int(np.floor(np.log(1.0 - confidence) / np.log(p))))
-    while 1.0 - p ** n < confidence:
-        n += 1
-    while n > 1 and 1.0 - p ** (n - 1) >= confidence:
-        n -= 1
-    return n
+    def choose(self, key, unit, magnitude):
+        self.chosen.setdefault(key, readable_unit(unit, magnitude))
+
+    def get(self, key, unit, values=None):
+        """(label, factor) of `key`; a key not chosen yet gets one from `values` (and keeps it)."""
+        key = self.ALIASES.get(key, key)
+        if key not in self.chosen:
+            v = np.asarray(values if values is not None else [], dtype=float)
+            v = v[np.isfinite(v)]
+            self.choose(key, unit, float(np.max(np.abs(v))) if len(v) else float("nan"))
+        return self.chosen[key]
 
 
 @dataclass
@@ -93,6 +122,10 @@ class LevelValue:
     bound: float          # one-sided upper confidence bound (NaN if the sample is too small)
     rank: int             # its rank k (None if none)
     n_needed: int         # runs a bound needs (when rank is None)
+
+    @property
+    def too_few(self):
+        return self.rank is None
 
 
 @dataclass
@@ -105,8 +138,15 @@ class DesignLoad:
     n: int                # ok runs with a finite value
     nominal: float
     mean: float
+    min: float
     max: float
     levels: list          # LevelValue per requested level
+
+    @property
+    def nominal_below_runs(self):
+        """The nominal lies below every dispersed run (a peak over dispersed bays, see
+        design_table_html)."""
+        return np.isfinite(self.nominal) and self.nominal < self.min
 
     @property
     def ratio(self):
@@ -136,21 +176,27 @@ def load_values(c, e, key, source):
     return x, nom, unit
 
 
-def design_loads(c, e, levels, confidence):
-    """The DesignLoad of every load the file has with a finite nonzero value in some ok run."""
+def design_loads(c, e, levels, confidence, units=None):
+    """The DesignLoad of every load the file has with a finite nonzero value in some ok run, with
+    its label and definition for the campaign's direction; `units` (DisplayUnits) gets each
+    load's display unit."""
     res = []
-    for key, label, source, definition in LOADS:
+    for key, label, source, deploy_def, retract_def in LOADS:
+        label, definition = load_text(key, label, deploy_def, retract_def, c.attrs["direction"])
         x, nom, unit = load_values(c, e, key, source)
-        if x is None:
+        if x is None or definition is None:
             continue
         v = np.sort(x[c.ok & np.isfinite(x)])
         if len(v) == 0 or not np.any(v != 0):
             continue
         lv = []
         for q in levels:
-            k = upper_bound_rank(len(v), q / 100.0, confidence)
-            lv.append(LevelValue(q, percentile(v, q), float(v[k - 1]) if k else float("nan"), k,
-                                 None if k else runs_needed_for_bound(q / 100.0, confidence)))
-        res.append(DesignLoad(key, label, definition, unit, key in IMPULSE_KEYS, len(v), nom,
-                              float(np.mean(v)), float(v[-1]), lv))
+            ci = quantile_ci(v, q / 100.0, confidence)
+            lv.append(LevelValue(q, percentile(v, q), ci.hi, ci.s, ci.n_needed_hi))
+        d = DesignLoad(key, label, definition, unit, key in IMPULSE_KEYS, len(v), nom,
+                       float(np.mean(v)), float(v[0]), float(v[-1]), lv)
+        if units is not None:
+            units.choose(key, unit, max(abs(nom) if np.isfinite(nom) else 0.0,
+                                        abs(lv[-1].estimate) if lv else abs(d.max)))
+        res.append(d)
     return res

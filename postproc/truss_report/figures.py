@@ -2,18 +2,21 @@
 import numpy as np
 
 from .constants import LEVELS
+from .page import fmt
 
 
-def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan")):
+def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidence=0.95):
+    """x sorted, in the display unit u (est, cis and nominal too)."""
     n = len(x)
-    fig, (a1, a2, a3) = plt.subplots(1, 3, figsize=(15.0, 4.3))
+    unit = f" ({u})" if u != "1" else ""
+    # Histogram and exceedance probability (1 - ECDF, log scale: the tail that the design
+    # percentiles sit in; the ECDF itself adds nothing the two do not show).
+    fig, (a1, a3) = plt.subplots(1, 2, figsize=(13.0, 4.6))
     edges = np.histogram_bin_edges(x, bins="auto")
     if len(edges) > 81:
         edges = np.linspace(x[0], x[-1], 81)
     a1.hist(x, bins=edges, color="C0", alpha=0.8)
     a1.set_ylabel("runs")
-    a2.step(x, np.arange(1, n + 1) / n, where="post", color="C0")
-    a2.set_ylabel("empirical CDF")
     surv = 1.0 - np.arange(1, n + 1) / n
     a3.step(x[:-1], surv[:-1], where="post", color="C0")
     a3.set_yscale("log")
@@ -22,28 +25,30 @@ def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan")):
     colors = {"p50": "C2", "p95": "C1", "p99": "C3", "p99_865": "C4"}
     for q, name, lab in LEVELS:
         style = dict(color=colors[name], lw=1.1, ls="--")
-        a1.axvline(est[name], label=f"{lab} = {est[name]:.5g} {u}", **style)
-        a2.axvline(est[name], **style)
-        # The CI as a segment (it need not contain the estimate for very small n); a bound
+        a1.axvline(est[name], label=f"{lab} = {fmt(est[name])}{' ' + u if u != '1' else ''}",
+                   **style)
+        # The bounds as a segment (it need not contain the estimate for very small n); a bound
         # the sample cannot give is drawn to the sample's extreme.
         ci, level = cis[name], 1.0 - q / 100.0
         lo = ci.lo if np.isfinite(ci.lo) else x[0]
         hi = ci.hi if np.isfinite(ci.hi) else x[-1]
         a3.plot([lo, hi], [level, level], "|-", color=colors[name], lw=1.6, ms=8)
         a3.plot([est[name]], [level], "o", color=colors[name], ms=4,
-                label=f"{lab} and 95 % CI" + ("" if np.isfinite(ci.lo) and np.isfinite(ci.hi)
-                                             else " (a bound beyond the sample)"))
+                label=f"{lab}, {confidence * 100:g} % bounds" + ("" if np.isfinite(ci.lo) and
+                                                          np.isfinite(ci.hi) else " (n too small)"))
     if np.isfinite(nominal):
-        for ax in (a1, a2, a3):
-            ax.axvline(nominal, color="k", lw=1.4, ls="-", label=f"nominal = {nominal:.5g} {u}"
+        for ax in (a1, a3):
+            ax.axvline(nominal, color="k", lw=1.4, ls="-",
+                       label=f"nominal = {fmt(nominal)}{' ' + u if u != '1' else ''}"
                        if ax is a1 else None)
-    for ax in (a1, a2, a3):
-        ax.set_xlabel(f"{title} ({u})" if u != "1" else title)
+    for ax in (a1, a3):
+        ax.set_xlabel(title + unit)
         ax.grid(True, alpha=0.3)
-    a1.legend(fontsize=7, loc="best")
-    a3.legend(fontsize=7, loc="lower left")
-    fig.suptitle(f"{title}: {n} ok runs with a finite value", fontsize=10)
-    fig.tight_layout()
+    # Keys outside the data: the histogram's to its right half is often empty, but not always.
+    a1.legend(loc="upper left", bbox_to_anchor=(0.0, -0.2), ncol=2, frameon=False)
+    a3.legend(loc="upper left", bbox_to_anchor=(0.0, -0.2), ncol=2, frameon=False)
+    fig.suptitle(f"{title}: {n} ok runs with a finite value")
+    fig.set_layout_engine("tight")   # applied when drawn
     return fig
 
 
@@ -59,10 +64,10 @@ def fig_lock_timing(plt, bays, lt, it, u, words, dt_text):
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         ax.set_ylabel(f"{what} ({u})")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=8)
-    a1.set_title(f"{words[0]} time per bay", fontsize=10)
-    a2.set_title(f"time between successive {words[1]}\n({dt_text})", fontsize=9)
-    fig.tight_layout()
+        ax.legend()
+    a1.set_title(f"{words[0]} time per bay")
+    a2.set_title(f"time between successive {words[1]}\n({dt_text})")
+    fig.set_layout_engine("tight")   # applied when drawn
     return fig
 
 
@@ -73,10 +78,10 @@ def fig_motor(plt, torque, stall_t, ok_t, stalled, nominal, u):
     edges = edges if len(edges) <= 61 else np.linspace(edges[0], edges[-1], 61)
     a1.hist([stall_t[ok_t], stall_t[stalled]], bins=edges, stacked=True, color=["C0", "C3"],
             label=[f"ok runs ({int(ok_t.sum())})", f"stalled runs ({int(stalled.sum())})"])
-    a1.axvline(nominal, color="k", ls="--", lw=1, label=f"base scene {nominal:.5g} {u}")
+    a1.axvline(nominal, color="k", ls="--", lw=1, label=f"base scene {fmt(nominal)} {u}")
     a1.set_xlabel(f"stall torque of the run ({u})")
     a1.set_ylabel("runs")
-    a1.legend(fontsize=8)
+    a1.legend()
     a2.plot(stall_t[ok_t], torque[ok_t], ".", ms=3, color="C0", label="ok runs")
     a2.plot(stall_t[stalled], torque[stalled], "x", ms=4, color="C3",
             label="stalled runs (peak before the stall)")
@@ -84,10 +89,10 @@ def fig_motor(plt, torque, stall_t, ok_t, stalled, nominal, u):
     a2.plot(lim, lim, "k--", lw=1, label="peak torque = stall torque")
     a2.set_xlabel(f"stall torque of the run ({u})")
     a2.set_ylabel(f"peak drive torque ({u})")
-    a2.legend(fontsize=8)
+    a2.legend()
     for ax in (a1, a2):
         ax.grid(True, alpha=0.3)
-    fig.tight_layout()
+    fig.set_layout_engine("tight")   # applied when drawn
     return fig
 
 
@@ -104,14 +109,14 @@ def fig_tornado(plt, ranked, aggregate, title, band):
     ax.axvspan(-band, band, color="0.8", alpha=0.6, zorder=0)
     ax.axvline(0, color="k", lw=0.8)
     ax.set_yticks(range(len(vals)))
-    ax.set_yticklabels(labels, fontsize=7)
+    ax.set_yticklabels(labels)
     ax.set_xlim(-1.05, 1.05)
     ax.set_xlabel("Spearman ρ (1)")
     for i, v in enumerate(vals):
-        ax.text(v, i, f" {v:+.3f} ".replace("-0.000", "0.000").replace("+0.000", "0.000"), va="center", ha="left" if v > 0 else "right", fontsize=6)
-    ax.set_title(f"{title}: top {len(vals)} inputs by |ρ|", fontsize=9)
+        ax.text(v, i, f" {v:+.3f} ".replace("-0.000", "0.000").replace("+0.000", "0.000"), va="center", ha="left" if v > 0 else "right", fontsize=8)
+    ax.set_title(f"{title}: top {len(vals)} inputs by |ρ|")
     ax.grid(True, axis="x", alpha=0.3)
-    fig.tight_layout()
+    fig.set_layout_engine("tight")   # applied when drawn
     return fig
 
 
@@ -130,14 +135,14 @@ def fig_sobol(plt, factors, outs):
             ok &= np.isfinite(o[k + "_lo"]) & np.isfinite(o[k + "_hi"])
             ax.hlines(y[ok] + dy, o[k + "_lo"][ok], o[k + "_hi"][ok], color="k", lw=1.2)
         ax.set_yticks(y)
-        ax.set_yticklabels(factors, fontsize=7)
+        ax.set_yticklabels(factors)
         ax.set_ylim(G - 0.5, -0.5)
         undefined = not np.all(np.isfinite(o["first_order"]) & np.isfinite(o["total"]))
-        ax.set_title(key + (" (some indices undefined: NaN)" if undefined else ""), fontsize=9)
+        ax.set_title(key + (" (some indices undefined: NaN)" if undefined else ""))
         ax.set_xlabel("Sobol' index (1); black: CI")
         ax.grid(True, axis="x", alpha=0.3)
-    axes.ravel()[0].legend(fontsize=7)
+    axes.ravel()[0].legend()
     for ax in axes.ravel()[len(outs):]:
         ax.set_visible(False)
-    fig.tight_layout()
+    fig.set_layout_engine("tight")   # applied when drawn
     return fig

@@ -8,7 +8,7 @@ import numpy as np
 
 import run_figures as rf
 from run_figures import InputError
-from .constants import OUTPUTS, ROOT_ATTRS_INT, ROOT_ATTRS_STR, SCHEMA_VERSION, STATS_FIELDS
+from .constants import OUTPUTS, ROOT_ATTRS_INT, ROOT_ATTRS_STR, SCHEMA_VERSIONS, STATS_FIELDS
 
 
 class H5:
@@ -72,12 +72,13 @@ def read_kind(h5):
     if "schema_version" not in h5.f.attrs:
         raise h5.error("no root attribute schema_version: not a truss-sim/truss-campaign file")
     version = h5.attr(h5.f, "schema_version", int)
-    if version != SCHEMA_VERSION:
-        raise h5.error(f"schema_version is {version}; this report reads schema_version "
-                       f"{SCHEMA_VERSION}")
     kind = h5.attr(h5.f, "kind", str)
-    if kind not in ("campaign", "single_run"):
+    if kind not in SCHEMA_VERSIONS:
         raise h5.error(f"kind is '{kind}'; this report reads 'campaign' and 'single_run' files")
+    if version not in SCHEMA_VERSIONS[kind]:
+        readable = " and ".join(str(v) for v in SCHEMA_VERSIONS[kind])
+        raise h5.error(f"schema_version is {version}; this report reads {kind} files of schema_version "
+                       f"{readable}")
     return kind
 
 

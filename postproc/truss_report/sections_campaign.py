@@ -4,10 +4,11 @@ import re
 
 import numpy as np
 
-from .constants import CONFIDENCE, LEVELS, MAX_FAILED_LISTED, OUTPUTS, STATS_FIELDS
+from .constants import CONFIDENCE, LEVELS, MAX_FAILED_LISTED, OUTPUTS, STATS_FIELDS, output_label
 from .figures import fig_distribution, fig_lock_timing
-from .page import esc, num, table, unit_label
-from .stats import StatsComparison, band_stats, column_stats, lock_intervals, lock_order, percentile, quantile_ci
+from .page import esc, fmt, num, table, unit_label
+from .stats import (StatsComparison, band_stats, column_stats, lock_intervals, lock_order,
+                    percentile, quantile_ci)
 
 
 def section_campaign(page, c):
@@ -169,73 +170,78 @@ def subsection_base_scene(c):
             + esc(c.attrs["campaign_toml"]) + "</pre></details>")
 
 
-def ci_note(sampling):
-    note = ("Confidence intervals of the percentiles are distribution-free order-statistic "
-            f"intervals at {CONFIDENCE:.0%}: for the q-quantile, the number of runs below the "
-            "true quantile is Binomial(n, q), and the interval is [x<sub>(r)</sub>, "
-            "x<sub>(s)</sub>] with r, s from that binomial's 2.5 % and 97.5 % quantiles "
-            "(r = binom.ppf(0.025, n, q), s = binom.ppf(0.975, n, q) + 1; ranks 1-based). "
-            "Coverage is the exact probability that the interval holds the true quantile "
-            "(≥ 95 %). When n is too small for a bound at this level, the table says "
-            "“n too small” and gives the number of runs that bound needs. The intervals assume "
-            "independent runs")
+def ci_note(sampling, confidence):
+    note = ("Bounds of the percentiles are distribution-free order-statistic bounds, each one-sided at "
+            f"{confidence * 100:g} % (the design-load table's upper bound is the same number): for the "
+            "q-quantile, the number of runs below the true quantile is Binomial(n, q); the upper "
+            "bound is x<sub>(s)</sub>, s the smallest rank with F(s − 1) ≥ "
+            f"{fmt(confidence)}, the lower bound x<sub>(r)</sub>, r the smallest rank with "
+            f"F(r) ≥ {fmt(1 - confidence)} (F the binomial CDF; ranks 1-based). Together they "
+            f"are an interval of coverage ≥ {(2 * confidence - 1) * 100:g} %; the table gives its exact "
+            "coverage. When n is too small for a bound, the table says “n too small” and gives "
+            "the number of runs that bound needs (an upper bound of P99.865 at 95 % needs 2218). "
+            "The bounds assume independent runs")
     if sampling == "monte_carlo":
         return note + ", which Monte Carlo sampling gives."
     if sampling == "saltelli":
         return note + (". <b>This campaign used Saltelli sampling: the runs of one block share "
-                       "coordinates, so they are not independent and these intervals are not "
+                       "coordinates, so they are not independent and these bounds are not "
                        "valid; use a Monte Carlo campaign for the load percentiles.</b>")
     return note + (f". With {esc(sampling)} sampling the runs are stratified rather than "
-                   "independent; the intervals are then usually conservative, but this is not "
+                   "independent; the bounds are then usually conservative, but this is not "
                    "guaranteed.")
 
 
-def section_loads(page, c):
+def section_loads(page, c, confidence=CONFIDENCE):
     out = ['<section id="loads"><h2>2. Peak loads and deployment time</h2>',
            "<p>Statistics over the ok runs with a finite value only (the runs that "
            "<code>/stats/&lt;output&gt;/count</code> counts). Percentiles are linear "
            "interpolation between order statistics (Hyndman-Fan type 7, "
            "<code>numpy.percentile</code>'s default), the definition of <code>/stats</code>; "
            "each is shown next to the value stored in <code>/stats</code>. Standard deviations "
-           "use ddof = 1.</p>", f"<p>{ci_note(c.attrs['sampling'])}</p>"]
+           "use ddof = 1. Each load is shown in the unit of the design-load table.</p>",
+           f"<p>{ci_note(c.attrs['sampling'], confidence)}</p>"]
     comparison = StatsComparison()
-    for key, label in OUTPUTS.items():
-        out.append(output_block(page, c, key, label, comparison))
+    for key in OUTPUTS:
+        out.append(output_block(page, c, key, output_label(key, c.attrs["direction"]),
+                                comparison, confidence))
     comparison.report(page, "the six outputs recomputed vs /stats/<output>", "stats")
     out.append("</section>")
     return "\n".join(out)
 
 
-def output_block(page, c, key, label, comparison):
-    """Histogram, ECDF, exceedance and tables of one output (its /stats compared into
+def output_block(page, c, key, word, comparison, confidence):
+    """Histogram, exceedance probability and tables of one output (its /stats compared into
     `comparison`)."""
-    u = c.units[key]
-    word = label if not (key == "deploy_time_s" and c.attrs["direction"] == "retract") \
-        else "retraction time"
     x = np.sort(c.outputs[key][c.ok & np.isfinite(c.outputs[key])])
     mine = column_stats(x)
     stored = c.stats[key]
     comparison.add(mine, stored, float(np.max(np.abs(x))) if len(x) else 0.0, STATS_FIELDS)
-    head = (f'<h3 id="{key}">{esc(word[0].upper() + word[1:])} <code>{key}</code>'
-            f"{unit_label(u)}</h3>")
+    u, f = c.display_units.get(key, c.units[key], x) if hasattr(c, "display_units") \
+        else (c.units[key], 1.0)
+    head = (f'<h3 id="{key}">{esc(word[0].upper() + word[1:])}{unit_label(u)} '
+            f"<small><code>{key}</code></small></h3>")
     n_ok = int(c.ok.sum())
     if len(x) == 0:
         return (head + f"<p class='note'>No ok run has a finite value of <code>{key}</code> "
                 f"({num(f'{key}.count', 0, tag='span')} values from {n_ok} ok runs): nothing to "
                 f"show (the {esc(c.attrs['drive_mode'])} drive mode may not define it).</p>")
-    cis = {name: quantile_ci(x, q / 100.0) for q, name, _ in LEVELS}
+    cis = {name: quantile_ci(x, q / 100.0, confidence) for q, name, _ in LEVELS}
     est = {name: percentile(x, q) for q, name, _ in LEVELS}
     e = getattr(c, "extras", None)
     nominal = e.nominal.get(key, float("nan")) if e is not None and e.nominal else float("nan")
-    fig = fig_distribution(page.plt, x, f"{word} ({key})", u, est, cis, nominal)
+    fig = fig_distribution(page.plt, x / f, word, u, {k: v / f for k, v in est.items()},
+                           {k: v.scaled(f) for k, v in cis.items()}, nominal / f, confidence)
     parts = [head,
              f"<p>{num(f'{key}.count', len(x), tag='span')} ok runs with a finite value "
              f"(of {n_ok} ok runs and {c.n} runs).</p>",
              page.figure(fig, f"dist_{key}.png",
-                         f"{word}: histogram, empirical CDF and exceedance probability "
-                         "(1 − ECDF, log scale) with P50, P95, P99, P99.865 and their 95 % CIs")]
-    summary = [[num(f"{key}.{s}", mine[s], u) for s in ("mean", "std", "min", "max")],
-               [num(f"{key}.{s}.stats", stored[s], u) for s in ("mean", "std", "min", "max")]]
+                         f"{word}: histogram and exceedance probability "
+                         f"(1 − ECDF, log scale) with P50, P95, P99, P99.865 and their one-sided "
+                         f"{confidence * 100:g} % bounds")]
+    summary = [[num(f"{key}.{s}", mine[s], u, factor=f) for s in ("mean", "std", "min", "max")],
+               [num(f"{key}.{s}.stats", stored[s], u, factor=f)
+                for s in ("mean", "std", "min", "max")]]
     summary[0].insert(0, "recomputed")
     summary[1].insert(0, "<code>/stats</code>")
     parts.append(table(["", "mean", "std (ddof 1)", "min", "max"], summary, "narrow"))
@@ -243,20 +249,23 @@ def output_block(page, c, key, label, comparison):
     for q, name, lab in LEVELS:
         ci = cis[name]
         rows.append([
-            lab, num(f"{key}.{name}", est[name], u), num(f"{key}.{name}.stats", stored[name], u),
-            ci_cell(f"{key}.{name}.ci_lo", ci.lo, ci.n_needed_lo, u),
-            ci_cell(f"{key}.{name}.ci_hi", ci.hi, ci.n_needed_hi, u),
+            lab, num(f"{key}.{name}", est[name], u, factor=f),
+            num(f"{key}.{name}.stats", stored[name], u, factor=f),
+            ci_cell(f"{key}.{name}.ci_lo", ci.lo, ci.n_needed_lo, u, f),
+            ci_cell(f"{key}.{name}.ci_hi", ci.hi, ci.n_needed_hi, u, f),
             (num(f"{key}.{name}.ci_r", ci.r) if ci.r is not None else "<td>—</td>"),
             (num(f"{key}.{name}.ci_s", ci.s) if ci.s is not None else "<td>—</td>"),
             num(f"{key}.{name}.ci_coverage", ci.coverage, digits=4)])
-    parts.append(table(["percentile", "estimate", "<code>/stats</code>", "95 % CI low",
-                        "95 % CI high", "rank r", "rank s", "coverage"], rows))
+    conf = f"{confidence * 100:g} %"
+    parts.append(table(["percentile", "estimate", "<code>/stats</code>", f"lower {conf} bound",
+                        f"upper {conf} bound", "rank r", "rank s", "coverage of [lower, upper]"],
+                       rows))
     return "\n".join(parts)
 
 
-def ci_cell(key, v, n_needed, unit):
+def ci_cell(key, v, n_needed, unit, factor=1.0):
     if n_needed is None:
-        return num(key, v, unit)
+        return num(key, v, unit, factor=factor)
     return (f'<td class="num toosmall" data-key="{esc(key)}" data-value="nan">n too small '
             f'(needs n ≥ {num(key + ".n_needed", n_needed, tag="span")})</td>')
 

@@ -3,17 +3,17 @@ campaign report (verdict and design loads on top)."""
 import numpy as np
 
 import run_figures as rf
-from .design import design_loads
+from .design import DisplayUnits, design_loads
 from .figures_design import (fig_convergence, fig_envelopes, fig_peak_location, fig_scatter,
                              fig_sobol_convergence, sobol_blocks, sobol_estimates)
 from .mechanism import compute_margins
 from .page import esc, html_page, num, table
 from .sections_campaign import section_campaign, section_loads, section_lock_timing
 from .sections_free import section_rail_miss
-from .sections_margins import (input_columns, section_checks, section_histories, section_margins,
-                               section_sensitivity)
-from .stats import spearman
-from .top import design_table_html, mechanism_html, model_limits_html, signoff_html, verdict_html
+from .sections_margins import (input_axis, input_columns, rank_correlations, section_checks,
+                               section_histories, section_margins, section_sensitivity)
+from .top import (design_table_html, mechanism_html, model_limits_html, signoff_html,
+                  terminal_summary, verdict_html, verdict_items)
 
 
 def section_nominal(page, e):
@@ -38,39 +38,41 @@ def section_nominal(page, e):
     return "\n".join(out)
 
 
-def top_inputs(c, y, k=3):
-    cols = input_columns(c)
-    ranked = []
-    for col in cols:
-        r, _ = spearman(col.values, y)
-        if np.isfinite(r):
-            ranked.append((abs(r), col.label, col.values))
+def top_inputs(c, key, k=3):
+    """(axis label, values) of the k input columns of largest |Spearman rho| with the output
+    `key` (ok runs)."""
+    rho = rank_correlations(c)[key]
+    ranked = [(abs(rho[col.label][0]), col) for col in input_columns(c)
+              if np.isfinite(rho[col.label][0])]
     ranked.sort(key=lambda t: -t[0])
-    return [(lab, x) for _, lab, x in ranked[:k]]
+    return [input_axis(col) for _, col in ranked[:k]]
 
 
 def section_plots(page, c, e, loads, opts):
     out = ["<section id='plots'><h2>Where and how the loads arise</h2>"]
     top = opts.levels[-1]
+    du = c.display_units
     fields = [(k, lab, e.bays[k]) for k, lab in
               (("peak_drive_force_N", "peak drive force"), ("peak_pin_force_N", "peak pin force"),
                ("latch_energy_J", "latch energy"), ("entry_impulse_Ns", "rail-entry impulse"),
                ("unlock_impulse_Ns", "unlock impulse"))
               if k in e.bays and np.any(np.isfinite(e.bays[k][c.ok]) & (e.bays[k][c.ok] != 0))]
     if fields:
+        units = {k: du.get(k, e.units[k], b[c.ok]) for k, _, b in fields}
         out.append("<h3>Per-bay envelopes</h3>" + page.figure(
             fig_envelopes(page.plt, fields, c.ok, e.nominal["bays"] if e.nominal else None,
-                          e.units, top), "envelopes.png",
+                          units, top), "envelopes.png",
             f"per-bay peak loads over the ok runs: P50, P{top:g}, min–max band, nominal"))
-    items = [(lab, e.runs[b], e.runs[t], c.outputs[v], c.units[v]) for lab, b, t, v in
+    items = [(lab, e.runs[b], e.runs[t], c.outputs[v], v) for lab, b, t, v in
              (("peak drive force", "peak_drive_force_bay", "peak_drive_force_time_s",
                "peak_drive_force_N"),
               ("peak pin force", "peak_pin_force_bay", "peak_pin_force_time_s", "peak_pin_force_N"))
              if b in e.runs and t in e.runs]
-    items = [(lab, np.where(c.ok, b, np.nan), t, v, u) for lab, b, t, v, u in items]
+    items = [(lab, np.where(c.ok, b, np.nan), t, v, k) for lab, b, t, v, k in items]
     if items:
+        units = {k: du.get(k, c.units[k], v) for _, _, _, v, k in items}
         out.append("<h3>Where the peaks occur</h3>" + page.figure(
-            fig_peak_location(page.plt, items), "peak_location.png",
+            fig_peak_location(page.plt, items, units), "peak_location.png",
             "bay and time of each ok run's peak (top: runs per bay; bottom: value against time)"))
     if c.dispersions:
         rows, nominal = [], {}
@@ -78,20 +80,21 @@ def section_plots(page, c, e, loads, opts):
             if d.impulse or d.key not in c.outputs:
                 continue
             y = np.where(c.ok, c.outputs[d.key], np.nan)
-            rows.append((d.label, d.unit, y, top_inputs(c, y)))
+            rows.append((d.label, du.get(d.key, d.unit), y, top_inputs(c, d.key)))
             nominal[d.label] = d.nominal
         if rows:
             out.append("<h3>Top inputs against each load</h3>" + page.figure(
                 fig_scatter(page.plt, rows, nominal), "scatter_top_inputs.png",
                 "each load against its three inputs of largest |Spearman ρ| (ok runs), nominal "
-                "dashed"))
-    series = [(d.label, d.unit, c.outputs[d.key][c.ok & np.isfinite(c.outputs[d.key])])
+                "dashed; an aggregate input (“mean relative deviation over bays”) is the mean "
+                "over the run's bays of (value − nominal) / nominal, in %"))
+    series = [(d.label, du.get(d.key, d.unit), c.outputs[d.key][c.ok & np.isfinite(c.outputs[d.key])])
               for d in loads if d.key in c.outputs and d.key != "deploy_time_s"]
     if series:
         out.append("<h3>Convergence of the percentile estimates</h3>" + page.figure(
             fig_convergence(page.plt, series, opts.levels, opts.confidence), "convergence.png",
-            f"percentile estimates over the first m runs (run-index order) with their two-sided "
-            f"{opts.confidence:.0%} order-statistic intervals"))
+            f"percentile estimates over the first m runs (run-index order) with their one-sided "
+            f"{opts.confidence * 100:g} % bounds"))
     if c.sensitivity is not None:
         G = len(c.sensitivity["factor"])
         ss = [(k, c.outputs[k], c.ok) for k in ("peak_drive_force_N", "peak_pin_force_N")]
@@ -121,16 +124,24 @@ def sobol_agreement(c, series, G):
 
 
 def campaign_report(page, c, e, opts):
+    """The campaign report's HTML; page.summary gets the verdict's lines for the terminal."""
     c.extras = e
-    body = [section_campaign(page, c), section_rail_miss(c), section_loads(page, c), section_lock_timing(page, c),
-            section_margins(page, c), section_sensitivity(page, c), section_histories(page, c)]
+    c.display_units = DisplayUnits()    # one unit per quantity, chosen from the design loads
+    loads = design_loads(c, e, opts.levels, opts.confidence, c.display_units)
+    body = [section_campaign(page, c), section_rail_miss(c), section_loads(page, c, opts.confidence),
+            section_lock_timing(page, c), section_margins(page, c), section_sensitivity(page, c),
+            section_histories(page, c)]
     n_checks = 7 if c.histories else 6
     body.append(section_checks(page, n_checks))
-    loads = design_loads(c, e, opts.levels, opts.confidence)
     m = compute_margins(c, e, opts.motorisation_factor, opts.uncertainty_factor, opts.inertia_factor)
     failed = [what for what, passed, _ in page.checks if not passed]
-    top = [verdict_html(c, m, failed, e.nominal_status, len(page.checks)),
-           design_table_html(loads, opts.confidence, c.attrs["sampling"]), mechanism_html(m)]
+    top = [verdict_html(c, m, failed, e.nominal_status, len(page.checks), loads, c.display_units),
+           design_table_html(loads, opts.confidence, c.attrs["sampling"], c.display_units,
+                             c.attrs["n_bays_max"]),
+           mechanism_html(m, c.display_units)]
+    page.summary = terminal_summary(c, m, loads, verdict_items(c, m, failed, e.nominal_status,
+                                                               loads),
+                                    c.display_units, opts.confidence)
     rest = [section_nominal(page, e), section_plots(page, c, e, loads, opts)]
     toc = ("<nav><a href='#design'>Design loads</a> · <a href='#mechanism'>Mechanism margins</a> · "
            "<a href='#nominal'>Nominal run</a> · <a href='#plots'>Plots</a> · "

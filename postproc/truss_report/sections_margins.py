@@ -4,10 +4,12 @@ from dataclasses import dataclass
 import numpy as np
 
 import run_figures as rf
-from .constants import AGREE_RTOL, MAX_HISTORY_FIGURES, OUTPUTS, TORNADO_TOP, TORQUE_RTOL
+from .constants import (AGREE_RTOL, MAX_HISTORY_FIGURES, OUTPUTS, TORNADO_TOP, TORQUE_RTOL,
+                        output_label)
 from .figures import fig_motor, fig_sobol, fig_tornado
+from .design import readable_unit
 from .page import esc, fmt, num, table
-from .stats import clopper_pearson, spearman
+from .stats import clopper_pearson, spearman_table
 
 
 def section_margins(page, c):
@@ -20,7 +22,7 @@ def section_margins(page, c):
     stall_code = [k for k, v in c.status_name.items() if v == "stall"]
     stalled = np.isin(c.status, stall_code)
     torque = c.outputs["peak_drive_torque_Nm"]
-    u = c.units["peak_drive_torque_Nm"]
+    u, f = c.display_units.get("torque", c.units["peak_drive_torque_Nm"], torque)
     stall_t, source = c.stall_torque, c.stall_torque_source
     ok_t = c.ok & np.isfinite(torque) & np.isfinite(stall_t)
     ok_exceed = ok_t & (torque > stall_t * (1.0 + TORQUE_RTOL))
@@ -32,9 +34,9 @@ def section_margins(page, c):
     lo, hi = clopper_pearson(k, n_cons)
     util = torque[ok_t] / stall_t[ok_t]
     nominal = float((c.base_scene.get("drive") or {}).get("stall_torque_Nm", float("nan")))
-    fig = fig_motor(page.plt, torque, stall_t, ok_t, stalled, nominal, u)
+    fig = fig_motor(page.plt, torque / f, stall_t / f, ok_t, stalled, nominal / f, u)
     rows = [
-        ["stall torque of the base scene", num("motor.stall_torque_nominal", nominal, u)],
+        ["stall torque of the base scene", num("motor.stall_torque_nominal", nominal, u, factor=f)],
         ["runs considered (ok with a finite peak torque, + stalled)", num("motor.n_considered",
                                                                          n_cons)],
         ["stalled runs (status stall)", num("motor.n_stall", int(stalled.sum()))],
@@ -65,7 +67,7 @@ def section_margins(page, c):
 
 def section_margins_velocity(page, c, head):
     torque = c.outputs["peak_drive_torque_Nm"]
-    u = c.units["peak_drive_torque_Nm"]
+    u, f = c.display_units.get("torque", c.units["peak_drive_torque_Nm"], torque)
     if c.motor_torque_at_speed is None:
         return (head + "<p>This file has no <code>/runs/motor_torque_at_speed_Nm</code> (it was "
                 "written before the simulator stored the motor's torque at the prescribed speed): "
@@ -81,18 +83,19 @@ def section_margins_velocity(page, c, head):
     drive = c.base_scene.get("drive") or {}
     omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
     ratio = avail[considered] / torque[considered]
-    fig, ax = page.plt.subplots(figsize=(10.0, 4.0))
-    ax.hist(torque[considered], bins=60, color="C0", label=f"peak drive torque, {n_cons} ok runs")
-    for v, lab in ((float(np.min(avail[considered])), "available torque at the prescribed speed (min over runs)"),
-                   (float(np.max(avail[considered])), "(max over runs)")):
-        ax.axvline(v, color="C3", ls="--", lw=1, label=f"{lab}: {v:.5g} {u}")
-    ax.set_xlabel(f"torque ({u})")
+    fig, ax = page.plt.subplots(figsize=(10.0, 4.2))
+    ax.hist(torque[considered] / f, bins=60, color="C0", label=f"peak drive torque, {n_cons} ok runs")
+    a_min, a_max = float(np.min(avail[considered])), float(np.max(avail[considered]))
+    ax.axvline(a_min / f, color="C3", ls="--", lw=1.2,
+               label=f"available at the prescribed speed: {fmt(a_min / f, 4)} {u}"
+               + (f" (smallest; largest {fmt(a_max / f, 4)} {u})" if a_max > a_min else ""))
+    ax.set_xlabel(f"drive torque, the three screws together ({u})")
     ax.set_ylabel("runs")
-    ax.legend(fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.18), ncol=2, frameon=False)
     ax.grid(True, alpha=0.3)
-    fig.tight_layout()
+    fig.set_layout_engine("tight")   # applied when drawn
     rows = [
-        ["motor stall torque of the scene", num("velmargin.stall_torque", float(drive["stall_torque_Nm"]), u)],
+        ["motor stall torque of the scene", num("velmargin.stall_torque", float(drive["stall_torque_Nm"]), u, factor=f)],
         ["motor no-load speed of the scene", num("velmargin.no_load_speed", float(drive["no_load_speed_rad_per_s"]), "rad/s")],
         ["screw speed the prescribed drive speed needs", num("velmargin.required_speed", omega, "rad/s")],
         ["runs considered (ok, finite peak torque)", num("velmargin.n_considered", n_cons)],
@@ -104,14 +107,16 @@ def section_margins_velocity(page, c, head):
         ["median available / peak torque", num("velmargin.ratio_p50", float(np.percentile(ratio, 50)), digits=6)],
     ]
     return (head + "<p>Velocity drive: the driven frame follows the prescribed speed whatever torque that "
-            "takes, so the campaign gives the <b>torque a motor must deliver</b>. It is compared with "
+            "takes, so the campaign gives the <b>torque a motor must deliver</b> (at the screws, the "
+            "three together: the torque of one motor driving them 1:1). It is compared with "
             "the scene's motor (<code>drive.stall_torque_Nm</code>, "
-            "<code>drive.no_load_speed_rad_per_s</code>: project defaults unless the scene sets them) "
+            "<code>drive.no_load_speed_rad_per_s</code>) "
             "on its linear speed-torque line: at the screw speed &omega; = 2&pi; v / h the motor gives "
             "T<sub>s</sub> (1 &minus; &omega; / &omega;<sub>0</sub>), per run when any of these is "
             "dispersed. A run exceeds when its peak drive torque is above that; the probability has an "
-            "exact (Clopper-Pearson) 95 % interval. A result of 1 means this motor cannot hold the "
-            "prescribed speed: choose a stronger motor, or rerun the campaign in motor mode.</p>"
+            "exact (Clopper-Pearson) 95 % interval. This is the bare torque balance, without the "
+            "factors of the standard (those are in the mechanism margins at the top). A result of 1 "
+            "means this motor cannot hold the prescribed speed at all.</p>"
             + page.figure(fig, "velocity_torque_margin.png",
                           "peak drive torque of the ok runs against the torque the scene's motor gives at the "
                           "prescribed speed")
@@ -123,6 +128,8 @@ class InputColumn:
     label: str
     values: np.ndarray
     aggregate: bool       # the per-dispersion aggregate (or a per-run dispersion itself)
+    units: str = "1"      # of the values; an aggregate (per-bay/frame mean) is a relative deviation
+    relative: bool = False  # values are (value - nominal) / nominal
 
 
 def input_columns(c):
@@ -130,13 +137,26 @@ def input_columns(c):
     cols = []
     for d in c.dispersions:
         if d.per == "run":
-            cols.append(InputColumn(d.key, d.values, True))
+            cols.append(InputColumn(d.key, d.values, True, d.units))
             continue
         start = 1 if d.per == "bay" else 0
         for j in range(d.values.shape[1]):
-            cols.append(InputColumn(f"{d.key}[{d.per} {j + start}]", d.values[:, j], False))
-        cols.append(InputColumn(aggregate_label(d), aggregate_input(d), True))
+            cols.append(InputColumn(f"{d.key}[{d.per} {j + start}]", d.values[:, j], False,
+                                    d.units))
+        cols.append(InputColumn(aggregate_label(d), aggregate_input(d), True,
+                                "1" if d.nominal != 0 else d.units, d.nominal != 0))
     return cols
+
+
+def input_axis(col):
+    """(axis label, values) of an input column for a plot: a relative deviation in %, a length
+    in mm, a mass in g (when the values are that small), else the file's unit."""
+    if col.relative:
+        key, per = col.label[:-1].split(" (mean over ")
+        return f"{key}: mean relative\ndeviation over {per} (%)", 100.0 * col.values
+    finite = col.values[np.isfinite(col.values)]
+    lab, f = readable_unit(col.units, float(np.max(np.abs(finite))) if len(finite) else np.nan)
+    return (col.label + (f" ({lab})" if lab != "1" else ""), col.values / f)
 
 
 def aggregate_label(d):
@@ -155,15 +175,26 @@ def aggregate_input(d):
     return np.where(count > 0, total / np.maximum(count, 1), np.nan)
 
 
+def rank_correlations(c):
+    """{output: {input label: (Spearman rho, pairs)}} over the ok runs, computed once per report
+    (the tornado charts and the scatter plots of the top inputs read the same table)."""
+    if getattr(c, "rank_correlations", None) is None:
+        cols = input_columns(c)
+        c.rank_correlations, ranks = {}, {}
+        for key in OUTPUTS:
+            y = np.where(c.ok, c.outputs[key], np.nan)
+            c.rank_correlations[key] = dict(zip((col.label for col in cols),
+                                                spearman_table([col.values for col in cols], y,
+                                                               ranks)))
+    return c.rank_correlations
+
+
 def section_sensitivity(page, c):
     out = ['<section id="sensitivity"><h2>5. What drives the loads</h2>']
     if not c.dispersions:
         return out[0] + "<p>No dispersed input.</p></section>"
     cols = input_columns(c)
-    rho = {}
-    for key in OUTPUTS:
-        y = np.where(c.ok, c.outputs[key], np.nan)
-        rho[key] = {col.label: spearman(col.values, y) for col in cols}
+    rho = rank_correlations(c)
     out.append("<p>Spearman rank correlation ρ (<code>scipy.stats.spearmanr</code>) of each "
                "sampled input with each output, over the ok runs where both are finite. A per-bay "
                "(per-frame) dispersion contributes one input per bay (frame), "
@@ -195,7 +226,7 @@ def section_sensitivity(page, c):
                         "correlation defined (no finite ok value, or a constant output).</p></div>")
             continue
         n_y = int(np.sum(c.ok & np.isfinite(c.outputs[key])))
-        fig = fig_tornado(page.plt, ranked, aggregate, f"{key} (n = {n_y})",
+        fig = fig_tornado(page.plt, ranked, aggregate, f"{output_label(key, c.attrs['direction'])} (n = {n_y})",
                           1.96 / np.sqrt(max(n_y - 1, 1)))
         detail = table(["input", "ρ", "runs"],
                        [[f"<code>{esc(lab)}</code>", num(f"spearman.{key}.{lab}", r, digits=3),
@@ -262,8 +293,9 @@ def subsection_sobol(page, c):
 def calc_design_correlations(c, n_factors):
     """Largest |rank correlation| between the A and B rows of each dispersion's columns (one per
     bay or frame for per-bay/per-frame keys). Saltelli's design (block of G + 2 runs: A, B, AB_1
-    .. AB_G) assumes A and B independent; some pairs of Sobol' dimensions are strongly correlated
-    at small N (docs/campaigns.md), which biases that factor's indices. Returns {key: (rho, N)}."""
+    .. AB_G) assumes A and B independent; a correlated pair biases that factor's indices. Campaign
+    files of schema_version 1 drew A and B from one Sobol' point, some of whose pairs of dimensions
+    correlate strongly at small N (docs/campaigns.md). Returns {key: (rho, N)}."""
     block = n_factors + 2
     n_blocks = len(c.status) // block
     res = {}
@@ -298,9 +330,9 @@ def design_correlation_note(c, n_factors):
     return ("<p class='warn'>Design check: the A and B samples of "
             + ", ".join(f"<code>{esc(k)}</code> (rank correlation {r:.2f})" for k, r in sorted(bad.items()))
             + f" are correlated beyond 4/&radic;N = {limit:.2f} (N = {n_blocks} blocks). Saltelli's "
-              "estimators assume them independent: these factors' indices are biased at this N "
-              "(a property of the unscrambled Sobol' sequence's high dimensions, docs/campaigns.md). "
-              "Run more blocks before relying on them.</p>")
+              "estimators assume them independent: these factors' indices may be biased at this N "
+              "(files of schema_version 1 drew A and B from one Sobol' point, whose high dimensions "
+              "do this; docs/campaigns.md). Run more blocks before relying on them.</p>")
 
 
 def out_of_range_note(outs):

@@ -1,16 +1,29 @@
 """truss_report.top: the top of the campaign report: verdict banner, design-load table, mechanism
-margins (ECSS), model limits and the sign-off block."""
+margins (ECSS), model limits and the sign-off block; the verdict's lines for the terminal."""
+import html
+import re
+
 import numpy as np
 
-from .design import readable_unit
 from .mechanism import ECSS_CLAUSE, ECSS_SOURCE
 from .page import esc, fmt, num, table
 
 
-def verdict_items(c, m, failed_checks, nominal_status):
+def too_few_items(loads):
+    """[(level, smallest n, runs needed)] of the levels some load has no upper bound for."""
+    res = []
+    for i, q in enumerate([lv.level for lv in loads[0].levels] if loads else []):
+        short = [d for d in loads if d.levels[i].too_few]
+        if short:
+            res.append((q, min(d.n for d in short), short[0].levels[i].n_needed))
+    return res
+
+
+def verdict_items(c, m, failed_checks, nominal_status, loads=()):
     """[(key, text)] of everything that fails: margins below the required factor, every run
     status other than ok (names from the file's enum: stalls, rail misses, solver or accuracy
-    flags), a nominal run that is not ok, and failed consistency checks."""
+    flags), a nominal run that is not ok, design loads without a bound (too few runs), and
+    failed consistency checks."""
     items = []
     if m.fails:
         items.append(("margin", f"motorisation factor below the required {fmt(m.mf_required)} in "
@@ -26,26 +39,51 @@ def verdict_items(c, m, failed_checks, nominal_status):
                           + ")"))
     if nominal_status and nominal_status != "ok":
         items.append(("nominal", f"the nominal run is <b>{esc(nominal_status)}</b>"))
+    for q, n, need in too_few_items(list(loads)):
+        items.append((f"too_few.p{fmt(q)}", "too few runs for the design loads: P" + fmt(q)
+                      + " has no upper confidence bound from " + num(f"verdict.too_few.p{fmt(q)}.n",
+                                                                     n, tag="span")
+                      + " ok runs (it needs ≥ " + num(f"verdict.too_few.p{fmt(q)}", need, tag="span")
+                      + "); run more"))
     for what in failed_checks:
         items.append(("check", f"consistency check failed: {esc(what)}"))
     return items
 
 
-def verdict_html(c, m, failed_checks, nominal_status, n_checks):
-    items = verdict_items(c, m, failed_checks, nominal_status)
+def drive_text(c, m, units):
+    """What the campaign is judged against: the drive and its motor, in words (HTML-free)."""
+    drive = c.base_scene.get("drive") or {}
+    lab, f = units.get("torque", "Nm")
+    if m.mode == "velocity":
+        return (f"velocity drive at {fmt(float(drive.get('speed_m_per_s', np.nan)))} m/s by the "
+                f"scene's motor: stall torque {fmt(m.stall_scene / f)} {lab}, no-load "
+                f"speed {fmt(m.no_load_speed)} rad/s (it gives {fmt(m.t_avail_min / f)} {lab} at the "
+                f"screw speed {fmt(m.omega, 4)} rad/s)")
+    if m.mode == "motor":
+        dispersed = [d.key for d in c.dispersions if d.key.startswith("drive.")]
+        return (f"motor drive by a motor of stall torque {fmt(m.stall_scene / f)} {lab}, no-load "
+                f"speed {fmt(m.no_load_speed)} rad/s"
+                + (f" (base scene; dispersed per run: {', '.join(dispersed)})" if dispersed else ""))
+    return f"{m.mode} drive: no motor to judge"
+
+
+def verdict_html(c, m, failed_checks, nominal_status, n_checks, loads=(), units=None):
+    items = verdict_items(c, m, failed_checks, nominal_status, loads)
     checked = (f"checked: motorisation factor ≥ {fmt(m.mf_required)} ({esc(ECSS_CLAUSE)}; "
                f"spring factor {fmt(m.k_uncertainty)}"
                + (f", inertial factor {fmt(m.k_inertia)})" if m.mode == "velocity" else ")")
                if m.n > 0 else f"drive mode {esc(m.mode)}: margins not computed ({esc(m.note)})")
-    checked += f"; outcome of all {c.n} runs; {n_checks} consistency checks of the file."
+    checked += (f"; outcome of all {c.n} runs; an upper bound of every design load; {n_checks} "
+                "consistency checks of the file.")
+    against = ("<br>Judged against: " + esc(drive_text(c, m, units)) + ".") if units else ""
     if not items:
         return ("<div class='verdict pass' data-key='verdict' data-value='pass'>"
-                "<b>VERDICT: PASS</b> — nothing fails. <span class='small'>" + checked
-                + "</span></div>")
+                "<b>VERDICT: PASS</b> — nothing fails." + against + "<br><span class='small'>"
+                + checked + "</span></div>")
     return ("<div class='verdict fail' data-key='verdict' data-value='fail'><b>VERDICT: "
             f"{len(items)} item{'s' if len(items) > 1 else ''} FAIL</b><ul>"
             + "".join(f"<li data-item='{esc(k)}'>{t}</li>" for k, t in items)
-            + f"</ul><span class='small'>{checked}</span></div>")
+            + f"</ul>{against[4:]}<br><span class='small'>{checked}</span></div>")
 
 
 def cell(key, v, factor, unit_label, digits=5):
@@ -55,7 +93,7 @@ def cell(key, v, factor, unit_label, digits=5):
             f"{fmt(shown, digits)} {esc(unit_label)}</td>")
 
 
-def design_table_html(loads, confidence, sampling):
+def design_table_html(loads, confidence, sampling, units, n_bays):
     lev = [lv.level for lv in loads[0].levels] if loads else []
     heads = ["load", "definition", "nominal", "mean"]
     for q in lev:
@@ -63,8 +101,7 @@ def design_table_html(loads, confidence, sampling):
     heads += [f"P{fmt(lev[-1])} / nominal" if lev else "ratio"]
     rows = []
     for d in loads:
-        ref = max(abs(d.nominal) if np.isfinite(d.nominal) else 0.0, abs(d.levels[-1].estimate))
-        lab, f = readable_unit(d.unit, ref)
+        lab, f = units.get(d.key, d.unit)
         row = [f"<b>{esc(d.label)}</b><br><code>{esc(d.key)}</code>",
                f"<small>{esc(d.definition)}</small>",
                cell(f"design.{d.key}.nominal", d.nominal, f, lab),
@@ -82,24 +119,35 @@ def design_table_html(loads, confidence, sampling):
                            f"data-value='{lv.n_needed}'>{lv.n_needed}</span>)</td>")
         row.append(num(f"design.{d.key}.ratio", d.ratio, digits=4))
         rows.append(row)
-    note = ("<p class='small'>Over the ok runs with a finite value (n per load). Percentiles: "
+    return ("<h2 id='design'>Design loads</h2>" + table(heads, rows, "design")
+            + design_table_note(loads, confidence, sampling, n_bays))
+
+
+def design_table_note(loads, confidence, sampling, n_bays):
+    below = [d.label for d in loads if d.nominal_below_runs and d.key.startswith("peak_")]
+    nominal = ("" if not below else
+               " <b>Why the nominal lies below the runs</b> (" + esc(", ".join(below)) + "): each "
+               "of these is the largest of the bays' values in a run; with every bay dispersed, "
+               f"the largest of {n_bays} dispersed values is above the nominal one even though each "
+               "bay's mean is nominal, so the dispersed runs, not the nominal, give the design "
+               "value.")
+    return ("<p class='small'>Over the ok runs with a finite value (n per load). Percentiles: "
             "linear interpolation between order statistics (type 7). The upper bound is the "
             "order statistic x<sub>(k)</sub>, k the smallest rank with "
             "Σ<sub>i&lt;k</sub> C(n,i) p<sup>i</sup>(1−p)<sup>n−i</sup> ≥ "
             f"{fmt(confidence)}: distribution-free, one-sided, for independent runs"
             + (" (not valid for Saltelli sampling)" if sampling == "saltelli" else
                "" if sampling == "monte_carlo" else f" ({esc(sampling)} sampling: usually "
-               "conservative)") + ". Nominal: the base scene without dispersions "
-            "(<code>/nominal</code>); impulses are instantaneous momentum transfers, reported "
-            "apart from the smooth peaks.</p>")
-    return "<h2 id='design'>Design loads</h2>" + table(heads, rows, "design") + note
+               "conservative)") + "; section 2 shows the same bound. Nominal: the base scene "
+            "without dispersions (<code>/nominal</code>); impulses are instantaneous momentum "
+            "transfers, reported apart from the smooth peaks." + nominal + "</p>")
 
 
-def mechanism_html(m):
+def mechanism_html(m, units):
     head = f"<h2 id='mechanism'>Mechanism margins ({esc(ECSS_CLAUSE)})</h2>"
     if m.n == 0:
         return head + f"<p>Not computed: {esc(m.note)}.</p>"
-    lab, f = readable_unit("Nm", m.t_min_design)
+    lab, f = units.get("torque", "Nm")
     lo, hi = m.p_below_ci
     vel = m.mode == "velocity"
     avail = ("the scene's motor at the prescribed screw speed" if vel else
@@ -139,8 +187,10 @@ def mechanism_html(m):
     text = ("<p>T<sub>min</sub> = 2 (1.1 I + 1.2 S + 1.5 H<sub>M</sub> + 3 F<sub>R</sub> + "
             "3 H<sub>Y</sub> + 3 H<sub>A</sub> + 3 H<sub>D</sub>) + 1.25 T<sub>D</sub> + "
             "T<sub>L</sub> (clause 4.7.5.3.1; uncertainty factors of Table 4-2, theoretical "
-            "column). This rigid, frictionless model has the spring resistance S (the diagonals: "
-            "the torque that holds the mast at rest along its path)"
+            "column). Torques are at the screws, the three together: the torque of one motor "
+            "that drives them 1:1 (one screw carries a third). This rigid, frictionless model has "
+            "the spring resistance S (the diagonals: the torque that holds the mast at rest along "
+            "its path)"
             + (" and, with the prescribed speed as the acceleration requirement, the inertial "
                "resistance T<sub>D</sub> (drive torque minus S). " if vel else
                "; the motor drive has no specified acceleration, so T<sub>D</sub> = 0 and the "
@@ -151,6 +201,33 @@ def mechanism_html(m):
             "(factor 3) must be added by the user. Source of the clause: "
             f"{esc(ECSS_SOURCE)}.</p>")
     return head + text + table(["", "value"], [[f"<th>{a}</th>", b] for a, b in rows], "kv")
+
+
+def terminal_summary(c, m, loads, items, units, confidence):
+    """The verdict and its key figures as plain text lines, for the terminal."""
+    tags = re.compile(r"<[^>]+>")
+    lines = [("VERDICT: PASS — nothing fails" if not items else
+              f"VERDICT: FAIL — {len(items)} item{'s' if len(items) > 1 else ''}")
+             + f" ({c.attrs['campaign_name']}, {c.n} runs, {c.attrs['direction']})"]
+    lines += ["  FAIL: " + html.unescape(tags.sub("", t)) for _, t in items]
+    lines.append("  judged against: " + drive_text(c, m, units))
+    if m.n > 0:
+        lab, f = units.get("torque", "Nm")
+        lines.append(f"  ECSS motorisation factor {fmt(m.mf_required)}: torque needed "
+                     f"{fmt(m.t_min_design / f)} {lab}, available {fmt(m.t_avail_min / f)} {lab} "
+                     f"(smallest margin {m.tm_min * 100:+.1f} %); stall torque needed "
+                     f"{fmt(m.stall_needed / f)} {lab}")
+    for d in loads:
+        if d.key not in ("peak_drive_force_N", "peak_drive_torque_Nm", "peak_pin_force_N",
+                         "deploy_time_s"):
+            continue
+        lab, f = units.get(d.key, d.unit)
+        lv = d.levels[-1]
+        bound = (f"upper {confidence * 100:g} % bound {fmt(lv.bound / f)} {lab}" if lv.rank else
+                 f"no bound: n = {d.n} too few, needs >= {lv.n_needed}")
+        lines.append(f"  {d.label}: P{fmt(lv.level)} {fmt(lv.estimate / f)} {lab} ({bound}), "
+                     f"nominal {fmt(d.nominal / f)} {lab}")
+    return lines
 
 
 MODEL_LIMITS = [
@@ -166,7 +243,8 @@ MODEL_LIMITS = [
     "model does not hold, so only their impulses (N s) are reported.",
     "Stack: the stowed bays are held or free as the scene's stack.mode says; a free stack moves "
     "with the lower frame, a held stack does not.",
-    "The loads are per mast (total drive) or per pin / per diagonal as each definition says; "
+    "The loads are per mast (drive force and torque: the three screws together) or per pin / per "
+    "diagonal as each definition says; "
     "no fatigue, thermal or gravity (orbit: no gravity) effects.",
 ]
 

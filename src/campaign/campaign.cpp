@@ -354,6 +354,10 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       if (o.dispersions[i].key == o.dispersions[j].key)
         throw InputError(fmt::format("error: {}:{}: dispersion[{}].key: \"{}\" is already dispersed at line {}", path,
                                      o.dispersions[i].line, i + 1, o.dispersions[i].key, o.dispersions[j].line));
+  // Implausible dispersions are refused before any run (most of the runs would be invalid input).
+  for (std::size_t i = 0; i < o.dispersions.size(); ++i)
+    if (const std::string e = check_dispersion_draws(o, i); !e.empty())
+      throw InputError(fmt::format("error: {}:{}: dispersion[{}]: {}", path, o.dispersions[i].line, i + 1, e));
   const toml::node* n_runs_node = root["ensemble"]["n_runs"].node();
   if (o.ensemble.sampling == SamplingMethod::saltelli) {
     if (o.dispersions.empty()) c.fail(root["ensemble"]["sampling"].node(), "ensemble.sampling: saltelli needs at least one [[dispersion]]");

@@ -364,9 +364,28 @@ std::vector<DesignValue> read_design_values(const std::string& path, const Outpu
       for (const auto* f : cols.f64)
         if (std::string(f->name) == name)
           res.push_back({label, f->units, std::get<double>(f->get(nominal)), read(fmt::format("stats/{}/p99_865", name)),
-                         read(fmt::format("stats/{}/max", name))});
+                         read(fmt::format("stats/{}/max", name)),
+                         static_cast<std::int64_t>(read(fmt::format("stats/{}/count", name)))});
   } catch (const std::exception&) {
     res.clear();  // the summary is a convenience: the file itself is complete
+  }
+  H5Fclose(file);
+  return res;
+}
+
+std::string read_example_message(const std::string& path, std::int64_t n_runs, sim::RunStatus status) {
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  if (file < 0) return {};
+  std::string res;
+  try {
+    const std::vector<std::int8_t> s = read_status(file, n_runs);
+    const auto it = std::find(s.begin(), s.end(), static_cast<std::int8_t>(status));
+    if (it != s.end()) {
+      const auto run = static_cast<std::int64_t>(it - s.begin());
+      res = fmt::format("run {}: {}", run, read_message(file, run));
+    }
+  } catch (const std::exception&) {
+    res.clear();  // a convenience of the end summary, like read_design_values
   }
   H5Fclose(file);
   return res;

@@ -14,7 +14,9 @@
 
 namespace truss::campaign {
 
-inline constexpr std::int64_t kCampaignSchemaVersion = 1;
+// 2: a Saltelli design draws A and B from the Monte Carlo generator beyond 2d = 8 dimensions
+// (kSaltelliSobolMaxDims); 1 drew them from one shifted Sobol' point up to 2d = 2048. Same layout.
+inline constexpr std::int64_t kCampaignSchemaVersion = 2;
 
 // How the last session's schedule went (rank 0's view), for /timing: not reproducible.
 struct ScheduleTiming {
@@ -90,5 +92,7 @@ class CampaignFile {
 // cannot be read (the summary is a convenience; the file is what counts).
 struct DesignValue;
 std::vector<DesignValue> read_design_values(const std::string& path, const OutputColumns& cols, const sim::RunResult& nominal);
+// "run i: message" of the first run with `status` in a finished results file ("" if none or unreadable).
+std::string read_example_message(const std::string& path, std::int64_t n_runs, sim::RunStatus status);
 
 }  // namespace truss::campaign

@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "sim/scene_keys.hpp"
 
 namespace truss::campaign {
@@ -69,6 +71,60 @@ DimensionLayout calc_layout(const CampaignOptions& c) {
     if (!e.empty()) throw std::invalid_argument("dispersion of " + d.key + ": " + e);
   }
   return L;
+}
+
+namespace {
+// The 3-sigma quantiles: tolerances are stated at 3 sigma, and a campaign of a few thousand runs
+// draws about that far into each tail.
+constexpr double kPlausibleLow = 0.00135, kPlausibleHigh = 0.99865;
+
+// Uniforms that make distribution `dist` draw each value of interest: the two 3-sigma quantiles,
+// or the middle of each value's probability for a discrete table.
+std::vector<double> plausibility_levels(const Distribution& dist) {
+  if (dist.kind != DistributionKind::discrete) return {kPlausibleLow, kPlausibleHigh};
+  double total = 0.0, below = 0.0;
+  for (double w : dist.weights) total += w;
+  std::vector<double> u;
+  for (double w : dist.weights) {
+    u.push_back((below + 0.5 * w) / total);
+    below += w;
+  }
+  return u;
+}
+}  // namespace
+
+std::string check_dispersion_draws(const CampaignOptions& c, std::size_t i) {
+  const DispersionOptions& d = c.dispersions[i];
+  const DimensionLayout L = calc_layout(c);
+  const Distribution& dist = L.distributions[i];
+  for (double level : plausibility_levels(dist)) {
+    std::vector<double> u(static_cast<std::size_t>(std::max(1, L.total)), 0.5);
+    for (int k = 0; k < L.count[i]; ++k) u[static_cast<std::size_t>(L.offset[i] + k)] = level;
+    const double draw = dist.calc_quantile(level);
+    std::string why, value;
+    try {
+      const RunInputs in = calc_run_inputs(c, L, u.data());
+      const double v = in.values[i].front();
+      value = fmt::format("{:.6g} {}", v, find_key_units(d.key));
+      why = in.scene.validate();
+      if (why.empty()) why = sim::validate_mast(in.mast, in.scene);
+    } catch (const std::exception& e) {
+      why = e.what();
+    }
+    if (why.empty()) continue;
+    const std::string where = dist.kind == DistributionKind::discrete
+                                  ? fmt::format("its value {}", draw)
+                                  : fmt::format("its {} % quantile ({}3 sigma), a draw of {:.6g},", 100.0 * level,
+                                                level < 0.5 ? "-" : "+", draw);
+    return fmt::format("{} ({} {}) is implausible: {} gives {} = {}, which the model refuses ({}); most runs would end "
+                       "as invalid input{}",
+                       d.key, d.apply == Apply::relative ? "relative" : d.apply == Apply::offset ? "offset" : "absolute",
+                       to_string(d.distribution), where, d.key, value.empty() ? "no value" : value, why,
+                       d.apply == Apply::relative ? " (apply = \"relative\" takes a fraction of the nominal value: "
+                                                    "std = 0.05 is 5 %)"
+                                                  : "");
+  }
+  return {};
 }
 
 RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, const double* u) {

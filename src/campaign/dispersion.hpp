@@ -25,6 +25,14 @@ DimensionLayout calc_layout(const CampaignOptions& c);
 
 Distribution make_distribution(const DispersionOptions& d);
 
+// Plausibility of dispersion i of a campaign whose base scene is resolved: the draws it makes in
+// practice, the distribution's 3-sigma quantiles (0.135 % and 99.865 %; every value of a discrete
+// table), applied to every bay (frame) with the other dispersions at their medians, must give a
+// scene the model accepts (the checks simulate() makes). Empty, or why not: the quantile, the
+// value it gives and the model's refusal, with a hint for a relative draw (a fraction, not a
+// percentage). A campaign that fails this would record most of its runs as invalid input.
+std::string check_dispersion_draws(const CampaignOptions& c, std::size_t i);
+
 // Nominal value of a dispersible scene key in the base scene (per-bay and per-frame keys: the
 // scene's single value). NaN for a key that is not dispersible.
 double find_nominal(const sim::SceneOptions& s, const std::string& key);

@@ -85,14 +85,42 @@ std::pair<std::string, double> readable_unit(const std::string& units, double ma
 }
 }  // namespace
 
+std::int64_t calc_runs_needed_p99_865() {
+  const double p = 0.99865, confidence = 0.95;
+  auto n = static_cast<std::int64_t>(std::floor(std::log(1.0 - confidence) / std::log(p)));
+  while (1.0 - std::pow(p, static_cast<double>(n)) < confidence) ++n;  // exact at the boundary
+  return n;
+}
+
 void print_design_summary(std::FILE* out, const std::vector<DesignValue>& values) {
+  const std::int64_t needed = calc_runs_needed_p99_865();
   fmt::print(out, "[truss-campaign] design values (ok runs; nominal = base scene without dispersions):\n");
   for (const auto& v : values) {
     const auto [u, f] = readable_unit(v.units, std::isfinite(v.max) ? v.max : v.nominal);
-    fmt::print(out, "[truss-campaign]   {:<22} nominal {:>8.5g} {:<4}  P99.865 {:>8.5g} {:<4}  max {:>8.5g} {}\n", v.label,
-               v.nominal / f, u, v.p99_865 / f, u, v.max / f, u);
+    const std::string few = v.count >= needed ? ""
+                            : fmt::format("  <- from {} ok run{}: too few for a P99.865 (its 95 % bound needs {})",
+                                          v.count, v.count == 1 ? "" : "s", needed);
+    fmt::print(out, "[truss-campaign]   {:<22} nominal {:>8.5g} {:<4}  P99.865 {:>8.5g} {:<4}  max {:>8.5g} {}{}\n", v.label,
+               v.nominal / f, u, v.p99_865 / f, u, v.max / f, u, few);
   }
   std::fflush(out);
+}
+
+bool print_campaign_verdict(std::FILE* out, const StatusCounts& counts, const std::string& example) {
+  std::int64_t total = 0;
+  for (std::int64_t k : counts) total += k;
+  const std::int64_t invalid = counts[static_cast<std::size_t>(sim::RunStatus::invalid_input)];
+  if (invalid == 0) return true;
+  const bool most = 2 * invalid > total;
+  fmt::print(out, "[truss-campaign] {}: {} of {} runs are invalid input: the dispersions give scenes the model refuses{}\n",
+             most ? "error" : "warning", invalid, total,
+             most ? "; the results file is written, but its statistics stand on the few other runs" : "");
+  if (!example.empty()) fmt::print(out, "[truss-campaign]   e.g. {}\n", example);
+  if (most)
+    fmt::print(out, "[truss-campaign]   check the [[dispersion]] entries (apply = \"relative\" takes a fraction: std = "
+                    "0.05 is 5 %) and run again\n");
+  std::fflush(out);
+  return !most;
 }
 
 }  // namespace truss::campaign

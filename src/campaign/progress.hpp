@@ -47,11 +47,23 @@ class Progress {
   std::chrono::steady_clock::time_point start_, last_;
 };
 
-// One line of the end summary: an output's nominal value and its campaign P99.865 and maximum.
+// One line of the end summary: an output's nominal value and its campaign P99.865 and maximum,
+// over `count` ok runs with a finite value.
 struct DesignValue {
   std::string label, units;
   double nominal, p99_865, max;
+  std::int64_t count = 0;
 };
+// Ok runs an upper bound of P99.865 needs at 95 % confidence: the smallest n with
+// 1 - 0.99865^n >= 0.95 (2218; the load report's design-load table uses the same bound).
+std::int64_t calc_runs_needed_p99_865();
+// The values, each P99.865 from fewer ok runs than that flagged as too few.
 void print_design_summary(std::FILE* out, const std::vector<DesignValue>& values);
+
+// The end of a campaign: whether its runs are usable. When most runs (more than half) are invalid
+// input, the dispersions give scenes the model refuses: prints an error with the count and an
+// example reason (`example`: a run's message) and returns false (the command then exits non-zero;
+// the results file stays written, failed runs are data). Some invalid runs: a warning, true.
+bool print_campaign_verdict(std::FILE* out, const StatusCounts& counts, const std::string& example);
 
 }  // namespace truss::campaign

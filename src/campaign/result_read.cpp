@@ -45,4 +45,19 @@ std::vector<std::int8_t> read_status(hid_t file, std::int64_t n) {
   return v;
 }
 
+std::string read_message(hid_t file, std::int64_t run) {
+  Handle ds(H5Dopen2(file, "runs/message", H5P_DEFAULT), H5Dclose, "open /runs/message");
+  Handle fspace(H5Dget_space(ds.get()), H5Sclose, "space of /runs/message");
+  const hsize_t start[1] = {static_cast<hsize_t>(run)}, count[1] = {1};
+  check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select /runs/message");
+  Handle mspace(H5Screate_simple(1, count, nullptr), H5Sclose, "memory space of /runs/message");
+  Handle type(H5Tcopy(H5T_C_S1), H5Tclose, "string type");
+  check(H5Tset_size(type.get(), H5T_VARIABLE), "variable string type");
+  char* text = nullptr;
+  check(H5Dread(ds.get(), type.get(), mspace.get(), fspace.get(), H5P_DEFAULT, &text), "read /runs/message");
+  std::string s = text ? text : "";
+  H5free_memory(text);
+  return s;
+}
+
 }  // namespace truss::campaign

@@ -179,5 +179,7 @@ std::vector<double> read_f64_column(hid_t file, const std::string& path, std::in
 std::vector<std::vector<double>> read_f64_columns(hid_t file, const std::string& path, std::int64_t n, std::int64_t width,
                                                   std::int64_t col0, std::int64_t cols, std::int64_t block_rows);
 std::vector<std::int8_t> read_status(hid_t file, std::int64_t n);
+// The message of one run (/runs/message[run]).
+std::string read_message(hid_t file, std::int64_t run);
 
 }  // namespace truss::campaign

@@ -20,7 +20,7 @@ namespace truss::campaign {
 // The uniforms of run i: the campaign's SamplePlan over all dimensions. saltelli: the plan's
 // factor groups are the dispersions (blocks of G + 2 runs A, B, AB_1 .. AB_G), so AB_g takes every
 // dimension of dispersion g (all its bays) from B; the base points are shifted Sobol' points of
-// dimension 2d (Monte Carlo beyond kSobolMaxDims), see SamplePlan.
+// dimension 2d up to 2d = kSaltelliSobolMaxDims, Monte Carlo points beyond, see SamplePlan.
 class RunSampler {
  public:
   explicit RunSampler(const CampaignOptions& c);

@@ -200,20 +200,39 @@ struct Distribution {
 //   saltelli         blocks of G + 2 runs: A, B, AB_1 .. AB_G for G factors.
 //                    Block b's base point is point b of the plain
 //                    2d-dimensional sobol plan (shifted Sobol', same seed) if
-//                    2d <= kSobolMaxDims, else of the plain monte_carlo plan
-//                    (counter_uniform(seed, b, j)): A = its first d
-//                    coordinates, B = the last d. A factor is a group of
-//                    consecutive dimensions (by default each dimension is its
-//                    own factor, G = d); AB_g = A with every dimension of
+//                    2d <= kSaltelliSobolMaxDims, else of the plain
+//                    monte_carlo plan (counter_uniform(seed, b, j)): A = its
+//                    first d coordinates, B = the last d. A factor is a group
+//                    of consecutive dimensions (by default each dimension is
+//                    its own factor, G = d); AB_g = A with every dimension of
 //                    factor g taken from B.
 enum class SamplingMethod { monte_carlo, latin_hypercube, sobol, saltelli };
 inline constexpr const char* kSamplingNames[] = {"monte_carlo", "latin_hypercube", "sobol", "saltelli"};
 inline const char* to_string(SamplingMethod m) { return kSamplingNames[static_cast<int>(m)]; }
 
 // Largest Sobol' dimension embedded (Joe-Kuo new-joe-kuo-6.21201 dimensions
-// 1..kSobolMaxDims). Beyond it a sobol plan fails validation, and a saltelli
-// plan falls back to the Monte Carlo generator for its base sample.
+// 1..kSobolMaxDims). Beyond it a sobol plan fails validation.
 inline constexpr int kSobolMaxDims = 2048;
+
+// Largest base dimension 2d of a saltelli plan whose A and B come from one
+// Sobol' point; beyond it they come from the Monte Carlo generator. Saltelli's
+// estimators need every column of A independent of the same column of B (and
+// of the other columns): a correlation rho between A_j and B_j scales both
+// indices of factor j by (1 - rho). In the Joe-Kuo sequence, many pairs of
+// dimensions beyond the first few have the same first digit, as a linear
+// function of the point index, over the first 2^m points: such a pair
+// correlates by +-0.75 (next digits: +-0.19, +-0.05), e.g. dimensions 183 and
+// 367 (rail.x_m of the Table-1 sensitivity campaign, d = 184) at N = 256. No
+// scrambling fixes this: a digital shift, a linear (Matousek) or a nested
+// (Owen) scramble flips digit k of a coordinate by a function of its digits
+// before k, the first digit by a constant, so two coordinates with tied first
+// digits stay tied (only the sign of the correlation becomes random; a nested
+// scramble of dimensions 183 and 367 gives +-0.75 at N = 256 for every seed). Within the first 8 dimensions every
+// pair stays below 2 / sqrt(N) from N = 64 (4 / sqrt(N), the report's
+// design-check bound, from N = 16; tests/unit/test_saltelli_design.cpp), so
+// small designs keep the lower error of Sobol' points; the Monte Carlo base is unbiased at
+// any d, and its bootstrap intervals are exact (its blocks are independent).
+inline constexpr int kSaltelliSobolMaxDims = 8;
 
 class SamplePlan {
  public:
@@ -254,8 +273,10 @@ class SamplePlan {
   std::uint64_t master_seed() const { return seed_; }
   // saltelli: number of blocks N; otherwise 0.
   std::int64_t saltelli_base_count() const;
-  // saltelli: whether the base sample is Sobol' (2d <= kSobolMaxDims).
-  bool saltelli_uses_sobol() const { return method_ == SamplingMethod::saltelli && 2 * d_ <= kSobolMaxDims; }
+  // saltelli: whether the base sample is Sobol' (2d <= kSaltelliSobolMaxDims).
+  bool saltelli_uses_sobol() const {
+    return method_ == SamplingMethod::saltelli && 2 * d_ <= kSaltelliSobolMaxDims;
+  }
 
  private:
   void calc_sobol(std::uint64_t index, int first, int count, std::uint32_t* x) const;

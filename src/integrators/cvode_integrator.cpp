@@ -1,7 +1,10 @@
 #include "integrators/cvode_integrator.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <exception>
 #include <string>
 #include <vector>
@@ -20,16 +23,35 @@ namespace truss::integrators {
 
 namespace {
 
+using Clock = std::chrono::steady_clock;
+double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
 // What CVODE's callbacks need; the system changes with every integrate() call.
 struct UserData {
+  void* mem = nullptr;       // CVODE's memory (the Jacobian reads the step size and error weights)
+  N_Vector ewt = nullptr;    // scratch for the error weights
   OdeSystem* sys = nullptr;
   long rhs_evals = 0;
   long nonfinite_rhs = 0;    // evaluations that returned NaN or inf (CVODE retried smaller steps)
   std::exception_ptr error;  // thrown by the system inside a callback, rethrown after CVode returns
+  // The wall-time cap (StepObserver::deadline). A Newton-matrix set-up (the Jacobian's n
+  // right-hand sides and the dense LU, O(n^3): about 3 s at n = 4,000 here) is not started when the
+  // last one's duration would end past it.
+  Clock::time_point deadline = Clock::time_point::max();
+  Clock::time_point setup_start{};
+  bool setup_running = false;  // from jac_fn's start to the next right-hand side (after the LU)
+  double setup_s = 0.0;        // the last set-up's duration (s); 0 before the first
+  double setup_n = 0.0;        // ... at this system size: the prediction scales with n^3
+  bool deadline_hit = false;
 };
 
 int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
   auto* d = static_cast<UserData*>(ud);
+  if (d->setup_running) {  // the first right-hand side after a set-up: its Jacobian and LU are done
+    d->setup_s = seconds(Clock::now() - d->setup_start);
+    d->setup_n = static_cast<double>(N_VGetLength(y));
+    d->setup_running = false;
+  }
   try {
     d->sys->calc_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
   } catch (...) {
@@ -42,6 +64,51 @@ int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
       ++d->nonfinite_rhs;
       return 1;  // recoverable: CVODE cuts the step
     }
+  return 0;
+}
+
+// The Newton matrix's Jacobian by forward differences, column by column, with CVODE's own
+// increments (cvLsDenseDQJac: max(sqrt(eps) |y_j|, 1000 |h| eps N ||f|| / w_j)). Where y + inc e_j
+// gives a non-finite right-hand side the column is the backward difference instead: near a
+// singular configuration (a bay within a few 1e-9 m of straight, beyond which the mass matrix is
+// not positive definite) CVODE's forward increment of a frame height, about 1e-8 m, leaves the
+// region where the equations hold, and without this every Jacobian failed at any step size.
+int jac_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector ftemp, N_Vector, N_Vector) {
+  auto* d = static_cast<UserData*>(ud);
+  const Clock::time_point now = Clock::now();
+  const double n_ratio = d->setup_n > 0 ? static_cast<double>(N_VGetLength(y)) / d->setup_n : 0.0;
+  const double predicted_s = d->setup_s * n_ratio * n_ratio * n_ratio;
+  if (d->deadline != Clock::time_point::max() &&
+      now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(predicted_s)) > d->deadline) {
+    d->deadline_hit = true;
+    return -1;  // unrecoverable: CVode returns CV_LSETUP_FAIL, reported as IntegratorStatus::deadline
+  }
+  d->setup_start = now;
+  realtype h = 0.0;
+  if (CVodeGetCurrentStep(d->mem, &h) < 0 || CVodeGetErrWeights(d->mem, d->ewt) < 0) return -1;
+  const sunindextype n = N_VGetLength(y);
+  const double eps = std::numeric_limits<double>::epsilon(), srur = std::sqrt(eps);
+  const double fnorm = N_VWrmsNorm(fy, d->ewt);
+  const double min_inc = fnorm != 0.0 ? 1000.0 * std::abs(h) * eps * static_cast<double>(n) * fnorm : 1.0;
+  double* yd = N_VGetArrayPointer(y);
+  const double* w = N_VGetArrayPointer(d->ewt);
+  const double* f0 = N_VGetArrayPointer(fy);
+  const double* f1 = N_VGetArrayPointer(ftemp);
+  for (sunindextype j = 0; j < n; ++j) {
+    const double yj = yd[j], inc = std::max(srur * std::abs(yj), min_inc / w[j]);
+    double* col = SUNDenseMatrix_Column(J, j);
+    int flag = 1;
+    for (const double step : {inc, -inc}) {
+      yd[j] = yj + step;
+      flag = rhs_fn(t, y, ftemp, ud);
+      if (flag != 0) continue;
+      for (sunindextype i = 0; i < n; ++i) col[i] = (f1[i] - f0[i]) / step;
+      break;
+    }
+    yd[j] = yj;
+    if (flag != 0) return flag;  // recoverable (1): CVODE cuts the step; an exception (-1): fatal
+  }
+  d->setup_running = true;  // the LU follows; the next right-hand side ends the set-up's timing
   return 0;
 }
 
@@ -86,7 +153,7 @@ class CvodeDense : public DenseOutput {
 struct CvodeIntegrator::Solver {
   SUNContext ctx = nullptr;
   void* mem = nullptr;
-  N_Vector y = nullptr, tmp = nullptr;
+  N_Vector y = nullptr, tmp = nullptr, ewt = nullptr;
   SUNNonlinearSolver nls = nullptr;  // adams: fixed point (bdf: CVODE's own Newton solver)
   SUNMatrix A = nullptr;             // bdf: dense Newton matrix
   SUNLinearSolver ls = nullptr;      // bdf: dense LU
@@ -109,7 +176,8 @@ struct CvodeIntegrator::Solver {
     A = nullptr;
     if (y) N_VDestroy(y);
     if (tmp) N_VDestroy(tmp);
-    y = tmp = nullptr;
+    if (ewt) N_VDestroy(ewt);
+    y = tmp = ewt = nullptr;
     n = -1;
   }
 
@@ -121,20 +189,25 @@ struct CvodeIntegrator::Solver {
     if (!check_null(y, "N_VNew_Serial", sum)) return false;
     tmp = N_VNew_Serial(n_new, ctx);
     if (!check_null(tmp, "N_VNew_Serial", sum)) return false;
+    ewt = N_VNew_Serial(n_new, ctx);
+    if (!check_null(ewt, "N_VNew_Serial", sum)) return false;
     N_VConst(0.0, y);
     mem = CVodeCreate(method == CvodeMethod::bdf ? CV_BDF : CV_ADAMS, ctx);
     if (!check_null(mem, "CVodeCreate", sum)) return false;
     if (!check_flag(CVodeSetErrHandlerFn(mem, sunflags::silent, nullptr), "CVodeSetErrHandlerFn", sum)) return false;
     if (!check_flag(CVodeInit(mem, rhs_fn, t0, y), "CVodeInit", sum)) return false;
     if (!check_flag(CVodeSetUserData(mem, &ud), "CVodeSetUserData", sum)) return false;
+    ud.mem = mem;
+    ud.ewt = ewt;
     if (method == CvodeMethod::bdf) {
-      // Newton (CVODE's default nonlinear solver) on a dense matrix; no Jacobian function given:
-      // CVODE's difference quotients cost n extra right-hand sides per Jacobian, with n tiny.
+      // Newton (CVODE's default nonlinear solver) on a dense matrix; difference quotients (jac_fn)
+      // cost n extra right-hand sides per Jacobian.
       A = SUNDenseMatrix(n_new, n_new, ctx);
       if (!check_null(A, "SUNDenseMatrix", sum)) return false;
       ls = SUNLinSol_Dense(y, A, ctx);
       if (!check_null(ls, "SUNLinSol_Dense", sum)) return false;
       if (!check_flag(CVodeSetLinearSolver(mem, ls, A), "CVodeSetLinearSolver", sum)) return false;
+      if (!check_flag(CVodeSetJacFn(mem, jac_fn), "CVodeSetJacFn", sum)) return false;
     } else {
       nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
       if (!check_null(nls, "SUNNonlinSol_FixedPoint", sum)) return false;
@@ -154,6 +227,8 @@ struct CvodeIntegrator::Solver {
     ud.rhs_evals = 0;
     ud.nonfinite_rhs = 0;
     ud.error = nullptr;
+    ud.deadline_hit = false;
+    ud.setup_running = false;
     double* p = N_VGetArrayPointer(y);
     for (int i = 0; i < n; ++i) p[i] = y0[i];
     // History, order, step counters and initial step choice start afresh.
@@ -204,6 +279,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
     solver_->method = method_;
   }
   Solver& cv = *solver_;
+  cv.ud.deadline = observer ? observer->deadline() : Clock::time_point::max();
   if (!cv.prepare(sys, t0, t_end, y0, opts_, sum)) {
     cv.free_problem();  // start from new SUNDIALS objects next time
     return sum;
@@ -248,6 +324,12 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
 
     sum.rhs_evals = cv.ud.rhs_evals;
     sum.t = t;
+    if (flag < 0 && cv.ud.deadline_hit) {
+      copy_state();
+      sum.status = IntegratorStatus::deadline;
+      sum.message = fmt::format("wall-clock deadline: the next Newton-matrix set-up (last {:.3g} s) would pass it", cv.ud.setup_s);
+      return failed();
+    }
     if (flag < 0) {
       copy_state();
       sum.status = flag == CV_TOO_MUCH_WORK ? IntegratorStatus::step_limit : IntegratorStatus::failure;

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "numerics/illinois.hpp"
+
 namespace truss::integrators {
 
 const char* to_string(IntegratorStatus s) {
@@ -16,6 +18,7 @@ const char* to_string(IntegratorStatus s) {
     case IntegratorStatus::stopped_by_observer: return "stopped by observer";
     case IntegratorStatus::failure: return "failure";
     case IntegratorStatus::stiff: return "stiff";
+    case IntegratorStatus::deadline: return "wall-clock deadline";
   }
   return "?";
 }
@@ -172,31 +175,14 @@ int DormandPrince54::find_event(OdeSystem& sys, double t, double t_new, const De
   sys.calc_events(t_new, ynew_.data(), g1_.data());
   for (int e = 0; e < ne; ++e) {
     if (!crosses(g0_[e], g1_[e], sys.event_direction(e))) continue;
-    double ta = t, tb = t_new, ga = g0_[e], gb = g1_[e];
-    int side = 0;
-    double tc = tb;
     // Below a few ulps of t the bracket cannot shrink (t > 512 s: ulp > 1e-13 s); stop there
     // instead of spending the 200 iterations.
     const double tol = std::max(opts_.event_time_tol, 4.0 * std::numeric_limits<double>::epsilon() * std::abs(t_new));
-    for (int it = 0; it < 200 && (tb - ta) > tol; ++it) {
-      tc = (ta * gb - tb * ga) / (gb - ga);
-      if (!(tc > ta && tc < tb)) tc = 0.5 * (ta + tb);
+    const double root = numerics::find_crossing_illinois([&](double tc) {  // on the side where the event has happened
       dense.calc_state(tc, yev_.data());
       sys.calc_events(tc, yev_.data(), gt_.data());
-      const double gc = gt_[e];
-      if ((gc > 0.0) == (gb > 0.0) && gc != 0.0) {
-        tb = tc; gb = gc;
-        if (side == -1) ga *= 0.5;
-        side = -1;
-      } else if (gc == 0.0) {
-        ta = tb = tc; break;
-      } else {
-        ta = tc; ga = gc;
-        if (side == 1) gb *= 0.5;
-        side = 1;
-      }
-    }
-    const double root = tb;  // the side on which the event has happened
+      return gt_[e];
+    }, t, g0_[e], t_new, g1_[e], tol);
     if (root < t_ev || ev < 0) { t_ev = root; ev = e; }
   }
   return ev;

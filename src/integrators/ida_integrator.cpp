@@ -11,8 +11,10 @@
 #include <ida/ida.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
-#include <sunmatrix/sunmatrix_dense.h>
+#include <numeric>
+
+#include <sunlinsol/sunlinsol_band.h>
+#include <sunmatrix/sunmatrix_band.h>
 
 #include "integrators/sundials_checks.hpp"
 
@@ -20,11 +22,29 @@ namespace truss::integrators {
 
 namespace {
 
+// Where each unknown w = (y, z) of the system sits in IDA's vectors: position p holds w[order[p]]
+// (the residual rows likewise).
+struct Layout {
+  std::vector<int> order;
+  mutable std::vector<double> w, wp, r;  // the system's order (scratch of the callbacks)
+  // IDA's vector -> the system's order.
+  const double* gather(N_Vector v, std::vector<double>& out) const {
+    const double* p = N_VGetArrayPointer(v);
+    for (std::size_t k = 0; k < order.size(); ++k) out[static_cast<std::size_t>(order[k])] = p[k];
+    return out.data();
+  }
+  void scatter(const double* in, N_Vector v) const {
+    double* p = N_VGetArrayPointer(v);
+    for (std::size_t k = 0; k < order.size(); ++k) p[k] = in[order[k]];
+  }
+};
+
 // What IDA's callbacks need; the system changes with every integrate() call.
 struct UserData {
   OdeSystem* sys = nullptr;
   DaeForm* dae = nullptr;
-  int n_ode = 0;              // size of y; the algebraic unknowns z follow it in IDA's vector
+  int n_ode = 0;              // size of y; the algebraic unknowns z follow it in w = (y, z)
+  Layout layout;
   long res_evals = 0;
   long nonfinite_res = 0;     // evaluations that returned NaN or inf (IDA retried smaller steps)
   std::exception_ptr error;   // thrown inside a callback, rethrown after IDASolve returns
@@ -32,17 +52,20 @@ struct UserData {
 
 int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  const double* y = N_VGetArrayPointer(yy);
-  double* r = N_VGetArrayPointer(rr);
+  const Layout& L = d->layout;
+  const double* w = L.gather(yy, L.w);
+  double* r = L.r.data();
   bool ok = false;
   try {
-    ok = d->dae->calc_residual(t, y, N_VGetArrayPointer(yp), y + d->n_ode, r);
+    ok = d->dae->calc_residual(t, w, L.gather(yp, L.wp), w + d->n_ode, r);
   } catch (...) {
     d->error = std::current_exception();
     return -1;  // unrecoverable: IDA returns IDA_RES_FAIL, the exception is rethrown
   }
   ++d->res_evals;
-  for (sunindextype i = 0; ok && i < N_VGetLength(rr); ++i) ok = std::isfinite(r[i]);
+  L.scatter(r, rr);
+  const double* rp = N_VGetArrayPointer(rr);
+  for (sunindextype i = 0; ok && i < N_VGetLength(rr); ++i) ok = std::isfinite(rp[i]);
   if (ok) return 0;
   ++d->nonfinite_res;
   return 1;  // recoverable: IDA cuts the step
@@ -51,7 +74,7 @@ int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
 int root_fn(realtype t, N_Vector yy, N_Vector, realtype* g, void* ud) {
   auto* d = static_cast<UserData*>(ud);
   try {
-    d->sys->calc_events(t, N_VGetArrayPointer(yy), g);
+    d->sys->calc_events(t, d->layout.gather(yy, d->layout.w), g);
   } catch (...) {
     d->error = std::current_exception();
     return -1;
@@ -70,16 +93,17 @@ bool check_null(const void* p, const char* function, IntegratorSummary& sum) {
   return sunflags::check_null(p, "IDA", function, sum);
 }
 
-// Dense output of y (the first n_ode entries of IDA's vector).
+// Dense output of y (the first n_ode unknowns).
 class IdaDense : public DenseOutput {
  public:
   void* mem = nullptr;
   N_Vector tmp = nullptr;
   int n_ode = 0;
+  const Layout* layout = nullptr;
   mutable int flag = IDA_SUCCESS;  // first failed IDAGetDky of the step, checked after on_step
   void calc_state(double t, double* y) const override {
     const int f = IDAGetDky(mem, t, 0, tmp);
-    const double* p = N_VGetArrayPointer(tmp);
+    const double* p = layout->gather(tmp, layout->w);
     for (int i = 0; i < n_ode; ++i) y[i] = f < 0 ? std::nan("") : p[i];
     if (f < 0 && flag >= 0) flag = f;
   }
@@ -95,6 +119,7 @@ struct IdaIntegrator::Solver {
   SUNMatrix A = nullptr;
   SUNLinearSolver ls = nullptr;
   int n = -1, n_ode = -1;  // size of IDA's vectors and of y; -1: none
+  int lower = -1, upper = -1;  // half-bandwidths of the banded solver
   bool guessed = false;    // the last start used the system's guess of y' and z
   UserData ud;
 
@@ -112,10 +137,12 @@ struct IdaIntegrator::Solver {
       if (*v) N_VDestroy(*v);
       *v = nullptr;
     }
-    n = n_ode = -1;
+    n = n_ode = lower = upper = -1;
   }
 
-  bool create(int n_new, int n_ode_new, double t0, IntegratorSummary& sum) {
+  // The solver for a system of n_new unknowns (n_ode_new of them y), banded with half-bandwidths
+  // lo, up.
+  bool create(int n_new, int n_ode_new, int lo, int up, double t0, IntegratorSummary& sum) {
     free_problem();
     if (!ctx && !check_sundials(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", sum)) return false;
     for (N_Vector* v : {&yy, &yp, &id, &tmp}) {
@@ -128,15 +155,11 @@ struct IdaIntegrator::Solver {
     if (!check_flag(IDASetErrHandlerFn(mem, sunflags::silent, nullptr), "IDASetErrHandlerFn", sum)) return false;
     if (!check_flag(IDAInit(mem, res_fn, t0, yy, yp), "IDAInit", sum)) return false;
     if (!check_flag(IDASetUserData(mem, &ud), "IDASetUserData", sum)) return false;
-    A = SUNDenseMatrix(n_new, n_new, ctx);
-    if (!check_null(A, "SUNDenseMatrix", sum)) return false;
-    ls = SUNLinSol_Dense(yy, A, ctx);
-    if (!check_null(ls, "SUNLinSol_Dense", sum)) return false;
+    A = SUNBandMatrix(n_new, up, lo, ctx);
+    if (!check_null(A, "SUNBandMatrix", sum)) return false;
+    ls = SUNLinSol_Band(yy, A, ctx);
+    if (!check_null(ls, "SUNLinSol_Band", sum)) return false;
     if (!check_flag(IDASetLinearSolver(mem, ls, A), "IDASetLinearSolver", sum)) return false;
-    // Differential (1) and algebraic (0) components; the algebraic ones leave the error test.
-    double* pid = N_VGetArrayPointer(id);
-    for (int i = 0; i < n_new; ++i) pid[i] = i < n_ode_new ? 1.0 : 0.0;
-    if (!check_flag(IDASetId(mem, id), "IDASetId", sum)) return false;
     if (!check_flag(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", sum)) return false;
     // The residual is linear in the unknowns of IDACalcIC (y' and z at fixed y): full Newton steps
     // are exact up to rounding, and the line search only fails on that rounding at tight atol
@@ -144,7 +167,25 @@ struct IdaIntegrator::Solver {
     if (!check_flag(IDASetLineSearchOffIC(mem, SUNTRUE), "IDASetLineSearchOffIC", sum)) return false;
     n = n_new;
     n_ode = n_ode_new;
+    lower = lo;
+    upper = up;
     return true;
+  }
+
+  // The layout of dae's unknowns in IDA's vectors (ud.layout) and its half-bandwidths lo, up; a
+  // form without a band order keeps its own order with a full band.
+  void set_layout(const DaeForm& dae, int n_sys, int& lo, int& up) {
+    Layout& L = ud.layout;
+    if (!dae.find_band_order(L.order, lo, up) || static_cast<int>(L.order.size()) != n_sys) {
+      L.order.resize(static_cast<std::size_t>(n_sys));
+      std::iota(L.order.begin(), L.order.end(), 0);
+      lo = up = n_sys - 1;
+    }
+    lo = std::min(lo, n_sys - 1);
+    up = std::min(up, n_sys - 1);
+    L.w.assign(static_cast<std::size_t>(n_sys), 0.0);
+    L.wp.assign(L.w.size(), 0.0);
+    L.r.assign(L.w.size(), 0.0);
   }
 
   // Restart IDA on sys from (t0, y0). calc_ic: consistent z and y' by IDACalcIC (else the system's
@@ -152,25 +193,34 @@ struct IdaIntegrator::Solver {
   bool prepare(OdeSystem& sys, DaeForm& dae, double t0, double t_end, const double* y0,
                const IntegratorOptions& o, IntegratorSummary& sum, bool calc_ic, int& ic_flag) {
     const int n_ode_sys = sys.size(), n_sys = n_ode_sys + dae.num_algebraic();
-    if ((n_sys != n || n_ode_sys != n_ode) && !create(n_sys, n_ode_sys, t0, sum)) return false;
+    int lo = 0, up = 0;
+    set_layout(dae, n_sys, lo, up);
+    if ((n_sys != n || n_ode_sys != n_ode || lo != lower || up != upper) && !create(n_sys, n_ode_sys, lo, up, t0, sum))
+      return false;
     ud.sys = &sys;
     ud.dae = &dae;
     ud.n_ode = n_ode;
     ud.res_evals = 0;
     ud.nonfinite_res = 0;
     ud.error = nullptr;
-    N_VConst(0.0, yy);
-    N_VConst(0.0, yp);
-    double* p = N_VGetArrayPointer(yy);
-    for (int i = 0; i < n_ode; ++i) p[i] = y0[i];
+    // (y, z) and (y', z') in the system's order, then into IDA's.
+    std::vector<double> w(static_cast<std::size_t>(n), 0.0), wp(w.size(), 0.0);
+    std::copy(y0, y0 + n_ode, w.begin());
     // The system's guess of y' and z (else zeros); IDACalcIC corrects it. From a zero guess its
     // Newton iteration (on the DQ Jacobian with the differential columns scaled by 1/h) failed to
     // converge (IDA_CONV_FAIL) at some rail entries of torque-driven runs.
-    guessed = dae.calc_initial_guess(t0, p, N_VGetArrayPointer(yp), p + n_ode);
+    guessed = dae.calc_initial_guess(t0, w.data(), wp.data(), w.data() + n_ode);
     if (!guessed) {
-      N_VConst(0.0, yp);
-      for (int i = n_ode; i < n; ++i) p[i] = 0.0;
+      std::fill(wp.begin(), wp.end(), 0.0);
+      std::fill(w.begin() + n_ode, w.end(), 0.0);
     }
+    ud.layout.scatter(w.data(), yy);
+    ud.layout.scatter(wp.data(), yp);
+    // Differential (1) and algebraic (0) components; the algebraic ones leave the error test.
+    std::fill(w.begin(), w.end(), 0.0);
+    std::fill(w.begin(), w.begin() + n_ode, 1.0);
+    ud.layout.scatter(w.data(), id);
+    if (!check_flag(IDASetId(mem, id), "IDASetId", sum)) return false;
     if (!check_flag(IDAReInit(mem, t0, yy, yp), "IDAReInit", sum)) return false;
     if (!check_flag(IDASStolerances(mem, o.rtol, o.atol), "IDASStolerances", sum)) return false;
     if (!check_flag(IDASetMaxNumSteps(mem, o.max_steps), "IDASetMaxNumSteps", sum)) return false;
@@ -202,8 +252,9 @@ struct IdaIntegrator::Solver {
   // refinement of the peaks (its q' is a difference quotient over the span). Hairer's first guess
   // instead (Hairer, Norsett, Wanner I, II.4): h0 = 0.01 ||y0|| / ||y'0||, from yy, yp as set.
   bool set_initial_step(const IntegratorOptions& o, double t0, double t_end, IntegratorSummary& sum) {
-    const double* y = N_VGetArrayPointer(yy);
-    const double* dy = N_VGetArrayPointer(yp);
+    std::vector<double> w(ud.layout.w.size()), wp(w.size());
+    const double* y = ud.layout.gather(yy, w);
+    const double* dy = ud.layout.gather(yp, wp);
     double d0 = 0.0, d1 = 0.0;
     for (int i = 0; i < n_ode; ++i) {
       const double w = o.atol + o.rtol * std::abs(y[i]);
@@ -260,13 +311,14 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
   if (!prepared) return failed();
   const int ne = sys.num_events();
   auto copy_state = [&] {
-    const double* p = N_VGetArrayPointer(s.yy);
+    const double* p = s.ud.layout.gather(s.yy, s.ud.layout.w);
     for (int i = 0; i < s.n_ode; ++i) y0[i] = p[i];
   };
   IdaDense dense;
   dense.mem = s.mem;
   dense.tmp = s.tmp;
   dense.n_ode = s.n_ode;
+  dense.layout = &s.ud.layout;
   double t = t0;
   std::vector<int> roots(static_cast<std::size_t>(ne));
   while (true) {

@@ -1,10 +1,11 @@
 // SUNDIALS IDA behind the same interface as the own RK pair and CVODE: it integrates the
 // residual form of a system (OdeSystem::dae_form(): F(t, y, y', z) = 0, z algebraic), not
-// y' = f(t, y). Variable-order BDF (orders 1-5) with Newton iteration on a dense direct linear
-// solver (SUNLinSol_Dense) and IDA's difference-quotient Jacobian: per Jacobian, N + k residual
-// evaluations (each O(N)) and an O((N + k)^3) LU, so O(n^2) and O(n^3) work per Jacobian for an
-// n-frame phase (N = 2n + 1). That is cheap for the free stack's tens of frames and is meant as a
-// cross-check of the direct O(n) bordered solve, not as the production solver of long masts.
+// y' = f(t, y). Variable-order BDF (orders 1-5) with Newton iteration on IDA's difference-quotient
+// Jacobian and a banded direct linear solver (SUNBandMatrix, SUNLinSol_Band). IDA's vectors hold
+// the unknowns in the order the form gives (DaeForm::find_band_order; the free stack's phases, each
+// frame's q and q' side by side), in which the Jacobian is banded: per Jacobian, lower + upper + 1
+// residual evaluations (each O(n)) and an O(N lower (lower + upper)) LU, so every step is O(n) for
+// an n-frame phase. A form without an order keeps its own with a full band (a dense Jacobian).
 // The algebraic unknowns are excluded from the local error test (IDASetSuppressAlg): they are
 // fixed by the constraints at each step; consistent initial values of z and of y' for the given y
 // come from IDACalcIC (IDA_YA_YDP_INIT) at every start. IDA's root finding locates the events on

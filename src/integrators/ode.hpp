@@ -2,8 +2,10 @@
 // Chrono's ChIntegrable and Boost.Odeint's system / stepper / observer split): a system gives
 // y' = f(t, y) and event functions; an observer sees every accepted step through its dense output.
 #pragma once
+#include <chrono>
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace truss::integrators {
 
@@ -12,8 +14,9 @@ namespace truss::integrators {
 //   cvode        SUNDIALS CVODE, BDF with Newton iteration and a dense direct solver (stiff)
 //   cvode_adams  SUNDIALS CVODE, Adams-Moulton with fixed-point iteration (non-stiff)
 //   automatic    dopri54 until Hairer's stiffness test fires, then cvode for the rest of the run
-//   ida          SUNDIALS IDA (variable-order BDF on a residual F(t, y, y', z) = 0, dense direct
-//                linear solver) on the system's DaeForm: the free stack's cross-check solver
+//   ida          SUNDIALS IDA (variable-order BDF on a residual F(t, y, y', z) = 0, banded direct
+//                linear solver in the order the DaeForm gives) on the system's DaeForm: the free
+//                stack's cross-check solver
 enum class IntegratorKind { dopri54, cvode, cvode_adams, automatic, ida };
 inline const char* to_string(IntegratorKind k) {
   constexpr const char* names[] = {"dopri54", "cvode", "cvode_adams", "auto", "ida"};
@@ -31,6 +34,10 @@ class DaeForm {
   virtual bool calc_residual(double t, const double* y, const double* yp, const double* z, double* res) = 0;
   // A guess of y' and z at (t, y) for the consistent start (IDACalcIC); false: zeros.
   virtual bool calc_initial_guess(double /*t*/, const double* /*y*/, double* /*yp*/, double* /*z*/) { return false; }
+  // An order of the unknowns w = (y, z), and of the residual rows likewise, in which the Jacobian
+  // dF/dw + c dF/dw' is banded: order[p] is the index in w of the unknown (and the row) at
+  // position p, lower and upper the half-bandwidths. false: no band (the full matrix).
+  virtual bool find_band_order(std::vector<int>& /*order*/, int& /*lower*/, int& /*upper*/) const { return false; }
 };
 
 class OdeSystem {
@@ -59,6 +66,11 @@ class StepObserver {
   virtual ~StepObserver() = default;
   // Called after every accepted step (truncated at an event). Return false to stop.
   virtual bool on_step(const DenseOutput& step) = 0;
+  // The wall-clock time by which the integration must have stopped (the run's wall-time cap;
+  // max(): none). The observer stops it after a step past it; an integrator whose single steps can
+  // take long (CVODE's dense Newton matrix, O(n^3) to factorize) also declines to start work it
+  // predicts would carry it past, and returns IntegratorStatus::deadline.
+  virtual std::chrono::steady_clock::time_point deadline() const { return std::chrono::steady_clock::time_point::max(); }
 };
 
 struct IntegratorOptions {
@@ -75,7 +87,7 @@ struct IntegratorOptions {
   std::string validate() const;   // empty or "field: reason"
 };
 
-enum class IntegratorStatus { reached_end, event, step_limit, stopped_by_observer, failure, stiff };
+enum class IntegratorStatus { reached_end, event, step_limit, stopped_by_observer, failure, stiff, deadline };
 const char* to_string(IntegratorStatus);
 
 struct IntegratorSummary {

@@ -63,15 +63,6 @@ std::string quote(std::string_view s) {
   return r + "\"";
 }
 
-// A TOML float that reads back to exactly v.
-std::string toml_double(double v) {
-  if (std::isnan(v)) return "nan";
-  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-  std::string s = fmt::format("{}", v);  // shortest round-trip representation
-  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
-  return s;
-}
-
 std::string describe(const toml::node& v) {
   switch (v.type()) {
     case toml::node_type::string: {
@@ -399,6 +390,27 @@ sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string
   return parse_scene(text, source_name, settings, true, warnings);
 }
 
+sim::SceneOptions parse_scene_variant(const sim::SceneOptions& base, std::string_view text,
+                                      const std::string& source_name,
+                                      const std::vector<SceneSetting>& settings, const std::vector<SceneSetting>& more,
+                                      std::vector<std::string>* warnings) {
+  SceneOptions s = base;
+  std::vector<Diag> diags;
+  std::map<std::string, Origin> origins;
+  for (std::size_t i = 0; i < more.size(); ++i) apply_override(s, more[i], settings.size() + i, diags, origins);
+  if (diags.empty()) {
+    try {
+      check_scene(s, source_name, origins, warnings);
+      return s;
+    } catch (const InputError&) {
+      // worded below as the whole text gives it (a key of the file is named with its line there)
+    }
+  }
+  std::vector<SceneSetting> all = settings;
+  all.insert(all.end(), more.begin(), more.end());
+  return parse_scene(text, source_name, all, true);  // throws the InputError
+}
+
 sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
                                                const std::string& source_name,
                                                const std::vector<std::string>& overrides) {
@@ -434,6 +446,14 @@ std::string read_input_file(const std::string& path, const char* what, std::size
 sim::SceneOptions parse_scene_file_with(const std::string& path, const std::vector<SceneSetting>& overrides,
                                         std::vector<std::string>* warnings) {
   return parse_scene(read_input_file(path, "scene file"), path, overrides, true, warnings);
+}
+
+std::string toml_double(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  std::string s = fmt::format("{}", v);  // shortest round-trip representation
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
 }
 
 std::vector<std::string> known_scene_keys() {

@@ -54,6 +54,15 @@ sim::SceneOptions parse_scene_text_with(std::string_view text, const std::string
                                         const std::vector<SceneSetting>& settings,
                                         std::vector<std::string>* warnings = nullptr);
 
+// A variant of a scene that parse_scene_text_with(text, source_name, settings) gave as `base`: the
+// same options, checks and messages as parse_scene_text_with(text, source_name, settings + more),
+// at the cost of the `more` settings alone (the text is read again only to word an error, with the
+// lines its keys came from). Warnings: for the keys `more` sets. For batches of variants of one scene.
+sim::SceneOptions parse_scene_variant(const sim::SceneOptions& base, std::string_view text,
+                                      const std::string& source_name,
+                                      const std::vector<SceneSetting>& settings, const std::vector<SceneSetting>& more,
+                                      std::vector<std::string>* warnings = nullptr);
+
 // As parse_scene_text but without SceneOptions::validate(): checks syntax, keys, types and
 // enumeration values only. For tools that change the options further and validate afterwards.
 sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
@@ -64,6 +73,9 @@ sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
 // read back bit-exactly; optional keys that are unset appear only as comments. Parsing the text
 // again gives the same options.
 std::string resolved_scene_toml(const sim::SceneOptions& scene);
+
+// A TOML float that reads back to exactly v ("12.0", "1e-05", "nan", "-inf").
+std::string toml_double(double v);
 
 // All known keys, "table.key", in the order resolved_scene_toml writes them.
 std::vector<std::string> known_scene_keys();

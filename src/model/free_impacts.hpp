@@ -15,6 +15,9 @@
 // Impulsive start from rest in velocity mode (docs/model.md §2 "free": the momentum-consistent kick):
 //   M dv = e_m P, dv_m = u  =>  P = u / (M^-1 e_m)_m, dv = P M^-1 e_m; a lossless ramp: the
 //   drive's work (1/2) P u equals the kinetic energy (1/2) dv' M dv it leaves.
+// The paper's literal start instead (the free frames at rest): dv = u e_m, the drive's impulse on
+//   its row P = M_mm u and its work (1/2) P u = (1/2) M_mm u^2, the kinetic energy it leaves (the
+//   stowed stack holds the other frames for the instant: no work).
 // Contact landing (model/contacts.hpp), and any plastic impact with up to three constraint rows
 // R_j (contact, rail, drive speed) that must change by d_j = R_j dv (a closing contact J v+ = 0,
 // so d = -J v; the rail and the screw keep their velocity conditions, d = 0):
@@ -90,6 +93,18 @@ inline StackImpact calc_stack_start_kick(const Eigen::VectorXd& diag, const Eige
   r.drive_impulse_Ns = u / ze[N - 1];
   r.dv = r.drive_impulse_Ns * ze;
   r.dv[N - 1] = u;
+  r.drive_work_J = 0.5 * r.drive_impulse_Ns * u;
+  r.ok = true;
+  return r;
+}
+
+inline StackImpact calc_stack_start_rest(const Eigen::VectorXd& diag, double u) {
+  const Eigen::Index N = diag.size();
+  StackImpact r;
+  if (!(diag[N - 1] > 0.0)) return r;
+  r.dv = Eigen::VectorXd::Zero(N);
+  r.dv[N - 1] = u;
+  r.drive_impulse_Ns = diag[N - 1] * u;
   r.drive_work_J = 0.5 * r.drive_impulse_Ns * u;
   r.ok = true;
   return r;

@@ -214,7 +214,8 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
   app.add_flag("--no-write-thread", o.no_write_thread, "bench only: rank 0 writes returned chunks itself")->group("");
   app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
   app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
-             "3 I/O or internal error.");
+             "3 I/O or internal error; 4 results written, but most runs are invalid input (the dispersions give "
+             "scenes the model refuses).");
   try {
     app.parse(argc, argv);
     if (o.output_path.empty() && !o.dry_run) throw CLI::RequiredError("--output");
@@ -308,7 +309,8 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
                              static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC, sched.runs_by_rank0,
                              us(sched.rank0_poll_s + sched.rank0_tick_s), us(sched.rank0_handle_cpu_s), thread_cpu, peak_chunks,
                              chunk_runs, jobs_offloaded, jobs_offloaded + jobs_local);
-    return kExitOk;
+    const std::string example = campaign::read_example_message(o.output_path, n_runs, sim::RunStatus::invalid_input);
+    return campaign::print_campaign_verdict(stderr, counts, example) ? kExitOk : kExitMostlyInvalid;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
     return kExitBadInput;
@@ -376,7 +378,7 @@ int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const 
       std::cerr << "error: " << e.what() << '\n';
       status = kExitIoError;
     }
-    if (status != kExitOk) {  // nothing written: no results file, and the journal as it was
+    if (status != kExitOk && status != kExitMostlyInvalid) {  // nothing written: no results file, the journal as it was
       r0.journal.reset();
       r0.file.reset();
     }
@@ -487,7 +489,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm) {
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
       status = kExitIoError;
     }
-    if (status != kExitOk) {  // nothing written: no results file, and the journal as it was
+    if (status != kExitOk && status != kExitMostlyInvalid) {  // nothing written: no results file, the journal as it was
       r0.journal.reset();
       r0.file.reset();
     }

@@ -8,7 +8,8 @@
 // HDF5 file at the end.
 //
 // Exit status: 0 the results file is written (failed runs are data in it); 2 bad input (command
-// line, campaign file, an existing output or journal), nothing written; 3 an I/O or internal error.
+// line, campaign file, an existing output or journal), nothing written; 3 an I/O or internal error;
+// 4 the results file is written, but most runs are invalid input (campaign/progress.hpp).
 #pragma once
 #include <mpi.h>
 
@@ -17,6 +18,7 @@ namespace truss::parallel {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitBadInput = 2;
 inline constexpr int kExitIoError = 3;
+inline constexpr int kExitMostlyInvalid = 4;  // the file is written, but most runs are invalid input
 
 // Collective over comm; returns the exit status (the same on every rank).
 int run_campaign_command(int argc, char** argv, MPI_Comm comm);

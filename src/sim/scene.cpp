@@ -53,6 +53,8 @@ std::string SceneOptions::validate() const {
            "has one coordinate per phase and no rail multiplier: use \"dopri54\", \"cvode\", \"cvode_adams\" or \"auto\"";
   if (stack.contacts == StackContacts::on && stack.mode != StackMode::free)
     return "stack.contacts: contacts between stowed frames apply to the free stack only (stack.mode = \"free\"); the held stack's canister holds them";
+  if (stack.start == StackStart::rest && stack.mode != StackMode::free)
+    return "stack.start: \"rest\" applies to the free stack only (stack.mode = \"free\"); the held stack's canister holds the stowed frames at rest anyway";
   if (panels.count < 0 || panels.count % 2 != 0)
     return fmt::format("panels.count: must be 0 (no panels) or a positive even number, got {}", panels.count);
   if (panels.count > 0) {
@@ -78,7 +80,8 @@ std::string SceneOptions::validate() const {
 std::string plan_stages(const SceneOptions& scene, const model::MastParams& mast, double direction,
                         std::vector<stages::StageSpec>& out) {
   if (scene.stack.mode == StackMode::free)
-    return stages::plan_free_stages(mast, direction, scene.stack.contacts == StackContacts::on, out);
+    return stages::plan_free_stages(mast, direction, scene.stack.contacts == StackContacts::on,
+                                    scene.stack.start == StackStart::kick, out);
   return stages::plan_held_stages(mast, direction, out);
 }
 

@@ -22,6 +22,7 @@ using integrators::IntegratorKind;
 enum class StackMode { held, free };
 enum class StackContacts { off, on };   // TOML false | true
 enum class ContactLaw { plastic };
+enum class StackStart { kick, rest };   // the free frames at the velocity drive's impulsive start
 
 using model::to_string;
 using integrators::to_string;
@@ -59,6 +60,10 @@ struct StackOptions {
   StackMode mode = StackMode::held;  // docs/model.md §2: the canister holds stowed frames
   StackContacts contacts = StackContacts::off;  // docs/model.md §2 "free": contacts optional; off = the paper's literal model
   ContactLaw contact_law = ContactLaw::plastic;  // docs/model.md §2: plastic by default (the only law so far)
+  // Free stack, velocity drive, deployment: the free frames take the momentum-consistent kick of
+  // the impulsive start (kick), or stay at rest while the driven frame jumps to v (rest, the
+  // paper's literal start). docs/model-notes.md, "Start".
+  StackStart start = StackStart::kick;
 };
 
 struct PanelOptions {

@@ -89,6 +89,8 @@ std::vector<SceneKey> make_table() {
       TRUSS_ENUM(stack, mode, "\"held\" | \"free\"", "held", "free"),
       TRUSS_ENUM(stack, contacts, "false | true: unilateral stack contacts D_i >= 0 (free stack only)", "false", "true"),
       TRUSS_ENUM(stack, contact_law, "\"plastic\" (landings lose the approach energy)", "plastic"),
+      TRUSS_ENUM(stack, start, "\"kick\" | \"rest\": the free frames at the velocity drive's impulsive start (free stack only)",
+                 "kick", "rest"),
       R(TRUSS_INT(panels, count, "1", "number of solar panels, 0 = none, else even", kFixed), C(0, 1e5), C(0, 200)),
       R(TRUSS_REAL(panels, length_m, "m", "m, l_p, panel length", kRun), P(1e3), C(0.05, 5)),
       R(TRUSS_REAL(panels, mass_kg, "kg", "kg, m_p, mass of one panel", kRun), P(1e4), C(0.01, 10)),

@@ -1,15 +1,16 @@
 // Peaks of a closed-form phase from samples that carry exact time derivatives (the velocity
 // mode's held phases, phase_kinematic.hpp). For each tracked quantity Q (peaks.hpp):
-//   - every sample is a candidate (a maximum at a phase end, at a kink, or at a grid point);
+//   - a sample is a local maximum at a phase end or a kink when its one-sided slopes say so;
 //   - between two samples of a smooth piece the cubic Hermite interpolant of (Q, Q') shows an
 //     interior maximum where Q' changes sign from + to -, or where both end slopes have one sign
 //     and the cubic still turns (a maximum hidden between two samples; confirmed by one probe);
 //   - an interior maximum is the root of Q', bracketed by the samples and found by a secant step
 //     safeguarded by regula falsi and bisection, to a few ulp of t: its time is exact to the
 //     rounding of Q', not to the square root of the rounding of Q (a search on values).
-// Spans are refined in the order of their Hermite estimate while that exceeds the best value
-// found, and only for quantities whose best can change a record (PeakTracker::could_improve).
-// Ties keep the earliest sample (docs/model.md §5).
+// Only quantities whose best can change a record are searched (PeakTracker::could_improve), and
+// only the interior maxima that could be the highest or equal it are refined. Peaks equal to the
+// run's accuracy (the record's tie tolerance, peaks.hpp) are one: the earliest of the phase's
+// equal maxima is offered before the highest, as PhasePeaks does for time stepping.
 #pragma once
 #include <algorithm>
 #include <array>
@@ -81,63 +82,124 @@ void refine_rated_root(int k, double lo, double glo, double hi, double ghi, doub
 
 }  // namespace detail
 
+namespace detail {
+
+// A local maximum of a quantity in a phase: at a sample (a phase end, a kink, a zero slope) or
+// inside a span (its Hermite estimate until refined).
+struct Hill {
+  double t, value;
+  std::size_t span;  // the span (j, j + 1) of an interior maximum; kNoSpan at a sample
+  HermiteMaximum h;
+  bool exact;
+};
+inline constexpr std::size_t kNoSpan = ~std::size_t{0};
+
+// Refines an interior hill to the root of Q' (exact = true), or drops it (exact = false, value
+// -inf) when a probe shows the Hermite cubic's hidden maximum is not there.
+template <class Eval>
+void refine_hill(int k, const std::vector<RatedSample>& samples, Eval& eval, Hill& hill) {
+  const std::size_t ki = static_cast<std::size_t>(k);
+  const RatedSample& a = samples[hill.span];
+  const RatedSample& b = samples[hill.span + 1];
+  double lo = a.t, glo = a.dq[ki], hi = b.t, ghi = b.dq[ki];
+  const double t_est = hill.t;
+  hill.value = -kInf;
+  if (!(glo > 0.0 && ghi < 0.0)) {
+    // A maximum hidden between two slopes of one sign: a probe between it and the cubic's other
+    // critical point must show the slope's other sign to bracket it.
+    if (!std::isfinite(hill.h.s_other)) return;
+    const double t_probe = a.t + 0.5 * (hill.h.s + hill.h.s_other) * (b.t - a.t);
+    const double g = eval(t_probe).dq[ki];
+    if (glo <= 0.0 && g > 0.0) { lo = t_probe; glo = g; }
+    else if (glo > 0.0 && g < 0.0) { hi = t_probe; ghi = g; }
+    else return;
+  }
+  RatedSample root;
+  const bool near_lo = t_est - lo <= hi - t_est;  // the secant's first partner: the nearer end
+  refine_rated_root(k, lo, glo, hi, ghi, std::clamp(t_est, lo, hi), near_lo ? lo : hi, near_lo ? glo : ghi, eval, root);
+  hill.t = root.t;
+  hill.value = root.q[ki];
+  hill.exact = true;
+}
+
+}  // namespace detail
+
 template <class Eval>
 void absorb_rated_peaks(const std::vector<RatedSample>& samples, PeakTracker& tracker, Eval&& eval,
                         const std::array<PeakSearch, kQuantityCount>& search) {
+  using detail::Hill;
   const std::size_t n = samples.size();
+  thread_local std::vector<Hill> hills;  // work space: no allocation per phase
   for (int k = 0; k < kQuantityCount; ++k) {
     const std::size_t ki = static_cast<std::size_t>(k);
-    if (search[ki] == PeakSearch::none) continue;
-    double best = -kInf, best_t = kNaN;
-    for (const RatedSample& s : samples)
-      if (s.q[ki] > best) { best = s.q[ki]; best_t = s.t; }
-    // Interior maxima of the smooth spans, by their Hermite estimate; a span is skipped when even
-    // the bound of its cubic (within (|m0| + |m1|) 4/27 of its chord) cannot beat the record.
-    const Extremum& record = tracker.target(k);
-    const double floor = std::isfinite(record.value) ? std::max(best, record.value) : best;
-    struct Span { std::size_t j; HermiteMaximum h; };
-    thread_local std::vector<Span> spans;  // work space: no allocation per phase
-    spans.clear();
-    double top = best;
-    for (std::size_t j = 0; j + 1 < n && search[ki] == PeakSearch::full; ++j) {
-      const RatedSample& a = samples[j];
+    if (search[ki] == PeakSearch::none || n == 0) continue;
+    Extremum& record = tracker.target(k);
+    const double tol = record.tie_tol;  // equal peaks (to the run's accuracy, peaks.hpp) are one
+    double best = -kInf;
+    for (const RatedSample& s : samples) best = std::max(best, s.q[ki]);
+    const double keep = best - tol * std::abs(best);  // below it no hill equals the phase's highest
+    // Spans whose cubic cannot reach the record (nor equal it) are not searched.
+    const double big = record.largest();
+    const double floor = std::isfinite(record.value) ? std::max(keep, big - tol * std::abs(big)) : keep;
+    hills.clear();
+    double bound = best;  // no value of the phase above it
+    for (std::size_t j = 0; j < n; ++j) {
+      const RatedSample& s = samples[j];
+      // At a sample: the phase start falling, the phase end rising, a kink rising into it and
+      // falling out (its two samples share the value: the first counts), or a zero slope above both
+      // neighbours.
+      const bool starts = j == 0 || s.kink_before, ends = j + 1 == n || samples[j + 1].kink_before;
+      bool hill;
+      if (j + 1 < n && samples[j + 1].kink_before) hill = s.dq[ki] >= 0.0 && samples[j + 1].dq[ki] <= 0.0;
+      else if (s.kink_before) hill = false;
+      else if (starts || ends) hill = (!starts || s.dq[ki] <= 0.0) && (!ends || s.dq[ki] >= 0.0);
+      else hill = s.dq[ki] == 0.0 && s.q[ki] >= samples[j - 1].q[ki] && s.q[ki] >= samples[j + 1].q[ki];
+      if (hill && s.q[ki] >= keep) hills.push_back({s.t, s.q[ki], detail::kNoSpan, {}, true});
+      if (ends || search[ki] != PeakSearch::full) continue;
       const RatedSample& b = samples[j + 1];
-      if (b.kink_before) continue;
-      const double reach = 0.15 * (b.t - a.t) * (std::abs(a.dq[ki]) + std::abs(b.dq[ki]));
-      if (!(std::max(a.q[ki], b.q[ki]) + reach > floor)) continue;
-      const HermiteMaximum h = find_hermite_maximum(a, b, k);
-      if (!h.found || !(h.value > best)) continue;
-      spans.push_back({j, h});
-      top = std::max(top, h.value);
+      // The bound of the span's cubic (within (|m0| + |m1|) 4/27 of its chord) must reach the floor.
+      const double chord = std::max(s.q[ki], b.q[ki]);
+      if (!(chord + 0.15 * (b.t - s.t) * (std::abs(s.dq[ki]) + std::abs(b.dq[ki])) >= floor)) continue;
+      const HermiteMaximum h = find_hermite_maximum(s, b, k);
+      if (!h.found || !(h.value >= keep)) continue;
+      hills.push_back({s.t + h.s * (b.t - s.t), h.value, j, h, false});
+      bound = std::max(bound, 2.0 * h.value - chord);  // the estimate's rise above the chord, twice
     }
-    if (!tracker.could_improve(k, top)) continue;
-    std::stable_sort(spans.begin(), spans.end(), [](const Span& a, const Span& b) { return a.h.value > b.h.value; });
-    for (const Span& sp : spans) {
-      if (!(sp.h.value > best)) break;
-      const RatedSample& a = samples[sp.j];
-      const RatedSample& b = samples[sp.j + 1];
-      double lo = a.t, glo = a.dq[ki], hi = b.t, ghi = b.dq[ki];
-      const double t_est = a.t + sp.h.s * (b.t - a.t);
-      if (!(glo > 0.0 && ghi < 0.0)) {
-        // A maximum hidden between two slopes of one sign: a probe between it and the cubic's
-        // other critical point must show the slope's other sign to bracket it; else the span
-        // holds no maximum above its samples.
-        if (!std::isfinite(sp.h.s_other)) continue;
-        const double t_probe = a.t + 0.5 * (sp.h.s + sp.h.s_other) * (b.t - a.t);
-        const RatedSample p = eval(t_probe);
-        if (p.q[ki] > best) { best = p.q[ki]; best_t = p.t; }
-        const double g = p.dq[ki];
-        if (glo <= 0.0 && g > 0.0) { lo = t_probe; glo = g; }
-        else if (glo > 0.0 && g < 0.0) { hi = t_probe; ghi = g; }
-        else continue;
+    // Slopes at the rounding level can leave no sample a hill (a prescribed quantity): then the
+    // highest sample is the peak.
+    if (hills.empty()) {
+      std::size_t jb = 0;
+      for (std::size_t j = 1; j < n; ++j)
+        if (samples[j].q[ki] > samples[jb].q[ki]) jb = j;
+      hills.push_back({samples[jb].t, samples[jb].q[ki], detail::kNoSpan, {}, true});
+    }
+    if (!tracker.could_improve(k, bound)) continue;
+    // Refine the interior hills, highest estimate first, while one could still be the highest or
+    // equal it (its estimate's rise above the chord taken twice).
+    for (;;) {
+      double top = -kInf;
+      Hill* next = nullptr;
+      for (Hill& h : hills) {
+        if (h.exact) top = std::max(top, h.value);
+        else if (!next || h.value > next->value) next = &h;
       }
-      RatedSample root;
-      const bool near_lo = t_est - lo <= hi - t_est;  // the secant's first partner: the nearer end
-      detail::refine_rated_root(k, lo, glo, hi, ghi, std::clamp(t_est, lo, hi), near_lo ? lo : hi,
-                                near_lo ? glo : ghi, eval, root);
-      if (root.q[ki] > best || (root.q[ki] == best && root.t < best_t)) { best = root.q[ki]; best_t = root.t; }
+      if (!next) break;
+      const RatedSample& a = samples[next->span];
+      const double chord = std::max(a.q[ki], samples[next->span + 1].q[ki]);
+      if (std::isfinite(top) && 2.0 * next->value - chord < top - tol * std::abs(top)) break;
+      detail::refine_hill(k, samples, eval, *next);
+      next->exact = true;  // refined, or dropped with value -inf
     }
-    tracker.target(k).offer(best, best_t, tracker.bay);
+    const Hill* top = nullptr;
+    for (const Hill& h : hills)
+      if (h.exact && h.value > -kInf && (!top || h.value > top->value)) top = &h;
+    if (!top) continue;
+    // Hills are in time order but for the interior ones refined past a sample: the earliest equal.
+    const Hill* first = top;
+    for (const Hill& h : hills)
+      if (h.exact && h.value > -kInf && h.t < first->t && is_tie(h.value, top->value, tol)) first = &h;
+    if (first != top) record.offer(first->value, first->t, tracker.bay);
+    record.offer(top->value, top->t, tracker.bay);
   }
 }
 

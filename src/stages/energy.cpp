@@ -31,12 +31,16 @@ double calc_energy_scale_J(const RunResult& r) {
          std::abs(r.potential_energy_end_J);
 }
 
-double calc_allowed_energy_residual_J(const RunResult& r, double rtol, double atol, double length_m) {
-  const double E = calc_energy_scale_J(r);
+double calc_allowed_relative_error(int n_bays, double rtol, double atol, double length_m) {
   // A run's error has a share that does not shrink with fewer phases (start, impacts, the events'
   // location): short masts get the bound of Table 1's 60 phases (measured up to 50 rtol E at n = 1).
-  const double phases = std::max(60.0, 2.0 * r.n_bays);
-  return std::min(1e-2 * E, 20.0 * phases * std::max(rtol, atol / length_m) * E + static_cast<double>(r.steps) * atol);
+  const double phases = std::max(60.0, 2.0 * n_bays);
+  return std::min(1e-2, 20.0 * phases * std::max(rtol, atol / length_m));
+}
+
+double calc_allowed_energy_residual_J(const RunResult& r, double rtol, double atol, double length_m) {
+  const double E = calc_energy_scale_J(r);
+  return std::min(1e-2 * E, calc_allowed_relative_error(r.n_bays, rtol, atol, length_m) * E + static_cast<double>(r.steps) * atol);
 }
 
 std::string calc_accuracy_failure(const RunResult& r, double rtol, double atol, double length_m, bool contacts) {

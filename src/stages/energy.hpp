@@ -26,6 +26,10 @@ namespace truss::stages {
 // its tolerance allows: status `inaccurate`.
 double calc_energy_scale_J(const RunResult& r);
 double calc_allowed_energy_residual_J(const RunResult& r, double rtol, double atol, double length_m);
+// The relative error a run of n bays at (rtol, atol) keeps, the bound's factor of E above:
+// min(1e-2, 20 max(60, 2 n) max(rtol, atol / l_s)). Also the tolerance within which two peaks are
+// one (peaks.hpp).
+double calc_allowed_relative_error(int n_bays, double rtol, double atol, double length_m);
 // With stack contacts (contacts = true) the frames may overlap only by what locating a contact event
 // leaves, kContactOverlapFraction l_s (measured: 1e-9 l_s at every tolerance from 1e-3 to 1e-12, the
 // root finder's position tolerance); a deeper overlap means a crossing was missed inside a step.

@@ -75,12 +75,29 @@ void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g
     g[contact_lift_off] = c.lift_off_g;
   }
   g[above_rail_top] = watch_rail_top_ ? 0.5 * (y_m + y_l) - yr : -1.0;
-  g[rail_approach_min] = -1.0;
-  if (watch_approach_min_) {
-    const double u = qdot[n - 1], w = n >= 2 ? qdot[n - 2] : 0.0, D = y_m - y_l;
-    const double x = std::max(calc_hinge_offset_m(mast.bay(m), D), kStraightFraction * l);
-    g[rail_approach_min] = 0.5 * (u + w) - mast.rail.cot_beta() * D * (u - w) / (4.0 * x);
+}
+
+void FreePhaseA::calc_bay_touches(const MastParams& mast, int first_bay, int last_bay, const double* ys, const double* vs,
+                                  int first, double* h, double* rate) {
+  for (int i = first_bay; i <= last_bay; ++i) {
+    const BayParams& b = mast.bay(i);
+    const double D = ys[i - first] - ys[i - 1 - first], Dd = vs[i - first] - vs[i - 1 - first];
+    *h++ = kStraightFraction * b.strut_length_m - calc_hinge_offset_m(b, D);
+    *rate++ = D * Dd;  // dx/dt = -D D' / (4 x)
   }
+}
+
+void FreePhaseA::calc_touches(const double* q, const double* qdot, double* h, double* rate) const {
+  const int n = dof(), m = ctx_.bay;
+  thread_local std::vector<double> ys, vs;
+  expand_frames(q, qdot, ys, vs);
+  if (rail_touch()) {  // h = -f, f' = (u + w)/2 + c x' with x' = -D (u - w) / (4 x)
+    const double u = qdot[n - 1], w = n >= 2 ? qdot[n - 2] : 0.0, D = ys.back() - ys[ys.size() - 2];
+    const double x = std::max(calc_hinge_offset_m(ctx_.mast->bay(m), D), kStraightFraction * ctx_.mast->bay(m).strut_length_m);
+    *h++ = -calc_rail_function_m(q);
+    *rate++ = ctx_.mast->rail.cot_beta() * D * (u - w) / (4.0 * x) - 0.5 * (u + w);
+  }
+  calc_bay_touches(*ctx_.mast, std::max(lo_, 1), m, ys.data(), vs.data(), std::max(lo_ - 1, 0), h, rate);
 }
 
 bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratch& sys, PhaseDaeTerms& t) const {

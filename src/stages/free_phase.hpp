@@ -15,10 +15,11 @@
 //                      one bay 2 l_m without rail entry (rail miss);
 //   deploying_straight kStraightFraction l_m - x_m: bay m straightens without rail entry (rail miss);
 //   singular_bay       kStraightFraction l_i - x_i, largest over the moving bays i < m (singular);
-//   rail_approach_min  f' = (u + w)/2 - c D (u - w)/(4 x) (watched only): a local minimum of f. A
-//                      grazing approach can dip below f = 0 and back inside one step, which the
-//                      sign test at step ends misses; at the minimum the caller checks f <= 0;
 //   above_rail_top     y_h - y_r (watched only: the time the hinge rises above the rail's top, x = 0).
+// Touches (phase.hpp; a step can pass in and out of them unseen by the sign test at its ends): the
+// rail, h = -f with rate -f' = c D (u - w)/(4 x) - (u + w)/2 (deployment: the end event), and each
+// moving bay i, h = kStraightFraction l_i - x_i with rate D_i D_i' (bay m: deploying_straight,
+// the others: singular_bay).
 //   contact_landing, contact_lift_off (stack contacts on, stages/free_contacts.hpp): the state is
 //                      then one height per cluster of frames in closed contact (q = (Y_c), frames
 //                      below lo rest on the floor), the mass matrix reduced by model/contacts.hpp.
@@ -56,12 +57,21 @@ class FreePhaseA final : public PhaseModel {
   void snap_to_end(double* q) const override {  // deployment: the event is located to the event tolerance
     if (ctx_.direction < 0) q[dof() - 1] = ctx_.q_end;
   }
-  enum StopEvent { past_miss_height, deploying_straight, singular_bay, rail_approach_min, above_rail_top, contact_landing, contact_lift_off };
+  enum StopEvent { past_miss_height, deploying_straight, singular_bay, above_rail_top, contact_landing, contact_lift_off };
   // A bay within this fraction of l_s of straight (hinge offset) is straight (docs/model.md §2: 1e-4 l_s).
   static constexpr double kStraightFraction = 1e-4;
-  void set_watch(bool rail_top, bool approach_min) { watch_rail_top_ = rail_top; watch_approach_min_ = approach_min; }
-  int num_stop_events() const override { return layout_.enabled ? 7 : 5; }
+  void set_watch_rail_top(bool watch) { watch_rail_top_ = watch; }
+  int num_stop_events() const override { return layout_.enabled ? 6 : 4; }
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;
+  int num_touches() const override { return rail_touch() + ctx_.bay - std::max(lo_, 1) + 1; }
+  void calc_touches(const double* q, const double* qdot, double* h, double* rate) const override;
+  int find_touch_event(int k) const override {
+    return k < rail_touch() ? -1 : k == num_touches() - 1 ? deploying_straight : singular_bay;
+  }
+  // Touches h = kStraightFraction l_i - x_i (rate D_i D_i') of bays first_bay..last_bay from the frame
+  // heights and velocities ys, vs of frames first.. (phases A and B).
+  static void calc_bay_touches(const model::MastParams& mast, int first_bay, int last_bay, const double* ys,
+                               const double* vs, int first, double* h, double* rate);
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
   int get_lowest_frame() const { return lo_; }
@@ -83,8 +93,9 @@ class FreePhaseA final : public PhaseModel {
   model::ActiveFrames active_;
   int lo_;
   double held_height_m_;
-  bool watch_rail_top_ = false, watch_approach_min_ = false;
+  bool watch_rail_top_ = false;
   ContactLayout layout_;
+  int rail_touch() const { return ctx_.direction > 0 ? 1 : 0; }  // deployment: the rail is a touch
   // Frame heights and velocities from frame max(lo - 1, 0) to m (the held frame lo - 1 included).
   void expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const;
 };

@@ -78,6 +78,12 @@ void FreePhaseB::calc_stop_events(const double* q, const double* qdot, double* g
   }
 }
 
+void FreePhaseB::calc_touches(const double* q, const double* qdot, double* h, double* rate) const {
+  thread_local std::vector<double> ys, vs;
+  expand_frames(q, qdot, ys, vs);
+  FreePhaseA::calc_bay_touches(*ctx_.mast, std::max(lo_, 1), ctx_.bay - 1, ys.data(), vs.data(), std::max(lo_ - 1, 0), h, rate);
+}
+
 double FreePhaseB::calc_driven_speed_m_per_s(const double* q, const double* qdot) const {
   const int n = dof();
   const double x = q[n - 1], l = ctx_.mast->bay(ctx_.bay).strut_length_m;

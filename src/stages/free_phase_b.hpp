@@ -51,6 +51,10 @@ class FreePhaseB final : public PhaseModel {
   // FreePhaseA::kStraightFraction l_s of straight (largest kStraightFraction l_i - x_i).
   int num_stop_events() const override { return layout_.enabled ? 3 : 1; }
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;
+  // Touches (phase.hpp): each moving bay below m straightening (stop event 0), as FreePhaseA's.
+  int num_touches() const override { return ctx_.bay - std::max(lo_, 1); }
+  void calc_touches(const double* q, const double* qdot, double* h, double* rate) const override;
+  int find_touch_event(int) const override { return 0; }
   // Rail function f (m) at p: 0 on the rail.
   double calc_rail_function_m(const double* q) const;
   // Residual form (phase.hpp): the rail's lambda with a, s_a, and in velocity mode the drive force

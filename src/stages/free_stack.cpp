@@ -43,13 +43,13 @@ ContactLayout FreeStack::make_layout(PhaseKind kind, int m, int lo) const {
   return L;
 }
 
-std::unique_ptr<PhaseModel> FreeStack::make_phase(const PhaseContext& ctx, bool watch_rail_top, bool watch_approach_min) const {
+std::unique_ptr<PhaseModel> FreeStack::make_phase(const PhaseContext& ctx, bool watch_rail_top) const {
   const int lo = calc_lowest_frame(ctx.kind, ctx.bay);
   last_lo_ = lo;
   const double held = y_[0];  // frame 0 and the resting block are the only held frames (height 0)
   if (ctx.kind == PhaseKind::open) {
     auto a = std::make_unique<FreePhaseA>(ctx, lo, held);
-    a->set_watch(watch_rail_top, watch_approach_min);
+    a->set_watch_rail_top(watch_rail_top);
     if (contacts_) a->set_contacts(make_layout(ctx.kind, ctx.bay, lo));
     return a;
   }
@@ -125,7 +125,7 @@ StackImpact FreeStack::apply_start_kick(const StageSpec& s, double u) {
   Eigen::VectorXd v;
   calc_cluster_system(s, PhaseKind::open, lo, sys, v);
   TridiagonalWork w;
-  StackImpact k = calc_stack_start_kick(sys.diag, sys.sub, u, w);
+  StackImpact k = s.start_kick ? calc_stack_start_kick(sys.diag, sys.sub, u, w) : calc_stack_start_rest(sys.diag, u);
   if (k.ok) add_cluster_velocities(make_layout(PhaseKind::open, s.bay, lo), lo, k.dv);
   return k;
 }

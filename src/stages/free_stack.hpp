@@ -61,14 +61,15 @@ class FreeStack {
 
   FreeStack(const model::MastParams& mast, bool contacts);
   // The phase model of ctx (ctx.kind, ctx.bay) on the current state; the open phase's watched
-  // events (FreePhaseA::set_watch): the hinge above the rail top, the minimum of f.
-  std::unique_ptr<PhaseModel> make_phase(const PhaseContext& ctx, bool watch_rail_top, bool watch_approach_min) const;
+  // event (FreePhaseA::set_watch_rail_top): the hinge above the rail top.
+  std::unique_ptr<PhaseModel> make_phase(const PhaseContext& ctx, bool watch_rail_top) const;
   // Rail function f of bay m's hinge at the current heights (m; > 0 before the rail).
   double calc_rail_function_m(int m) const;
   // Start state (q, q') of that phase, and its end state (q, q' concatenated) taken back.
   void get_start(const PhaseContext& ctx, std::vector<double>& q, std::vector<double>& qdot) const;
   void set_end(const PhaseContext& ctx, const std::vector<double>& end_state);
-  // Velocity mode, t = 0: frames 1..m jump from rest with the driven frame at speed u.
+  // Velocity mode, t = 0: frames 1..m jump from rest with the driven frame at speed u (the kick),
+  // or the driven frame alone (s.start_kick false: the paper's literal start).
   model::StackImpact apply_start_kick(const StageSpec& s, double u);
   // End of phase A of bay m: the plastic rail entry of all moving frames.
   FreeRailEntry apply_rail_entry(const StageSpec& s, bool drive_holds_speed);

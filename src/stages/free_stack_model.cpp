@@ -44,7 +44,8 @@ StackEvent FreeStackModel::start_stage(const StageSpec& s, bool first_stage) {
     return e;
   }
   if (s.start != StageStart::from_rest_or_kick || !drive_holds_speed_) return e;
-  // Impulsive start (docs/model.md §2 "free"): the free frames take the momentum-consistent kick.
+  // Impulsive start (docs/model.md §2 "free"): the free frames take the momentum-consistent kick,
+  // or stay at rest (stack.start = "rest").
   const model::StackImpact k = stack_.apply_start_kick(s, u);
   if (!k.ok) e.failure = "singular configuration: the stowed stack's mass matrix is not positive definite";
   if (!k.ok) return e;
@@ -59,13 +60,13 @@ PhaseSegment FreeStackModel::begin_segment(const StageSpec& s, const PhaseSpec& 
     ctx_ = make_context(s, ph.kind, 0.0);
     ctx_.q_end = dir_ > 0 ? 0.0 : ph.q_end;  // on the rail: the lock at x = 0 (x falling), or the exit
     ctx_.sign_q = ph.kind == PhaseKind::on_rail ? -dir_ : dir_;
-    watch_rail_top_ = watch_approach_min_ = ph.kind == PhaseKind::open && dir_ > 0;
+    watch_rail_top_ = ph.kind == PhaseKind::open && dir_ > 0;
   }
   PhaseSegment seg;
   // Open the pulling contacts, land the touching ones.
   seg.start_events = book_contacts(stack_.prepare_segment(ctx_, drive_holds_speed_), t_s);
   if (!seg.start_events.failure.empty()) return seg;
-  phase_ = stack_.make_phase(ctx_, watch_rail_top_, watch_approach_min_);
+  phase_ = stack_.make_phase(ctx_, watch_rail_top_);
   stack_.get_start(ctx_, q0_, qdot0_);
   seg.solver = &stepper_.emplace(*phase_, *integrator_, io);
   seg.q = q0_.data();
@@ -86,13 +87,6 @@ SegmentEnd FreeStackModel::end_segment(const PhaseOutcome& o, double t_s, const 
   if (watch_rail_top_ && o.stop_event == FreePhaseA::above_rail_top) {
     rail_top_time_s_ = t_s;  // recorded; the phase goes on without this event
     watch_rail_top_ = false;
-    return r;
-  }
-  if (watch_approach_min_ && o.stop_event == FreePhaseA::rail_approach_min) {
-    // f' = 0 with f <= 0: the pin dipped into the rail within a step; it enters here, where its
-    // velocity is tangent to the rail (f' = 0: the entry impulse vanishes with the dip).
-    if (stack_.calc_rail_function_m(ctx_.bay) <= 0.0) r.next = SegmentEnd::Next::phase_end;
-    watch_approach_min_ = false;
     return r;
   }
   r.next = SegmentEnd::Next::failed;

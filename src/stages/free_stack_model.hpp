@@ -1,10 +1,9 @@
 // The free stack (docs/model.md §2 "free") as a stack mode of the stage loop: the frames below the
 // deploying bay move (their state: free_stack.hpp); every phase is stepped in time (phase_dynamic.hpp)
 // on the phase models of free_phase.hpp and free_phase_b.hpp, in segments between the stop events
-// that do not end it: stack contacts (a landing or a lift-off, then on) and the open phase's two
-// watched events, each at most once: the hinge rising above the rail's top (its time is recorded)
-// and the first minimum of the rail function f (a grazing entry if f <= 0 there, else on). The
-// other stop events are the stopping rules: rail miss, singular configuration.
+// that do not end it: stack contacts (a landing or a lift-off, then on) and the open phase's watched
+// event, at most once: the hinge rising above the rail's top (its time is recorded). The other stop
+// events are the stopping rules: rail miss, singular configuration.
 #pragma once
 #include <memory>
 #include <optional>
@@ -41,7 +40,7 @@ class FreeStackModel final : public StackModel {
   std::unique_ptr<PhaseModel> phase_;                     // its segment running
   std::optional<DynamicPhaseSolver> stepper_;
   std::vector<double> q0_, qdot0_;
-  bool watch_rail_top_ = false, watch_approach_min_ = false;
+  bool watch_rail_top_ = false;
   double rail_top_time_s_ = kNaN;  // the hinge rose above y_r (this stage)
 };
 

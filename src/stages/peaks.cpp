@@ -20,7 +20,14 @@ void HermiteSpan::calc(double t, double* q, double* qd) const {
 }
 
 void PhasePeaks::reset(double direction) {
-  for (Bracket& b : b_) { b.value = -kInf; b.want_next = false; b.sample = {-1, -1, -1}; }
+  for (Bracket& b : b_) {
+    for (Hill* h : {&b.top, &b.first}) {
+      h->value = -kInf;
+      h->want_next = false;
+      h->sample = {-1, -1, -1};
+    }
+    b.fell = false;
+  }
   count_ = 0;
   direction_ = direction;
   max_rail_residual = 0.0;
@@ -29,23 +36,31 @@ void PhasePeaks::reset(double direction) {
 void PhasePeaks::feed(double t, const PhasePoint& p, const double* state, int n) {
   const long i = count_++;
   Sample& slot = ring_[static_cast<std::size_t>(i % kRing)];
-  if (i >= kRing)  // sample i - kRing leaves the ring: the brackets that refer to it copy it
+  if (i >= kRing)  // sample i - kRing leaves the ring: the hills that refer to it copy it
     for (Bracket& b : b_)
-      for (std::size_t w = 0; w < 3; ++w)
-        if (b.sample[w] == i - kRing) { b.own[w] = slot; b.sample[w] = -1; }
+      for (Hill* h : {&b.top, &b.first})
+        for (std::size_t w = 0; w < 3; ++w)
+          if (h->sample[w] == i - kRing) { h->own[w] = slot; h->sample[w] = -1; }
   slot.assign(t, p, state, n);
   for (int q = 0; q < kQuantityCount; ++q) {
     Bracket& b = b_[static_cast<std::size_t>(q)];
     const double v = calc_peak_quantity(q, p, direction_);
-    if (v > b.value) {
-      b.value = v;
-      // The previous sample (itself at the phase start), this one, and the next to come.
-      b.sample = {i > 0 ? i - 1 : i, i, i};
-      b.want_next = true;
-    } else if (b.want_next) {
-      b.sample[2] = i;
-      b.want_next = false;
-    }
+    auto take = [&](Hill& h, bool better) {
+      if (better) {
+        h.value = v;
+        h.sample = {i > 0 ? i - 1 : i, i, i};  // the previous sample (itself at the phase start), this, the next
+        h.want_next = true;
+      } else if (h.want_next) {
+        h.sample[2] = i;
+        h.want_next = false;
+      }
+    };
+    take(b.top, v > b.top.value);
+    // A rise after a fall is another local maximum: it replaces the first only beyond the tie
+    // tolerance (the earliest of equal peaks is kept).
+    const bool first = v > b.first.value && !(b.fell && is_tie(b.first.value, v, tie_tol_));
+    take(b.first, first);
+    b.fell = !first && (b.fell || v < b.first.value);
   }
   max_rail_residual = std::max(max_rail_residual, p.rail_residual_m);
 }

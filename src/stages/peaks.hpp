@@ -1,4 +1,7 @@
 // Peak tracking (docs/model.md §5: peaks with their time and bay; the earliest where one repeats).
+// "Repeats" is read to the run's accuracy: peaks within a relative tie tolerance of the largest
+// (the run's allowed relative error, energy.hpp) are one peak, reported with the largest value at
+// the time and bay where it first occurs (docs/model-notes.md, "Equal peaks").
 // A phase's samples (step ends, or a grid in closed form) are fed in time order; for each tracked
 // quantity PhasePeaks keeps its best sample and the two neighbours that bracket it, and refine()
 // maximises between them, on the exact closed form or on a quintic Hermite interpolant of the
@@ -18,14 +21,41 @@ namespace truss::stages {
 inline constexpr double kInf = std::numeric_limits<double>::infinity();
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
+// Two values are one peak when they differ by at most tol of the larger's magnitude.
+inline bool is_tie(double v, double larger, double tol) { return v >= larger - tol * std::abs(larger); }
+
+// The largest of values offered in time order (value), at the time and bay of the earliest offer
+// within the tie tolerance of it (t, bay).
 struct Extremum {
   double value = -kInf;
   double t = kNaN;
   int bay = 0;
+  double tie_tol = 0.0;  // relative
+  // True if the reported offer changed.
   bool offer(double v, double time, int b) {
-    if (v > value) { value = v; t = time; bay = b; return true; }
-    return false;
+    if (!(v > -kInf) || (!ties_.empty() && !is_tie(v, max_, tie_tol))) return false;
+    if (ties_.empty() || v > max_) {
+      max_ = v;
+      std::erase_if(ties_, [&](const Offer& o) { return !is_tie(o.v, max_, tie_tol); });
+    }
+    ties_.push_back({v, time, b});
+    const Offer& first = ties_.front();
+    const bool changed = max_ != value || !(first.t == t) || first.b != bay;
+    value = max_; t = first.t; bay = first.b;
+    return changed;
   }
+  void clear() {
+    value = max_ = -kInf;
+    t = kNaN;
+    bay = 0;
+    ties_.clear();
+  }
+  double largest() const { return max_; }
+
+ private:
+  struct Offer { double v, t; int b; };
+  double max_ = -kInf;
+  std::vector<Offer> ties_;  // the offers within the tie tolerance of max_, in time order
 };
 
 // Quantities whose extremes a run reports. kRailApproach is minus the hinge's distance from the
@@ -75,33 +105,47 @@ struct HermiteSpan {
 class PhasePeaks {
  public:
   void reset(double direction);
+  // Besides the highest sample, each quantity keeps the earliest local maximum that the later ones
+  // do not beat by more than this relative tolerance (the first of equal peaks; Extremum).
+  void set_tie_tolerance(double tol) { tie_tol_ = tol; }
   // state: (q, q', q'') of the sample, 3 dof values (nullptr, 0 in closed form).
   void feed(double t, const PhasePoint& p, const double* state = nullptr, int n = 0);
   // eval(t, span) gives the phase point at t inside the span [a, b] of two consecutive samples.
+  // first: the earliest of equal maxima, else the highest sample's.
   template <class Eval>
-  void refine(int q, Eval&& eval, double xtol, double& value, double& time) const;
-  double best(int q) const { return b_[static_cast<std::size_t>(q)].value; }
+  void refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time) const;
+  double best(int q) const { return b_[static_cast<std::size_t>(q)].top.value; }
+  // Whether the earliest of equal maxima is another than the highest sample's.
+  bool has_earlier_tie(int q) const {
+    const Bracket& b = b_[static_cast<std::size_t>(q)];
+    return b.first.value > -kInf && get(b.first, 1).t < get(b.top, 1).t;
+  }
   double max_rail_residual = 0.0;
 
  private:
-  // The last three samples stay in a ring; a bracket refers to them by their number in the
-  // phase and keeps its own copy only of a sample about to leave the ring (a quantity that keeps
-  // rising copies nothing; one that peaked copies its three samples once).
+  // The last three samples stay in a ring; a hill refers to its samples by their number in the
+  // phase and keeps its own copy only of one about to leave the ring (a quantity that keeps rising
+  // copies nothing; a maximum copies its three samples once).
   static constexpr int kRing = 3;
-  struct Bracket {
+  struct Hill {  // a local maximum's best sample and its neighbours
     double value = -kInf;
-    std::array<Sample, 3> own;        // prev, best, next, once they left the ring
-    std::array<long, 3> sample{-1, -1, -1};  // their numbers while in the ring, else -1
+    std::array<long, 3> sample{-1, -1, -1};  // prev, best, next: their numbers while in the ring, else -1
+    std::array<Sample, 3> own;               // ... and their copies once they left it
     bool want_next = false;
   };
-  const Sample& get(const Bracket& b, int which) const {
-    const long i = b.sample[static_cast<std::size_t>(which)];
-    return i >= 0 ? ring_[static_cast<std::size_t>(i % kRing)] : b.own[static_cast<std::size_t>(which)];
+  struct Bracket {
+    Hill top, first;
+    bool fell = false;  // a sample below first's best came after it: a later rise is another maximum
+  };
+  const Sample& get(const Hill& h, int which) const {
+    const long i = h.sample[static_cast<std::size_t>(which)];
+    return i >= 0 ? ring_[static_cast<std::size_t>(i % kRing)] : h.own[static_cast<std::size_t>(which)];
   }
   std::array<Bracket, kQuantityCount> b_;
   std::array<Sample, kRing> ring_;
   long count_ = 0;  // samples fed this phase
   double direction_ = 1.0;
+  double tie_tol_ = 0.0;
 };
 
 class PeakTracker {
@@ -111,16 +155,20 @@ class PeakTracker {
   Extremum stage_rail_approach;              // per stage, not merged into the run's
   double max_rail_residual = 0.0;
   int bay = 0;
-  void start_stage(int b) { bay = b; stage_force = Extremum{}; stage_pin = Extremum{}; stage_rail_approach = Extremum{}; }
+  void set_tie_tolerance(double tol) {
+    for (Extremum& e : run) e.tie_tol = tol;
+    stage_force.tie_tol = stage_pin.tie_tol = stage_rail_approach.tie_tol = tol;
+  }
+  void start_stage(int b) { bay = b; stage_force.clear(); stage_pin.clear(); stage_rail_approach.clear(); }
   // The stage's force and pin records join the run's.
   void close_stage() {
     run[kForce].offer(stage_force.value, stage_force.t, stage_force.bay);
     run[kPin].offer(stage_pin.value, stage_pin.t, stage_pin.bay);
   }
-  // Whether a phase whose largest value of quantity q is `best` can change a record.
+  // Whether a phase whose largest value of quantity q is `best` can change its record.
   bool could_improve(int q, double best) {
     const Extremum& tr = target(q);
-    return best > tr.value || !std::isfinite(tr.value);
+    return best > tr.largest() || !std::isfinite(tr.value);
   }
   Extremum& target(int q) {
     if (q == kForce) return stage_force;
@@ -133,20 +181,25 @@ class PeakTracker {
   void absorb(const PhasePeaks& pp, Eval&& eval, double xtol) {
     max_rail_residual = std::max(max_rail_residual, pp.max_rail_residual);
     for (int q = 0; q < kQuantityCount; ++q) {
+      Extremum& tr = target(q);
       if (!could_improve(q, pp.best(q))) continue;
       double v, t;
-      pp.refine(q, eval, xtol, v, t);
-      target(q).offer(v, t, bay);
+      if (pp.has_earlier_tie(q)) {  // the first of equal maxima, then the highest
+        pp.refine(q, true, eval, xtol, v, t);
+        tr.offer(v, t, bay);
+      }
+      pp.refine(q, false, eval, xtol, v, t);
+      tr.offer(v, t, bay);
     }
   }
 };
 
 template <class Eval>
-void PhasePeaks::refine(int q, Eval&& eval, double xtol, double& value, double& time) const {
-  const Bracket& b = b_[static_cast<std::size_t>(q)];
+void PhasePeaks::refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time) const {
+  const Hill& b = first ? b_[static_cast<std::size_t>(q)].first : b_[static_cast<std::size_t>(q)].top;
   value = b.value;
   time = kNaN;
-  if (b.sample[1] < 0 && !(b.value > -kInf)) return;  // no sample this phase
+  if (!(b.value > -kInf)) return;  // no sample this phase
   const Sample& prev = get(b, 0);
   const Sample& best = get(b, 1);
   const Sample& next = get(b, 2);

@@ -73,6 +73,10 @@ using PhaseScratch = model::FrameSystem;
 // motor modes, multipliers mu_j: the rail's lambda (on the rail) and, in velocity mode, the drive
 // force F (its constraint keeps the driven frame's speed). The drive force is the multiplier
 // drive_multiplier, or drive_force_N (torque, motor) when that is -1.
+// Every term is local, so that the DAE's Jacobian is banded (IDA's banded solver): diag[i], sub[i]
+// and rhs[i] depend on q and q' of coordinates i-1..i+1 only; the c_j are zero but on the last two
+// coordinates, and c_j, s_j, driven_speed_m_per_s and drive_force_N depend on q and q' of those
+// two only (tests/numeric/test_free_ida.cpp checks the band by perturbation).
 struct PhaseDaeTerms {
   static constexpr int kMaxMultipliers = 2;
   Eigen::VectorXd diag, sub, rhs;
@@ -113,6 +117,16 @@ class PhaseModel {
   // crossings): each rises through zero when it fires. The held phases have none.
   virtual int num_stop_events() const { return 0; }
   virtual void calc_stop_events(const double* /*q*/, const double* /*qdot*/, double* /*g*/) const {}
+  // Grazing touches: conditions h_k(q) >= 0 that end the phase (its end event or a stop event) and
+  // that a step can pass in and out of between its two ends, unseen by the events' sign test there
+  // (a pin that dips into the rail and out, a bay that straightens and folds back). At (q, q') the
+  // model gives every h_k and a rate with the sign of dh_k/dt. A step with h_k < 0 at both ends,
+  // h_k rising at its start and falling at its end, is searched for a maximum h_k >= 0 on its dense
+  // output; the touch is where h_k first reaches 0 (phase_dynamic.cpp).
+  virtual int num_touches() const { return 0; }
+  virtual void calc_touches(const double* /*q*/, const double* /*qdot*/, double* /*h*/, double* /*rate*/) const {}
+  // The event touch k is: -1 the phase's end event, else the index of the stop event.
+  virtual int find_touch_event(int /*k*/) const { return -1; }
   // Residual form (PhaseDaeTerms) at (q, q'): the number of multipliers, -1 when the model has
   // none (the held phases); calc_dae_terms returns false where the terms are not defined.
   virtual int num_multipliers() const { return -1; }

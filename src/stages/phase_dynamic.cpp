@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
+
+#include "numerics/illinois.hpp"
 
 namespace truss::stages {
 
@@ -51,6 +54,22 @@ class PhaseOde final : public integrators::OdeSystem, public integrators::DaeFor
     for (int j = 0; j < terms_.num_multipliers; ++j) mu[j] = j == terms_.drive_multiplier ? p.drive_force_N : p.lambda_N;
     return std::isfinite(yp[0]);
   }
+  // Each coordinate's q_i and v_i side by side, then W and the multipliers: positions 2i, 2i + 1,
+  // 2n, 2n + 1 + j. By PhaseDaeTerms' locality (phase.hpp) row i of M v' - r couples q, v, v' of
+  // coordinates i-1..i+1 (offsets -3..+2) and, for i >= n-2, the multipliers (up to +3 + k); the
+  // rows of W and of the constraints couple q, v of coordinates n-2, n-1 (down to -4 - k).
+  bool find_band_order(std::vector<int>& order, int& lower, int& upper) const override {
+    const int k = m_.num_multipliers();
+    order.resize(static_cast<std::size_t>(2 * n_ + 1 + k));
+    for (int i = 0; i < n_; ++i) {
+      order[static_cast<std::size_t>(2 * i)] = i;
+      order[static_cast<std::size_t>(2 * i + 1)] = n_ + i;
+    }
+    for (int p = 2 * n_; p < 2 * n_ + 1 + k; ++p) order[static_cast<std::size_t>(p)] = p;
+    lower = 4 + k;
+    upper = k > 0 ? 3 + k : 2;
+    return true;
+  }
   void calc_rhs(double, const double* y, double* dy) override {
     const double power = m_.calc_motion(y, y + n_, dy + n_, scratch_);
     std::copy(y + n_, y + 2 * n_, dy);
@@ -77,31 +96,95 @@ class PhaseOde final : public integrators::OdeSystem, public integrators::DaeFor
   PhaseDaeTerms terms_;
 };
 
+// Watches the model's grazing touches (PhaseModel::num_touches) between step ends: a touch whose
+// h rises at a step's start and falls at its end, below 0 at both, has a maximum inside; if h >= 0
+// there, the touch happened where h first reached 0 (both located on the step's dense output).
+class TouchWatch {
+ public:
+  TouchWatch(const PhaseModel& m, double time_tol)
+      : m_(m), n_(m.dof()), tol_(time_tol), h0_(static_cast<std::size_t>(m.num_touches())), r0_(h0_.size()),
+        h1_(h0_.size()), r1_(h0_.size()), state_(static_cast<std::size_t>(2 * n_ + 1)) {}
+  bool empty() const { return h0_.empty(); }
+  void start(const double* q, const double* qdot) { m_.calc_touches(q, qdot, h0_.data(), r0_.data()); }
+  // The earliest touch in the step [d.t_begin, d.t_end] whose end state is y1: its index (-1: none)
+  // and time t. The step end becomes the start of the next step.
+  int find(const integrators::DenseOutput& d, const double* y1, double& t) {
+    m_.calc_touches(y1, y1 + n_, h1_.data(), r1_.data());
+    int found = -1;
+    t = d.t_end;
+    for (std::size_t k = 0; k < h0_.size(); ++k) {
+      if (!(h0_[k] < 0.0 && h1_[k] < 0.0 && r0_[k] > 0.0 && r1_[k] < 0.0)) continue;
+      const auto touch = [&](double tt, bool rate) {
+        d.calc_state(tt, state_.data());
+        m_.calc_touches(state_.data(), state_.data() + n_, h_.data(), r_.data());
+        return rate ? r_[k] : h_[k];
+      };
+      h_.resize(h0_.size());
+      r_.resize(h0_.size());
+      const double tol = std::max(tol_, 4.0 * std::numeric_limits<double>::epsilon() * std::abs(d.t_end));
+      const double t_max = numerics::find_crossing_illinois([&](double tt) { return touch(tt, true); }, d.t_begin,
+                                                             r0_[k], d.t_end, r1_[k], tol);
+      const double h_max = touch(t_max, false);
+      if (!(h_max >= 0.0)) continue;
+      const double tc = numerics::find_crossing_illinois([&](double tt) { return touch(tt, false); }, d.t_begin, h0_[k],
+                                                         t_max, h_max, tol);
+      if (found < 0 || tc < t) { found = static_cast<int>(k); t = tc; }
+    }
+    h0_.swap(h1_);
+    r0_.swap(r1_);
+    return found;
+  }
+
+ private:
+  const PhaseModel& m_;
+  int n_;
+  double tol_;
+  std::vector<double> h0_, r0_, h1_, r1_, h_, r_, state_;
+};
+
 // Feeds the peak brackets with every step end and the history with its grid times; enforces
-// the wall-time cap.
+// the wall-time cap; stops at a grazing touch, with its time and state.
 class PhaseObserver final : public integrators::StepObserver {
  public:
-  PhaseObserver(const PhaseModel& m, PhaseSinks& sinks, PhaseScratch& scratch)
-      : m_(m), sinks_(sinks), scratch_(scratch), n_(m.dof()),
+  PhaseObserver(const PhaseModel& m, PhaseSinks& sinks, PhaseScratch& scratch, double time_tol)
+      : m_(m), sinks_(sinks), scratch_(scratch), n_(m.dof()), touches_(m, time_tol),
         state_(static_cast<std::size_t>(2 * n_ + 1)), sample_(static_cast<std::size_t>(3 * n_)) {}
   bool timed_out = false;
   long point_evals = 0;
+  int touch = -1;                    // the touch that stopped the phase (-1: none)
+  double touch_t_s = 0;
+  std::vector<double> touch_state;   // (q, q', W) there
+  void start(const double* q, const double* qdot) { touches_.start(q, qdot); }
+  std::chrono::steady_clock::time_point deadline() const override { return sinks_.deadline; }
   bool on_step(const integrators::DenseOutput& d) override {
+    double have = NAN;  // the time whose state is in state_
     auto eval = [&](double t, bool history) {
-      d.calc_state(t, state_.data());
+      if (t != have) d.calc_state(t, state_.data());
+      have = NAN;
       ++point_evals;
       if (history && sinks_.history.records_frames()) m_.calc_frame_heights(state_.data(), sinks_.history.frame_buffer());
       std::copy(state_.begin(), state_.begin() + 2 * n_, sample_.begin());
       if (!history) return m_.calc_loads(state_.data(), state_.data() + n_, sample_.data() + 2 * n_, scratch_);
       return m_.calc_point(state_.data(), state_.data() + n_, sample_.data() + 2 * n_, scratch_);
     };
-    const double t1 = d.t_end;
+    double t1 = d.t_end;
+    if (t1 > d.t_begin && !touches_.empty()) {
+      d.calc_state(t1, state_.data());
+      touch = touches_.find(d, state_.data(), t1);
+      if (touch < 0) have = t1;
+    }
     if (t1 > d.t_begin) {
       const PhasePoint p = eval(t1, false);  // the peaks' sample: its loads
       sinks_.phase_peaks.feed(t1, p, sample_.data(), 3 * n_);
     }
     const bool in_time = sinks_.history.sample([&](double t) { return eval(t, true); }, d.t_begin, t1, m_.context().bay,
                                                sinks_.deadline);
+    if (touch >= 0) {
+      touch_t_s = t1;
+      touch_state.assign(state_.size(), 0.0);
+      d.calc_state(t1, touch_state.data());
+      return false;
+    }
     // The clock every 16 steps (a step costs microseconds; the cap holds to a few tens of them).
     if (!in_time || ((++steps_ & 15) == 0 && std::chrono::steady_clock::now() > sinks_.deadline)) {
       timed_out = true;
@@ -116,10 +199,15 @@ class PhaseObserver final : public integrators::StepObserver {
   PhaseScratch& scratch_;
   int n_;
   long steps_ = 0;
+  TouchWatch touches_;
   std::vector<double> state_, sample_;
 };
 
 }  // namespace
+
+std::unique_ptr<integrators::OdeSystem> make_phase_ode(const PhaseModel& model, double creep_speed_m_per_s) {
+  return std::make_unique<PhaseOde>(model, creep_speed_m_per_s);
+}
 
 double DynamicPhaseSolver::calc_creep_speed_m_per_s(const model::DriveParams& d) {
   return kCreepSpeedFraction * d.no_load_speed_rad_per_s * d.screw_lead_m / (2.0 * std::numbers::pi);
@@ -146,9 +234,17 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
     return out;
   }
   PhaseOde ode(model_, start.creep_speed_m_per_s);
-  PhaseObserver obs(model_, sinks, scratch);
+  PhaseObserver obs(model_, sinks, scratch, options_.event_time_tol);
+  obs.start(start.q, start.qdot);
   integrator_.set_options(options_);
-  const integrators::IntegratorSummary sum = integrator_.integrate(ode, t, t + kHorizon_s, y.data(), &obs);
+  integrators::IntegratorSummary sum = integrator_.integrate(ode, t, t + kHorizon_s, y.data(), &obs);
+  if (obs.touch >= 0) {  // a grazing touch, before any event the integrator found in the same step
+    y = obs.touch_state;
+    sum.t = obs.touch_t_s;
+    sum.status = integrators::IntegratorStatus::event;
+    const int e = model_.find_touch_event(obs.touch);
+    sum.event_index = e < 0 ? 0 : ode.num_base_events() + e;
+  }
   out.steps = sum.steps;
   out.rejected_steps = sum.rejected_steps;
   out.evals += sum.rhs_evals + obs.point_evals;
@@ -177,7 +273,7 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
     out.stop_event = sum.event_index - ode.num_base_events();
   } else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 2) out.reason = PhaseEndReason::crept_to_rest;
   else if (sum.status == integrators::IntegratorStatus::event && sum.event_index == 1) out.reason = PhaseEndReason::stopped;
-  else if (obs.timed_out) out.reason = PhaseEndReason::wall_time;
+  else if (obs.timed_out || sum.status == integrators::IntegratorStatus::deadline) out.reason = PhaseEndReason::wall_time;
   else if (sum.status == integrators::IntegratorStatus::step_limit) out.reason = PhaseEndReason::step_limit;
   else if (sum.status == integrators::IntegratorStatus::reached_end) out.reason = PhaseEndReason::horizon;
   else out.reason = PhaseEndReason::failure;

@@ -3,10 +3,16 @@
 // phase end (rising end gap), a stop of the driven frame (falling speed) and, in motor mode, the
 // creep stall. Peaks are refined on the Hermite interpolant of the step ends.
 #pragma once
+#include <memory>
+
 #include "integrators/ode.hpp"
 #include "stages/phase_solver.hpp"
 
 namespace truss::stages {
+
+// The phase as the solver integrates it: the ODE (q, q', W) and, when the model has one, its
+// residual form with the band order IDA uses (for tests of that form).
+std::unique_ptr<integrators::OdeSystem> make_phase_ode(const PhaseModel& model, double creep_speed_m_per_s);
 
 class DynamicPhaseSolver final : public PhaseSolver {
  public:

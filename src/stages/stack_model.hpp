@@ -50,7 +50,6 @@ struct SegmentEnd {
   enum class Next {
     by_outcome,    // the outcome's reason decides: reached_end ends the phase, the others fail the run
     next_segment,  // a stop event handled (contact, watched crossing): the phase goes on
-    phase_end,     // the phase's end event, found by a stop event (a grazing rail entry)
     failed,        // a stop rule of the model (rail miss, singular configuration): status, message
   };
   Next next = Next::by_outcome;

@@ -90,6 +90,10 @@ StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stage
   r_.bays.resize(static_cast<std::size_t>(n));
   for (int i = 1; i <= n; ++i) r_.bays[static_cast<std::size_t>(i - 1)].bay = i;
   history_.enable_frames(stack_->count_history_frames());
+  // Peaks equal to the run's accuracy are one peak, reported where it first occurs (peaks.hpp).
+  const double tie = calc_allowed_relative_error(n, opts.run.rtol, opts.run.atol, mast.bay(1).strut_length_m);
+  tracker_.set_tie_tolerance(tie);
+  phase_peaks_.set_tie_tolerance(tie);
   if (opts.drive.mode == DriveMode::velocity) r_.motor_torque_at_speed_Nm = opts.drive.calc_motor_torque_Nm(opts.drive.speed_m_per_s);
 }
 
@@ -175,7 +179,6 @@ void StageLoop::run_phase(const StageSpec& s, const PhaseSpec& ph) {
     if (!book(e.event)) return;
     switch (e.next) {
       case SegmentEnd::Next::next_segment: continue;
-      case SegmentEnd::Next::phase_end: return;
       case SegmentEnd::Next::failed: return fail_stop(e, s.bay);
       case SegmentEnd::Next::by_outcome: return fail_phase(o, s.bay);
     }

@@ -80,7 +80,8 @@ std::string explain_start_past_entry(const MastParams& mast, int m, double y_sta
 
 }  // namespace
 
-std::string plan_free_stages(const MastParams& mast, double direction, bool contacts, std::vector<StageSpec>& out) {
+std::string plan_free_stages(const MastParams& mast, double direction, bool contacts, bool start_kick,
+                             std::vector<StageSpec>& out) {
   out.clear();
   if (direction < 0) {
     // Retraction: the held stack's stages (unlock, on the rail until the pin leaves it where a
@@ -101,6 +102,7 @@ std::string plan_free_stages(const MastParams& mast, double direction, bool cont
     s.panel_height_offset_m = span[m];
     s.free_stack = true;
     s.contacts = contacts;
+    s.start_kick = start_kick;
     s.phases.push_back({PhaseKind::open, 0.0, 0.0, PhaseEnd::rail_entry, 0.0});
     s.phases.push_back({PhaseKind::on_rail, 0.0, 0.0, PhaseEnd::lock, 0.0});
     out.push_back(s);

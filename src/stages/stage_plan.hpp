@@ -40,6 +40,8 @@ struct StageSpec {
   // motion takes the pin to the rail.
   bool free_stack = false;
   bool contacts = false;            // free stack: unilateral stack contacts D_i >= 0 (docs/model.md §2)
+  bool start_kick = true;           // free stack, start from rest in velocity mode: the free frames
+                                    // take the kick (else they stay at rest; sim::StackStart)
 };
 
 // Builds the stages of a held-stack run. Returns an empty string, or "key: reason" if the
@@ -49,6 +51,7 @@ std::string plan_held_stages(const model::MastParams& mast, double direction, st
 // Builds the stages of a free-stack run: deployment, bays n..1, each phase A until rail entry and
 // phase B until the lock; retraction, the held stack's retraction stages (whose rail geometry
 // must hold) run with free frames. Returns "key: reason" for what the free stack cannot run.
-std::string plan_free_stages(const model::MastParams& mast, double direction, bool contacts, std::vector<StageSpec>& out);
+std::string plan_free_stages(const model::MastParams& mast, double direction, bool contacts, bool start_kick,
+                             std::vector<StageSpec>& out);
 
 }  // namespace truss::stages

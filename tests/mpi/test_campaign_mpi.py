@@ -115,7 +115,7 @@ def case_ranks(args):
     same, why = same_values(a, b)
     check(same, f"1 and 3 ranks give identical datasets outside /timing ({len(a)} datasets) {why}")
     with h5py.File(outs[3], "r") as f:
-        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 1 and f.attrs["kind"] == "campaign",
+        check(f.attrs["n_ranks"] == 3 and f.attrs["schema_version"] == 2 and f.attrs["kind"] == "campaign",
               "root attributes: n_ranks, schema_version, kind")
         check(set(np.unique(f["timing/rank"][:])) == {0, 1, 2}, "all 3 ranks computed runs (dynamic scheduling)")
         missing = []
@@ -127,6 +127,12 @@ def case_ranks(args):
     check_nominal(args, d, outs[3])
     check("[truss-campaign] campaign" in p.stderr and "design values" in p.stderr and " ok" in p.stderr,
           "start banner, outcomes by status name and end summary with design values on stderr")
+    # 90 ok runs: every P99.865 of the summary is flagged as standing on too few runs (an upper 95 %
+    # bound needs n with 1 - 0.99865^n >= 0.95, n >= 2218).
+    flagged = [ln for ln in p.stderr.splitlines() if "P99.865" in ln and "nominal" in ln]
+    check(len(flagged) == 6 and all("from 90 ok runs: too few for a P99.865 (its 95 % bound needs 2218)" in ln
+                                    for ln in flagged),
+          f"end summary: each P99.865 from 90 runs flagged as too few ({flagged[:1]})")
 
 
 def check_nominal(args, d, path):
@@ -415,6 +421,14 @@ BAD = {
     "inline_scene_key": ("[ensemble]\nn_runs = 10\n[scene.mast]\nn_bays = 6\nstrut_lenght_m = 0.2\n", ":5:", "strut_lenght_m"),
     "inline_scene_value": ("[ensemble]\nn_runs = 10\n[scene.mast]\nn_bays = -6\n", ":4:", "n_bays"),
     "toml_syntax": ("[ensemble\nn_runs = 10\n", ":1:", ""),
+    # Implausible dispersions, refused before any run (they would end most runs as invalid input):
+    # a percentage typed as a fraction (std = 2: 200 %), and millimetres typed as metres.
+    "percent_as_fraction": ("[ensemble]\nn_runs = 300\n[[dispersion]]\nkey = \"mast.strut_mass_kg\"\nper = \"bay\"\n"
+                            "apply = \"relative\"\ndistribution = \"normal\"\nstd = 2\n", ":3:",
+                            "mast.strut_mass_kg (relative normal) is implausible"),
+    "millimetres_as_metres": ("[ensemble]\nn_runs = 300\n[[dispersion]]\nkey = \"mast.frame_side_m\"\nper = \"frame\"\n"
+                              "apply = \"offset\"\ndistribution = \"uniform\"\nlower = -0.5\nupper = 0.5\n", ":3:",
+                              "mast.frame_side_m (offset uniform) is implausible"),
 }
 
 

@@ -54,10 +54,11 @@ std::array<PeakSearch, stages::kQuantityCount> force_only() {
 }
 
 template <class Load>
-stages::Extremum find_peak(Load& load, const std::vector<double>& times) {
+stages::Extremum find_peak(Load& load, const std::vector<double>& times, double tie_tol = 0.0) {
   std::vector<RatedSample> samples;
   for (double t : times) samples.push_back(load(t));
   stages::PeakTracker tr;
+  tr.set_tie_tolerance(tie_tol);
   tr.start_stage(3);
   load.evals = 0;
   stages::absorb_rated_peaks(samples, tr, load, force_only());
@@ -108,6 +109,21 @@ TEST_CASE("closed-form peaks: a maximum at a sample or a phase end is the sample
   e = find_peak(twin, {0.0, 0.25, 0.5, 0.75, 1.0});
   CHECK(e.t == 0.0);
   CHECK(e.value == 1.0);
+}
+
+TEST_CASE("closed-form peaks: equal maxima in a phase are one peak, at the earliest", "[closed_form][peaks]") {
+  // Q = sin(2 pi t) + 1e-7 t over [0, 2]: maxima at t = 1/4 and 5/4, the later higher by 1e-7.
+  // Within a tie tolerance of 1e-5 they are one peak: the larger value at the earlier time; with
+  // no tolerance the later, higher one.
+  AnalyticLoad load{[](double t) { return std::sin(2.0 * M_PI * t) + 1e-7 * t; },
+                    [](double t) { return 2.0 * M_PI * std::cos(2.0 * M_PI * t) + 1e-7; }};
+  const std::vector<double> times{0.0, 0.15, 0.3, 0.45, 0.6, 0.75, 0.9, 1.05, 1.2, 1.35, 1.5, 1.65, 1.8, 1.95, 2.0};
+  const double t1 = std::acos(-1e-7 / (2.0 * M_PI)) / (2.0 * M_PI), t2 = t1 + 1.0;  // Q' = 0
+  stages::Extremum e = find_peak(load, times, 1e-5);
+  CHECK(e.t == Approx(t1).margin(1e-14));
+  CHECK(e.value == Approx(std::sin(2.0 * M_PI * t2) + 1e-7 * t2).epsilon(4 * kEps));
+  e = find_peak(load, times, 0.0);
+  CHECK(e.t == Approx(t2).margin(1e-14));
 }
 
 namespace {

@@ -1,7 +1,7 @@
 // The free stack's second solver (issue 9 item 5): SUNDIALS IDA on the residual form of the free
 // phases against the direct method (the bordered tridiagonal solve of eqs. 19-20 integrated by the
 // own Dormand-Prince pair). The two share the assembly of M, r and the constraint rows
-// (free_phase*.cpp) but nothing after it: IDA solves the residual's Newton systems with a dense LU
+// (free_phase*.cpp) but nothing after it: IDA solves the residual's Newton systems with a banded LU
 // of its difference-quotient Jacobian and integrates with variable-order BDF, the direct method
 // eliminates the multipliers with Thomas sweeps and integrates with an explicit RK pair.
 #include <catch2/catch.hpp>
@@ -15,6 +15,7 @@
 #include "sim/simulate.hpp"
 #include "stages/free_phase.hpp"
 #include "stages/free_phase_b.hpp"
+#include "stages/phase_dynamic.hpp"
 #include "test_helpers.hpp"
 
 using namespace truss;
@@ -104,6 +105,74 @@ TEST_CASE("free phases: the residual form vanishes at the direct solution", "[nu
       CHECK(t.driven_speed_m_per_s == Approx(p.u_m_per_s).epsilon(1e-14));
     }
   }
+}
+
+TEST_CASE("free phases: IDA's band holds the whole Jacobian of the residual form", "[numeric][free][ida]") {
+  // IDA's banded solver keeps only the entries of dF/dw + c dF/dw' within the half-bandwidths the
+  // phase gives (PhaseOde::find_band_order), in its order of the unknowns. Every entry outside the
+  // band must be zero: each unknown w_k and each w'_k is perturbed in turn, and a residual row
+  // outside the band from k must come out bit for bit the same. (A band one too narrow still
+  // integrates, through Newton iterations on a wrong Jacobian: this is where it shows.) Phases A
+  // and B, three drive modes, with panels, with and without stack contacts (clusters of frames as
+  // coordinates).
+  model::MastParams mast = testing::make_uneven_mast(8, 0.1);
+  mast.panels.count = 4;
+  mast.panels.length_m = 1.0;
+  for (const char* mode : {"velocity", "torque", "motor"})
+    for (const bool contacts : {false, true})
+      for (const auto kind : {stages::PhaseKind::open, stages::PhaseKind::on_rail}) {
+        INFO(mode << (contacts ? ", contacts" : "") << (kind == stages::PhaseKind::open ? ", phase A" : ", phase B"));
+        model::DriveParams drive;
+        drive.mode = mode_of(mode);
+        const bool open = kind == stages::PhaseKind::open;
+        const stages::PhaseContext ctx{&mast, kind, 8, 0.0, 1.3, 0.36, drive, 1.0, 0.0, open ? 1.0 : -1.0};
+        stages::FreePhaseA a(ctx, 1, 0.0);
+        stages::FreePhaseB b(ctx, 1, 0.0, 10.0);
+        // Frames 1..8 (A) or 1..7 (B); clusters {1,2}, {3}, {4,5}, {6,7}, {8} (A) / {6,7} last (B).
+        if (contacts) {
+          a.set_contacts(stages::ContactLayout{true, {0, 2, 3, 5, 7}, 8, false, false});
+          b.set_contacts(stages::ContactLayout{true, {0, 2, 3, 5}, 7, false, false});
+        }
+        const stages::PhaseModel& p = open ? static_cast<const stages::PhaseModel&>(a) : b;
+        const auto ode = stages::make_phase_ode(p, 0.0);
+        integrators::DaeForm* dae = ode->dae_form();
+        REQUIRE(dae);
+        const int n = p.dof(), n_ode = ode->size(), size = n_ode + dae->num_algebraic();
+        std::vector<int> order;
+        int lower = 0, upper = 0;
+        REQUIRE(dae->find_band_order(order, lower, upper));
+        REQUIRE(static_cast<int>(order.size()) == size);
+        std::vector<int> pos(order.size());
+        for (int k = 0; k < size; ++k) pos[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
+        // A generic state, off the rail, with y' and z not consistent (the Jacobian is needed
+        // everywhere Newton goes).
+        std::vector<double> w(static_cast<std::size_t>(size)), wp(w.size()), r0(w.size()), r1(w.size());
+        for (int i = 0; i < size; ++i) {
+          w[static_cast<std::size_t>(i)] = 0.05 * (i % n + 1) + 0.01 * std::sin(i);
+          wp[static_cast<std::size_t>(i)] = 0.02 * std::cos(1.3 * i);
+        }
+        if (!open) w[static_cast<std::size_t>(n - 1)] = 0.06;  // the hinge offset x
+        REQUIRE(dae->calc_residual(0.0, w.data(), wp.data(), w.data() + n_ode, r0.data()));
+        int outside = 0, coupled = 0;
+        for (int which = 0; which < 2 * size; ++which) {
+          const int k = which % size;
+          std::vector<double> w1 = w, wp1 = wp;
+          (which < size ? w1 : wp1)[static_cast<std::size_t>(k)] += 1e-4;
+          REQUIRE(dae->calc_residual(0.0, w1.data(), wp1.data(), w1.data() + n_ode, r1.data()));
+          for (int row = 0; row < size; ++row) {
+            if (r1[static_cast<std::size_t>(row)] == r0[static_cast<std::size_t>(row)]) continue;
+            const int offset = pos[static_cast<std::size_t>(k)] - pos[static_cast<std::size_t>(row)];
+            ++coupled;
+            if (offset < -lower || offset > upper) {
+              ++outside;
+              FAIL_CHECK("row " << row << " depends on " << (which < size ? "w_" : "w'_") << k << ": offset " << offset
+                                << " outside [" << -lower << ", " << upper << "]");
+            }
+          }
+        }
+        CHECK(outside == 0);
+        CHECK(coupled > 3 * size);  // the perturbations do reach the residual
+      }
 }
 
 TEST_CASE("free stack: IDA and the direct bordered solve agree to their tolerances", "[numeric][free][ida]") {

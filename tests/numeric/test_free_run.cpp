@@ -162,12 +162,12 @@ TEST_CASE("free stack stopping rules: the event functions of docs/model.md §2",
   const model::MastParams mast = sim::build_mast(s);
   stages::PhaseContext ctx{&mast, stages::PhaseKind::open, 4, 0.0, 1.1, 0.36, s.drive, 1.0, 0.0, 1.0};
   stages::FreePhaseA a(ctx, 1, 0.0);
-  a.set_watch(true, true);
-  REQUIRE(a.num_stop_events() == 5);
+  a.set_watch_rail_top(true);
+  REQUIRE(a.num_stop_events() == 4);
   const double l = 0.18, yr = mast.rail.axis_height_m(), eps = 1e-4 * l;
   // D for a hinge offset x: D = 2 sqrt(l^2 - x^2).
   auto D_of_x = [&](double x) { return 2.0 * std::sqrt(l * l - x * x); };
-  double g[5];
+  double g[4];
   const double qd[4] = {0, 0, 0, 0};
   {  // bay 2 (frames 1, 2) just inside / outside 1e-4 l of straight: singular
     const double q_in[4] = {0.0, D_of_x(0.9 * eps), D_of_x(0.9 * eps) + 0.05, D_of_x(0.9 * eps) + 0.1};
@@ -185,17 +185,71 @@ TEST_CASE("free stack stopping rules: the event functions of docs/model.md §2",
     CHECK(g[stages::FreePhaseA::past_miss_height] == Approx(0.3 + D_of_x(0.5 * eps) - (yr + 3 * l)).epsilon(1e-14));
     CHECK(g[stages::FreePhaseA::above_rail_top] == Approx(0.5 * (0.6 + D_of_x(0.5 * eps)) - yr).epsilon(1e-14));
   }
-  {  // rail_approach_min is f' along the motion: central difference of f (error O(h^2) ~ 1e-10)
+  {  // touches (phase.hpp): the rail, h = -f with rate -f', and bays 1..4, h = 1e-4 l - x_i with a
+     // rate of the sign of dh/dt; f' and x_i' by central differences along the motion (O(h^2) ~ 1e-10)
     const double q[4] = {0.0, 0.01, 0.05, 0.2}, v[4] = {0.0, 0.02, 0.07, 0.1};
-    a.calc_stop_events(q, v, g);
-    const double h = 1e-5;
+    REQUIRE(a.num_touches() == 5);
+    double h[5], rate[5];
+    a.calc_touches(q, v, h, rate);
+    const double dt = 1e-5;
     double qp[4], qm[4];
-    for (int k = 0; k < 4; ++k) { qp[k] = q[k] + h * v[k]; qm[k] = q[k] - h * v[k]; }
-    const double fd = (a.calc_rail_function_m(qp) - a.calc_rail_function_m(qm)) / (2 * h);
-    CHECK(g[stages::FreePhaseA::rail_approach_min] == Approx(fd).epsilon(1e-7));
-    a.set_watch(false, false);  // not watched: never rises
+    for (int k = 0; k < 4; ++k) { qp[k] = q[k] + dt * v[k]; qm[k] = q[k] - dt * v[k]; }
+    const double fd = (a.calc_rail_function_m(qp) - a.calc_rail_function_m(qm)) / (2 * dt);
+    CHECK(h[0] == Approx(-a.calc_rail_function_m(q)).epsilon(1e-15));
+    CHECK(rate[0] == Approx(-fd).epsilon(1e-7));
+    CHECK(a.find_touch_event(0) == -1);  // the rail: the end event (entry)
+    auto x_of = [&](const double* y, int i) { return 0.5 * std::sqrt(4 * l * l - (y[i] - y[i - 1]) * (y[i] - y[i - 1])); };
+    const double y[5] = {0.0, q[0], q[1], q[2], q[3]}, yp[5] = {0.0, qp[0], qp[1], qp[2], qp[3]}, ym[5] = {0.0, qm[0], qm[1], qm[2], qm[3]};
+    for (int i = 1; i <= 4; ++i) {
+      INFO("bay " << i);
+      CHECK(h[i] == Approx(eps - x_of(y, i)).epsilon(1e-14));
+      const double dh = -(x_of(yp, i) - x_of(ym, i)) / (2 * dt);
+      CHECK((rate[i] > 0.0) == (dh > 0.0));
+      CHECK(a.find_touch_event(i) == (i == 4 ? stages::FreePhaseA::deploying_straight : stages::FreePhaseA::singular_bay));
+    }
+    a.set_watch_rail_top(false);  // not watched: never rises
     a.calc_stop_events(q, v, g);
-    CHECK(g[stages::FreePhaseA::rail_approach_min] == -1.0);
     CHECK(g[stages::FreePhaseA::above_rail_top] == -1.0);
   }
+}
+
+TEST_CASE("stack.start: the free frames at rest or kicked at the impulsive start", "[numeric][free]") {
+  // Velocity drive, 3 free bays, contacts off (the paper's literal model). "rest": the driven
+  // frame 3 jumps to v alone; its impulse is the driven row of the stowed mass matrix times v,
+  // M_33 = 2 G(0) + 15/8 m_s + m_f + m_tip (docs/model.md §3; G(0) = 3 J_c / (4 l_s^2)), and the
+  // frames below start at rest. Frame 2 then has no acceleration either at t = 0+ (its row of
+  // M y'' = r: y_3'' = 0, G'(0) = 0, slack diagonals), so it leaves the stack as t^3: its height at
+  // 2h is 8 times that at h. "kick": M dv = e_3 P moves frame 2 at once (height ~ t: a ratio of 2),
+  // with a smaller impulse P = v / (M^-1)_33 <= M_33 v. Both ramps are lossless: the ledger closes.
+  for (const bool rest : {true, false}) {
+    INFO((rest ? "rest" : "kick"));
+    sim::SceneOptions s;
+    s.mast.n_bays = 3;
+    s.mast.diagonal_free_length_m = 0.48;
+    s.stack.mode = sim::StackMode::free;
+    s.stack.start = rest ? sim::StackStart::rest : sim::StackStart::kick;
+    s.run.rtol = 1e-10;
+    s.run.atol = 1e-12;
+    s.run.output_step_s = 1e-4;
+    REQUIRE(s.validate().empty());
+    const sim::RunResult r = sim::simulate(s);
+    const double ls = 0.18, ms = 0.1, Jc = ms * ls * ls / 12.0, G0 = 3.0 * Jc / (4.0 * ls * ls);
+    const double M33 = 2.0 * G0 + 15.0 / 8.0 * ms + 0.5 + (6.0 * ms + 0.5);
+    if (rest) CHECK(r.start_drive_impulse_Ns == Approx(M33 * 0.1).epsilon(1e-14));
+    else CHECK(r.start_drive_impulse_Ns < M33 * 0.1 * (1.0 - 1e-4));
+    const auto& h = r.history;
+    const std::size_t frames = 4;  // frames 0..3 per row
+    REQUIRE(h.t_s.size() > 3);
+    REQUIRE(h.t_s[1] == Approx(1e-4));
+    const double y1 = h.frame_height_m[1 * frames + 2], y2 = h.frame_height_m[2 * frames + 2];
+    CHECK(std::abs(y2 / y1) == Approx(rest ? 8.0 : 2.0).epsilon(0.01));  // O(h) corrections: h = 1e-4 s
+    CHECK(std::abs(r.energy_residual_J) < 1e-7 * r.drive_work_J);
+    // The case: the literal start changes the outcome of this mast (kicked: every bay deploys;
+    // at rest the lower frames lag and the diagonals, taut from D = 0.27 m, pull frame 2 past bay 3's rail).
+    CHECK(r.status == (rest ? sim::RunStatus::rail_miss : sim::RunStatus::ok));
+  }
+  // The held stack holds its frames anyway: "rest" there is refused, naming the key.
+  sim::SceneOptions held;
+  held.stack.start = sim::StackStart::rest;
+  CHECK(held.validate().rfind("stack.start:", 0) == 0);
 }

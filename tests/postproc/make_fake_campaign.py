@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Write a small synthetic campaign file in truss-campaign's layout (docs/hdf5-schema.md,
-"Campaign", schema_version 1).
+"Campaign", schema_version 2).
 
 Test fixture for postproc/report.py. The layout, types, units and attributes follow the schema;
 the numbers are made up: smooth functions of the sampled inputs plus noise, so that rank
@@ -430,7 +430,7 @@ def main():
     p.add_argument("--variable-bays", action="store_true")
     p.add_argument("--no-torque", action="store_true")
     p.add_argument("--histories", type=lambda s: [int(x) for x in s.split(",") if x], default=[])
-    p.add_argument("--schema-version", type=int, default=1)
+    p.add_argument("--schema-version", type=int, default=2)
     p.add_argument("--kind", default="campaign")
     p.add_argument("--omit", default=None)
     p.add_argument("--truncate", action="store_true")

@@ -1,6 +1,7 @@
 #!/usr/bin/python3
 """Test of the top of the campaign report (issue 12): verdict, design-load table, ECSS margins,
-the pandas reader and the Dakota-style CSV, against values recomputed here from the HDF5 file.
+the pandas reader and the run table CSV, against values recomputed here from the HDF5 file; the
+loads' labels and definitions for the campaign's direction (deploy or retract).
 
 Usage:
     test_design_loads.py --repo REPO_ROOT --scratch DIR --campaign-h5 PATH [--campaign-h5 ...]
@@ -119,6 +120,14 @@ def expected(h5path):
                     E[tag + ".ucb"] = v[k - 1]
                     E[tag + ".ucb_rank"] = k
             E[f"design.{key}.ratio"] = E[f"design.{key}.p{LEVELS[-1]:g}"] / nominal
+        # A level that some load has no bound for fails the verdict: too few runs.
+        for q in LEVELS:
+            short = [k for k in loads if f"design.{k}.p{q:g}.ucb_n_needed" in E]
+            if short:
+                E[f"verdict.too_few.p{q:g}"] = E[f"design.{short[0]}.p{q:g}.ucb_n_needed"]
+                E[f"verdict.too_few.p{q:g}.n"] = min(
+                    sum(1 for a, good in zip(loads[k][0], ok) if good and math.isfinite(a))
+                    for k in short)
         scene = tomllib.loads(f.attrs["base_scene_toml"])
         E.update(expected_margins(f, scene, ok, nom))
     return E
@@ -199,6 +208,7 @@ def check_report(repo, scratch, h5path):
     check(got.get("revision") is None and "Revision <b data-key='revision'>B</b>" in text,
           f"{name}: sign-off block with the revision given")
     check(not re.search(r">-0(\.0*)?( |<)", text), f"{name}: no '-0' shown")
+    check_direction_words(name, h5path, text)
     check_csv(name, h5path, os.path.join(out, "runs.csv"))
 
 
@@ -206,14 +216,35 @@ def check_csv(name, h5path, path):
     with h5py.File(h5path, "r") as f, open(path, newline="") as fh:
         rows = list(csv.reader(fh))
         enum = {v: k for k, v in h5py.check_enum_dtype(f["runs/status"].dtype).items()}
-        status = [enum[int(s)].replace(" ", "_") for s in f["runs/status"][()]]
+        status = [enum[int(s)] for s in f["runs/status"][()]]
+        messages = [m.decode() if isinstance(m, bytes) else m for m in f["runs/message"][()]]
         head = rows[0]
         force = [float(r[head.index("peak_drive_force_N")]) for r in rows[1:]]
-        check(head[:3] == ["%eval_id", "interface", "status"] and len(rows) - 1 == len(status)
-              and [int(r[0]) for r in rows[1:]] == list(range(1, len(status) + 1))
-              and [r[2] for r in rows[1:]] == status
+        check(head[:2] == ["run_index", "status"] and head[-1] == "message"
+              and len(rows) - 1 == len(status)
+              and [int(r[0]) for r in rows[1:]] == list(range(len(status)))
+              and [r[1] for r in rows[1:]] == status and [r[-1] for r in rows[1:]] == messages
+              and all(len(r) == len(head) for r in rows)
               and np.array_equal(force, f["runs/peak_drive_force_N"][()], equal_nan=True),
-              f"{name}: Dakota-style CSV: %eval_id 1..n, status names, values exact")
+              f"{name}: run table CSV: run_index 0..n-1, status names, messages, values exact")
+
+
+def check_direction_words(name, h5path, text):
+    """The design table names its loads for the campaign's direction: a retraction has no
+    'last lock' and no rail-entry definition, a deployment no retraction."""
+    with h5py.File(h5path, "r") as f:
+        direction = f.attrs["direction"]
+        direction = direction.decode() if isinstance(direction, bytes) else direction
+    table = text[text.find("id='design'"):text.find("id='mechanism'")]
+    row = table[table.find("deploy_time_s"):]
+    row = row[:row.find("</tr>")]
+    if direction == "retract":
+        ok = ("retraction time" in table and "end of the retraction" in row
+              and "last lock" not in table and "rail entry" not in table
+              and "peak unlock energy" in table and "unlock" in table)
+    else:
+        ok = ("deployment time" in table and "last lock" in row and "retract" not in table)
+    check(ok, f"{name}: design-load labels and definitions for a {direction} campaign")
 
 
 def check_reader(repo, h5path):

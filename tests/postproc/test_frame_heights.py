@@ -92,6 +92,12 @@ def main():
         ok_bottom &= np.array_equal(yb[shown], Y[shown, k]) and bool(np.all(np.isnan(yb[~shown])))
     check(ok_bottom, "bottom panel: frame k shown exactly while k < bay")
     check("m" in top.get_ylabel() and "s" in bottom.get_xlabel(), "axes carry units")
+    # The key: a colour bar of the frame index whose colour at k is frame k's line colour.
+    bars = [ax for ax in fig.axes[2:] if "frame index" in ax.get_ylabel()]
+    cmap = plt.get_cmap("viridis")
+    colours = all(np.allclose(matplotlib.colors.to_rgba(top.lines[k].get_color()), cmap(k / n))
+                  for k in range(n + 1))
+    check(len(bars) == 1 and colours, "key: a colour bar of the frame index, frame k's line in its colour")
     plt.close(fig)
 
     # 3. Command line and report.

@@ -9,6 +9,10 @@ rm -rf "$scratch"; mkdir -p "$scratch"
 cp -r "$repo/postproc" "$scratch/src"          # the build writes into the source: use a copy
 /usr/bin/python3 -m venv --system-site-packages "$scratch/venv"
 "$scratch/venv/bin/pip" install -q --no-deps --no-build-isolation --no-index "$scratch/src"
+# The install leaves the sources as they were: its egg-info and wheel build go to build/ (ignored).
+extra=$(cd "$scratch/src" && find . -mindepth 1 -maxdepth 1 ! -name build | sort)
+want=$(cd "$repo/postproc" && find . -mindepth 1 -maxdepth 1 ! -name build | sort)
+[ "$extra" = "$want" ] || { echo "FAIL: pip install left files beside the sources: $(comm -23 <(echo "$extra") <(echo "$want"))"; exit 1; }
 cd "$scratch"
 "$scratch/venv/bin/truss-report" --help | grep -q -- "--levels"
 "$scratch/venv/bin/truss-report" /nonexistent.h5 -o out && exit 1 || rc=$?

@@ -16,7 +16,7 @@ result), and checks:
   - every <img> the report references exists and is a PNG with a sane IHDR header;
   - failed runs are reported with the right counts, grouped runs matching their status;
   - bad input stops with exit code 2, one `error:` line naming the file, and nothing written:
-    schema_version 2, a truncated file, a text file, a wrong kind, a missing dataset, a
+    schema_version 3, a truncated file, a text file, a wrong kind, a missing dataset, a
     non-empty output directory without --force.
 Prints one line per check; exits 0 when all pass, 1 otherwise.
 """
@@ -83,13 +83,14 @@ def col_stats(x):
 
 
 def order_ci(x_sorted, p, conf=0.95):
-    """Ranks (1-based) of the order-statistic CI from the binomial CDF table, the bounds (NaN
-    when the sample is too small), the coverage, and the n a missing bound needs."""
+    """Ranks (1-based) of the one-sided order-statistic bounds (each at conf) from the binomial
+    CDF table, the bounds (NaN when the sample is too small), the coverage of the interval they
+    make, and the n a missing bound needs."""
     n = len(x_sorted)
-    a = (1 - conf) / 2
+    a = 1 - conf
     cdf = stats.binom.cdf(np.arange(n + 1), n, p)
     r = int(np.searchsorted(cdf, a, side="left"))          # first k with F(k) >= a
-    s = int(np.searchsorted(cdf, 1 - a, side="left")) + 1  # 1 + first k with F(k) >= 1 - a
+    s = int(np.searchsorted(cdf, 1 - a, side="left")) + 1  # 1 + first k with F(k) >= conf
     F = lambda k: 0.0 if k < 0 else (1.0 if k >= n else float(cdf[k]))  # noqa: E731
     res = {"ci_coverage": F(min(s, n + 1) - 1) - F(r - 1)}
     if r >= 1:
@@ -661,8 +662,8 @@ def main():
                           f"fig5_bay{nb}_zoom.png"] if has_history else [])
 
     # Bad input: exit 2, one error line naming the file, nothing written.
-    expect_error(repo, scratch, "schema_version_2",
-                 fake(repo, S("schema2.h5"), "--schema-version", "2"), "schema_version")
+    expect_error(repo, scratch, "schema_version_3",
+                 fake(repo, S("schema3.h5"), "--schema-version", "3"), "schema_version")
     expect_error(repo, scratch, "truncated", fake(repo, S("trunc.h5"), "--truncate"), "trunc.h5")
     with open(S("text.h5"), "w") as fh:
         fh.write("this is not an HDF5 file\n")

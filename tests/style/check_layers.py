@@ -9,7 +9,7 @@ import sys
 ALLOWED = {
     "numerics": set(),
     "model": {"model"},
-    "integrators": {"integrators"},
+    "integrators": {"integrators", "numerics"},  # numerics: pure root finders shared with the stages
     "stages": {"stages", "model", "integrators", "numerics"},
     "sim": {"sim", "stages", "model", "integrators", "numerics"},
     "io": {"io", "sim", "stages", "model", "integrators", "numerics"},

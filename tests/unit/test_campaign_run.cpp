@@ -9,6 +9,7 @@
 #include <random>
 
 #include "campaign/campaign.hpp"
+#include "campaign/progress.hpp"
 #include "campaign/results.hpp"
 #include "campaign/run_record.hpp"
 #include "io/scene_toml.hpp"
@@ -186,4 +187,39 @@ TEST_CASE("an inline scene: applied after the file, errors at the campaign file'
   CHECK_THAT(error("[scene.masts]\nn_bays = 3\n"), Catch::StartsWith("error: inline.toml:1: unknown key 'scene.masts'"));
   CHECK_THAT(error("[output]\nhistory_runs = [3]\n[ensemble]\nn_runs = 3\n"),
              Catch::StartsWith("error: inline.toml:2: output.history_runs: run 3 does not exist"));
+}
+
+namespace {
+// What print_campaign_verdict prints for these counts, and whether the runs are usable.
+std::pair<bool, std::string> verdict_of(std::int64_t ok, std::int64_t invalid) {
+  StatusCounts counts{};
+  counts[static_cast<std::size_t>(truss::sim::RunStatus::ok)] = ok;
+  counts[static_cast<std::size_t>(truss::sim::RunStatus::invalid_input)] = invalid;
+  std::FILE* f = std::tmpfile();
+  const bool usable = print_campaign_verdict(f, counts, "run 3: mast.strut_mass_kg: bay 1 has a non-positive strut mass");
+  std::rewind(f);
+  std::string text;
+  for (int c; (c = std::fgetc(f)) != EOF;) text += static_cast<char>(c);
+  std::fclose(f);
+  return {usable, text};
+}
+}  // namespace
+
+TEST_CASE("end of a campaign: mostly invalid input is an error, some a warning", "[campaign][verdict]") {
+  const auto [all_ok, quiet] = verdict_of(300, 0);
+  CHECK(all_ok);
+  CHECK(quiet.empty());
+  const auto [usable, warning] = verdict_of(299, 1);
+  CHECK(usable);
+  CHECK_THAT(warning, Catch::Contains("warning: 1 of 300 runs are invalid input") && Catch::Contains("run 3:"));
+  const auto [half, at_half] = verdict_of(150, 150);  // exactly half is not "most"
+  CHECK(half);
+  const auto [most, error] = verdict_of(1, 299);
+  CHECK_FALSE(most);
+  CHECK_THAT(error, Catch::Contains("error: 299 of 300 runs are invalid input") && Catch::Contains("run 3:") &&
+                        Catch::Contains("[[dispersion]]"));
+  // The P99.865 bound's run count, from its definition (1 - p^n >= 0.95), written out here.
+  CHECK(calc_runs_needed_p99_865() == 2218);
+  CHECK(1.0 - std::pow(0.99865, 2218.0) >= 0.95);
+  CHECK(1.0 - std::pow(0.99865, 2217.0) < 0.95);
 }

@@ -88,3 +88,31 @@ TEST_CASE("dispersed Table-1 runs simulate and balance energy; draws depend on t
   CHECK(min_mass > 0.09);
   CHECK(max_mass < 0.11);
 }
+
+TEST_CASE("implausible dispersions are named before any run; plausible ones pass", "[dispersion][plausible]") {
+  const std::string root = TRUSS_SOURCE_DIR;
+  CampaignOptions c = parse_campaign_file(root + "/campaigns/table1_dispersed.toml", {"ensemble.n_runs=24"});
+  for (std::size_t i = 0; i < c.dispersions.size(); ++i) CHECK(check_dispersion_draws(c, i).empty());
+  // A percentage typed as a fraction: std = 2 (200 %) on a relative strut mass. At -3 sigma the
+  // draw is -6, the mass 0.1 (1 - 6) = -0.5 kg (-0.49999 at the quantile -2.99998 sigma); the
+  // message names the quantile, the value and the refusal.
+  c.dispersions[0].std = 2.0;
+  const std::string e = check_dispersion_draws(c, 0);
+  CHECK_THAT(e, Catch::Contains("mast.strut_mass_kg") && Catch::Contains("0.135 % quantile") &&
+                    Catch::Contains("= -0.49999") && Catch::Contains("non-positive strut mass") &&
+                    Catch::Contains("takes a fraction"));
+  // The edge: the draw at -3 sigma is -3 std, so a relative std just under 1/3 keeps every mass
+  // positive and one just over makes it negative (the normal quantile 0.00135 is -3.0000 sigma).
+  c.dispersions[0].std = 0.33;
+  CHECK(check_dispersion_draws(c, 0).empty());
+  c.dispersions[0].std = 0.34;
+  CHECK_FALSE(check_dispersion_draws(c, 0).empty());
+  // A discrete table: every value is checked, whatever its weight.
+  c.dispersions[0].distribution = DistributionKind::discrete;
+  c.dispersions[0].values = {-0.01, 0.0, 0.01};
+  c.dispersions[0].weights = {1.0, 1.0, 1.0};
+  CHECK(check_dispersion_draws(c, 0).empty());
+  c.dispersions[0].values = {-1.5, 0.0, 0.01};
+  c.dispersions[0].weights = {0.001, 1.0, 1.0};
+  CHECK_THAT(check_dispersion_draws(c, 0), Catch::Contains("its value -1.5"));
+}

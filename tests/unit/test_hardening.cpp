@@ -131,12 +131,23 @@ TEST_CASE("campaign messages name the --set or the campaign line", "[hardening][
 }
 
 TEST_CASE("a dispersed value outside its hard range is a named failed run", "[hardening][campaign]") {
-  // frame mass drawn uniformly in [2e5, 3e5] kg, above the hard limit of 1e5 kg: every run is
+  // frame mass drawn uniformly in [2e5, 3e5] kg, above the hard limit of 1e5 kg: the file is
+  // refused before any run (implausible dispersion); built in code past that check, every run is
   // invalid_input with the key, the frame and the range in its message; nothing throws.
   const std::string text =
       "[ensemble]\nn_runs = 4\n[scene.mast]\nn_bays = 3\n[[dispersion]]\nkey = \"mast.frame_mass_kg\"\nper = \"frame\"\n"
       "apply = \"absolute\"\ndistribution = \"uniform\"\nlower = 2e5\nupper = 3e5\n";
-  const truss::campaign::CampaignContext ctx(truss::campaign::parse_campaign_text(text, "c.toml", "."));
+  CHECK_THAT(error_of([&] { truss::campaign::parse_campaign_text(text, "c.toml", "."); }),
+             Contains("c.toml:5: dispersion[1]: mast.frame_mass_kg (absolute uniform) is implausible"));
+  auto past_the_check = [](std::string file, const std::string& lower, const std::string& upper, double lo, double hi) {
+    file.replace(file.find(lower), lower.size(), "lower = 1");
+    file.replace(file.find(upper), upper.size(), "upper = 2");
+    truss::campaign::CampaignOptions o = truss::campaign::parse_campaign_text(file, "c.toml", ".");
+    o.dispersions[0].lower = lo;
+    o.dispersions[0].upper = hi;
+    return o;
+  };
+  const truss::campaign::CampaignContext ctx(past_the_check(text, "lower = 2e5", "upper = 3e5", 2e5, 3e5));
   for (std::int64_t run = 0; run < 4; ++run) {
     truss::campaign::RunRecord r;
     REQUIRE_NOTHROW(r = truss::campaign::calc_run_record(ctx, run, 0));
@@ -147,7 +158,7 @@ TEST_CASE("a dispersed value outside its hard range is a named failed run", "[ha
   const std::string per_run =
       "[ensemble]\nn_runs = 4\n[scene.mast]\nn_bays = 3\n[[dispersion]]\nkey = \"drive.speed_m_per_s\"\n"
       "apply = \"absolute\"\ndistribution = \"uniform\"\nlower = 1001\nupper = 2000\n";
-  const truss::campaign::CampaignContext ctx2(truss::campaign::parse_campaign_text(per_run, "c.toml", "."));
+  const truss::campaign::CampaignContext ctx2(past_the_check(per_run, "lower = 1001", "upper = 2000", 1001, 2000));
   for (std::int64_t run = 0; run < 4; ++run) {
     const auto r = truss::campaign::calc_run_record(ctx2, run, 0);
     CHECK(r.status == sim::RunStatus::invalid_input);

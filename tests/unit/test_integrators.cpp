@@ -3,8 +3,10 @@
 // harmonic oscillator's closed form; event times; invalid options; a NaN right-hand side.
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <numbers>
+#include <thread>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -355,4 +357,48 @@ TEST_CASE("SUNDIALS flag checks name the solver, the function and the flag", "[i
   CHECK(sunflags::check_sundials(0, "CVODE", "SUNContext_Create", s4));
   CHECK_FALSE(sunflags::check_sundials(3, "CVODE", "SUNContext_Create", s4));
   CHECK(s4.message == "CVODE: SUNContext_Create failed with flag 3");
+}
+
+namespace {
+// n decoupled stiff equations y_i' = -1000 (y_i - cos t) whose right-hand side takes 0.5 ms: a
+// Newton-matrix set-up (n right-hand sides for the Jacobian) costs n x 0.5 ms, far more than a step.
+class SlowStiffSystem : public OdeSystem {
+ public:
+  explicit SlowStiffSystem(int n) : n_(n) {}
+  int size() const override { return n_; }
+  void calc_rhs(double t, const double* y, double* dy) override {
+    std::this_thread::sleep_for(std::chrono::microseconds(500));
+    for (int i = 0; i < n_; ++i) dy[i] = -1000.0 * (y[i] - std::cos(t + i));
+  }
+ private:
+  int n_;
+};
+class DeadlineObserver : public StepObserver {
+ public:
+  explicit DeadlineObserver(std::chrono::steady_clock::time_point d) : d_(d) {}
+  bool on_step(const DenseOutput&) override { return std::chrono::steady_clock::now() <= d_; }
+  std::chrono::steady_clock::time_point deadline() const override { return d_; }
+ private:
+  std::chrono::steady_clock::time_point d_;
+};
+}  // namespace
+
+TEST_CASE("CVODE BDF keeps a wall-clock deadline: no Newton-matrix set-up that would pass it", "[integrators][cvode]") {
+  // 300 equations: a set-up takes 300 x 0.5 ms = 0.15 s, steps a few ms. Set-ups come every few
+  // steps, so without the prediction the run ends up to one set-up (0.15 s) past the deadline;
+  // with it, within a step of it. The observer alone checks only after a step.
+  SlowStiffSystem sys(300);
+  IntegratorOptions o;
+  o.rtol = 1e-6;
+  o.atol = 1e-8;
+  CvodeIntegrator cvode(o);
+  std::vector<double> y(300, 0.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  const double budget_s = 0.6;
+  DeadlineObserver obs(t0 + std::chrono::milliseconds(600));
+  const IntegratorSummary s = cvode.integrate(sys, 0.0, 1e3, y.data(), &obs);
+  const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  INFO(s.to_string() << ", took " << took_s << " s");
+  CHECK((s.status == IntegratorStatus::deadline || s.status == IntegratorStatus::stopped_by_observer));
+  CHECK(took_s < budget_s + 0.05);  // a step (a few right-hand sides) past it at most, not a 0.15 s set-up
 }

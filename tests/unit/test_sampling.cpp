@@ -691,7 +691,7 @@ TEST_CASE("sobol: two-dimensional projections are nets", "[sampling][sobol]") {
 // ===========================================================================
 
 TEST_CASE("saltelli: block layout A, B, AB_1..AB_d", "[sampling][saltelli]") {
-  // d = 3 with a Sobol' base; d = 1100 (2d > 2048) with the Monte Carlo base.
+  // d = 3 with a Sobol' base; d = 1100 with the Monte Carlo base.
   for (int d : {3, 1100}) {
     const std::int64_t n_base = 8;
     const int block = SamplePlan::saltelli_block(d);
@@ -736,13 +736,13 @@ TEST_CASE("saltelli: factor groups, rows built independently from the plain sobo
           "[sampling][saltelli]") {
   // A factor may span several consecutive dimensions (a campaign's per-bay dispersion): AB_g takes
   // all of them from B. Independent construction: A and B are the two halves of point b of the
-  // plain 2d-dimensional plan (sobol when 2d <= kSobolMaxDims, else monte_carlo), as documented;
+  // plain 2d-dimensional plan (sobol when 2d <= kSaltelliSobolMaxDims = 8, else monte_carlo), as documented;
   // every row of the grouped plan must equal the row built here from them, bit for bit.
   struct Case { std::vector<int> groups; SamplingMethod base; };
-  const Case cases[] = {{{1, 3, 2}, SamplingMethod::sobol},
-                        {{5}, SamplingMethod::sobol},
-                        {{300, 1, 723}, SamplingMethod::sobol},        // 2d = 2048: the last Sobol' case
-                        {{300, 1, 724}, SamplingMethod::monte_carlo},  // 2d = 2050 > 2048: Monte Carlo
+  const Case cases[] = {{{1, 2, 1}, SamplingMethod::sobol},        // 2d = 8: the last Sobol' case
+                        {{4}, SamplingMethod::sobol},
+                        {{1, 3, 1}, SamplingMethod::monte_carlo},  // 2d = 10: Monte Carlo
+                        {{300, 1, 723}, SamplingMethod::monte_carlo},
                         {{1000, 1, 99}, SamplingMethod::monte_carlo}};
   const std::uint64_t seed = 424242;
   for (const Case& c : cases) {

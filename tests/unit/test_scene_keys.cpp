@@ -22,7 +22,7 @@ std::vector<unsigned char> bytes_of(const sim::SceneOptions& s) {
   put(s.mast.frame_side_m); put(s.mast.frame_mass_kg); put(s.mast.diagonal_stiffness_N_per_m);
   put(s.mast.diagonal_free_length_m); put(s.mast.tip_mass_kg.value_or(-1)); put(s.rail.x_m); put(s.rail.y_m);
   put(s.rail.beta_deg); put(s.drive.mode); put(s.drive.speed_m_per_s); put(s.drive.screw_lead_m); put(s.drive.torque_Nm);
-  put(s.drive.stall_torque_Nm); put(s.drive.no_load_speed_rad_per_s); put(s.stack.mode); put(s.stack.contacts); put(s.stack.contact_law); put(s.panels.count);
+  put(s.drive.stall_torque_Nm); put(s.drive.no_load_speed_rad_per_s); put(s.stack.mode); put(s.stack.contacts); put(s.stack.contact_law); put(s.stack.start); put(s.panels.count);
   put(s.panels.length_m); put(s.panels.mass_kg); put(s.panels.tip_height_m.value_or(-1)); put(s.run.direction);
   put(s.run.output_step_s); put(s.run.rtol); put(s.run.atol); put(s.run.integrator); put(s.run.max_steps);
   put(s.run.max_wall_time_s); put(s.run.max_history_bytes);
@@ -32,7 +32,7 @@ std::vector<unsigned char> bytes_of(const sim::SceneOptions& s) {
 
 TEST_CASE("scene key table: each accessor writes its own field, by name", "[unit][keys]") {
   const auto& keys = sim::scene_keys();
-  REQUIRE(keys.size() == 33);  // every field of SceneOptions above has one row
+  REQUIRE(keys.size() == 34);  // every field of SceneOptions above has one row
   const sim::SceneOptions base;
   for (const auto& k : keys) {
     sim::SceneOptions s;
@@ -64,6 +64,8 @@ TEST_CASE("scene key table: each accessor writes its own field, by name", "[unit
   CHECK(s.mast.n_bays == 12);
   sim::find_scene_key("stack.contacts")->set_enum(s, 1);
   CHECK(s.stack.contacts == sim::StackContacts::on);
+  sim::find_scene_key("stack.start")->set_enum(s, 1);
+  CHECK(s.stack.start == sim::StackStart::rest);
 }
 
 TEST_CASE("scene key table: resolved values of the optional keys are the derived defaults", "[unit][keys]") {
@@ -112,7 +114,7 @@ TEST_CASE("scene key table: dispersion scopes, mast fields and units", "[unit][k
   for (const char* name : run_keys) CHECK(sim::find_scene_key(name)->scope == sim::KeyScope::run);
   int n_fixed = 0;
   for (const auto& k : sim::scene_keys()) n_fixed += !k.is_dispersible();
-  CHECK(n_fixed == 33 - 13 - 5 - 2);
+  CHECK(n_fixed == 34 - 13 - 5 - 2);
   for (const char* name : {"panels.count", "run.rtol", "drive.mode", "stack.mode", "run.max_steps"})
     CHECK_FALSE(sim::find_scene_key(name)->is_dispersible());
   CHECK(sim::find_scene_key("mast.strut_inertia_kg_m2")->unit == "kg m^2");

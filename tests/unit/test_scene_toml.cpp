@@ -101,6 +101,7 @@ no_load_speed_rad_per_s = 80.0
 mode = "free"
 contacts = true
 contact_law = "plastic"
+start = "rest"
 
 [panels]
 count = 4
@@ -147,6 +148,7 @@ TEST_CASE("a full scene file sets every key", "[scene]") {
   CHECK(s.stack.mode == StackMode::free);
   CHECK(s.stack.contacts == truss::sim::StackContacts::on);
   CHECK(s.stack.contact_law == truss::sim::ContactLaw::plastic);
+  CHECK(s.stack.start == truss::sim::StackStart::rest);
   CHECK(s.panels.count == 4);
   CHECK(s.panels.length_m == 0.6);
   CHECK(s.panels.mass_kg == 0.3);
@@ -289,6 +291,10 @@ TEST_CASE("bad enumeration values list the allowed values", "[scene][errors]") {
              StartsWith("error: scene.toml:4: stack.contact_law: unknown value \"elastic\""));
   // Contacts on a held stack: validate() names the key and its line.
   CHECK_THAT(parse_error("[stack]\nmode = \"held\"\n\ncontacts = true\n"), StartsWith("error: scene.toml:4: stack.contacts: "));
+  // The free frames' start: by name; "rest" on a held stack names the key and its line.
+  CHECK_THAT(parse_error("[stack]\nmode = \"free\"\nstart = \"still\"\n"),
+             StartsWith("error: scene.toml:3: stack.start: unknown value \"still\""));
+  CHECK_THAT(parse_error("[stack]\nmode = \"held\"\nstart = \"rest\"\n"), StartsWith("error: scene.toml:3: stack.start: "));
   // Enumerations are case-sensitive, like TOML keys.
   CHECK_THAT(parse_error("[drive]\nmode = \"Motor\"\n"), Contains("drive.mode"));
 }

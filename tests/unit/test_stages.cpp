@@ -140,6 +140,54 @@ TEST_CASE("peak tracker: bracketed grid maximum refined on the closed form", "[u
   CHECK(tr.run[stages::kForce].bay == 7);
 }
 
+TEST_CASE("peak ties: values within the tie tolerance of the largest are one peak, reported where it first occurs",
+          "[unit][peaks]") {
+  const double tol = 1e-6;
+  stages::Extremum e;
+  e.tie_tol = tol;
+  CHECK(e.offer(1.0, 1.0, 5));
+  e.offer(1.0 + 0.5 * tol, 2.0, 4);  // a tie: the first's time and bay stay, the value is the largest
+  CHECK(e.t == 1.0);
+  CHECK(e.bay == 5);
+  CHECK(e.value == 1.0 + 0.5 * tol);
+  CHECK(e.largest() == e.value);
+  // 1 + 1.5 tol: the first is no longer within tol of the largest, the second is (by exactly tol).
+  CHECK(e.offer(1.0 + 1.5 * tol, 3.0, 3));
+  CHECK(e.t == 2.0);
+  CHECK(e.bay == 4);
+  CHECK(e.offer(1.0 + 4 * tol, 4.0, 2));  // clearly larger: it alone
+  CHECK(e.t == 4.0);
+  CHECK_FALSE(e.offer(0.5, 5.0, 1));      // smaller: nothing
+  CHECK(e.t == 4.0);
+  e.clear();
+  CHECK(e.tie_tol == tol);
+  CHECK(e.offer(-2.0, 6.0, 1));           // negative values: tol of the magnitude
+  e.offer(-2.0 + tol, 7.0, 1);
+  CHECK(e.t == 6.0);
+  CHECK(e.value == -2.0 + tol);
+
+  // Within a phase: two local maxima of the drive force within tol, the later one higher: the
+  // earliest is reported (t = 0.3) with the larger value; beyond tol the later one alone.
+  for (const double bump : {0.5 * tol, 3.0 * tol}) {
+    auto point = [&](double t) {
+      stages::PhasePoint p;
+      p.drive_force_N = std::exp(-200.0 * (t - 0.3) * (t - 0.3)) + (1.0 + bump) * std::exp(-200.0 * (t - 0.7) * (t - 0.7));
+      return p;
+    };
+    stages::PhasePeaks pp;
+    pp.set_tie_tolerance(tol);
+    pp.reset(1.0);
+    for (int i = 0; i <= 40; ++i) pp.feed(0.025 * i, point(0.025 * i));
+    stages::PeakTracker tr;
+    tr.set_tie_tolerance(tol);
+    tr.start_stage(1);
+    tr.absorb(pp, [&](double t, const stages::HermiteSpan&) { return point(t); }, 1e-12);
+    INFO("second maximum higher by " << bump);
+    CHECK(tr.stage_force.t == Approx(bump < tol ? 0.3 : 0.7).margin(1e-4));
+    CHECK(tr.stage_force.value == Approx(1.0 + bump).epsilon(1e-12));
+  }
+}
+
 TEST_CASE("Hermite span interpolates quintic motion of any number of coordinates exactly", "[unit][peaks]") {
   // q_i(t) = a_i t^5 + b_i t^2 + c_i: quintic Hermite on (q, q', q'') at both ends is exact.
   const double a[3] = {0.3, -1.1, 2.0}, b[3] = {1.0, 0.5, -0.2}, c[3] = {0.1, 0.0, 4.0};

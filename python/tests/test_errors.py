@@ -1,0 +1,105 @@
+"""Bad input raises ValueError with the message truss-sim prints (and exits 2 for), word for word:
+scene files (missing, bad TOML, unknown keys, bad types and ranges), settings (as --set), a
+geometry the rail cannot take; plausibility warnings are truss-sim's warnings, as UserWarning."""
+import warnings
+
+import pytest
+
+import truss_deploy as td
+from conftest import run_cli
+
+
+def cli_error(truss_sim, scene, *sets):
+    args = [scene]
+    for s in sets:
+        args += ["--set", s]
+    rc, out, err = run_cli(truss_sim, *args)
+    assert rc == 2 and out == "", (rc, out)
+    return err.rstrip("\n")
+
+
+def test_missing_file(truss_sim, scratch):
+    path = str(scratch / "no_such_scene.toml")
+    with pytest.raises(ValueError) as e:
+        td.Scene.from_toml(path)
+    assert str(e.value) == cli_error(truss_sim, path)
+    assert "cannot read scene file" in str(e.value)
+
+
+@pytest.mark.parametrize("text", [
+    "[mast]\nn_bays = 12.5\nstrut_lenght_m = 0.2\n[rail]\nbeta_deg = 95\n",  # three diagnostics, by line
+    "[mast]\nn_bays = = 3\n",                                                  # TOML syntax
+    "[rail]\nbeta_deg = 95.0\n",                                                # range, with its line
+    "[drive]\nmode = \"motr\"\n",                                               # enumeration, suggestion
+], ids=["keys", "syntax", "range", "enum"])
+def test_bad_scene_file(truss_sim, scratch, text):
+    path = scratch / "bad_scene.toml"
+    path.write_text(text)
+    with pytest.raises(ValueError) as e:
+        td.Scene.from_toml(str(path))
+    assert str(e.value) == cli_error(truss_sim, str(path))
+
+
+# (Python value, what a user types after --set): the same setting, the same message.
+SETTINGS = [
+    ("mast.n_baays", 12, "12"),                       # unknown key, with a suggestion
+    ("mats.n_bays", 12, "12"),                        # unknown table
+    ("mast.n_bays", 12.5, "12.5"),                    # an integer key given a float
+    ("mast.n_bays", 0, "0"),                          # its range
+    ("rail.beta_deg", 95, "95"),                      # validate(): "(set by --set ...)"
+    ("drive.mode", "motr", "motr"),                   # an unknown enumeration value
+    ("stack.contacts", "yes", "yes"),                 # a yes/no key given a string
+    ("mast.diagonal_stiffness_N_per_m", 5e9, "5000000000.0"),  # beyond its hard range
+    ("mast.strut_mass_kg", float("nan"), "nan"),      # not a number
+    ("rail.x_m", 0.3, "0.3"),                         # a geometry error, with the keys involved
+]
+
+
+@pytest.mark.parametrize("key,value,typed", SETTINGS, ids=[s[0] + "=" + s[2] for s in SETTINGS])
+def test_bad_setting(repo, truss_sim, key, value, typed):
+    path = str(repo / "campaigns" / "scenes" / "table1.toml")
+    with pytest.raises(ValueError) as e:
+        td.Scene.from_toml(path).with_(**{key: value})
+    assert str(e.value) == cli_error(truss_sim, path, f"{key}={typed}")
+
+
+@pytest.mark.parametrize("key,value,typed", SETTINGS, ids=[s[0] + "=" + s[2] for s in SETTINGS])
+def test_bad_row_of_simulate_many(repo, truss_sim, key, value, typed):
+    """A batch's rows are variants of the base scene, checked without reading its file again; a
+    bad row's message is still the one truss-sim gives (with the file's lines of the keys involved)."""
+    path = str(repo / "campaigns" / "scenes" / "table1.toml")
+    base = td.Scene.from_toml(path).with_(**{"mast.n_bays": 3})
+    with pytest.raises(ValueError) as e:
+        td.simulate_many(base, [{"rail.beta_deg": 20.0}, {key: value}, {"rail.beta_deg": 96.0}], threads=2)
+    assert str(e.value) == "simulate_many: run 1: " + cli_error(truss_sim, path, "mast.n_bays=3", f"{key}={typed}")
+
+
+def test_warnings_are_truss_sim_warnings(repo, truss_sim):
+    path = str(repo / "campaigns" / "scenes" / "table1.toml")
+    sets = {"drive.torque_Nm": 5.2, "mast.n_bays": 3}
+    rc, _, err = run_cli(truss_sim, path, "--set", "drive.torque_Nm=5.2", "--set", "mast.n_bays=3")
+    assert rc == 0
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        td.Scene.from_toml(path).with_(**sets)
+    assert [str(x.message) for x in w] == err.splitlines() and len(w) == 1
+    assert w[0].category is UserWarning
+    # A batch warns once, naming how many runs and the first one's warning.
+    with warnings.catch_warnings(record=True) as w:
+        warnings.simplefilter("always")
+        td.simulate_many(td.Scene.from_toml(path).with_(**{"mast.n_bays": 3}),
+                         {"drive.torque_Nm": [0.01, 5.2, 6.0]}, bays=False)
+    assert [str(x.message) for x in w] == ["simulate_many: 2 of 3 runs set a key outside its typical range; run 1: "
+                                           + err.splitlines()[0]]
+
+
+def test_wrong_types():
+    s = td.Scene.table1()
+    with pytest.raises(TypeError, match=r"mast\.n_bays: expected a number, a bool or a string, got list"):
+        s.with_(**{"mast.n_bays": [3]})
+    with pytest.raises(KeyError, match="unknown scene key 'mast.n_baays'"):
+        s["mast.n_baays"]
+    with pytest.raises(TypeError):
+        td.simulate_many(s)  # one scene: give a list, or a base and overrides
+    with pytest.raises(ValueError, match="threads: must be a positive integer"):
+        td.simulate_many([s], threads=0)
