@@ -30,25 +30,31 @@ inline double calc_rigid_bay_mass_kg(const BayParams& b, const FrameParams& uppe
   return 6.0 * b.strut_mass_kg + upper.mass_kg;
 }
 
-inline double calc_G(const BayParams& b, double D) {
+// The functions of D are templates on the number type (double, or a dual number that carries a
+// time derivative through the closed forms); the same expressions, so the same bits in double.
+template <class T>
+T calc_G(const BayParams& b, T D) {
   const double l = b.strut_length_m;
   return (3.0 / 16.0 * b.strut_mass_kg * D * D + 3.0 * b.strut_inertia_kg_m2) / (4.0 * l * l - D * D);
 }
 
-inline double calc_dG_dD(const BayParams& b, double D) {
+template <class T>
+T calc_dG_dD(const BayParams& b, T D) {
   const double l = b.strut_length_m;
-  const double den = 4.0 * l * l - D * D;
+  const T den = 4.0 * l * l - D * D;
   return D * (1.5 * b.strut_mass_kg * l * l + 6.0 * b.strut_inertia_kg_m2) / (den * den);
 }
 
 // g(x): coefficient of (dx/dt)^2 in the strut kinetic energy, regular at the lock x = 0.
-inline double calc_g_hinge(const BayParams& b, double x) {
-  const double s2 = b.strut_length_m * b.strut_length_m - x * x;
+template <class T>
+T calc_g_hinge(const BayParams& b, T x) {
+  const T s2 = b.strut_length_m * b.strut_length_m - x * x;
   return 0.75 * b.strut_mass_kg + 3.0 * b.strut_inertia_kg_m2 / s2;
 }
 
-inline double calc_dg_hinge_dx(const BayParams& b, double x) {
-  const double s2 = b.strut_length_m * b.strut_length_m - x * x;
+template <class T>
+T calc_dg_hinge_dx(const BayParams& b, T x) {
+  const T s2 = b.strut_length_m * b.strut_length_m - x * x;
   return 6.0 * b.strut_inertia_kg_m2 * x / (s2 * s2);
 }
 
@@ -57,36 +63,44 @@ inline double calc_latch_energy_J(const BayParams& b, double hinge_speed_m_per_s
   return calc_g_hinge(b, 0.0) * hinge_speed_m_per_s * hinge_speed_m_per_s;
 }
 
-inline double calc_hinge_offset_m(const BayParams& b, double D) {
+template <class T>
+T calc_hinge_offset_m(const BayParams& b, T D) {
+  using std::sqrt;
   const double l = b.strut_length_m;
-  return 0.5 * std::sqrt(std::max(0.0, 4.0 * l * l - D * D));
+  const T q = 4.0 * l * l - D * D;
+  return 0.5 * sqrt(0.0 < q ? q : T(0.0));  // std::max(0.0, q)
 }
 
 inline double calc_diagonal_offset_sq_m2(const FrameParams& lower, const FrameParams& upper) {
   return (lower.side_m * lower.side_m + lower.side_m * upper.side_m + upper.side_m * upper.side_m) / 3.0;
 }
 
-inline double calc_diagonal_length_m(double offset_sq_m2, double D) {
-  return std::sqrt(offset_sq_m2 + D * D);
+template <class T>
+T calc_diagonal_length_m(double offset_sq_m2, T D) {
+  using std::sqrt;
+  return sqrt(offset_sq_m2 + D * D);
 }
 
 // Tension in one diagonal (N); zero when slack.
-inline double calc_diagonal_tension_N(const BayParams& b, double offset_sq_m2, double D) {
-  const double stretch = calc_diagonal_length_m(offset_sq_m2, D) - b.diagonal_free_length_m;
-  return stretch > 0.0 ? b.diagonal_stiffness_N_per_m * stretch : 0.0;
+template <class T>
+T calc_diagonal_tension_N(const BayParams& b, double offset_sq_m2, T D) {
+  const T stretch = calc_diagonal_length_m(offset_sq_m2, D) - b.diagonal_free_length_m;
+  return stretch > 0.0 ? b.diagonal_stiffness_N_per_m * stretch : T(0.0);
 }
 
 // Potential of the six diagonals of the bay (J).
-inline double calc_bay_potential_J(const BayParams& b, double offset_sq_m2, double D) {
-  const double stretch = calc_diagonal_length_m(offset_sq_m2, D) - b.diagonal_free_length_m;
-  return stretch > 0.0 ? 3.0 * b.diagonal_stiffness_N_per_m * stretch * stretch : 0.0;
+template <class T>
+T calc_bay_potential_J(const BayParams& b, double offset_sq_m2, T D) {
+  const T stretch = calc_diagonal_length_m(offset_sq_m2, D) - b.diagonal_free_length_m;
+  return stretch > 0.0 ? 3.0 * b.diagonal_stiffness_N_per_m * stretch * stretch : T(0.0);
 }
 
 // dU/dD of the bay (N): the force with which the diagonals pull the two frames together.
-inline double calc_bay_dU_dD_N(const BayParams& b, double offset_sq_m2, double D) {
-  const double L = calc_diagonal_length_m(offset_sq_m2, D);
-  const double stretch = L - b.diagonal_free_length_m;
-  return stretch > 0.0 ? 6.0 * b.diagonal_stiffness_N_per_m * stretch * D / L : 0.0;
+template <class T>
+T calc_bay_dU_dD_N(const BayParams& b, double offset_sq_m2, T D) {
+  const T L = calc_diagonal_length_m(offset_sq_m2, D);
+  const T stretch = L - b.diagonal_free_length_m;
+  return stretch > 0.0 ? 6.0 * b.diagonal_stiffness_N_per_m * stretch * D / L : T(0.0);
 }
 
 // Opening at which the diagonals become taut (a kink of the forces); negative if taut at D = 0.

@@ -28,17 +28,19 @@ struct DriveParams {
 
   // Screw force (N, along +y) at driven-frame velocity u (torque and motor modes; 0 in velocity
   // mode, where the force is an output). `direction` is calc_direction_sign of the run.
-  double calc_force_N(double u, double direction) const {
+  // A template on the number type, as model/bay.hpp.
+  template <class T>
+  T calc_force_N(T u, double direction) const {
     const double to_force = 2.0 * std::numbers::pi / screw_lead_m;
     switch (mode) {
-      case DriveMode::torque: return direction * to_force * torque_Nm;
+      case DriveMode::torque: return T(direction * to_force * torque_Nm);
       case DriveMode::motor: {
-        const double omega = to_force * direction * u;  // screw speed along the run direction
+        const T omega = to_force * direction * u;  // screw speed along the run direction
         return direction * to_force * stall_torque_Nm * (1.0 - omega / no_load_speed_rad_per_s);
       }
       case DriveMode::velocity: break;
     }
-    return 0.0;
+    return T(0.0);
   }
   // M = F h / (2 pi)
   double calc_torque_Nm(double force_N) const { return force_N * screw_lead_m / (2.0 * std::numbers::pi); }

@@ -10,6 +10,8 @@
 // be excluded from the G terms when the caller writes it in its hinge coordinate x (bay.hpp).
 // Cost is linear in the number of moving frames; nothing else of the mast is touched.
 #pragma once
+#include <array>
+
 #include <Eigen/Core>
 
 #include "model/bay.hpp"
@@ -37,26 +39,41 @@ struct FrameSystem {
       diag.resize(n); sub.resize(n); velocity_terms.resize(n); spring_forces.resize(n);
     }
   }
+  void clear(int n) {  // n frames, all zero
+    resize(n);
+    diag.setZero(); sub.setZero(); velocity_terms.setZero(); spring_forces.setZero();
+  }
+};
+
+// The same system for at most three moving frames (the held stack's phases) in any number type
+// T (double, or a dual number carrying a time derivative): no allocation.
+template <class T>
+struct SmallFrameSystem {
+  std::array<T, 3> diag, sub, velocity_terms, spring_forces;
+  void clear(int n) {
+    for (int k = 0; k < n; ++k) diag[k] = sub[k] = velocity_terms[k] = spring_forces[k] = T(0.0);
+  }
 };
 
 // y, v: heights and velocities of frames first_frame.. (y[0] is frame first_frame); they must
-// cover frames max(lo-1, 0)..m, and frames below lo must have v = 0.
-inline void calc_frame_system(const MastParams& mast, const ActiveFrames& a, const double* y_in,
-                              const double* v_in, int first_frame, FrameSystem& out) {
+// cover frames max(lo-1, 0)..m, and frames below lo must have v = 0. System: FrameSystem, or
+// SmallFrameSystem<T> for up to three moving frames.
+template <class T, class System>
+void calc_frame_system(const MastParams& mast, const ActiveFrames& a, const T* y_in, const T* v_in, int first_frame,
+                       System& out) {
   auto y = [&](int k) { return y_in[k - first_frame]; };
   auto v = [&](int k) { return v_in[k - first_frame]; };
   const int N = a.size();
-  out.resize(N);
-  out.diag.setZero(); out.sub.setZero(); out.velocity_terms.setZero(); out.spring_forces.setZero();
+  out.clear(N);
   const int first_bay = a.lo > 0 ? a.lo : 1;
   for (int i = first_bay; i <= a.m; ++i) {
     const BayParams& b = mast.bay(i);
     const int k = i - a.lo;        // local index of the upper frame
     const bool lower_moves = (i - 1) >= a.lo;
-    const double D = y(i) - y(i - 1);
-    const double dD = v(i) - v(i - 1);
+    const T D = y(i) - y(i - 1);
+    const T dD = v(i) - v(i - 1);
     const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
-    const double dU = calc_bay_dU_dD_N(b, b2, D);
+    const T dU = calc_bay_dU_dD_N(b, b2, D);
     out.diag[k] += calc_regular_upper_mass_kg(b) + mast.frame(i).mass_kg;
     out.spring_forces[k] -= dU;
     if (lower_moves) {
@@ -65,8 +82,8 @@ inline void calc_frame_system(const MastParams& mast, const ActiveFrames& a, con
       out.spring_forces[k - 1] += dU;
     }
     if (!(i == a.m && a.bay_m_in_hinge_coordinate)) {
-      const double G = calc_G(b, D);
-      const double vt = calc_dG_dD(b, D) * dD * dD;
+      const T G = calc_G(b, D);
+      const T vt = calc_dG_dD(b, D) * dD * dD;
       out.diag[k] += 2.0 * G;
       out.velocity_terms[k] -= vt;
       if (lower_moves) {
@@ -80,8 +97,8 @@ inline void calc_frame_system(const MastParams& mast, const ActiveFrames& a, con
   const int top = N - 1;
   out.diag[top] += a.locked_mass_kg;
   if (mast.panels.enabled()) {
-    const double H = y(a.m) + a.panel_height_offset_m;
-    const double u = v(a.m);
+    const T H = y(a.m) + a.panel_height_offset_m;
+    const T u = v(a.m);
     out.diag[top] += calc_panel_mass_kg(mast.panels, H);
     out.velocity_terms[top] -= calc_half_panel_mass_slope_kg_per_m(mast.panels, H) * u * u;
   }

@@ -10,19 +10,22 @@
 
 namespace truss::model {
 
-inline double calc_panel_mass_kg(const PanelParams& p, double H) {
+// Templates on the number type, as model/bay.hpp.
+template <class T>
+T calc_panel_mass_kg(const PanelParams& p, T H) {
   const double np = p.count;
   const double P = np * np * p.length_m * p.length_m;
   // sum_{k=1..n} (k - 1/2)^2 = n (4 n^2 - 1) / 12
   const double folded = p.mass_kg / (np * np) * np * (4.0 * np * np - 1.0) / 12.0;
-  const double gap = P - H * H;
+  const T gap = P - H * H;
   return folded + p.mass_kg * H * H / (4.0 * np * gap) + np * p.mass_kg * p.length_m * p.length_m / (12.0 * gap);
 }
 
-inline double calc_half_panel_mass_slope_kg_per_m(const PanelParams& p, double H) {
+template <class T>
+T calc_half_panel_mass_slope_kg_per_m(const PanelParams& p, T H) {
   const double np = p.count;
   const double P = np * np * p.length_m * p.length_m;
-  const double gap = P - H * H;
+  const T gap = P - H * H;
   return p.mass_kg * np * p.length_m * p.length_m * H / (3.0 * gap * gap);
 }
 

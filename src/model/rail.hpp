@@ -32,23 +32,40 @@ struct RailConstants {
 inline RailConstants calc_rail_constants(const RailParams& r) {
   return {r.cot_beta(), r.axis_height_m(), 3.0 * std::sin(r.beta_rad)};
 }
-inline double calc_pin_force_N(const RailConstants& r, double lambda_N) { return std::abs(lambda_N) / r.three_sin_beta; }
+// Templates on the number type below (double, or a dual number carrying a time derivative), as
+// model/bay.hpp: the same expressions, so the same bits in double.
+template <class T>
+T calc_pin_force_N(const RailConstants& r, T lambda_N) {
+  using std::abs;
+  return abs(lambda_N) / r.three_sin_beta;
+}
+// f with the constants of the phase (no trigonometry per evaluation): the same bits as above.
+template <class T>
+T calc_rail_function_m(const RailParams& r, const RailConstants& rc, T hinge_x_m, T hinge_y_m) {
+  return hinge_y_m - r.y_m + rc.cot_beta * (hinge_x_m - r.x_m);
+}
 
-struct OnRailKinematics {
-  double x = 0, s = 0;          // hinge offset and half-opening sqrt(l^2 - x^2)
-  double Y = 0, dY = 0, d2Y = 0;  // upper (driven) frame height and derivatives in x
-  double Z = 0, dZ = 0, d2Z = 0;  // lower frame height and derivatives in x
+template <class T>
+struct OnRailKinematicsT {
+  T x = 0, s = 0;          // hinge offset and half-opening sqrt(l^2 - x^2)
+  T x_over_s = 0;          // x / s
+  T Y = 0, dY = 0, d2Y = 0;  // upper (driven) frame height and derivatives in x
+  T Z = 0, dZ = 0, d2Z = 0;  // lower frame height and derivatives in x
 };
+using OnRailKinematics = OnRailKinematicsT<double>;
 
-inline OnRailKinematics calc_on_rail(const RailConstants& r, double strut_length_m, double x) {
+template <class T>
+OnRailKinematicsT<T> calc_on_rail(const RailConstants& r, double strut_length_m, T x) {
+  using std::sqrt;
   const double c = r.cot_beta;
   const double l = strut_length_m;
-  OnRailKinematics k;
+  OnRailKinematicsT<T> k;
   k.x = x;
-  k.s = std::sqrt(l * l - x * x);
-  const double yh = r.axis_height_m - c * x;
-  const double xs = x / k.s;
-  const double curv = l * l / (k.s * k.s * k.s);
+  k.s = sqrt(l * l - x * x);
+  const T yh = r.axis_height_m - c * x;
+  const T xs = x / k.s;
+  const T curv = l * l / (k.s * k.s * k.s);
+  k.x_over_s = xs;
   k.Y = yh + k.s;
   k.dY = -c - xs;
   k.d2Y = -curv;
@@ -65,13 +82,18 @@ inline OnRailKinematics calc_on_rail(const RailParams& r, double strut_length_m,
 // near the lock: with d = y - y_r and remaining travel to the lock e = (y_r + l) - y,
 //   x = (l^2 - d^2) / (c d + sqrt((1 + c^2) l^2 - d^2)),  l^2 - d^2 = e (2 l - e).
 // Pass e directly (e.g. v (t_lock - t)) so that no digits are lost as x -> 0.
-inline double calc_x_on_rail_from_travel(const RailParams& r, double strut_length_m, double travel_to_lock_m) {
-  const double c = r.cot_beta();
+template <class T>
+T calc_x_on_rail_from_travel(const RailConstants& r, double strut_length_m, T travel_to_lock_m) {
+  using std::sqrt;
+  const double c = r.cot_beta;
   const double l = strut_length_m;
-  const double e = travel_to_lock_m;
-  const double d = l - e;
-  const double num = e * (2.0 * l - e);
-  return num / (c * d + std::sqrt((1.0 + c * c) * l * l - d * d));
+  const T e = travel_to_lock_m;
+  const T d = l - e;
+  const T num = e * (2.0 * l - e);
+  return num / (c * d + sqrt((1.0 + c * c) * l * l - d * d));
+}
+inline double calc_x_on_rail_from_travel(const RailParams& r, double strut_length_m, double travel_to_lock_m) {
+  return calc_x_on_rail_from_travel(calc_rail_constants(r), strut_length_m, travel_to_lock_m);
 }
 
 // Rail entry of a bay whose lower frame is held at height z0 (docs/model.md §2, held stack).

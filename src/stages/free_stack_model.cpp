@@ -21,8 +21,9 @@ StackEvent FreeStackModel::book_contacts(const FreeSegmentStart& c, double t_s) 
   e.contact_landings = c.landings;
   e.energy_loss_J = c.energy_loss_J;
   e.drive_work_J = c.drive_work_J;  // the screw's work in the landings (velocity drive)
-  if (!c.ok) e.failure = fmt::format("singular configuration: the landing of frame {} at t = {:.9g} s (stage of bay {}) has no "
-                                     "plastic solution", c.bay, t_s, ctx_.bay);
+  if (!c.ok)
+    e.failure = fmt::format("singular configuration: the landing of frame {} at t = {:.9g} s (stage of bay {}) has no "
+                            "plastic solution", c.bay, t_s, ctx_.bay);
   return e;
 }
 
@@ -32,7 +33,8 @@ StackEvent FreeStackModel::start_stage(const StageSpec& s, bool first_stage) {
   StackEvent e;
   const double u = dir_ * opts_.drive.speed_m_per_s;
   if (s.start == StageStart::unlock) {  // retraction: unlock of bay m with every moving frame (docs/model.md §2)
-    const FreeContactEvent c = stack_.apply_unlock(make_context(s, PhaseKind::on_rail, 0.0), u, drive_holds_speed_, first_stage);
+    const PhaseContext ctx = make_context(s, PhaseKind::on_rail, 0.0);
+    const FreeContactEvent c = stack_.apply_unlock(ctx, u, drive_holds_speed_, first_stage);
     if (!c.ok) e.failure = fmt::format("singular configuration: the unlock of bay {} has no solution", s.bay);
     if (!c.ok) return e;
     if (first_stage && drive_holds_speed_) e.start_drive_impulse_Ns = c.impulse_Ns;
@@ -61,7 +63,8 @@ PhaseSegment FreeStackModel::begin_segment(const StageSpec& s, const PhaseSpec& 
     watch_rail_top_ = ph.kind == PhaseKind::open && dir_ > 0;
   }
   PhaseSegment seg;
-  seg.start_events = book_contacts(stack_.prepare_segment(ctx_, drive_holds_speed_), t_s);  // open the pulling, land the touching
+  // Open the pulling contacts, land the touching ones.
+  seg.start_events = book_contacts(stack_.prepare_segment(ctx_, drive_holds_speed_), t_s);
   if (!seg.start_events.failure.empty()) return seg;
   phase_ = stack_.make_phase(ctx_, watch_rail_top_);
   stack_.get_start(ctx_, q0_, qdot0_);
@@ -115,8 +118,8 @@ StackEvent FreeStackModel::end_phase(const StageSpec& s, const PhaseSpec& ph, co
     }
     case PhaseEnd::rail_entry: {  // plastic impact of all moving frames with the rail (model/free_impacts.hpp)
       const FreeRailEntry r = stack_.apply_rail_entry(s, drive_holds_speed_);
-      if (!r.impact.ok) e.failure = fmt::format("singular configuration: the rail entry of bay {} at t = {:.9g} s has no "
-                                                "solution", s.bay, t_s);
+      if (!r.impact.ok)
+        e.failure = fmt::format("singular configuration: the rail entry of bay {} at t = {:.9g} s has no solution", s.bay, t_s);
       if (!r.impact.ok) return e;
       e.rail_impulse_Ns = r.impact.rail_impulse_Ns;
       e.drive_impulse_Ns = r.impact.drive_impulse_Ns;

@@ -26,7 +26,17 @@ namespace truss::stages {
 // Pure: the frame-system work space is the caller's.
 class HeldPhase final : public PhaseModel {
  public:
-  explicit HeldPhase(const PhaseContext& ctx);
+  explicit HeldPhase(const PhaseContext& ctx) : HeldPhase(ctx, model::calc_rail_constants(ctx.mast->rail)) {}
+  HeldPhase(const PhaseContext& ctx, const model::RailConstants& rail);  // the rail's constants, computed once
+  const model::RailConstants& get_rail_constants() const { return rail_; }
+  // In double, or in numerics::Dual (q, qdot seeded with their time derivatives: every field of
+  // the point then carries its time derivative).
+  template <class T>
+  PhasePointT<T> calc_point_t(T q, T qdot) const;
+  // Velocity mode: the point at q with the driven frame at speed u_m_per_s along +y (on the rail
+  // xi = u / Y'(x), from the same rail kinematics the point uses).
+  template <class T>
+  PhasePointT<T> calc_point_at_speed_t(T q, double u_m_per_s, PointFields fields = PointFields::all) const;
   PhasePoint calc_point(double q, double qdot, PhaseScratch& scratch) const;
   // Convenience for tests and one-off evaluations: allocates its own work space.
   PhasePoint calc_point(double q, double qdot) const;
@@ -48,10 +58,16 @@ class HeldPhase final : public PhaseModel {
   double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[0] - ctx_.q_end); }
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[0]; }
   void snap_to_end(double* q) const override { q[0] = ctx_.q_end; }
+  double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
+  PhasePoint calc_loads(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
 
  private:
-  PhasePoint calc_open(double y, double u, PhaseScratch& scratch) const;
-  PhasePoint calc_on_rail(double x, double xi, PhaseScratch& scratch) const;
+  template <class T>
+  PhasePointT<T> calc_open(T y, T u, PointFields fields = PointFields::all) const;
+  template <class T>
+  PhasePointT<T> calc_on_rail(const model::OnRailKinematicsT<T>& kin, T xi,
+                              PointFields fields = PointFields::all) const;
+  model::OnRailKinematics calc_kinematics(double x) const { return model::calc_on_rail(rail_, strut_length_m(), x); }
   PhaseContext ctx_;
   model::RailConstants rail_;
   model::ActiveFrames active_;

@@ -10,8 +10,10 @@ namespace truss::stages {
 
 using namespace truss::model;
 
-HeldStack::HeldStack(const MastParams& mast, const RunnerOptions& opts) : StackModel(mast, opts) {
-  if (!drive_holds_speed_) integrator_ = integrators::make_integrator(opts.run.integrator, opts.calc_integrator_options());
+HeldStack::HeldStack(const MastParams& mast, const RunnerOptions& opts)
+    : StackModel(mast, opts), rail_(calc_rail_constants(mast.rail)) {
+  if (!drive_holds_speed_)
+    integrator_ = integrators::make_integrator(opts.run.integrator, opts.calc_integrator_options());
 }
 
 StackEvent HeldStack::start_stage(const StageSpec& s, bool first_stage) {
@@ -19,7 +21,8 @@ StackEvent HeldStack::start_stage(const StageSpec& s, bool first_stage) {
   const double v = opts_.drive.speed_m_per_s;
   if (s.start == StageStart::from_rest_or_kick && drive_holds_speed_) {
     // Impulsive start of the driven part from rest (docs/model.md §4): a lossless ramp of the drive.
-    const PhasePoint p0 = HeldPhase(make_context(s, PhaseKind::open, 0.0)).calc_point(s.phases[0].q_start, dir_ * v);
+    const HeldPhase open(make_context(s, PhaseKind::open, 0.0), rail_);
+    const PhasePoint p0 = open.calc_point(s.phases[0].q_start, dir_ * v);
     e.evals = 1;
     u_ = dir_ * v;
     const DriveRamp ramp = calc_drive_ramp(p0.mass_yy, u_);
@@ -27,9 +30,9 @@ StackEvent HeldStack::start_stage(const StageSpec& s, bool first_stage) {
     e.drive_work_J = ramp.work_J;
   }
   if (s.start != StageStart::unlock) return e;
-  const PhasePoint p0 = HeldPhase(make_context(s, PhaseKind::on_rail, 0.0)).calc_point(0.0, 0.0);
+  const PhasePoint p0 = HeldPhase(make_context(s, PhaseKind::on_rail, 0.0), rail_).calc_point(0.0, 0.0);
   e.evals = 1;
-  const double c = mast_.rail.cot_beta();
+  const double c = rail_.cot_beta;
   if (drive_holds_speed_ && first_stage) {
     // The mast starts from rest: the drive ramps the driven frame and, through the rail, the
     // hinge (x' = -u / c) up together, lossless; no impact, so no latch energy (docs/model.md §2
@@ -57,7 +60,7 @@ PhaseSegment HeldStack::begin_segment(const StageSpec& s, const PhaseSpec& ph, b
   PhaseContext ctx = make_context(s, ph.kind, ph.lower_held_height_m);
   ctx.q_end = ph.q_end;
   ctx.sign_q = ph.q_end > ph.q_start ? 1.0 : -1.0;
-  phase_.emplace(ctx);
+  phase_.emplace(ctx, rail_);
   q0_ = ph.q_start;
   qdot0_ = ph.kind == PhaseKind::open ? u_ : xi_;
   PhaseSegment seg;
@@ -78,10 +81,10 @@ StackEvent HeldStack::end_phase(const StageSpec& s, const PhaseSpec& ph, const P
       const TwoFrameMass M = calc_two_frame_mass(mast_, s.bay, s.locked_mass_kg, s.panel_height_offset_m,
                                                  ph.lower_held_height_m, p_end.y_driven_m);
       const double x = s.entry_hinge_x_m, D = p_end.y_driven_m - ph.lower_held_height_m;
-      const FrameImpact imp = calc_rail_entry_impact(M, calc_rail_gradient(mast_.rail.cot_beta(), D, x), u_end,
+      const FrameImpact imp = calc_rail_entry_impact(M, calc_rail_gradient(rail_.cot_beta, D, x), u_end,
                                                      drive_holds_speed_);
       u_ = u_end + imp.du_m_per_s;
-      xi_ = u_ / calc_on_rail(mast_.rail, mast_.bay(s.bay).strut_length_m, x).dY;
+      xi_ = u_ / calc_on_rail(rail_, mast_.bay(s.bay).strut_length_m, x).dY;
       e.rail_impulse_Ns = imp.rail_impulse_Ns;
       e.drive_impulse_Ns = imp.drive_impulse_Ns;
       e.energy_loss_J = imp.energy_loss_J;

@@ -29,6 +29,7 @@ class HeldStack final : public StackModel {
   }
 
  private:
+  const model::RailConstants rail_;                       // the rail's trigonometry, once a run
   std::unique_ptr<integrators::Integrator> integrator_;  // the run's one integrator (torque, motor)
   std::optional<HeldPhase> phase_;                        // the phase running
   std::optional<KinematicPhaseSolver> closed_form_;

@@ -4,20 +4,6 @@
 
 namespace truss::stages {
 
-double calc_peak_quantity(int q, const PhasePoint& p, double direction) {
-  switch (q) {
-    case kForce: return p.drive_force_N;
-    case kNegForce: return -p.drive_force_N;
-    case kPin: return p.pin_force_N;
-    case kTension: return p.diagonal_tension_N;
-    case kRailApproach: return -p.rail_distance_m;
-    case kOverlap: return -p.min_bay_opening_m;
-    case kStaticForce: return direction * p.static_drive_force_N;
-    case kInertialForce: return direction * (p.drive_force_N - p.static_drive_force_N);
-    default: return direction * p.u_m_per_s;
-  }
-}
-
 void HermiteSpan::calc(double t, double* q, double* qd) const {
   const int n = dof();
   const double h = b->t - a->t, s = (t - a->t) / h, s2 = s * s, s3 = s2 * s, s4 = s3 * s, s5 = s4 * s;
@@ -35,29 +21,37 @@ void HermiteSpan::calc(double t, double* q, double* qd) const {
 
 void PhasePeaks::reset(double direction) {
   for (Bracket& b : b_) {
-    b.top.value = b.first.value = -kInf;
-    b.top.want_next = b.first.want_next = false;
+    for (Hill* h : {&b.top, &b.first}) {
+      h->value = -kInf;
+      h->want_next = false;
+      h->sample = {-1, -1, -1};
+    }
     b.fell = false;
   }
-  has_last_ = false;
+  count_ = 0;
   direction_ = direction;
   max_rail_residual = 0.0;
 }
 
 void PhasePeaks::feed(double t, const PhasePoint& p, const double* state, int n) {
+  const long i = count_++;
+  Sample& slot = ring_[static_cast<std::size_t>(i % kRing)];
+  if (i >= kRing)  // sample i - kRing leaves the ring: the hills that refer to it copy it
+    for (Bracket& b : b_)
+      for (Hill* h : {&b.top, &b.first})
+        for (std::size_t w = 0; w < 3; ++w)
+          if (h->sample[w] == i - kRing) { h->own[w] = slot; h->sample[w] = -1; }
+  slot.assign(t, p, state, n);
   for (int q = 0; q < kQuantityCount; ++q) {
     Bracket& b = b_[static_cast<std::size_t>(q)];
     const double v = calc_peak_quantity(q, p, direction_);
     auto take = [&](Hill& h, bool better) {
       if (better) {
         h.value = v;
-        if (has_last_) h.prev = last_;
-        else h.prev.assign(t, p, state, n);
-        h.best.assign(t, p, state, n);
-        h.next = h.best;
+        h.sample = {i > 0 ? i - 1 : i, i, i};  // the previous sample (itself at the phase start), this, the next
         h.want_next = true;
       } else if (h.want_next) {
-        h.next.assign(t, p, state, n);
+        h.sample[2] = i;
         h.want_next = false;
       }
     };
@@ -68,8 +62,6 @@ void PhasePeaks::feed(double t, const PhasePoint& p, const double* state, int n)
     take(b.first, first);
     b.fell = !first && (b.fell || v < b.first.value);
   }
-  last_.assign(t, p, state, n);
-  has_last_ = true;
   max_rail_residual = std::max(max_rail_residual, p.rail_residual_m);
 }
 

@@ -66,7 +66,21 @@ struct Extremum {
 // the static part is not defined).
 enum PeakQuantity { kForce, kNegForce, kPin, kTension, kSpeed, kRailApproach, kOverlap, kStaticForce, kInertialForce,
                     kQuantityCount };
-double calc_peak_quantity(int q, const PhasePoint& p, double direction);
+// In the point's number type (double, or a dual number: then with its time derivative).
+template <class T>
+T calc_peak_quantity(int q, const PhasePointT<T>& p, double direction) {
+  switch (q) {
+    case kForce: return p.drive_force_N;
+    case kNegForce: return -p.drive_force_N;
+    case kPin: return p.pin_force_N;
+    case kTension: return p.diagonal_tension_N;
+    case kRailApproach: return -p.rail_distance_m;
+    case kOverlap: return -p.min_bay_opening_m;
+    case kStaticForce: return direction * p.static_drive_force_N;
+    case kInertialForce: return direction * (p.drive_force_N - p.static_drive_force_N);
+    default: return direction * p.u_m_per_s;
+  }
+}
 
 struct Sample {
   double t = 0;
@@ -104,23 +118,32 @@ class PhasePeaks {
   // Whether the earliest of equal maxima is another than the highest sample's.
   bool has_earlier_tie(int q) const {
     const Bracket& b = b_[static_cast<std::size_t>(q)];
-    return b.first.best.t < b.top.best.t;
+    return b.first.value > -kInf && get(b.first, 1).t < get(b.top, 1).t;
   }
   double max_rail_residual = 0.0;
 
  private:
+  // The last three samples stay in a ring; a hill refers to its samples by their number in the
+  // phase and keeps its own copy only of one about to leave the ring (a quantity that keeps rising
+  // copies nothing; a maximum copies its three samples once).
+  static constexpr int kRing = 3;
   struct Hill {  // a local maximum's best sample and its neighbours
     double value = -kInf;
-    Sample prev, best, next;
+    std::array<long, 3> sample{-1, -1, -1};  // prev, best, next: their numbers while in the ring, else -1
+    std::array<Sample, 3> own;               // ... and their copies once they left it
     bool want_next = false;
   };
   struct Bracket {
     Hill top, first;
     bool fell = false;  // a sample below first's best came after it: a later rise is another maximum
   };
+  const Sample& get(const Hill& h, int which) const {
+    const long i = h.sample[static_cast<std::size_t>(which)];
+    return i >= 0 ? ring_[static_cast<std::size_t>(i % kRing)] : h.own[static_cast<std::size_t>(which)];
+  }
   std::array<Bracket, kQuantityCount> b_;
-  Sample last_;
-  bool has_last_ = false;
+  std::array<Sample, kRing> ring_;
+  long count_ = 0;  // samples fed this phase
   double direction_ = 1.0;
   double tie_tol_ = 0.0;
 };
@@ -142,6 +165,11 @@ class PeakTracker {
     run[kForce].offer(stage_force.value, stage_force.t, stage_force.bay);
     run[kPin].offer(stage_pin.value, stage_pin.t, stage_pin.bay);
   }
+  // Whether a phase whose largest value of quantity q is `best` can change its record.
+  bool could_improve(int q, double best) {
+    const Extremum& tr = target(q);
+    return best > tr.largest() || !std::isfinite(tr.value);
+  }
   Extremum& target(int q) {
     if (q == kForce) return stage_force;
     if (q == kPin) return stage_pin;
@@ -154,7 +182,7 @@ class PeakTracker {
     max_rail_residual = std::max(max_rail_residual, pp.max_rail_residual);
     for (int q = 0; q < kQuantityCount; ++q) {
       Extremum& tr = target(q);
-      if (!(pp.best(q) > tr.largest()) && std::isfinite(tr.value)) continue;
+      if (!could_improve(q, pp.best(q))) continue;
       double v, t;
       if (pp.has_earlier_tie(q)) {  // the first of equal maxima, then the highest
         pp.refine(q, true, eval, xtol, v, t);
@@ -170,14 +198,19 @@ template <class Eval>
 void PhasePeaks::refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time) const {
   const Hill& b = first ? b_[static_cast<std::size_t>(q)].first : b_[static_cast<std::size_t>(q)].top;
   value = b.value;
-  time = b.best.t;
+  time = kNaN;
+  if (!(b.value > -kInf)) return;  // no sample this phase
+  const Sample& prev = get(b, 0);
+  const Sample& best = get(b, 1);
+  const Sample& next = get(b, 2);
+  time = best.t;
   if (!std::isfinite(b.value)) return;
-  for (const HermiteSpan span : {HermiteSpan{&b.prev, &b.best}, HermiteSpan{&b.best, &b.next}}) {
+  for (const HermiteSpan span : {HermiteSpan{&prev, &best}, HermiteSpan{&best, &next}}) {
     const double len = span.b->t - span.a->t;
     if (!(len > 0.0)) continue;
     // A best sample at a kink or at the phase end is often the maximum itself: if the quantity
     // falls just inside the span, the span holds nothing higher (it is bracketed by the grid).
-    const bool best_is_a = span.a == &b.best;
+    const bool best_is_a = span.a == &best;
     const double probe_t = best_is_a ? span.a->t + 1e-6 * len : span.b->t - 1e-6 * len;
     if (calc_peak_quantity(q, eval(probe_t, span), direction_) < b.value) continue;
     auto [tm, vm] = numerics::maximize_brent([&](double t) { return calc_peak_quantity(q, eval(t, span), direction_); },

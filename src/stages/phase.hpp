@@ -27,33 +27,42 @@ struct PhaseContext {
 };
 
 // Everything one evaluation of a phase gives: the reported frames, accelerations, loads.
-struct PhasePoint {
-  double q = 0, qdot = 0, qddot = 0;  // held phase: its coordinate (y_m or x) and derivatives
-  double y_driven_m = 0, y_lower_m = 0;
-  double u_m_per_s = 0, w_m_per_s = 0;  // velocities of driven and lower frame
-  double hinge_x_m = 0, hinge_y_m = 0;
-  double drive_force_N = 0;
+// A template on the number type: PhasePoint (double) everywhere; the held phase's closed form
+// also in a dual number type, whose fields then carry their time derivatives.
+template <class T>
+struct PhasePointT {
+  T q = 0, qdot = 0, qddot = 0;  // held phase: its coordinate (y_m or x) and derivatives
+  T y_driven_m = 0, y_lower_m = 0;
+  T u_m_per_s = 0, w_m_per_s = 0;  // velocities of driven and lower frame
+  T hinge_x_m = 0, hinge_y_m = 0;
+  T drive_force_N = 0;
   // Drive force (N, along +y) that holds the mast at rest in this configuration: the diagonals'
   // (spring) resistance alone, -dU/dy_m along the phase's path (no velocity, no acceleration).
   // The inertial part of the drive force is drive_force_N - static_drive_force_N. NaN where not
   // defined (the free stack, whose frames below the driven one have no rest configuration).
-  double static_drive_force_N = __builtin_nan("");
-  double lambda_N = 0;                // rail multiplier (0 off the rail)
-  double pin_force_N = 0;
-  double diagonal_tension_N = 0;      // largest tension of one diagonal in the moving bays
-  double kinetic_energy_J = 0;
-  double potential_energy_J = 0;      // diagonals of the moving bays (m and, on the rail, m-1)
-  double rail_residual_m = 0;
+  T static_drive_force_N = __builtin_nan("");
+  T lambda_N = 0;                // rail multiplier (0 off the rail)
+  T pin_force_N = 0;
+  T diagonal_tension_N = 0;      // largest tension of one diagonal in the moving bays
+  T kinetic_energy_J = 0;
+  T potential_energy_J = 0;      // diagonals of the moving bays (m and, on the rail, m-1)
+  T rail_residual_m = 0;
   // Mass matrix in the phase's coordinates: open: mass_yy only; on_rail: (y_m, x) entries.
-  double mass_yy = 0, mass_yx = 0, mass_xx = 0;
-  double rail_slope = 0;              // on_rail: gamma = c + x/s = df/dx = -Y'(x)
+  T mass_yy = 0, mass_yx = 0, mass_xx = 0;
+  T rail_slope = 0;              // on_rail: gamma = c + x/s = df/dx = -Y'(x)
   // Free stack, open phase: distance of the hinge from the rail line, f sin(beta) (m; > 0 on
   // the stack's side); +inf where not tracked (held stack, on the rail).
-  double rail_distance_m = __builtin_inf();
+  T rail_distance_m = __builtin_inf();
   // Free stack: smallest bay opening D_i of the moving bays (m); < 0 when frames have passed
   // through each other (or frame 1 through the floor): contacts are off. +inf where not tracked.
-  double min_bay_opening_m = __builtin_inf();
+  T min_bay_opening_m = __builtin_inf();
 };
+using PhasePoint = PhasePointT<double>;
+
+// Which fields of a point an evaluation fills (the rest keep their defaults): all of them; the
+// loads, speeds, masses and rail residual (what the peaks need); or what time stepping needs, the
+// accelerations, the drive force and the speeds.
+enum class PointFields { all, loads, motion };
 
 // Work space of a model evaluation, owned by the caller (the model functions stay pure).
 using PhaseScratch = model::FrameSystem;
@@ -86,6 +95,17 @@ class PhaseModel {
   virtual const PhaseContext& context() const = 0;
   // Accelerations (dof values into qddot) and the reported point at (q, q').
   virtual PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const = 0;
+  // Accelerations (dof values into qddot) at (q, q') and the drive's power F dy_m/dt (W): what
+  // time stepping needs of a point (PointFields::motion), nothing else computed.
+  virtual double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const {
+    const PhasePoint p = calc_point(q, qdot, qddot, scratch);
+    return p.drive_force_N * p.u_m_per_s;
+  }
+  // The point as the peak tracker needs it at a step end (PointFields::loads: the loads, speeds,
+  // masses and rail residual; the energies and the hinge may be left out); by default all of it.
+  virtual PhasePoint calc_loads(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const {
+    return calc_point(q, qdot, qddot, scratch);
+  }
   // Driven-frame velocity dy_m/dt (m/s).
   virtual double calc_driven_speed_m_per_s(const double* q, const double* qdot) const = 0;
   // Rises through zero at the phase's end event; and its second time derivative (from q'').

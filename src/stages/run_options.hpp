@@ -31,7 +31,7 @@ struct RunOptions {
 struct RunnerOptions {
   model::DriveParams drive;                  // the scene's [drive] table
   RunOptions run;                            // the scene's [run] table
-  int peak_samples_per_piece = 9;            // velocity mode: bracketing grid per smooth piece (>= 3)
+  int peak_samples_per_piece = 4;            // velocity mode: samples a smooth piece, with their loads' rates (>= 3)
   // Integrator options of the run (tolerances; the step budget is set per phase).
   integrators::IntegratorOptions calc_integrator_options() const;
 };

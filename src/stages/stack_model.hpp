@@ -77,7 +77,9 @@ class StackModel {
   virtual int find_first_moving_frame(const StageSpec& s, const PhaseSpec& ph) const = 0;
   // Potential energy of the whole mast at the end of a completed run (J); the stowed or deployed
   // mast's unless the stack mode knows better.
-  virtual double calc_end_potential_J(double stowed_J, double deployed_J) const { return dir_ > 0 ? deployed_J : stowed_J; }
+  virtual double calc_end_potential_J(double stowed_J, double deployed_J) const {
+    return dir_ > 0 ? deployed_J : stowed_J;
+  }
   // Frames the history records per row (0: none), and their heights with driven frame m.
   virtual int count_history_frames() const { return 0; }
   virtual void get_frame_heights(int /*m*/, double* /*y*/) const {}
@@ -87,7 +89,8 @@ class StackModel {
       : mast_(mast), opts_(opts), dir_(model::calc_direction_sign(opts.run.direction)),
         drive_holds_speed_(opts.drive.mode == model::DriveMode::velocity) {}
   PhaseContext make_context(const StageSpec& s, PhaseKind kind, double lower_held_height_m) const {
-    return {&mast_, kind, s.bay, lower_held_height_m, s.locked_mass_kg, s.panel_height_offset_m, opts_.drive, dir_, 0.0, 1.0};
+    return {&mast_, kind, s.bay, lower_held_height_m, s.locked_mass_kg, s.panel_height_offset_m, opts_.drive, dir_,
+            0.0, 1.0};
   }
   const model::MastParams& mast_;
   const RunnerOptions& opts_;

@@ -71,8 +71,10 @@ class StageLoop {
 };
 
 // The stack mode of a plan: the one place that knows them all.
-std::unique_ptr<StackModel> make_stack_model(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts) {
-  if (!stages.empty() && stages.front().free_stack) return std::make_unique<FreeStackModel>(mast, opts, stages.front().contacts);
+std::unique_ptr<StackModel> make_stack_model(const MastParams& mast, const std::vector<StageSpec>& stages,
+                                             const RunnerOptions& opts) {
+  if (!stages.empty() && stages.front().free_stack)
+    return std::make_unique<FreeStackModel>(mast, opts, stages.front().contacts);
   return std::make_unique<HeldStack>(mast, opts);
 }
 
@@ -276,8 +278,8 @@ void StageLoop::finish() {
   const double U_start = dir_ > 0 ? ledger_.get_stowed_potential_J() : ledger_.get_deployed_potential_J();
   double U_end = 0.0;
   if (last_stage_ && last_phase_) {
-    if (failed_) U_end = ledger_.calc_total_potential_J(last_stage_->bay, stack_->find_first_moving_frame(*last_stage_, *last_phase_),
-                                                        last_.potential_energy_J);
+    const int first_moving = stack_->find_first_moving_frame(*last_stage_, *last_phase_);
+    if (failed_) U_end = ledger_.calc_total_potential_J(last_stage_->bay, first_moving, last_.potential_energy_J);
     else U_end = stack_->calc_end_potential_J(ledger_.get_stowed_potential_J(), ledger_.get_deployed_potential_J());
   }
   ledger_.set_start(0.0, U_start);

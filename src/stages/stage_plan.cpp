@@ -117,11 +117,17 @@ std::string plan_held_stages(const MastParams& mast, double direction, std::vect
   std::vector<double> locked, span;
   calc_rigid_above(mast, locked, span);
   std::vector<StageSpec> deploy(n);
+  const double y_r = mast.rail.axis_height_m();
+  HeldRailEntry e;
   for (int m = n; m >= 1; --m) {
     const BayParams& b = mast.bay(m);
-    const HeldRailEntry e = calc_held_rail_entry(mast.rail, b.strut_length_m, 0.0);
-    if (std::string bad = check_held_entry(mast, m, e); !bad.empty()) return bad;
-    const double y_start = (m == n) ? 0.0 : calc_lock_lower_height_m(mast.rail, mast.bay(m + 1).strut_length_m);
+    // The entry depends on the strut length alone (the rail is the mast's): computed again only
+    // where the length changes (a dispersed mast), with its check.
+    if (m == n || b.strut_length_m != mast.bay(m + 1).strut_length_m) {
+      e = calc_held_rail_entry(mast.rail, b.strut_length_m, 0.0);
+      if (std::string bad = check_held_entry(mast, m, e); !bad.empty()) return bad;
+    }
+    const double y_start = (m == n) ? 0.0 : y_r - mast.bay(m + 1).strut_length_m;  // calc_lock_lower_height_m
     if (!(y_start < e.upper_height_m)) return explain_start_past_entry(mast, m, y_start, e.upper_height_m);
     StageSpec s;
     s.bay = m;

@@ -108,8 +108,9 @@ TEST_CASE("Dormand-Prince pair converges with order 5", "[numeric][rk]") {
 }
 
 TEST_CASE("energy balance holds in every drive mode, impulses and impact losses included", "[numeric][energy]") {
-  // Residual = drive work - dT - dU - impact losses. Velocity mode is closed form plus Gauss-
-  // Kronrod quadrature: rounding level. Torque/motor: bounded by the integration error, which at
+  // Residual = drive work - dT - dU - impact losses. Velocity mode is closed form, its work the
+  // energy change of each phase: rounding level, what remains checked are the impacts between the
+  // phases and the ledger's stowed and locked potentials. Torque/motor: bounded by the integration error, which at
   // rtol 1e-12 keeps it below 1e-9 of the work (DP5(4)); CVODE's Adams local error control
   // accumulates more, 1e-8.
   struct Case { DriveMode mode; Direction dir; IntegratorKind integ; double rtol; double bound; };

@@ -3,6 +3,7 @@
 # directions, both integrators, and variants (panels, few bays, a stall, a step cap, histories).
 #   tests/regression/json_identity.sh record TRUSS_SIM OUTDIR     # write one JSON per case
 #   tests/regression/json_identity.sh compare DIR_A DIR_B         # exit 1 on any difference
+#   tests/regression/json_compare.py DIR_A DIR_B --rtol 1e-12      # the same to a relative tolerance
 # wall_time_s is the only field removed: it is a measurement of the machine, not a result.
 # The HDF5 histories of the cases that write them are dumped too (h5dump, datasets only).
 set -euo pipefail
