@@ -45,6 +45,9 @@ struct AnalyticLoad {
     return s;
   }
 };
+// clang 14 (the sanitizer build) has no deduction for aggregates (P1816); GCC 12 has.
+template <class Q, class DQ>
+AnalyticLoad(Q, DQ) -> AnalyticLoad<Q, DQ>;
 
 std::array<PeakSearch, stages::kQuantityCount> force_only() {
   std::array<PeakSearch, stages::kQuantityCount> s;
