@@ -142,7 +142,12 @@ def nonfinite_fields(js):
 def memory_bound_bytes(case):
     n = int(case.get("mast.n_bays", 30))
     dense = case.get("run.integrator") in ("cvode", "ida") and case.get("stack.mode") == "free"
-    return 64e6 + 3 * HISTORY_BYTES + (3 * 8 * (2 * n + 3) ** 2 if dense else 0)
+    bound = 64e6 + 3 * HISTORY_BYTES + (3 * 8 * (2 * n + 3) ** 2 if dense else 0)
+    if os.environ.get("TRUSS_SANITIZED") == "1":
+        # AddressSanitizer keeps freed blocks in its quarantine (256 MB by default,
+        # quarantine_size_mb) and a shadow byte per 8 bytes, with red zones around each block.
+        bound = 2 * bound + 256e6
+    return bound
 
 
 def promise_problems(r, js, cap):
