@@ -19,8 +19,8 @@
 
 #include "bench_timing.hpp"
 #include "sim/simulate.hpp"
-#include "stages/free_phase.hpp"
-#include "stages/free_phase_b.hpp"
+#include "free_stack/free_phase.hpp"
+#include "free_stack/free_phase_b.hpp"
 
 using namespace truss;
 using namespace truss::sim;

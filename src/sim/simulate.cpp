@@ -2,11 +2,27 @@
 
 #include <chrono>
 #include <limits>
+#include <memory>
+#include <vector>
 
+#include "free_stack/free_stack_model.hpp"
+#include "stages/held_stack.hpp"
 #include "stages/stage_loop.hpp"
 #include "stages/stage_plan.hpp"
 
 namespace truss::sim {
+namespace {
+
+// The stack mode of a plan: the one place that knows them all.
+std::unique_ptr<stages::StackModel> make_stack_model(const model::MastParams& mast,
+                                                     const std::vector<stages::StageSpec>& plan,
+                                                     const stages::RunnerOptions& opts) {
+  if (!plan.empty() && plan.front().free_stack)
+    return std::make_unique<stages::FreeStackModel>(mast, opts, plan.front().contacts);
+  return std::make_unique<stages::HeldStack>(mast, opts);
+}
+
+}  // namespace
 
 RunResult simulate(const SceneOptions& scene, const model::MastParams& mast) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -30,7 +46,7 @@ RunResult simulate(const SceneOptions& scene, const model::MastParams& mast) {
   if (!e.empty()) return invalid(e);
 
   const stages::RunnerOptions ro{scene.drive, scene.run};
-  RunResult r = stages::run_stages(mast, plan, ro);
+  RunResult r = stages::run_stages(mast, plan, ro, make_stack_model(mast, plan, ro));
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
 }

@@ -10,8 +10,6 @@
 #include "model/impacts.hpp"
 #include "model/rail.hpp"
 #include "stages/energy.hpp"
-#include "stages/free_stack_model.hpp"
-#include "stages/held_stack.hpp"
 #include "stages/phase_dynamic.hpp"
 
 namespace truss::stages {
@@ -22,7 +20,8 @@ namespace {
 
 class StageLoop {
  public:
-  StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts);
+  StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts,
+            std::unique_ptr<StackModel> stack);
   RunResult run();
 
  private:
@@ -70,19 +69,12 @@ class StageLoop {
   double ke_end_ = 0.0;
 };
 
-// The stack mode of a plan: the one place that knows them all.
-std::unique_ptr<StackModel> make_stack_model(const MastParams& mast, const std::vector<StageSpec>& stages,
-                                             const RunnerOptions& opts) {
-  if (!stages.empty() && stages.front().free_stack)
-    return std::make_unique<FreeStackModel>(mast, opts, stages.front().contacts);
-  return std::make_unique<HeldStack>(mast, opts);
-}
-
-StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts)
+StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts,
+                     std::unique_ptr<StackModel> stack)
     : mast_(mast), stages_(stages), opts_(opts), dir_(calc_direction_sign(opts.run.direction)),
       wall_start_(std::chrono::steady_clock::now()), ledger_(mast),
       history_(&r_.history, opts.run.output_step_s, opts_.drive, opts.run.max_history_bytes),
-      stack_(make_stack_model(mast, stages, opts)), steps_left_(opts.run.max_steps) {
+      stack_(std::move(stack)), steps_left_(opts.run.max_steps) {
   const int n = mast.n_bays();
   r_.n_bays = n;
   r_.direction = to_string(opts.run.direction);
@@ -325,8 +317,9 @@ RunResult StageLoop::run() {
 
 }  // namespace
 
-RunResult run_stages(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts) {
-  return StageLoop(mast, stages, opts).run();
+RunResult run_stages(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts,
+                     std::unique_ptr<StackModel> stack) {
+  return StageLoop(mast, stages, opts, std::move(stack)).run();
 }
 
 }  // namespace truss::stages

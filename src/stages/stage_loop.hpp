@@ -6,17 +6,21 @@
 // to the PeakTracker, energies to the EnergyLedger, samples to the history; the result is a
 // RunResult with one status.
 #pragma once
+#include <memory>
 #include <vector>
 
 #include "model/params.hpp"
 #include "stages/result.hpp"
 #include "stages/run_options.hpp"
+#include "stages/stack_model.hpp"
 #include "stages/stage_plan.hpp"
 
 namespace truss::stages {
 
-// Runs the planned stages. The options are not checked again here: they come validated from the
+// Runs the planned stages with the plan's stack mode (`stack`: the caller picks it, so that the loop
+// knows no mode by name). The options are not checked again here: they come validated from the
 // entry point that built them (sim::simulate, from SceneOptions::validate()).
-RunResult run_stages(const model::MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts);
+RunResult run_stages(const model::MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts,
+                     std::unique_ptr<StackModel> stack);
 
 }  // namespace truss::stages

@@ -86,7 +86,7 @@ std::string plan_free_stages(const MastParams& mast, double direction, bool cont
   if (direction < 0) {
     // Retraction: the held stack's stages (unlock, on the rail until the pin leaves it where a
     // lower frame at the stowed height meets it, then down to the deployment's start height),
-    // with the frames below moving (stages/free_stack.hpp). The same geometry must hold.
+    // with the frames below moving (free_stack/free_stack.hpp). The same geometry must hold.
     if (std::string bad = plan_held_stages(mast, direction, out); !bad.empty()) return bad;
     for (StageSpec& s : out) { s.free_stack = true; s.contacts = contacts; }
     return {};

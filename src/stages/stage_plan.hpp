@@ -36,7 +36,7 @@ struct StageSpec {
   // Rail-entry geometry of this bay (held lower frame at 0).
   double entry_hinge_x_m = 0, entry_upper_height_m = 0;
   // Free stack (docs/model.md §2 "free"): the frames below the driven one are free; the phases' q
-  // values are not used (the state lives in stages/free_stack.hpp) and entry happens where the
+  // values are not used (the state lives in free_stack/free_stack.hpp) and entry happens where the
   // motion takes the pin to the rail.
   bool free_stack = false;
   bool contacts = false;            // free stack: unilateral stack contacts D_i >= 0 (docs/model.md §2)

@@ -13,8 +13,8 @@
 
 #include "numeric/dense_frames.hpp"
 #include "sim/simulate.hpp"
-#include "stages/free_phase.hpp"
-#include "stages/free_phase_b.hpp"
+#include "free_stack/free_phase.hpp"
+#include "free_stack/free_phase_b.hpp"
 #include "stages/phase_dynamic.hpp"
 #include "test_helpers.hpp"
 

@@ -13,7 +13,7 @@
 #include "model/impacts.hpp"
 #include "numeric/dense_frames.hpp"
 #include "sim/simulate.hpp"
-#include "stages/free_phase.hpp"
+#include "free_stack/free_phase.hpp"
 #include "test_helpers.hpp"
 
 using namespace truss;

@@ -1,4 +1,4 @@
-// The free stack's phase A (stages/free_phase.hpp) integrated as an ODE: the energy balance
+// The free stack's phase A (free_stack/free_phase.hpp) integrated as an ODE: the energy balance
 // T + U - W = const (no impact, no contact in the interval) checks the tridiagonal mass matrix,
 // the velocity terms and the O(n) solve together, independently of how they are written: a wrong
 // coefficient in M or r breaks the balance at first order in time.
@@ -9,7 +9,7 @@
 
 #include "integrators/dopri54.hpp"
 #include "sim/scene.hpp"
-#include "stages/free_phase.hpp"
+#include "free_stack/free_phase.hpp"
 
 using namespace truss;
 using Catch::Detail::Approx;
@@ -112,7 +112,7 @@ TEST_CASE("free phase A in velocity mode: the driven frame keeps its speed, the 
 }
 
 #include "model/rail.hpp"
-#include "stages/free_phase_b.hpp"
+#include "free_stack/free_phase_b.hpp"
 #include "stages/held_phase.hpp"
 
 TEST_CASE("free phase B with the frames below held equals the held stack's rail phase (independent elimination)",

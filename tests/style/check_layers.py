@@ -6,7 +6,7 @@ import pathlib
 import re
 import sys
 
-SIM = {"sim", "stages", "model", "integrators", "numerics"}
+SIM = {"sim", "free_stack", "stages", "model", "integrators", "numerics"}
 ALLOWED = {
     "util": {"util"},
     "sampling": {"sampling"},
@@ -14,6 +14,7 @@ ALLOWED = {
     "model": {"model"},
     "integrators": {"integrators", "numerics"},  # numerics: pure root finders shared with the stages
     "stages": {"stages", "model", "integrators", "numerics"},
+    "free_stack": {"free_stack", "stages", "model", "integrators", "numerics"},
     "sim": SIM,
     "io": {"io"} | SIM,
     "app": {"app", "io"} | SIM,

@@ -4,8 +4,9 @@ over 500 lines (generated tables, *.inc, aside), and in the folders given to --n
 120 columns (so that no file gets under its limit by packing lines). Functions are found by brace
 matching on the source with comments and string literals removed: a top-level or
 namespace/class-level block opened by a line that looks like a definition (ends with ')'
-[const/override/...] '{'). Python modules under --py-dir: at most 400 lines each.
-Usage: check_sizes.py SRC_DIR [--max-function 120] [--max-file 500] [--narrow FOLDER ...]
+[const/override/...] '{'). Python modules under --py-dir: at most 400 lines each. No folder of SRC_DIR above --max-folder-share of
+the source lines (*.cpp, *.hpp; generated tables aside), so that the folders show the design.
+Usage: check_sizes.py SRC_DIR [--max-function 120] [--max-file 500] [--max-folder-share 0.22] [--narrow FOLDER ...]
 [--max-columns 120] [--py-dir postproc]; exit 1 on a violation."""
 import argparse
 import pathlib
@@ -57,13 +58,17 @@ def main():
     ap.add_argument("--max-columns", type=int, default=120)
     ap.add_argument("--py-dir", help="also check the Python modules under this folder")
     ap.add_argument("--max-py-file", type=int, default=400)
+    ap.add_argument("--max-folder-share", type=float, default=0.22)
     a = ap.parse_args()
     bad = 0
     files = sorted(p for p in pathlib.Path(a.src).rglob("*") if p.suffix in (".cpp", ".hpp"))
     longest = (0, "")
+    folder_lines = {}
     for p in files:
         text = p.read_text()
         n = text.count("\n")
+        folder = p.relative_to(a.src).parts[0]
+        folder_lines[folder] = folder_lines.get(folder, 0) + n
         if n > a.max_file:
             print(f"{p}: {n} lines (limit {a.max_file})")
             bad += 1
@@ -78,6 +83,11 @@ def main():
             if length > a.max_function:
                 print(f"{p}:{start}: function of {length} lines (limit {a.max_function}): {head}")
                 bad += 1
+    total = sum(folder_lines.values())
+    for folder, n in sorted(folder_lines.items()):
+        if n > a.max_folder_share * total:
+            print(f"{a.src}/{folder}: {n} of {total} source lines ({n / total:.0%}, limit {a.max_folder_share:.0%})")
+            bad += 1
     if a.py_dir:
         for p in sorted(pathlib.Path(a.py_dir).rglob("*.py")):
             n = p.read_text().count("\n")

@@ -20,7 +20,7 @@
 // rail, h = -f with rate -f' = c D (u - w)/(4 x) - (u + w)/2 (deployment: the end event), and each
 // moving bay i, h = kStraightFraction l_i - x_i with rate D_i D_i' (bay m: deploying_straight,
 // the others: singular_bay).
-//   contact_landing, contact_lift_off (stack contacts on, stages/free_contacts.hpp): the state is
+//   contact_landing, contact_lift_off (stack contacts on, free_stack/free_contacts.hpp): the state is
 //                      then one height per cluster of frames in closed contact (q = (Y_c), frames
 //                      below lo rest on the floor), the mass matrix reduced by model/contacts.hpp.
 // An event not watched returns -1 (never rises).
@@ -29,7 +29,7 @@
 
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
-#include "stages/free_contacts.hpp"
+#include "free_stack/free_contacts.hpp"
 #include "stages/phase.hpp"
 
 namespace truss::stages {

@@ -1,4 +1,4 @@
-#include "stages/free_phase.hpp"
+#include "free_stack/free_phase.hpp"
 
 #include <algorithm>
 #include <cmath>

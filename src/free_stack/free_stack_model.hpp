@@ -9,7 +9,7 @@
 #include <optional>
 #include <vector>
 
-#include "stages/free_stack.hpp"
+#include "free_stack/free_stack.hpp"
 #include "stages/phase_dynamic.hpp"
 #include "stages/stack_model.hpp"
 

@@ -15,7 +15,7 @@
 // drive) is solved directly: two tridiagonal solves and a scalar (model/tridiagonal.hpp). In
 // velocity mode y_m'' = 0 is a second row b' p'' = k_x x'^2 - alpha (y_m' - v) with the drive force
 // as its multiplier: three solves and a 2x2 system. Pin force |lambda| / (3 sin beta).
-// Stack contacts on (stages/free_contacts.hpp): p = (Y_c of the clusters of frames lo..m-1, x),
+// Stack contacts on (free_stack/free_contacts.hpp): p = (Y_c of the clusters of frames lo..m-1, x),
 // the frame-height system reduced to the clusters (model/contacts.hpp) before the map to x; stop
 // events 1 and 2 are the contact landing and lift-off.
 #pragma once
@@ -23,7 +23,7 @@
 
 #include "model/frames.hpp"
 #include "model/tridiagonal.hpp"
-#include "stages/free_contacts.hpp"
+#include "free_stack/free_contacts.hpp"
 #include "stages/phase.hpp"
 
 namespace truss::stages {

@@ -1,4 +1,4 @@
-#include "stages/free_stack.hpp"
+#include "free_stack/free_stack.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,8 +10,8 @@
 #include "model/frames.hpp"
 #include "model/impacts.hpp"
 #include "model/rail.hpp"
-#include "stages/free_phase.hpp"
-#include "stages/free_phase_b.hpp"
+#include "free_stack/free_phase.hpp"
+#include "free_stack/free_phase_b.hpp"
 
 namespace truss::stages {
 

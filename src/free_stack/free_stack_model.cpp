@@ -1,11 +1,11 @@
-#include "stages/free_stack_model.hpp"
+#include "free_stack/free_stack_model.hpp"
 
 #include <cmath>
 
 #include <fmt/format.h>
 
 #include "integrators/factory.hpp"
-#include "stages/free_phase.hpp"
+#include "free_stack/free_phase.hpp"
 
 namespace truss::stages {
 

@@ -1,4 +1,4 @@
-#include "stages/free_phase_b.hpp"
+#include "free_stack/free_phase_b.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include "model/bay.hpp"
 #include "model/contacts.hpp"
 #include "model/rail.hpp"
-#include "stages/free_phase.hpp"
+#include "free_stack/free_phase.hpp"
 
 namespace truss::stages {
 

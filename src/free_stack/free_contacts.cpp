@@ -1,4 +1,4 @@
-#include "stages/free_contacts.hpp"
+#include "free_stack/free_contacts.hpp"
 
 #include <Eigen/Core>
 #include <algorithm>

@@ -5,7 +5,7 @@
 // (model/free_impacts.hpp), and the lock (x = 0: bay m joins the locked part, dD/dt = 0 there).
 // Moving frames: phase A lo = 1 (frame 0 held on the floor, as in the paper), the driven frame m
 // on top; phase B lo = 1, or 0 in the stage of bay 1 (its rail lifts frame 0).
-// Stack contacts (`stack.contacts = true`, stages/free_contacts.hpp): every contact D_i >= 0 starts
+// Stack contacts (`stack.contacts = true`, free_stack/free_contacts.hpp): every contact D_i >= 0 starts
 // closed; frames 0..k resting in closed contact on the floor (the resting block) are left out of
 // the phases (lo = k + 1), frames in closed contact above move as clusters. prepare_segment opens
 // every closed contact whose force pulls (before each integration segment), apply_contact_event
@@ -19,7 +19,7 @@
 
 #include "model/free_impacts.hpp"
 #include "model/params.hpp"
-#include "stages/free_contacts.hpp"
+#include "free_stack/free_contacts.hpp"
 #include "stages/phase.hpp"
 #include "stages/stage_plan.hpp"
 
