@@ -1,19 +1,23 @@
 #!/usr/bin/python3
 """truss-campaign against hostile input and a failing machine (issue 13): resource limits before
-any work, messages that name the --set or the campaign line, a refused --force exits 2, a full
-disk while rank 0 writes the results, and the per-run wall-time cap.
+any work, messages that name the --set or the campaign line, one campaign at a time on an output,
+a full disk while rank 0 writes the results, and the per-run wall-time cap.
 
   test_hostile_mpi.py --driver truss-campaign --repo SRC --scratch DIR
 """
 import argparse
 import fcntl
 import os
+import re
 import shutil
 import subprocess
 import sys
 
 import h5py
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_campaign_mpi import datasets, same_values  # noqa: E402
 
 ENV = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
            OMPI_MCA_rmaps_base_oversubscribe="1")
@@ -76,15 +80,45 @@ def messages(args, d):
             os.remove(os.path.join(d, f))
 
 
-def force_refused(args, d):
-    """--force on a journal that a live campaign holds: exit 2, as the same refusal with --resume."""
+def in_use(args, d):
+    """One campaign at a time on an output (its lock, .NAME.lock): a held lock refuses a start,
+    --force and --resume with exit 2 naming the holder, and nothing of the holder's is touched (its
+    temporary file, its journal, its lock file); of two mpirun started at the same instant on one
+    output, one writes the file (equal to an uninterrupted campaign's) and the other is refused so."""
     camp = os.path.join(args.repo, "campaigns/table1_dispersed.toml")
     out = os.path.join(d, "f.h5")
-    with open(out + ".journal", "w") as j:
-        fcntl.flock(j, fcntl.LOCK_EX)  # what a running truss-campaign does
-        p = mpirun(args, 2, [camp, "-o", out, "--force"])
-        check(p.returncode == 2 and "in use" in p.stderr, f"--force on a held journal: exit 2, '{first_line(p)}'")
-    os.remove(out + ".journal")
+    lock = os.path.join(d, ".f.h5.lock")
+    theirs = [os.path.join(d, ".f.h5.tmp.4242"), out + ".journal"]
+    for t in theirs:
+        open(t, "wb").write(b"a live session's")
+    with open(lock, "w") as held:
+        held.write("PID 4242 on testhost\n")
+        held.flush()
+        fcntl.flock(held, fcntl.LOCK_EX)  # what a running truss-campaign holds
+        for extra in ([], ["--force"], ["--resume"]):
+            p = mpirun(args, 2, [camp, "-o", out, *extra, "--progress", "none"])
+            check(p.returncode == 2 and f"{out} is in use by another truss-campaign (PID 4242 on testhost" in p.stderr
+                  and all(open(t, "rb").read() == b"a live session's" for t in theirs)
+                  and open(lock).read() == "PID 4242 on testhost\n" and len(os.listdir(d)) == 3,
+                  f"{' '.join(extra) or 'a start'} on a held output: exit 2, '{first_line(p)}', the holder's files as "
+                  f"they were")
+    for f in theirs + [lock]:
+        os.remove(f)
+    synthetic = ["--set", "ensemble.n_runs=300", "--synthetic-run-cost-s", "0.01", "--progress", "none"]
+    ref = os.path.join(d, "ref.h5")
+    check(mpirun(args, 2, [camp, "-o", ref, *synthetic]).returncode == 0, "an uninterrupted campaign")
+    for trial in range(3):
+        out = os.path.join(d, f"two{trial}.h5")
+        cmd = ["mpirun", "--oversubscribe", "-np", "2", args.driver, camp, "-o", out, *synthetic]
+        procs = [subprocess.Popen(cmd, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                 for _ in range(2)]
+        res = sorted((p.wait(timeout=300), p.stderr.read()) for p in procs)
+        left = sorted(f for f in os.listdir(d) if f.startswith(f".two{trial}.") or f.startswith(f"two{trial}."))
+        same, why = same_values(datasets(ref), datasets(out))
+        check([rc for rc, _ in res] == [0, 2] and re.search(r"is in use by another truss-campaign \(PID \d+ on ",
+                                                              res[1][1]) and same and left == [f"two{trial}.h5"],
+              f"two starts at once: exits {[rc for rc, _ in res]}, the loser '{res[1][1].splitlines()[0][:120]}', "
+              f"the winner's file equals the uninterrupted one {why}, nothing else left {left}")
 
 
 def disk_full(args, d):
@@ -129,7 +163,7 @@ def main():
     ap.add_argument("--repo", required=True)
     ap.add_argument("--scratch", required=True)
     args = ap.parse_args()
-    for case in (resources, messages, force_refused, disk_full, wall_time):
+    for case in (resources, messages, in_use, disk_full, wall_time):
         d = os.path.join(args.scratch, case.__name__)
         shutil.rmtree(d, ignore_errors=True)
         os.makedirs(d)
