@@ -24,7 +24,7 @@ std::string human(double bytes) {
   const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB", "ZiB"};
   int u = 0;
   while (bytes >= 1024.0 && u < 7) { bytes /= 1024.0; ++u; }
-  return fmt::format("{:.3g} {}", bytes, units[u]);
+  return fmt::format("{:.4g} {}", bytes, units[u]);  // 1020 KiB, not 1.02e+03
 }
 }  // namespace
 

@@ -12,6 +12,7 @@ import re
 import shutil
 import subprocess
 import sys
+import time
 
 import h5py
 import numpy as np
@@ -114,19 +115,24 @@ def in_use(args, d):
                  for _ in range(2)]
         res = sorted((p.wait(timeout=300), p.stderr.read()) for p in procs)
         left = sorted(f for f in os.listdir(d) if f.startswith(f".two{trial}.") or f.startswith(f"two{trial}."))
-        same, why = same_values(datasets(ref), datasets(out))
+        same, why = same_values(datasets(ref), datasets(out)) if os.path.exists(out) else (False, "(none written)")
         check([rc for rc, _ in res] == [0, 2] and re.search(r"is in use by another truss-campaign \(PID \d+ on ",
                                                               res[1][1]) and same and left == [f"two{trial}.h5"],
               f"two starts at once: exits {[rc for rc, _ in res]}, the loser '{res[1][1].splitlines()[0][:120]}', "
               f"the winner's file equals the uninterrupted one {why}, nothing else left {left}")
 
 
+def tmpfs(path, size):
+    """A tmpfs of `size` (mount's syntax) at path; False if this cannot be done here (not root)."""
+    os.makedirs(path, exist_ok=True)
+    return os.geteuid() == 0 and subprocess.run(["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", path]).returncode == 0
+
+
 def disk_full(args, d):
     """Rank 0's results file on a 1 MiB tmpfs (histories make it too large): exit 3, the system's
     reason, no crash (was: SIGSEGV in HDF5's exit-time cleanup), no temporary file left."""
     full = os.path.join(d, "full")
-    os.makedirs(full)
-    if os.geteuid() != 0 or subprocess.run(["mount", "-t", "tmpfs", "-o", "size=1m", "tmpfs", full]).returncode != 0:
+    if not tmpfs(full, "1m"):
         print("  skip: disk full (needs root and tmpfs)")
         return
     try:
@@ -139,6 +145,64 @@ def disk_full(args, d):
               f"disk full on rank 0: exit {p.returncode} (3 expected), '{first_line(p)}', left {left}")
     finally:
         subprocess.run(["umount", full])
+
+
+def disk_full_resume(args, d):
+    """The disk fills while a campaign runs: rank 0 removes its temporary file before the job is
+    aborted (the journal keeps the finished runs). Once the disk has room again, --resume removes
+    the temporary files of killed sessions before its free-space check and counts the journal it
+    keeps once: the disk is sized so that it has room for the campaign, but not for the journal
+    twice or with a stale temporary file of 1 MiB. The resumed file equals an uninterrupted one's."""
+    camp = os.path.join(args.repo, "campaigns/table1_dispersed.toml")
+    # Synthetic runs' values do not compress: the file is about its estimate (/runs uncompressed), plus
+    # /nominal, kept small by a coarse history step.
+    synthetic = ["--set", "ensemble.n_runs=600", "--synthetic-run-cost-s", "0.01", "--progress", "none",
+                 "--set", "output.history_step_s=0.1"]
+    ref = os.path.join(d, "ref.h5")
+    check(mpirun(args, 2, [camp, "-o", ref, *synthetic]).returncode == 0, "an uninterrupted campaign")
+    disk = os.path.join(d, "disk")
+    if not tmpfs(disk, "64k"):
+        print("  skip: disk full (needs root and tmpfs)")
+        return
+    try:  # the journal's estimate, from the campaign's refusal on a disk too small
+        p = mpirun(args, 2, [camp, "-o", os.path.join(disk, "r.h5"), *synthetic])
+        sizes = re.findall(r"about ([0-9.]+) MiB", p.stderr)
+    finally:
+        subprocess.run(["umount", disk])
+    check(p.returncode == 2 and len(sizes) == 2, f"the estimates: results file and journal {sizes} MiB")
+    journal = float(sizes[1]) * 2**20
+    # Room for the file and the journal, 1 % more (the estimates' 4 digits, the lock file, block rounding).
+    if not tmpfs(disk, f"{int((os.path.getsize(ref) + journal) * 1.01 / 4096 + 2) * 4}k"):
+        return
+    try:
+        out = os.path.join(disk, "r.h5")
+        proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, camp, "-o", out, *synthetic],
+                                env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        while proc.poll() is None and (not os.path.exists(out + ".journal")
+                                       or os.path.getsize(out + ".journal") < 0.4 * journal):
+            time.sleep(0.005)
+        with open(os.path.join(disk, "filler"), "wb") as f:  # every free byte
+            try:
+                while True:
+                    f.write(b"\0" * 65536)
+                    f.flush()
+            except OSError:
+                pass
+        err = proc.communicate(timeout=300)[1]
+        left = sorted(os.listdir(disk))
+        check(proc.returncode != 0 and "No space left on device" in err and left == [".r.h5.lock", "filler", "r.h5.journal"],
+              f"disk full mid-run: exit {proc.returncode}, '{err.strip().splitlines()[0][:120]}', left {left} (the "
+              f"journal, the lock file of the aborted session: no temporary file)")
+        os.remove(os.path.join(disk, "filler"))
+        stale = os.path.join(disk, ".r.h5.tmp.999999")
+        open(stale, "wb").write(b"\0" * 2**20)
+        p = mpirun(args, 2, [camp, "-o", out, *synthetic, "--resume"])
+        same, why = same_values(datasets(ref), datasets(out)) if p.returncode == 0 else (False, "")
+        check(p.returncode == 0 and f"removed {stale}" in p.stderr and same and os.listdir(disk) == ["r.h5"],
+              f"--resume: exit {p.returncode} ({first_line(p)}), the stale file removed, the file equals the "
+              f"uninterrupted one {why}, nothing else left {os.listdir(disk)}")
+    finally:
+        subprocess.run(["umount", disk])
 
 
 def wall_time(args, d):
@@ -163,7 +227,7 @@ def main():
     ap.add_argument("--repo", required=True)
     ap.add_argument("--scratch", required=True)
     args = ap.parse_args()
-    for case in (resources, messages, in_use, disk_full, wall_time):
+    for case in (resources, messages, in_use, disk_full, disk_full_resume, wall_time):
         d = os.path.join(args.scratch, case.__name__)
         shutil.rmtree(d, ignore_errors=True)
         os.makedirs(d)
