@@ -21,7 +21,7 @@
 #include "parallel/progress.hpp"
 #include "parallel/synthetic_run.hpp"
 #include "results/resources.hpp"
-#include "util/lock_file.hpp"
+#include "results/lock_file.hpp"
 
 namespace truss::parallel {
 
@@ -60,7 +60,7 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 
 // Rank 0's state between the checks and the end.
 struct Rank0 {
-  std::unique_ptr<util::LockFile> lock;         // the output's, for the whole session (first in, last out)
+  std::unique_ptr<results::LockFile> lock;         // the output's, for the whole session (first in, last out)
   std::unique_ptr<results::CampaignFile> file;  // the results file being written (a temporary name)
   std::unique_ptr<results::Journal> journal;
   std::unique_ptr<Progress> progress;
@@ -89,8 +89,8 @@ void lock_and_check_output(const CommandOptions& o, const campaign::CampaignCont
   check_path();  // before a lock file is made next to it
   const std::string lock = results::CampaignFile::lock_name(o.output_path);
   try {
-    r0.lock = std::make_unique<util::LockFile>(lock);
-  } catch (const util::LockHeld& e) {
+    r0.lock = std::make_unique<results::LockFile>(lock);
+  } catch (const results::LockHeld& e) {
     throw io::InputError(fmt::format("error: {} is in use by another truss-campaign ({}, lock file {}); wait for "
                                      "it to end or stop it (ranks of a killed mpirun may still run)",
                                      o.output_path, e.what(), lock));

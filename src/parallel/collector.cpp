@@ -133,7 +133,8 @@ void Collector::restore_run(const FrameCheck& check) {
                              round, plans_.empty() ? -1 : plans_.back().end_run() - 1));
   if (rec.rank() < 0 || rec.rank() >= session_ranks_)
     check.refuse(fmt::format("run {} computed on rank {} in a session on {} ranks", run, rec.rank(), session_ranks_));
-  check.seconds(rec.wall_time_s(), fmt::format("run {}: a wall time", run).c_str());
+  if (const double w = rec.wall_time_s(); !(std::isfinite(w) && w >= 0.0))
+    check.refuse(fmt::format("run {}: a wall time of {} s", run, w));
   if (file_.store().has(run)) check.refuse(fmt::format("run {} recorded twice", run));
   file_.store().add(rec, std::max<std::int64_t>(0, st_.session - 1));
   observe(rec);

@@ -78,7 +78,7 @@ class CampaignFile {
   // session of this campaign can own one then).
   static std::vector<std::string> remove_stale(const std::string& path);
   static std::string temporary_name(const std::string& path);  // .NAME.tmp.PID of this process
-  // .NAME.lock: the lock (util/lock_file.hpp) a campaign holds on its output from before any check
+  // .NAME.lock: the lock (results/lock_file.hpp) a campaign holds on its output from before any check
   // of its journal and temporary files until its journal is removed.
   static std::string lock_name(const std::string& path);
 

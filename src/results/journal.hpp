@@ -57,7 +57,7 @@ struct JournalRefused : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// A journal takes no lock of its own: its campaign holds the output's lock (util/lock_file.hpp,
+// A journal takes no lock of its own: its campaign holds the output's lock (results/lock_file.hpp,
 // CampaignFile::lock_name) from before the journal is opened until after it is removed.
 class Journal {
  public:

@@ -9,7 +9,7 @@ journal: crafted journals (records that pass their CRC but make no sense: a run 
   leave the journal byte for byte as it was and nothing written; a flipped byte in the middle is
   reported as a damaged middle with the counts of records kept and dropped (counted here by an
   independent parser of the journal format), and stale .NAME.tmp.PID files are removed on --resume.
-faults: 10 seeded trials of kill -9 (of mpirun, of a worker, of rank 0) at a random moment, each
+faults: 10 seeded trials (--trials) of kill -9 (of mpirun, of a worker, of rank 0) at a random moment, each
   followed by --resume: every result equals an uninterrupted campaign's, no temporary file,
   journal or process is left behind.
 Campaigns use the hidden --synthetic-run-cost-s (runs sleep, records are a function of the run
@@ -284,7 +284,8 @@ def case_faults(args):
     cost = 0.004  # 600 runs x 4 ms on 2 ranks: about 1.5 s of campaign to hit
     ref = os.path.join(d, "ref.h5")
     # How long the journal lives (runs computed; not the MPI start-up): the span to kill within.
-    proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, *campaign_args(args, ref, cost)],
+    proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", str(args.ranks), args.driver,
+                             *campaign_args(args, ref, cost)],
                             env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     while not os.path.exists(ref + ".journal") and proc.poll() is None:
         time.sleep(0.005)
@@ -297,10 +298,11 @@ def case_faults(args):
     resumed = {}
     rng = random.Random(20261123)
     targets = ["mpirun", "worker", "rank0"]
-    for trial in range(10):
+    for trial in range(args.trials):
         target = targets[trial % 3]
         out = os.path.join(d, f"t{trial}.h5")
-        proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, *campaign_args(args, out, cost)],
+        proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", str(args.ranks), args.driver,
+                                 *campaign_args(args, out, cost)],
                                 env=ENV, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         while not os.path.exists(out + ".journal") and proc.poll() is None:
             time.sleep(0.005)
@@ -316,7 +318,7 @@ def case_faults(args):
         if os.path.exists(out):
             how = "results written without a resume (the job ended before the kill took effect, or ranks outlived mpirun)"
         else:
-            p = run(args, 2, campaign_args(args, out, cost) + ["--resume"])
+            p = run(args, args.ranks, campaign_args(args, out, cost) + ["--resume"])
             check(p.returncode == 0, f"trial {trial}: --resume after kill -9 of {target} at {delay:.2f} s "
                                      f"({p.stderr.strip()[-200:]})")
             how = "resumed"
@@ -335,6 +337,8 @@ def main():
     ap.add_argument("--driver", required=True)
     ap.add_argument("--repo", required=True)
     ap.add_argument("--scratch", required=True)
+    ap.add_argument("--trials", type=int, default=10, help="faults: kill -9 trials (10 in CI)")
+    ap.add_argument("--ranks", type=int, default=2, help="faults: ranks of the killed and resumed campaigns")
     args = ap.parse_args()
     print(f"case {args.case}:")
     globals()[f"case_{args.case}"](args)

@@ -1,5 +1,5 @@
 // The journal (results/journal.hpp): its frames, torn tails and damaged middles, refusals, and a
-// write error that stops it; the output's lock that guards it (util/lock_file.hpp).
+// write error that stops it; the output's lock that guards it (results/lock_file.hpp).
 #include <catch2/catch.hpp>
 
 #include <sys/resource.h>
@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "results/journal.hpp"
-#include "util/lock_file.hpp"
+#include "results/lock_file.hpp"
 #include "util/bytes.hpp"
 #include "util/crc32.hpp"
 
@@ -201,16 +201,16 @@ TEST_CASE("a lock file: one holder, named to the others, the file gone when let 
   const std::string path = scratch(".out.h5.lock").string();
   {
     std::ofstream(path) << "PID 1 on a host that rebooted\n";  // a dead holder's file: taken over
-    const truss::util::LockFile lock(path);
+    const truss::results::LockFile lock(path);
     const std::string me = "PID " + std::to_string(::getpid()) + " on ";
     std::ifstream in(path);
     std::string line;
     std::getline(in, line);
     CHECK(line.rfind(me, 0) == 0);
     // flock() locks belong to an open file: a second one is refused, in this process as in another.
-    CHECK_THROWS_MATCHES(truss::util::LockFile(path), truss::util::LockHeld, Catch::Message(line));
+    CHECK_THROWS_MATCHES(truss::results::LockFile(path), truss::results::LockHeld, Catch::Message(line));
   }
   CHECK_FALSE(fs::exists(path));
-  const truss::util::LockFile again(path);
+  const truss::results::LockFile again(path);
   CHECK(fs::exists(path));
 }

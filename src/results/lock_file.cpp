@@ -1,4 +1,4 @@
-#include "util/lock_file.hpp"
+#include "results/lock_file.hpp"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -10,7 +10,7 @@
 
 #include <fmt/format.h>
 
-namespace truss::util {
+namespace truss::results {
 
 namespace {
 
@@ -69,4 +69,4 @@ LockFile::~LockFile() {
   ::close(fd_);
 }
 
-}  // namespace truss::util
+}  // namespace truss::results

@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-namespace truss::util {
+namespace truss::results {
 
 // Another live process holds the lock; what() names it as its file does ("PID 4242 on node7").
 struct LockHeld : std::runtime_error {
@@ -30,4 +30,4 @@ class LockFile {
   int fd_ = -1;
 };
 
-}  // namespace truss::util
+}  // namespace truss::results
