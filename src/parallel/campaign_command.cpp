@@ -21,6 +21,7 @@
 #include "parallel/progress.hpp"
 #include "parallel/synthetic_run.hpp"
 #include "results/resources.hpp"
+#include "results/lock_file.hpp"
 
 namespace truss::parallel {
 
@@ -59,30 +60,45 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
 
 // Rank 0's state between the checks and the end.
 struct Rank0 {
+  std::unique_ptr<results::LockFile> lock;         // the output's, for the whole session (first in, last out)
   std::unique_ptr<results::CampaignFile> file;  // the results file being written (a temporary name)
   std::unique_ptr<results::Journal> journal;
   std::unique_ptr<Progress> progress;
   std::unique_ptr<Collector> collector;
   results::JournalScan scan;
-  // Nothing written: no results file (its temporary one removed), and the journal as it was.
+  // Nothing written: no results file (its temporary one removed), the journal as it was, the
+  // output's lock let go.
   void drop() {
     collector.reset();
     journal.reset();
     file.reset();
+    lock.reset();
   }
 };
 
-// Rank 0: output and journal checks; creates the results file (a temporary name until the end)
-// and opens or creates the journal, restoring its rounds and runs into the file. Throws
-// io::InputError for anything the user must decide.
-void prepare_output(const CommandOptions& o, const std::string& campaign_text, const campaign::CampaignContext& ctx,
-                    methods::Method& method, Rank0& r0) {
+// Rank 0: the output's lock, then with it held the temporary files of killed sessions removed
+// and the output, journal and resource checks. Throws io::InputError for anything the user must
+// decide (another live truss-campaign on the same output among them).
+void lock_and_check_output(const CommandOptions& o, const campaign::CampaignContext& ctx, Rank0& r0) {
   if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
-  if (o.resume && fs::exists(o.output_path))
-    throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
-  io::check_output_path(o.output_path, o.force);
-  // Memory and disk for every run, before the journal exists (a refusal leaves nothing behind).
-  if (const std::string e = results::check_resources(ctx, o.output_path); !e.empty()) throw io::InputError(e);
+  auto check_path = [&] {
+    if (o.resume && fs::exists(o.output_path))
+      throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
+    io::check_output_path(o.output_path, o.force);
+  };
+  check_path();  // before a lock file is made next to it
+  const std::string lock = results::CampaignFile::lock_name(o.output_path);
+  try {
+    r0.lock = std::make_unique<results::LockFile>(lock);
+  } catch (const results::LockHeld& e) {
+    throw io::InputError(fmt::format("error: {} is in use by another truss-campaign ({}, lock file {}); wait for "
+                                     "it to end or stop it (ranks of a killed mpirun may still run)",
+                                     o.output_path, e.what(), lock));
+  }
+  check_path();  // again, under the lock: a session that held it until now may have finished the file
+  // No live session of this output exists (we hold its lock): temporary files are of killed ones.
+  for (const auto& stale : results::CampaignFile::remove_stale(o.output_path))
+    std::cerr << fmt::format("[truss-campaign] removed {}, left by an interrupted session\n", stale);
   const std::string jpath = o.output_path + ".journal";
   const bool has_journal = fs::exists(fs::symlink_status(jpath));
   if (o.resume && !has_journal)
@@ -91,22 +107,33 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
   if (!o.resume && has_journal && !o.force)
     throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
                                      "(same campaign and --set options) or start over with --force", jpath));
+  // Memory and disk for every run; the journal on disk is the campaign's already (kept on
+  // --resume, replaced on --force).
+  std::error_code ec;
+  const auto journal_bytes = has_journal ? fs::file_size(jpath, ec) : 0;
+  if (const std::string e = results::check_resources(ctx, o.output_path, ec ? 0.0 : static_cast<double>(journal_bytes));
+      !e.empty())
+    throw io::InputError(e);
+}
+
+// Rank 0: the output's checks (lock_and_check_output); creates the results file (a temporary name
+// until the end) and opens or creates the journal, restoring its rounds and runs into the file.
+void prepare_output(const CommandOptions& o, const std::string& campaign_text, const campaign::CampaignContext& ctx,
+                    methods::Method& method, Rank0& r0) {
+  lock_and_check_output(o, ctx, r0);
+  const std::string jpath = o.output_path + ".journal";
   const results::StoreOptions store{results::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression};
   r0.file = std::make_unique<results::CampaignFile>(o.output_path, ctx, store);
   try {
-    if (!o.resume && has_journal) results::Journal::remove_unused(jpath);
+    if (o.force) fs::remove(jpath);
     r0.journal = std::make_unique<results::Journal>(o.resume ? results::Journal::open_existing(jpath, campaign_text)
                                                              : results::Journal::create(jpath, campaign_text));
-  } catch (const std::runtime_error& e) {  // JournalRefused included: held by a live campaign, another campaign
-    throw io::InputError(std::string(o.resume ? "error: --resume: " : has_journal ? "error: --force: " : "error: ") +
-                         e.what());
+  } catch (const std::runtime_error& e) {  // JournalRefused included: another campaign's journal
+    throw io::InputError(std::string(o.resume ? "error: --resume: " : "error: ") + e.what());
   }
   r0.progress = std::make_unique<Progress>(ctx.options.ensemble.n_runs, 0, ProgressMode::none, 1.0);
   r0.collector = std::make_unique<Collector>(ctx.record, method, *r0.journal, *r0.file, *r0.progress, o.engine);
   if (o.resume) r0.scan = r0.collector->restore();
-  // Temporary files of killed sessions: no live session of this campaign exists (we hold the lock).
-  for (const auto& stale : results::CampaignFile::remove_stale(o.output_path))
-    std::cerr << fmt::format("[truss-campaign] removed {}, left by an interrupted session\n", stale);
 }
 
 ProgressMode progress_mode(const std::string& s) {

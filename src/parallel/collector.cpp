@@ -2,6 +2,7 @@
 // method's round records; the round plans; --resume from the journal.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <limits>
 
 #include "io/scene_toml.hpp"
@@ -52,52 +53,92 @@ methods::RoundPlan Collector::propose(std::int64_t round, std::int64_t first_run
   return {round, first_run, p.n_runs, std::move(p.state)};
 }
 
-// One journal frame into the session state, the plans or the results file.
-void Collector::restore_frame(FrameKind kind, std::string_view payload, std::size_t offset) {
-  const std::string where = fmt::format("{}: record at byte {}", journal_.path(), offset);
-  auto refuse = [&](const std::string& what) {
-    throw io::InputError(fmt::format("error: --resume: {}: {}; the journal is inconsistent; start over with --force",
-                                     where, what));
-  };
-  auto need = [&](std::size_t n, const char* what) {
+namespace detail {
+
+// The checks of one journal frame on --resume. A frame that passed its CRC but holds what no
+// campaign writes (a crash tears the last frame, it does not make one up) is refused, naming the
+// journal and the frame's byte offset.
+struct FrameCheck {
+  const std::string& path;
+  std::size_t offset;
+  std::string_view payload;
+  [[noreturn]] void refuse(const std::string& what) const {
+    throw io::InputError(fmt::format("error: --resume: {}: record at byte {}: {}; the journal is inconsistent; "
+                                     "start over with --force", path, offset, what));
+  }
+  void size(std::size_t n, const char* what) const {
     if (payload.size() != n) refuse(fmt::format("a {} record of {} bytes (expected {})", what, payload.size(), n));
-  };
+  }
+  // A clock reading or a duration: finite and not negative.
+  double seconds(double v, const char* what) const {
+    if (!(std::isfinite(v) && v >= 0.0)) refuse(fmt::format("{} of {} s", what, v));
+    return v;
+  }
+};
+
+}  // namespace detail
+
+using detail::FrameCheck;
+
+// One journal frame into the session state, the plans or the results file. Every frame follows a
+// session record (start_session writes one before anything else).
+void Collector::restore_frame(FrameKind kind, std::string_view payload, std::size_t offset) {
+  const FrameCheck check{journal_.path(), offset, payload};
+  if (kind != FrameKind::session && st_.session == 0) check.refuse("a record before the first session record");
   if (kind == FrameKind::session) {
-    need(sizeof(double) + sizeof(std::int32_t), "session");
-    if (st_.session == 0) st_.first_start = util::get_at<double>(payload.data());
+    check.size(sizeof(double) + sizeof(std::int32_t), "session");
+    const double start = check.seconds(util::get_at<double>(payload.data()), "a session start at unix time");
+    session_ranks_ = util::get_at<std::int32_t>(payload.data() + sizeof(double));
+    if (session_ranks_ < 1) check.refuse(fmt::format("a session on {} ranks", session_ranks_));
+    if (st_.session == 0) st_.first_start = start;
     st_.previous_wall_s += st_.session_wall;
     st_.session_wall = 0.0;
     ++st_.session;
   } else if (kind == FrameKind::heartbeat) {
-    need(sizeof(double), "heartbeat");
-    st_.session_wall = util::get_at<double>(payload.data());
+    check.size(sizeof(double), "heartbeat");
+    const double wall = check.seconds(util::get_at<double>(payload.data()), "a heartbeat (session wall time)");
+    if (wall < st_.session_wall)
+      check.refuse(fmt::format("a heartbeat of {} s after one of {} s in the same session", wall, st_.session_wall));
+    st_.session_wall = wall;
   } else if (kind == FrameKind::plan) {
-    methods::RoundPlan p;
-    try {
-      p = methods::RoundPlan::from_bytes(payload);
-    } catch (const std::exception& e) {
-      refuse(e.what());
-    }
-    const std::int64_t first = plans_.empty() ? 0 : plans_.back().end_run();
-    if (p.round != static_cast<std::int64_t>(plans_.size()) || p.first_run != first || p.n_runs < 0)
-      refuse(fmt::format("round {} (runs {} to {}) does not follow round {}", p.round, p.first_run,
-                         p.end_run() - 1, static_cast<std::int64_t>(plans_.size()) - 1));
-    plans_.push_back(p);
-    file_.store().extend(p.end_run());
+    restore_plan(check);
   } else {
-    if (const std::string e = L_.check(payload); !e.empty())
-      refuse(fmt::format("not a run record of this campaign ({}, {} bytes)", e, payload.size()));
-    const campaign::RecordView rec(payload, L_);
-    const std::int64_t run = rec.run(), round = rec.round();
-    if (round < 0 || round >= static_cast<std::int64_t>(plans_.size()) ||
-        !plans_[static_cast<std::size_t>(round)].contains(run))
-      refuse(fmt::format("run index {} out of range (round {}; the journal's rounds have runs 0 to {})", run, round,
-                         plans_.empty() ? -1 : plans_.back().end_run() - 1));
-    if (file_.store().has(run)) refuse(fmt::format("run {} recorded twice", run));
-    file_.store().add(rec, std::max<std::int64_t>(0, st_.session - 1));
-    observe(rec);
-    while (file_.store().write_pending()) file_.store().write_next();  // memory bounded as in a session
+    restore_run(check);
   }
+}
+
+void Collector::restore_plan(const FrameCheck& check) {
+  methods::RoundPlan p;
+  try {
+    p = methods::RoundPlan::from_bytes(check.payload);
+  } catch (const std::exception& e) {
+    check.refuse(e.what());
+  }
+  const std::int64_t first = plans_.empty() ? 0 : plans_.back().end_run();
+  if (p.round != static_cast<std::int64_t>(plans_.size()) || p.first_run != first || p.n_runs < 0)
+    check.refuse(fmt::format("round {} (runs {} to {}) does not follow round {}", p.round, p.first_run,
+                             p.end_run() - 1, static_cast<std::int64_t>(plans_.size()) - 1));
+  plans_.push_back(p);
+  file_.store().extend(p.end_run());
+}
+
+void Collector::restore_run(const FrameCheck& check) {
+  if (const std::string e = L_.check(check.payload); !e.empty())
+    check.refuse(fmt::format("not a run record of this campaign ({}, {} bytes)", e, check.payload.size()));
+  const campaign::RecordView rec(check.payload, L_);
+  const std::int64_t run = rec.run(), round = rec.round();
+  if (round < 0 || round >= static_cast<std::int64_t>(plans_.size()) ||
+      !plans_[static_cast<std::size_t>(round)].contains(run))
+    check.refuse(fmt::format("run index {} out of range (round {}; the journal's rounds have runs 0 to {})", run,
+                             round, plans_.empty() ? -1 : plans_.back().end_run() - 1));
+  if (rec.rank() < 0 || rec.rank() >= session_ranks_)
+    check.refuse(fmt::format("run {} computed on rank {} in a session on {} ranks", run, rec.rank(), session_ranks_));
+  if (const double w = rec.wall_time_s(); !(std::isfinite(w) && w >= 0.0))
+    check.refuse(fmt::format("run {}: a wall time of {} s", run, w));
+  if (file_.store().has(run)) check.refuse(fmt::format("run {} recorded twice", run));
+  file_.store().add(rec, std::max<std::int64_t>(0, st_.session - 1));
+  observe(rec);
+  while (file_.store().write_pending()) file_.store().write_next();  // memory bounded as in a session
 }
 
 void Collector::start_session(double unix_start, int n_ranks) {

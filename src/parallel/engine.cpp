@@ -42,6 +42,13 @@ double thread_cpu_s() {
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
+// Rank 0's fatal error: the results file's temporary name removed (the journal keeps every finished
+// run for --resume), then the job aborted.
+[[noreturn]] void abort_rank0(MPI_Comm comm, Collector& collector, const char* where, const std::exception& e) {
+  collector.remove_temporary_file();
+  abort_job(comm, where, e);
+}
+
 // A worker's result message, received into memory of its own.
 struct Incoming {
   std::string bytes;
@@ -187,7 +194,7 @@ bool Rank0Round::complete_receives() {
         ++sum_.runs_by_workers;
       }
     } catch (const std::exception& e) {
-      abort_job(comm_, "storing results", e);
+      abort_rank0(comm_, collector_, "storing results", e);
     }
   }
   drop_completed(recv_reqs_, incoming_);
@@ -224,7 +231,7 @@ void Rank0Round::compute_one() {
   try {
     evaluate_(plan_, run, one_);
   } catch (const std::exception& e) {
-    abort_job(comm_, "a run", e);
+    abort_rank0(comm_, collector_, "a run", e);
   }
   compute_cpu_s_ += thread_cpu_s() - c0;
   sum_.rank0_compute_s += seconds_since(t0);
@@ -233,7 +240,7 @@ void Rank0Round::compute_one() {
   try {
     collector_.add_frame(one_, plan_);
   } catch (const std::exception& e) {
-    abort_job(comm_, "storing a result", e);
+    abort_rank0(comm_, collector_, "storing a result", e);
   }
   ++received_;
 }
@@ -245,7 +252,7 @@ void Rank0Round::maybe_tick() {
   try {
     collector_.tick(false);
   } catch (const std::exception& e) {
-    abort_job(comm_, "syncing the journal", e);
+    abort_rank0(comm_, collector_, "syncing the journal", e);
   }
   sum_.rank0_tick_s += seconds_since(now);
 }
@@ -267,7 +274,7 @@ void Rank0Round::run() {
       try {
         collector_.write_next();
       } catch (const std::exception& e) {
-        abort_job(comm_, "writing the results file", e);
+        abort_rank0(comm_, collector_, "writing the results file", e);
       }
     } else if (handed_ < to_do_) {
       compute_one();
@@ -328,7 +335,7 @@ EngineResult run_engine(MPI_Comm comm, const Evaluate& evaluate, Collector* coll
       try {
         plan = collector->plan_round(r, first);
       } catch (const std::exception& e) {
-        abort_job(comm, "planning a round", e);
+        abort_rank0(comm, *collector, "planning a round", e);
       }
     }
     plan = broadcast_plan(comm, plan, root);

@@ -34,6 +34,10 @@
 
 namespace truss::parallel {
 
+namespace detail {
+struct FrameCheck;
+}
+
 struct EngineOptions {
   int max_batch = 32;             // upper bound on runs per batch: keeps the end of a round balanced
   int batches_per_rank = 4;       // guided scheduling: batch = remaining / (batches_per_rank * ranks)
@@ -63,10 +67,11 @@ class Collector {
             results::CampaignFile& file, Progress& progress, const EngineOptions& opts);
   // --resume: every frame of the journal (Journal::open_existing) into the session state, the
   // round plans and the results file. A frame that passed its CRC but makes no sense (a run out of
-  // range or twice, a short payload) was not written by a crash: io::InputError naming its byte
-  // offset, and the journal stays as it was. Then the method proposes the journaled rounds again
-  // from the restored records: io::InputError if it does not propose the same plans (another
-  // program, or a method that depends on something else than its records).
+  // its round, twice or from a rank the session did not have, a short payload, a NaN or negative
+  // time, a session on no ranks) was not written by a crash: io::InputError naming the journal
+  // and the frame's byte offset, and the journal stays as it was. Then the method proposes the
+  // journaled rounds again from the restored records: io::InputError if it does not propose the
+  // same plans (another program, or a method that depends on something else than its records).
   results::JournalScan restore();
   // Journals this session's start and syncs the journal.
   void start_session(double unix_start, int n_ranks);
@@ -82,12 +87,16 @@ class Collector {
   // Every flush interval (or now, with `sync`): a heartbeat, the journal synced and the results
   // file's pages pushed to disk. Progress when due.
   void tick(bool sync);
+  // Before the job is aborted (rank 0's fatal error): see CampaignFile::remove_temporary.
+  void remove_temporary_file() noexcept { file_.remove_temporary(); }
   const SessionState& session() const { return st_; }
   double journal_s() const { return journal_s_; }
   const std::vector<methods::RoundPlan>& plans() const { return plans_; }  // journaled or planned so far
 
  private:
   void restore_frame(results::FrameKind kind, std::string_view payload, std::size_t offset);
+  void restore_plan(const detail::FrameCheck& check);
+  void restore_run(const detail::FrameCheck& check);
   methods::RoundPlan propose(std::int64_t round, std::int64_t first_run);  // round - 1's records to the method
   void observe(const campaign::RecordView& rec);
   const campaign::RecordLayout& L_;
@@ -99,6 +108,7 @@ class Collector {
   SessionState st_;
   std::vector<methods::RoundPlan> plans_;  // every round's, from the journal (the first n_journaled_) and new
   std::size_t n_journaled_ = 0;
+  std::int32_t session_ranks_ = 0;  // while restoring: the rank count of the session being read
   std::vector<std::size_t> observed_;                      // the record fields of method_.observed_outputs()
   std::map<std::int64_t, methods::RoundRecords> records_;  // by round, for the method
   std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now(), last_sync_ = wall0_;

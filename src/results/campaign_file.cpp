@@ -15,11 +15,20 @@ namespace truss::results {
 using namespace io::h5;
 namespace fs = std::filesystem;
 
-std::string CampaignFile::temporary_name(const std::string& path) {
+namespace {
+// .NAME<suffix> next to `path`.
+std::string hidden_name(const std::string& path, const std::string& suffix) {
   const fs::path p(path);
   const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path();
-  return (dir / fmt::format(".{}.tmp.{}", p.filename().string(), static_cast<long>(::getpid()))).string();
+  return (dir / fmt::format(".{}{}", p.filename().string(), suffix)).string();
 }
+}  // namespace
+
+std::string CampaignFile::temporary_name(const std::string& path) {
+  return hidden_name(path, fmt::format(".tmp.{}", static_cast<long>(::getpid())));
+}
+
+std::string CampaignFile::lock_name(const std::string& path) { return hidden_name(path, ".lock"); }
 
 CampaignFile::CampaignFile(const std::string& path, const campaign::CampaignContext& ctx, const StoreOptions& opts)
     : path_(path), tmp_(temporary_name(path)), ctx_(ctx) {
@@ -56,6 +65,11 @@ void CampaignFile::discard() noexcept {
     fs::remove(tmp_, ec);
     tmp_.clear();
   }
+}
+
+void CampaignFile::remove_temporary() noexcept {
+  if (!tmp_.empty()) ::unlink(tmp_.c_str());
+  tmp_.clear();
 }
 
 void CampaignFile::write_summary(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,

@@ -70,11 +70,17 @@ class CampaignFile {
                      const sim::RunResult& nominal, const CampaignFileInfo& info);
   hid_t handle() const { return file_; }
   void commit(bool force);
+  // A fatal error, the job about to be aborted (no destructor will run): the temporary file
+  // removed now, without closing it (the library may have failed inside it).
+  void remove_temporary() noexcept;
   // Removes the .NAME.tmp.PID files that killed sessions left next to `path`, except this
-  // process's own; returns their paths. Call while holding the journal's lock (no live session
-  // of this campaign can own one then).
+  // process's own; returns their paths. Call while holding the output's lock (lock_name: no live
+  // session of this campaign can own one then).
   static std::vector<std::string> remove_stale(const std::string& path);
   static std::string temporary_name(const std::string& path);  // .NAME.tmp.PID of this process
+  // .NAME.lock: the lock (results/lock_file.hpp) a campaign holds on its output from before any check
+  // of its journal and temporary files until its journal is removed.
+  static std::string lock_name(const std::string& path);
 
  private:
   void discard() noexcept;

@@ -1,7 +1,6 @@
 #include "results/journal.hpp"
 
 #include <fcntl.h>
-#include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -34,17 +33,6 @@ void write_all(int fd, std::string_view bytes, const std::string& path) {
     }
     bytes.remove_prefix(static_cast<std::size_t>(n));
   }
-}
-
-void lock_or_refuse(int fd, const std::string& path) {
-  if (::flock(fd, LOCK_EX | LOCK_NB) == 0) return;
-  const int err = errno;
-  ::close(fd);
-  if (err == EWOULDBLOCK)
-    throw JournalRefused(fmt::format("{} is in use by another running truss-campaign (perhaps ranks of a killed "
-                                     "mpirun are still running: stop them first)", path));
-  errno = err;
-  fail_errno("cannot lock journal", path);
 }
 
 bool known_kind(std::uint8_t k) {
@@ -176,18 +164,9 @@ Journal::~Journal() {
   ::close(fd_);
 }
 
-void Journal::remove_unused(const std::string& path) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) fail_errno("cannot open journal", path);
-  lock_or_refuse(fd, path);
-  if (::unlink(path.c_str()) != 0) fail_errno("cannot remove journal", path);
-  ::close(fd);
-}
-
 Journal Journal::create(const std::string& path, const std::string& campaign_text) {
   const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd < 0) fail_errno("cannot create journal", path);
-  lock_or_refuse(fd, path);
   Journal j(path, fd);
   j.buffer_.assign(kMagic, sizeof kMagic);
   util::put(j.buffer_, kVersion);
@@ -201,7 +180,6 @@ Journal Journal::create(const std::string& path, const std::string& campaign_tex
 Journal Journal::open_existing(const std::string& path, const std::string& campaign_text) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd < 0) fail_errno("cannot open journal", path);
-  lock_or_refuse(fd, path);
   Journal j(path, fd);
   const off_t size = ::lseek(fd, 0, SEEK_END);
   if (size < 0 || ::lseek(fd, 0, SEEK_SET) < 0) fail_errno("cannot seek journal", path);

@@ -52,21 +52,20 @@ struct JournalScan {
   std::string describe(const std::string& path) const;  // "" when nothing was dropped
 };
 
-// A journal that must not be used: it belongs to another campaign, or a live process holds it.
+// A journal that must not be used: it belongs to another campaign.
 struct JournalRefused : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-// While open, a journal holds an exclusive flock(): a second truss-campaign on the same output
-// (for example --resume while ranks of a killed mpirun still run) is refused instead of
-// interleaving its writes. The lock dies with its process.
+// A journal takes no lock of its own: its campaign holds the output's lock (results/lock_file.hpp,
+// CampaignFile::lock_name) from before the journal is opened until after it is removed.
 class Journal {
  public:
   // Creates a new journal (fails if `path` exists) holding `campaign_text`, synced.
   static Journal create(const std::string& path, const std::string& campaign_text);
   // Opens an existing journal to read its frames (next_frame) and then append. Throws
   // std::runtime_error if the header is unreadable, and JournalRefused if it holds a different
-  // campaign text or another process has it open.
+  // campaign text.
   static Journal open_existing(const std::string& path, const std::string& campaign_text);
   // The next good frame of an existing journal (its payload valid until the next call; `offset`
   // its byte offset in the file), or false at the end or at the first bad frame.
@@ -74,8 +73,6 @@ class Journal {
   // After next_frame has returned false: scans what follows the last good frame, cuts it off and
   // leaves the journal ready for appending. Until then the file is as it was.
   JournalScan finish_reading();
-  // Removes an unfinished journal (--force); JournalRefused if a live process holds it.
-  static void remove_unused(const std::string& path);
 
   Journal(Journal&&) noexcept;
   Journal& operator=(Journal&&) = delete;

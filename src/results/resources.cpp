@@ -3,6 +3,7 @@
 #include <sys/resource.h>
 #include <sys/statvfs.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -23,7 +24,7 @@ std::string human(double bytes) {
   const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB", "ZiB"};
   int u = 0;
   while (bytes >= 1024.0 && u < 7) { bytes /= 1024.0; ++u; }
-  return fmt::format("{:.3g} {}", bytes, units[u]);
+  return fmt::format("{:.4g} {}", bytes, units[u]);  // 1020 KiB, not 1.02e+03
 }
 }  // namespace
 
@@ -69,7 +70,8 @@ double free_disk_bytes(const std::string& dir) {
   return static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
 }
 
-std::string check_resources(const campaign::CampaignContext& ctx, const std::string& output_path) {
+std::string check_resources(const campaign::CampaignContext& ctx, const std::string& output_path,
+                            double journal_on_disk_bytes) {
   const ResourceEstimate e = estimate_resources(ctx);
   const std::int64_t n = ctx.options.ensemble.n_runs;
   const double mem = available_memory_bytes();
@@ -82,11 +84,13 @@ std::string check_resources(const campaign::CampaignContext& ctx, const std::str
   const std::filesystem::path p(output_path);
   const std::string dir = p.has_parent_path() ? p.parent_path().string() : ".";
   const double disk = free_disk_bytes(dir);
-  const double need = e.output_bytes + e.journal_bytes;
-  if (need > disk)
-    return fmt::format("error: ensemble.n_runs = {}: the results file (about {}) and the journal (about {}) need "
+  const double journal_to_write = std::max(0.0, e.journal_bytes - journal_on_disk_bytes);
+  if (e.output_bytes + journal_to_write > disk)
+    return fmt::format("error: ensemble.n_runs = {}: the results file (about {}) and the journal (about {}{}) need "
                        "more than the {} free in {}; free space or use fewer runs",
-                       n, human(e.output_bytes), human(e.journal_bytes), human(disk), dir);
+                       n, human(e.output_bytes), human(e.journal_bytes),
+                       journal_on_disk_bytes > 0 ? fmt::format(", {} of it written", human(journal_on_disk_bytes)) : "",
+                       human(disk), dir);
   // A file-size limit (ulimit -f) would stop the journal mid-campaign (EFBIG, exit 3): refuse now.
   rlimit fsize{};
   if (::getrlimit(RLIMIT_FSIZE, &fsize) == 0 && fsize.rlim_cur != RLIM_INFINITY &&

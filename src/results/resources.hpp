@@ -27,6 +27,9 @@ double free_disk_bytes(const std::string& dir);
 
 // Empty if the campaign fits, else the complete refusal ("error: ...", estimates in it). Memory:
 // at most 80 % of the available memory (the rest for the process, MPI and the HDF5 library).
-std::string check_resources(const campaign::CampaignContext& ctx, const std::string& output_path);
+// Disk: the results file and the journal, less `journal_on_disk_bytes` that the campaign's journal
+// holds already (counted in the journal's estimate, and no longer free).
+std::string check_resources(const campaign::CampaignContext& ctx, const std::string& output_path,
+                            double journal_on_disk_bytes = 0.0);
 
 }  // namespace truss::results

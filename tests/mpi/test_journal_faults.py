@@ -4,11 +4,12 @@
   test_journal_faults.py --case journal|faults --driver truss-campaign --repo SRC --scratch DIR
 
 journal: crafted journals (records that pass their CRC but make no sense: a run twice, a short
-  payload, a run index out of range, a short heartbeat) make --resume exit 2 naming the record and
+  payload, a run index out of range or from a rank its session did not have, a short heartbeat, NaN,
+  negative or backward times, a session on no ranks, a frame before the first session) make --resume exit 2 naming the record and
   leave the journal byte for byte as it was and nothing written; a flipped byte in the middle is
   reported as a damaged middle with the counts of records kept and dropped (counted here by an
   independent parser of the journal format), and stale .NAME.tmp.PID files are removed on --resume.
-faults: 10 seeded trials of kill -9 (of mpirun, of a worker, of rank 0) at a random moment, each
+faults: 10 seeded trials (--trials) of kill -9 (of mpirun, of a worker, of rank 0) at a random moment, each
   followed by --resume: every result equals an uninterrupted campaign's, no temporary file,
   journal or process is left behind.
 Campaigns use the hidden --synthetic-run-cost-s (runs sleep, records are a function of the run
@@ -147,6 +148,24 @@ def case_journal(args):
     refused("out_of_range", blob + frame(b"R", struct.pack("<q", N_RUNS + 7) + rec[8:]),
             f"run index {N_RUNS + 7} out of range")
     refused("short_heartbeat", blob + frame(b"H", b"\0\0\0\0"), "heartbeat record of 4 bytes")
+    # Valid CRCs, impossible values: times that are NaN, negative or running backwards, a session on
+    # no ranks, a run from a rank its session did not have, a frame before the first session.
+    nan = float("nan")
+    refused("nan_heartbeat", blob + frame(b"H", struct.pack("<d", nan)), "a heartbeat (session wall time) of nan s")
+    refused("negative_heartbeat", blob + frame(b"H", struct.pack("<d", -1.0)), "of -1 s")
+    refused("backwards_heartbeat", blob + frame(b"H", struct.pack("<d", 1e4)) + frame(b"H", struct.pack("<d", 5e3)),
+            "a heartbeat of 5000 s after one of 10000 s in the same session")
+    refused("no_ranks", blob + frame(b"S", struct.pack("<di", time.time(), 0)), "a session on 0 ranks")
+    refused("nan_start", blob + frame(b"S", struct.pack("<di", nan, 2)), "a session start at unix time of nan s")
+    done = {struct.unpack_from("<q", pl, 0)[0] for _, pl in runs}
+    fresh_run = struct.pack("<q", min(set(range(N_RUNS)) - done))
+    # Record head (campaign/record.hpp): run i64, round i64, status i8, rank i64 at byte 17, wall f64 at 25.
+    refused("rank", blob + frame(b"R", fresh_run + rec[8:17] + struct.pack("<q", 2) + rec[25:]),
+            "computed on rank 2 in a session on 2 ranks")
+    refused("nan_run_wall", blob + frame(b"R", fresh_run + rec[8:25] + struct.pack("<d", nan) + rec[33:]),
+            "a wall time of nan s")
+    plan = next(pl for _, k, pl in frames if k == b"P")
+    refused("before_session", header + frame(b"P", plan), "a record before the first session record")
 
     # A flipped byte inside a run record in the middle: the records before it are kept, the valid
     # ones after it dropped (recomputed), and the message says so with both counts.
@@ -265,7 +284,8 @@ def case_faults(args):
     cost = 0.004  # 600 runs x 4 ms on 2 ranks: about 1.5 s of campaign to hit
     ref = os.path.join(d, "ref.h5")
     # How long the journal lives (runs computed; not the MPI start-up): the span to kill within.
-    proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, *campaign_args(args, ref, cost)],
+    proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", str(args.ranks), args.driver,
+                             *campaign_args(args, ref, cost)],
                             env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     while not os.path.exists(ref + ".journal") and proc.poll() is None:
         time.sleep(0.005)
@@ -278,10 +298,11 @@ def case_faults(args):
     resumed = {}
     rng = random.Random(20261123)
     targets = ["mpirun", "worker", "rank0"]
-    for trial in range(10):
+    for trial in range(args.trials):
         target = targets[trial % 3]
         out = os.path.join(d, f"t{trial}.h5")
-        proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, *campaign_args(args, out, cost)],
+        proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", str(args.ranks), args.driver,
+                                 *campaign_args(args, out, cost)],
                                 env=ENV, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         while not os.path.exists(out + ".journal") and proc.poll() is None:
             time.sleep(0.005)
@@ -297,7 +318,7 @@ def case_faults(args):
         if os.path.exists(out):
             how = "results written without a resume (the job ended before the kill took effect, or ranks outlived mpirun)"
         else:
-            p = run(args, 2, campaign_args(args, out, cost) + ["--resume"])
+            p = run(args, args.ranks, campaign_args(args, out, cost) + ["--resume"])
             check(p.returncode == 0, f"trial {trial}: --resume after kill -9 of {target} at {delay:.2f} s "
                                      f"({p.stderr.strip()[-200:]})")
             how = "resumed"
@@ -316,6 +337,8 @@ def main():
     ap.add_argument("--driver", required=True)
     ap.add_argument("--repo", required=True)
     ap.add_argument("--scratch", required=True)
+    ap.add_argument("--trials", type=int, default=10, help="faults: kill -9 trials (10 in CI)")
+    ap.add_argument("--ranks", type=int, default=2, help="faults: ranks of the killed and resumed campaigns")
     args = ap.parse_args()
     print(f"case {args.case}:")
     globals()[f"case_{args.case}"](args)

@@ -1,5 +1,5 @@
 // The journal (results/journal.hpp): its frames, torn tails and damaged middles, refusals, and a
-// write error that stops it.
+// write error that stops it; the output's lock that guards it (results/lock_file.hpp).
 #include <catch2/catch.hpp>
 
 #include <sys/resource.h>
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "results/journal.hpp"
+#include "results/lock_file.hpp"
 #include "util/bytes.hpp"
 #include "util/crc32.hpp"
 
@@ -149,15 +150,8 @@ TEST_CASE("the journal keeps every complete frame and drops a torn or damaged ta
   CHECK(r.scan.damaged_middle());
   CHECK_THAT(r.scan.describe(path), Catch::Contains("damaged in the middle"));
 
-  // Another campaign's journal, or one that a live process holds, is refused.
+  // Another campaign's journal is refused.
   CHECK_THROWS_AS(Journal::open_existing(path, "campaign B"), JournalRefused);
-  {
-    Journal held = Journal::open_existing(path, "campaign A");
-    CHECK_THROWS_AS(Journal::open_existing(path, "campaign A"), JournalRefused);
-    CHECK_THROWS_AS(Journal::remove_unused(path), JournalRefused);
-  }
-  Journal::remove_unused(path);
-  CHECK(!fs::exists(path));
 }
 
 TEST_CASE("frames written through many buffers come back whole and in order", "[campaign][journal]") {
@@ -201,4 +195,22 @@ TEST_CASE("a write error stops the journal: the error, then nothing more written
   CHECK(r.frames.size() > 100);
   for (std::size_t i = 0; i < r.frames.size(); ++i) CHECK(r.frames[i].second == payload(static_cast<int>(i), 5000));
   fs::remove(path);
+}
+
+TEST_CASE("a lock file: one holder, named to the others, the file gone when let go", "[campaign][journal]") {
+  const std::string path = scratch(".out.h5.lock").string();
+  {
+    std::ofstream(path) << "PID 1 on a host that rebooted\n";  // a dead holder's file: taken over
+    const truss::results::LockFile lock(path);
+    const std::string me = "PID " + std::to_string(::getpid()) + " on ";
+    std::ifstream in(path);
+    std::string line;
+    std::getline(in, line);
+    CHECK(line.rfind(me, 0) == 0);
+    // flock() locks belong to an open file: a second one is refused, in this process as in another.
+    CHECK_THROWS_MATCHES(truss::results::LockFile(path), truss::results::LockHeld, Catch::Message(line));
+  }
+  CHECK_FALSE(fs::exists(path));
+  const truss::results::LockFile again(path);
+  CHECK(fs::exists(path));
 }
