@@ -62,12 +62,12 @@ const std::vector<std::uint32_t>& sobol_table() {
 }
 
 // Balanced Feistel network on 2 * half_bits bits (half_bits in [1, 32]): a bijection whatever the
-// round function, here SplitMix64 keyed per round. Applied to x[idx[0..k)] (k <= 32), each with
+// round function, here SplitMix64 keyed per round. Applied to x[idx[0..k)] (k <= 256), each with
 // the round keys of its own dimension (dim_keys[idx[i] * kFeistelRounds + r]), the rounds of all of
 // them interleaved: the k hash chains are independent, so the core overlaps them instead of
 // waiting on one chain at a time (a run's Latin hypercube point is hundreds of such chains).
 void feistel_lanes(std::uint64_t* x, const int* idx, int k, int half_bits, const std::uint64_t* dim_keys) {
-  constexpr int kMax = 32;
+  constexpr int kMax = 256;
   const std::uint64_t mask = (1ULL << half_bits) - 1;
   std::uint64_t left[kMax], right[kMax];
   for (int i = 0; i < k; ++i) {
@@ -259,8 +259,9 @@ void SamplePlan::calc_uniforms(std::int64_t run_index, double* u) const {
       const std::uint64_t jitter_state = counter_run_state(seed_, run_index, kTagLhsJitter);
       const auto n = static_cast<std::uint64_t>(n_runs_);
       const double dn = static_cast<double>(n_runs_);
-      // Dimensions in blocks of 32, their permutations computed side by side (feistel_lanes).
-      constexpr int kBlock = 32;
+      // Dimensions in blocks of 256, their permutations computed side by side (feistel_lanes): the
+      // chains that walk longest (up to about 10 times when 2^2h is near 4n) still have company.
+      constexpr int kBlock = 256;
       std::uint64_t strata[kBlock];
       int walking[kBlock];
       for (int j0 = 0; j0 < d_; j0 += kBlock) {

@@ -585,7 +585,7 @@ TEST_CASE("latin hypercube: one sample per stratum in every dimension", "[sampli
 // Feistel network on 2h bits (2^2h >= n), round r of dimension j keyed by
 // counter_hash(seed, r, j, kTagLhsPerm), cycle-walked into [0, n); the jitter of run i in dimension
 // j is the j-th SplitMix64 output of counter_run_state(seed, i, kTagLhsJitter). The plan computes
-// 32 dimensions' chains side by side; this reference computes each alone.
+// 256 dimensions' chains side by side; this reference computes each alone.
 namespace {
 double lhs_reference(std::uint64_t seed, std::int64_t n, std::int64_t run, std::int64_t j) {
   const int h = (static_cast<int>(std::bit_width(static_cast<std::uint64_t>(n - 1))) + 1) / 2;
@@ -610,10 +610,10 @@ double lhs_reference(std::uint64_t seed, std::int64_t n, std::int64_t run, std::
 }  // namespace
 
 TEST_CASE("latin hypercube: every dimension's point is its keyed permutation's, in any block", "[sampling][lhs]") {
-  // d = 70: two full blocks of 32 dimensions and a partial one. n = 2000 makes about half the
+  // d = 600: two full blocks of 256 chains and a partial one. n = 2000 makes about half the
   // chains walk again (4,096 points for 2,000 strata), n = 1000 a few (1,024), n = 1 none.
   for (std::int64_t n : {std::int64_t{1000}, std::int64_t{2000}, std::int64_t{1}}) {
-    const int d = 70;
+    const int d = 600;
     const SamplePlan plan(SamplingMethod::latin_hypercube, n, d, 77);
     std::vector<double> u(static_cast<std::size_t>(d));
     int wrong = 0;
