@@ -129,7 +129,8 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
     const auto& d = c.dispersions[i];
     if (d.per != Per::run) continue;
     const sim::SceneKey* key = L.keys[i];
-    const double nominal = key && key->is_dispersible() ? key->get_real(c.base) : std::numeric_limits<double>::quiet_NaN();
+    const double nominal =
+        key && key->is_dispersible() ? key->get_real(c.base) : std::numeric_limits<double>::quiet_NaN();
     const double v = applied(d, nominal, L.distributions[i].calc_quantile(u[L.offset[i]]));
     in.values[i] = {v};
     if (key && key->set_real) key->set_real(in.scene, v);

@@ -35,7 +35,8 @@ struct ActiveFrames {
   int size() const { return m - lo + 1; }
   double calc_offset_sq_m2(const MastParams& mast, int bay) const {
     const int k = bay - (m - 1);
-    if (k >= 0 && !std::isnan(top_offset_sq_m2[static_cast<std::size_t>(k)])) return top_offset_sq_m2[static_cast<std::size_t>(k)];
+    if (k >= 0 && !std::isnan(top_offset_sq_m2[static_cast<std::size_t>(k)]))
+      return top_offset_sq_m2[static_cast<std::size_t>(k)];
     return calc_diagonal_offset_sq_m2(mast.frame(bay - 1), mast.frame(bay));
   }
 };
