@@ -81,6 +81,11 @@ def main():
           f"median of {a.repeats} interleaved repeats\n")
     print(f"bare simulator (1 process, no MPI/journal/HDF5): {bare_total:.3f} s = {n / bare_total:.0f} runs/s "
           f"(simulate alone {bare_sim:.3f} s, sampling and dispersion {bare_total - bare_sim:.3f} s)\n")
+    if "uniforms_s" in res["bare"][0]:  # the per-run split (thread CPU time, bench_campaign_bare)
+        us = {k: 1e6 * med(x[k] for x in res["bare"]) / n
+              for k in ("uniforms_s", "inputs_s", "simulate_s", "encode_s", "record_path_s")}
+        print("a run's path, CPU us a run: " + ", ".join(f"{k[:-2]} {v:.1f}" for k, v in us.items())
+              + f"; record path / simulate = {us['record_path_s'] / us['simulate_s']:.3f}\n")
     print("| ranks | campaign wall (s) | mpirun wall (s) | runs/s | efficiency | note |")
     print("| ----- | ----------------- | --------------- | ------ | ---------- | ---- |")
     t1 = med(x["inner"] for x in res[ranks[0]]) if ranks[0] == 1 else None
@@ -101,7 +106,8 @@ def main():
         # CPU time is less sensitive than wall time to other load on a shared machine.
         cpu1 = med(x["cpu"] for x in res[1])
         print(f"1-rank campaign CPU time (mpirun and rank, user + sys): {cpu1:.3f} s; "
-              f"against bare sample+simulate wall {bare_total:.3f} s: {100 * (cpu1 / bare_total - 1):+.1f} %")
+              f"against bare sample+simulate {bare_total:.3f} s: {100 * (cpu1 / bare_total - 1):+.1f} %; "
+              f"per run {1e6 * cpu1 / n:.1f} us = {cpu1 / bare_sim:.3f} x simulate alone")
 
 
 if __name__ == "__main__":

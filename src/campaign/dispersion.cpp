@@ -25,15 +25,6 @@ std::string find_key_units(const std::string& k) {
 
 namespace {
 
-// Per-run values go to the scene (build_mast spreads those of per-bay / per-frame keys).
-void set_run_key(sim::SceneOptions& s, const std::string& k, double v) {
-  if (const sim::SceneKey* key = sim::find_scene_key(k); key && key->set_real) key->set_real(s, v);
-}
-
-double* bay_field(model::BayParams& b, const std::string& k) { return sim::find_scene_key(k)->bay_field(b); }
-
-double* frame_field(model::FrameParams& f, const std::string& k) { return sim::find_scene_key(k)->frame_field(f); }
-
 double applied(const DispersionOptions& d, double nominal_value, double draw) {
   switch (d.apply) {
     case Apply::absolute: return draw;
@@ -68,6 +59,7 @@ DimensionLayout calc_layout(const CampaignOptions& c) {
     L.count.push_back(n);
     L.total += n;
     L.distributions.push_back(make_distribution(d));
+    L.keys.push_back(sim::find_scene_key(d.key));
     const std::string e = L.distributions.back().validate();
     if (!e.empty()) throw std::invalid_argument("dispersion of " + d.key + ": " + e);
   }
@@ -136,9 +128,12 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
   for (std::size_t i = 0; i < c.dispersions.size(); ++i) {
     const auto& d = c.dispersions[i];
     if (d.per != Per::run) continue;
-    const double v = applied(d, find_nominal(c.base, d.key), L.distributions[i].calc_quantile(u[L.offset[i]]));
+    const sim::SceneKey* key = L.keys[i];
+    const double nominal =
+        key && key->is_dispersible() ? key->get_real(c.base) : std::numeric_limits<double>::quiet_NaN();
+    const double v = applied(d, nominal, L.distributions[i].calc_quantile(u[L.offset[i]]));
     in.values[i] = {v};
-    set_run_key(in.scene, d.key, v);
+    if (key && key->set_real) key->set_real(in.scene, v);
   }
   in.mast = sim::build_mast(in.scene);
   const int n = in.mast.n_bays();
@@ -149,13 +144,13 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
     vals.assign(static_cast<std::size_t>(L.count[i]), std::numeric_limits<double>::quiet_NaN());
     if (d.per == Per::bay) {
       for (int b = 1; b <= n; ++b) {
-        double* f = bay_field(in.mast.bays[static_cast<std::size_t>(b - 1)], d.key);
+        double* f = L.keys[i]->bay_field(in.mast.bays[static_cast<std::size_t>(b - 1)]);
         *f = applied(d, *f, L.distributions[i].calc_quantile(u[L.offset[i] + b - 1]));
         vals[static_cast<std::size_t>(b - 1)] = *f;
       }
     } else {
       for (int k = 0; k <= n; ++k) {
-        double* f = frame_field(in.mast.frames[static_cast<std::size_t>(k)], d.key);
+        double* f = L.keys[i]->frame_field(in.mast.frames[static_cast<std::size_t>(k)]);
         *f = applied(d, *f, L.distributions[i].calc_quantile(u[L.offset[i] + k]));
         vals[static_cast<std::size_t>(k)] = *f;
       }

@@ -8,6 +8,7 @@
 #include "campaign/campaign.hpp"
 #include "sampling/sampling.hpp"
 #include "model/params.hpp"
+#include "sim/scene_keys.hpp"
 
 namespace truss::campaign {
 
@@ -19,6 +20,7 @@ struct DimensionLayout {
   int total = 0;            // dimensions per run
   int n_bays_max = 0;       // largest bay count a run can have
   std::vector<Distribution> distributions;  // one per dispersion, built once
+  std::vector<const sim::SceneKey*> keys;   // each dispersion's scene key, looked up once
 };
 
 // Throws std::invalid_argument naming the dispersion if a distribution is unusable (the campaign

@@ -60,6 +60,11 @@ RecordLayout::RecordLayout(const CampaignOptions& c, const DimensionLayout& dims
     in.dispersion = static_cast<int>(k);
     add(std::move(in));
   }
+  blank_.assign(fixed_bytes_, '\0');
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const Field& f : fields_)
+    if (f.type == ValueType::f64)
+      for (int k = 0; k < f.width; ++k) util::put_at(blank_.data() + f.offset + 8 * static_cast<std::size_t>(k), nan);
 }
 
 int RecordLayout::find_output(const std::string& name) const {
@@ -96,11 +101,7 @@ std::int64_t RecordView::i64(std::size_t field, int k) const {
 }
 
 RecordWriter::RecordWriter(const RecordLayout& layout, std::string& out) : L_(layout), out_(out), start_(out.size()) {
-  out_.resize(start_ + L_.fixed_bytes(), '\0');
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (std::size_t f = 0; f < L_.fields().size(); ++f)
-    if (L_.fields()[f].type == ValueType::f64)
-      for (int k = 0; k < L_.fields()[f].width; ++k) set_f64(f, nan, k);
+  out_.append(L_.blank_fixed_part());
 }
 
 char* RecordWriter::at(std::size_t field, int k) {

@@ -66,10 +66,13 @@ class RecordLayout {
 
   // "" if `record` is a record of this layout, else what is wrong with it.
   std::string check(std::string_view record) const;
+  // A record's fixed part before its setters (RecordWriter): every float64 NaN, every integer 0.
+  const std::string& blank_fixed_part() const { return blank_; }
 
  private:
   void add(Field f);
   std::vector<Field> fields_;
+  std::string blank_;
   std::size_t fixed_bytes_ = 0;
   int n_bays_max_ = 0, n_inputs_ = 0;
 };

@@ -11,6 +11,8 @@
 // Cost is linear in the number of moving frames; nothing else of the mast is touched.
 #pragma once
 #include <array>
+#include <cmath>
+#include <limits>
 
 #include <Eigen/Core>
 
@@ -26,7 +28,17 @@ struct ActiveFrames {
   bool bay_m_in_hinge_coordinate = false;  // omit bay m's G terms (caller adds g(x) dx/dt^2)
   double locked_mass_kg = 0;           // locked bays above m and the tip, rigid with frame m
   double panel_height_offset_m = 0;    // H = y_m + offset (used only if panels are enabled)
+  // b^2 (calc_diagonal_offset_sq_m2) of bays m-1 and m when the caller computed them once for a
+  // phase (its bays do not change); NaN: computed at each evaluation. The same value either way.
+  std::array<double, 2> top_offset_sq_m2{std::numeric_limits<double>::quiet_NaN(),
+                                         std::numeric_limits<double>::quiet_NaN()};
   int size() const { return m - lo + 1; }
+  double calc_offset_sq_m2(const MastParams& mast, int bay) const {
+    const int k = bay - (m - 1);
+    if (k >= 0 && !std::isnan(top_offset_sq_m2[static_cast<std::size_t>(k)]))
+      return top_offset_sq_m2[static_cast<std::size_t>(k)];
+    return calc_diagonal_offset_sq_m2(mast.frame(bay - 1), mast.frame(bay));
+  }
 };
 
 struct FrameSystem {
@@ -50,8 +62,8 @@ struct FrameSystem {
 template <class T>
 struct SmallFrameSystem {
   std::array<T, 3> diag, sub, velocity_terms, spring_forces;
-  void clear(int n) {
-    for (int k = 0; k < n; ++k) diag[k] = sub[k] = velocity_terms[k] = spring_forces[k] = T(0.0);
+  void clear(int /*n*/) {  // all three (a fixed size: no call to memset)
+    diag.fill(T(0.0)); sub.fill(T(0.0)); velocity_terms.fill(T(0.0)); spring_forces.fill(T(0.0));
   }
 };
 
@@ -72,7 +84,7 @@ void calc_frame_system(const MastParams& mast, const ActiveFrames& a, const T* y
     const bool lower_moves = (i - 1) >= a.lo;
     const T D = y(i) - y(i - 1);
     const T dD = v(i) - v(i - 1);
-    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    const double b2 = a.calc_offset_sq_m2(mast, i);
     const T dU = calc_bay_dU_dD_N(b, b2, D);
     out.diag[k] += calc_regular_upper_mass_kg(b) + mast.frame(i).mass_kg;
     out.spring_forces[k] -= dU;

@@ -61,19 +61,27 @@ const std::vector<std::uint32_t>& sobol_table() {
   return table;
 }
 
-// Balanced Feistel network on 2 * half_bits bits (half_bits in [1, 32]): a
-// bijection whatever the round function, here SplitMix64 keyed per round.
-std::uint64_t feistel(std::uint64_t x, int half_bits, const std::uint64_t* round_keys) {
+// Balanced Feistel network on 2 * half_bits bits (half_bits in [1, 32]): a bijection whatever the
+// round function, here SplitMix64 keyed per round. Applied to x[idx[0..k)] (k <= 256), each with
+// the round keys of its own dimension (dim_keys[idx[i] * kFeistelRounds + r]), the rounds of all of
+// them interleaved: the k hash chains are independent, so the core overlaps them instead of
+// waiting on one chain at a time (a run's Latin hypercube point is hundreds of such chains).
+void feistel_lanes(std::uint64_t* x, const int* idx, int k, int half_bits, const std::uint64_t* dim_keys) {
+  constexpr int kMax = 256;
   const std::uint64_t mask = (1ULL << half_bits) - 1;
-  std::uint64_t left = x >> half_bits;
-  std::uint64_t right = x & mask;
-  for (int r = 0; r < kFeistelRounds; ++r) {
-    const std::uint64_t f = splitmix_at(round_keys[r], right) & mask;
-    const std::uint64_t next = left ^ f;
-    left = right;
-    right = next;
+  std::uint64_t left[kMax], right[kMax];
+  for (int i = 0; i < k; ++i) {
+    left[i] = x[idx[i]] >> half_bits;
+    right[i] = x[idx[i]] & mask;
   }
-  return (left << half_bits) | right;
+  for (int r = 0; r < kFeistelRounds; ++r)
+    for (int i = 0; i < k; ++i) {
+      const std::uint64_t f = splitmix_at(dim_keys[idx[i] * kFeistelRounds + r], right[i]) & mask;
+      const std::uint64_t next = left[i] ^ f;
+      left[i] = right[i];
+      right[i] = next;
+    }
+  for (int i = 0; i < k; ++i) x[idx[i]] = (left[i] << half_bits) | right[i];
 }
 
 }  // namespace
@@ -251,23 +259,39 @@ void SamplePlan::calc_uniforms(std::int64_t run_index, double* u) const {
       const std::uint64_t jitter_state = counter_run_state(seed_, run_index, kTagLhsJitter);
       const auto n = static_cast<std::uint64_t>(n_runs_);
       const double dn = static_cast<double>(n_runs_);
-      for (int j = 0; j < d_; ++j) {
-        const std::uint64_t* keys = round_keys_.data() + static_cast<std::size_t>(j) * kFeistelRounds;
+      // Dimensions in blocks of 256, their permutations computed side by side (feistel_lanes): the
+      // chains that walk longest (up to about 10 times when 2^2h is near 4n) still have company.
+      constexpr int kBlock = 256;
+      std::uint64_t strata[kBlock];
+      int walking[kBlock];
+      for (int j0 = 0; j0 < d_; j0 += kBlock) {
+        const int m = std::min(kBlock, d_ - j0);
+        int k = 0;
+        for (int l = 0; l < m; ++l) {
+          strata[l] = static_cast<std::uint64_t>(run_index);
+          if (n > 1) walking[k++] = l;
+        }
         // Cycle walking: re-apply the bijection on [0, 2^2h) until the
         // value lands in [0, n); this restricts it to a bijection on [0, n).
-        std::uint64_t stratum = static_cast<std::uint64_t>(run_index);
-        if (n > 1) {
-          do stratum = feistel(stratum, half_bits_, keys);
-          while (stratum >= n);
+        const std::uint64_t* keys = round_keys_.data() + static_cast<std::size_t>(j0) * kFeistelRounds;
+        while (k > 0) {
+          feistel_lanes(strata, walking, k, half_bits_, keys);
+          int still = 0;
+          for (int i = 0; i < k; ++i)
+            if (strata[walking[i]] >= n) walking[still++] = walking[i];
+          k = still;
         }
-        const double jitter = to_open_unit(splitmix_at(jitter_state, static_cast<std::uint64_t>(j)));
-        const double s = static_cast<double>(stratum);
-        double v = (s + jitter) / dn;
-        // s + jitter rounds up to s + 1 when jitter is within an ulp of 1;
-        // keep the sample inside its stratum [s/n, (s+1)/n) and below 1.
-        const double hi = (s + 1.0) / dn;
-        if (v >= hi) v = std::nextafter(hi, 0.0);
-        u[j] = v;
+        for (int l = 0; l < m; ++l) {
+          const int j = j0 + l;
+          const double jitter = to_open_unit(splitmix_at(jitter_state, static_cast<std::uint64_t>(j)));
+          const double s = static_cast<double>(strata[l]);
+          double v = (s + jitter) / dn;
+          // s + jitter rounds up to s + 1 when jitter is within an ulp of 1;
+          // keep the sample inside its stratum [s/n, (s+1)/n) and below 1.
+          const double hi = (s + 1.0) / dn;
+          if (v >= hi) v = std::nextafter(hi, 0.0);
+          u[j] = v;
+        }
       }
       return;
     }

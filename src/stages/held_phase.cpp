@@ -24,6 +24,9 @@ HeldPhase::HeldPhase(const PhaseContext& ctx, const model::RailConstants& rail) 
     active_.bay_m_in_hinge_coordinate = true;
     if (m >= 2) b2_lower_ = calc_diagonal_offset_sq_m2(mast.frame(m - 2), mast.frame(m - 1));
   }
+  // The two bays' b^2 once for the phase, not at every evaluation of the frame system.
+  if (m >= 2) active_.top_offset_sq_m2[0] = calc_diagonal_offset_sq_m2(mast.frame(m - 2), mast.frame(m - 1));
+  active_.top_offset_sq_m2[1] = b2_m_;
 }
 
 template <class T>

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <functional>
+#include <utility>
 
 #include "integrators/cvode_integrator.hpp"
 #include "integrators/dopri54.hpp"
@@ -217,9 +218,13 @@ TEST_CASE("DP5(4) and CVODE agree on the motor-mode lock times", "[numeric][cvod
 TEST_CASE("rail formulation in (y_m, x) equals the frame-height formulation away from the lock, and is regular at it",
           "[numeric][rail]") {
   const model::MastParams mast = make_uneven_mast(5);
-  for (auto law : {model::DriveMode::velocity, model::DriveMode::torque}) {
+  // Frame m-2 held at 0 leaves bay m-1's diagonals slack here; at -0.4 m both bays are taut (their
+  // frames of different sides: each bay's own diagonal offset).
+  for (auto [law, z0] : {std::pair{model::DriveMode::velocity, 0.0}, std::pair{model::DriveMode::torque, 0.0},
+                         std::pair{model::DriveMode::motor, -0.4}}) {
     stages::PhaseContext ctx;
     ctx.mast = &mast; ctx.kind = stages::PhaseKind::on_rail; ctx.bay = 3; ctx.locked_mass_kg = 3.0;
+    ctx.lower_held_height_m = z0;
     ctx.drive.mode = law;
     const stages::HeldPhase ph(ctx);
     const auto& b = mast.bay(3);
@@ -228,9 +233,9 @@ TEST_CASE("rail formulation in (y_m, x) equals the frame-height formulation away
       const auto k = model::calc_on_rail(mast.rail, b.strut_length_m, x);
       const double xi = -0.1 / (-k.dY);  // driven frame up at 0.1 m/s
       const stages::PhasePoint p = ph.calc_point(x, xi);
-      // Frame heights (m-1, m), bay 3 with its G terms, frame m-2 = 1 held at 0.
+      // Frame heights (m-1, m), bay 3 with its G terms, frame m-2 = 1 held at z0.
       model::ActiveFrames a; a.lo = 2; a.m = 3; a.locked_mass_kg = 3.0;
-      const double y[3] = {0.0, k.Z, k.Y}, v[3] = {0.0, k.dZ * xi, k.dY * xi};
+      const double y[3] = {z0, k.Z, k.Y}, v[3] = {0.0, k.dZ * xi, k.dY * xi};
       model::FrameSystem sys;
       model::calc_frame_system(mast, a, y, v, 1, sys);
       const double D = k.Y - k.Z;
