@@ -64,7 +64,8 @@ void parse_failure_table(const Ctx& c, const toml::table& t, CampaignOptions& o)
            "\"<column>\" with above = or below = a threshold and unit = the column's unit");
   if (margin) {
     if (above || below || unit)
-      c.fail(above ? above : below ? below : unit, "failure: a margin fails at 0; above, below and unit go with column");
+      c.fail(above ? above : below ? below : unit,
+             "failure: a margin fails at 0; above, below and unit go with column");
     f.kind = FailureKind::margin;
     f.column = get_string(c, *margin, "failure.margin");
     return;

@@ -14,8 +14,10 @@
 //   f' = (u + w)/2 + c x',   x' = -D D' / (4 x),
 //   f'' = (a_u + a_w)/2 + c x'',   x'' = -(D'^2 + D D'') / (4 x) - x'^2 / x,
 // phase A continued through the entry with f'' held is f(tau) = f' tau + f'' tau^2 / 2 (f = 0 at
-// the entry): the uncaptured pin would dip to f'^2 / (2 f'') below the rail, f'^2 sin(beta) /
-// (2 f'') from the rail line, when f'' > 0 (none otherwise: capped at l).
+// the entry), over a horizon T = l / max(|u|, |f'|) (the time the drive takes to move the driven
+// frame one strut length): the uncaptured pin would dip to
+//   d = max over tau in [0, T] of -(f' tau + f'' tau^2 / 2)
+// below the rail (f'^2 / (2 f'') when the minimum falls within T), d sin(beta) from the rail line.
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -154,9 +156,9 @@ inline HeldEntryRange calc_held_entry_range(const RailParams& r, double strut_le
   return {l * (c * d + std::sqrt(1.0 - d * d)), c * l};
 }
 
-// The margin of a rail entry (m, > 0; see the head of this file): how deep the uncaptured pin would
-// dip below the rail line, at most the strut length l. Frame heights y_m (driven), y_lo (lower),
-// their velocities u, w and accelerations a_u, a_w at the entry; 0 for a grazing entry (f' = 0).
+// The margin of a rail entry (m, >= 0; see the head of this file): how deep the uncaptured pin would
+// dip below the rail line. Frame heights y_m (driven), y_lo (lower), their velocities u, w and
+// accelerations a_u, a_w at the entry; 0 for a grazing entry (f' = 0, f'' > 0). Continuous in all.
 inline double calc_rail_entry_margin_m(const RailParams& r, double strut_length_m, double y_m, double y_lo, double u,
                                        double w, double a_u, double a_w) {
   const double c = r.cot_beta(), l = strut_length_m;
@@ -165,9 +167,9 @@ inline double calc_rail_entry_margin_m(const RailParams& r, double strut_length_
   const double xd = -D * Dd / (4.0 * x);
   const double xdd = -(Dd * Dd + D * Ddd) / (4.0 * x) - xd * xd / x;
   const double fd = 0.5 * (u + w) + c * xd, fdd = 0.5 * (a_u + a_w) + c * xdd;
-  const double cap = l;
-  if (!(fdd > 0.0)) return cap;
-  return std::min(cap, fd * fd * std::sin(r.beta_rad) / (2.0 * fdd));
+  const double horizon = l / std::max(std::abs(u), std::abs(fd));
+  const double tau = fdd > 0.0 ? std::min(horizon, -fd / fdd) : horizon;  // the continued path's lowest point
+  return std::max(0.0, -(fd * tau + 0.5 * fdd * tau * tau)) * std::sin(r.beta_rad);
 }
 
 // Lock: x = 0, upper frame at y_r + l, lower frame lifted to y_r - l.

@@ -227,7 +227,17 @@ TEST_CASE("rail entry margin: the dip of the continued hinge path, to second ord
     REQUIRE(fmin < 0.0);
     CHECK(m == Approx(-fmin * sb).epsilon(5e-3));
   }
-  // A grazing entry (f' = 0) has no dip; a pin still accelerating into the rail is capped at l.
+  // A grazing entry (f' = 0, f'' > 0) has no dip.
   CHECK(calc_rail_entry_margin_m(rail, l, 0.4, 0.1, 0.0, 0.0, 0.0, 0.3) == 0.0);
-  CHECK(calc_rail_entry_margin_m(rail, l, 0.4, 0.1, 0.1, 0.0, 0.0, 0.0) == l);  // D'' = 0, x'' < 0: f'' < 0
+  // A pin still accelerating into the rail (f'' < 0): the dip over the horizon T = l / max(|u|, |f'|),
+  // with f' and f'' by central differences of f along the path (step 1e-4 s: truncation 1e-8
+  // relative, rounding 1e-16 / 1e-8 = 1e-8 relative in f'').
+  const double ym = 0.4, ylo = 0.1, u = 0.1, au = 0.0, aw = -0.2, h = 1e-4;
+  auto f_at = [&](double t) { return f_of(ym + u * t + 0.5 * au * t * t, ylo + 0.5 * aw * t * t); };
+  const double fd = (f_at(h) - f_at(-h)) / (2 * h), fdd = (f_at(h) - 2 * f_at(0) + f_at(-h)) / (h * h);
+  REQUIRE(fd < 0.0);
+  REQUIRE(fdd < 0.0);
+  const double T = l / std::max(u, -fd);
+  CHECK(calc_rail_entry_margin_m(rail, l, ym, ylo, u, 0.0, au, aw) ==
+        Approx(-(fd * T + 0.5 * fdd * T * T) * sb).epsilon(1e-6));
 }
