@@ -12,17 +12,25 @@ reaches it.
   each level's runs are its rounds' rows; the failure samples are runs whose margin is <= 0, with
   their inputs as /runs/inputs holds them.
 - The same datasets on 1 and 2 ranks.
+- The report (postproc/report.py) of that file: its failure-probability numbers against values
+  computed here: p and beta from /subset, the 95 % interval p exp(+-z s), s^2 = ln(1 + cov^2) with z
+  from scipy, and the design-point column of the diagonal free length as the failure samples' mean
+  standard-normal coordinate recomputed from their inputs ((x - nominal) / std for its offset
+  normal dispersion); no design loads (the runs are not draws).
 - kill -9 of the whole job in the middle of level 1 (its fourth round planned, records of it
   journaled), then --resume on 2 ranks: the same datasets as the uninterrupted campaign.
 """
 import argparse
+import math
 import os
+import re
 import subprocess
 import sys
 import time
 
 import h5py
 import numpy as np
+from scipy.stats import norm
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_campaign_mpi import ENV, check, datasets, fresh, same_values  # noqa: E402
@@ -76,6 +84,33 @@ def check_against_rows(path):
               "the failure samples' inputs are their rows of /runs/inputs")
 
 
+def report_value(html, key):
+    m = re.search(r'data-key="' + re.escape(key) + r'" data-value="([^"]+)"', html)
+    check(m is not None, f"the report has {key}")
+    return float(m.group(1))
+
+
+def check_report(args, path, outdir):
+    p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc/report.py"), path, "-o", outdir,
+                        "--force"], capture_output=True, text=True, timeout=300)
+    check(p.returncode == 0 and "SUBSET SIMULATION" in p.stdout, f"report: exit 0 ({p.stderr.strip()[-300:]})")
+    html = open(os.path.join(outdir, "report.html"), encoding="utf-8").read()
+    with h5py.File(path, "r") as f:
+        g = f["subset"]
+        pr, cov = float(g["p"][()]), float(g["cov_lineage"][()])
+        x = g["failure_samples/inputs/mast.diagonal_free_length_m"][:]
+    s = math.sqrt(math.log(1 + cov * cov))
+    z = norm.ppf(0.975)
+    check(report_value(html, "subset.p") == pr and abs(report_value(html, "subset.beta") + norm.ppf(pr)) < 1e-9,
+          "report: p and beta = -Phi^-1(p)")
+    for key, want in (("subset.p.ci_lo", pr * math.exp(-z * s)), ("subset.p.ci_hi", pr * math.exp(z * s))):
+        check(abs(report_value(html, key) / want - 1) < 1e-12, f"report: {key} = {want:.6g}")
+    mz = np.mean((x - 0.483) / 0.005)  # the campaign's l_0 (--set above) and its dispersion's std
+    check(abs(report_value(html, "subset.dp.mast.diagonal_free_length_m.z") - mz) < 1e-9,
+          f"report: the design point's free-length coordinate, {mz:.4g} sigma, from the failure samples' inputs")
+    check("design loads" not in html.lower() and "subset_levels.png" in html, "report: a level plot, no design loads")
+
+
 def killed_mid_level(args, out):
     proc = subprocess.Popen(command(args, out, 2), env=ENV, start_new_session=True, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
@@ -109,6 +144,7 @@ def main():
     check_against_rows(outs[2])
     same, why = same_values(datasets(outs[2]), datasets(outs[1]))
     check(same, f"1 and 2 ranks: the same datasets outside /timing {why}")
+    check_report(args, outs[2], os.path.join(d, "report"))
     out = os.path.join(d, "killed.h5")
     plans, in_last = killed_mid_level(args, out)
     check(plans >= 4 and in_last >= 2 and not os.path.exists(out),
