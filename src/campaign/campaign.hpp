@@ -7,6 +7,10 @@
 //                "saltelli"), max_run_wall_time_s, method ("design": the sampling's fixed design;
 //                "subset": subset simulation of a failure probability, its runs set by
 //                [ensemble.subset] n_per_level, p0, max_levels, proposal_half_width, not n_runs)
+//   [ensemble.stop]  sequential stopping of a Monte Carlo design: rounds (the first n_runs runs,
+//                then as many as the target asks) until target ("percentile_bound" of output at
+//                level; "probability_half_width" | "probability_relative_half_width" of the share of
+//                runs that are not ok) holds to width at confidence, or max_runs is reached
 //   [failure]    subset: the failure event, as margin = "<column>" (a margin column, failed when
 //                <= 0) or column = "<column>", above | below = threshold, unit = the column's unit
 //   [output]     history_runs = [run indices], history_step_s (decimated histories stored)
@@ -24,6 +28,7 @@
 
 #include "io/scene_toml.hpp"
 #include "sampling/sampling.hpp"
+#include "sampling/stopping.hpp"
 #include "sampling/subset_simulation.hpp"
 #include "sim/scene.hpp"
 
@@ -78,6 +83,12 @@ struct EnsembleOptions {
   double max_run_wall_time_s = 60.0;         // a run longer than this is stopped and recorded
   EnsembleMethod method = EnsembleMethod::design;
   SubsetSettings subset;                     // method = subset
+  // [ensemble.stop]: when `stop` is set, the design runs in rounds from n_runs up to
+  // stop_rule.max_runs until stop_rule holds for stop_output (percentile_bound) or for the share of
+  // runs that are not ok (the probability targets).
+  bool stop = false;
+  sampling::StopRule stop_rule;
+  std::string stop_output;
   // method = subset: the cap on runs, N + (max_levels - 1)(N - N_c), is n_runs (set by the parser).
 };
 

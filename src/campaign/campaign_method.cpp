@@ -1,6 +1,7 @@
 // How a campaign chooses its runs, as its file says (campaign.hpp): ensemble.method, the subset
 // simulation's settings [ensemble.subset] and its failure event [failure]; their one set of rules
 // (validate_method, part of CampaignOptions::validate) and their resolved TOML.
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -49,6 +50,25 @@ void parse_subset_table(const Ctx& c, const toml::table& t, CampaignOptions& o) 
   }
 }
 
+void parse_stop_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
+  sampling::StopRule& r = o.ensemble.stop_rule;
+  o.ensemble.stop = true;
+  const std::vector<std::string> targets(std::begin(sampling::kStopTargetNames), std::end(sampling::kStopTargetNames));
+  for (const auto& [k, v] : t) {
+    const std::string key = "ensemble.stop." + std::string(k.str());
+    if (k == "target") {
+      const std::string s = get_string(c, v, key, targets);
+      r.target = static_cast<sampling::StopTarget>(std::find(targets.begin(), targets.end(), s) - targets.begin());
+    } else if (k == "output") o.ensemble.stop_output = get_string(c, v, key);
+    else if (k == "level") r.level = get_number(c, v, key);
+    else if (k == "width") r.width = get_number(c, v, key);
+    else if (k == "confidence") r.confidence = get_number(c, v, key);
+    else if (k == "max_runs") r.max_runs = get_integer(c, v, key);
+    else c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.stop.target, output, level, width, confidence, "
+                                "max_runs)", key));
+  }
+}
+
 void parse_failure_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
   FailureOptions& f = o.failure;
   f.line = static_cast<int>(t.source().begin.line);
@@ -90,7 +110,31 @@ void derive_subset_runs(const Ctx& c, const toml::table& root, CampaignOptions& 
   if (s.validate().empty()) o.ensemble.n_runs = s.max_evaluations();
 }
 
+// The rules of [ensemble.stop]: a Monte Carlo design (its points extend run by run), a rule that
+// can be met within max_runs (StopRule::validate), a percentile of a float64 column.
+std::string validate_stop(const CampaignOptions& o) {
+  const EnsembleOptions& e = o.ensemble;
+  if (e.method == EnsembleMethod::subset) return "ensemble.stop: method = \"subset\" has its own end; remove [ensemble.stop]";
+  if (e.sampling != SamplingMethod::monte_carlo)
+    return fmt::format("ensemble.sampling: [ensemble.stop] adds runs round by round, which only Monte Carlo points "
+                       "allow (\"{}\" fixes its design for n_runs)", to_string(e.sampling));
+  if (const std::string err = e.stop_rule.validate(); !err.empty()) return "ensemble.stop." + err;
+  if (e.n_runs > e.stop_rule.max_runs)
+    return fmt::format("ensemble.stop.max_runs: {} is below the first round's ensemble.n_runs = {}", e.stop_rule.max_runs,
+                       e.n_runs);
+  const bool percentile = e.stop_rule.target == sampling::StopTarget::percentile_bound;
+  if (percentile && find_run_column_unit(e.stop_output).empty())
+    return fmt::format("ensemble.stop.output: \"{}\" is not a float64 column of /runs (e.g. peak_drive_torque_Nm)",
+                       e.stop_output);
+  if (!percentile && !e.stop_output.empty())
+    return "ensemble.stop.output: the probability targets count the runs that are not ok; output goes with "
+           "target = \"percentile_bound\"";
+  return {};
+}
+
 std::string validate_method(const CampaignOptions& o) {
+  if (o.ensemble.stop)
+    if (std::string e = validate_stop(o); !e.empty()) return e;
   const FailureOptions& f = o.failure;
   if (o.ensemble.method != EnsembleMethod::subset)
     return f.kind == FailureKind::none ? "" : "failure: only ensemble.method = \"subset\" reads [failure]";
@@ -114,6 +158,13 @@ std::string validate_method(const CampaignOptions& o) {
 }
 
 std::string method_toml(const CampaignOptions& o) {
+  if (o.ensemble.stop) {
+    const sampling::StopRule& r = o.ensemble.stop_rule;
+    std::string t = fmt::format("[ensemble.stop]\ntarget = \"{}\"\n", sampling::to_string(r.target));
+    if (!o.ensemble.stop_output.empty()) t += fmt::format("output = \"{}\"\n", o.ensemble.stop_output);
+    return t + fmt::format("level = {}\nwidth = {}\nconfidence = {}\nmax_runs = {}\n\n", r.level, r.width,
+                           r.confidence, r.max_runs);
+  }
   if (o.ensemble.method != EnsembleMethod::subset) return {};
   const SubsetSettings& s = o.ensemble.subset;
   std::string t = fmt::format("[ensemble.subset]\nn_per_level = {}\np0 = {}\nmax_levels = {}\n"

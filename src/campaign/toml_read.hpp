@@ -58,6 +58,7 @@ inline std::string get_string(const Ctx& c, const toml::node& n, const std::stri
 // ensemble.n_runs (refusing an n_runs written with method = "subset"); the rules of the method.
 void parse_subset_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
 void parse_failure_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
+void parse_stop_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
 void derive_subset_runs(const Ctx& c, const toml::table& root, CampaignOptions& o);
 std::string validate_method(const CampaignOptions& o);
 std::string method_toml(const CampaignOptions& o);  // [ensemble] method, [ensemble.subset], [failure]
