@@ -131,6 +131,12 @@ CampaignOptions parse_campaign_text(std::string_view text, const std::string& so
 // options: the base scene inline (every key), every dispersion with all its parameters.
 std::string resolved_campaign_toml(const CampaignOptions& c);
 
+// The most runs the campaign can make: ensemble.n_runs, or with [ensemble.stop] its max_runs (a
+// subset campaign's n_runs is its cap already): what memory and disk are checked for.
+inline std::int64_t calc_max_runs(const CampaignOptions& c) {
+  return c.ensemble.stop ? c.ensemble.stop_rule.max_runs : c.ensemble.n_runs;
+}
+
 // The subset options of a campaign (its dimensions and master seed filled in).
 sampling::SubsetOptions calc_subset_options(const CampaignOptions& c);
 // The unit of the float64 run field `name` (RunResult, io::run_result_fields), or "" if none.

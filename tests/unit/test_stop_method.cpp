@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "campaign/evaluate.hpp"
+#include "campaign_fixtures.hpp"
 #include "io/scene_toml.hpp"
 #include "methods/fixed_design.hpp"
 #include "methods/stop_method.hpp"
@@ -23,23 +24,10 @@ master_seed = 3
 {}
 [ensemble.stop]
 {}
-[scene.mast]
-n_bays = 4
-[[dispersion]]
-key = "mast.strut_mass_kg"
-distribution = "normal"
-std = 0.02
-)", ensemble, stop);
+{})", ensemble, stop, campaign::test::kFourBaysStrutMass);
 }
 
-std::string error_of(const std::string& text) {
-  try {
-    campaign::parse_campaign_text(text, "stop.toml", ".");
-  } catch (const io::InputError& e) {
-    return e.what();
-  }
-  return {};
-}
+std::string error_of(const std::string& text) { return campaign::test::campaign_error(text, "stop.toml"); }
 
 const char* kPercentile = "target = \"percentile_bound\"\noutput = \"peak_drive_force_N\"\nlevel = 0.99\nwidth = 0.005\n"
                           "max_runs = 5000";

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "campaign/evaluate.hpp"
+#include "campaign_fixtures.hpp"
 #include "io/scene_toml.hpp"
 #include "methods/subset_method.hpp"
 
@@ -25,27 +26,16 @@ master_seed = 5
 {}
 [failure]
 {}
-[scene.mast]
-n_bays = 4
-[[dispersion]]
-key = "mast.strut_mass_kg"
-distribution = "normal"
-std = 0.02
-[[dispersion]]
+{}[[dispersion]]
 key = "drive.speed_m_per_s"
 distribution = "normal"
 std = 0.05
-)", ensemble_extra, subset, failure);
+)", ensemble_extra, subset, failure, campaign::test::kFourBaysStrutMass);
 }
 
 // The message of the error the text gives ("" if it parses).
 std::string error_of(const std::string& text, const std::vector<std::string>& sets = {}) {
-  try {
-    campaign::parse_campaign_text(text, "rare.toml", ".", sets);
-  } catch (const io::InputError& e) {
-    return e.what();
-  }
-  return {};
+  return campaign::test::campaign_error(text, "rare.toml", sets);
 }
 
 }  // namespace
