@@ -92,17 +92,19 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
     } else if (k == "method") {
       const std::vector<std::string> names(std::begin(kEnsembleMethodNames), std::end(kEnsembleMethodNames));
       o.ensemble.method = static_cast<EnsembleMethod>(index_of(names, get_string(c, v, key, names)));
-    } else if (k == "stop") {
+    } else if (k == "stop") {  // a table, or false (--set ensemble.stop=false: the file's n_runs, one round)
       const toml::table* s = v.as_table();
-      if (!s) c.fail(&v, "ensemble.stop must be a table ([ensemble.stop])");
-      detail::parse_stop_table(c, *s, o);
+      if (s) detail::parse_stop_table(c, *s, o);
+      else if (v.value_exact<bool>() != std::optional<bool>(false))
+        c.fail(&v, "ensemble.stop must be a table ([ensemble.stop]), or false to run n_runs in one round");
     } else if (k == "subset") {
       const toml::table* s = v.as_table();
       if (!s) c.fail(&v, "ensemble.subset must be a table ([ensemble.subset])");
       detail::parse_subset_table(c, *s, o);
     } else {
       c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
-                             "ensemble.max_run_wall_time_s, ensemble.method, [ensemble.subset], [ensemble.stop])", key));
+                             "ensemble.max_run_wall_time_s, ensemble.method, [ensemble.subset], "
+                             "[ensemble.stop])", key));
     }
   }
 }

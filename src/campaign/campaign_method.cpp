@@ -114,14 +114,15 @@ void derive_subset_runs(const Ctx& c, const toml::table& root, CampaignOptions& 
 // can be met within max_runs (StopRule::validate), a percentile of a float64 column.
 std::string validate_stop(const CampaignOptions& o) {
   const EnsembleOptions& e = o.ensemble;
-  if (e.method == EnsembleMethod::subset) return "ensemble.stop: method = \"subset\" has its own end; remove [ensemble.stop]";
+  if (e.method == EnsembleMethod::subset)
+    return "ensemble.stop: method = \"subset\" has its own end; remove [ensemble.stop]";
   if (e.sampling != SamplingMethod::monte_carlo)
     return fmt::format("ensemble.sampling: [ensemble.stop] adds runs round by round, which only Monte Carlo points "
                        "allow (\"{}\" fixes its design for n_runs)", to_string(e.sampling));
   if (const std::string err = e.stop_rule.validate(); !err.empty()) return "ensemble.stop." + err;
   if (e.n_runs > e.stop_rule.max_runs)
-    return fmt::format("ensemble.stop.max_runs: {} is below the first round's ensemble.n_runs = {}", e.stop_rule.max_runs,
-                       e.n_runs);
+    return fmt::format("ensemble.stop.max_runs: {} is below the first round's ensemble.n_runs = {}",
+                       e.stop_rule.max_runs, e.n_runs);
   const bool percentile = e.stop_rule.target == sampling::StopTarget::percentile_bound;
   if (percentile && find_run_column_unit(e.stop_output).empty())
     return fmt::format("ensemble.stop.output: \"{}\" is not a float64 column of /runs (e.g. peak_drive_torque_Nm)",

@@ -54,6 +54,12 @@ TEST_CASE("[ensemble.stop]: a rule that can never be met, and other bad input, r
   below.replace(below.find("max_runs = 5000"), 15, "max_runs = 400");
   CHECK(error_of(below).find("ensemble.stop.max_runs: 400 is below the first round's ensemble.n_runs = 500") !=
         std::string::npos);
+  // --set ensemble.stop=false: one round of n_runs (and any design); anything but a table or false is refused.
+  CHECK_FALSE(campaign::parse_campaign_text(stop_text("sampling = \"latin_hypercube\"", kPercentile), "stop.toml", ".",
+                                            {"ensemble.stop=false"})
+                  .ensemble.stop);
+  CHECK(campaign::test::campaign_error(stop_text("", kPercentile), "stop.toml", {"ensemble.stop=true"})
+            .find("--set ensemble.stop=true: ensemble.stop must be a table") != std::string::npos);
   const campaign::CampaignOptions o = campaign::parse_campaign_text(stop_text("", kPercentile), "stop.toml", ".");
   const campaign::CampaignOptions back =
       campaign::parse_campaign_text(campaign::resolved_campaign_toml(o), "resolved.toml", ".");
