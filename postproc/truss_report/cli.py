@@ -13,7 +13,7 @@ from .h5read import H5, file_sha256, load_campaign, load_single_run, read_kind
 from .mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY
 from .page import Page
 from .sections_design import campaign_report, section_nominal
-from .sections_subset import read_subset, subset_report
+from .sections_subset import read_stop, read_subset, subset_report
 from .single_run import single_run_report
 
 CSV_NAME = "runs.csv"
@@ -88,6 +88,8 @@ def build(path, outdir, force, opts=None, progress=None):
             try:
                 data = load_campaign(h5, sha256) if kind == "campaign" else load_single_run(h5, sha256)
                 subset = read_subset(f) if kind == "campaign" else None
+                if kind == "campaign":
+                    data.stop = read_stop(f)
                 extras = load_extras(h5, data) if kind == "campaign" else None
             except (OSError, RuntimeError) as e:
                 raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None

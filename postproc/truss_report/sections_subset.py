@@ -38,6 +38,39 @@ def read_subset(f):
     return s
 
 
+def read_stop(f):
+    """The /stop group (sequential stopping) as a dict, or None."""
+    if "stop" not in f:
+        return None
+    g = f["stop"]
+    s = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in g.attrs.items()}
+    for k in ("runs", "used", "estimate", "upper", "achieved_width"):
+        s[k] = g[k][()]
+    s["unit"] = g["estimate"].attrs["units"]
+    s["rounds_state"] = [x.decode() if isinstance(x, bytes) else x for x in g["state"][()]]
+    return s
+
+
+def subsection_stop(s):
+    """The rounds of a sequentially stopped campaign and why it stopped (empty without /stop)."""
+    if s is None:
+        return ""
+    u = s["unit"]
+    rows = [[str(k), num(f"stop.round{k}.runs", int(s["runs"][k])), num(f"stop.round{k}.used", int(s["used"][k])),
+             num(f"stop.round{k}.estimate", float(s["estimate"][k]), u), num(f"stop.round{k}.upper", float(s["upper"][k]), u),
+             num(f"stop.round{k}.width", float(s["achieved_width"][k]), digits=3), esc(s["rounds_state"][k])]
+            for k in range(len(s["runs"]))]
+    what = (f"the one-sided {fmt(100 * s['confidence'])} % bound of the {fmt(s['level'])} quantile of "
+            f"<code>{esc(s['output'])}</code> within {fmt(s['width'])} of it (relative)"
+            if s["target"] == "percentile_bound" else
+            f"the {esc(s['target'].replace('_', ' '))} of the share of runs that are not ok at most {fmt(s['width'])}")
+    return ("<h3>Sequential stopping</h3><p>The campaign ran in rounds until " + what + f", at most "
+            f"{s['max_runs']} runs (<code>/stop</code>). It stopped: <b>{esc(s['state'])}</b>, "
+            f"{esc(s['reason'])}.</p>"
+            + table(["after round", "runs", "values used", "estimate", "upper bound", "achieved width", "state"],
+                    rows, "narrow"))
+
+
 def interval(p, cov):
     """Lognormal 95 % interval of the estimate p with coefficient of variation cov."""
     if not (p > 0 and math.isfinite(cov)):

@@ -19,6 +19,11 @@ reaches it.
   normal dispersion); no design loads (the runs are not draws).
 - kill -9 of the whole job in the middle of level 1 (its fourth round planned, records of it
   journaled), then --resume on 2 ranks: the same datasets as the uninterrupted campaign.
+- Sequential stopping ([ensemble.stop]) on the shipped motor campaign: /stop's rounds are the
+  file's rounds, and each round's decision is recomputed here from the rows of the runs up to it:
+  the P99.865 of the ok runs' peak torque (numpy's type 7), its one-sided 95 % bound x_(k), k the
+  least rank with F_Binomial(k - 1; n, q) >= 0.95 (scipy), and whether (bound - estimate) /
+  estimate <= 0.02; the last round meets it, the earlier ones do not; the report lists the rounds.
 """
 import argparse
 import math
@@ -30,7 +35,7 @@ import time
 
 import h5py
 import numpy as np
-from scipy.stats import norm
+from scipy.stats import binom, norm
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_campaign_mpi import ENV, check, datasets, fresh, same_values  # noqa: E402
@@ -111,6 +116,40 @@ def check_report(args, path, outdir):
     check("design loads" not in html.lower() and "subset_levels.png" in html, "report: a level plot, no design loads")
 
 
+def check_stop(args, d):
+    out = os.path.join(d, "motor.h5")
+    p = subprocess.run(["mpirun", "--oversubscribe", "-np", "2", args.driver,
+                        os.path.join(args.repo, "campaigns/motor_torque.toml"), "-o", out, "--progress", "none"],
+                       env=ENV, capture_output=True, text=True, timeout=600)
+    check(p.returncode == 0 and "stop rule after round" in p.stderr, f"motor campaign with [ensemble.stop]: exit 0 "
+          f"({p.stderr.strip()[-300:]})")
+    q, width = 0.99865, 0.02
+    with h5py.File(out, "r") as f:
+        g = f["stop"]
+        runs, est, upper = g["runs"][:], g["estimate"][:], g["upper"][:]
+        state = [s.decode() if isinstance(s, bytes) else s for s in g["state"][:]]
+        rounds = f["runs/round"][:]
+        y = np.where(f["runs/status"][:] == 0, f["runs/peak_drive_torque_Nm"][:], np.nan)
+    check(len(runs) >= 2 and np.array_equal(runs, [np.count_nonzero(rounds <= r) for r in range(len(runs))])
+          and runs[-1] == y.size, f"/stop's rounds {list(runs)} are the file's rounds")
+    for r, n in enumerate(runs):
+        v = np.sort(y[:n][np.isfinite(y[:n])])
+        e = np.percentile(v, 100 * q)
+        ks = np.nonzero(binom.cdf(np.arange(v.size), v.size, q) >= 0.95)[0]
+        bound = v[ks[0]] if ks.size else np.nan
+        met = bool(ks.size) and (bound - e) / abs(e) <= width
+        check(abs(est[r] - e) <= 1e-12 * abs(e) and (np.isnan(bound) and np.isnan(upper[r]) or upper[r] == bound)
+              and state[r] == ("met" if met else "more"), f"round {r} ({n} runs): P99.865 {e:.6g}, bound {bound:.6g}, "
+              f"{state[r]}")
+    check(state[-1] == "met", "the last round meets the rule")
+    outdir = os.path.join(d, "motor_report")
+    p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc/report.py"), out, "-o", outdir,
+                        "--force"], capture_output=True, text=True, timeout=300)
+    html = open(os.path.join(outdir, "report.html"), encoding="utf-8").read()
+    check(p.returncode == 0 and "Sequential stopping" in html and report_value(html, f"stop.round{len(runs) - 1}.runs")
+          == runs[-1], "the report lists the rounds")
+
+
 def killed_mid_level(args, out):
     proc = subprocess.Popen(command(args, out, 2), env=ENV, start_new_session=True, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
@@ -153,6 +192,7 @@ def main():
     check(p.returncode == 0, f"--resume finishes ({p.stderr.strip()[-300:]})")
     same, why = same_values(datasets(outs[2]), datasets(out))
     check(same, f"the resumed file equals the uninterrupted one, value for value {why}")
+    check_stop(args, d)
     print("passed")
 
 
