@@ -12,7 +12,8 @@ from .extras import load_extras
 from .h5read import H5, file_sha256, load_campaign, load_single_run, read_kind
 from .mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY
 from .page import Page
-from .sections_design import campaign_report
+from .sections_design import campaign_report, section_nominal
+from .sections_subset import read_stop, read_subset, subset_report
 from .single_run import single_run_report
 
 CSV_NAME = "runs.csv"
@@ -86,6 +87,9 @@ def build(path, outdir, force, opts=None, progress=None):
             h5 = H5(f, path)
             try:
                 data = load_campaign(h5, sha256) if kind == "campaign" else load_single_run(h5, sha256)
+                subset = read_subset(f) if kind == "campaign" else None
+                if kind == "campaign":
+                    data.stop = read_stop(f)
                 extras = load_extras(h5, data) if kind == "campaign" else None
             except (OSError, RuntimeError) as e:
                 raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
@@ -99,8 +103,11 @@ def build(path, outdir, force, opts=None, progress=None):
             page = Page(staging, plt, progress)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                text = (campaign_report(page, data, extras, opts) if kind == "campaign"
-                        else single_run_report(page, data))
+                if subset is not None:  # the runs are not draws: no design loads
+                    text = subset_report(page, data, subset, opts, section_nominal(page, extras))
+                else:
+                    text = (campaign_report(page, data, extras, opts) if kind == "campaign"
+                            else single_run_report(page, data))
         page.finish()
         if csv is not None:
             csv.join()

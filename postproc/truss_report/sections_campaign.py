@@ -7,6 +7,7 @@ import numpy as np
 from .constants import CONFIDENCE, LEVELS, MAX_FAILED_LISTED, OUTPUTS, STATS_FIELDS, output_label
 from .figures import fig_distribution, fig_lock_timing
 from .page import esc, fmt, num, table, unit_label
+from .sections_subset import subsection_stop
 from .stats import (StatsComparison, band_stats, column_stats, lock_intervals, lock_order,
                     percentile, quantile_ci)
 
@@ -36,6 +37,7 @@ def section_campaign(page, c):
     out.append(table(["", ""], [[f"<th>{k}</th>", v] for k, v in rows], "kv"))
     out.append(subsection_status(page, c))
     out.append(subsection_failures(c))
+    out.append(subsection_stop(getattr(c, "stop", None)))
     out.append(subsection_dispersions(c))
     out.append(subsection_base_scene(c))
     out.append("</section>")

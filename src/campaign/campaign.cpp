@@ -11,6 +11,7 @@
 #include <toml++/toml.h>
 
 #include "campaign/dispersion.hpp"
+#include "campaign/toml_read.hpp"
 #include "io/scene_toml.hpp"
 #include "sim/scene_keys.hpp"
 
@@ -29,38 +30,10 @@ int index_of(const std::vector<std::string>& names, const std::string& s) {
   return static_cast<int>(std::find(names.begin(), names.end(), s) - names.begin());
 }
 
-struct Ctx {
-  std::string file;
-  std::map<const toml::node*, std::string> set_by;  // values put in the tree by --set: the argument
-  [[noreturn]] void fail(const toml::node* at, const std::string& what) const {
-    if (const auto it = set_by.find(at); it != set_by.end())
-      throw InputError(fmt::format("error: --set {}: {}", it->second, what));
-    if (at && at->source().begin.line > 0)
-      throw InputError(fmt::format("error: {}:{}: {}", file, at->source().begin.line, what));
-    throw InputError(fmt::format("error: {}: {}", file, what));
-  }
-};
-
-std::string join(const std::vector<std::string>& v) {
-  std::string s;
-  for (const auto& x : v) s += (s.empty() ? "\"" : ", \"") + x + "\"";
-  return s;
-}
-
-double get_number(const Ctx& c, const toml::node& n, const std::string& key) {
-  if (auto i = n.value_exact<std::int64_t>()) return static_cast<double>(*i);
-  if (auto d = n.value_exact<double>()) return *d;
-  c.fail(&n, fmt::format("{}: expected a number", key));
-}
-
-std::string get_string(const Ctx& c, const toml::node& n, const std::string& key,
-                       const std::vector<std::string>& allowed = {}) {
-  auto s = n.value_exact<std::string>();
-  if (!s) c.fail(&n, fmt::format("{}: expected a string", key));
-  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), *s) == allowed.end())
-    c.fail(&n, fmt::format("{}: \"{}\" is not one of {}", key, *s, join(allowed)));
-  return *s;
-}
+using detail::Ctx;
+using detail::get_number;
+using detail::get_string;
+using detail::join;
 
 // A campaign key that becomes a scene's [run] key in every run (ensemble.max_run_wall_time_s ->
 // run.max_wall_time_s, output.history_step_s -> run.output_step_s) takes that key's hard range from
@@ -116,9 +89,22 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
       o.ensemble.sampling = static_cast<SamplingMethod>(index_of(kSampling, get_string(c, v, key, kSampling)));
     } else if (k == "max_run_wall_time_s") {
       o.ensemble.max_run_wall_time_s = get_number(c, v, key);
+    } else if (k == "method") {
+      const std::vector<std::string> names(std::begin(kEnsembleMethodNames), std::end(kEnsembleMethodNames));
+      o.ensemble.method = static_cast<EnsembleMethod>(index_of(names, get_string(c, v, key, names)));
+    } else if (k == "stop") {  // a table, or false (--set ensemble.stop=false: the file's n_runs, one round)
+      const toml::table* s = v.as_table();
+      if (s) detail::parse_stop_table(c, *s, o);
+      else if (v.value_exact<bool>() != std::optional<bool>(false))
+        c.fail(&v, "ensemble.stop must be a table ([ensemble.stop]), or false to run n_runs in one round");
+    } else if (k == "subset") {
+      const toml::table* s = v.as_table();
+      if (!s) c.fail(&v, "ensemble.subset must be a table ([ensemble.subset])");
+      detail::parse_subset_table(c, *s, o);
     } else {
       c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
-                             "ensemble.max_run_wall_time_s)", key));
+                             "ensemble.max_run_wall_time_s, ensemble.method, [ensemble.subset], "
+                             "[ensemble.stop])", key));
     }
   }
 }
@@ -296,6 +282,8 @@ std::string CampaignOptions::validate() const {
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = check_dispersion_draws(*this, i); !e.empty())
       return fmt::format("dispersion[{}]: {}", i + 1, e);
+  if (std::string e = detail::validate_method(*this); !e.empty()) return e;
+  if (ensemble.method == EnsembleMethod::subset) return {};
   return validate_sampling(*this);
 }
 
@@ -324,11 +312,13 @@ const toml::node* node_of_field(const toml::table& root, const std::string& mess
     const toml::array* a = root["dispersion"].as_array();
     return a && i < a->size() ? a->get(i) : nullptr;
   }
-  const auto dot = field.find('.');
-  if (dot == std::string::npos) return nullptr;
-  const auto table = root[field.substr(0, dot)];
-  if (const toml::node* n = table[field.substr(dot + 1)].node()) return n;
-  return table.node();
+  // The value at the field's path, else the nearest table above it that exists.
+  for (std::string path = field; !path.empty();) {
+    if (const toml::node* n = root.at_path(path).node()) return n;
+    const auto dot = path.rfind('.');
+    path = dot == std::string::npos ? std::string() : path.substr(0, dot);
+  }
+  return nullptr;
 }
 
 CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string& base_dir,
@@ -353,14 +343,22 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       scene_sets.push_back({arg, {}});
       continue;
     }
-    if (dot == std::string::npos || (tname != "ensemble" && tname != "campaign" && tname != "output"))
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.* and base-scene keys "
-                                   "(mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg));
+    if (dot == std::string::npos ||
+        (tname != "ensemble" && tname != "campaign" && tname != "output" && tname != "failure"))
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, failure.* and base-scene "
+                                   "keys (mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg));
     toml::table v = parse_override_value(value);
-    const std::string kname = key.substr(dot + 1);
-    if (!root.contains(tname)) root.insert(tname, toml::table{});
-    toml::table* t = root[tname].as_table();
-    if (!t) throw InputError(fmt::format("error: --set {}: '{}' is not a table in {}", arg, tname, path));
+    std::string kname = key.substr(dot + 1);
+    toml::table* t = &root;
+    for (std::string tn = tname;;) {  // ensemble.subset.p0: the tables on the way, created if missing
+      if (!t->contains(tn)) t->insert(tn, toml::table{});
+      t = (*t)[tn].as_table();
+      if (!t) throw InputError(fmt::format("error: --set {}: '{}' is not a table in {}", arg, tn, path));
+      const auto d = kname.find('.');
+      if (d == std::string::npos) break;
+      tn = kname.substr(0, d);
+      kname = kname.substr(d + 1);
+    }
     t->insert_or_assign(kname, *v.get("v"));
     // Messages about this value (or an element of it) name the --set, not the campaign file.
     const toml::node* set_node = t->get(kname);
@@ -371,7 +369,11 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
 
   CampaignOptions o;
   for (const auto& [k, v] : root) {
-    if (k == "campaign" || k == "ensemble" || k == "scene" || k == "output") {
+    if (k == "failure") {
+      const toml::table* t = v.as_table();
+      if (!t) c.fail(&v, "'failure' must be a table");
+      detail::parse_failure_table(c, *t, o);
+    } else if (k == "campaign" || k == "ensemble" || k == "scene" || k == "output") {
       const toml::table* t = v.as_table();
       if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
       if (k == "campaign") parse_campaign_table(c, *t, o);
@@ -384,9 +386,11 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       for (std::size_t i = 0; i < a->size(); ++i)
         o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
     } else {
-      c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, output, scene, [[dispersion]])", k.str()));
+      c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, output, scene, failure, "
+                             "[[dispersion]])", k.str()));
     }
   }
+  detail::derive_subset_runs(c, root, o);
   // Base scene: file relative to the campaign file, then inline tables, overrides, --set scene.*.
   std::vector<io::SceneSetting> sets = o.scene_settings;
   sets.insert(sets.end(), scene_sets.begin(), scene_sets.end());

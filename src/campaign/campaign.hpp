@@ -4,7 +4,15 @@
 //
 //   [campaign]   name, description
 //   [ensemble]   n_runs, master_seed, sampling ("monte_carlo" | "latin_hypercube" | "sobol" |
-//                "saltelli"), max_run_wall_time_s
+//                "saltelli"), max_run_wall_time_s, method ("design": the sampling's fixed design;
+//                "subset": subset simulation of a failure probability, its runs set by
+//                [ensemble.subset] n_per_level, p0, max_levels, proposal_half_width, not n_runs)
+//   [ensemble.stop]  sequential stopping of a Monte Carlo design: rounds (the first n_runs runs,
+//                then as many as the target asks) until target ("percentile_bound" of output at
+//                level; "probability_half_width" | "probability_relative_half_width" of the share of
+//                runs that are not ok) holds to width at confidence, or max_runs is reached
+//   [failure]    subset: the failure event, as margin = "<column>" (a margin column, failed when
+//                <= 0) or column = "<column>", above | below = threshold, unit = the column's unit
 //   [output]     history_runs = [run indices], history_step_s (decimated histories stored)
 //   [scene]      file (path relative to the campaign file; default: Table 1 defaults),
 //                overrides = { "drive.mode" = "motor", ... }, and/or the scene inline as
@@ -20,6 +28,8 @@
 
 #include "io/scene_toml.hpp"
 #include "sampling/sampling.hpp"
+#include "sampling/stopping.hpp"
+#include "sampling/subset_simulation.hpp"
 #include "sim/scene.hpp"
 
 namespace truss::campaign {
@@ -42,11 +52,44 @@ struct DispersionOptions {
   int line = 0;                     // line of the [[dispersion]] entry, for messages
 };
 
+enum class EnsembleMethod { design, subset };
+inline constexpr const char* kEnsembleMethodNames[] = {"design", "subset"};
+
+// The settings of subset simulation a campaign file gives (sampling::SubsetOptions has its rules;
+// its dims and seed come from the dispersions and ensemble.master_seed).
+struct SubsetSettings {
+  std::int64_t n_per_level = 2000;
+  double p0 = 0.1;
+  int max_levels = 20;
+  double proposal_half_width = 1.0;
+};
+
+// The failure event of a subset campaign: a float64 column of /runs and its margin, in the
+// column's unit, positive when safe: margin: the column itself; above: threshold - value;
+// below: value - threshold.
+enum class FailureKind { none, margin, above, below };
+struct FailureOptions {
+  FailureKind kind = FailureKind::none;
+  std::string column;
+  double threshold = 0.0;
+  std::string unit;   // above / below: must be the column's unit
+  int line = 0;       // of the [failure] table, for messages
+};
+
 struct EnsembleOptions {
   std::int64_t n_runs = 100;                 // number of deployments
   std::uint64_t master_seed = 1;             // with the run index, the only source of randomness
   SamplingMethod sampling = SamplingMethod::monte_carlo;  // parsed from its name (sampling::kSamplingNames)
   double max_run_wall_time_s = 60.0;         // a run longer than this is stopped and recorded
+  EnsembleMethod method = EnsembleMethod::design;
+  SubsetSettings subset;                     // method = subset
+  // [ensemble.stop]: when `stop` is set, the design runs in rounds from n_runs up to
+  // stop_rule.max_runs until stop_rule holds for stop_output (percentile_bound) or for the share of
+  // runs that are not ok (the probability targets).
+  bool stop = false;
+  sampling::StopRule stop_rule;
+  std::string stop_output;
+  // method = subset: the cap on runs, N + (max_levels - 1)(N - N_c), is n_runs (set by the parser).
 };
 
 struct OutputOptions {
@@ -63,6 +106,7 @@ struct CampaignOptions {
   std::vector<io::SceneSetting> scene_settings;  // inline tables, overrides and --set, in order
   sim::SceneOptions base;                     // the resolved base scene
   std::vector<DispersionOptions> dispersions;
+  FailureOptions failure;                     // method = subset
   std::vector<std::string> warnings;          // plausibility warnings of the base scene (not written back)
   // Every rule of a campaign, in one place: empty, or "field: reason" naming the first field that
   // breaks one ("ensemble.n_runs: ...", "output.history_runs: ...", "dispersion[2].per: ...").
@@ -86,6 +130,17 @@ CampaignOptions parse_campaign_text(std::string_view text, const std::string& so
 // The campaign with everything resolved, as TOML that parse_campaign_text reads back to the same
 // options: the base scene inline (every key), every dispersion with all its parameters.
 std::string resolved_campaign_toml(const CampaignOptions& c);
+
+// The most runs the campaign can make: ensemble.n_runs, or with [ensemble.stop] its max_runs (a
+// subset campaign's n_runs is its cap already): what memory and disk are checked for.
+inline std::int64_t calc_max_runs(const CampaignOptions& c) {
+  return c.ensemble.stop ? c.ensemble.stop_rule.max_runs : c.ensemble.n_runs;
+}
+
+// The subset options of a campaign (its dimensions and master seed filled in).
+sampling::SubsetOptions calc_subset_options(const CampaignOptions& c);
+// The unit of the float64 run field `name` (RunResult, io::run_result_fields), or "" if none.
+std::string find_run_column_unit(const std::string& name);
 
 // Runs per Saltelli block: A, B and one AB matrix per dispersion (a dispersion is one factor).
 inline std::int64_t saltelli_block_runs(const CampaignOptions& c) {

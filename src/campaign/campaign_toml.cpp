@@ -6,6 +6,7 @@
 #include <toml++/toml.h>
 
 #include "campaign/campaign.hpp"
+#include "campaign/toml_read.hpp"
 
 namespace truss::campaign {
 
@@ -41,9 +42,11 @@ std::string toml_nums(const std::vector<double>& v) {
 std::string resolved_campaign_toml(const CampaignOptions& c) {
   std::string t = "# Resolved campaign: every value used, the base scene inline.\n[campaign]\n";
   t += fmt::format("name = {}\ndescription = {}\n\n[ensemble]\n", toml_str(c.name), toml_str(c.description));
-  t += fmt::format("n_runs = {}\nmaster_seed = {}\nsampling = {}\nmax_run_wall_time_s = {}\n\n", c.ensemble.n_runs,
+  if (c.ensemble.method != EnsembleMethod::subset) t += fmt::format("n_runs = {}\n", c.ensemble.n_runs);
+  t += fmt::format("master_seed = {}\nsampling = {}\nmax_run_wall_time_s = {}\nmethod = \"{}\"\n\n",
                    c.ensemble.master_seed, toml_str(to_string(c.ensemble.sampling)),
-                   toml_num(c.ensemble.max_run_wall_time_s));
+                   toml_num(c.ensemble.max_run_wall_time_s), kEnsembleMethodNames[static_cast<int>(c.ensemble.method)]);
+  t += detail::method_toml(c);
   t += "[output]\nhistory_runs = [";
   for (std::size_t i = 0; i < c.output.history_runs.size(); ++i)
     t += fmt::format("{}{}", i ? ", " : "", c.output.history_runs[i]);

@@ -53,6 +53,14 @@ double FreePhaseA::calc_rail_function_m(const double* q) const {
   return model::calc_rail_function_m(ctx_.mast->rail, x, 0.5 * (y_m + y_l));
 }
 
+double FreePhaseA::calc_rail_entry_margin_m(const double* q, const double* qdot, const double* qddot) const {
+  const int n = dof();
+  const bool lower_moves = n >= 2;  // else frame m - 1 is held
+  return model::calc_rail_entry_margin_m(ctx_.mast->rail, ctx_.mast->bay(ctx_.bay).strut_length_m, q[n - 1],
+                                         lower_moves ? q[n - 2] : held_height_m_, qdot[n - 1],
+                                         lower_moves ? qdot[n - 2] : 0.0, qddot[n - 1], lower_moves ? qddot[n - 2] : 0.0);
+}
+
 void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;

@@ -74,6 +74,9 @@ class FreePhaseA final : public PhaseModel {
                                const double* vs, int first, double* h, double* rate);
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
+  // At a rail entry: how deep the uncaptured pin would dip below the rail line (model/rail.hpp,
+  // calc_rail_entry_margin_m), from the state and its accelerations qddot (calc_point).
+  double calc_rail_entry_margin_m(const double* q, const double* qdot, const double* qddot) const;
   int get_lowest_frame() const { return lo_; }
   // Residual form (phase.hpp): velocity mode one multiplier (the drive force, y_m'' = 0), else none.
   int num_multipliers() const override { return ctx_.drive.mode == model::DriveMode::velocity ? 1 : 0; }

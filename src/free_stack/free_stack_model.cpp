@@ -117,6 +117,8 @@ StackEvent FreeStackModel::end_phase(const StageSpec& s, const PhaseSpec& ph, co
       return e;
     }
     case PhaseEnd::rail_entry: {  // plastic impact of all moving frames with the rail (model/free_impacts.hpp)
+      e.rail_margin_m = calc_entry_margin_m();  // before the impact changes the velocities
+      ++e.evals;
       const FreeRailEntry r = stack_.apply_rail_entry(s, drive_holds_speed_);
       if (!r.impact.ok)
         e.failure = fmt::format("singular configuration: the rail entry of bay {} at t = {:.9g} s has no solution", s.bay, t_s);
@@ -131,6 +133,16 @@ StackEvent FreeStackModel::end_phase(const StageSpec& s, const PhaseSpec& ph, co
     case PhaseEnd::reach_height: return e;                      // retraction: frame m back at its start height
   }
   return e;
+}
+
+double FreeStackModel::calc_entry_margin_m() {
+  const auto* a = dynamic_cast<const FreePhaseA*>(phase_.get());
+  if (a == nullptr) return kNaN;
+  stack_.get_start(ctx_, q0_, qdot0_);  // the state at the entry (set_end)
+  std::vector<double> qddot(q0_.size());
+  PhaseScratch scratch;
+  a->calc_point(q0_.data(), qdot0_.data(), qddot.data(), scratch);
+  return a->calc_rail_entry_margin_m(q0_.data(), qdot0_.data(), qddot.data());
 }
 
 }  // namespace truss::stages

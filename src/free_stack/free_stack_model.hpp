@@ -34,6 +34,7 @@ class FreeStackModel final : public StackModel {
 
  private:
   StackEvent book_contacts(const FreeSegmentStart& c, double t_s) const;  // the contacts' event
+  double calc_entry_margin_m();  // the rail margin of the entry that ends the open phase
   FreeStack stack_;
   std::unique_ptr<integrators::Integrator> integrator_;  // the run's one integrator
   PhaseContext ctx_;                                      // the phase running

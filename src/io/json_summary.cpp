@@ -63,6 +63,7 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_F64(max_rail_residual_m, "m"),
       TRUSS_RUN_I64(rail_miss_bay),
       TRUSS_RUN_F64(rail_miss_closest_approach_m, "m"),
+      TRUSS_RUN_F64(rail_margin_m, "m"),
       TRUSS_RUN_F64(rail_miss_closest_approach_time_s, "s"),
       TRUSS_RUN_F64(rail_miss_above_rail_top_time_s, "s"),
       TRUSS_RUN_F64(min_bay_opening_m, "m"),

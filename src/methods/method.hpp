@@ -67,6 +67,11 @@ class Method {
   // Rank 0, once every run is in the results file: the method's own results (Saltelli: the Sobol'
   // indices, /sensitivity). `n_runs`: the runs of all rounds.
   virtual void write_results(hid_t file, std::int64_t n_runs) const;
+  // False when the runs are not draws of the dispersions (subset simulation's Markov chains): the
+  // command then prints no design values (percentiles) of them.
+  virtual bool runs_are_draws() const { return true; }
+  // Rank 0, after write_results: the method's result for the terminal (lines), or nothing.
+  virtual std::string calc_result_text() const { return {}; }
 };
 
 // The method of ensemble.sampling.

@@ -232,7 +232,9 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     r0.journal->close_and_remove();
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n",
                              sim::to_string(nominal.status), nominal.message.empty() ? "" : ": " + nominal.message);
-    print_design_summary(stderr, results::read_design_values(o.output_path, ctx.record, nominal));
+    if (method.runs_are_draws())
+      print_design_summary(stderr, results::read_design_values(o.output_path, ctx.record, nominal));
+    std::cerr << method.calc_result_text();
     const results::ScheduleSummary& s = done.schedule;
     const double per = 1e6 / std::max(1.0, static_cast<double>(s.runs_by_rank0 + s.runs_by_workers));  // us a result
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs in {} round{} ({}), {:.3g} s on {} rank{} "

@@ -29,7 +29,7 @@ std::string human(double bytes) {
 }  // namespace
 
 ResourceEstimate estimate_resources(const campaign::CampaignContext& ctx) {
-  const double n = static_cast<double>(ctx.options.ensemble.n_runs);
+  const double n = static_cast<double>(campaign::calc_max_runs(ctx.options));
   // One run's record (campaign/record.hpp) and its session column: a row of the file.
   const double row = static_cast<double>(ctx.record.fixed_bytes()) + 8.0;
   ResourceEstimate e;
@@ -73,7 +73,7 @@ double free_disk_bytes(const std::string& dir) {
 std::string check_resources(const campaign::CampaignContext& ctx, const std::string& output_path,
                             double journal_on_disk_bytes) {
   const ResourceEstimate e = estimate_resources(ctx);
-  const std::int64_t n = ctx.options.ensemble.n_runs;
+  const std::int64_t n = campaign::calc_max_runs(ctx.options);
   const double mem = available_memory_bytes();
   if (e.memory_bytes > 0.8 * mem)
     return fmt::format("error: ensemble.n_runs = {}: rank 0 would need about {} in memory ({} bytes per run: run "

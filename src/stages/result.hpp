@@ -106,6 +106,11 @@ struct RunResult {
   double rail_miss_closest_approach_m = NAN_INIT();
   double rail_miss_closest_approach_time_s = NAN_INIT();
   double rail_miss_above_rail_top_time_s = NAN_INIT();
+  // The rail margin (free-stack deployment, docs/model-notes.md "Rail margin"; m, > 0 safe): on a
+  // rail miss minus the closest approach, else the smallest over the bays' entries of how deep the
+  // uncaptured pin would have dipped below the rail line (phase A continued over one strut length of
+  // drive travel); NaN for the held stack and retractions.
+  double rail_margin_m = NAN_INIT();
   // Free stack without contacts (the paper's literal model): the smallest opening D_i of any bay
   // over the run, its time and bay; negative when frames passed through each other or frame 1
   // through the floor. NaN (bay 0) for the held stack.

@@ -31,6 +31,7 @@ struct StackEvent {
   double drive_work_J = 0;               // work of the drive's impulse(s)
   long contact_landings = 0, contact_lift_offs = 0;  // stack contacts
   long evals = 0;                        // model evaluations the event took
+  double rail_margin_m = kNaN;           // a free-stack rail entry: its margin (RunResult::rail_margin_m)
 };
 
 // A stretch of a phase that one solver runs: its solver (owned by the stack mode, valid until the

@@ -96,6 +96,7 @@ bool StageLoop::book(const StackEvent& e) {
   r_.contact_lift_offs += e.contact_lift_offs;
   r_.contact_landings += e.contact_landings;
   if (e.contact_landings > 0) r_.contact_energy_loss_J += e.energy_loss_J;
+  if (!std::isnan(e.rail_margin_m) && !(r_.rail_margin_m <= e.rail_margin_m)) r_.rail_margin_m = e.rail_margin_m;
   ledger_.add_loss(e.energy_loss_J);
   ledger_.add_impulse_work(e.drive_work_J);
   if (!e.failure.empty()) fail(RunStatus::singular_configuration, e.failure);
@@ -152,6 +153,7 @@ void StageLoop::fail_stop(const SegmentEnd& e, int m) {
     r_.rail_miss_closest_approach_m = -a.value;
     r_.rail_miss_closest_approach_time_s = a.t;
     r_.rail_miss_above_rail_top_time_s = e.above_rail_top_time_s;
+    r_.rail_margin_m = a.value;  // minus the closest approach
   }
   fail(e.status, e.message);
 }

@@ -311,7 +311,8 @@ def case_failures(args):
     d = fresh(args, "failures")
     camp = os.path.join(args.repo, "campaigns/motor_torque.toml")
     out = os.path.join(d, "motor.h5")
-    p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=400", "--progress", "none"])
+    p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=400", "--set", "ensemble.stop=false",
+                         "--progress", "none"])
     check(p.returncode == 0, "motor campaign with stalls exits 0 (failed runs are data)")
     with h5py.File(out, "r") as f:
         status = f["runs/status"][:]

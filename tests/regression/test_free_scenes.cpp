@@ -9,6 +9,8 @@
 #include <cmath>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "io/scene_toml.hpp"
 #include "sim/simulate.hpp"
 
@@ -148,4 +150,37 @@ TEST_CASE("paper_free.toml retracts with stack contacts in every drive mode", "[
     CHECK(r.min_bay_opening_m > -2e-9 * 0.18);
     CHECK(std::abs(r.energy_residual_J) < 1e-5 * (std::abs(r.drive_work_J) + r.energy_lost_J));  // rtol 1e-8 of the scene
   }
+}
+
+// The rail margin (docs/model-notes.md "Rail margin") is continuous through the boundary between a
+// miss and an entry: the diagonal free length l_0 bisected to 2e-7 m between a miss (0.4700 m) and
+// an entry (0.4710 m). Near the boundary the margin moves about 1.05 m per m of l_0 on either side
+// (measured at l_0 = 0.4704 / 0.47042 and 0.47045 / 0.47048), so both sides of the last bracket
+// lie within 3 brackets' worth of zero; a jump (e.g. an entry margin that does not go to zero as
+// the entry grazes) would leave one side a finite distance away.
+TEST_CASE("rail_margin_m: negative on a miss, positive on an entry, continuous through the boundary",
+          "[regression][free]") {
+  auto run = [](double l0) {
+    return sim::simulate(load("paper_free.toml", {"stack.contacts=false", "run.output_step_s=0",
+                                                  "mast.diagonal_free_length_m=" + fmt::format("{}", l0)}));
+  };
+  double miss = 0.4700, entry = 0.4710;
+  sim::RunResult rm = run(miss), re = run(entry);
+  REQUIRE(rm.status == sim::RunStatus::rail_miss);
+  REQUIRE(re.status == sim::RunStatus::ok);
+  CHECK(rm.rail_margin_m == -rm.rail_miss_closest_approach_m);
+  while (entry - miss > 2e-7) {
+    const double mid = 0.5 * (miss + entry);
+    sim::RunResult r = run(mid);
+    REQUIRE((r.status == sim::RunStatus::ok || r.status == sim::RunStatus::rail_miss));
+    (r.status == sim::RunStatus::ok ? entry : miss) = mid;
+    (r.status == sim::RunStatus::ok ? re : rm) = std::move(r);
+  }
+  INFO("l_0 in [" << miss << ", " << entry << "]: margins " << rm.rail_margin_m << ", " << re.rail_margin_m << " m");
+  CHECK(rm.rail_margin_m < 0.0);
+  CHECK(re.rail_margin_m > 0.0);
+  CHECK(-rm.rail_margin_m < 3 * (entry - miss));
+  CHECK(re.rail_margin_m < 3 * (entry - miss));
+  // The held stack has no rail miss: no margin.
+  CHECK(std::isnan(sim::simulate(load("table1.toml", {"run.output_step_s=0"})).rail_margin_m));
 }

@@ -10,6 +10,7 @@
 
 #include "campaign/campaign.hpp"
 #include "campaign/evaluate.hpp"
+#include "io/scene_toml.hpp"
 
 namespace truss::campaign::test {
 
@@ -42,6 +43,26 @@ upper = 0.1
 )", n_runs, sampling);
   return parse_campaign_text(text, "small.toml", ".");
 }
+
+// The message of the error a campaign text gives ("" if it parses), its source named `name`.
+inline std::string campaign_error(const std::string& text, const std::string& name,
+                                  const std::vector<std::string>& sets = {}) {
+  try {
+    parse_campaign_text(text, name, ".", sets);
+  } catch (const io::InputError& e) {
+    return e.what();
+  }
+  return {};
+}
+
+// A 4-bay base scene with one per-run dispersion (the strut mass, normal 2 %).
+inline constexpr const char* kFourBaysStrutMass = R"([scene.mast]
+n_bays = 4
+[[dispersion]]
+key = "mast.strut_mass_kg"
+distribution = "normal"
+std = 0.02
+)";
 
 inline bool stalls(std::int64_t run) { return run % 7 == 3; }
 inline double cell_value(std::int64_t run, int cell) { return static_cast<double>(run) + cell / 1000.0; }

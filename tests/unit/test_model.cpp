@@ -193,3 +193,51 @@ TEST_CASE("diagonals: tension only, tension and potential consistent", "[model]"
   // equal frames: the offset is the frame side
   CHECK(calc_diagonal_offset_sq_m2({0.36, 0.5}, {0.36, 0.5}) == Approx(0.36 * 0.36).epsilon(1e-15));
 }
+
+// The rail margin of an entry (model/rail.hpp): the dip below the rail line of phase A continued
+// through the entry, to second order. Checked against the hinge path itself: frames moving at
+// constant accelerations from a state on the rail (f = 0, falling), f sampled every 1e-7 s until
+// it rises again, its minimum times sin(beta) as the depth. The path's f is not a parabola (x_h
+// is a square root of the heights), so the estimate errs by the third-order term, O(tau f''' / f'')
+// relative, tau = -f'/f'' the time to the dip: about 1e-3 for these nearly grazing entries;
+// a wrong x' or x'' would be off by order one.
+TEST_CASE("rail entry margin: the dip of the continued hinge path, to second order", "[model][rail]") {
+  const RailParams rail;
+  const double l = 0.18, c = rail.cot_beta(), sb = std::sin(rail.beta_rad);
+  auto f_of = [&](double ym, double ylo) {
+    const double x = std::sqrt(l * l - 0.25 * (ym - ylo) * (ym - ylo));
+    return calc_rail_function_m(rail, x, 0.5 * (ym + ylo));
+  };
+  struct Case { double D, u, w, au, aw; };
+  // f' = -2e-3 .. -4e-3 m/s, f'' = 0.5 .. 1.6 m/s^2: dips of about 5e-6 m, 3 ms after the entry.
+  for (const Case k : {Case{0.30, 0.1, 0.0585, 0.0, 0.4}, Case{0.25, 0.1, 0.0423, 0.0, 0.3},
+                       Case{0.33, 0.05, 0.0346, 0.2, 0.6}}) {
+    double ylo = 0.1, ym = ylo + k.D;
+    const double f0 = f_of(ym, ylo);
+    ym -= f0;  // both frames shifted: D kept, f = 0 (the entry)
+    ylo -= f0;
+    double fmin = 0.0, t = 0.0, f = 0.0;
+    for (int i = 1; i < 20000000 && f <= fmin + 1e-15; ++i) {
+      t = i * 1e-7;
+      f = f_of(ym + k.u * t + 0.5 * k.au * t * t, ylo + k.w * t + 0.5 * k.aw * t * t);
+      fmin = std::min(fmin, f);
+    }
+    const double m = calc_rail_entry_margin_m(rail, l, ym, ylo, k.u, k.w, k.au, k.aw);
+    INFO("D " << k.D << ": dip " << -fmin * sb << " m, estimate " << m << " m, c " << c);
+    REQUIRE(fmin < 0.0);
+    CHECK(m == Approx(-fmin * sb).epsilon(5e-3));
+  }
+  // A grazing entry (f' = 0, f'' > 0) has no dip.
+  CHECK(calc_rail_entry_margin_m(rail, l, 0.4, 0.1, 0.0, 0.0, 0.0, 0.3) == 0.0);
+  // A pin still accelerating into the rail (f'' < 0): the dip over the horizon T = l / max(|u|, |f'|),
+  // with f' and f'' by central differences of f along the path (step 1e-4 s: truncation 1e-8
+  // relative, rounding 1e-16 / 1e-8 = 1e-8 relative in f'').
+  const double ym = 0.4, ylo = 0.1, u = 0.1, au = 0.0, aw = -0.2, h = 1e-4;
+  auto f_at = [&](double t) { return f_of(ym + u * t + 0.5 * au * t * t, ylo + 0.5 * aw * t * t); };
+  const double fd = (f_at(h) - f_at(-h)) / (2 * h), fdd = (f_at(h) - 2 * f_at(0) + f_at(-h)) / (h * h);
+  REQUIRE(fd < 0.0);
+  REQUIRE(fdd < 0.0);
+  const double T = l / std::max(u, -fd);
+  CHECK(calc_rail_entry_margin_m(rail, l, ym, ylo, u, 0.0, au, aw) ==
+        Approx(-(fd * T + 0.5 * fdd * T * T) * sb).epsilon(1e-6));
+}

@@ -1,0 +1,219 @@
+"""truss_report.sections_subset: the report of a subset-simulation campaign (ensemble.method =
+"subset", the file's /subset, docs/hdf5-schema.md): the failure probability with its interval,
+beta, the coefficients of variation, the runs used and the runs crude Monte Carlo would need for
+the same CoV; the threshold of each level; the failure samples' inputs against nominal (which
+inputs drive the failure). The runs of such a campaign are not draws of the dispersions (the
+Markov chains dwell near the failure), so it has no design loads and no run-share probabilities.
+
+The interval: the estimate is a product of the levels' shares, close to lognormal, so the 95 %
+interval is p exp(+-1.96 s), s^2 = ln(1 + cov^2), with the lineage CoV (the headline; Au & Beck's
+estimator takes the levels as independent and underestimates the spread)."""
+import math
+
+import numpy as np
+
+from .page import esc, fmt, html_page, num, table
+from .top import model_limits_html, signoff_html
+
+Z95 = 1.959963984540054
+
+
+def read_subset(f):
+    """The /subset group of an open h5py file as a dict, or None."""
+    if "subset" not in f:
+        return None
+    g = f["subset"]
+    s = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in g.attrs.items()}
+    for k in ("p", "cov", "cov_lineage", "beta", "crude_mc_runs"):
+        s[k] = float(g[k][()])
+    s["runs"], s["lineages"] = int(g["runs"][()]), int(g["lineages"][()])
+    s["levels"] = {k: g["levels"][k][()] for k in g["levels"]}
+    s["level_units"] = g["levels/threshold"].attrs["units"]
+    fs = g["failure_samples"]
+    s["failure_runs"] = fs["run_index"][()]
+    s["failure_margin"] = fs["margin"][()]
+    s["failure_z"] = fs["z"][()]
+    s["failure_inputs"] = {k: (fs["inputs"][k][()], fs["inputs"][k].attrs.get("nominal", np.nan),
+                               fs["inputs"][k].attrs["units"]) for k in fs["inputs"]}
+    return s
+
+
+def read_stop(f):
+    """The /stop group (sequential stopping) as a dict, or None."""
+    if "stop" not in f:
+        return None
+    g = f["stop"]
+    s = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in g.attrs.items()}
+    for k in ("runs", "used", "estimate", "upper", "achieved_width"):
+        s[k] = g[k][()]
+    s["unit"] = g["estimate"].attrs["units"]
+    s["rounds_state"] = [x.decode() if isinstance(x, bytes) else x for x in g["state"][()]]
+    return s
+
+
+def subsection_stop(s):
+    """The rounds of a sequentially stopped campaign and why it stopped (empty without /stop)."""
+    if s is None:
+        return ""
+    u = s["unit"]
+    rows = [[str(k), num(f"stop.round{k}.runs", int(s["runs"][k])), num(f"stop.round{k}.used", int(s["used"][k])),
+             num(f"stop.round{k}.estimate", float(s["estimate"][k]), u), num(f"stop.round{k}.upper", float(s["upper"][k]), u),
+             num(f"stop.round{k}.width", float(s["achieved_width"][k]), digits=3), esc(s["rounds_state"][k])]
+            for k in range(len(s["runs"]))]
+    what = (f"the one-sided {fmt(100 * s['confidence'])} % bound of the {fmt(s['level'])} quantile of "
+            f"<code>{esc(s['output'])}</code> within {fmt(s['width'])} of it (relative)"
+            if s["target"] == "percentile_bound" else
+            f"the {esc(s['target'].replace('_', ' '))} of the share of runs that are not ok at most {fmt(s['width'])}")
+    return ("<h3>Sequential stopping</h3><p>The campaign ran in rounds until " + what + f", at most "
+            f"{s['max_runs']} runs (<code>/stop</code>). It stopped: <b>{esc(s['state'])}</b>, "
+            f"{esc(s['reason'])}.</p>"
+            + table(["after round", "runs", "values used", "estimate", "upper bound", "achieved width", "state"],
+                    rows, "narrow"))
+
+
+def interval(p, cov):
+    """Lognormal 95 % interval of the estimate p with coefficient of variation cov."""
+    if not (p > 0 and math.isfinite(cov)):
+        return float("nan"), float("nan")
+    sd = math.sqrt(math.log1p(cov * cov))
+    return p * math.exp(-Z95 * sd), p * math.exp(Z95 * sd)
+
+
+def event_text(s):
+    col, kind = esc(s["failure_column"]), s["failure_kind"]
+    unit = s["margin_units"]
+    if kind == "margin":
+        return f"<code>{col}</code> ≤ 0 {esc(unit)}"
+    return f"<code>{col}</code> {'≥' if kind == 'above' else '≤'} {fmt(s['failure_threshold'])} {esc(unit)}"
+
+
+def section_probability(s):
+    lo, hi = interval(s["p"], s["cov_lineage"])
+    rows = [["failure probability p", num("subset.p", s["p"], digits=4)],
+            ["95 % interval, low (lognormal, lineage CoV)", num("subset.p.ci_lo", lo, digits=4)],
+            ["95 % interval, high", num("subset.p.ci_hi", hi, digits=4)],
+            ["reliability index β = −Φ⁻¹(p)", num("subset.beta", s["beta"], digits=4)],
+            ["coefficient of variation (lineage estimator)", num("subset.cov_lineage", s["cov_lineage"], digits=3)],
+            ["coefficient of variation (Au & Beck)", num("subset.cov", s["cov"], digits=3)],
+            ["runs used", num("subset.runs", s["runs"])],
+            ["levels", num("subset.levels", len(s["levels"]["threshold"]))],
+            ["crude Monte Carlo runs for the same CoV", num("subset.crude_mc_runs", s["crude_mc_runs"], digits=3)],
+            ["distinct level-0 ancestors of the last level", num("subset.lineages", s["lineages"])]]
+    warn = ""
+    if s["status"] != "converged":
+        warn = (f"<p class='warn'>The estimate did not converge: <b>{esc(s['status'])}</b> "
+                f"({esc(s['message'])}). With <code>level_cap</code> the failure was not reached "
+                "within max_levels: p is at most the last level's threshold share times p0^levels; "
+                "raise max_levels.</p>")
+    elif s["lineages"] < 20:
+        warn = (f"<p class='warn'>Only {s['lineages']} level-0 ancestors survive to the last level: "
+                "both CoVs then understate the spread; take them as an indication, or raise "
+                "n_per_level.</p>")
+    return ("<section id='probability'><h2>Failure probability</h2>"
+            f"<p>Failure event: {event_text(s)}, estimated by subset simulation (Au &amp; Beck "
+            f"2001) with {s['n_per_level']} samples a level and p0 = {fmt(s['p0'])}. Status "
+            f"<b>{esc(s['status'])}</b>: {esc(s['message'])}.</p>" + warn
+            + table(["quantity", "value"], rows, "narrow") + "</section>")
+
+
+def fig_levels(plt, s):
+    th, pr = s["levels"]["threshold"], s["levels"]["probability"]
+    k = np.arange(len(th))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11.0, 3.8))
+    a1.plot(k, th, "o-", color="C0")
+    a1.axhline(0.0, color="C3", lw=1, ls="--", label="failure (margin 0)")
+    a1.set_xlabel("level")
+    a1.set_ylabel(f"threshold ({s['level_units']})")
+    a1.set_xticks(k)
+    a1.legend()
+    a2.semilogy(k, np.cumprod(pr), "o-", color="C1", label="P(margin ≤ threshold)")
+    a2.axhline(s["p"], color="C3", lw=1, ls="--", label=f"p = {fmt(s['p'], 3)}")
+    a2.set_xlabel("level")
+    a2.set_ylabel("probability")
+    a2.set_xticks(k)
+    a2.legend()
+    fig.tight_layout()
+    return fig
+
+
+def section_levels(page, s):
+    L = s["levels"]
+    u = s["level_units"]
+    rows = [[str(i), num(f"subset.level{i}.threshold", float(L["threshold"][i]), u, digits=4),
+             num(f"subset.level{i}.probability", float(L["probability"][i]), digits=4),
+             num(f"subset.level{i}.acceptance", float(L["acceptance"][i]), digits=3),
+             num(f"subset.level{i}.runs", int(L["runs"][i])),
+             num(f"subset.level{i}.unusable", int(L["unusable"][i]))] for i in range(len(L["threshold"]))]
+    return ("<section id='levels'><h2>Levels</h2><p>Each level keeps the samples whose margin is at "
+            "or below its threshold (a share p0 of them, more with ties); the last level's "
+            "threshold is the failure itself. The acceptance rate is the share of Markov steps "
+            "that moved (0.2–0.8 is healthy; near 0 the chains stall and the CoV understates). "
+            "Unusable runs could not give a margin (a stall before the event) and count as safe.</p>"
+            + page.figure(fig_levels(page.plt, s), "subset_levels.png",
+                          "threshold of each level (left) and the probability of reaching it (right)")
+            + table(["level", "threshold", "share", "acceptance", "runs", "unusable"], rows, "narrow")
+            + "</section>")
+
+
+def design_point_rows(s, c):
+    """[(|mean z|, row)] per dispersed key: nominal, the population's median (level 0: draws of
+    the dispersions), the failure samples' median, their mean standard-normal coordinate."""
+    n0 = int(s["levels"]["runs"][0])
+    z, rows, col = s["failure_z"], [], 0
+    for d in c.dispersions:
+        if d.key not in s["failure_inputs"]:
+            continue
+        x, nominal, unit = s["failure_inputs"][d.key]
+        w = 1 if x.ndim == 1 else x.shape[1]
+        zk = z[:, col:col + w] if len(z) else np.zeros((0, w))
+        col += w
+        mz = float(np.mean(zk)) if zk.size else float("nan")
+        pop = d.values[:n0] if d.values.ndim == 1 else np.nanmean(d.values[:n0], axis=1)
+        fx = x if x.ndim == 1 else np.nanmean(x, axis=1)
+        per = "" if w == 1 else f" (mean over {w} {'bays' if d.per == 'bay' else 'frames'})"
+        rows.append((abs(mz) if math.isfinite(mz) else -1.0,
+                     [f"<code>{esc(d.key)}</code>{per}", num(f"subset.dp.{d.key}.nominal", float(nominal), unit),
+                      num(f"subset.dp.{d.key}.population", float(np.nanmedian(pop)), unit),
+                      num(f"subset.dp.{d.key}.failure", float(np.nanmedian(fx)) if len(fx) else float("nan"),
+                          unit),
+                      num(f"subset.dp.{d.key}.z", mz, digits=3)]))
+    rows.sort(key=lambda t: -t[0])
+    return [r for _, r in rows]
+
+
+def section_design_point(s, c):
+    n = len(s["failure_runs"])
+    if n == 0:
+        return ("<section id='designpoint'><h2>Failure samples</h2><p>No failing sample: the "
+                "estimate did not reach the failure.</p></section>")
+    return ("<section id='designpoint'><h2>What drives the failure</h2>"
+            f"<p>The {n} distinct failing points of the last level (<code>/subset/failure_samples</code>) "
+            "against the nominal and the population (the median over level 0, plain draws of the "
+            "dispersions). The last column is the failure samples' mean coordinate in the standard "
+            "normal space of the dispersions: how many standard deviations from its median a "
+            "dispersion must go for the failure; sorted by its size, the inputs that drive the "
+            "failure come first.</p>"
+            + table(["input", "nominal", "population median", "failure samples' median",
+                     "mean z (σ)"], design_point_rows(s, c)) + "</section>")
+
+
+def terminal_lines(c, s):
+    lo, hi = interval(s["p"], s["cov_lineage"])
+    return [f"SUBSET SIMULATION ({c.attrs['campaign_name']}, {s['runs']} runs, {s['status']}): "
+            f"P({s['failure_column']} {'>=' if s['failure_kind'] == 'above' else '<='} "
+            f"{fmt(s['failure_threshold'])} {s['margin_units']}) = {fmt(s['p'], 4)}",
+            f"  95 % interval [{fmt(lo, 3)}, {fmt(hi, 3)}], beta = {fmt(s['beta'], 4)}, CoV "
+            f"{fmt(s['cov_lineage'], 3)} (lineage; Au & Beck {fmt(s['cov'], 3)}); crude Monte Carlo "
+            f"would need {fmt(s['crude_mc_runs'], 3)} runs"]
+
+
+def subset_report(page, c, s, opts, nominal_html):
+    """The report of a subset campaign; page.summary gets its lines for the terminal."""
+    page.summary = terminal_lines(c, s)
+    toc = ("<nav><a href='#probability'>Failure probability</a> · <a href='#levels'>Levels</a> · "
+           "<a href='#designpoint'>What drives the failure</a> · <a href='#nominal'>Nominal run</a> · "
+           "<a href='#limits'>Model limits</a> · <a href='#signoff'>Sign-off</a></nav>")
+    body = [section_probability(s), section_levels(page, s), section_design_point(s, c), nominal_html]
+    title = f"Failure-probability report: campaign “{c.attrs['campaign_name']}”"
+    return html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
+                     + signoff_html(opts.revision))

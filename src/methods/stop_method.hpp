@@ -1,0 +1,36 @@
+// Sequential stopping ([ensemble.stop], campaign.hpp): a Monte Carlo design run in rounds until a
+// statistical target holds or the cap on runs is reached (sampling/stopping.hpp's rules). Round 0
+// runs ensemble.n_runs; after each round the rule is decided over every run so far and, unless
+// met or capped, asks for the runs it estimates the target needs. Run i's point is the Monte Carlo
+// point i, whatever the rounds: the first n_runs runs are those of the one-shot design.
+//   percentile_bound: the output's values of the ok runs (the others count as runs without a
+//     value); probability targets: the share of runs that are not ok.
+// The results: /stop (docs/hdf5-schema.md): the rule, and per round its runs, estimate, bound,
+// achieved width, state and reason; the last round's state and reason say why it stopped.
+#pragma once
+#include "methods/method.hpp"
+#include "sampling/sampling.hpp"
+#include "sampling/stopping.hpp"
+
+namespace truss::methods {
+
+class StopMethod : public Method {
+ public:
+  explicit StopMethod(const campaign::CampaignContext& ctx);
+  std::vector<std::string> observed_outputs() const override;
+  Proposal propose(std::int64_t round, const RoundRecords& previous) override;
+  void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const override;
+  void write_results(hid_t file, std::int64_t n_runs) const override;
+  std::string calc_result_text() const override;
+  // One decision per finished round, in order.
+  const std::vector<sampling::StopDecision>& decisions() const { return decisions_; }
+
+ private:
+  const campaign::CampaignContext& ctx_;
+  sampling::SamplePlan plan_;  // Monte Carlo over max_runs runs
+  std::vector<double> values_;  // percentile: each run's output, NaN unless ok
+  std::int64_t runs_ = 0, failures_ = 0;
+  std::vector<sampling::StopDecision> decisions_;
+};
+
+}  // namespace truss::methods

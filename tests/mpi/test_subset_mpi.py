@@ -1,0 +1,200 @@
+#!/usr/bin/python3
+"""Subset simulation through the engine under a real mpirun (ensemble.method = "subset",
+methods/subset_method.hpp), on real free-stack runs: campaigns/free_rail_miss_rare.toml made small
+(100 samples a level, at most 3 levels: at most 280 runs of ~50 ms), its diagonals' mean free
+length lowered to 0.483 m so that the miss (l_0 below about 0.4704 m) has p of order 5e-3: level 2
+reaches it.
+
+  test_subset_mpi.py --driver truss-campaign --repo SRC --scratch DIR
+
+- /subset against the file's own rows: level 0 is runs 0..99 (round 0); its threshold is the 10th
+  smallest rail margin among them (NaN counted as safe), its probability the share at or below it;
+  each level's runs are its rounds' rows; the failure samples are runs whose margin is <= 0, with
+  their inputs as /runs/inputs holds them.
+- The same datasets on 1 and 2 ranks.
+- The report (postproc/report.py) of that file: its failure-probability numbers against values
+  computed here: p and beta from /subset, the 95 % interval p exp(+-z s), s^2 = ln(1 + cov^2) with z
+  from scipy, and the design-point column of the diagonal free length as the failure samples' mean
+  standard-normal coordinate recomputed from their inputs ((x - nominal) / std for its offset
+  normal dispersion); no design loads (the runs are not draws).
+- kill -9 of the whole job in the middle of level 1 (its fourth round planned, records of it
+  journaled), then --resume on 2 ranks: the same datasets as the uninterrupted campaign.
+- Sequential stopping ([ensemble.stop]) on the shipped motor campaign: /stop's rounds are the
+  file's rounds, and each round's decision is recomputed here from the rows of the runs up to it:
+  the P99.865 of the ok runs' peak torque (numpy's type 7), its one-sided 95 % bound x_(k), k the
+  least rank with F_Binomial(k - 1; n, q) >= 0.95 (scipy), and whether (bound - estimate) /
+  estimate <= 0.02; the last round meets it, the earlier ones do not; the report lists the rounds.
+"""
+import argparse
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+from scipy.stats import binom, norm
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_campaign_mpi import ENV, check, datasets, fresh, same_values  # noqa: E402
+from test_journal_faults import kill_job, parse_journal  # noqa: E402
+
+CAMPAIGN = "campaigns/free_rail_miss_rare.toml"
+N, NC = 100, 10
+
+
+def command(args, out, ranks):
+    return ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, os.path.join(args.repo, CAMPAIGN), "-o", out,
+            "--set", f"ensemble.subset.n_per_level={N}", "--set", "ensemble.subset.max_levels=3",
+            "--set", "mast.diagonal_free_length_m=0.483",
+            "--progress", "none", "--flush-interval", "0.02"]
+
+
+def run(args, out, ranks, extra=()):
+    return subprocess.run(command(args, out, ranks) + list(extra), env=ENV, capture_output=True, text=True,
+                          timeout=600)
+
+
+def check_against_rows(path):
+    with h5py.File(path, "r") as f:
+        g = f["subset"]
+        margin = f["runs/rail_margin_m"][:]
+        rounds = f["runs/round"][:]
+        status = f["runs/status"][:]
+        n = margin.size
+        check(int(g["runs"][()]) == n and np.array_equal(f["runs/run_index"][:], np.arange(n)),
+              f"/subset/runs = the file's {n} runs, indexed 0..{n - 1}")
+        check((rounds[:N] == 0).all() and (rounds[N:] > 0).all(), "level 0 is round 0, runs 0..99")
+        ok = status == 0
+        m0 = np.where(ok[:N] | (margin[:N] <= 0), margin[:N], np.inf)
+        m0 = np.where(np.isnan(m0), np.inf, m0)
+        b1 = np.sort(m0)[NC - 1]
+        th = g["levels/threshold"][:]
+        check(th[0] == b1 and g["levels/threshold"].attrs["units"] == "m",
+              f"level 0's threshold is the 10th smallest margin of its rows ({th[0]} vs {b1}), in m")
+        check(g["levels/probability"][0] == np.count_nonzero(m0 <= b1) / N, "level 0's probability from its rows")
+        runs = g["levels/runs"][:]
+        check(runs.sum() == n and runs[0] == N, f"the levels' runs {list(runs)} add up to the file's")
+        p = float(g["p"][()])
+        check(g.attrs["status"] == "converged" and p == np.prod(g["levels/probability"][:]) and 1e-4 < p < 0.1,
+              f"converged: p = {p:.3g} is the product of the levels' probabilities")
+        idx = g["failure_samples/run_index"][:]
+        fm = g["failure_samples/margin"][:]
+        check(idx.size > 0 and np.array_equal(margin[idx], fm) and (fm <= 0).all()
+              and (status[idx] == 1).all(), f"{idx.size} failure samples: rail misses, their margins <= 0")
+        x = f["runs/inputs/mast.diagonal_free_length_m"][:]
+        check(np.array_equal(g["failure_samples/inputs/mast.diagonal_free_length_m"][:], x[idx]),
+              "the failure samples' inputs are their rows of /runs/inputs")
+
+
+def report_value(html, key):
+    m = re.search(r'data-key="' + re.escape(key) + r'" data-value="([^"]+)"', html)
+    check(m is not None, f"the report has {key}")
+    return float(m.group(1))
+
+
+def check_report(args, path, outdir):
+    p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc/report.py"), path, "-o", outdir,
+                        "--force"], capture_output=True, text=True, timeout=300)
+    check(p.returncode == 0 and "SUBSET SIMULATION" in p.stdout, f"report: exit 0 ({p.stderr.strip()[-300:]})")
+    html = open(os.path.join(outdir, "report.html"), encoding="utf-8").read()
+    with h5py.File(path, "r") as f:
+        g = f["subset"]
+        pr, cov = float(g["p"][()]), float(g["cov_lineage"][()])
+        x = g["failure_samples/inputs/mast.diagonal_free_length_m"][:]
+    s = math.sqrt(math.log(1 + cov * cov))
+    z = norm.ppf(0.975)
+    check(report_value(html, "subset.p") == pr and abs(report_value(html, "subset.beta") + norm.ppf(pr)) < 1e-9,
+          "report: p and beta = -Phi^-1(p)")
+    for key, want in (("subset.p.ci_lo", pr * math.exp(-z * s)), ("subset.p.ci_hi", pr * math.exp(z * s))):
+        check(abs(report_value(html, key) / want - 1) < 1e-12, f"report: {key} = {want:.6g}")
+    mz = np.mean((x - 0.483) / 0.005)  # the campaign's l_0 (--set above) and its dispersion's std
+    check(abs(report_value(html, "subset.dp.mast.diagonal_free_length_m.z") - mz) < 1e-9,
+          f"report: the design point's free-length coordinate, {mz:.4g} sigma, from the failure samples' inputs")
+    check("design loads" not in html.lower() and "subset_levels.png" in html, "report: a level plot, no design loads")
+
+
+def check_stop(args, d):
+    out = os.path.join(d, "motor.h5")
+    p = subprocess.run(["mpirun", "--oversubscribe", "-np", "2", args.driver,
+                        os.path.join(args.repo, "campaigns/motor_torque.toml"), "-o", out, "--progress", "none"],
+                       env=ENV, capture_output=True, text=True, timeout=600)
+    check(p.returncode == 0 and "stop rule after round" in p.stderr, f"motor campaign with [ensemble.stop]: exit 0 "
+          f"({p.stderr.strip()[-300:]})")
+    q, width = 0.99865, 0.02
+    with h5py.File(out, "r") as f:
+        g = f["stop"]
+        runs, est, upper = g["runs"][:], g["estimate"][:], g["upper"][:]
+        state = [s.decode() if isinstance(s, bytes) else s for s in g["state"][:]]
+        rounds = f["runs/round"][:]
+        y = np.where(f["runs/status"][:] == 0, f["runs/peak_drive_torque_Nm"][:], np.nan)
+    check(len(runs) >= 2 and np.array_equal(runs, [np.count_nonzero(rounds <= r) for r in range(len(runs))])
+          and runs[-1] == y.size, f"/stop's rounds {list(runs)} are the file's rounds")
+    for r, n in enumerate(runs):
+        v = np.sort(y[:n][np.isfinite(y[:n])])
+        e = np.percentile(v, 100 * q)
+        ks = np.nonzero(binom.cdf(np.arange(v.size), v.size, q) >= 0.95)[0]
+        bound = v[ks[0]] if ks.size else np.nan
+        met = bool(ks.size) and (bound - e) / abs(e) <= width
+        check(abs(est[r] - e) <= 1e-12 * abs(e) and (np.isnan(bound) and np.isnan(upper[r]) or upper[r] == bound)
+              and state[r] == ("met" if met else "more"), f"round {r} ({n} runs): P99.865 {e:.6g}, bound {bound:.6g}, "
+              f"{state[r]}")
+    check(state[-1] == "met", "the last round meets the rule")
+    outdir = os.path.join(d, "motor_report")
+    p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc/report.py"), out, "-o", outdir,
+                        "--force"], capture_output=True, text=True, timeout=300)
+    html = open(os.path.join(outdir, "report.html"), encoding="utf-8").read()
+    check(p.returncode == 0 and "Sequential stopping" in html and report_value(html, f"stop.round{len(runs) - 1}.runs")
+          == runs[-1], "the report lists the rounds")
+
+
+def killed_mid_level(args, out):
+    proc = subprocess.Popen(command(args, out, 2), env=ENV, start_new_session=True, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    journal, t0, seen = out + ".journal", time.time(), (0, 0)
+    while time.time() - t0 < 300 and proc.poll() is None:
+        if os.path.exists(journal):
+            _, frames = parse_journal(open(journal, "rb").read())
+            plans = sum(1 for _, k, _ in frames if k == b"P")
+            in_last = sum(1 for _, k, pl in frames if k == b"R" and int.from_bytes(pl[8:16], "little") == plans - 1)
+            seen = (plans, in_last)
+            if plans >= 4 and in_last >= 2:
+                break
+        time.sleep(0.005)
+    kill_job(proc)
+    return seen
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--driver", required=True)
+    ap.add_argument("--repo", required=True)
+    ap.add_argument("--scratch", required=True)
+    args = ap.parse_args()
+    d = fresh(args, "subset")
+    outs = {}
+    for ranks in (2, 1):
+        outs[ranks] = os.path.join(d, f"r{ranks}.h5")
+        p = run(args, outs[ranks], ranks)
+        check(p.returncode == 0 and "subset simulation of P(rail_margin_m <= 0 m)" in p.stderr,
+              f"{ranks} rank(s): exit 0 and the result printed ({p.stderr.strip()[-300:]})")
+    check_against_rows(outs[2])
+    same, why = same_values(datasets(outs[2]), datasets(outs[1]))
+    check(same, f"1 and 2 ranks: the same datasets outside /timing {why}")
+    check_report(args, outs[2], os.path.join(d, "report"))
+    out = os.path.join(d, "killed.h5")
+    plans, in_last = killed_mid_level(args, out)
+    check(plans >= 4 and in_last >= 2 and not os.path.exists(out),
+          f"killed in level 1: {plans} rounds planned, {in_last} records of the last journaled, no results file")
+    p = run(args, out, 2, ["--resume"])
+    check(p.returncode == 0, f"--resume finishes ({p.stderr.strip()[-300:]})")
+    same, why = same_values(datasets(outs[2]), datasets(out))
+    check(same, f"the resumed file equals the uninterrupted one, value for value {why}")
+    check_stop(args, d)
+    print("passed")
+
+
+if __name__ == "__main__":
+    main()

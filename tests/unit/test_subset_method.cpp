@@ -1,0 +1,149 @@
+// Subset simulation as a method of the engine (methods/subset_method.hpp) and its campaign keys
+// (campaign_method.cpp): the file's rules with file, key and line; the method's rounds driven here
+// as the engine drives them, on an analytic limit state of the campaign's own uniforms, whose
+// failure probability is known exactly.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "campaign/evaluate.hpp"
+#include "campaign_fixtures.hpp"
+#include "io/scene_toml.hpp"
+#include "methods/subset_method.hpp"
+
+using namespace truss;
+
+namespace {
+
+std::string rare_text(const std::string& ensemble_extra, const std::string& subset, const std::string& failure) {
+  return fmt::format(R"([ensemble]
+method = "subset"
+master_seed = 5
+{}
+[ensemble.subset]
+{}
+[failure]
+{}
+{}[[dispersion]]
+key = "drive.speed_m_per_s"
+distribution = "normal"
+std = 0.05
+)", ensemble_extra, subset, failure, campaign::test::kFourBaysStrutMass);
+}
+
+// The message of the error the text gives ("" if it parses).
+std::string error_of(const std::string& text, const std::vector<std::string>& sets = {}) {
+  return campaign::test::campaign_error(text, "rare.toml", sets);
+}
+
+}  // namespace
+
+TEST_CASE("subset campaign keys: bad input named by file, key and line; the run cap as n_runs", "[methods][subset]") {
+  const std::string ok_subset = "n_per_level = 100\np0 = 0.1\nmax_levels = 4", margin = "margin = \"rail_margin_m\"";
+  // Lines: 1 [ensemble], 2 method, 3 master_seed, 4 extra, 5 [ensemble.subset], 6.. its keys.
+  CHECK(error_of(rare_text("", "n_per_level = 100\np0 = 0.6", margin)).find("rare.toml:7: ensemble.subset.p0: 0.6") != std::string::npos);
+  CHECK(error_of(rare_text("", "n_per_level = 100\np0 = 0.0", margin)).find("ensemble.subset.p0") != std::string::npos);
+  CHECK(error_of(rare_text("", "n_per_level = 100\np0 = 0.125", margin)).find("whole number of chains") !=
+        std::string::npos);
+  CHECK(error_of(rare_text("", ok_subset, margin), {"ensemble.subset.p0=0.7"})
+            .find("--set ensemble.subset.p0=0.7: ensemble.subset.p0") != std::string::npos);
+  const std::string no_column = error_of(rare_text("", ok_subset, "margin = \"rail_margn_m\""));
+  CHECK(no_column.find("rare.toml:10: failure.margin: \"rail_margn_m\" is not a float64 column") != std::string::npos);
+  const std::string unit = error_of(rare_text("", ok_subset, "column = \"peak_drive_force_N\"\nabove = 3.5\nunit = \"kN\""));
+  CHECK(unit.find("rare.toml:12: failure.unit: \"kN\", but peak_drive_force_N is in \"N\"") != std::string::npos);
+  CHECK(error_of(rare_text("", ok_subset, "column = \"peak_drive_force_N\"\nabove = 3.5")).find("failure.unit: missing") !=
+        std::string::npos);
+  CHECK(error_of(rare_text("", ok_subset, "column = \"status\"\nabove = 3.5\nunit = \"1\""))
+            .find("failure.column") != std::string::npos);
+  CHECK(error_of(rare_text("n_runs = 500", ok_subset, margin)).find("rare.toml:4: ensemble.n_runs: method = \"subset\"") !=
+        std::string::npos);
+  std::string no_failure = rare_text("", ok_subset, "");
+  no_failure.replace(no_failure.find("[failure]\n"), 10, "");
+  CHECK(error_of(no_failure).find("failure: method = \"subset\" needs a [failure] table") != std::string::npos);
+  CHECK(error_of(rare_text("", ok_subset, "")).find("rare.toml:9: failure: give either margin") != std::string::npos);
+  std::string design = rare_text("", ok_subset, margin);
+  design.replace(design.find("method = \"subset\""), 17, "method = \"design\"");
+  design.replace(design.find("[ensemble.subset]\n" + ok_subset), 18 + ok_subset.size(), "");
+  CHECK(error_of(design).find("failure: only ensemble.method = \"subset\" reads [failure]") != std::string::npos);
+  // A valid one: n_runs is the cap N + (max_levels - 1)(N - N_c); its resolved TOML reads back to it.
+  const campaign::CampaignOptions o = campaign::parse_campaign_text(rare_text("", ok_subset, margin), "rare.toml", ".");
+  CHECK(o.ensemble.n_runs == 100 + 3 * 90);
+  const campaign::CampaignOptions back =
+      campaign::parse_campaign_text(campaign::resolved_campaign_toml(o), "resolved.toml", ".");
+  CHECK(back.ensemble.method == campaign::EnsembleMethod::subset);
+  CHECK(back.ensemble.n_runs == o.ensemble.n_runs);
+  CHECK(back.ensemble.subset.p0 == 0.1);
+  CHECK(back.failure.kind == campaign::FailureKind::margin);
+  CHECK(back.failure.column == "rail_margin_m");
+}
+
+TEST_CASE("subset method: margins from records; a failed run counts only when it shows the failure", "[methods][subset]") {
+  methods::RoundRecords r;
+  const auto ok = static_cast<std::int8_t>(sim::RunStatus::ok), miss = static_cast<std::int8_t>(sim::RunStatus::rail_miss),
+             stall = static_cast<std::int8_t>(sim::RunStatus::stall);
+  r.status = {ok, miss, stall, stall, ok};
+  r.outputs = {{0.5, -0.2, 0.3, -0.1, std::nan("")}};
+  campaign::FailureOptions f;
+  f.kind = campaign::FailureKind::margin;
+  std::vector<double> m = methods::SubsetMethod::calc_margins(f, r);
+  CHECK(m[0] == 0.5);
+  CHECK(m[1] == -0.2);
+  CHECK(std::isnan(m[2]));  // a stall with a positive margin so far cannot say
+  CHECK(m[3] == -0.1);      // it failed before it stalled
+  CHECK(std::isnan(m[4]));
+  f.kind = campaign::FailureKind::above;
+  f.threshold = 0.4;
+  m = methods::SubsetMethod::calc_margins(f, r);
+  CHECK(m[0] == Approx(-0.1));
+  CHECK(std::isnan(m[1]));  // a rail miss whose column stays below the allowable: cannot say
+  CHECK(std::isnan(m[2]));
+  f.kind = campaign::FailureKind::below;
+  m = methods::SubsetMethod::calc_margins(f, r);
+  CHECK(m[0] == Approx(0.1));
+  CHECK(m[1] == Approx(-0.6));  // below the bound before the run stopped: a failure it shows
+}
+
+// The engine's loop, here: propose, the round's points by calc_uniforms, their margins, the next
+// round. Limit state g = beta - (z1 + z2) / sqrt(2), z_j = Phi^-1(u_j): p = Phi(-beta) exactly.
+TEST_CASE("subset method: rounds of contiguous runs whose points give the exact failure probability",
+          "[methods][subset]") {
+  const double beta = 3.5;  // p = 2.326e-4
+  const campaign::CampaignContext ctx(campaign::parse_campaign_text(
+      rare_text("", "n_per_level = 1000\np0 = 0.1", "margin = \"rail_margin_m\""), "rare.toml", "."));
+  REQUIRE(ctx.dims.total == 2);
+  methods::SubsetMethod m(ctx);
+  auto margin_at = [&](const methods::RoundPlan& plan, std::int64_t run) {
+    double u[2];
+    m.calc_uniforms(plan, run, u);
+    return beta - (sampling::normal_quantile(u[0]) + sampling::normal_quantile(u[1])) / std::sqrt(2.0);
+  };
+  std::vector<methods::RoundPlan> plans;
+  methods::RoundRecords prev;
+  std::int64_t next = 0;
+  for (std::int64_t round = 0;; ++round) {
+    methods::Proposal p = m.propose(round, prev);
+    if (p.n_runs == 0) break;
+    plans.push_back({round, next, p.n_runs, p.state});
+    prev = {next, std::vector<std::int8_t>(static_cast<std::size_t>(p.n_runs), 0), {{}}};
+    for (std::int64_t run = next; run < next + p.n_runs; ++run) prev.outputs[0].push_back(margin_at(plans.back(), run));
+    next += p.n_runs;
+  }
+  const sampling::SubsetSummary s = m.simulation().calc_summary();
+  const double exact = sampling::normal_cdf(-beta);
+  INFO("p = " << s.p << " (exact " << exact << "), CoV " << s.cov_lineage << ", " << s.runs << " runs");
+  CHECK(s.status == sampling::SubsetStatus::converged);
+  CHECK(s.runs == next);
+  CHECK(std::abs(std::log(s.p / exact)) < 3.0 * s.cov_lineage);  // one seed: within 3 CoV
+  CHECK(s.levels.size() == 4);  // p0^3 = 1e-3 > p > p0^4
+  // The failure samples name their runs: the point of that run in its round gives the margin.
+  const std::vector<sampling::SubsetSample> fs = m.simulation().calc_failure_samples();
+  REQUIRE(!fs.empty());
+  for (const sampling::SubsetSample& x : fs) {
+    CHECK(x.margin <= 0.0);
+    const auto plan = std::find_if(plans.begin(), plans.end(), [&](const auto& p) { return p.contains(x.evaluation); });
+    REQUIRE(plan != plans.end());
+    CHECK(margin_at(*plan, x.evaluation) == x.margin);
+  }
+}
