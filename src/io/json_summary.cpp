@@ -42,6 +42,7 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_F64(peak_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(min_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(motor_torque_at_speed_Nm, "Nm"),
+      TRUSS_RUN_F64(motor_torque_margin_Nm, "Nm"),
       TRUSS_RUN_F64(peak_static_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(peak_inertial_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(peak_pin_force_N, "N"),

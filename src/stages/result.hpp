@@ -76,6 +76,10 @@ struct RunResult {
   // Velocity mode: the torque the scene's motor (drive.stall_torque_Nm, no_load_speed) gives at
   // the prescribed speed, from the one motor law (model/drive.hpp); NaN in torque and motor modes.
   double motor_torque_at_speed_Nm = NAN_INIT();
+  // Velocity mode: the motor's quasi-static stall margin (docs/model-notes.md "Motor torque margin";
+  // N m, > 0 safe): motor_torque_at_speed_Nm - peak_drive_torque_Nm, negative when the drive needs
+  // more torque at some instant than the motor gives at the prescribed speed. NaN in the other modes.
+  double motor_torque_margin_Nm = NAN_INIT();
   // The drive torque split into its resistances (the three screws together, along the run
   // direction, peaks over the smooth motion; impulses apart): static = the torque that holds the
   // mast at rest in each configuration (the diagonals' springs, the model's only resistance), and

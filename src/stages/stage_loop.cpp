@@ -253,6 +253,7 @@ void StageLoop::finish() {
   r_.min_drive_force_bay = run[kNegForce].bay;
   r_.peak_drive_torque_Nm = opts_.drive.calc_torque_Nm(r_.peak_drive_force_N);
   r_.min_drive_torque_Nm = opts_.drive.calc_torque_Nm(r_.min_drive_force_N);
+  r_.motor_torque_margin_Nm = r_.motor_torque_at_speed_Nm - r_.peak_drive_torque_Nm;  // NaN unless velocity mode
   r_.peak_static_drive_torque_Nm = opts_.drive.calc_torque_Nm(fin(run[kStaticForce].value)) + 0.0;  // + 0: no -0
   r_.peak_inertial_drive_torque_Nm = opts_.drive.calc_torque_Nm(fin(run[kInertialForce].value)) + 0.0;
   r_.peak_pin_force_N = fin(run[kPin].value);

@@ -303,6 +303,15 @@ TEST_CASE("velocity mode reports the scene's motor torque at the prescribed spee
   REQUIRE(r.status == sim::RunStatus::ok);
   // omega = 2 pi 0.05 / 0.008 = 39.2699 rad/s; 0.03 (1 - 39.2699 / 60) = 0.0103650 N m
   CHECK(r.motor_torque_at_speed_Nm == Approx(0.03 * (1.0 - 2.0 * M_PI * 0.05 / 0.008 / 60.0)).epsilon(1e-14));
+  // The stall margin: the motor's torque at speed less the largest torque the drive needed.
+  CHECK(r.motor_torque_margin_Nm == Approx(r.motor_torque_at_speed_Nm - r.peak_drive_torque_Nm).epsilon(1e-14));
+  CHECK(r.motor_torque_margin_Nm > 0.0);  // 10.4 mN m available against a few mN m needed
+  sim::SceneOptions weak = s;
+  weak.drive.stall_torque_Nm = 1e-4;  // 0.035 mN m at speed: below the peak the run needs
+  const sim::RunResult w = sim::simulate(weak);
+  CHECK(w.motor_torque_margin_Nm < 0.0);
+  CHECK(w.peak_drive_torque_Nm == Approx(r.peak_drive_torque_Nm).epsilon(1e-14));  // the motion is prescribed
   s.drive.mode = model::DriveMode::torque;
   CHECK(std::isnan(sim::simulate(s).motor_torque_at_speed_Nm));
+  CHECK(std::isnan(sim::simulate(s).motor_torque_margin_Nm));
 }
