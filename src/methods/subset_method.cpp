@@ -128,14 +128,19 @@ std::string SubsetMethod::calc_result_text() const {
   std::string t = fmt::format("[truss-campaign] subset simulation of P({} {} {} {}): {} ({})\n", f.column,
                               above ? ">=" : "<=", f.kind == campaign::FailureKind::margin ? 0.0 : f.threshold, unit,
                               sampling::to_string(s.status), s.message);
+  // With no failing sample (p = 0) there is no CoV to match: say so rather than print inf and NaN.
+  const std::string crude = s.p > 0.0 ? fmt::format("crude Monte Carlo would need {:.3g} runs for that CoV",
+                                                     (1.0 - s.p) / (s.p * s.cov_lineage * s.cov_lineage))
+                                      : std::string("no failing sample");
   t += fmt::format("[truss-campaign]   p = {:.4g}, CoV {:.3g} (lineage; Au & Beck {:.3g}), beta = {:.4g}, {} runs in "
-                   "{} levels (crude Monte Carlo would need {:.3g} runs for that CoV)\n",
-                   s.p, s.cov_lineage, s.cov, s.beta, s.runs, s.levels.size(),
-                   (1.0 - s.p) / (s.p * s.cov_lineage * s.cov_lineage));
-  for (std::size_t k = 0; k < s.levels.size(); ++k)
+                   "{} levels ({})\n", s.p, s.cov_lineage, s.cov, s.beta, s.runs, s.levels.size(), crude);
+  for (std::size_t k = 0; k < s.levels.size(); ++k) {
+    const std::string acceptance = k == 0 ? std::string("- (independent draws)")
+                                          : fmt::format("{:.3g}", s.levels[k].acceptance());
     t += fmt::format("[truss-campaign]   level {}: margin <= {:.6g} {} in {:.3g} of its samples, {} runs, "
-                     "acceptance {:.3g}\n", k, s.levels[k].threshold, unit, s.levels[k].probability,
-                     s.levels[k].runs, s.levels[k].acceptance());
+                     "acceptance {}\n", k, s.levels[k].threshold, unit, s.levels[k].probability,
+                     s.levels[k].runs, acceptance);
+  }
   return t;
 }
 
