@@ -45,7 +45,8 @@ std::uint32_t encode_chunk(std::string_view raw, std::size_t elem_size, int leve
     out.assign(raw);
     return 0;
   }
-  std::string shuffled(raw.size(), '\0');
+  thread_local std::string shuffled;  // reused: a chunk's dataset is the same size each time
+  shuffled.resize(raw.size());
   shuffle(reinterpret_cast<const unsigned char*>(raw.data()), raw.size(), elem_size,
           reinterpret_cast<unsigned char*>(shuffled.data()));
   // libdeflate's zlib-format stream (RFC 1950), which HDF5's deflate filter inflates like its own:
@@ -63,7 +64,7 @@ std::uint32_t encode_chunk(std::string_view raw, std::size_t elem_size, int leve
   out.resize(cap);
   const std::size_t z = libdeflate_zlib_compress(c.get(), shuffled.data(), shuffled.size(), out.data(), cap);
   if (z == 0) {  // larger than HDF5's output buffer: HDF5 skips the optional deflate filter, so do we
-    out = std::move(shuffled);
+    out.assign(shuffled);
     return kDeflateSkipped;
   }
   out.resize(z);
