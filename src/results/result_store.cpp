@@ -25,6 +25,7 @@ struct ResultStore::Chunk {
   std::unique_ptr<char[]> rows;  // chunk_runs x fixed_bytes
   std::vector<std::string> message;
   std::vector<std::int64_t> session;
+  std::vector<std::uint8_t> use;  // ok runs (status 0): they feed the statistics
 };
 
 // One per-run dataset: a record field (`field` >= 0), /runs/message (kMessage) or /timing/session
@@ -147,6 +148,7 @@ ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
   c->rows = std::make_unique_for_overwrite<char[]>(static_cast<std::size_t>(chunk_) * L_.fixed_bytes());
   c->message.resize(static_cast<std::size_t>(chunk_));
   c->session.resize(static_cast<std::size_t>(chunk_));
+  c->use.resize(static_cast<std::size_t>(chunk_));
   Chunk& ref = *c;
   open_.emplace(k, std::move(c));
   peak_chunks_ = std::max(peak_chunks_, open_.size());
@@ -165,6 +167,7 @@ void ResultStore::add(const campaign::RecordView& rec, std::int64_t session) {
   std::memcpy(c.rows.get() + i * L_.fixed_bytes(), rec.bytes().data(), L_.fixed_bytes());
   c.message[i].assign(rec.message());
   c.session[i] = session;
+  c.use[i] = rec.bytes()[L_.fields()[RecordLayout::kStatus].offset] == 0;
   if (++c.filled == chunk_) complete_.push_back(c.index);
 }
 
@@ -218,11 +221,7 @@ void ResultStore::write_dataset(const Chunk& c, const Dataset& d, std::int64_t r
   const std::uint32_t mask = encode_chunk(raw_, d.elem, deflate_, encoded_);
   const hsize_t offset[2] = {static_cast<hsize_t>(c.index * chunk_), 0};
   check(H5Dwrite_chunk(d.ds.get(), H5P_DEFAULT, mask, offset, encoded_.size(), encoded_.data()), "write " + what);
-  if (d.stats < 0) return;
-  std::vector<std::uint8_t> use(r);  // ok runs (status 0) feed the statistics
-  const std::size_t status = L_.fields()[RecordLayout::kStatus].offset;
-  for (std::size_t i = 0; i < r; ++i) use[i] = c.rows[i * fixed + status] == 0;
-  merge_stats(d, c.index, use, rows);
+  if (d.stats >= 0) merge_stats(d, c.index, c.use, rows);
 }
 
 void ResultStore::merge_stats(const Dataset& d, std::int64_t chunk, const std::vector<std::uint8_t>& use,

@@ -206,3 +206,50 @@ TEST_CASE("streamed statistics: a chunk summary counts the values below, at the 
   CHECK_THROWS_AS(cs.add(1, s), std::runtime_error);  // twice
   CHECK_FALSE(cs.complete(2));                        // chunk 0 missing
 }
+
+TEST_CASE("streamed statistics: a chunk summary against each kind of window, counted value by value",
+          "[campaign][stats]") {
+  // Windows past either end of the chunk, at its min and max, narrow (most blocks of eight hold
+  // nothing inside), wide, collapsed onto a tie; row counts that are not multiples of eight.
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> g(0.0, 1.0);
+  for (const std::size_t rows : {std::size_t{4096}, std::size_t{1003}, std::size_t{7}}) {
+    std::vector<double> v(2 * rows);  // stride 2: every other value is another column's
+    std::vector<std::uint8_t> use(rows);
+    for (std::size_t i = 0; i < rows; ++i) {
+      v[2 * i] = i % 13 == 4 ? std::numeric_limits<double>::quiet_NaN() : std::round(g(rng) * 1e3) / 1e3;
+      v[2 * i + 1] = 1e300;
+      use[i] = rng() % 7 != 0;
+    }
+    std::vector<double> x;  // the usable values, in order
+    for (std::size_t i = 0; i < rows; ++i)
+      if (use[i] && std::isfinite(v[2 * i])) x.push_back(v[2 * i]);
+    const auto [mn, mx] = std::minmax_element(x.begin(), x.end());
+    const double inf = std::numeric_limits<double>::infinity();
+    const std::vector<Window> cases = {{*mx + 1.0, *mx + 2.0}, {*mn - 2.0, *mn - 1.0}, {*mn, *mx}, {-0.05, 0.05},
+                                       {-inf, inf},           {0.0, 0.0},             {*mx, inf}, {inf, inf}};
+    for (std::size_t c0 = 0; c0 < cases.size(); c0 += kStatTargets) {
+      Windows w;
+      for (std::size_t t = 0; t < kStatTargets && c0 + t < cases.size(); ++t) w[t] = cases[c0 + t];
+      const ChunkSummary s = calc_chunk_summary(reinterpret_cast<const char*>(v.data()), rows, 2, use.data(), w);
+      CHECK(s.moments.count == static_cast<std::int64_t>(x.size()));
+      CHECK(s.moments.min == *mn);
+      CHECK(s.moments.max == *mx);
+      for (std::size_t t = 0; t < kStatTargets; ++t) {
+        INFO("rows " << rows << ", window [" << w[t].lo << ", " << w[t].hi << "]");
+        std::int64_t below = 0, at_lo = 0, at_hi = 0;
+        std::vector<double> inside;
+        for (const double a : x) {
+          if (a < w[t].lo) ++below;
+          else if (a == w[t].lo) ++at_lo;
+          else if (a == w[t].hi) ++at_hi;
+          else if (a < w[t].hi) inside.push_back(a);
+        }
+        CHECK(s.below[t] == below);
+        CHECK(s.at_lo[t] == at_lo);
+        CHECK(s.at_hi[t] == at_hi);
+        CHECK(s.kept[t] == inside);
+      }
+    }
+  }
+}

@@ -93,6 +93,7 @@ TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as sm
   const Case cases[] = {{random_doubles(4096, true, 1), H5T_NATIVE_DOUBLE, 8},    // a load column: narrow spread
                         {random_doubles(4096, false, 2), H5T_NATIVE_DOUBLE, 8},   // wide spread, mostly incompressible
                         {random_doubles(4096 * 30, true, 3), H5T_NATIVE_DOUBLE, 8},  // a per-bay chunk (983 kB)
+                        {random_doubles(1003, true, 4), H5T_NATIVE_DOUBLE, 8},  // not whole blocks of eight
                         {status, H5T_NATIVE_INT8, 1}};                            // statuses: shuffle is a no-op
   for (int level : {1, 6}) {
     for (const Case& c : cases) {
