@@ -95,6 +95,8 @@ def _frame(cols, inputs, index):
         data[name] = values
         base = name.split("[", 1)[0]
         units[name] = run_units.get(name) or bay_units.get(base, "1")
-    df = pd.DataFrame(data, index=index)
+    # copy=False: the columns are fresh arrays of this call; copying them into consolidated blocks
+    # cost 12 us a run (30 bays, 411 columns), more than the simulation's overhead budget.
+    df = pd.DataFrame(data, index=index, copy=False)
     df.attrs["units"] = units
     return df
