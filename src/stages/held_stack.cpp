@@ -67,7 +67,7 @@ PhaseSegment HeldStack::begin_segment(const StageSpec& s, const PhaseSpec& ph, b
   seg.q = &q0_;
   seg.qdot = &qdot0_;
   seg.creep_reference_m_per_s = std::abs(u_);
-  if (drive_holds_speed_) seg.solver = &closed_form_.emplace(*phase_, opts_.peak_samples_per_piece);
+  if (drive_holds_speed_) seg.solver = &closed_form_.emplace(*phase_, opts_.peak_samples_per_piece, peak_work_);
   else seg.solver = &stepper_.emplace(*phase_, *integrator_, io);
   return seg;
 }

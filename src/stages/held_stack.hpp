@@ -33,6 +33,7 @@ class HeldStack final : public StackModel {
   std::unique_ptr<integrators::Integrator> integrator_;  // the run's one integrator (torque, motor)
   std::optional<HeldPhase> phase_;                        // the phase running
   std::optional<KinematicPhaseSolver> closed_form_;
+  RatedPeakWork peak_work_;  // closed_form_'s work space, kept for the run's phases
   std::optional<DynamicPhaseSolver> stepper_;
   double u_ = 0;             // driven-frame velocity carried between stages
   double xi_ = 0;            // hinge speed carried between phases

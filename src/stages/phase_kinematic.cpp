@@ -115,7 +115,7 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
     const double tc = t0 + (y_taut - y_begin) / (dir * v);
     if (tc > t0 && tc < t1) cut = tc;
   }
-  thread_local std::vector<RatedSample> samples;  // work space: no allocation per phase
+  std::vector<RatedSample>& samples = work_.samples;
   samples.clear();
   const int ns = std::max(3, samples_per_piece_);
   const double bounds[3] = {t0, std::isfinite(cut) ? cut : t1, t1};
@@ -141,7 +141,7 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   search.fill(PeakSearch::full);
   search[kRailApproach] = search[kOverlap] = PeakSearch::none;
   search[kSpeed] = PeakSearch::samples;
-  absorb_rated_peaks(samples, sinks.peaks, rated, search);
+  absorb_rated_peaks(work_, sinks.peaks, rated, search);
   sinks.peaks.max_rail_residual =
       std::max({sinks.peaks.max_rail_residual, p0.rail_residual_m, p1.rail_residual_m});
   // The history and the end point use the plain evaluation.

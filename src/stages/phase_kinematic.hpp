@@ -10,6 +10,7 @@
 // is the change of its mechanical energy between its end points (docs/model-notes.md, "Drive
 // work in velocity mode"): the rail and the held frames do no work.
 #pragma once
+#include "stages/closed_form_peaks.hpp"
 #include "stages/held_phase.hpp"
 #include "stages/phase_solver.hpp"
 
@@ -17,8 +18,9 @@ namespace truss::stages {
 
 class KinematicPhaseSolver final : public PhaseSolver {
  public:
-  KinematicPhaseSolver(const HeldPhase& phase, int samples_per_piece)
-      : phase_(phase), samples_per_piece_(samples_per_piece) {}
+  // work: the run's peak-search work space (reused phase after phase).
+  KinematicPhaseSolver(const HeldPhase& phase, int samples_per_piece, RatedPeakWork& work)
+      : phase_(phase), samples_per_piece_(samples_per_piece), work_(work) {}
   // From start.q (the phase coordinate at its start; start.qdot is the prescribed kinematics) to
   // the phase's end context().q_end.
   PhaseOutcome solve(const PhaseStart& start, PhaseSinks& sinks) override;
@@ -26,6 +28,7 @@ class KinematicPhaseSolver final : public PhaseSolver {
  private:
   const HeldPhase& phase_;
   int samples_per_piece_;
+  RatedPeakWork& work_;
 };
 
 }  // namespace truss::stages

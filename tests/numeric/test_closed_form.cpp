@@ -58,13 +58,13 @@ std::array<PeakSearch, stages::kQuantityCount> force_only() {
 
 template <class Load>
 stages::Extremum find_peak(Load& load, const std::vector<double>& times, double tie_tol = 0.0) {
-  std::vector<RatedSample> samples;
-  for (double t : times) samples.push_back(load(t));
+  stages::RatedPeakWork work;
+  for (double t : times) work.samples.push_back(load(t));
   stages::PeakTracker tr;
   tr.set_tie_tolerance(tie_tol);
   tr.start_stage(3);
   load.evals = 0;
-  stages::absorb_rated_peaks(samples, tr, load, force_only());
+  stages::absorb_rated_peaks(work, tr, load, force_only());
   return tr.stage_force;
 }
 
