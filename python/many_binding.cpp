@@ -46,7 +46,7 @@ class ColumnBlock {
       : block_({static_cast<pyb::ssize_t>(rows), static_cast<pyb::ssize_t>(n)}), n_(n) {}
   Column take() {
     const auto row = static_cast<pyb::ssize_t>(next_++);
-    return {block_[pyb::int_(row)], block_.mutable_data(row, 0), {},
+    return {block_[pyb::int_(row)], block_.mutable_data() + row * static_cast<pyb::ssize_t>(n_), {},
             std::is_same_v<T, double> ? Column::Kind::f64 : Column::Kind::i64};
   }
 
