@@ -137,9 +137,10 @@ std::string plan_held_stages(const MastParams& mast, double direction, std::vect
     s.panel_height_offset_m = span[m];
     s.entry_hinge_x_m = e.hinge_x_m;
     s.entry_upper_height_m = e.upper_height_m;
+    s.phases.reserve(2);
     s.phases.push_back({PhaseKind::open, y_start, e.upper_height_m, PhaseEnd::rail_entry, 0.0});
     s.phases.push_back({PhaseKind::on_rail, e.hinge_x_m, 0.0, PhaseEnd::lock, 0.0});
-    deploy[static_cast<std::size_t>(n - m)] = s;
+    deploy[static_cast<std::size_t>(n - m)] = std::move(s);
   }
   if (direction > 0) {
     out = std::move(deploy);
