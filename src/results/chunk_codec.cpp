@@ -10,6 +10,7 @@
 #include <cmath>
 #include <memory>
 #include <stdexcept>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -110,16 +111,10 @@ std::size_t count_noise_planes(const unsigned char* shuffled, std::size_t plane,
   return k;
 }
 
-}  // namespace
-
-// The zlib stream: header, the noise planes as stored blocks, the rest as one libdeflate DEFLATE
-// stream (its last block final), the Adler-32 of all of it (RFC 1950). Any inflater, HDF5's deflate
-// filter among them, reads it like a single-call stream.
-std::uint32_t encode_chunk(std::string_view raw, std::size_t elem_size, int level, std::string& out) {
-  if (level <= 0) {
-    out.assign(raw);
-    return 0;
-  }
+// Shuffled, then the zlib stream: header, the noise planes as stored blocks, the rest as one
+// libdeflate DEFLATE stream (its last block final), the Adler-32 of all of it (RFC 1950). Any
+// inflater, HDF5's deflate filter among them, reads it like a single-call stream.
+std::uint32_t encode_filtered(std::string_view raw, std::size_t elem_size, int level, std::string& out) {
   thread_local std::string shuffled;  // reused: a chunk's dataset is the same size each time
   shuffled.resize(raw.size());
   const auto* sh = reinterpret_cast<const unsigned char*>(shuffled.data());
@@ -156,6 +151,40 @@ std::uint32_t encode_chunk(std::string_view raw, std::size_t elem_size, int leve
   const std::uint32_t adler = libdeflate_adler32(1, sh, raw.size());
   for (const int shift : {24, 16, 8, 0}) out.push_back(static_cast<char>((adler >> shift) & 0xff));
   return 0;
+}
+
+}  // namespace
+
+std::uint32_t encode_chunk(std::string_view raw, std::size_t elem_size, int level, std::string& out) {
+  if (level <= 0) {
+    out.assign(raw);
+    return 0;
+  }
+  // A constant chunk (every element the same bytes: a quantity the scene never fills, NaN
+  // throughout, or a count that does not vary) is encoded once per value, size and level and its
+  // bytes reused: libdeflate takes 2.6 ns a byte over runs of one byte, a check for them 0.1 ns.
+  struct Constant {
+    int level;
+    std::size_t elem_size, size;
+    std::string element, encoded;
+    std::uint32_t mask;
+  };
+  thread_local std::vector<Constant> constants;  // the few constant columns of a campaign
+  const bool constant = raw.size() > elem_size && elem_size > 0 &&
+                        std::memcmp(raw.data(), raw.data() + elem_size, raw.size() - elem_size) == 0;
+  const std::string_view element = raw.substr(0, elem_size);
+  if (constant)
+    for (const Constant& c : constants)
+      if (c.level == level && c.elem_size == elem_size && c.size == raw.size() && c.element == element) {
+        out = c.encoded;
+        return c.mask;
+      }
+  const std::uint32_t mask = encode_filtered(raw, elem_size, level, out);
+  if (constant) {
+    if (constants.size() >= 64) constants.clear();
+    constants.push_back({level, elem_size, raw.size(), std::string(element), out, mask});
+  }
+  return mask;
 }
 
 }  // namespace truss::results

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -130,7 +131,8 @@ TEST_CASE("chunk codec: noise planes go as stored blocks, the rest deflated", "[
   std::mt19937_64 rng(7);
   std::vector<unsigned char> raw(8 * n), shuffled(8 * n);
   for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < 8; ++j) raw[8 * i + j] = j < 6 ? static_cast<unsigned char>(rng()) : j == 6 ? 0xf4 : 0x3f;
+    for (std::size_t j = 0; j < 8; ++j)
+      raw[8 * i + j] = j < 6 ? static_cast<unsigned char>(rng()) : j == 6 ? 0xf4 : 0x3f;
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t j = 0; j < 8; ++j) shuffled[j * n + i] = raw[8 * i + j];
   const std::string chunk(raw.begin(), raw.end());
@@ -147,6 +149,39 @@ TEST_CASE("chunk codec: noise planes go as stored blocks, the rest deflated", "[
   CHECK(static_cast<unsigned char>(mine[2]) == 0);  // BFINAL 0, BTYPE 00: a stored block
   CHECK(std::memcmp(mine.data() + 7, shuffled.data(), noise) == 0);
   CHECK(mine.size() < noise + 600);  // the two constant planes deflated to almost nothing
+}
+
+// Constant chunks are encoded once per value, size and level: each encoding, reused or not, must
+// inflate (zlib's uncompress) to its own chunk, shuffled. NaN, then 0.0, then NaN again, then
+// int64 30 (elements of the same 8 bytes' size), at two sizes and two levels.
+TEST_CASE("chunk codec: constant chunks, each its own stream", "[campaign][codec]") {
+  auto constant = [](double v, std::size_t n) {
+    std::string raw(8 * n, '\0');
+    for (std::size_t i = 0; i < n; ++i) std::memcpy(raw.data() + 8 * i, &v, 8);
+    return raw;
+  };
+  std::int64_t thirty = 30;
+  double as_double = 0.0;
+  std::memcpy(&as_double, &thirty, 8);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int level : {1, 6})
+    for (std::size_t n : {std::size_t{4096}, std::size_t{1250}})
+      for (double v : {nan, 0.0, nan, as_double}) {
+        const std::string raw = constant(v, n);
+        std::string mine;
+        REQUIRE(encode_chunk(raw, 8, level, mine) == 0);
+        std::string inflated(raw.size(), '\1');
+        uLongf len = inflated.size();
+        REQUIRE(uncompress(reinterpret_cast<Bytef*>(inflated.data()), &len, reinterpret_cast<const Bytef*>(mine.data()),
+                           mine.size()) == Z_OK);
+        std::string shuffled(raw.size(), '\0');
+        for (std::size_t i = 0; i < n; ++i)
+          for (std::size_t j = 0; j < 8; ++j) shuffled[j * n + i] = raw[8 * i + j];
+        INFO("level " << level << ", " << n << " elements of " << v);
+        CHECK(len == raw.size());
+        CHECK(inflated == shuffled);
+        CHECK(mine.size() < 200);
+      }
 }
 
 namespace {
