@@ -61,27 +61,35 @@ const std::vector<std::uint32_t>& sobol_table() {
   return table;
 }
 
-// Balanced Feistel network on 2 * half_bits bits (half_bits in [1, 32]): a bijection whatever the
-// round function, here SplitMix64 keyed per round. Applied to x[idx[0..k)] (k <= 256), each with
-// the round keys of its own dimension (dim_keys[idx[i] * kFeistelRounds + r]), the rounds of all of
-// them interleaved: the k hash chains are independent, so the core overlaps them instead of
-// waiting on one chain at a time (a run's Latin hypercube point is hundreds of such chains).
-void feistel_lanes(std::uint64_t* x, const int* idx, int k, int half_bits, const std::uint64_t* dim_keys) {
+// Feistel network on `bits` bits (2 to 64), a bijection whatever the round function, here
+// SplitMix64 keyed per round: x = (left, right) with right the low bits / 2 bits; a round maps
+// (left, right) to (right, left ^ F(right)), so the halves swap widths each round when bits is odd
+// (an unbalanced network; 6 rounds, an even number, restore the split). The domain 2^bits is the
+// smallest power of two >= n, under 2n: cycle walking needs fewer than 2 applications on average
+// (a balanced network on an even bit count would need up to 4). Applied to x[idx[0..k)] (k <= 256),
+// each with the round keys of its own dimension (dim_keys[idx[i] * kFeistelRounds + r]), the
+// rounds of all of them interleaved: the k hash chains are independent, so the core overlaps them
+// instead of waiting on one chain at a time (a run's Latin hypercube point is hundreds of chains).
+void feistel_lanes(std::uint64_t* x, const int* idx, int k, int bits, const std::uint64_t* dim_keys) {
   constexpr int kMax = 256;
-  const std::uint64_t mask = (1ULL << half_bits) - 1;
+  auto mask = [](int b) { return b >= 64 ? ~0ULL : (1ULL << b) - 1; };
+  int right_bits = bits / 2, left_bits = bits - right_bits;
   std::uint64_t left[kMax], right[kMax];
   for (int i = 0; i < k; ++i) {
-    left[i] = x[idx[i]] >> half_bits;
-    right[i] = x[idx[i]] & mask;
+    left[i] = x[idx[i]] >> right_bits;
+    right[i] = x[idx[i]] & mask(right_bits);
   }
-  for (int r = 0; r < kFeistelRounds; ++r)
+  for (int r = 0; r < kFeistelRounds; ++r) {
+    const std::uint64_t m = mask(left_bits);  // F's output takes the left half's width
     for (int i = 0; i < k; ++i) {
-      const std::uint64_t f = splitmix_at(dim_keys[idx[i] * kFeistelRounds + r], right[i]) & mask;
+      const std::uint64_t f = splitmix_at(dim_keys[idx[i] * kFeistelRounds + r], right[i]) & m;
       const std::uint64_t next = left[i] ^ f;
       left[i] = right[i];
       right[i] = next;
     }
-  for (int i = 0; i < k; ++i) x[idx[i]] = (left[i] << half_bits) | right[i];
+    std::swap(left_bits, right_bits);
+  }
+  for (int i = 0; i < k; ++i) x[idx[i]] = (left[i] << right_bits) | right[i];
 }
 
 }  // namespace
@@ -106,10 +114,8 @@ SamplePlan::SamplePlan(SamplingMethod method, std::int64_t n_runs, int d, std::u
     case SamplingMethod::monte_carlo:
       break;
     case SamplingMethod::latin_hypercube: {
-      // Balanced Feistel network on 2h bits with 2^(2h) >= n: cycle walking
-      // then needs fewer than 4 expected steps (the domain is < 4n).
-      const int bits = std::bit_width(static_cast<std::uint64_t>(n_runs_ - 1));
-      half_bits_ = (bits + 1) / 2;
+      // The smallest power of two >= n (at least 4, so that n = 2 is not the identity).
+      feistel_bits_ = std::max(2, static_cast<int>(std::bit_width(static_cast<std::uint64_t>(n_runs_ - 1))));
       round_keys_.resize(nd * kFeistelRounds);
       // Round keys depend only on (seed, dimension): the permutation of a
       // dimension is fixed before any run is computed.
@@ -260,7 +266,7 @@ void SamplePlan::calc_uniforms(std::int64_t run_index, double* u) const {
       const auto n = static_cast<std::uint64_t>(n_runs_);
       const double dn = static_cast<double>(n_runs_);
       // Dimensions in blocks of 256, their permutations computed side by side (feistel_lanes): the
-      // chains that walk longest (up to about 10 times when 2^2h is near 4n) still have company.
+      // chains that walk longest still have company.
       constexpr int kBlock = 256;
       std::uint64_t strata[kBlock];
       int walking[kBlock];
@@ -275,7 +281,7 @@ void SamplePlan::calc_uniforms(std::int64_t run_index, double* u) const {
         // value lands in [0, n); this restricts it to a bijection on [0, n).
         const std::uint64_t* keys = round_keys_.data() + static_cast<std::size_t>(j0) * kFeistelRounds;
         while (k > 0) {
-          feistel_lanes(strata, walking, k, half_bits_, keys);
+          feistel_lanes(strata, walking, k, feistel_bits_, keys);
           int still = 0;
           for (int i = 0; i < k; ++i)
             if (strata[walking[i]] >= n) walking[still++] = walking[i];

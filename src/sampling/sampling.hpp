@@ -183,7 +183,8 @@ struct Distribution {
 //   monte_carlo      u_j = counter_uniform(seed, i, j).
 //   latin_hypercube  u_j = (pi_j(i) + v_ij) / n, with pi_j a pseudorandom
 //                    permutation of [0, n) that depends only on (seed, j) —
-//                    a 6-round Feistel network with cycle walking, evaluated
+//                    a 6-round Feistel network on the smallest power of two
+//                    >= n (at least 4) with cycle walking, evaluated
 //                    at i without materialising it — and v_ij a
 //                    counter-based jitter. Each dimension has exactly one
 //                    sample per stratum [k/n, (k+1)/n).
@@ -291,8 +292,8 @@ class SamplePlan {
   std::vector<int> group_begin_;
   bool valid_ = false;
 
-  // latin_hypercube: Feistel network on 2*half_bits_ bits, rounds keyed per dimension.
-  int half_bits_ = 0;
+  // latin_hypercube: Feistel network on feistel_bits_ bits, rounds keyed per dimension.
+  int feistel_bits_ = 0;
   std::vector<std::uint64_t> round_keys_;  // [dim * kFeistelRounds + round]
 
   // sobol / saltelli with Sobol' base: direction numbers laid out [bit][dim]

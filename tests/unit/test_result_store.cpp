@@ -9,9 +9,12 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
+
+#include <zlib.h>
 
 #include "campaign_fixtures.hpp"
 #include "results/chunk_codec.hpp"
@@ -115,6 +118,70 @@ TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as sm
   std::string plain;
   CHECK(encode_chunk(cases[0].raw, 8, 0, plain) == 0);
   CHECK(plain == cases[0].raw);  // level 0: no filter, the raw bytes
+}
+
+// The byte planes of noise are stored, not compressed: a chunk of 4,096 doubles of narrow spread
+// whose 6 low planes are noise (bytes of a random generator) and whose 2 high planes are one
+// value each. Its stream is read by zlib's own inflater (uncompress, an implementation independent
+// of libdeflate) and by HDF5, and it holds the six noise planes verbatim as stored blocks (RFC
+// 1951: the 5-byte header 00 LEN NLEN, then the bytes): 24,576 bytes of the shuffled chunk found
+// as they are right after the 2-byte zlib header and the block header.
+TEST_CASE("chunk codec: noise planes go as stored blocks, the rest deflated", "[campaign][codec]") {
+  const std::size_t n = 4096;
+  std::mt19937_64 rng(7);
+  std::vector<unsigned char> raw(8 * n), shuffled(8 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < 8; ++j)
+      raw[8 * i + j] = j < 6 ? static_cast<unsigned char>(rng()) : j == 6 ? 0xf4 : 0x3f;
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < 8; ++j) shuffled[j * n + i] = raw[8 * i + j];
+  const std::string chunk(raw.begin(), raw.end());
+  std::string mine;
+  REQUIRE(encode_chunk(chunk, 8, 1, mine) == 0);
+  std::vector<unsigned char> inflated(8 * n);
+  uLongf len = inflated.size();
+  REQUIRE(uncompress(inflated.data(), &len, reinterpret_cast<const Bytef*>(mine.data()), mine.size()) == Z_OK);
+  CHECK(len == inflated.size());
+  CHECK(inflated == shuffled);
+  CHECK(hdf5_read_back(mine, 0, H5T_NATIVE_DOUBLE, 8, chunk.size(), 1) == chunk);
+  const std::size_t noise = 6 * n;
+  REQUIRE(mine.size() > 7 + noise);
+  CHECK(static_cast<unsigned char>(mine[2]) == 0);  // BFINAL 0, BTYPE 00: a stored block
+  CHECK(std::memcmp(mine.data() + 7, shuffled.data(), noise) == 0);
+  CHECK(mine.size() < noise + 600);  // the two constant planes deflated to almost nothing
+}
+
+// Constant chunks are encoded once per value, size and level: each encoding, reused or not, must
+// inflate (zlib's uncompress) to its own chunk, shuffled. NaN, then 0.0, then NaN again, then
+// int64 30 (elements of the same 8 bytes' size), at two sizes and two levels.
+TEST_CASE("chunk codec: constant chunks, each its own stream", "[campaign][codec]") {
+  auto constant = [](double v, std::size_t n) {
+    std::string raw(8 * n, '\0');
+    for (std::size_t i = 0; i < n; ++i) std::memcpy(raw.data() + 8 * i, &v, 8);
+    return raw;
+  };
+  std::int64_t thirty = 30;
+  double as_double = 0.0;
+  std::memcpy(&as_double, &thirty, 8);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int level : {1, 6})
+    for (std::size_t n : {std::size_t{4096}, std::size_t{1250}})
+      for (double v : {nan, 0.0, nan, as_double}) {
+        const std::string raw = constant(v, n);
+        std::string mine;
+        REQUIRE(encode_chunk(raw, 8, level, mine) == 0);
+        std::string inflated(raw.size(), '\1');
+        uLongf len = inflated.size();
+        REQUIRE(uncompress(reinterpret_cast<Bytef*>(inflated.data()), &len, reinterpret_cast<const Bytef*>(mine.data()),
+                           mine.size()) == Z_OK);
+        std::string shuffled(raw.size(), '\0');
+        for (std::size_t i = 0; i < n; ++i)
+          for (std::size_t j = 0; j < 8; ++j) shuffled[j * n + i] = raw[8 * i + j];
+        INFO("level " << level << ", " << n << " elements of " << v);
+        CHECK(len == raw.size());
+        CHECK(inflated == shuffled);
+        CHECK(mine.size() < 200);
+      }
 }
 
 namespace {

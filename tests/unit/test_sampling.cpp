@@ -581,25 +581,27 @@ TEST_CASE("latin hypercube: one sample per stratum in every dimension", "[sampli
   }
 }
 
-// The construction of sampling.hpp written out one dimension at a time: a balanced 6-round
-// Feistel network on 2h bits (2^2h >= n), round r of dimension j keyed by
-// counter_hash(seed, r, j, kTagLhsPerm), cycle-walked into [0, n); the jitter of run i in dimension
-// j is the j-th SplitMix64 output of counter_run_state(seed, i, kTagLhsJitter). The plan computes
-// 256 dimensions' chains side by side; this reference computes each alone.
+// The construction of sampling.hpp written out one dimension at a time: a 6-round Feistel network
+// on b bits (2^b the smallest power of two >= n, b >= 2) that splits x into a high half of
+// b - b/2 bits and a low half of b/2 bits; a round replaces (high, low) by (low, high ^ F(low)),
+// so the halves trade widths when b is odd. Round r of dimension j is keyed by
+// counter_hash(seed, r, j, kTagLhsPerm); the network is cycle-walked into [0, n); the jitter of
+// run i in dimension j is the j-th SplitMix64 output of counter_run_state(seed, i, kTagLhsJitter).
+// The plan computes 256 dimensions' chains side by side; this reference computes each alone,
+// carrying x as one number of b bits.
 namespace {
 double lhs_reference(std::uint64_t seed, std::int64_t n, std::int64_t run, std::int64_t j) {
-  const int h = (static_cast<int>(std::bit_width(static_cast<std::uint64_t>(n - 1))) + 1) / 2;
-  const std::uint64_t mask = (1ULL << h) - 1;
+  const int b = std::max(2, static_cast<int>(std::bit_width(static_cast<std::uint64_t>(n - 1))));
   std::uint64_t x = static_cast<std::uint64_t>(run);
   if (n > 1) do {
-      std::uint64_t left = x >> h, right = x & mask;
+      int lo = b / 2;  // width of the low half
       for (int r = 0; r < 6; ++r) {
-        const std::uint64_t f = splitmix_at(counter_hash(seed, r, j, kTagLhsPerm), right) & mask;
-        const std::uint64_t next = left ^ f;
-        left = right;
-        right = next;
+        const int hi = b - lo;
+        const std::uint64_t high = x >> lo, low = x & ((1ULL << lo) - 1);
+        const std::uint64_t f = splitmix_at(counter_hash(seed, r, j, kTagLhsPerm), low) & ((1ULL << hi) - 1);
+        x = (low << hi) | (high ^ f);  // the new high half is the old low one (lo bits)
+        lo = hi;
       }
-      x = (left << h) | right;
     } while (x >= static_cast<std::uint64_t>(n));
   const double jitter =
       to_open_unit(splitmix_at(counter_run_state(seed, run, kTagLhsJitter), static_cast<std::uint64_t>(j)));
@@ -610,9 +612,10 @@ double lhs_reference(std::uint64_t seed, std::int64_t n, std::int64_t run, std::
 }  // namespace
 
 TEST_CASE("latin hypercube: every dimension's point is its keyed permutation's, in any block", "[sampling][lhs]") {
-  // d = 600: two full blocks of 256 chains and a partial one. n = 2000 makes about half the
-  // chains walk again (4,096 points for 2,000 strata), n = 1000 a few (1,024), n = 1 none.
-  for (std::int64_t n : {std::int64_t{1000}, std::int64_t{2000}, std::int64_t{1}}) {
+  // d = 600: two full blocks of 256 chains and a partial one. n = 1100 makes about half the
+  // chains walk again (2,048 points for 1,100 strata: b = 11, odd), n = 1000 a few (1,024: b = 10,
+  // even), n = 5 (8 points, b = 3) and n = 2 (4 points, b = 2) the smallest networks, n = 1 none.
+  for (std::int64_t n : {std::int64_t{1000}, std::int64_t{1100}, std::int64_t{5}, std::int64_t{2}, std::int64_t{1}}) {
     const int d = 600;
     const SamplePlan plan(SamplingMethod::latin_hypercube, n, d, 77);
     std::vector<double> u(static_cast<std::size_t>(d));
