@@ -184,8 +184,15 @@ def main():
     same, why = same_values(datasets(outs[2]), datasets(outs[1]))
     check(same, f"1 and 2 ranks: the same datasets outside /timing {why}")
     check_report(args, outs[2], os.path.join(d, "report"))
-    out = os.path.join(d, "killed.h5")
-    plans, in_last = killed_mid_level(args, out)
+    # The kill is timed by watching the journal: on a loaded machine the job can finish level 1
+    # between two looks, so up to three attempts (a setup step, not the property under test).
+    for attempt in range(3):
+        out = os.path.join(d, f"killed{attempt}.h5")
+        plans, in_last = killed_mid_level(args, out)
+        if plans >= 4 and in_last >= 2 and not os.path.exists(out):
+            break
+        print(f"  (attempt {attempt + 1}: the job was not caught in level 1: {plans} rounds planned, {in_last} "
+              "records of the last journaled; again)")
     check(plans >= 4 and in_last >= 2 and not os.path.exists(out),
           f"killed in level 1: {plans} rounds planned, {in_last} records of the last journaled, no results file")
     p = run(args, out, 2, ["--resume"])
