@@ -1,7 +1,6 @@
 #include "campaign/record.hpp"
 
 #include <limits>
-#include <variant>
 
 #include <fmt/format.h>
 
@@ -34,21 +33,20 @@ RecordLayout::RecordLayout(const CampaignOptions& c, const DimensionLayout& dims
   add({"status", Group::runs, ValueType::status, 1, Scale::none, "1"});
   add({"rank", Group::timing, ValueType::i64, 1, Scale::none, "1"});
   add({"run_wall_time_s", Group::timing, ValueType::f64, 1, Scale::none, "s"});
-  const sim::RunResult probe;
   for (const auto& f : io::run_result_fields()) {  // float64 outputs first, then int64 (the file's order)
-    if (std::string_view(f.name) == "wall_time_s" || !std::holds_alternative<double>(f.get(probe))) continue;
+    if (std::string_view(f.name) == "wall_time_s" || !f.f64) continue;
     Field o{f.name, Group::runs, ValueType::f64, 1, Scale::none, f.units, true};
     o.run = &f;
     add(std::move(o));
   }
   for (const auto& f : io::run_result_fields()) {
-    if (!std::holds_alternative<std::int64_t>(f.get(probe))) continue;
+    if (!f.get_i64) continue;
     Field o{f.name, Group::runs, ValueType::i64, 1, Scale::none, f.units};
     o.run = &f;
     add(std::move(o));
   }
   for (const auto& f : io::bay_result_fields()) {
-    if (!std::holds_alternative<double>(f.get(sim::BayResult{}))) continue;  // bay: the column index
+    if (!f.f64) continue;  // bay: the column index
     Field o{f.name, Group::bays, ValueType::f64, n_bays_max_, Scale::bay, f.units, true};
     o.bay = &f;
     add(std::move(o));
@@ -129,11 +127,14 @@ void append_record(const RecordLayout& layout, const RecordHead& head, const sim
   const std::size_t n_bays = std::min(r.bays.size(), static_cast<std::size_t>(layout.n_bays_max()));
   for (std::size_t i = RecordLayout::kWallTime + 1; i < fields.size(); ++i) {
     const Field& f = fields[i];
-    if (f.run && f.type == ValueType::f64) w.set_f64(i, std::get<double>(f.run->get(r)));
-    else if (f.run) w.set_i64(i, std::get<std::int64_t>(f.run->get(r)));
-    else if (f.bay)
-      for (std::size_t b = 0; b < n_bays; ++b)
-        w.set_f64(i, std::get<double>(f.bay->get(r.bays[b])), static_cast<int>(b));
+    if (f.run && f.run->f64) w.set_f64(i, r.*(f.run->f64));
+    else if (f.run) w.set_i64(i, f.run->get_i64(r));
+    else if (f.bay) {
+      // Pointer and member held in locals: the stores through char* may alias anything reloaded.
+      char* p = w.at(i, 0);
+      const auto member = f.bay->f64;
+      for (std::size_t b = 0; b < n_bays; ++b) util::put_at(p + 8 * b, r.bays[b].*member);
+    }
   }
   std::size_t k = 0;  // the inputs: each dispersion's values in DimensionLayout order, the fields' order
   for (std::size_t i = 0; i < fields.size(); ++i)

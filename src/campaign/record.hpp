@@ -106,9 +106,10 @@ class RecordWriter {
   void set_f64(std::size_t field, double v, int k = 0);
   void set_status(sim::RunStatus s);
   void finish(std::string_view message);
+  // Where value k of `field` goes (valid until the next append to `out`).
+  char* at(std::size_t field, int k);
 
  private:
-  char* at(std::size_t field, int k);
   const RecordLayout& L_;
   std::string& out_;
   std::size_t start_;

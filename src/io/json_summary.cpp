@@ -12,13 +12,16 @@ using sim::RunResult;
 using sim::TimeHistory;
 
 #define TRUSS_RUN_F64(NAME, UNITS) \
-  RunField { #NAME, UNITS, [](const RunResult& r) -> FieldValue { return double{r.NAME}; } }
-#define TRUSS_RUN_I64(NAME) \
-  RunField { #NAME, "1", [](const RunResult& r) -> FieldValue { return std::int64_t{r.NAME}; } }
+  RunField { #NAME, UNITS, [](const RunResult& r) -> FieldValue { return double{r.NAME}; }, &RunResult::NAME }
+#define TRUSS_RUN_I64(NAME)                                                                 \
+  RunField {                                                                                \
+    #NAME, "1", [](const RunResult& r) -> FieldValue { return std::int64_t{r.NAME}; }, nullptr, \
+        [](const RunResult& r) { return std::int64_t{r.NAME}; }                             \
+  }
 #define TRUSS_RUN_STR(NAME) \
   RunField { #NAME, "1", [](const RunResult& r) -> FieldValue { return std::string{r.NAME}; } }
 #define TRUSS_BAY_F64(NAME, UNITS) \
-  BayField { #NAME, UNITS, [](const BayResult& b) -> FieldValue { return double{b.NAME}; } }
+  BayField { #NAME, UNITS, [](const BayResult& b) -> FieldValue { return double{b.NAME}; }, &BayResult::NAME }
 #define TRUSS_HIST_F64(NAME, UNITS)                                                    \
   HistoryField {                                                                       \
     #NAME, UNITS, [](const TimeHistory& h) -> const std::vector<double>* { return &h.NAME; }, \

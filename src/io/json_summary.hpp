@@ -22,15 +22,21 @@ using FieldValue = std::variant<double, std::int64_t, std::string>;
 
 // Units: "s", "N", "Nm", "J", "Ns", "m", "m/s"; "1" for counts, indices and other dimensionless
 // values (never empty).
+// Besides the variant `get`, each field has a typed accessor for writers that copy many values a
+// run (the campaign record): a float64 field its member (f64), an integer field its value as int64
+// (get_i64); the other is null. Both come from the same line of the table.
 struct RunField {
   const char* name;
   const char* units;
   FieldValue (*get)(const sim::RunResult&);
+  double sim::RunResult::*f64 = nullptr;
+  std::int64_t (*get_i64)(const sim::RunResult&) = nullptr;
 };
 struct BayField {
   const char* name;
   const char* units;
   FieldValue (*get)(const sim::BayResult&);  // double or int64 only
+  double sim::BayResult::*f64 = nullptr;     // a float64 field's member, else null
 };
 struct HistoryField {
   const char* name;
