@@ -18,11 +18,14 @@ using campaign::RecordLayout;
 using campaign::Scale;
 using campaign::ValueType;
 
-// A chunk of runs in memory: each run's record where it arrived (its fixed part in its row, its
-// message and session beside), until every row has arrived and the chunk is written.
+// A chunk of runs in memory, until every row has arrived and the chunk is written: each record's
+// fields scattered on arrival into the chunk's column blocks, one per field (field f's block at
+// chunk_runs x f.offset, its row i at i x f.bytes()), so that a dataset chunk is one contiguous
+// block when it is written. Gathering a field from whole records at write time read one cache line
+// of a 3 kB record per value: 2.5 us a Table-1 result, now ~0.5 us for the scatter.
 struct ResultStore::Chunk {
   std::int64_t index = 0, filled = 0;
-  std::unique_ptr<char[]> rows;  // chunk_runs x fixed_bytes
+  std::unique_ptr<char[]> cols;  // chunk_runs x fixed_bytes, by field
   std::vector<std::string> message;
   std::vector<std::int64_t> session;
   std::vector<std::uint8_t> use;  // ok runs (status 0): they feed the statistics
@@ -145,7 +148,7 @@ ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
   if (const auto it = open_.find(k); it != open_.end()) return *it->second;
   auto c = std::make_unique<Chunk>();
   c->index = k;
-  c->rows = std::make_unique_for_overwrite<char[]>(static_cast<std::size_t>(chunk_) * L_.fixed_bytes());
+  c->cols = std::make_unique_for_overwrite<char[]>(static_cast<std::size_t>(chunk_) * L_.fixed_bytes());
   c->message.resize(static_cast<std::size_t>(chunk_));
   c->session.resize(static_cast<std::size_t>(chunk_));
   c->use.resize(static_cast<std::size_t>(chunk_));
@@ -164,7 +167,15 @@ void ResultStore::add(const campaign::RecordView& rec, std::int64_t session) {
   ++status_counts_[static_cast<std::size_t>(rec.status())];
   Chunk& c = chunk_for(run);
   const auto i = static_cast<std::size_t>(run - c.index * chunk_);
-  std::memcpy(c.rows.get() + i * L_.fixed_bytes(), rec.bytes().data(), L_.fixed_bytes());
+  const char* src = rec.bytes().data();
+  char* cols = c.cols.get();
+  const auto rows = static_cast<std::size_t>(chunk_);
+  for (const campaign::Field& f : L_.fields()) {
+    const std::size_t bytes = f.bytes();
+    char* dst = cols + rows * f.offset + i * bytes;
+    if (bytes == 8) std::memcpy(dst, src + f.offset, 8);  // most fields: a move, not a call
+    else std::memcpy(dst, src + f.offset, bytes);
+  }
   c.message[i].assign(rec.message());
   c.session[i] = session;
   c.use[i] = rec.bytes()[L_.fields()[RecordLayout::kStatus].offset] == 0;
@@ -189,10 +200,10 @@ void ResultStore::finish() {
   open_.clear();
 }
 
-// Rows [0, rows) of chunk c's dataset d (the rest of the chunk, past the last run, stays zero):
-// gathered from the records, then filtered and written as one HDF5 chunk; the statistics of its
-// output columns merged.
-void ResultStore::write_dataset(const Chunk& c, const Dataset& d, std::int64_t rows) {
+// Rows [0, rows) of chunk c's dataset d (the rest of the chunk, past the last run, is zeroed):
+// its column block filtered and written as one HDF5 chunk; the statistics of its output columns
+// merged.
+void ResultStore::write_dataset(Chunk& c, const Dataset& d, std::int64_t rows) {
   const auto r = static_cast<std::size_t>(rows);
   const std::string what = fmt::format("chunk {} of {}", c.index,
                                        d.field >= 0 ? L_.fields()[static_cast<std::size_t>(d.field)].name
@@ -208,28 +219,23 @@ void ResultStore::write_dataset(const Chunk& c, const Dataset& d, std::int64_t r
     check(H5Dwrite(d.ds.get(), type.get(), mspace.get(), fspace.get(), H5P_DEFAULT, msg.data()), "write " + what);
     return;
   }
-  const std::size_t bytes = d.width * d.elem, fixed = L_.fixed_bytes();
-  raw_.resize(static_cast<std::size_t>(chunk_) * bytes);
-  std::memset(raw_.data() + r * bytes, 0, raw_.size() - r * bytes);
-  if (d.field == Dataset::kSession) {
-    std::memcpy(raw_.data(), c.session.data(), r * bytes);
-  } else {
-    const std::size_t offset = L_.fields()[static_cast<std::size_t>(d.field)].offset;
-    for (std::size_t i = 0; i < r; ++i)
-      std::memcpy(raw_.data() + i * bytes, c.rows.get() + i * fixed + offset, bytes);
-  }
-  const std::uint32_t mask = encode_chunk(raw_, d.elem, deflate_, encoded_);
+  const std::size_t bytes = d.width * d.elem, n = static_cast<std::size_t>(chunk_);
+  char* block = d.field == Dataset::kSession
+                    ? reinterpret_cast<char*>(c.session.data())
+                    : c.cols.get() + n * L_.fields()[static_cast<std::size_t>(d.field)].offset;
+  std::memset(block + r * bytes, 0, (n - r) * bytes);  // the rows past the last run of a partial chunk
+  const std::uint32_t mask = encode_chunk({block, n * bytes}, d.elem, deflate_, encoded_);
   const hsize_t offset[2] = {static_cast<hsize_t>(c.index * chunk_), 0};
   check(H5Dwrite_chunk(d.ds.get(), H5P_DEFAULT, mask, offset, encoded_.size(), encoded_.data()), "write " + what);
-  if (d.stats >= 0) merge_stats(d, c.index, c.use, rows);
+  if (d.stats >= 0) merge_stats(d, block, c.index, c.use, rows);
 }
 
-void ResultStore::merge_stats(const Dataset& d, std::int64_t chunk, const std::vector<std::uint8_t>& use,
-                              std::int64_t rows) {
+void ResultStore::merge_stats(const Dataset& d, const char* block, std::int64_t chunk,
+                              const std::vector<std::uint8_t>& use, std::int64_t rows) {
   const auto r = static_cast<std::size_t>(rows);
   for (std::size_t b = 0; b < d.width; ++b) {
     sampling::ColumnStats& col = col_[static_cast<std::size_t>(d.stats) + b];
-    const char* values = raw_.data() + 8 * b;
+    const char* values = block + 8 * b;
     if (!col.seeded()) col.seed(values, r, d.width, use.data());
     col.add(chunk, sampling::calc_chunk_summary(values, r, d.width, use.data(), col.windows()));
   }

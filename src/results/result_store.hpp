@@ -90,8 +90,9 @@ class ResultStore {
   struct Dataset;
   Chunk& chunk_for(std::int64_t run);
   void create_datasets(hid_t file);
-  void write_dataset(const Chunk& c, const Dataset& d, std::int64_t rows);
-  void merge_stats(const Dataset& d, std::int64_t chunk, const std::vector<std::uint8_t>& use, std::int64_t rows);
+  void write_dataset(Chunk& c, const Dataset& d, std::int64_t rows);  // zeroes the rows past `rows`
+  void merge_stats(const Dataset& d, const char* block, std::int64_t chunk, const std::vector<std::uint8_t>& use,
+                   std::int64_t rows);
 
   const campaign::RecordLayout& L_;
   std::int64_t n_ = 0, chunk_;
@@ -106,7 +107,7 @@ class ResultStore {
   std::size_t next_dataset_ = 0;                          // of complete_.front()
   std::size_t peak_chunks_ = 0;
   std::vector<sampling::ColumnStats> col_;                // one per output column (per bay for per-bay fields)
-  std::string raw_, encoded_;                             // a dataset chunk, before and after the filters
+  std::string encoded_;                                   // a dataset chunk after the filters
 };
 
 // Reading the finished /runs back (statistics, sensitivity): a 1-D float64 column; columns

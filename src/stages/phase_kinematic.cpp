@@ -79,8 +79,9 @@ PhaseOutcome KinematicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& si
   const double y_finish = open ? ctx.q_end : calc_on_rail(rail, l, ctx.q_end).Y;
   const double t0 = start.t_s, t1 = t0 + std::abs(y_finish - y_begin) / v;
   // The run's wall-time cap: a phase costs a bounded number of evaluations here, so the cap is
-  // checked at its start and, after the history (the cost of long histories), at its end.
-  if (std::chrono::steady_clock::now() > sinks.deadline) {
+  // checked at the start of every few phases (PhaseSinks::check_clock) and, after the history
+  // (the cost of long histories), at its end.
+  if (sinks.check_clock && std::chrono::steady_clock::now() > sinks.deadline) {
     out.reason = PhaseEndReason::wall_time;
     out.t_end_s = t0;
     return out;

@@ -31,7 +31,8 @@ class StageLoop {
   PhaseSinks make_sinks() {
     return {tracker_, phase_peaks_, history_,
             wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                              std::chrono::duration<double>(opts_.run.max_wall_time_s))};
+                              std::chrono::duration<double>(opts_.run.max_wall_time_s)),
+            segments_++ % PhaseSinks::kClockEvery == 0};
   }
   void account(const PhaseOutcome& o, const StageSpec& s, const PhaseSpec& ph);
   bool book(const StackEvent& e);
@@ -62,6 +63,7 @@ class StageLoop {
   double creep_reference_m_per_s_ = 0.0;  // the segment's (PhaseSegment)
   long evals_ = 0;
   long steps_left_ = 0;
+  long segments_ = 0;  // phase segments begun (PhaseSinks::check_clock)
   PhasePoint last_;          // last evaluated point of the run
   const StageSpec* last_stage_ = nullptr;
   const PhaseSpec* last_phase_ = nullptr;

@@ -285,6 +285,19 @@ TEST_CASE("free-stack histories are bounded in bytes, frame heights included", "
   CHECK_THAT(s.validate(), Contains("run.max_history_bytes"));
 }
 
+TEST_CASE("the wall-time cap holds in velocity mode without a history (the clock read every few phases)",
+          "[robust][caps]") {
+  SceneOptions s = table1(DriveMode::velocity, 1000);
+  s.run.output_step_s = 0.0;
+  const RunResult full = simulate(s);
+  REQUIRE(full.status == RunStatus::ok);
+  // a tenth of the uncapped run's own wall time: the cap must stop it well short of the last bay
+  s.run.max_wall_time_s = 0.1 * full.wall_time_s;
+  const RunResult r = simulate(s);
+  CHECK(r.status == RunStatus::wall_time_limit);
+  CHECK(r.bays_completed < 1000);
+}
+
 TEST_CASE("the wall-time cap holds in velocity mode (closed form with a long history)", "[robust][caps]") {
   SceneOptions s = table1(DriveMode::velocity, 1000);
   s.drive.speed_m_per_s = 1e-3;
