@@ -315,7 +315,8 @@ void check_scene(const SceneOptions& s, const std::string& source_name, const st
     for (const auto& k : geometry_keys(bad)) {
       const KeyDesc* d = sim::find_scene_key(k);
       const auto v = d ? sim::key_value(*d, s) : std::nullopt;
-      involved += fmt::format("\n  {} = {}{} ({})", k, v ? fmt::format("{}", *v) : "unset", d && d->unit != "1" ? " " + std::string(d->unit) : "",
+      const std::string unit = d && d->unit != "1" ? fmt::format(" {}", d->unit) : "";
+      involved += fmt::format("\n  {} = {}{} ({})", k, v ? fmt::format("{}", *v) : "unset", unit,
                               origin_text(origins, k, source_name));
     }
     throw InputError(fmt::format("error: {}: {}{}", source_name, bad, involved.empty() ? "" : "\n  keys involved:" + involved));

@@ -125,7 +125,10 @@ std::string KeyRange::text() const {
 }
 
 namespace {
-std::string unit_text(const SceneKey& k) { return k.unit == "1" ? "" : " " + std::string(k.unit == "Nm" ? "N m" : k.unit); }
+// fmt rather than " " + std::string: GCC 12 warns falsely (-Wrestrict) on the inlined operator+.
+std::string unit_text(const SceneKey& k) {
+  return k.unit == "1" ? "" : fmt::format(" {}", k.unit == "Nm" ? "N m" : k.unit);
+}
 }  // namespace
 
 std::string check_hard_range(const SceneKey& k, double v) {
