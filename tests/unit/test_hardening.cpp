@@ -5,6 +5,8 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <string>
@@ -116,6 +118,16 @@ TEST_CASE("input files are bounded in size", "[hardening][files]") {
              Contains("/dev/zero: cannot read scene file: larger than the limit"));
   CHECK_THAT(error_of([] { truss::io::read_input_file("/dev/zero", "campaign file", 1000); }), Contains("limit of 1000 bytes"));
   CHECK_THAT(error_of([] { truss::io::parse_scene_file("/"); }), Contains("is a directory"));
+  // the limit exactly, and one byte past it; a file of several read blocks comes back whole
+  const std::string dir = std::filesystem::temp_directory_path() / "truss_hardening_files";
+  std::filesystem::create_directories(dir);
+  std::string text(200'001, 'x');
+  for (std::size_t i = 0; i < text.size(); ++i) text[i] = static_cast<char>('a' + (i * 7919) % 26);
+  std::ofstream(dir + "/big.toml", std::ios::binary) << text;
+  CHECK(truss::io::read_input_file(dir + "/big.toml", "scene file", 200'001) == text);
+  CHECK_THAT(error_of([&] { truss::io::read_input_file(dir + "/big.toml", "scene file", 200'000); }),
+             Contains("big.toml: cannot read scene file: larger than the limit of 200000 bytes"));
+  std::filesystem::remove_all(dir);
 }
 
 TEST_CASE("campaign messages name the --set or the campaign line", "[hardening][campaign]") {
