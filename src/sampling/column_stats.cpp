@@ -6,6 +6,10 @@
 #include <cstring>
 #include <stdexcept>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include <fmt/format.h>
 
 namespace truss::sampling {
@@ -82,8 +86,7 @@ Moments combine(const Moments& a, const Moments& b) {
 namespace {
 
 // Two doubles and their lane masks (-1 where true): GCC's and clang's vector extensions, one SSE2
-// register (a wider vector_size is lowered lane by lane without AVX). The scalar loop was not
-// vectorised (comparisons of doubles counted in integers).
+// register on baseline x86-64 (NEON elsewhere).
 using Vec2 = double __attribute__((vector_size(16)));
 using Mask2 = decltype(Vec2{} < Vec2{});
 
@@ -91,81 +94,216 @@ struct WindowCount {
   std::int64_t below = 0, at_lo = 0, at_hi = 0;
 };
 
-// x against the window (lo, hi): the values below and at each end counted, those strictly inside
-// appended to `kept` in their order. One pass, eight values at a time; a block with none inside
-// (most of them once the windows narrow) copies nothing. `scratch`: room for x.size() values.
-WindowCount count_window(const std::vector<double>& x, double lo, double hi, std::vector<double>& scratch,
-                         std::vector<double>& kept) {
-  const std::size_t n = x.size(), n8 = n / 8 * 8;
+constexpr std::size_t kBlock = 8;  // values a block: one test whether any lies in [lo, hi]
+
+// The values of one block of x against the window: those at either end counted, those strictly
+// inside appended to out[k...] in their order. Branch-free: which are inside is not predictable.
+inline void classify_block(const double* x, double lo, double hi, WindowCount& c, double* out, std::size_t& k) {
+  for (std::size_t j = 0; j < kBlock; ++j) {
+    const double v = x[j];
+    c.at_lo += v == lo;
+    c.at_hi += v == hi;
+    out[k] = v;
+    k += (v > lo) & (v < hi);
+  }
+}
+
+// count_window's whole blocks. Per vector two comparisons: below lo, and not above hi; a block with
+// a value in [lo, hi] (a minority once the windows narrow) is then classified value by value.
+WindowCount count_blocks_generic(const double* x, std::size_t n_blocks, double lo, double hi, double* out,
+                                 std::size_t& k) {
   const Vec2 lo2 = {lo, lo}, hi2 = {hi, hi};
-  Mask2 below{}, at_lo{}, at_hi{};
-  double* out = scratch.data();
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < n8; i += 8) {
-    Mask2 any{};
-    for (std::size_t j = 0; j < 8; j += 2) {
+  Mask2 below{};
+  WindowCount c;
+  for (std::size_t b = 0; b < n_blocks; ++b) {
+    const double* xb = x + kBlock * b;
+    Mask2 in{};
+    for (std::size_t j = 0; j < kBlock; j += 2) {
       Vec2 v;
-      std::memcpy(&v, x.data() + i + j, sizeof v);
-      below -= v < lo2;
-      at_lo -= v == lo2;
-      at_hi -= v == hi2;
-      any |= (v > lo2) & (v < hi2);
+      std::memcpy(&v, xb + j, sizeof v);
+      const Mask2 lt = v < lo2;
+      below -= lt;
+      in |= (v >= lo2) & (v <= hi2);  // x is finite: not below lo
     }
-    if ((any[0] | any[1]) == 0) continue;
-    for (std::size_t j = i; j < i + 8; ++j) {  // branch-free: which are inside is not predictable
-      out[k] = x[j];
-      k += x[j] > lo && x[j] < hi;
+    if ((in[0] | in[1]) != 0) classify_block(xb, lo, hi, c, out, k);
+  }
+  c.below += below[0] + below[1];
+  return c;
+}
+
+#if defined(__x86_64__)
+// Left-packing four doubles by a 4-bit mask of lanes: for each mask the 32-bit lanes of its set
+// doubles, in order (AVX2 has no compress instruction).
+struct PackTable {
+  alignas(32) std::int32_t lanes[16][8]{};
+  std::uint8_t count[16]{};
+  constexpr PackTable() {
+    for (int m = 0; m < 16; ++m)
+      for (int j = 0; j < 4; ++j)
+        if (m >> j & 1) {
+          lanes[m][2 * count[m]] = 2 * j;
+          lanes[m][2 * count[m] + 1] = 2 * j + 1;
+          ++count[m];
+        }
+  }
+};
+constexpr PackTable kPack;
+
+// The same, four lanes at a time, for processors with AVX2 (chosen at run time: the binary stays
+// baseline x86-64). A block with values in [lo, hi] is classified four at a time too: the ends
+// counted, the values inside left-packed into out (up to 4 slots past k written: k stays below the
+// index of the vector, so they lie within x's length).
+__attribute__((target("avx2"))) WindowCount count_blocks_avx2(const double* x, std::size_t n_blocks, double lo,
+                                                               double hi, double* out, std::size_t& k) {
+  const __m256d lo4 = _mm256_set1_pd(lo), hi4 = _mm256_set1_pd(hi);
+  __m256i below = _mm256_setzero_si256(), at_lo = below, at_hi = below;
+  for (std::size_t b = 0; b < n_blocks; ++b) {
+    const double* xb = x + kBlock * b;
+    const __m256d v0 = _mm256_loadu_pd(xb), v1 = _mm256_loadu_pd(xb + 4);
+    const __m256d lt0 = _mm256_cmp_pd(v0, lo4, _CMP_LT_OQ), lt1 = _mm256_cmp_pd(v1, lo4, _CMP_LT_OQ);
+    below = _mm256_sub_epi64(below, _mm256_castpd_si256(lt0));
+    below = _mm256_sub_epi64(below, _mm256_castpd_si256(lt1));
+    const __m256d in0 = _mm256_andnot_pd(lt0, _mm256_cmp_pd(v0, hi4, _CMP_LE_OQ));
+    const __m256d in1 = _mm256_andnot_pd(lt1, _mm256_cmp_pd(v1, hi4, _CMP_LE_OQ));
+    if (_mm256_movemask_pd(_mm256_or_pd(in0, in1)) == 0) continue;
+    for (const __m256d v : {v0, v1}) {
+      at_lo = _mm256_sub_epi64(at_lo, _mm256_castpd_si256(_mm256_cmp_pd(v, lo4, _CMP_EQ_OQ)));
+      at_hi = _mm256_sub_epi64(at_hi, _mm256_castpd_si256(_mm256_cmp_pd(v, hi4, _CMP_EQ_OQ)));
+      const int m = _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(v, lo4, _CMP_GT_OQ), _mm256_cmp_pd(v, hi4, _CMP_LT_OQ)));
+      const __m256i perm = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.lanes[m]));
+      _mm256_storeu_pd(out + k, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(v), perm)));
+      k += kPack.count[m];
     }
   }
+  alignas(32) std::int64_t lanes[3][4];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[0]), below);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[1]), at_lo);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[2]), at_hi);
   WindowCount c;
-  for (std::size_t i = n8; i < n; ++i) {
+  for (std::size_t j = 0; j < 4; ++j) {
+    c.below += lanes[0][j];
+    c.at_lo += lanes[1][j];
+    c.at_hi += lanes[2][j];
+  }
+  return c;
+}
+#endif
+
+using CountBlocks = WindowCount (*)(const double*, std::size_t, double, double, double*, std::size_t&);
+
+bool has_avx2() {
+#if defined(__x86_64__)
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+CountBlocks select_kernel(bool avx2) {
+#if defined(__x86_64__)
+  if (avx2) return count_blocks_avx2;
+#endif
+  (void)avx2;
+  return count_blocks_generic;
+}
+
+CountBlocks& count_blocks_kernel() {
+  static CountBlocks kernel = select_kernel(has_avx2());
+  return kernel;
+}
+
+// x against the window (lo, hi): the values below and at each end counted, those strictly inside
+// appended to `kept` in their order. `scratch`: room for x.size() values.
+WindowCount count_window(const std::vector<double>& x, double lo, double hi, std::vector<double>& scratch,
+                         std::vector<double>& kept) {
+  const std::size_t n = x.size(), n_blocks = n / kBlock;
+  double* out = scratch.data();
+  std::size_t k = 0;
+  WindowCount c = count_blocks_kernel()(x.data(), n_blocks, lo, hi, out, k);
+  for (std::size_t i = kBlock * n_blocks; i < n; ++i) {
     const double v = x[i];
     c.below += v < lo;
     c.at_lo += v == lo;
     c.at_hi += v == hi;
     out[k] = v;
-    k += v > lo && v < hi;
-  }
-  for (std::size_t j = 0; j < 2; ++j) {
-    c.below += below[j];
-    c.at_lo += at_lo[j];
-    c.at_hi += at_hi[j];
+    k += (v > lo) & (v < hi);
   }
   kept.assign(out, out + k);
   return c;
 }
 
+struct Gathered {
+  std::size_t count = 0;
+  double sum = 0.0;  // of value - x0 (x0: the first usable value)
+  double min = std::numeric_limits<double>::infinity(), max = -std::numeric_limits<double>::infinity();
+};
+
+// The usable values of rows first.. (row `first` usable) gathered into x, summed in index order
+// shifted by the first (exact for a constant chunk, no cancellation for a tiny spread), their min
+// and max taken: one pass, bound by the latency of the additions as the M2 pass is. A row not used
+// adds +0.0, which leaves the sum's bits alone (the sum is never -0.0). Its own function: inlined,
+// the accumulators lived on the stack.
+[[gnu::noinline]] Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride,
+                                         const std::uint8_t* use, std::size_t first, double* x) {
+  Gathered g;
+  double x0;
+  std::memcpy(&x0, values + 8 * first * stride, 8);
+  double sum = 0.0, lo = g.min, hi = g.max;
+  std::size_t n = 0;
+  for (std::size_t i = first; i < rows; ++i) {  // branch-free: failed runs and NaN are not predictable
+    double v;
+    std::memcpy(&v, values + 8 * i * stride, 8);
+    const bool ok = (use[i] != 0) & std::isfinite(v);
+    x[n] = v;
+    n += ok;
+    sum += ok ? v - x0 : 0.0;
+    lo = ok && v < lo ? v : lo;  // std::min's choice among equal values (-0.0 and +0.0): the first
+    hi = ok && hi < v ? v : hi;
+  }
+  g.count = n;
+  g.sum = sum;
+  g.min = lo;
+  g.max = hi;
+  return g;
+}
+
 }  // namespace
+
+bool use_avx2_kernels(bool on) {
+  const bool avx2 = on && has_avx2();
+  count_blocks_kernel() = select_kernel(avx2);
+  return avx2;
+}
 
 ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                                 const Windows& w) {
   thread_local std::vector<double> x, scratch;
   x.resize(rows);
   scratch.resize(rows);
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < rows; ++i) {  // branch-free: failed runs and NaN are not predictable
-    double v;
-    std::memcpy(&v, values + 8 * i * stride, 8);
-    x[n] = v;
-    n += (use[i] != 0) & std::isfinite(v);
-  }
-  x.resize(n);
   ChunkSummary s;
   s.window = w;
   Moments& m = s.moments;
-  m.count = static_cast<std::int64_t>(x.size());
-  if (x.empty()) return s;
-  // Shifted by the first value: exact for a constant chunk, no cancellation for a tiny spread.
+  const auto load = [&](std::size_t i) {
+    double v;
+    std::memcpy(&v, values + 8 * i * stride, 8);
+    return v;
+  };
+  std::size_t i = 0;
+  while (i < rows && !(use[i] != 0 && std::isfinite(load(i)))) ++i;
+  if (i == rows) return s;
+  const Gathered g = gather_usable(values, rows, stride, use, i, x.data());
+  const std::size_t n = g.count;
   const double x0 = x.front();
-  double sum = 0.0;
-  for (double v : x) sum += v - x0;
-  const double dm = sum / static_cast<double>(x.size());
+  x.resize(n);
+  m.count = static_cast<std::int64_t>(n);
+  m.min = g.min;
+  m.max = g.max;
+  const double sum = g.sum;
+  const double dm = sum / static_cast<double>(n);
   m.mean = x0 + dm;
-  for (double v : x) {
-    m.m2 += (v - x0 - dm) * (v - x0 - dm);
-    m.min = std::min(m.min, v);
-    m.max = std::max(m.max, v);
-  }
+  double m2 = 0.0;
+  for (const double v : x) m2 += (v - x0 - dm) * (v - x0 - dm);
+  m.m2 = m2;
   // Per target: a window past the chunk's values is settled by its min and max, any other by one
   // pass of count_window. Rank 0 pays this as it writes the chunk (docs/benchmarks.md).
   for (std::size_t t = 0; t < kStatTargets; ++t) {
