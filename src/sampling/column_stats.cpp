@@ -108,13 +108,15 @@ inline void classify_block(const double* x, double lo, double hi, WindowCount& c
   }
 }
 
-// count_window's whole blocks. Per vector two comparisons: below lo, and not above hi; a block with
-// a value in [lo, hi] (a minority once the windows narrow) is then classified value by value.
-WindowCount count_blocks_generic(const double* x, std::size_t n_blocks, double lo, double hi, double* out,
-                                 std::size_t& k) {
+// count_window's whole blocks, in two passes. The first compares each vector twice (below lo, not
+// above hi), counts the values below, and lists the blocks with a value in [lo, hi] (a minority once
+// the windows narrow) without a branch; the second classifies the listed blocks. A branch per block
+// instead was mispredicted at about every listed block. `blocks`: room for n_blocks indices.
+WindowCount count_blocks_generic(const double* x, std::size_t n_blocks, double lo, double hi, std::uint32_t* blocks,
+                                 double* out, std::size_t& k) {
   const Vec2 lo2 = {lo, lo}, hi2 = {hi, hi};
   Mask2 below{};
-  WindowCount c;
+  std::size_t listed = 0;
   for (std::size_t b = 0; b < n_blocks; ++b) {
     const double* xb = x + kBlock * b;
     Mask2 in{};
@@ -125,9 +127,12 @@ WindowCount count_blocks_generic(const double* x, std::size_t n_blocks, double l
       below -= lt;
       in |= (v >= lo2) & (v <= hi2);  // x is finite: not below lo
     }
-    if ((in[0] | in[1]) != 0) classify_block(xb, lo, hi, c, out, k);
+    blocks[listed] = static_cast<std::uint32_t>(b);
+    listed += (in[0] | in[1]) != 0;
   }
-  c.below += below[0] + below[1];
+  WindowCount c;
+  c.below = below[0] + below[1];
+  for (std::size_t j = 0; j < listed; ++j) classify_block(x + kBlock * blocks[j], lo, hi, c, out, k);
   return c;
 }
 
@@ -150,13 +155,15 @@ struct PackTable {
 constexpr PackTable kPack;
 
 // The same, four lanes at a time, for processors with AVX2 (chosen at run time: the binary stays
-// baseline x86-64). A block with values in [lo, hi] is classified four at a time too: the ends
-// counted, the values inside left-packed into out (up to 4 slots past k written: k stays below the
-// index of the vector, so they lie within x's length).
+// baseline x86-64). The listed blocks are classified four values at a time too: the ends counted,
+// the values inside left-packed into out (up to 4 slots past k written: k stays below the index of
+// the vector, so they lie within x's length).
 __attribute__((target("avx2"))) WindowCount count_blocks_avx2(const double* x, std::size_t n_blocks, double lo,
-                                                               double hi, double* out, std::size_t& k) {
+                                                               double hi, std::uint32_t* blocks, double* out,
+                                                               std::size_t& k) {
   const __m256d lo4 = _mm256_set1_pd(lo), hi4 = _mm256_set1_pd(hi);
   __m256i below = _mm256_setzero_si256(), at_lo = below, at_hi = below;
+  std::size_t listed = 0;
   for (std::size_t b = 0; b < n_blocks; ++b) {
     const double* xb = x + kBlock * b;
     const __m256d v0 = _mm256_loadu_pd(xb), v1 = _mm256_loadu_pd(xb + 4);
@@ -165,15 +172,18 @@ __attribute__((target("avx2"))) WindowCount count_blocks_avx2(const double* x, s
     below = _mm256_sub_epi64(below, _mm256_castpd_si256(lt1));
     const __m256d in0 = _mm256_andnot_pd(lt0, _mm256_cmp_pd(v0, hi4, _CMP_LE_OQ));
     const __m256d in1 = _mm256_andnot_pd(lt1, _mm256_cmp_pd(v1, hi4, _CMP_LE_OQ));
-    if (_mm256_movemask_pd(_mm256_or_pd(in0, in1)) == 0) continue;
-    for (const __m256d v : {v0, v1}) {
-      at_lo = _mm256_sub_epi64(at_lo, _mm256_castpd_si256(_mm256_cmp_pd(v, lo4, _CMP_EQ_OQ)));
-      at_hi = _mm256_sub_epi64(at_hi, _mm256_castpd_si256(_mm256_cmp_pd(v, hi4, _CMP_EQ_OQ)));
-      const int m = _mm256_movemask_pd(_mm256_and_pd(_mm256_cmp_pd(v, lo4, _CMP_GT_OQ), _mm256_cmp_pd(v, hi4, _CMP_LT_OQ)));
-      const __m256i perm = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.lanes[m]));
-      _mm256_storeu_pd(out + k, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(v), perm)));
-      k += kPack.count[m];
-    }
+    blocks[listed] = static_cast<std::uint32_t>(b);
+    listed += _mm256_movemask_pd(_mm256_or_pd(in0, in1)) != 0;
+  }
+  for (std::size_t j = 0; j < 2 * listed; ++j) {  // the listed blocks' vectors
+    const __m256d v = _mm256_loadu_pd(x + kBlock * blocks[j / 2] + 4 * (j % 2));
+    at_lo = _mm256_sub_epi64(at_lo, _mm256_castpd_si256(_mm256_cmp_pd(v, lo4, _CMP_EQ_OQ)));
+    at_hi = _mm256_sub_epi64(at_hi, _mm256_castpd_si256(_mm256_cmp_pd(v, hi4, _CMP_EQ_OQ)));
+    const __m256d inside = _mm256_and_pd(_mm256_cmp_pd(v, lo4, _CMP_GT_OQ), _mm256_cmp_pd(v, hi4, _CMP_LT_OQ));
+    const int m = _mm256_movemask_pd(inside);
+    const __m256i perm = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.lanes[m]));
+    _mm256_storeu_pd(out + k, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(v), perm)));
+    k += kPack.count[m];
   }
   alignas(32) std::int64_t lanes[3][4];
   _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[0]), below);
@@ -189,7 +199,8 @@ __attribute__((target("avx2"))) WindowCount count_blocks_avx2(const double* x, s
 }
 #endif
 
-using CountBlocks = WindowCount (*)(const double*, std::size_t, double, double, double*, std::size_t&);
+using CountBlocks = WindowCount (*)(const double*, std::size_t, double, double, std::uint32_t*, double*,
+                                    std::size_t&);
 
 bool has_avx2() {
 #if defined(__x86_64__)
@@ -212,14 +223,24 @@ CountBlocks& count_blocks_kernel() {
   return kernel;
 }
 
+// Room for count_window's work on a chunk of `rows` values.
+struct CountScratch {
+  std::vector<double> out;
+  std::vector<std::uint32_t> blocks;
+  void resize(std::size_t rows) {
+    out.resize(rows);
+    blocks.resize(rows / kBlock);
+  }
+};
+
 // x against the window (lo, hi): the values below and at each end counted, those strictly inside
-// appended to `kept` in their order. `scratch`: room for x.size() values.
-WindowCount count_window(const std::vector<double>& x, double lo, double hi, std::vector<double>& scratch,
+// appended to `kept` in their order.
+WindowCount count_window(const std::vector<double>& x, double lo, double hi, CountScratch& scratch,
                          std::vector<double>& kept) {
   const std::size_t n = x.size(), n_blocks = n / kBlock;
-  double* out = scratch.data();
+  double* out = scratch.out.data();
   std::size_t k = 0;
-  WindowCount c = count_blocks_kernel()(x.data(), n_blocks, lo, hi, out, k);
+  WindowCount c = count_blocks_kernel()(x.data(), n_blocks, lo, hi, scratch.blocks.data(), out, k);
   for (std::size_t i = kBlock * n_blocks; i < n; ++i) {
     const double v = x[i];
     c.below += v < lo;
@@ -277,7 +298,8 @@ bool use_avx2_kernels(bool on) {
 
 ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                                 const Windows& w) {
-  thread_local std::vector<double> x, scratch;
+  thread_local std::vector<double> x;
+  thread_local CountScratch scratch;
   x.resize(rows);
   scratch.resize(rows);
   ChunkSummary s;
