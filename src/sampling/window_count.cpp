@@ -1,0 +1,209 @@
+// The inner loops of the streamed column statistics: the usable values of a chunk's column
+// gathered and summed, and counted against a percentile window (window_count.hpp).
+#include "sampling/window_count.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
+#include "sampling/column_stats.hpp"
+
+namespace truss::sampling {
+
+namespace {
+
+// Two doubles and their lane masks (-1 where true): GCC's and clang's vector extensions, one SSE2
+// register on baseline x86-64 (NEON elsewhere).
+using Vec2 = double __attribute__((vector_size(16)));
+using Mask2 = decltype(Vec2{} < Vec2{});
+
+
+// The values of one block of x against the window: those at either end counted, those strictly
+// inside appended to out[k...] in their order. Branch-free: which are inside is not predictable.
+inline void classify_block(const double* x, double lo, double hi, WindowCount& c, double* out, std::size_t& k) {
+  for (std::size_t j = 0; j < kBlock; ++j) {
+    const double v = x[j];
+    c.at_lo += v == lo;
+    c.at_hi += v == hi;
+    out[k] = v;
+    k += (v > lo) & (v < hi);
+  }
+}
+
+// count_window's whole blocks, in two passes. The first compares each vector twice (below lo, not
+// above hi), counts the values below, and lists the blocks with a value in [lo, hi] (a minority once
+// the windows narrow) without a branch; the second classifies the listed blocks. A branch per block
+// instead was mispredicted at about every listed block. `blocks`: room for n_blocks indices.
+WindowCount count_blocks_generic(const double* x, std::size_t n_blocks, double lo, double hi, std::uint32_t* blocks,
+                                 double* out, std::size_t& k) {
+  const Vec2 lo2 = {lo, lo}, hi2 = {hi, hi};
+  Mask2 below{};
+  std::size_t listed = 0;
+  for (std::size_t b = 0; b < n_blocks; ++b) {
+    const double* xb = x + kBlock * b;
+    Mask2 in{};
+    for (std::size_t j = 0; j < kBlock; j += 2) {
+      Vec2 v;
+      std::memcpy(&v, xb + j, sizeof v);
+      const Mask2 lt = v < lo2;
+      below -= lt;
+      in |= (v >= lo2) & (v <= hi2);  // x is finite: not below lo
+    }
+    blocks[listed] = static_cast<std::uint32_t>(b);
+    listed += (in[0] | in[1]) != 0;
+  }
+  WindowCount c;
+  c.below = below[0] + below[1];
+  for (std::size_t j = 0; j < listed; ++j) classify_block(x + kBlock * blocks[j], lo, hi, c, out, k);
+  return c;
+}
+
+#if defined(__x86_64__)
+// Left-packing four doubles by a 4-bit mask of lanes: for each mask the 32-bit lanes of its set
+// doubles, in order (AVX2 has no compress instruction).
+struct PackTable {
+  alignas(32) std::int32_t lanes[16][8]{};
+  std::uint8_t count[16]{};
+  constexpr PackTable() {
+    for (int m = 0; m < 16; ++m)
+      for (int j = 0; j < 4; ++j)
+        if (m >> j & 1) {
+          lanes[m][2 * count[m]] = 2 * j;
+          lanes[m][2 * count[m] + 1] = 2 * j + 1;
+          ++count[m];
+        }
+  }
+};
+constexpr PackTable kPack;
+
+// The same, four lanes at a time, for processors with AVX2 (chosen at run time: the binary stays
+// baseline x86-64). The listed blocks are classified four values at a time too: the ends counted,
+// the values inside left-packed into out (up to 4 slots past k written: k stays below the index of
+// the vector, so they lie within x's length).
+__attribute__((target("avx2"))) WindowCount count_blocks_avx2(const double* x, std::size_t n_blocks, double lo,
+                                                               double hi, std::uint32_t* blocks, double* out,
+                                                               std::size_t& k) {
+  const __m256d lo4 = _mm256_set1_pd(lo), hi4 = _mm256_set1_pd(hi);
+  __m256i below = _mm256_setzero_si256(), at_lo = below, at_hi = below;
+  std::size_t listed = 0;
+  for (std::size_t b = 0; b < n_blocks; ++b) {
+    const double* xb = x + kBlock * b;
+    const __m256d v0 = _mm256_loadu_pd(xb), v1 = _mm256_loadu_pd(xb + 4);
+    const __m256d lt0 = _mm256_cmp_pd(v0, lo4, _CMP_LT_OQ), lt1 = _mm256_cmp_pd(v1, lo4, _CMP_LT_OQ);
+    below = _mm256_sub_epi64(below, _mm256_castpd_si256(lt0));
+    below = _mm256_sub_epi64(below, _mm256_castpd_si256(lt1));
+    const __m256d in0 = _mm256_andnot_pd(lt0, _mm256_cmp_pd(v0, hi4, _CMP_LE_OQ));
+    const __m256d in1 = _mm256_andnot_pd(lt1, _mm256_cmp_pd(v1, hi4, _CMP_LE_OQ));
+    blocks[listed] = static_cast<std::uint32_t>(b);
+    listed += _mm256_movemask_pd(_mm256_or_pd(in0, in1)) != 0;
+  }
+  for (std::size_t j = 0; j < 2 * listed; ++j) {  // the listed blocks' vectors
+    const __m256d v = _mm256_loadu_pd(x + kBlock * blocks[j / 2] + 4 * (j % 2));
+    at_lo = _mm256_sub_epi64(at_lo, _mm256_castpd_si256(_mm256_cmp_pd(v, lo4, _CMP_EQ_OQ)));
+    at_hi = _mm256_sub_epi64(at_hi, _mm256_castpd_si256(_mm256_cmp_pd(v, hi4, _CMP_EQ_OQ)));
+    const __m256d inside = _mm256_and_pd(_mm256_cmp_pd(v, lo4, _CMP_GT_OQ), _mm256_cmp_pd(v, hi4, _CMP_LT_OQ));
+    const int m = _mm256_movemask_pd(inside);
+    const __m256i perm = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.lanes[m]));
+    _mm256_storeu_pd(out + k, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(v), perm)));
+    k += kPack.count[m];
+  }
+  alignas(32) std::int64_t lanes[3][4];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[0]), below);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[1]), at_lo);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[2]), at_hi);
+  WindowCount c;
+  for (std::size_t j = 0; j < 4; ++j) {
+    c.below += lanes[0][j];
+    c.at_lo += lanes[1][j];
+    c.at_hi += lanes[2][j];
+  }
+  return c;
+}
+#endif
+
+using CountBlocks = WindowCount (*)(const double*, std::size_t, double, double, std::uint32_t*, double*,
+                                    std::size_t&);
+
+bool has_avx2() {
+#if defined(__x86_64__)
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+CountBlocks select_kernel(bool avx2) {
+#if defined(__x86_64__)
+  if (avx2) return count_blocks_avx2;
+#endif
+  (void)avx2;
+  return count_blocks_generic;
+}
+
+CountBlocks& count_blocks_kernel() {
+  static CountBlocks kernel = select_kernel(has_avx2());
+  return kernel;
+}
+
+}  // namespace
+
+// x against the window (lo, hi): the values below and at each end counted, those strictly inside
+// appended to `kept` in their order.
+WindowCount count_window(const double* x, std::size_t n, double lo, double hi, CountScratch& scratch) {
+  scratch.resize(n);
+  const std::size_t n_blocks = n / kBlock;
+  double* out = scratch.out.data();
+  std::size_t k = 0;
+  WindowCount c = count_blocks_kernel()(x, n_blocks, lo, hi, scratch.blocks.data(), out, k);
+  for (std::size_t i = kBlock * n_blocks; i < n; ++i) {
+    const double v = x[i];
+    c.below += v < lo;
+    c.at_lo += v == lo;
+    c.at_hi += v == hi;
+    out[k] = v;
+    k += (v > lo) & (v < hi);
+  }
+  c.inside = k;
+  return c;
+}
+
+// The usable values of rows first.. (row `first` usable) gathered into x, summed in index order
+// shifted by the first (exact for a constant chunk, no cancellation for a tiny spread), their min
+// and max taken: one pass, bound by the latency of the additions as the M2 pass is. A row not used
+// adds +0.0, which leaves the sum's bits alone (the sum is never -0.0). Its own function (not inlined
+// into calc_chunk_summary, where the accumulators lived on the stack).
+Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride,
+                                         const std::uint8_t* use, std::size_t first, double* x) {
+  Gathered g;
+  double x0;
+  std::memcpy(&x0, values + 8 * first * stride, 8);
+  double sum = 0.0, lo = g.min, hi = g.max;
+  std::size_t n = 0;
+  for (std::size_t i = first; i < rows; ++i) {  // branch-free: failed runs and NaN are not predictable
+    double v;
+    std::memcpy(&v, values + 8 * i * stride, 8);
+    const bool ok = (use[i] != 0) & std::isfinite(v);
+    x[n] = v;
+    n += ok;
+    sum += ok ? v - x0 : 0.0;
+    lo = ok && v < lo ? v : lo;  // std::min's choice among equal values (-0.0 and +0.0): the first
+    hi = ok && hi < v ? v : hi;
+  }
+  g.count = n;
+  g.sum = sum;
+  g.min = lo;
+  g.max = hi;
+  return g;
+}
+
+bool use_avx2_kernels(bool on) {
+  const bool avx2 = on && has_avx2();
+  count_blocks_kernel() = select_kernel(avx2);
+  return avx2;
+}
+
+}  // namespace truss::sampling
