@@ -128,23 +128,29 @@ ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_
   const double sum = g.sum;
   const double dm = sum / static_cast<double>(n);
   m.mean = x0 + dm;
-  double m2 = 0.0;
-  for (const double v : x) m2 += (v - x0 - dm) * (v - x0 - dm);
-  m.m2 = m2;
-  // Per target: a window past the chunk's values is settled by its min and max, any other by one
-  // pass of count_window. Rank 0 pays this as it writes the chunk (docs/benchmarks.md).
+  // Per target: a window past the chunk's values is settled by its min and max, the others are
+  // counted together, with the M2 pass. Rank 0 pays this as it writes the chunk (docs/benchmarks.md).
+  std::size_t nw = 0;
+  std::array<std::size_t, kStatTargets> target{};
+  std::array<double, kStatTargets> lo{}, hi{};
+  std::array<std::vector<double>*, kStatTargets> kept{};
   for (std::size_t t = 0; t < kStatTargets; ++t) {
-    const double lo = w[t].lo, hi = w[t].hi;
-    if (m.max < lo) {
+    if (m.max < w[t].lo) {
       s.below[t] = m.count;
-      continue;
+    } else if (m.min <= w[t].hi) {
+      target[nw] = t;
+      lo[nw] = w[t].lo;
+      hi[nw] = w[t].hi;
+      kept[nw++] = &s.kept[t];
     }
-    if (m.min > hi) continue;
-    const WindowCount c = count_window(x.data(), x.size(), lo, hi, scratch);
-    s.kept[t].assign(scratch.out.data(), scratch.out.data() + c.inside);
-    s.below[t] = c.below;
-    s.at_lo[t] = c.at_lo;
-    s.at_hi[t] = lo == hi ? 0 : c.at_hi;  // one end: its copies are at_lo
+  }
+  std::array<WindowCount, kStatTargets> c;
+  m.m2 = count_windows_m2(x, x0, dm, nw, lo.data(), hi.data(), c.data(), kept.data(), scratch);
+  for (std::size_t j = 0; j < nw; ++j) {
+    const std::size_t t = target[j];
+    s.below[t] = c[j].below;
+    s.at_lo[t] = c[j].at_lo;
+    s.at_hi[t] = lo[j] == hi[j] ? 0 : c[j].at_hi;  // one end: its copies are at_lo
   }
   return s;
 }

@@ -80,27 +80,14 @@ struct PackTable {
 };
 constexpr PackTable kPack;
 
-// The same, four lanes at a time, for processors with AVX2 (chosen at run time: the binary stays
-// baseline x86-64). The listed blocks are classified four values at a time too: the ends counted,
-// the values inside left-packed into out (up to 4 slots past k written: k stays below the index of
-// the vector, so they lie within x's length).
-__attribute__((target("avx2"))) WindowCount count_blocks_avx2(const double* x, std::size_t n_blocks, double lo,
-                                                               double hi, std::uint32_t* blocks, double* out,
-                                                               std::size_t& k) {
+// count_blocks_avx2's second pass: the listed blocks classified four values at a time, the ends
+// counted, the values inside left-packed into out (up to 4 slots past k written: k stays below the
+// index of the vector, so they lie within x's length).
+__attribute__((target("avx2"))) WindowCount classify_listed_avx2(const double* x, const std::uint32_t* blocks,
+                                                                  std::size_t listed, double lo, double hi,
+                                                                  double* out, std::size_t& k) {
   const __m256d lo4 = _mm256_set1_pd(lo), hi4 = _mm256_set1_pd(hi);
-  __m256i below = _mm256_setzero_si256(), at_lo = below, at_hi = below;
-  std::size_t listed = 0;
-  for (std::size_t b = 0; b < n_blocks; ++b) {
-    const double* xb = x + kBlock * b;
-    const __m256d v0 = _mm256_loadu_pd(xb), v1 = _mm256_loadu_pd(xb + 4);
-    const __m256d lt0 = _mm256_cmp_pd(v0, lo4, _CMP_LT_OQ), lt1 = _mm256_cmp_pd(v1, lo4, _CMP_LT_OQ);
-    below = _mm256_sub_epi64(below, _mm256_castpd_si256(lt0));
-    below = _mm256_sub_epi64(below, _mm256_castpd_si256(lt1));
-    const __m256d in0 = _mm256_andnot_pd(lt0, _mm256_cmp_pd(v0, hi4, _CMP_LE_OQ));
-    const __m256d in1 = _mm256_andnot_pd(lt1, _mm256_cmp_pd(v1, hi4, _CMP_LE_OQ));
-    blocks[listed] = static_cast<std::uint32_t>(b);
-    listed += _mm256_movemask_pd(_mm256_or_pd(in0, in1)) != 0;
-  }
+  __m256i at_lo = _mm256_setzero_si256(), at_hi = at_lo;
   for (std::size_t j = 0; j < 2 * listed; ++j) {  // the listed blocks' vectors
     const __m256d v = _mm256_loadu_pd(x + kBlock * blocks[j / 2] + 4 * (j % 2));
     at_lo = _mm256_sub_epi64(at_lo, _mm256_castpd_si256(_mm256_cmp_pd(v, lo4, _CMP_EQ_OQ)));
@@ -111,16 +98,67 @@ __attribute__((target("avx2"))) WindowCount count_blocks_avx2(const double* x, s
     _mm256_storeu_pd(out + k, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(v), perm)));
     k += kPack.count[m];
   }
-  alignas(32) std::int64_t lanes[3][4];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[0]), below);
-  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[1]), at_lo);
-  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[2]), at_hi);
+  alignas(32) std::int64_t lanes[2][4];
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[0]), at_lo);
+  _mm256_store_si256(reinterpret_cast<__m256i*>(lanes[1]), at_hi);
   WindowCount c;
   for (std::size_t j = 0; j < 4; ++j) {
-    c.below += lanes[0][j];
-    c.at_lo += lanes[1][j];
-    c.at_hi += lanes[2][j];
+    c.at_lo += lanes[0][j];
+    c.at_hi += lanes[1][j];
   }
+  return c;
+}
+
+// The first pass of count_blocks_generic for nw windows at once, four lanes at a time (AVX2: chosen
+// at run time, the binary stays baseline x86-64), with `m2`'s additions riding along when asked
+// (they are bound by their latency, which leaves room for the comparisons). Window t's listed
+// blocks go to blocks[t * n_blocks ...].
+template <bool kM2>
+__attribute__((target("avx2"))) void list_blocks_avx2(const double* x, std::size_t n_blocks, double x0, double dm,
+                                                      double& m2, std::size_t nw, const double* lo, const double* hi,
+                                                      std::int64_t* below, std::uint32_t* blocks, std::size_t* listed) {
+  __m256d lo4[kStatTargets], hi4[kStatTargets];
+  __m256i bel[kStatTargets];
+  std::size_t n_listed[kStatTargets];
+  for (std::size_t t = 0; t < nw; ++t) {
+    lo4[t] = _mm256_set1_pd(lo[t]);
+    hi4[t] = _mm256_set1_pd(hi[t]);
+    bel[t] = _mm256_setzero_si256();
+    n_listed[t] = 0;
+  }
+  double acc = m2;
+  for (std::size_t b = 0; b < n_blocks; ++b) {
+    const double* xb = x + kBlock * b;
+    if constexpr (kM2)
+      for (std::size_t j = 0; j < kBlock; ++j) acc += (xb[j] - x0 - dm) * (xb[j] - x0 - dm);
+    const __m256d v0 = _mm256_loadu_pd(xb), v1 = _mm256_loadu_pd(xb + 4);
+    for (std::size_t t = 0; t < nw; ++t) {
+      const __m256d lt0 = _mm256_cmp_pd(v0, lo4[t], _CMP_LT_OQ), lt1 = _mm256_cmp_pd(v1, lo4[t], _CMP_LT_OQ);
+      bel[t] = _mm256_sub_epi64(bel[t], _mm256_castpd_si256(lt0));
+      bel[t] = _mm256_sub_epi64(bel[t], _mm256_castpd_si256(lt1));
+      const __m256d in0 = _mm256_andnot_pd(lt0, _mm256_cmp_pd(v0, hi4[t], _CMP_LE_OQ));
+      const __m256d in1 = _mm256_andnot_pd(lt1, _mm256_cmp_pd(v1, hi4[t], _CMP_LE_OQ));
+      blocks[t * n_blocks + n_listed[t]] = static_cast<std::uint32_t>(b);
+      n_listed[t] += _mm256_movemask_pd(_mm256_or_pd(in0, in1)) != 0;
+    }
+  }
+  m2 = acc;
+  for (std::size_t t = 0; t < nw; ++t) {
+    alignas(32) std::int64_t lanes[4];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), bel[t]);
+    below[t] = lanes[0] + lanes[1] + lanes[2] + lanes[3];
+    listed[t] = n_listed[t];
+  }
+}
+
+WindowCount count_blocks_avx2(const double* x, std::size_t n_blocks, double lo, double hi, std::uint32_t* blocks,
+                              double* out, std::size_t& k) {
+  double m2 = 0.0;
+  std::int64_t below = 0;
+  std::size_t listed = 0;
+  list_blocks_avx2<false>(x, n_blocks, 0.0, 0.0, m2, 1, &lo, &hi, &below, blocks, &listed);
+  WindowCount c = classify_listed_avx2(x, blocks, listed, lo, hi, out, k);
+  c.below = below;
   return c;
 }
 #endif
@@ -198,6 +236,46 @@ Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride,
   g.min = lo;
   g.max = hi;
   return g;
+}
+
+double count_windows_m2(const std::vector<double>& x, double x0, double dm, std::size_t nw, const double* lo,
+                        const double* hi, WindowCount* c, std::vector<double>* const* kept, CountScratch& scratch) {
+  const std::size_t n = x.size(), n_blocks = n / kBlock;
+  double m2 = 0.0;
+  std::size_t done = 0;  // values whose M2 term is added
+#if defined(__x86_64__)
+  if (count_blocks_kernel() == count_blocks_avx2) {
+    scratch.resize(n);
+    if (scratch.blocks.size() < nw * n_blocks) scratch.blocks.resize(nw * n_blocks);
+    std::int64_t below[kStatTargets];
+    std::size_t listed[kStatTargets];
+    list_blocks_avx2<true>(x.data(), n_blocks, x0, dm, m2, nw, lo, hi, below, scratch.blocks.data(), listed);
+    done = kBlock * n_blocks;
+    for (; done < n; ++done) m2 += (x[done] - x0 - dm) * (x[done] - x0 - dm);
+    for (std::size_t t = 0; t < nw; ++t) {
+      std::size_t k = 0;
+      c[t] = classify_listed_avx2(x.data(), scratch.blocks.data() + t * n_blocks, listed[t], lo[t], hi[t],
+                                  scratch.out.data(), k);
+      c[t].below = below[t];
+      for (std::size_t i = kBlock * n_blocks; i < n; ++i) {
+        const double v = x[i];
+        c[t].below += v < lo[t];
+        c[t].at_lo += v == lo[t];
+        c[t].at_hi += v == hi[t];
+        scratch.out[k] = v;
+        k += (v > lo[t]) & (v < hi[t]);
+      }
+      kept[t]->assign(scratch.out.data(), scratch.out.data() + k);
+    }
+    return m2;
+  }
+#endif
+  for (const double v : x) m2 += (v - x0 - dm) * (v - x0 - dm);
+  for (std::size_t t = 0; t < nw; ++t) {
+    c[t] = count_window(x.data(), n, lo[t], hi[t], scratch);
+    kept[t]->assign(scratch.out.data(), scratch.out.data() + c[t].inside);
+  }
+  return m2;
 }
 
 bool use_avx2_kernels(bool on) {

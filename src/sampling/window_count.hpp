@@ -4,6 +4,8 @@
 // (use_avx2_kernels) as with the plain definitions.
 #pragma once
 #include <cstdint>
+
+#include "sampling/stats.hpp"
 #include <limits>
 #include <vector>
 
@@ -29,6 +31,12 @@ struct CountScratch {
 // x[0..n) (finite values) against the window (lo, hi): the values below and at each end counted,
 // those strictly inside stored to scratch.out in their order.
 WindowCount count_window(const double* x, std::size_t n, double lo, double hi, CountScratch& scratch);
+
+// The M2 of x about x0 + dm (its terms added in index order) and, as count_window, x against each
+// window (lo[t], hi[t]) for t < nw (at most kStatTargets): counts into c[t], the values inside
+// into *kept[t].
+double count_windows_m2(const std::vector<double>& x, double x0, double dm, std::size_t nw, const double* lo,
+                        const double* hi, WindowCount* c, std::vector<double>* const* kept, CountScratch& scratch);
 
 struct Gathered {
   std::size_t count = 0;
