@@ -209,19 +209,16 @@ WindowCount count_window(const double* x, std::size_t n, double lo, double hi, C
   return c;
 }
 
-// The usable values of rows first.. (row `first` usable) gathered into x, summed in index order
-// shifted by the first (exact for a constant chunk, no cancellation for a tiny spread), their min
-// and max taken: one pass, bound by the latency of the additions as the M2 pass is. A row not used
-// adds +0.0, which leaves the sum's bits alone (the sum is never -0.0). Its own function (not inlined
-// into calc_chunk_summary, where the accumulators lived on the stack).
-Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride,
-                                         const std::uint8_t* use, std::size_t first, double* x) {
-  Gathered g;
-  double x0;
-  std::memcpy(&x0, values + 8 * first * stride, 8);
-  double sum = 0.0, lo = g.min, hi = g.max;
-  std::size_t n = 0;
-  for (std::size_t i = first; i < rows; ++i) {  // branch-free: failed runs and NaN are not predictable
+namespace {
+
+// gather_usable's loop over rows [i, rows), continuing g (x0: the first usable value, n: values
+// gathered so far). A row not used adds +0.0, which leaves the sum's bits alone (the sum is never
+// -0.0); bound by the latency of the additions as the M2 pass is.
+void gather_rows(const char* values, std::size_t i, std::size_t rows, std::size_t stride, const std::uint8_t* use,
+                 double x0, double* x, Gathered& g) {
+  double sum = g.sum, lo = g.min, hi = g.max;
+  std::size_t n = g.count;
+  for (; i < rows; ++i) {  // branch-free: failed runs and NaN are not predictable
     double v;
     std::memcpy(&v, values + 8 * i * stride, 8);
     const bool ok = (use[i] != 0) & std::isfinite(v);
@@ -235,8 +232,80 @@ Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride,
   g.sum = sum;
   g.min = lo;
   g.max = hi;
+}
+
+// The value among x[0..n) equal to m that comes first (-0.0 or +0.0 where m is a zero).
+double find_first_equal(const double* x, std::size_t n, double m) {
+  if (m != 0.0) return m;
+  for (std::size_t i = 0; i < n; ++i)
+    if (x[i] == 0.0) return x[i];
+  return m;
+}
+
+#if defined(__x86_64__)
+// gather_rows for contiguous values, four rows at a time (AVX2): the usable ones left-packed into
+// x, their shifted values added one by one in row order (the same additions), min and max per lane
+// (each lane keeps its first of equal values; across lanes only a zero's sign can differ, so the
+// first zero of x is then looked up). Returns the first row not done.
+__attribute__((target("avx2"))) std::size_t gather_rows_avx2(const double* v, std::size_t first, std::size_t rows,
+                                                              const std::uint8_t* use, double x0, double* x,
+                                                              Gathered& g) {
+  const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
+  const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity()), x04 = _mm256_set1_pd(x0);
+  __m256d lo = inf, hi = _mm256_sub_pd(_mm256_setzero_pd(), inf);
+  double sum = g.sum;
+  std::size_t n = g.count, i = first;
+  for (; i + 4 <= rows; i += 4) {
+    const __m256d d = _mm256_loadu_pd(v + i);
+    std::int32_t u;
+    std::memcpy(&u, use + i, 4);
+    const __m256i unused = _mm256_cmpeq_epi64(_mm256_cvtepu8_epi64(_mm_cvtsi32_si128(u)), _mm256_setzero_si256());
+    const __m256d ok = _mm256_andnot_pd(_mm256_castsi256_pd(unused),
+                                        _mm256_cmp_pd(_mm256_and_pd(d, abs_mask), inf, _CMP_LT_OQ));
+    const int m = _mm256_movemask_pd(ok);
+    const __m256i perm = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.lanes[m]));
+    _mm256_storeu_pd(x + n, _mm256_castps_pd(_mm256_permutevar8x32_ps(_mm256_castpd_ps(d), perm)));
+    n += kPack.count[m];
+    const __m256d s = _mm256_and_pd(_mm256_sub_pd(d, x04), ok);  // +0.0 in rows not used
+    const __m128d s01 = _mm256_castpd256_pd128(s), s23 = _mm256_extractf128_pd(s, 1);
+    sum += _mm_cvtsd_f64(s01);
+    sum += _mm_cvtsd_f64(_mm_unpackhi_pd(s01, s01));
+    sum += _mm_cvtsd_f64(s23);
+    sum += _mm_cvtsd_f64(_mm_unpackhi_pd(s23, s23));
+    lo = _mm256_min_pd(_mm256_blendv_pd(inf, d, ok), lo);  // (a < b ? a : b): the earlier of equal values
+    hi = _mm256_max_pd(_mm256_blendv_pd(-inf, d, ok), hi);
+  }
+  alignas(32) double l[4], h[4];
+  _mm256_store_pd(l, lo);
+  _mm256_store_pd(h, hi);
+  const double mn = std::min(std::min(l[0], l[1]), std::min(l[2], l[3]));
+  const double mx = std::max(std::max(h[0], h[1]), std::max(h[2], h[3]));
+  g.min = find_first_equal(x, n, mn);
+  g.max = find_first_equal(x, n, mx);
+  g.count = n;
+  g.sum = sum;
+  return i;
+}
+#endif
+
+}  // namespace
+
+Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
+                       std::size_t first, double* x) {
+  Gathered g;
+  double x0;
+  std::memcpy(&x0, values + 8 * first * stride, 8);
+  std::size_t i = first;
+#if defined(__x86_64__)
+  if (stride == 1 && count_blocks_kernel() == count_blocks_avx2) {
+    const auto* v = reinterpret_cast<const double*>(values);  // only for the unaligned loads
+    i = gather_rows_avx2(v, first, rows, use, x0, x, g);
+  }
+#endif
+  gather_rows(values, i, rows, stride, use, x0, x, g);
   return g;
 }
+
 
 double count_windows_m2(const std::vector<double>& x, double x0, double dm, std::size_t nw, const double* lo,
                         const double* hi, WindowCount* c, std::vector<double>* const* kept, CountScratch& scratch) {

@@ -298,16 +298,17 @@ bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; 
 
 TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bit, with either kernel",
           "[campaign][stats]") {
-  // Random columns (continuous, NaN-laden, heavy ties, constant, signed zeros), random row counts
-  // (blocks of eight and four lanes, and the rows past them), strides, unused rows, and random
-  // windows: between two of the chunk's values, at a value, collapsed onto one, past either end.
+  // Random columns (continuous, NaN-laden, heavy ties, constant, signed zeros, signed zeros at the
+  // min), random row counts (blocks of eight and four lanes, and the rows past them), strides, unused
+  // rows, and random windows: between two of the chunk's values, at a value, collapsed onto one, past
+  // either end.
   std::mt19937_64 rng(23);
   std::normal_distribution<double> g(0.0, 1.0);
   const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
   for (const bool avx2 : {false, true}) {
     const bool used = use_avx2_kernels(avx2);
     for (int trial = 0; trial < 120; ++trial) {
-      const std::size_t rows = 1 + rng() % 300, stride = 1 + rng() % 3, kind = trial % 5;
+      const std::size_t rows = 1 + rng() % 300, stride = 1 + rng() % 3, kind = trial % 6;
       std::vector<double> v(rows * stride, 1e300);
       std::vector<std::uint8_t> use(rows);
       for (std::size_t i = 0; i < rows; ++i) {
@@ -315,7 +316,8 @@ TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bi
         if (kind == 1 && rng() % 4 == 0) a = rng() % 2 ? nan : -inf;
         if (kind == 2) a = static_cast<double>(rng() % 4);
         if (kind == 3) a = 2.5;
-        if (kind == 4) a = rng() % 3 == 0 ? (rng() % 2 ? 0.0 : -0.0) : std::round(a);
+        if (kind >= 4) a = rng() % 3 == 0 ? (rng() % 2 ? 0.0 : -0.0) : std::round(a);
+        if (kind == 5 && a != 0.0) a = std::abs(a);  // the min a zero of either sign
         v[i * stride] = a;
         use[i] = rng() % 8 != 0;
       }
