@@ -125,8 +125,7 @@ ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_
   m.count = static_cast<std::int64_t>(n);
   m.min = g.min;
   m.max = g.max;
-  const double sum = g.sum;
-  const double dm = sum / static_cast<double>(n);
+  const double dm = g.sum / static_cast<double>(n);  // the mean's shift from x0
   m.mean = x0 + dm;
   // Per target: a window past the chunk's values is settled by its min and max, the others are
   // counted together, with the M2 pass. Rank 0 pays this as it writes the chunk (docs/benchmarks.md).

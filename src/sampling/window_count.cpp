@@ -21,7 +21,6 @@ namespace {
 using Vec2 = double __attribute__((vector_size(16)));
 using Mask2 = decltype(Vec2{} < Vec2{});
 
-
 // The values of one block of x against the window: those at either end counted, those strictly
 // inside appended to out[k...] in their order. Branch-free: which are inside is not predictable.
 inline void classify_block(const double* x, double lo, double hi, WindowCount& c, double* out, std::size_t& k) {
@@ -163,9 +162,6 @@ WindowCount count_blocks_avx2(const double* x, std::size_t n_blocks, double lo, 
 }
 #endif
 
-using CountBlocks = WindowCount (*)(const double*, std::size_t, double, double, std::uint32_t*, double*,
-                                    std::size_t&);
-
 bool has_avx2() {
 #if defined(__x86_64__)
   return __builtin_cpu_supports("avx2");
@@ -174,30 +170,27 @@ bool has_avx2() {
 #endif
 }
 
-CountBlocks select_kernel(bool avx2) {
-#if defined(__x86_64__)
-  if (avx2) return count_blocks_avx2;
-#endif
-  (void)avx2;
-  return count_blocks_generic;
+bool& avx2_enabled() {  // the kernels' switch: use_avx2_kernels
+  static bool on = has_avx2();
+  return on;
 }
 
-CountBlocks& count_blocks_kernel() {
-  static CountBlocks kernel = select_kernel(has_avx2());
-  return kernel;
+WindowCount count_blocks(const double* x, std::size_t n_blocks, double lo, double hi, std::uint32_t* blocks,
+                         double* out, std::size_t& k) {
+#if defined(__x86_64__)
+  if (avx2_enabled()) return count_blocks_avx2(x, n_blocks, lo, hi, blocks, out, k);
+#endif
+  return count_blocks_generic(x, n_blocks, lo, hi, blocks, out, k);
 }
 
 }  // namespace
 
-// x against the window (lo, hi): the values below and at each end counted, those strictly inside
-// appended to `kept` in their order.
-WindowCount count_window(const double* x, std::size_t n, double lo, double hi, CountScratch& scratch) {
-  scratch.resize(n);
-  const std::size_t n_blocks = n / kBlock;
-  double* out = scratch.out.data();
-  std::size_t k = 0;
-  WindowCount c = count_blocks_kernel()(x, n_blocks, lo, hi, scratch.blocks.data(), out, k);
-  for (std::size_t i = kBlock * n_blocks; i < n; ++i) {
+namespace {
+
+// Values x[from..n) (past the whole blocks) against the window, one by one.
+void count_rest(const double* x, std::size_t from, std::size_t n, double lo, double hi, WindowCount& c, double* out,
+                std::size_t& k) {
+  for (std::size_t i = from; i < n; ++i) {
     const double v = x[i];
     c.below += v < lo;
     c.at_lo += v == lo;
@@ -205,6 +198,16 @@ WindowCount count_window(const double* x, std::size_t n, double lo, double hi, C
     out[k] = v;
     k += (v > lo) & (v < hi);
   }
+}
+
+}  // namespace
+
+WindowCount count_window(const double* x, std::size_t n, double lo, double hi, CountScratch& scratch) {
+  scratch.resize(n);
+  const std::size_t n_blocks = n / kBlock;
+  std::size_t k = 0;
+  WindowCount c = count_blocks(x, n_blocks, lo, hi, scratch.blocks.data(), scratch.out.data(), k);
+  count_rest(x, kBlock * n_blocks, n, lo, hi, c, scratch.out.data(), k);
   c.inside = k;
   return c;
 }
@@ -297,7 +300,7 @@ Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride,
   std::memcpy(&x0, values + 8 * first * stride, 8);
   std::size_t i = first;
 #if defined(__x86_64__)
-  if (stride == 1 && count_blocks_kernel() == count_blocks_avx2) {
+  if (stride == 1 && avx2_enabled()) {
     const auto* v = reinterpret_cast<const double*>(values);  // only for the unaligned loads
     i = gather_rows_avx2(v, first, rows, use, x0, x, g);
   }
@@ -306,34 +309,25 @@ Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride,
   return g;
 }
 
-
 double count_windows_m2(const std::vector<double>& x, double x0, double dm, std::size_t nw, const double* lo,
                         const double* hi, WindowCount* c, std::vector<double>* const* kept, CountScratch& scratch) {
   const std::size_t n = x.size(), n_blocks = n / kBlock;
   double m2 = 0.0;
-  std::size_t done = 0;  // values whose M2 term is added
 #if defined(__x86_64__)
-  if (count_blocks_kernel() == count_blocks_avx2) {
+  if (avx2_enabled()) {
     scratch.resize(n);
     if (scratch.blocks.size() < nw * n_blocks) scratch.blocks.resize(nw * n_blocks);
     std::int64_t below[kStatTargets];
     std::size_t listed[kStatTargets];
     list_blocks_avx2<true>(x.data(), n_blocks, x0, dm, m2, nw, lo, hi, below, scratch.blocks.data(), listed);
-    done = kBlock * n_blocks;
-    for (; done < n; ++done) m2 += (x[done] - x0 - dm) * (x[done] - x0 - dm);
+    for (std::size_t i = kBlock * n_blocks; i < n; ++i) m2 += (x[i] - x0 - dm) * (x[i] - x0 - dm);
     for (std::size_t t = 0; t < nw; ++t) {
       std::size_t k = 0;
       c[t] = classify_listed_avx2(x.data(), scratch.blocks.data() + t * n_blocks, listed[t], lo[t], hi[t],
                                   scratch.out.data(), k);
       c[t].below = below[t];
-      for (std::size_t i = kBlock * n_blocks; i < n; ++i) {
-        const double v = x[i];
-        c[t].below += v < lo[t];
-        c[t].at_lo += v == lo[t];
-        c[t].at_hi += v == hi[t];
-        scratch.out[k] = v;
-        k += (v > lo[t]) & (v < hi[t]);
-      }
+      count_rest(x.data(), kBlock * n_blocks, n, lo[t], hi[t], c[t], scratch.out.data(), k);
+      c[t].inside = k;
       kept[t]->assign(scratch.out.data(), scratch.out.data() + k);
     }
     return m2;
@@ -348,9 +342,8 @@ double count_windows_m2(const std::vector<double>& x, double x0, double dm, std:
 }
 
 bool use_avx2_kernels(bool on) {
-  const bool avx2 = on && has_avx2();
-  count_blocks_kernel() = select_kernel(avx2);
-  return avx2;
+  avx2_enabled() = on && has_avx2();
+  return avx2_enabled();
 }
 
 }  // namespace truss::sampling
