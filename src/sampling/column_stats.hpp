@@ -24,6 +24,10 @@
 //
 // A summary made against older, wider windows (windows only narrow) is re-classified exactly when
 // it is merged.
+//
+// The inner loops (window_count.hpp) have an AVX2 kernel, chosen at run time where the processor
+// has it, and a baseline one; both give these definitions to the bit (sums in index order, the
+// first of equal values kept as std::min does), so /stats does not depend on the machine.
 #pragma once
 #include <array>
 #include <cstdint>
