@@ -1,5 +1,6 @@
 // Streaming column statistics: the equations and the window rule are in column_stats.hpp.
 #include "sampling/column_stats.hpp"
+#include "sampling/window_count.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -50,17 +51,39 @@ struct WindowValues {
 // The window around the estimate of target p (`below` values under v's window, n in all): cut to
 // w ranks past the estimate on each side that holds more. The current window when the estimate is
 // not among v's values.
+struct WindowRanks {
+  bool cut = false;  // the estimate lies among the window's values
+  std::int64_t lo = 0, hi = 0;  // the ranks among them of the new ends, when cut: lo > 0, hi < size - 1
+};
+
+WindowRanks find_window_ranks(std::int64_t size, std::int64_t below, std::int64_t n, double p) {
+  const double r = p * static_cast<double>(n - 1) - static_cast<double>(below);
+  if (size == 0 || r < 0.0 || r > static_cast<double>(size - 1)) return {};
+  const std::int64_t w = half_width(n, p);
+  return {true, static_cast<std::int64_t>(std::floor(r)) - w, static_cast<std::int64_t>(std::ceil(r)) + w};
+}
+
 Window calc_window(WindowValues v, std::int64_t below, std::int64_t n, double p) {
   const std::int64_t size = v.size();
-  const double r = p * static_cast<double>(n - 1) - static_cast<double>(below);
+  const WindowRanks k = find_window_ranks(size, below, n, p);
   Window cur = v.w;
-  if (size == 0 || r < 0.0 || r > static_cast<double>(size - 1)) return cur;
-  const std::int64_t w = half_width(n, p);
-  const std::int64_t i_lo = static_cast<std::int64_t>(std::floor(r)) - w;
-  const std::int64_t i_hi = static_cast<std::int64_t>(std::ceil(r)) + w;
-  if (i_hi < size - 1) cur.hi = std::min(cur.hi, v.at(i_hi));
-  if (i_lo > 0) cur.lo = std::max(cur.lo, v.at(i_lo, i_hi < size - 1 ? i_hi : size));
+  if (!k.cut) return cur;
+  if (k.hi < size - 1) cur.hi = std::min(cur.hi, v.at(k.hi));
+  if (k.lo > 0) cur.lo = std::max(cur.lo, v.at(k.lo, k.hi < size - 1 ? k.hi : size));
   return cur;
+}
+
+// Puts the order statistics of x at the given ranks (ascending, each within x) in their places:
+// nth_element at the middle rank, then each side apart (fewer comparisons than a sort for a dozen).
+void select_ranks(std::vector<double>& x, std::size_t first, std::size_t last, const std::int64_t* rank_begin,
+                  const std::int64_t* rank_end) {
+  if (rank_begin == rank_end) return;
+  const std::int64_t* mid = rank_begin + (rank_end - rank_begin) / 2;
+  const auto m = static_cast<std::size_t>(*mid);
+  std::nth_element(x.begin() + static_cast<std::ptrdiff_t>(first), x.begin() + static_cast<std::ptrdiff_t>(m),
+                   x.begin() + static_cast<std::ptrdiff_t>(last));
+  select_ranks(x, first, m, rank_begin, mid);
+  select_ranks(x, m + 1, last, mid + 1, rank_end);
 }
 
 }  // namespace
@@ -79,106 +102,54 @@ Moments combine(const Moments& a, const Moments& b) {
   return m;
 }
 
-namespace {
-
-// Two doubles and their lane masks (-1 where true): GCC's and clang's vector extensions, one SSE2
-// register (a wider vector_size is lowered lane by lane without AVX). The scalar loop was not
-// vectorised (comparisons of doubles counted in integers).
-using Vec2 = double __attribute__((vector_size(16)));
-using Mask2 = decltype(Vec2{} < Vec2{});
-
-struct WindowCount {
-  std::int64_t below = 0, at_lo = 0, at_hi = 0;
-};
-
-// x against the window (lo, hi): the values below and at each end counted, those strictly inside
-// appended to `kept` in their order. One pass, eight values at a time; a block with none inside
-// (most of them once the windows narrow) copies nothing. `scratch`: room for x.size() values.
-WindowCount count_window(const std::vector<double>& x, double lo, double hi, std::vector<double>& scratch,
-                         std::vector<double>& kept) {
-  const std::size_t n = x.size(), n8 = n / 8 * 8;
-  const Vec2 lo2 = {lo, lo}, hi2 = {hi, hi};
-  Mask2 below{}, at_lo{}, at_hi{};
-  double* out = scratch.data();
-  std::size_t k = 0;
-  for (std::size_t i = 0; i < n8; i += 8) {
-    Mask2 any{};
-    for (std::size_t j = 0; j < 8; j += 2) {
-      Vec2 v;
-      std::memcpy(&v, x.data() + i + j, sizeof v);
-      below -= v < lo2;
-      at_lo -= v == lo2;
-      at_hi -= v == hi2;
-      any |= (v > lo2) & (v < hi2);
-    }
-    if ((any[0] | any[1]) == 0) continue;
-    for (std::size_t j = i; j < i + 8; ++j) {  // branch-free: which are inside is not predictable
-      out[k] = x[j];
-      k += x[j] > lo && x[j] < hi;
-    }
-  }
-  WindowCount c;
-  for (std::size_t i = n8; i < n; ++i) {
-    const double v = x[i];
-    c.below += v < lo;
-    c.at_lo += v == lo;
-    c.at_hi += v == hi;
-    out[k] = v;
-    k += v > lo && v < hi;
-  }
-  for (std::size_t j = 0; j < 2; ++j) {
-    c.below += below[j];
-    c.at_lo += at_lo[j];
-    c.at_hi += at_hi[j];
-  }
-  kept.assign(out, out + k);
-  return c;
-}
-
-}  // namespace
-
 ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                                 const Windows& w) {
-  thread_local std::vector<double> x, scratch;
+  thread_local std::vector<double> x;
+  thread_local CountScratch scratch;
   x.resize(rows);
-  scratch.resize(rows);
-  std::size_t n = 0;
-  for (std::size_t i = 0; i < rows; ++i) {  // branch-free: failed runs and NaN are not predictable
-    double v;
-    std::memcpy(&v, values + 8 * i * stride, 8);
-    x[n] = v;
-    n += (use[i] != 0) & std::isfinite(v);
-  }
-  x.resize(n);
   ChunkSummary s;
   s.window = w;
   Moments& m = s.moments;
-  m.count = static_cast<std::int64_t>(x.size());
-  if (x.empty()) return s;
-  // Shifted by the first value: exact for a constant chunk, no cancellation for a tiny spread.
+  const auto load = [&](std::size_t i) {
+    double v;
+    std::memcpy(&v, values + 8 * i * stride, 8);
+    return v;
+  };
+  std::size_t i = 0;
+  while (i < rows && !(use[i] != 0 && std::isfinite(load(i)))) ++i;
+  if (i == rows) return s;
+  const Gathered g = gather_usable(values, rows, stride, use, i, x.data());
+  const std::size_t n = g.count;
   const double x0 = x.front();
-  double sum = 0.0;
-  for (double v : x) sum += v - x0;
-  const double dm = sum / static_cast<double>(x.size());
+  x.resize(n);
+  m.count = static_cast<std::int64_t>(n);
+  m.min = g.min;
+  m.max = g.max;
+  const double dm = g.sum / static_cast<double>(n);  // the mean's shift from x0
   m.mean = x0 + dm;
-  for (double v : x) {
-    m.m2 += (v - x0 - dm) * (v - x0 - dm);
-    m.min = std::min(m.min, v);
-    m.max = std::max(m.max, v);
-  }
-  // Per target: a window past the chunk's values is settled by its min and max, any other by one
-  // pass of count_window. Rank 0 pays this as it writes the chunk (docs/benchmarks.md).
+  // Per target: a window past the chunk's values is settled by its min and max, the others are
+  // counted together, with the M2 pass. Rank 0 pays this as it writes the chunk (docs/benchmarks.md).
+  std::size_t nw = 0;
+  std::array<std::size_t, kStatTargets> target{};
+  std::array<double, kStatTargets> lo{}, hi{};
+  std::array<std::vector<double>*, kStatTargets> kept{};
   for (std::size_t t = 0; t < kStatTargets; ++t) {
-    const double lo = w[t].lo, hi = w[t].hi;
-    if (m.max < lo) {
+    if (m.max < w[t].lo) {
       s.below[t] = m.count;
-      continue;
+    } else if (m.min <= w[t].hi) {
+      target[nw] = t;
+      lo[nw] = w[t].lo;
+      hi[nw] = w[t].hi;
+      kept[nw++] = &s.kept[t];
     }
-    if (m.min > hi) continue;
-    const WindowCount c = count_window(x, lo, hi, scratch, s.kept[t]);
-    s.below[t] = c.below;
-    s.at_lo[t] = c.at_lo;
-    s.at_hi[t] = lo == hi ? 0 : c.at_hi;  // one end: its copies are at_lo
+  }
+  std::array<WindowCount, kStatTargets> c;
+  m.m2 = count_windows_m2(x, x0, dm, nw, lo.data(), hi.data(), c.data(), kept.data(), scratch);
+  for (std::size_t j = 0; j < nw; ++j) {
+    const std::size_t t = target[j];
+    s.below[t] = c[j].below;
+    s.at_lo[t] = c[j].at_lo;
+    s.at_hi[t] = lo[j] == hi[j] ? 0 : c[j].at_hi;  // one end: its copies are at_lo
   }
   return s;
 }
@@ -191,14 +162,33 @@ void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride,
   // serially: 260 columns of the Table-1 campaign).
   const std::size_t step = (rows + kSeedValues - 1) / kSeedValues;
   std::vector<double> x;
+  x.reserve(kSeedValues);
+  unsigned zeros = 0;  // bit 0: +0.0 seen, bit 1: -0.0 seen
   for (std::size_t i = 0; i < rows; i += step) {
     double v;
     std::memcpy(&v, values + 8 * i * stride, 8);
-    if (use[i] && std::isfinite(v)) x.push_back(v);
+    if (!use[i] || !std::isfinite(v)) continue;
+    x.push_back(v);
+    if (v == 0.0) zeros |= std::signbit(v) ? 2u : 1u;
   }
-  // Sorted once: each window end is then a look-up.
-  std::sort(x.begin(), x.end());
+  const bool mixed_zeros = zeros == 3;
+  // Each window end's order statistic put in its place (a look-up then, as in sorted values).
+  // Sorted instead where +0.0 and -0.0 both occur: which of them lands at a rank depends on the
+  // algorithm, and the windows must come out as before to the bit.
   const auto n = static_cast<std::int64_t>(x.size());
+  if (mixed_zeros) {
+    std::sort(x.begin(), x.end());
+  } else {
+    std::vector<std::int64_t> ranks;
+    for (std::size_t t = 0; t < kStatTargets; ++t) {
+      const WindowRanks k = find_window_ranks(n, 0, n, target_p(t));
+      if (k.cut && k.lo > 0) ranks.push_back(k.lo);
+      if (k.cut && k.hi < n - 1) ranks.push_back(k.hi);
+    }
+    std::sort(ranks.begin(), ranks.end());
+    ranks.erase(std::unique(ranks.begin(), ranks.end()), ranks.end());
+    select_ranks(x, 0, x.size(), ranks.data(), ranks.data() + ranks.size());
+  }
   for (std::size_t t = 0; t < kStatTargets; ++t) win_[t] = calc_window({win_[t], 0, 0, x, true}, 0, n, target_p(t));
 }
 
@@ -212,27 +202,18 @@ void ColumnStats::put(std::size_t t, double v, std::int64_t k) {
   else if (v == w.hi) at_hi_[t] += k;
 }
 
-// put(t, v, 1) for each of kept_[t][from..], in place: the values inside stay, in their order,
-// the others are counted or dropped. Branch-free (a value's side of the window ends is not
-// predictable): about 1 ns a value where the branches of put cost several.
+// put(t, v, 1) for each of kept_[t][from..]: the values inside stay, in their order, the others are
+// counted or dropped (count_window: a value's side of the window ends is not predictable).
 void ColumnStats::classify_kept(std::size_t t, std::size_t from) {
+  thread_local CountScratch scratch;
   std::vector<double>& x = kept_[t];
   const double lo = win_[t].lo, hi = win_[t].hi;
-  const bool two_ends = hi != lo;  // one end: its copies are at_lo (as put)
-  std::int64_t below = 0, at_lo = 0, at_hi = 0;
-  std::size_t k = from;
-  for (std::size_t i = from; i < x.size(); ++i) {
-    const double v = x[i];
-    below += v < lo;
-    at_lo += v == lo;
-    at_hi += two_ends & (v == hi);
-    x[k] = v;
-    k += (v > lo) & (v < hi);
-  }
-  x.resize(k);
-  below_[t] += below;
-  at_lo_[t] += at_lo;
-  at_hi_[t] += at_hi;
+  const WindowCount c = count_window(x.data() + from, x.size() - from, lo, hi, scratch);
+  x.resize(from);
+  x.insert(x.end(), scratch.out.data(), scratch.out.data() + c.inside);
+  below_[t] += c.below;
+  at_lo_[t] += c.at_lo;
+  at_hi_[t] += lo == hi ? 0 : c.at_hi;  // one end: its copies are at_lo (as put)
 }
 
 void ColumnStats::add(std::int64_t chunk, ChunkSummary s) {

@@ -24,6 +24,10 @@
 //
 // A summary made against older, wider windows (windows only narrow) is re-classified exactly when
 // it is merged.
+//
+// The inner loops (window_count.hpp) have an AVX2 kernel, chosen at run time where the processor
+// has it, and a baseline one; both give these definitions to the bit (sums in index order, the
+// first of equal values kept as std::min does), so /stats does not depend on the machine.
 #pragma once
 #include <array>
 #include <cstdint>
@@ -62,6 +66,10 @@ struct ChunkSummary {
 // and the value is finite.
 ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                                 const Windows& w);
+// Which counting kernel calc_chunk_summary uses: AVX2 where the processor has it (the default), or
+// the baseline SSE2 one (on = false), so that tests and benchmarks run both. Returns whether AVX2
+// is now used. Not thread-safe: call it before any summary is made.
+bool use_avx2_kernels(bool on);
 
 class ColumnStats {
  public:

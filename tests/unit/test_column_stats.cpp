@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <deque>
 #include <limits>
 #include <random>
@@ -252,4 +253,102 @@ TEST_CASE("streamed statistics: a chunk summary against each kind of window, cou
       }
     }
   }
+}
+
+namespace {
+
+// The chunk summary by the definitions, value by value (column_stats.hpp): the usable values in
+// row order; count, shifted mean and M2 by two plain passes; min and max by std::min/std::max in
+// row order (so the first of equal values, -0.0 or +0.0, is kept); each window's counts by a
+// comparison chain. A summary must match it bit for bit, since the streamed /stats must not
+// depend on the kernel that made it.
+ChunkSummary reference_summary(const std::vector<double>& v, std::size_t stride, const std::vector<std::uint8_t>& use,
+                               const Windows& w) {
+  ChunkSummary s;
+  s.window = w;
+  std::vector<double> x;
+  for (std::size_t i = 0; i < use.size(); ++i)
+    if (use[i] && std::isfinite(v[i * stride])) x.push_back(v[i * stride]);
+  Moments& m = s.moments;
+  m.count = static_cast<std::int64_t>(x.size());
+  if (x.empty()) return s;
+  double sum = 0.0;
+  for (const double a : x) sum += a - x.front();
+  const double dm = sum / static_cast<double>(x.size());
+  m.mean = x.front() + dm;
+  for (const double a : x) {
+    const double d = a - x.front() - dm;
+    m.m2 += d * d;
+    m.min = std::min(m.min, a);
+    m.max = std::max(m.max, a);
+  }
+  for (std::size_t t = 0; t < kStatTargets; ++t)
+    for (const double a : x) {
+      if (a < w[t].lo) ++s.below[t];
+      else if (a == w[t].lo) ++s.at_lo[t];
+      else if (a == w[t].hi) ++s.at_hi[t];
+      else if (a < w[t].hi) s.kept[t].push_back(a);
+    }
+  return s;
+}
+
+bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+}  // namespace
+
+TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bit, with either kernel",
+          "[campaign][stats]") {
+  // Random columns (continuous, NaN-laden, heavy ties, constant, signed zeros, signed zeros at the
+  // min), random row counts (blocks of eight and four lanes, and the rows past them), strides, unused
+  // rows, and random windows: between two of the chunk's values, at a value, collapsed onto one, past
+  // either end.
+  std::mt19937_64 rng(23);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  for (const bool avx2 : {false, true}) {
+    const bool used = use_avx2_kernels(avx2);
+    for (int trial = 0; trial < 120; ++trial) {
+      const std::size_t rows = 1 + rng() % 300, stride = 1 + rng() % 3, kind = trial % 6;
+      std::vector<double> v(rows * stride, 1e300);
+      std::vector<std::uint8_t> use(rows);
+      for (std::size_t i = 0; i < rows; ++i) {
+        double a = g(rng);
+        if (kind == 1 && rng() % 4 == 0) a = rng() % 2 ? nan : -inf;
+        if (kind == 2) a = static_cast<double>(rng() % 4);
+        if (kind == 3) a = 2.5;
+        if (kind >= 4) a = rng() % 3 == 0 ? (rng() % 2 ? 0.0 : -0.0) : std::round(a);
+        if (kind == 5 && a != 0.0) a = std::abs(a);  // the min a zero of either sign
+        v[i * stride] = a;
+        use[i] = rng() % 8 != 0;
+      }
+      Windows w;
+      for (Window& win : w) {
+        const double a = v[(rng() % rows) * stride], b = v[(rng() % rows) * stride];
+        switch (rng() % 4) {
+          case 0: win = {std::min(a, b), std::max(a, b)}; break;
+          case 1: win = {a, a}; break;
+          case 2: win = {std::min(a, b) - 0.25, std::max(a, b) + 0.25}; break;
+          default: win = rng() % 2 ? Window{-inf, -1e9} : Window{1e9, inf}; break;
+        }
+        if (!(win.lo <= win.hi)) win = {};  // a NaN end: the infinite window
+      }
+      INFO("trial " << trial << ", rows " << rows << ", stride " << stride << ", AVX2 " << used);
+      const ChunkSummary s = calc_chunk_summary(reinterpret_cast<const char*>(v.data()), rows, stride, use.data(), w);
+      const ChunkSummary r = reference_summary(v, stride, use, w);
+      CHECK(s.moments.count == r.moments.count);
+      CHECK(same_bits(s.moments.mean, r.moments.mean));
+      CHECK(same_bits(s.moments.m2, r.moments.m2));
+      CHECK(same_bits(s.moments.min, r.moments.min));
+      CHECK(same_bits(s.moments.max, r.moments.max));
+      for (std::size_t t = 0; t < kStatTargets; ++t) {
+        INFO("window [" << w[t].lo << ", " << w[t].hi << "]");
+        CHECK(s.below[t] == r.below[t]);
+        CHECK(s.at_lo[t] == r.at_lo[t]);
+        CHECK(s.at_hi[t] == r.at_hi[t]);
+        REQUIRE(s.kept[t].size() == r.kept[t].size());
+        CHECK(std::equal(s.kept[t].begin(), s.kept[t].end(), r.kept[t].begin(), same_bits));
+      }
+    }
+  }
+  use_avx2_kernels(true);
 }
