@@ -4,14 +4,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <array>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <map>
 #include <optional>
@@ -422,32 +417,6 @@ sim::SceneOptions parse_scene_text_unvalidated(std::string_view text,
 sim::SceneOptions parse_scene_file(const std::string& path, const std::vector<std::string>& overrides,
                                    std::vector<std::string>* warnings) {
   return parse_scene_file_with(path, as_settings(overrides), warnings);
-}
-
-std::string read_input_file(const std::string& path, const char* what, std::size_t max_bytes) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec))
-    throw InputError(fmt::format("error: {}: cannot read {}: is a directory", path, what));
-  errno = 0;
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    const int err = errno;
-    throw InputError(fmt::format("error: {}: cannot read {}: {}", path, what, err ? std::strerror(err) : "cannot open"));
-  }
-  // Read in blocks until the end or past max_bytes: a device such as /dev/zero or a huge file is
-  // refused, not slurped, and a small file costs its size (a buffer of max_bytes zero-filled first
-  // cost ~5 ms a file, more than a whole Table-1 run).
-  std::string text;
-  std::array<char, 1 << 16> block;
-  do {
-    in.read(block.data(), static_cast<std::streamsize>(block.size()));
-    text.append(block.data(), static_cast<std::size_t>(in.gcount()));
-    if (text.size() > max_bytes)
-      throw InputError(fmt::format("error: {}: cannot read {}: larger than the limit of {} bytes ({} MiB)", path,
-                                   what, max_bytes, max_bytes >> 20));
-  } while (in);
-  if (in.bad()) throw InputError(fmt::format("error: {}: cannot read {}: read error", path, what));
-  return text;
 }
 
 sim::SceneOptions parse_scene_file_with(const std::string& path, const std::vector<SceneSetting>& overrides,
