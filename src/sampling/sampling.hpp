@@ -281,6 +281,7 @@ class SamplePlan {
 
  private:
   void calc_sobol(std::uint64_t index, int first, int count, std::uint32_t* x) const;
+  void calc_latin_hypercube(std::int64_t run_index, double* u) const;
   std::string validate_groups() const;
 
   SamplingMethod method_;
@@ -294,7 +295,7 @@ class SamplePlan {
 
   // latin_hypercube: Feistel network on feistel_bits_ bits, rounds keyed per dimension.
   int feistel_bits_ = 0;
-  std::vector<std::uint64_t> round_keys_;  // [dim * kFeistelRounds + round]
+  std::vector<std::uint64_t> round_keys_;  // [round * d + dim], plus kGoldenGamma
 
   // sobol / saltelli with Sobol' base: direction numbers laid out [bit][dim]
   // so that the XOR loop over dimensions is contiguous, and the 53-bit
