@@ -2,6 +2,7 @@
 // uncertainty campaigns. See sampling.hpp for the API and the references; the
 // comments here explain the choices that are not obvious from the code.
 #include "sampling/sampling.hpp"
+#include "sampling/simd_clones.hpp"
 
 #include <algorithm>
 #include <array>
@@ -60,16 +61,6 @@ const std::vector<std::uint32_t>& sobol_table() {
   }();
   return table;
 }
-
-// The per-run loops below are compiled twice, for x86-64-v4 (AVX-512: eight 64-bit multiplications
-// per instruction) and for the baseline, and the loader picks the one the CPU runs: they are integer
-// arithmetic, exact conversions and IEEE divisions, so both give the same bits. Elsewhere: the
-// baseline alone.
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define TRUSS_SAMPLING_CLONES __attribute__((target_clones("arch=x86-64-v4", "default")))
-#else
-#define TRUSS_SAMPLING_CLONES
-#endif
 
 // Feistel network on `bits` bits (2 to 64), a bijection whatever the round function, here
 // SplitMix64 keyed per round: x = (left, right) with right the low bits / 2 bits; a round maps

@@ -173,6 +173,11 @@ struct Distribution {
   // Inverse CDF: the value x with F(x) = u, for u in (0, 1). For discrete,
   // the smallest value whose cumulative (normalised) weight is >= u.
   double calc_quantile(double u) const;
+  // x[i] = calc_quantile(u[i]) for i < count, the same bits, in bulk (a per-bay dispersion's draws):
+  // the kind is looked at once, and the normal quantile's central region is computed for all i
+  // side by side, which the core overlaps (and vectorises) where one call at a time waits on its
+  // division. u and x may be the same array.
+  void calc_quantiles(const double* u, double* x, std::size_t count) const;
 };
 
 // ---------------------------------------------------------------------------
