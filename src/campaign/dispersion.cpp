@@ -25,13 +25,34 @@ std::string find_key_units(const std::string& k) {
 
 namespace {
 
-double applied(const DispersionOptions& d, double nominal_value, double draw) {
-  switch (d.apply) {
+double applied(Apply how, double nominal_value, double draw) {
+  switch (how) {
     case Apply::absolute: return draw;
     case Apply::relative: return nominal_value * (1.0 + draw);
     case Apply::offset: return nominal_value + draw;
   }
   return draw;
+}
+
+// Each of the run's bays (frames) k < drawn: field(k) (the built mast's nominal) takes the draw
+// vals[k], and vals[k] the applied value. The kind of application is a template argument so that
+// the loop does not look it up again after each (indirect) field access.
+template <Apply How, class Field>
+void apply_draws(Field field, double* vals, int drawn) {
+  for (int k = 0; k < drawn; ++k) {
+    double* f = field(static_cast<std::size_t>(k));
+    *f = applied(How, *f, vals[k]);
+    vals[k] = *f;
+  }
+}
+
+template <class Field>
+void apply_draws(Apply how, Field field, double* vals, int drawn) {
+  switch (how) {
+    case Apply::absolute: return apply_draws<Apply::absolute>(field, vals, drawn);
+    case Apply::relative: return apply_draws<Apply::relative>(field, vals, drawn);
+    case Apply::offset: return apply_draws<Apply::offset>(field, vals, drawn);
+  }
 }
 
 }  // namespace
@@ -53,6 +74,10 @@ DimensionLayout calc_layout(const CampaignOptions& c) {
   for (const auto& d : c.dispersions)
     if (d.key == "mast.n_bays")
       for (double v : d.values) L.n_bays_max = std::max(L.n_bays_max, static_cast<int>(v));
+  L.strut_inertia_follows =
+      !c.base.mast.strut_inertia_kg_m2.has_value() &&
+      std::none_of(c.dispersions.begin(), c.dispersions.end(),
+                   [](const DispersionOptions& d) { return d.key == "mast.strut_inertia_kg_m2"; });
   for (const auto& d : c.dispersions) {
     const int n = d.per == Per::run ? 1 : d.per == Per::bay ? L.n_bays_max : L.n_bays_max + 1;
     L.offset.push_back(L.total);
@@ -131,7 +156,7 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
     const sim::SceneKey* key = L.keys[i];
     const double nominal =
         key && key->is_dispersible() ? key->get_real(c.base) : std::numeric_limits<double>::quiet_NaN();
-    const double v = applied(d, nominal, L.distributions[i].calc_quantile(u[L.offset[i]]));
+    const double v = applied(d.apply, nominal, L.distributions[i].calc_quantile(u[L.offset[i]]));
     in.values[i] = {v};
     if (key && key->set_real) key->set_real(in.scene, v);
   }
@@ -140,28 +165,19 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
   for (std::size_t i = 0; i < c.dispersions.size(); ++i) {
     const auto& d = c.dispersions[i];
     if (d.per == Per::run) continue;
+    // The draws of the run's bays (frames) in bulk, into the values, then applied in place.
     auto& vals = in.values[i];
     vals.assign(static_cast<std::size_t>(L.count[i]), std::numeric_limits<double>::quiet_NaN());
-    if (d.per == Per::bay) {
-      for (int b = 1; b <= n; ++b) {
-        double* f = L.keys[i]->bay_field(in.mast.bays[static_cast<std::size_t>(b - 1)]);
-        *f = applied(d, *f, L.distributions[i].calc_quantile(u[L.offset[i] + b - 1]));
-        vals[static_cast<std::size_t>(b - 1)] = *f;
-      }
-    } else {
-      for (int k = 0; k <= n; ++k) {
-        double* f = L.keys[i]->frame_field(in.mast.frames[static_cast<std::size_t>(k)]);
-        *f = applied(d, *f, L.distributions[i].calc_quantile(u[L.offset[i] + k]));
-        vals[static_cast<std::size_t>(k)] = *f;
-      }
-    }
+    const int drawn = d.per == Per::bay ? n : n + 1;
+    L.distributions[i].calc_quantiles(u + L.offset[i], vals.data(), static_cast<std::size_t>(drawn));
+    const sim::SceneKey& key = *L.keys[i];
+    if (d.per == Per::bay)
+      apply_draws(d.apply, [&](std::size_t k) { return key.bay_field(in.mast.bays[k]); }, vals.data(), drawn);
+    else
+      apply_draws(d.apply, [&](std::size_t k) { return key.frame_field(in.mast.frames[k]); }, vals.data(), drawn);
   }
   // A dispersed strut mass or length keeps the slender-rod inertia unless J_c is set or dispersed.
-  const bool inertia_given =
-      c.base.mast.strut_inertia_kg_m2.has_value() ||
-      std::any_of(c.dispersions.begin(), c.dispersions.end(),
-                  [](const DispersionOptions& d) { return d.key == "mast.strut_inertia_kg_m2"; });
-  if (!inertia_given)
+  if (L.strut_inertia_follows)
     for (auto& b : in.mast.bays)
       b.strut_inertia_kg_m2 = model::calc_default_strut_inertia_kg_m2(b.strut_mass_kg, b.strut_length_m);
   return in;

@@ -21,6 +21,8 @@ struct DimensionLayout {
   int n_bays_max = 0;       // largest bay count a run can have
   std::vector<Distribution> distributions;  // one per dispersion, built once
   std::vector<const sim::SceneKey*> keys;   // each dispersion's scene key, looked up once
+  // Each bay's J_c follows its (dispersed) strut mass and length: J_c neither set nor dispersed.
+  bool strut_inertia_follows = true;
 };
 
 // Throws std::invalid_argument naming the dispersion if a distribution is unusable (the campaign

@@ -2,6 +2,7 @@
 // uncertainty campaigns. See sampling.hpp for the API and the references; the
 // comments here explain the choices that are not obvious from the code.
 #include "sampling/sampling.hpp"
+#include "sampling/simd_clones.hpp"
 
 #include <algorithm>
 #include <array>
@@ -66,30 +67,57 @@ const std::vector<std::uint32_t>& sobol_table() {
 // (left, right) to (right, left ^ F(right)), so the halves swap widths each round when bits is odd
 // (an unbalanced network; 6 rounds, an even number, restore the split). The domain 2^bits is the
 // smallest power of two >= n, under 2n: cycle walking needs fewer than 2 applications on average
-// (a balanced network on an even bit count would need up to 4). Applied to x[idx[0..k)] (k <= 256),
-// each with the round keys of its own dimension (dim_keys[idx[i] * kFeistelRounds + r]), the
-// rounds of all of them interleaved: the k hash chains are independent, so the core overlaps them
-// instead of waiting on one chain at a time (a run's Latin hypercube point is hundreds of chains).
-void feistel_lanes(std::uint64_t* x, const int* idx, int k, int bits, const std::uint64_t* dim_keys) {
-  constexpr int kMax = 256;
+// (a balanced network on an even bit count would need up to 4).
+// One application to x[0..k) (k <= kLanes), lane i keyed in round r by keys[r * stride + i]: the
+// k hash chains are independent, so the core overlaps them instead of waiting on one chain at a
+// time (a run's Latin hypercube point is hundreds of chains), and the lanes are contiguous so that
+// the loop over them has no indirection. A key here is the round key plus kGoldenGamma:
+// splitmix_at(key, x) = mix64(key + (x + 1) * gamma) = mix64((key + gamma) + x * gamma), one
+// multiplication fewer per round.
+constexpr int kLanes = 256;
+TRUSS_SAMPLING_CLONES
+void feistel_apply(std::uint64_t* x, int k, int bits, const std::uint64_t* keys, std::size_t stride) {
   auto mask = [](int b) { return b >= 64 ? ~0ULL : (1ULL << b) - 1; };
   int right_bits = bits / 2, left_bits = bits - right_bits;
-  std::uint64_t left[kMax], right[kMax];
+  std::uint64_t left[kLanes], right[kLanes];
   for (int i = 0; i < k; ++i) {
-    left[i] = x[idx[i]] >> right_bits;
-    right[i] = x[idx[i]] & mask(right_bits);
+    left[i] = x[i] >> right_bits;
+    right[i] = x[i] & mask(right_bits);
   }
   for (int r = 0; r < kFeistelRounds; ++r) {
     const std::uint64_t m = mask(left_bits);  // F's output takes the left half's width
+    const std::uint64_t* kr = keys + static_cast<std::size_t>(r) * stride;
     for (int i = 0; i < k; ++i) {
-      const std::uint64_t f = splitmix_at(dim_keys[idx[i] * kFeistelRounds + r], right[i]) & m;
+      const std::uint64_t f = mix64(kr[i] + right[i] * kGoldenGamma) & m;
       const std::uint64_t next = left[i] ^ f;
       left[i] = right[i];
       right[i] = next;
     }
     std::swap(left_bits, right_bits);
   }
-  for (int i = 0; i < k; ++i) x[idx[i]] = (left[i] << right_bits) | right[i];
+  for (int i = 0; i < k; ++i) x[i] = (left[i] << right_bits) | right[i];
+}
+
+// u[l] = (s_l + v_l) / n for l < m: s_l = strata[l], v_l the counter-based jitter of dimension
+// j0 + l (run state jitter_state), n = dn.
+TRUSS_SAMPLING_CLONES
+void place_in_strata(const std::uint64_t* strata, int m, std::uint64_t jitter_state, std::uint64_t j0, double dn,
+                     double* u) {
+  // Selections made on bit patterns (for doubles > 0 their order is the numbers' order) and both
+  // arms computed: the loop has no branch and no floating-point comparison, so it vectorises.
+  auto bits = [](double x) { return std::bit_cast<std::uint64_t>(x); };
+  for (int l = 0; l < m; ++l) {
+    const std::uint64_t k = splitmix_at(jitter_state, j0 + static_cast<std::uint64_t>(l)) >> 11;
+    // to_open_unit(k << 11) without its branch: (2k + [k = 0]) 2^-54 is k 2^-53, or 2^-54 for
+    // k = 0, exactly (2k < 2^54 is even).
+    const auto twice = static_cast<std::int64_t>(2 * k + (k == 0));
+    const double jitter = static_cast<double>(twice) * 0x1p-54;
+    const double s = static_cast<double>(static_cast<std::int64_t>(strata[l]));  // < n <= 2^53: exact
+    // s + jitter rounds up to s + 1 when jitter is within an ulp of 1; keep the sample inside its
+    // stratum [s/n, (s+1)/n) and below 1: then the double just below hi (nextafter(hi, 0)).
+    const std::uint64_t v = bits((s + jitter) / dn), hi = bits((s + 1.0) / dn);
+    u[l] = std::bit_cast<double>(v >= hi ? hi - 1 : v);
+  }
 }
 
 }  // namespace
@@ -118,11 +146,12 @@ SamplePlan::SamplePlan(SamplingMethod method, std::int64_t n_runs, int d, std::u
       feistel_bits_ = std::max(2, static_cast<int>(std::bit_width(static_cast<std::uint64_t>(n_runs_ - 1))));
       round_keys_.resize(nd * kFeistelRounds);
       // Round keys depend only on (seed, dimension): the permutation of a
-      // dimension is fixed before any run is computed.
+      // dimension is fixed before any run is computed. Stored round-major, plus
+      // kGoldenGamma, as feistel_apply reads them.
       for (std::size_t j = 0; j < nd; ++j)
         for (int r = 0; r < kFeistelRounds; ++r)
-          round_keys_[j * kFeistelRounds + static_cast<std::size_t>(r)] =
-              counter_hash(seed_, r, static_cast<std::int64_t>(j), kTagLhsPerm);
+          round_keys_[static_cast<std::size_t>(r) * nd + j] =
+              counter_hash(seed_, r, static_cast<std::int64_t>(j), kTagLhsPerm) + kGoldenGamma;
       break;
     }
     case SamplingMethod::sobol:
@@ -249,6 +278,50 @@ void SamplePlan::calc_sobol(std::uint64_t index, int first, int count, std::uint
   }
 }
 
+// u_j = (pi_j(i) + v_ij) / n (sampling.hpp). Dimensions in blocks of kLanes, their permutations
+// computed side by side (feistel_apply).
+void SamplePlan::calc_latin_hypercube(std::int64_t run_index, double* u) const {
+  const std::uint64_t jitter_state = counter_run_state(seed_, run_index, kTagLhsJitter);
+  const auto n = static_cast<std::uint64_t>(n_runs_);
+  const double dn = static_cast<double>(n_runs_);
+  const auto nd = static_cast<std::size_t>(d_);
+  std::uint64_t strata[kLanes];
+  // Cycle walking: re-apply the bijection on [0, 2^bits) until the value lands in [0, n); this
+  // restricts it to a bijection on [0, n). The lanes still outside, with their keys, are gathered
+  // so that every pass runs on contiguous lanes: the chains that walk longest still have company.
+  int walking[kLanes];
+  std::uint64_t walk_x[kLanes], walk_keys[kFeistelRounds * kLanes];
+  for (int j0 = 0; j0 < d_; j0 += kLanes) {
+    const int m = std::min(kLanes, d_ - j0);
+    std::fill(strata, strata + m, static_cast<std::uint64_t>(run_index));
+    const std::uint64_t* keys = round_keys_.data() + j0;
+    if (n > 1) feistel_apply(strata, m, feistel_bits_, keys, nd);
+    // Compactions without branches (each lane is written, the count moves only for the walkers): at
+    // n = 100,000 a quarter of the lanes walk, at random, which no branch predictor guesses.
+    int k = 0;
+    for (int l = 0; l < m; ++l) {
+      walking[k] = l;
+      walk_x[k] = strata[l];
+      k += strata[l] >= n;
+    }
+    for (std::size_t r = 0; r < kFeistelRounds; ++r)
+      for (int i = 0; i < k; ++i) walk_keys[r * kLanes + i] = keys[r * nd + static_cast<std::size_t>(walking[i])];
+    while (k > 0) {
+      feistel_apply(walk_x, k, feistel_bits_, walk_keys, kLanes);
+      int still = 0;
+      for (int i = 0; i < k; ++i) {
+        strata[walking[i]] = walk_x[i];  // final once it lies in [0, n)
+        walking[still] = walking[i];
+        walk_x[still] = walk_x[i];
+        for (std::size_t r = 0; r < kFeistelRounds; ++r) walk_keys[r * kLanes + still] = walk_keys[r * kLanes + i];
+        still += walk_x[i] >= n;
+      }
+      k = still;
+    }
+    place_in_strata(strata, m, jitter_state, static_cast<std::uint64_t>(j0), dn, u + j0);
+  }
+}
+
 void SamplePlan::calc_uniforms(std::int64_t run_index, double* u) const {
   if (!valid_) throw std::logic_error("SamplePlan::calc_uniforms on an invalid plan: " + validate());
   if (run_index < 0 || run_index >= n_runs_)
@@ -261,46 +334,9 @@ void SamplePlan::calc_uniforms(std::int64_t run_index, double* u) const {
       for (int j = 0; j < d_; ++j) u[j] = to_open_unit(splitmix_at(state, static_cast<std::uint64_t>(j)));
       return;
     }
-    case SamplingMethod::latin_hypercube: {
-      const std::uint64_t jitter_state = counter_run_state(seed_, run_index, kTagLhsJitter);
-      const auto n = static_cast<std::uint64_t>(n_runs_);
-      const double dn = static_cast<double>(n_runs_);
-      // Dimensions in blocks of 256, their permutations computed side by side (feistel_lanes): the
-      // chains that walk longest still have company.
-      constexpr int kBlock = 256;
-      std::uint64_t strata[kBlock];
-      int walking[kBlock];
-      for (int j0 = 0; j0 < d_; j0 += kBlock) {
-        const int m = std::min(kBlock, d_ - j0);
-        int k = 0;
-        for (int l = 0; l < m; ++l) {
-          strata[l] = static_cast<std::uint64_t>(run_index);
-          if (n > 1) walking[k++] = l;
-        }
-        // Cycle walking: re-apply the bijection on [0, 2^2h) until the
-        // value lands in [0, n); this restricts it to a bijection on [0, n).
-        const std::uint64_t* keys = round_keys_.data() + static_cast<std::size_t>(j0) * kFeistelRounds;
-        while (k > 0) {
-          feistel_lanes(strata, walking, k, feistel_bits_, keys);
-          int still = 0;
-          for (int i = 0; i < k; ++i)
-            if (strata[walking[i]] >= n) walking[still++] = walking[i];
-          k = still;
-        }
-        for (int l = 0; l < m; ++l) {
-          const int j = j0 + l;
-          const double jitter = to_open_unit(splitmix_at(jitter_state, static_cast<std::uint64_t>(j)));
-          const double s = static_cast<double>(strata[l]);
-          double v = (s + jitter) / dn;
-          // s + jitter rounds up to s + 1 when jitter is within an ulp of 1;
-          // keep the sample inside its stratum [s/n, (s+1)/n) and below 1.
-          const double hi = (s + 1.0) / dn;
-          if (v >= hi) v = std::nextafter(hi, 0.0);
-          u[j] = v;
-        }
-      }
+    case SamplingMethod::latin_hypercube:
+      calc_latin_hypercube(run_index, u);
       return;
-    }
     case SamplingMethod::sobol: {
       // Run r is Sobol' point r: the origin is NOT dropped. The digital shift
       // already moves it away from 0, and dropping it would break the

@@ -173,6 +173,11 @@ struct Distribution {
   // Inverse CDF: the value x with F(x) = u, for u in (0, 1). For discrete,
   // the smallest value whose cumulative (normalised) weight is >= u.
   double calc_quantile(double u) const;
+  // x[i] = calc_quantile(u[i]) for i < count, the same bits, in bulk (a per-bay dispersion's draws):
+  // the kind is looked at once, and the normal quantile's central region is computed for all i
+  // side by side, which the core overlaps (and vectorises) where one call at a time waits on its
+  // division. u and x may be the same array.
+  void calc_quantiles(const double* u, double* x, std::size_t count) const;
 };
 
 // ---------------------------------------------------------------------------
@@ -281,6 +286,7 @@ class SamplePlan {
 
  private:
   void calc_sobol(std::uint64_t index, int first, int count, std::uint32_t* x) const;
+  void calc_latin_hypercube(std::int64_t run_index, double* u) const;
   std::string validate_groups() const;
 
   SamplingMethod method_;
@@ -294,7 +300,7 @@ class SamplePlan {
 
   // latin_hypercube: Feistel network on feistel_bits_ bits, rounds keyed per dimension.
   int feistel_bits_ = 0;
-  std::vector<std::uint64_t> round_keys_;  // [dim * kFeistelRounds + round]
+  std::vector<std::uint64_t> round_keys_;  // [round * d + dim], plus kGoldenGamma
 
   // sobol / saltelli with Sobol' base: direction numbers laid out [bit][dim]
   // so that the XOR loop over dimensions is contiguous, and the 53-bit

@@ -526,6 +526,28 @@ TEST_CASE("discrete: validation", "[sampling][discrete][validation]") {
   CHECK_THAT(unsorted.validate(), StartsWith("values:"));
 }
 
+TEST_CASE("calc_quantiles: the bits of calc_quantile, every kind, in bulk and in place", "[sampling]") {
+  // The bulk path splits AS 241's regions its own way (all entries through the central formula,
+  // then the rest one by one): the region edges p = 0.075 and 0.925 and their neighbours, the
+  // ends and values outside (0, 1) must land where calc_quantile puts them.
+  std::vector<double> u = {0.075, 0.925, std::nextafter(0.075, 0.0), std::nextafter(0.075, 1.0),
+                           std::nextafter(0.925, 0.0), std::nextafter(0.925, 1.0), 0.5, 0x1p-54, 1.0 - 0x1p-53,
+                           1e-300, 0.0, 1.0, -0.5, 1.5, std::numeric_limits<double>::quiet_NaN()};
+  for (std::int64_t k = 0; k < 2000; ++k) u.push_back(counter_uniform(11, k, 0));
+  const Distribution dists[] = {Distribution::normal(1.0, 0.3), Distribution::lognormal(0.2, 0.5),
+                                Distribution::truncated_normal(0.0, 1.0, -1.0, 2.0), Distribution::uniform(-2.0, 3.0),
+                                Distribution::discrete({1.0, 2.0, 3.0}, {1.0, 2.0, 1.0})};
+  for (const Distribution& dist : dists) {
+    std::vector<double> want(u.size()), got(u.size()), in_place = u;
+    for (std::size_t i = 0; i < u.size(); ++i) want[i] = dist.calc_quantile(u[i]);
+    dist.calc_quantiles(u.data(), got.data(), u.size());
+    dist.calc_quantiles(in_place.data(), in_place.data(), u.size());
+    INFO(to_string(dist.kind));
+    CHECK(bitwise_equal(got, want));
+    CHECK(bitwise_equal(in_place, want));
+  }
+}
+
 // ===========================================================================
 // Latin hypercube
 // ===========================================================================

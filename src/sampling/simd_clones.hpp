@@ -1,0 +1,15 @@
+// simd_clones.hpp — TRUSS_SAMPLING_CLONES, for the per-run loops of the sampling library (private to
+// src/sampling/: the Latin hypercube's permutations, the normal quantile in bulk).
+//
+// A function marked with it is compiled twice, for x86-64-v4 (AVX-512: eight 64-bit integer
+// multiplications or double divisions per instruction) and for the baseline, and the loader picks
+// the one the CPU runs. Only loops whose every operation is exact or correctly rounded (integer
+// arithmetic, exact conversions, IEEE +, *, / with no contraction: the library is compiled with
+// -ffp-contract=off) are marked, so both versions give the same bits. Elsewhere: the baseline alone.
+#pragma once
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define TRUSS_SAMPLING_CLONES __attribute__((target_clones("arch=x86-64-v4", "default")))
+#else
+#define TRUSS_SAMPLING_CLONES
+#endif
