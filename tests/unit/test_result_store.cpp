@@ -151,6 +151,38 @@ TEST_CASE("chunk codec: noise planes go as stored blocks, the rest deflated", "[
   CHECK(mine.size() < noise + 600);  // the two constant planes deflated to almost nothing
 }
 
+// A leading plane that deflate shrinks by under a tenth is stored too; the first plane that
+// shrinks by more ends the stored run. Plane 0: bytes uniform on 0..199 (entropy log2 200 = 7.64
+// bits a byte, so at best 95.5 % of its size, over 90 % with Huffman tables for 1 kB); plane 1:
+// uniform on 0..63 (6 bits, 75 %, plus its tables about 80 % of 1 kB); planes 2 to 7 one value each.
+// The stream must start with one stored block of exactly plane 0 (LEN 4,096) and inflate, by zlib
+// and by HDF5, to the chunk.
+TEST_CASE("chunk codec: planes deflate shrinks by under a tenth are stored", "[campaign][codec]") {
+  const std::size_t n = 4096;
+  std::mt19937_64 rng(11);
+  std::vector<unsigned char> raw(8 * n), shuffled(8 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < 8; ++j)
+      raw[8 * i + j] = static_cast<unsigned char>(j == 0 ? rng() % 200 : j == 1 ? rng() % 64 : 0x40 + j);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < 8; ++j) shuffled[j * n + i] = raw[8 * i + j];
+  const std::string chunk(raw.begin(), raw.end());
+  std::string mine;
+  REQUIRE(encode_chunk(chunk, 8, 1, mine) == 0);
+  std::vector<unsigned char> inflated(8 * n);
+  uLongf len = inflated.size();
+  REQUIRE(uncompress(inflated.data(), &len, reinterpret_cast<const Bytef*>(mine.data()), mine.size()) == Z_OK);
+  CHECK(len == inflated.size());
+  CHECK(inflated == shuffled);
+  CHECK(hdf5_read_back(mine, 0, H5T_NATIVE_DOUBLE, 8, chunk.size(), 1) == chunk);
+  REQUIRE(mine.size() > 7 + n);
+  CHECK(static_cast<unsigned char>(mine[2]) == 0);  // BFINAL 0, BTYPE 00: a stored block
+  const auto byte = [&](std::size_t i) { return static_cast<std::size_t>(static_cast<unsigned char>(mine[i])); };
+  CHECK(byte(3) + 256 * byte(4) == n);  // LEN: plane 0 alone
+  CHECK(std::memcmp(mine.data() + 7, shuffled.data(), n) == 0);
+  CHECK(mine.size() < 7 + n + 85 * n / 100);  // plane 1 deflated (to about 80 %), the rest to almost nothing
+}
+
 // Constant chunks are encoded once per value, size and level: each encoding, reused or not, must
 // inflate (zlib's uncompress) to its own chunk, shuffled. NaN, then 0.0, then NaN again, then
 // int64 30 (elements of the same 8 bytes' size), at two sizes and two levels.
