@@ -5,10 +5,12 @@
 // chunk by chunk with H5Dwrite_chunk from these bytes: libdeflate compresses these columns 2.5
 // times as fast as the zlib call inside HDF5's own deflate filter (docs/benchmarks.md), and HDF5
 // 1.10 does not let a program replace that predefined filter (H5Zregister refuses its id). The
-// leading byte planes that do not compress (the low mantissa bytes of dispersed and computed
-// values, random) go into the zlib stream as DEFLATE's stored blocks, the rest is compressed, and a
-// constant chunk is compressed once per value: under half rank 0's time per Table-1 result, and
-// files no larger. Readers (h5py, pandas, xarray) see an ordinary shuffled, deflated dataset.
+// leading byte planes that deflate shrinks by under a tenth (the low mantissa bytes of dispersed
+// and computed values, random or nearly) go into the zlib stream as DEFLATE's stored blocks, the
+// rest is compressed, and a constant chunk is compressed once per value: under half rank 0's time
+// per Table-1 result (files 1.2 % larger than storing only the planes deflate cannot shrink at
+// all: docs/benchmarks.md). Readers (h5py, pandas, xarray) see an ordinary shuffled, deflated
+// dataset.
 #pragma once
 #include <cstddef>
 #include <cstdint>

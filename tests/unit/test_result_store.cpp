@@ -83,6 +83,37 @@ std::string random_doubles(std::size_t n, bool smooth, unsigned seed) {
   return std::string(reinterpret_cast<const char*>(v.data()), n * 8);
 }
 
+// n doubles whose byte j (plane j after the shuffle) is byte(j, rng), from a generator seeded `seed`.
+template <class F>
+std::vector<unsigned char> chunk_of_planes(std::size_t n, unsigned seed, F byte) {
+  std::mt19937_64 rng(seed);
+  std::vector<unsigned char> raw(8 * n);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < 8; ++j) raw[8 * i + j] = static_cast<unsigned char>(byte(j, rng));
+  return raw;
+}
+
+// `raw` (whole doubles) encoded at level 1 with every filter applied, checked against inflaters
+// independent of the encoder: zlib's own (uncompress) must give the chunk shuffled as HDF5's
+// shuffle filter defines it (byte j of element i at j * n + i), and HDF5 must read the chunk back.
+// Returns the stream; `shuffled` gets the shuffled chunk.
+std::string encode_checked(const std::vector<unsigned char>& raw, std::vector<unsigned char>& shuffled) {
+  const std::size_t n = raw.size() / 8;
+  shuffled.assign(raw.size(), 0);
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < 8; ++j) shuffled[j * n + i] = raw[8 * i + j];
+  const std::string chunk(raw.begin(), raw.end());
+  std::string mine;
+  REQUIRE(encode_chunk(chunk, 8, 1, mine) == 0);
+  std::vector<unsigned char> inflated(raw.size());
+  uLongf len = inflated.size();
+  REQUIRE(uncompress(inflated.data(), &len, reinterpret_cast<const Bytef*>(mine.data()), mine.size()) == Z_OK);
+  CHECK(len == inflated.size());
+  CHECK(inflated == shuffled);
+  CHECK(hdf5_read_back(mine, 0, H5T_NATIVE_DOUBLE, 8, chunk.size(), 1) == chunk);
+  return mine;
+}
+
 }  // namespace
 
 TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as small as HDF5's own", "[campaign][codec]") {
@@ -128,27 +159,37 @@ TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as sm
 // as they are right after the 2-byte zlib header and the block header.
 TEST_CASE("chunk codec: noise planes go as stored blocks, the rest deflated", "[campaign][codec]") {
   const std::size_t n = 4096;
-  std::mt19937_64 rng(7);
-  std::vector<unsigned char> raw(8 * n), shuffled(8 * n);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < 8; ++j)
-      raw[8 * i + j] = j < 6 ? static_cast<unsigned char>(rng()) : j == 6 ? 0xf4 : 0x3f;
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t j = 0; j < 8; ++j) shuffled[j * n + i] = raw[8 * i + j];
-  const std::string chunk(raw.begin(), raw.end());
-  std::string mine;
-  REQUIRE(encode_chunk(chunk, 8, 1, mine) == 0);
-  std::vector<unsigned char> inflated(8 * n);
-  uLongf len = inflated.size();
-  REQUIRE(uncompress(inflated.data(), &len, reinterpret_cast<const Bytef*>(mine.data()), mine.size()) == Z_OK);
-  CHECK(len == inflated.size());
-  CHECK(inflated == shuffled);
-  CHECK(hdf5_read_back(mine, 0, H5T_NATIVE_DOUBLE, 8, chunk.size(), 1) == chunk);
+  std::vector<unsigned char> shuffled;
+  const auto raw = chunk_of_planes(n, 7, [](std::size_t j, std::mt19937_64& rng) {
+    return j < 6 ? rng() : j == 6 ? 0xf4 : 0x3f;
+  });
+  const std::string mine = encode_checked(raw, shuffled);
   const std::size_t noise = 6 * n;
   REQUIRE(mine.size() > 7 + noise);
   CHECK(static_cast<unsigned char>(mine[2]) == 0);  // BFINAL 0, BTYPE 00: a stored block
   CHECK(std::memcmp(mine.data() + 7, shuffled.data(), noise) == 0);
   CHECK(mine.size() < noise + 600);  // the two constant planes deflated to almost nothing
+}
+
+// A leading plane that deflate shrinks by under a tenth is stored too; the first plane that
+// shrinks by more ends the stored run. Plane 0: bytes uniform on 0..199 (entropy log2 200 = 7.64
+// bits a byte, so at best 95.5 % of its size, over 90 % with Huffman tables for 1 kB); plane 1:
+// uniform on 0..63 (6 bits, 75 %, plus its tables about 80 % of 1 kB); planes 2 to 7 one value each.
+// The stream must start with one stored block of exactly plane 0 (LEN 4,096) and inflate, by zlib
+// and by HDF5, to the chunk.
+TEST_CASE("chunk codec: planes deflate shrinks by under a tenth are stored", "[campaign][codec]") {
+  const std::size_t n = 4096;
+  std::vector<unsigned char> shuffled;
+  const auto raw = chunk_of_planes(n, 11, [](std::size_t j, std::mt19937_64& rng) {
+    return j == 0 ? rng() % 200 : j == 1 ? rng() % 64 : 0x40 + j;
+  });
+  const std::string mine = encode_checked(raw, shuffled);
+  REQUIRE(mine.size() > 7 + n);
+  CHECK(static_cast<unsigned char>(mine[2]) == 0);  // BFINAL 0, BTYPE 00: a stored block
+  const auto byte = [&](std::size_t i) { return static_cast<std::size_t>(static_cast<unsigned char>(mine[i])); };
+  CHECK(byte(3) + 256 * byte(4) == n);  // LEN: plane 0 alone
+  CHECK(std::memcmp(mine.data() + 7, shuffled.data(), n) == 0);
+  CHECK(mine.size() < 7 + n + 85 * n / 100);  // plane 1 deflated (to about 80 %), the rest to almost nothing
 }
 
 // Constant chunks are encoded once per value, size and level: each encoding, reused or not, must
