@@ -4,10 +4,10 @@
 // (use_avx2_kernels) as with the plain definitions.
 #pragma once
 #include <cstdint>
-
-#include "sampling/stats.hpp"
 #include <limits>
 #include <vector>
+
+#include "sampling/stats.hpp"
 
 namespace truss::sampling {
 
