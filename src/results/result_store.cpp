@@ -237,7 +237,8 @@ void ResultStore::merge_stats(const Dataset& d, const char* block, std::int64_t 
     sampling::ColumnStats& col = col_[static_cast<std::size_t>(d.stats) + b];
     const char* values = block + 8 * b;
     if (!col.seeded()) col.seed(values, r, d.width, use.data());
-    col.add(chunk, sampling::calc_chunk_summary(values, r, d.width, use.data(), col.windows()));
+    sampling::calc_chunk_summary(values, r, d.width, use.data(), col.windows(), summary_);
+    col.add(chunk, summary_);
   }
 }
 

@@ -107,6 +107,7 @@ class ResultStore {
   std::size_t next_dataset_ = 0;                          // of complete_.front()
   std::size_t peak_chunks_ = 0;
   std::vector<sampling::ColumnStats> col_;                // one per output column (per bay for per-bay fields)
+  sampling::ChunkSummary summary_;                        // one column's chunk summary, its room used again
   std::string encoded_;                                   // a dataset chunk after the filters
 };
 

@@ -32,19 +32,14 @@ std::int64_t half_width(std::int64_t n, double p) {
 struct WindowValues {
   Window w;
   std::int64_t at_lo, at_hi;
-  std::vector<double>& kept;
-  bool sorted = false;  // kept is in order: no selection needed
+  const std::vector<double>& kept;
+  bool sorted = false;  // kept's order statistics are in their places: no selection needed
   std::int64_t size() const { return at_lo + static_cast<std::int64_t>(kept.size()) + at_hi; }
-  // The i-th smallest; reorders kept. `below_of` (> i): an index whose order statistic is already
-  // in place, so only the part before it is searched.
-  double at(std::int64_t i, std::int64_t below_of = -1) {
+  double at(std::int64_t i) const {  // the i-th smallest
     if (i < at_lo) return w.lo;
-    i -= at_lo;
-    if (i >= static_cast<std::int64_t>(kept.size())) return w.hi;
-    const auto n = static_cast<std::int64_t>(kept.size());
-    const std::int64_t end = below_of > at_lo && below_of - at_lo < n ? below_of - at_lo : n;
-    if (!sorted) std::nth_element(kept.begin(), kept.begin() + i, kept.begin() + end);
-    return kept[static_cast<std::size_t>(i)];
+    const auto k = static_cast<std::size_t>(i - at_lo);
+    if (k >= kept.size()) return w.hi;
+    return sorted ? kept[k] : calc_order_statistic(kept.data(), kept.size(), k);
   }
 };
 
@@ -63,13 +58,13 @@ WindowRanks find_window_ranks(std::int64_t size, std::int64_t below, std::int64_
   return {true, static_cast<std::int64_t>(std::floor(r)) - w, static_cast<std::int64_t>(std::ceil(r)) + w};
 }
 
-Window calc_window(WindowValues v, std::int64_t below, std::int64_t n, double p) {
+Window calc_window(const WindowValues& v, std::int64_t below, std::int64_t n, double p) {
   const std::int64_t size = v.size();
   const WindowRanks k = find_window_ranks(size, below, n, p);
   Window cur = v.w;
   if (!k.cut) return cur;
   if (k.hi < size - 1) cur.hi = std::min(cur.hi, v.at(k.hi));
-  if (k.lo > 0) cur.lo = std::max(cur.lo, v.at(k.lo, k.hi < size - 1 ? k.hi : size));
+  if (k.lo > 0) cur.lo = std::max(cur.lo, v.at(k.lo));
   return cur;
 }
 
@@ -104,11 +99,20 @@ Moments combine(const Moments& a, const Moments& b) {
 
 ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                                 const Windows& w) {
+  ChunkSummary s;
+  calc_chunk_summary(values, rows, stride, use, w, s);
+  return s;
+}
+
+void calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
+                        const Windows& w, ChunkSummary& s) {
   thread_local std::vector<double> x;
   thread_local CountScratch scratch;
   x.resize(rows);
-  ChunkSummary s;
   s.window = w;
+  s.moments = {};
+  s.below = s.at_lo = s.at_hi = {};
+  for (std::vector<double>& k : s.kept) k.clear();  // their room is used again
   Moments& m = s.moments;
   const auto load = [&](std::size_t i) {
     double v;
@@ -117,7 +121,7 @@ ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_
   };
   std::size_t i = 0;
   while (i < rows && !(use[i] != 0 && std::isfinite(load(i)))) ++i;
-  if (i == rows) return s;
+  if (i == rows) return;
   const Gathered g = gather_usable(values, rows, stride, use, i, x.data());
   const std::size_t n = g.count;
   const double x0 = x.front();
@@ -151,7 +155,6 @@ ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_
     s.at_lo[t] = c[j].at_lo;
     s.at_hi[t] = lo[j] == hi[j] ? 0 : c[j].at_hi;  // one end: its copies are at_lo
   }
-  return s;
 }
 
 void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use) {
@@ -216,7 +219,7 @@ void ColumnStats::classify_kept(std::size_t t, std::size_t from) {
   at_hi_[t] += lo == hi ? 0 : c.at_hi;  // one end: its copies are at_lo (as put)
 }
 
-void ColumnStats::add(std::int64_t chunk, ChunkSummary s) {
+void ColumnStats::add(std::int64_t chunk, const ChunkSummary& s) {
   if (chunk < 0) throw std::runtime_error(fmt::format("column statistics: chunk {} out of range", chunk));
   const auto c = static_cast<std::size_t>(chunk);
   if (c >= chunks_.size()) {
@@ -287,12 +290,10 @@ Stats ColumnStats::calc_stats(bool& resolved) const {
   s.std = m.count > 1 ? std::sqrt(m.m2 / static_cast<double>(m.count - 1)) : kNaN;
   s.min = m.min;
   s.max = m.max;
-  std::vector<double> x;
   for (std::size_t t = 0; t < kStatTargets; ++t) {
     const PercentileIndex idx = find_percentile_index(static_cast<std::size_t>(m.count), kStatPercentiles[t]);
     const auto lo = static_cast<std::int64_t>(idx.lo) - below_[t], hi = static_cast<std::int64_t>(idx.hi) - below_[t];
-    x = kept_[t];
-    WindowValues v{win_[t], at_lo_[t], at_hi_[t], x};
+    const WindowValues v{win_[t], at_lo_[t], at_hi_[t], kept_[t]};
     if (lo < 0 || hi >= v.size()) {
       resolved = false;
       s.percentiles[t] = kNaN;

@@ -66,6 +66,9 @@ struct ChunkSummary {
 // and the value is finite.
 ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                                 const Windows& w);
+// The same into s, whose vectors' room is used again (rank 0 makes one summary per column and chunk).
+void calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
+                        const Windows& w, ChunkSummary& s);
 // Which counting kernel calc_chunk_summary uses: AVX2 where the processor has it (the default), or
 // the baseline SSE2 one (on = false), so that tests and benchmarks run both. Returns whether AVX2
 // is now used. Not thread-safe: call it before any summary is made.
@@ -79,7 +82,7 @@ class ColumnStats {
   void seed(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use);
   // Merges chunk `chunk`'s summary (made against these windows or older ones). Throws
   // std::runtime_error for a negative chunk index or a chunk merged twice.
-  void add(std::int64_t chunk, ChunkSummary s);
+  void add(std::int64_t chunk, const ChunkSummary& s);
   // The statistics so far; `resolved` is false when a percentile's order statistics are not
   // among the kept values (that percentile is then NaN).
   Stats calc_stats(bool& resolved) const;

@@ -2,6 +2,7 @@
 // gathered and summed, and counted against a percentile window (window_count.hpp).
 #include "sampling/window_count.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -246,20 +247,28 @@ double find_first_equal(const double* x, std::size_t n, double m) {
 }
 
 #if defined(__x86_64__)
-// gather_rows for contiguous values, four rows at a time (AVX2): the usable ones left-packed into
-// x, their shifted values added one by one in row order (the same additions), min and max per lane
-// (each lane keeps its first of equal values; across lanes only a zero's sign can differ, so the
-// first zero of x is then looked up). Returns the first row not done.
-__attribute__((target("avx2"))) std::size_t gather_rows_avx2(const double* v, std::size_t first, std::size_t rows,
-                                                              const std::uint8_t* use, double x0, double* x,
-                                                              Gathered& g) {
+// gather_rows four rows at a time (AVX2): the usable ones left-packed into x, their shifted values
+// added one by one in row order (the same additions), min and max per lane (each lane keeps its
+// first of equal values; across lanes only a zero's sign can differ, so the first zero of x is then
+// looked up). Rows of a per-bay block (stride > 1) are loaded one by one. Returns the first row not
+// done.
+__attribute__((target("avx2"))) std::size_t gather_rows_avx2(const char* values, std::size_t first, std::size_t rows,
+                                                              std::size_t stride, const std::uint8_t* use, double x0,
+                                                              double* x, Gathered& g) {
   const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffff));
   const __m256d inf = _mm256_set1_pd(std::numeric_limits<double>::infinity()), x04 = _mm256_set1_pd(x0);
   __m256d lo = inf, hi = _mm256_sub_pd(_mm256_setzero_pd(), inf);
   double sum = g.sum;
   std::size_t n = g.count, i = first;
   for (; i + 4 <= rows; i += 4) {
-    const __m256d d = _mm256_loadu_pd(v + i);
+    __m256d d;
+    if (stride == 1) {
+      d = _mm256_loadu_pd(reinterpret_cast<const double*>(values + 8 * i));
+    } else {
+      double r[4];
+      for (std::size_t j = 0; j < 4; ++j) std::memcpy(&r[j], values + 8 * (i + j) * stride, 8);
+      d = _mm256_set_pd(r[3], r[2], r[1], r[0]);
+    }
     std::int32_t u;
     std::memcpy(&u, use + i, 4);
     const __m256i unused = _mm256_cmpeq_epi64(_mm256_cvtepu8_epi64(_mm_cvtsi32_si128(u)), _mm256_setzero_si256());
@@ -300,10 +309,7 @@ Gathered gather_usable(const char* values, std::size_t rows, std::size_t stride,
   std::memcpy(&x0, values + 8 * first * stride, 8);
   std::size_t i = first;
 #if defined(__x86_64__)
-  if (stride == 1 && avx2_enabled()) {
-    const auto* v = reinterpret_cast<const double*>(values);  // only for the unaligned loads
-    i = gather_rows_avx2(v, first, rows, use, x0, x, g);
-  }
+  if (avx2_enabled()) i = gather_rows_avx2(values, first, rows, stride, use, x0, x, g);
 #endif
   gather_rows(values, i, rows, stride, use, x0, x, g);
   return g;
@@ -339,6 +345,89 @@ double count_windows_m2(const std::vector<double>& x, double x0, double dm, std:
     kept[t]->assign(scratch.out.data(), scratch.out.data() + c[t].inside);
   }
   return m2;
+}
+
+// Quickselect by three-way partitions that do not branch on the values (std::nth_element's
+// partitions mispredict about every other comparison, which made narrowing a window rank 0's largest
+// statistics cost in small campaigns). Each round: the median of three values as the pivot; the
+// values below it stored in place (never past the one read), those above to the other buffer; the
+// side holding rank r goes on, or r is among the pivot's copies. A run of unlucky pivots ends in
+// std::nth_element, as does a short rest.
+namespace {
+
+// One round's partition (see calc_order_statistic): x[0..n)'s values below p to below[...] (which may
+// be x itself), those above it to above[...], in their order; returns their counts.
+std::pair<std::size_t, std::size_t> partition_generic(const double* x, std::size_t n, double p, double* below,
+                                                      double* above) {
+  std::size_t n_below = 0, n_above = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double v = x[i];
+    below[n_below] = v;
+    above[n_above] = v;
+    n_below += v < p;
+    n_above += p < v;
+  }
+  return {n_below, n_above};
+}
+
+#if defined(__x86_64__)
+// partition_generic four values at a time, left-packed (AVX2); each store ends at or before the
+// vector just read, so below may be x.
+__attribute__((target("avx2"))) std::pair<std::size_t, std::size_t> partition_avx2(const double* x, std::size_t n,
+                                                                                   double p, double* below,
+                                                                                   double* above) {
+  const __m256d p4 = _mm256_set1_pd(p);
+  std::size_t n_below = 0, n_above = 0, i = 0;
+  for (; i + 4 <= n; i += 4) {
+    const __m256d v = _mm256_loadu_pd(x + i);
+    const int b = _mm256_movemask_pd(_mm256_cmp_pd(v, p4, _CMP_LT_OQ));
+    const int a = _mm256_movemask_pd(_mm256_cmp_pd(v, p4, _CMP_GT_OQ));
+    const __m256 f = _mm256_castpd_ps(v);
+    const __m256i to_below = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.lanes[b]));
+    const __m256i to_above = _mm256_load_si256(reinterpret_cast<const __m256i*>(kPack.lanes[a]));
+    _mm256_storeu_pd(below + n_below, _mm256_castps_pd(_mm256_permutevar8x32_ps(f, to_below)));
+    _mm256_storeu_pd(above + n_above, _mm256_castps_pd(_mm256_permutevar8x32_ps(f, to_above)));
+    n_below += kPack.count[b];
+    n_above += kPack.count[a];
+  }
+  const auto rest = partition_generic(x + i, n - i, p, below + n_below, above + n_above);
+  return {n_below + rest.first, n_above + rest.second};
+}
+#endif
+
+}  // namespace
+
+double calc_order_statistic(const double* x, std::size_t n, std::size_t r) {
+  thread_local std::vector<double> buf[2];
+  for (std::vector<double>& b : buf)
+    if (b.size() < n) b.resize(n);
+  const double* src = x;
+  int lt = 0;  // the buffer that takes the values below the pivot (src itself after the first round)
+  for (int round = 0; n > 32 && round < 64; ++round) {
+    const double a = src[n / 4], b = src[n / 2], c = src[3 * n / 4];
+    const double p = std::max(std::min(a, b), std::min(std::max(a, b), c));
+    double *below = buf[lt].data(), *above = buf[1 - lt].data();
+#if defined(__x86_64__)
+    const auto [n_below, n_above] = avx2_enabled() ? partition_avx2(src, n, p, below, above)
+                                                   : partition_generic(src, n, p, below, above);
+#else
+    const auto [n_below, n_above] = partition_generic(src, n, p, below, above);
+#endif
+    if (r < n_below) {
+      n = n_below;
+    } else if (r >= n - n_above) {
+      r -= n - n_above;
+      n = n_above;
+      lt = 1 - lt;
+    } else {
+      return p;
+    }
+    src = buf[lt].data();
+  }
+  double* rest = buf[lt].data();
+  if (src != rest) std::copy(src, src + n, rest);
+  std::nth_element(rest, rest + r, rest + n);
+  return rest[r];
 }
 
 bool use_avx2_kernels(bool on) {
