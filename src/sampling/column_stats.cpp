@@ -68,19 +68,6 @@ Window calc_window(const WindowValues& v, std::int64_t below, std::int64_t n, do
   return cur;
 }
 
-// Puts the order statistics of x at the given ranks (ascending, each within x) in their places:
-// nth_element at the middle rank, then each side apart (fewer comparisons than a sort for a dozen).
-void select_ranks(std::vector<double>& x, std::size_t first, std::size_t last, const std::int64_t* rank_begin,
-                  const std::int64_t* rank_end) {
-  if (rank_begin == rank_end) return;
-  const std::int64_t* mid = rank_begin + (rank_end - rank_begin) / 2;
-  const auto m = static_cast<std::size_t>(*mid);
-  std::nth_element(x.begin() + static_cast<std::ptrdiff_t>(first), x.begin() + static_cast<std::ptrdiff_t>(m),
-                   x.begin() + static_cast<std::ptrdiff_t>(last));
-  select_ranks(x, first, m, rank_begin, mid);
-  select_ranks(x, m + 1, last, mid + 1, rank_end);
-}
-
 }  // namespace
 
 Moments combine(const Moments& a, const Moments& b) {
@@ -174,25 +161,13 @@ void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride,
     x.push_back(v);
     if (v == 0.0) zeros |= std::signbit(v) ? 2u : 1u;
   }
+  // Sorted where +0.0 and -0.0 both occur: which of them lands at a rank depends on the algorithm,
+  // and the windows must come out as before to the bit.
   const bool mixed_zeros = zeros == 3;
-  // Each window end's order statistic put in its place (a look-up then, as in sorted values).
-  // Sorted instead where +0.0 and -0.0 both occur: which of them lands at a rank depends on the
-  // algorithm, and the windows must come out as before to the bit.
+  if (mixed_zeros) std::sort(x.begin(), x.end());
   const auto n = static_cast<std::int64_t>(x.size());
-  if (mixed_zeros) {
-    std::sort(x.begin(), x.end());
-  } else {
-    std::vector<std::int64_t> ranks;
-    for (std::size_t t = 0; t < kStatTargets; ++t) {
-      const WindowRanks k = find_window_ranks(n, 0, n, target_p(t));
-      if (k.cut && k.lo > 0) ranks.push_back(k.lo);
-      if (k.cut && k.hi < n - 1) ranks.push_back(k.hi);
-    }
-    std::sort(ranks.begin(), ranks.end());
-    ranks.erase(std::unique(ranks.begin(), ranks.end()), ranks.end());
-    select_ranks(x, 0, x.size(), ranks.data(), ranks.data() + ranks.size());
-  }
-  for (std::size_t t = 0; t < kStatTargets; ++t) win_[t] = calc_window({win_[t], 0, 0, x, true}, 0, n, target_p(t));
+  for (std::size_t t = 0; t < kStatTargets; ++t)
+    win_[t] = calc_window({win_[t], 0, 0, x, mixed_zeros}, 0, n, target_p(t));
 }
 
 // k copies of v (of a summary made against a wider window, or of a window being cut) into target
