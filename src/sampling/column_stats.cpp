@@ -32,14 +32,22 @@ std::int64_t half_width(std::int64_t n, double p) {
 struct WindowValues {
   Window w;
   std::int64_t at_lo, at_hi;
-  const std::vector<double>& kept;
-  bool sorted = false;  // kept's order statistics are in their places: no selection needed
+  std::vector<double>& kept;
   std::int64_t size() const { return at_lo + static_cast<std::int64_t>(kept.size()) + at_hi; }
-  double at(std::int64_t i) const {  // the i-th smallest
+  // Puts the order statistics i[0..n) (ascending) in their places (select_order_statistics):
+  // reorders kept.
+  void select(const std::int64_t* i, std::size_t n) {
+    std::array<std::size_t, 2 * kStatTargets> k{};
+    std::size_t m = 0;
+    for (std::size_t j = 0; j < n; ++j)
+      if (i[j] >= at_lo && i[j] - at_lo < static_cast<std::int64_t>(kept.size()))
+        k[m++] = static_cast<std::size_t>(i[j] - at_lo);
+    select_order_statistics(kept.data(), kept.size(), k.data(), m);
+  }
+  double at(std::int64_t i) const {  // the i-th smallest, once selected
     if (i < at_lo) return w.lo;
     const auto k = static_cast<std::size_t>(i - at_lo);
-    if (k >= kept.size()) return w.hi;
-    return sorted ? kept[k] : calc_order_statistic(kept.data(), kept.size(), k);
+    return k < kept.size() ? kept[k] : w.hi;
   }
 };
 
@@ -58,11 +66,14 @@ WindowRanks find_window_ranks(std::int64_t size, std::int64_t below, std::int64_
   return {true, static_cast<std::int64_t>(std::floor(r)) - w, static_cast<std::int64_t>(std::ceil(r)) + w};
 }
 
-Window calc_window(const WindowValues& v, std::int64_t below, std::int64_t n, double p) {
+// `selected`: v's order statistics are in their places already.
+Window calc_window(WindowValues v, std::int64_t below, std::int64_t n, double p, bool selected = false) {
   const std::int64_t size = v.size();
   const WindowRanks k = find_window_ranks(size, below, n, p);
   Window cur = v.w;
   if (!k.cut) return cur;
+  const std::int64_t ends[2] = {k.lo, k.hi};
+  if (!selected) v.select(ends, 2);
   if (k.hi < size - 1) cur.hi = std::min(cur.hi, v.at(k.hi));
   if (k.lo > 0) cur.lo = std::max(cur.lo, v.at(k.lo));
   return cur;
@@ -161,13 +172,24 @@ void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride,
     x.push_back(v);
     if (v == 0.0) zeros |= std::signbit(v) ? 2u : 1u;
   }
-  // Sorted where +0.0 and -0.0 both occur: which of them lands at a rank depends on the algorithm,
-  // and the windows must come out as before to the bit.
   const bool mixed_zeros = zeros == 3;
-  if (mixed_zeros) std::sort(x.begin(), x.end());
+  // Each window end's order statistic put in its place (a look-up then, as in sorted values).
+  // Sorted instead where +0.0 and -0.0 both occur: which of them lands at a rank depends on the
+  // algorithm, and the windows must come out as before to the bit.
   const auto n = static_cast<std::int64_t>(x.size());
-  for (std::size_t t = 0; t < kStatTargets; ++t)
-    win_[t] = calc_window({win_[t], 0, 0, x, mixed_zeros}, 0, n, target_p(t));
+  if (mixed_zeros) {
+    std::sort(x.begin(), x.end());
+  } else {
+    std::vector<std::int64_t> ranks;
+    for (std::size_t t = 0; t < kStatTargets; ++t) {
+      const WindowRanks k = find_window_ranks(n, 0, n, target_p(t));
+      if (k.cut) ranks.insert(ranks.end(), {k.lo, k.hi});
+    }
+    std::sort(ranks.begin(), ranks.end());
+    ranks.erase(std::unique(ranks.begin(), ranks.end()), ranks.end());
+    WindowValues{win_[0], 0, 0, x}.select(ranks.data(), ranks.size());
+  }
+  for (std::size_t t = 0; t < kStatTargets; ++t) win_[t] = calc_window({win_[t], 0, 0, x}, 0, n, target_p(t), true);
 }
 
 // k copies of v (of a summary made against a wider window, or of a window being cut) into target
@@ -265,10 +287,14 @@ Stats ColumnStats::calc_stats(bool& resolved) const {
   s.std = m.count > 1 ? std::sqrt(m.m2 / static_cast<double>(m.count - 1)) : kNaN;
   s.min = m.min;
   s.max = m.max;
+  std::vector<double> x;
   for (std::size_t t = 0; t < kStatTargets; ++t) {
     const PercentileIndex idx = find_percentile_index(static_cast<std::size_t>(m.count), kStatPercentiles[t]);
     const auto lo = static_cast<std::int64_t>(idx.lo) - below_[t], hi = static_cast<std::int64_t>(idx.hi) - below_[t];
-    const WindowValues v{win_[t], at_lo_[t], at_hi_[t], kept_[t]};
+    x = kept_[t];
+    WindowValues v{win_[t], at_lo_[t], at_hi_[t], x};
+    const std::int64_t ends[2] = {lo, hi};
+    v.select(ends, 2);
     if (lo < 0 || hi >= v.size()) {
       resolved = false;
       s.percentiles[t] = kNaN;

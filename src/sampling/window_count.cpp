@@ -347,16 +347,10 @@ double count_windows_m2(const std::vector<double>& x, double x0, double dm, std:
   return m2;
 }
 
-// Quickselect by three-way partitions that do not branch on the values (std::nth_element's
-// partitions mispredict about every other comparison, which made narrowing a window rank 0's largest
-// statistics cost in small campaigns). Each round: the median of three values as the pivot; the
-// values below it stored in place (never past the one read), those above to the other buffer; the
-// side holding rank r goes on, or r is among the pivot's copies. A run of unlucky pivots ends in
-// std::nth_element, as does a short rest.
 namespace {
 
-// One round's partition (see calc_order_statistic): x[0..n)'s values below p to below[...] (which may
-// be x itself), those above it to above[...], in their order; returns their counts.
+// One round's partition (select_part): x[0..n)'s values below p to below[...] (which may be x
+// itself), those above it to above[...], in their order; returns their counts.
 std::pair<std::size_t, std::size_t> partition_generic(const double* x, std::size_t n, double p, double* below,
                                                       double* above) {
   std::size_t n_below = 0, n_above = 0;
@@ -395,39 +389,48 @@ __attribute__((target("avx2"))) std::pair<std::size_t, std::size_t> partition_av
 }
 #endif
 
+// select_order_statistics on x[0..n), whose ranks are base + 0 .. n - 1 of the whole, for the
+// ranks [r, r_end) among them. Each round: the median of three values as the pivot; the values
+// below it stored in place (never past the one read), those above it to `above` and back after the
+// pivot's copies, so that x reads [below][p ... p][above]; the part below recursively, the part
+// above in the loop. Runs of unlucky pivots and short parts end in std::sort.
+void select_part(double* x, std::size_t n, std::size_t base, const std::size_t* r, const std::size_t* r_end,
+                 double* above, int depth) {
+  while (r != r_end) {
+    if (n <= 16 || depth > 64) {
+      std::sort(x, x + n);
+      return;
+    }
+    ++depth;
+    const double a = x[n / 4], b = x[n / 2], c = x[3 * n / 4];
+    const double p = std::max(std::min(a, b), std::min(std::max(a, b), c));
+#if defined(__x86_64__)
+    const auto [n_below, n_above] = avx2_enabled() ? partition_avx2(x, n, p, x, above)
+                                                   : partition_generic(x, n, p, x, above);
+#else
+    const auto [n_below, n_above] = partition_generic(x, n, p, x, above);
+#endif
+    const std::size_t equal_end = n - n_above;
+    std::fill(x + n_below, x + equal_end, p);
+    std::copy(above, above + n_above, x + equal_end);
+    const std::size_t* r_equal = std::lower_bound(r, r_end, base + n_below);
+    select_part(x, n_below, base, r, r_equal, above, depth);
+    r = std::lower_bound(r_equal, r_end, base + equal_end);
+    x += equal_end;
+    base += equal_end;
+    n = n_above;
+  }
+}
+
 }  // namespace
 
-double calc_order_statistic(const double* x, std::size_t n, std::size_t r) {
-  thread_local std::vector<double> buf[2];
-  for (std::vector<double>& b : buf)
-    if (b.size() < n) b.resize(n);
-  const double* src = x;
-  int lt = 0;  // the buffer that takes the values below the pivot (src itself after the first round)
-  for (int round = 0; n > 32 && round < 64; ++round) {
-    const double a = src[n / 4], b = src[n / 2], c = src[3 * n / 4];
-    const double p = std::max(std::min(a, b), std::min(std::max(a, b), c));
-    double *below = buf[lt].data(), *above = buf[1 - lt].data();
-#if defined(__x86_64__)
-    const auto [n_below, n_above] = avx2_enabled() ? partition_avx2(src, n, p, below, above)
-                                                   : partition_generic(src, n, p, below, above);
-#else
-    const auto [n_below, n_above] = partition_generic(src, n, p, below, above);
-#endif
-    if (r < n_below) {
-      n = n_below;
-    } else if (r >= n - n_above) {
-      r -= n - n_above;
-      n = n_above;
-      lt = 1 - lt;
-    } else {
-      return p;
-    }
-    src = buf[lt].data();
-  }
-  double* rest = buf[lt].data();
-  if (src != rest) std::copy(src, src + n, rest);
-  std::nth_element(rest, rest + r, rest + n);
-  return rest[r];
+// Quickselect by three-way partitions that do not branch on the values: std::nth_element's
+// partitions mispredict about every other comparison, which made narrowing a window rank 0's
+// largest statistics cost in small campaigns.
+void select_order_statistics(double* x, std::size_t n, const std::size_t* r, std::size_t k) {
+  thread_local std::vector<double> above;
+  if (above.size() < n) above.resize(n);
+  select_part(x, n, 0, r, r + k, above.data(), 0);
 }
 
 bool use_avx2_kernels(bool on) {

@@ -38,9 +38,10 @@ WindowCount count_window(const double* x, std::size_t n, double lo, double hi, C
 double count_windows_m2(const std::vector<double>& x, double x0, double dm, std::size_t nw, const double* lo,
                         const double* hi, WindowCount* c, std::vector<double>* const* kept, CountScratch& scratch);
 
-// The r-th smallest (0-based, r < n) of the finite values x[0..n): the value std::nth_element puts
-// at r (of equal values with other bits, -0.0 and +0.0, either one); x is left as it is.
-double calc_order_statistic(const double* x, std::size_t n, std::size_t r);
+// Puts the order statistics of the finite values x[0..n) at ranks r[0..k) (0-based, ascending, < n)
+// in their places: x[r[j]] is then the value a sort puts there (of equal values with other bits,
+// -0.0 and +0.0, any one).
+void select_order_statistics(double* x, std::size_t n, const std::size_t* r, std::size_t k);
 
 struct Gathered {
   std::size_t count = 0;
