@@ -393,17 +393,18 @@ __attribute__((target("avx2"))) std::pair<std::size_t, std::size_t> partition_av
 // ranks [r, r_end) among them. Each round: the median of three values as the pivot; the values
 // below it stored in place (never past the one read), those above it to `above` and back after the
 // pivot's copies, so that x reads [below][p ... p][above]; the part below recursively, the part
-// above in the loop. Runs of unlucky pivots and short parts end in std::sort.
+// above in the loop. Runs of unlucky pivots, short parts and a zero pivot end in std::sort.
 void select_part(double* x, std::size_t n, std::size_t base, const std::size_t* r, const std::size_t* r_end,
                  double* above, int depth) {
   while (r != r_end) {
-    if (n <= 16 || depth > 64) {
+    // A zero pivot: its copies' bits may differ (-0.0, +0.0) and must not be overwritten.
+    const double a = x[n / 4], b = x[n / 2], c = x[3 * n / 4];
+    const double p = std::max(std::min(a, b), std::min(std::max(a, b), c));
+    if (n <= 16 || depth > 64 || p == 0.0) {
       std::sort(x, x + n);
       return;
     }
     ++depth;
-    const double a = x[n / 4], b = x[n / 2], c = x[3 * n / 4];
-    const double p = std::max(std::min(a, b), std::min(std::max(a, b), c));
 #if defined(__x86_64__)
     const auto [n_below, n_above] = avx2_enabled() ? partition_avx2(x, n, p, x, above)
                                                    : partition_generic(x, n, p, x, above);

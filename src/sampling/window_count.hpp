@@ -39,8 +39,7 @@ double count_windows_m2(const std::vector<double>& x, double x0, double dm, std:
                         const double* hi, WindowCount* c, std::vector<double>* const* kept, CountScratch& scratch);
 
 // Puts the order statistics of the finite values x[0..n) at ranks r[0..k) (0-based, ascending, < n)
-// in their places: x[r[j]] is then the value a sort puts there (of equal values with other bits,
-// -0.0 and +0.0, any one).
+// in their places, as a sort would (of -0.0 and +0.0 at a rank, either one); x is only reordered.
 void select_order_statistics(double* x, std::size_t n, const std::size_t* r, std::size_t k);
 
 struct Gathered {
