@@ -1,5 +1,6 @@
 // The inner loops of the streamed column statistics: the usable values of a chunk's column
-// gathered and summed, and counted against a percentile window (window_count.hpp).
+// gathered and summed, counted against a percentile window, and order statistics selected
+// (window_count.hpp).
 #include "sampling/window_count.hpp"
 
 #include <algorithm>

@@ -1,7 +1,8 @@
 // The inner loops of the streamed column statistics (column_stats.hpp), apart because they hold
 // the vector kernels: a chunk's usable values gathered with their shifted sum, min and max, and
-// counted against a percentile window. Every result is the same, bit for bit, with either kernel
-// (use_avx2_kernels) as with the plain definitions.
+// counted against a percentile window; the order statistics that cut a window, selected. Every
+// result is the same, bit for bit, with either kernel (use_avx2_kernels) as with the plain
+// definitions.
 #pragma once
 #include <cstdint>
 #include <limits>
