@@ -306,6 +306,7 @@ TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bi
   std::mt19937_64 rng(23);
   std::normal_distribution<double> g(0.0, 1.0);
   const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  ChunkSummary reused;  // made again and again into the same room, as rank 0 does
   for (const bool avx2 : {false, true}) {
     const bool used = use_avx2_kernels(avx2);
     for (int trial = 0; trial < 120; ++trial) {
@@ -336,6 +337,9 @@ TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bi
       INFO("trial " << trial << ", rows " << rows << ", stride " << stride << ", AVX2 " << used);
       const ChunkSummary s = calc_chunk_summary(reinterpret_cast<const char*>(v.data()), rows, stride, use.data(), w);
       const ChunkSummary r = reference_summary(v, stride, use, w);
+      calc_chunk_summary(reinterpret_cast<const char*>(v.data()), rows, stride, use.data(), w, reused);
+      CHECK(reused.moments.count == r.moments.count);
+      CHECK(same_bits(reused.moments.m2, r.moments.m2));
       CHECK(s.moments.count == r.moments.count);
       CHECK(same_bits(s.moments.mean, r.moments.mean));
       CHECK(same_bits(s.moments.m2, r.moments.m2));
@@ -348,6 +352,8 @@ TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bi
         CHECK(s.at_hi[t] == r.at_hi[t]);
         REQUIRE(s.kept[t].size() == r.kept[t].size());
         CHECK(std::equal(s.kept[t].begin(), s.kept[t].end(), r.kept[t].begin(), same_bits));
+        CHECK((reused.below[t] == r.below[t] && reused.at_lo[t] == r.at_lo[t] && reused.at_hi[t] == r.at_hi[t]));
+        CHECK(reused.kept[t] == r.kept[t]);
       }
     }
   }
