@@ -5,8 +5,9 @@
 // chunk by chunk with H5Dwrite_chunk from these bytes: libdeflate compresses these columns 2.5
 // times as fast as the zlib call inside HDF5's own deflate filter (docs/benchmarks.md), and HDF5
 // 1.10 does not let a program replace that predefined filter (H5Zregister refuses its id). The
-// leading byte planes that deflate shrinks by under a tenth (the low mantissa bytes of dispersed
-// and computed values, random or nearly) go into the zlib stream as DEFLATE's stored blocks, the
+// leading byte planes that deflate would shrink by under a tenth (the low mantissa bytes of
+// dispersed and computed values, random or nearly: told by their byte entropy and repeats, without
+// deflating them) go into the zlib stream as DEFLATE's stored blocks, the
 // rest is compressed, and a constant chunk is compressed once per value: under half rank 0's time
 // per Table-1 result (files 1.2 % larger than storing only the planes deflate cannot shrink at
 // all: docs/benchmarks.md). Readers (h5py, pandas, xarray) see an ordinary shuffled, deflated

@@ -36,12 +36,15 @@ struct StoreOptions {
 };
 
 // Rows per chunk for a campaign of n runs (its first round): 4,096 (32 kB a float64 column) from
-// 65,536 runs up; smaller campaigns get at least 16 chunks of at least 512 rows (and no chunk
+// 32,768 runs up; smaller campaigns get at least 8 chunks of at least 1,024 rows (and no chunk
 // longer than the campaign), so that writing the chunks overlaps the runs instead of all falling
-// on the end. A function of the campaign alone: the file is the same on any number of ranks and
-// after --resume.
+// on the end. Each chunk of each dataset has fixed costs (an H5Dwrite_chunk, a deflate call, each
+// column's statistics merged): at 10,000 runs, chunks of 1,250 rows take rank 0 about 4 us a result
+// less than 16 chunks of 625 did, for a last chunk (written after the last run) twice as long
+// (docs/benchmarks.md). A function of the campaign alone: the file is the same on any number of
+// ranks and after --resume.
 inline std::int64_t find_chunk_runs(std::int64_t n_runs) {
-  const std::int64_t rows = n_runs / 16 < 512 ? 512 : n_runs / 16 > 4096 ? 4096 : n_runs / 16;
+  const std::int64_t rows = std::clamp<std::int64_t>(n_runs / 8, 1024, 4096);
   return std::max<std::int64_t>(1, std::min(rows, n_runs));
 }
 
