@@ -10,6 +10,8 @@
 // Each run is timed on its own with the steady clock (~40 ns a read, the same for both); which of
 // the two goes first alternates run by run. Run on an idle machine; wall times.
 // Usage: bench_campaign_paired CAMPAIGN.toml N_RUNS LEVEL DIR
+#include <malloc.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -34,6 +36,8 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: bench_campaign_paired CAMPAIGN.toml N_RUNS LEVEL DIR\n");
     return 2;
   }
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);  // as truss-campaign does (parallel/campaign_command.cpp): a chunk's
+  mallopt(M_TRIM_THRESHOLD, 256 << 20);  // blocks are reused from the heap, not mapped (and faulted in) anew
   const std::int64_t n = std::atoll(argv[2]);
   const int level = std::atoi(argv[3]);
   const std::string out = std::string(argv[4]) + "/bench_campaign_paired.h5";
