@@ -355,6 +355,25 @@ void check_file(const StoreFile& f, const RecordLayout& L, std::int64_t n, std::
 
 }  // namespace
 
+// The chunk rule as docs/hdf5-schema.md states it: chunks of 1,024 to 4,096 runs, never longer
+// than the campaign, and at least 8 of them while 4,096-run chunks would be fewer (so that writing
+// overlaps the runs); checked on every size up to 70,000 runs and a few larger ones.
+TEST_CASE("result store: chunks of clamp(n / 8, 1024, 4096) runs, at most n", "[campaign][store]") {
+  std::vector<std::int64_t> sizes;
+  for (std::int64_t n = 1; n <= 70000; ++n) sizes.push_back(n);
+  for (std::int64_t n : {std::int64_t{1} << 20, std::int64_t{1000000007}}) sizes.push_back(n);
+  int bad = 0;
+  for (const std::int64_t n : sizes) {
+    const std::int64_t c = find_chunk_runs(n), chunks = (n + c - 1) / c;
+    const bool ok = c >= 1 && c <= n && c <= 4096 && (c >= 1024 || c == n) &&
+                    (chunks >= 8 || c == 1024 || c == n) && (c == 4096 || chunks <= 9 || c == 1024);
+    bad += !ok;
+    if (!ok && bad < 5) FAIL_CHECK("n " << n << ": chunks of " << c << " runs, " << chunks << " of them");
+  }
+  CHECK(bad == 0);
+  CHECK(find_chunk_runs(10000) == 1250);  // the shipped Table-1 campaign: 8 chunks
+}
+
 TEST_CASE("result store: records in any order, over rounds that extend it, back at their rows", "[campaign][store]") {
   const CampaignContext ctx(test::small_campaign("latin_hypercube", 40));
   const RecordLayout& L = ctx.record;
