@@ -222,7 +222,7 @@ def case_resume(args):
     d = fresh(args, "resume")
     camp = os.path.join(args.repo, TABLE1)
     # Under the sanitizer stage (scripts/sanitize.sh sets TRUSS_SANITIZED=1) every run costs ~10x:
-    # 2,000 runs still leave the kill (at ~110 runs on disk) well inside the campaign.
+    # 2,000 runs (~9.4 MB of records) still leave the kill (at ~2 MB on disk) well inside the campaign.
     n = 2000 if os.environ.get("TRUSS_SANITIZED") else 5000
     sets = ["--set", f"ensemble.n_runs={n}"]
     ref = os.path.join(d, "ref.h5")
@@ -237,25 +237,16 @@ def case_resume(args):
            "--flush-interval", "0.01", "--progress", "none"]
     proc = subprocess.Popen(cmd, env=ENV, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     t0 = time.time()
-    # Kill once at least ~100 runs are on disk (a record is ~4.5 kB), well before the end.
+    # Kill once ~2 MB of records (~400 runs of ~4.7 kB) are on disk, well before the end (~23 MB).
     seen = []  # journal sizes observed while the job runs
     while time.time() - t0 < 120:
         if os.path.exists(journal):
             seen.append(os.path.getsize(journal))
-            if seen[-1] > 500_000:
+            if seen[-1] > 2_000_000:
                 break
         time.sleep(0.01)
+    running = proc.poll() is None
     t_kill = time.time() - t0
-    # The journal grows while runs are still being computed, by the periodic flush (every 0.01 s
-    # here: at ~10 MB/s of records a flush adds ~100 kB, so a poller that the two busy ranks starve
-    # for a few tens of ms still sees a size below 500 kB; 0.05 s failed so, once in a few CI runs):
-    # some observed size lies strictly between the first one seen (the header, or a flush)
-    # and the 1 MiB write-through
-    # buffer, which a journal written only by full buffers or the final flush never shows.
-    partial = [x for x in seen if seen[0] < x < (1 << 20)]
-    check(partial and t_kill < 0.6 * t_ref,
-          f"journal flushed while computing: {len(partial)} partial sizes seen, 500 kB after {t_kill:.2f} s "
-          f"of a {t_ref:.2f} s campaign")
     # kill -9 of the whole job: mpirun and every rank (Open MPI puts the ranks in their own
     # process groups, and a SIGKILLed mpirun cannot take them down).
     job = [proc.pid] + descendants(proc.pid)
@@ -269,6 +260,20 @@ def case_resume(args):
         time.sleep(0.01)
     check(not os.path.exists(out), "killed job left no results file")
     check(os.path.exists(journal), "killed job left its journal")
+    # The journal grows while runs are still being computed, by the periodic flush: rank 0 appends
+    # a heartbeat frame and writes its buffer out every flush interval, and otherwise only full
+    # 1 MiB buffers (the final sync comes after the last run). A size seen while the job ran that
+    # ends a heartbeat frame was such a flush. This holds however late the poller was scheduled
+    # (the CPU share of a poller beside two busy ranks, under ctest -j2, is not guaranteed: a check
+    # on sizes seen below the first 1 MiB failed so in CI).
+    from test_journal_faults import parse_journal  # the format parsed independently (imports this module)
+    with open(journal, "rb") as fh:
+        ends = {at + 9 + len(pl): kind for at, kind, pl in parse_journal(fh.read())[1]}
+    beats = sorted({x for x in seen if ends.get(x) == b"H"})
+    check(running and beats,
+          f"journal flushed while computing: {len(beats)} heartbeat flushes seen (last at {beats[-1] if beats else 0} "
+          f"bytes), job {'still running' if running else 'finished'} at the kill after {t_kill:.2f} s "
+          f"(uninterrupted: {t_ref:.2f} s)")
     with open(journal, "ab") as j:
         j.write(b"R\x10\x00\x00\x00torn")  # a frame cut short by the crash
     size = os.path.getsize(journal)
