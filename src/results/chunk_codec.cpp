@@ -1,7 +1,7 @@
 #include "results/chunk_codec.hpp"
 
 #include <emmintrin.h>
-#include <libdeflate.h>
+#include <isa-l/igzip_lib.h>
 
 #include <algorithm>
 #include <array>
@@ -72,8 +72,8 @@ std::size_t hdf5_deflate_buffer(std::size_t nbytes) {
   return static_cast<std::size_t>(std::ceil(static_cast<double>(nbytes) * static_cast<double>(1.001f)) + 12.0);
 }
 
-// The zlib header (RFC 1950) libdeflate writes for `level`: CM 8 with a 32 kB window, FLEVEL as
-// libdeflate maps the level, FCHECK making the 16-bit header a multiple of 31.
+// The zlib header (RFC 1950) for `level`: CM 8 with a 32 kB window, FLEVEL as zlib maps the level
+// (informative only: inflaters ignore it), FCHECK making the 16-bit header a multiple of 31.
 void put_zlib_header(int level, std::string& out) {
   const unsigned flevel = level < 2 ? 0 : level < 6 ? 1 : level == 6 ? 2 : 3;
   unsigned h = (0x78u << 8) | (flevel << 6);
@@ -98,13 +98,13 @@ void put_stored_blocks(std::string_view bytes, bool final, std::string& out) {
 }
 
 // What deflate would make of a sample of at most kSample bytes, estimated without running it (a
-// libdeflate call costs 4 us of set-up at level 1 whatever the size, 6-11 us on 625 bytes). Order-0
-// entropy H (s log2 s - sum c log2 c over the byte counts c, the size of a code that codes the bytes
-// one by one) plus the Huffman tables, about 20 bytes and 0.3 a distinct byte (fitted to libdeflate
-// level 1 on the planes of the Table-1 campaign); or, if smaller, the same with the bytes that
-// matches cover (count_matches) replaced by 2 bytes a match. It agrees with libdeflate on whether a
-// sample shrinks below 9/10 on 99.4 % of the planes of 10,000- and 100,000-run Table-1 campaigns;
-// the others are planes deflated that libdeflate would have stored, within a few % of the line.
+// deflate call is dearer than the whole estimate). Order-0 entropy H (s log2 s - sum c log2 c over
+// the byte counts c, the size of a code that codes the bytes one by one) plus the Huffman tables,
+// about 20 bytes and 0.3 a distinct byte (fitted to libdeflate level 1 on the planes of the Table-1
+// campaign); or, if smaller, the same with the bytes that matches cover (count_matches) replaced by
+// 2 bytes a match. It agrees with ISA-L's level 1 on whether a sample shrinks below 9/10 on 99.4 %
+// of the planes of 10,000- and 100,000-run Table-1 campaigns; the others are planes deflated that
+// ISA-L leaves at 0.90-0.96 of their size, never a plane stored that it would shrink.
 constexpr std::size_t kSample = 1024;
 
 const std::array<double, kSample + 1>& find_clogc() {  // c log2 c for c = 0 .. kSample
@@ -117,8 +117,9 @@ const std::array<double, kSample + 1>& find_clogc() {  // c log2 c for c = 0 .. 
 }
 
 // Bytes of p[0, s) covered by greedy matches of 4 bytes or more, and their number: at each position
-// the last one with the same hash of its 4 bytes, as libdeflate's fastest match finder (which, like
-// this, takes no match of 3: a run of 4 equal bytes between others is 4 literals to it).
+// the last one with the same hash of its 4 bytes, as the fastest deflate match finders (libdeflate's
+// level 1, ISA-L's), which like this take no match of 3: a run of 4 equal bytes between others is
+// 4 literals to them.
 std::pair<std::size_t, std::size_t> count_matches(const unsigned char* p, std::size_t s) {
   constexpr std::uint16_t kNone = 0xffff;  // positions are < kSample
   std::array<std::uint16_t, 4096> last;
@@ -170,8 +171,8 @@ bool is_noise(const unsigned char* p, std::size_t s) {
 // The leading byte planes of a shuffled chunk (es planes of `plane` bytes) that deflate hardly
 // shrinks: those whose first kSample bytes are estimated not to deflate below 9/10 of their size.
 // After the shuffle the planes of the low mantissa bytes come first, and of measured or dispersed
-// values they are noise or nearly so: libdeflate spends 5-7 ns a byte on them to save under a tenth,
-// against 2.5-4 ns for the planes of the exponent and high mantissa bytes that do compress.
+// values they are noise or nearly so: ISA-L's level 1 spends about 1 ns a byte on them to save under
+// a tenth (3.4 us a Table-1 result), the estimate and the stored copy about 0.5 us.
 // A pure function of the chunk's bytes: the file stays the same on any number of ranks.
 std::size_t count_noise_planes(const unsigned char* shuffled, std::size_t plane, std::size_t es) {
   const std::size_t s = std::min(plane, kSample);
@@ -180,8 +181,45 @@ std::size_t count_noise_planes(const unsigned char* shuffled, std::size_t plane,
   return k;
 }
 
+// ISA-L's igzip level for a zlib level: 1 -> 1 (its fastest with dynamic Huffman codes), 2 -> 2,
+// 3 to 9 -> 3 (its largest). On the Table-1 planes that compress, its level 1 takes 1.4 us a
+// result, zlib's 8.7 and libdeflate's 4.2 (2.6 ns a byte over the constant sign-and-exponent plane
+// that ends most chunks), for 189, 199 and 181 bytes: docs/benchmarks.md. ISA-L's levels 2 and 3
+// give the same sizes here; the strongest deflate (libdeflate's level 12, 110 times slower) would
+// take 155 bytes, 1 % of the file (mostly stored noise planes).
+int find_igzip_level(int level) { return std::min(level, 3); }
+
+// `in` as one raw DEFLATE stream (its last block final) at the end of `out`, in at most `cap`
+// bytes in all; false if it does not fit.
+bool put_deflated(const unsigned char* in, std::size_t n, int level, std::size_t cap, std::string& out) {
+  const int igzip = find_igzip_level(level);
+  thread_local std::vector<unsigned char> level_buf;  // level 1 needs none (ISA-L's stateless)
+  const std::size_t need = igzip == 2 ? ISAL_DEF_LVL2_DEFAULT : igzip == 3 ? ISAL_DEF_LVL3_DEFAULT : 0;
+  if (level_buf.size() < need) level_buf.resize(need);
+  const std::size_t at = out.size();
+  if (at >= cap) return false;
+  out.resize(cap);
+  isal_zstream s;
+  isal_deflate_stateless_init(&s);
+  s.level = static_cast<std::uint32_t>(igzip);
+  s.level_buf = need > 0 ? level_buf.data() : nullptr;
+  s.level_buf_size = static_cast<std::uint32_t>(need);
+  s.gzip_flag = IGZIP_DEFLATE;
+  s.end_of_stream = 1;
+  s.flush = NO_FLUSH;
+  s.next_in = const_cast<unsigned char*>(in);  // not written: ISA-L's struct is not const-correct
+  s.avail_in = static_cast<std::uint32_t>(n);
+  s.next_out = reinterpret_cast<unsigned char*>(out.data() + at);
+  s.avail_out = static_cast<std::uint32_t>(cap - at);
+  const int r = isal_deflate_stateless(&s);
+  if (r == STATELESS_OVERFLOW) return false;
+  if (r != COMP_OK) throw std::runtime_error(fmt::format("ISA-L deflate (level {}): error {}", igzip, r));
+  out.resize(at + s.total_out);
+  return true;
+}
+
 // Shuffled, then the zlib stream: header, the noise planes as stored blocks, the rest as one
-// libdeflate DEFLATE stream (its last block final), the Adler-32 of all of it (RFC 1950). Any
+// ISA-L DEFLATE stream (its last block final), the Adler-32 of all of it (RFC 1950). Any
 // inflater, HDF5's deflate filter among them, reads it like a single-call stream.
 std::uint32_t encode_filtered(std::string_view raw, std::size_t elem_size, int level, std::string& out) {
   thread_local std::string shuffled;  // reused: a chunk's dataset is the same size each time
@@ -189,14 +227,7 @@ std::uint32_t encode_filtered(std::string_view raw, std::size_t elem_size, int l
   const auto* sh = reinterpret_cast<const unsigned char*>(shuffled.data());
   shuffle(reinterpret_cast<const unsigned char*>(raw.data()), raw.size(), elem_size,
           reinterpret_cast<unsigned char*>(shuffled.data()));
-  struct Free {
-    void operator()(libdeflate_compressor* c) const { libdeflate_free_compressor(c); }
-  };
-  static std::array<std::unique_ptr<libdeflate_compressor, Free>, 10> compressors;
   if (level > 9) throw std::invalid_argument(fmt::format("deflate level {} (1 to 9)", level));
-  auto& c = compressors[static_cast<std::size_t>(level)];
-  if (!c) c.reset(libdeflate_alloc_compressor(level));
-  if (!c) throw std::runtime_error(fmt::format("libdeflate: no compressor for level {}", level));
   const std::size_t es = std::max<std::size_t>(elem_size, 1), plane = raw.size() / es;
   const std::size_t stored = plane > 1 ? count_noise_planes(sh, plane, es) * plane : 0;
   // Larger than HDF5's output buffer: HDF5 skips the optional deflate filter, so do we.
@@ -209,15 +240,8 @@ std::uint32_t encode_filtered(std::string_view raw, std::size_t elem_size, int l
   put_zlib_header(level, out);
   if (stored > 0) put_stored_blocks(std::string_view(shuffled).substr(0, stored), stored == raw.size(), out);
   if (out.size() + 4 > cap) return skip();
-  if (stored < raw.size()) {
-    const std::size_t at = out.size();
-    out.resize(cap - 4);
-    const std::size_t z = libdeflate_deflate_compress(c.get(), sh + stored, raw.size() - stored, out.data() + at,
-                                                      out.size() - at);
-    if (z == 0) return skip();
-    out.resize(at + z);
-  }
-  const std::uint32_t adler = libdeflate_adler32(1, sh, raw.size());
+  if (stored < raw.size() && !put_deflated(sh + stored, raw.size() - stored, level, cap - 4, out)) return skip();
+  const std::uint32_t adler = isal_adler32(1, sh, raw.size());
   for (const int shift : {24, 16, 8, 0}) out.push_back(static_cast<char>((adler >> shift) & 0xff));
   return 0;
 }
@@ -231,7 +255,8 @@ std::uint32_t encode_chunk(std::string_view raw, std::size_t elem_size, int leve
   }
   // A constant chunk (every element the same bytes: a quantity the scene never fills, NaN
   // throughout, or a count that does not vary) is encoded once per value, size and level and its
-  // bytes reused: libdeflate takes 2.6 ns a byte over runs of one byte, a check for them 0.1 ns.
+  // bytes reused: shuffle, ISA-L (0.06-0.3 ns a byte over runs of one byte) and Adler-32 cost
+  // 0.2-0.5 ns a byte, the check 0.1 ns (and a chunk that is not constant fails it at once).
   struct Constant {
     int level;
     std::size_t elem_size, size;

@@ -25,10 +25,10 @@ ALLOWED = {
 }
 # Besides the standard library: model/ and numerics/ take Eigen only; sampling/ (pure mathematics)
 # fmt, Boost.Math (the stopping rules' binomial law) and the compiler's x86 intrinsics (the AVX2
-# kernels of the column statistics, chosen at run time), util/ fmt and libdeflate (its CRC): no HDF5,
+# kernels of the column statistics, chosen at run time), util/ fmt and ISA-L (its CRC): no HDF5,
 # no MPI, no TOML.
 EXTERNAL_OK = {"numerics": ("",), "model": ("Eigen/",), "sampling": ("fmt/", "boost/math/", "immintrin.h"),
-               "util": ("fmt/", "libdeflate.h")}
+               "util": ("fmt/", "isa-l/")}
 
 
 def main():
