@@ -132,7 +132,7 @@ TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as sm
                         {random_doubles(4096 * 30, true, 3), H5T_NATIVE_DOUBLE, 8},  // a per-bay chunk (983 kB)
                         {random_doubles(1003, true, 4), H5T_NATIVE_DOUBLE, 8},  // not whole blocks of eight
                         {status, H5T_NATIVE_INT8, 1}};                            // statuses: shuffle is a no-op
-  for (int level : {1, 6}) {
+  for (int level : {1, 2, 6}) {  // ISA-L levels 1, 2 and 3
     for (const Case& c : cases) {
       std::uint32_t hdf5_mask = 99;
       const std::string hdf5 = hdf5_filtered_chunk(c.raw, c.type, c.es, level, hdf5_mask);
@@ -314,12 +314,15 @@ struct StoreFile {
     H5Dclose(d);
     return v;
   }
+  mutable std::int64_t null_strings = 0;  // of the last strings() read
   std::vector<std::string> strings(const std::string& ds, std::int64_t n) const {
     std::vector<char*> p(static_cast<std::size_t>(n));
     const hid_t d = H5Dopen2(file, ds.c_str(), H5P_DEFAULT);
     const hid_t t = H5Dget_type(d);
     REQUIRE(H5Dread(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, p.data()) >= 0);
-    std::vector<std::string> out(p.begin(), p.end());
+    std::vector<std::string> out;
+    for (const char* q : p) out.push_back(q ? q : "");  // NULL: an unwritten chunk (the fill value)
+    null_strings = static_cast<std::int64_t>(std::count(p.begin(), p.end(), nullptr));
     const hid_t space = H5Dget_space(d);
     H5Dvlen_reclaim(t, space, H5P_DEFAULT, p.data());
     H5Sclose(space);
@@ -380,6 +383,42 @@ TEST_CASE("result store: chunks of clamp(n / 8, 1024, 4096) runs, at most n", "[
   }
   CHECK(bad == 0);
   CHECK(find_chunk_runs(10000) == 1250);  // the shipped Table-1 campaign: 8 chunks
+}
+
+// /runs/message is written only for chunks that hold a message: with chunks of 2 runs and a stall
+// (with its message) at every run r % 7 == 3, chunks {2k, 2k+1} without such a run stay unwritten
+// and read back as NULL strings, the others hold their runs' messages and "" for the ok runs.
+TEST_CASE("result store: a chunk of runs without a message is not written", "[campaign][store]") {
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", 40));
+  const RecordLayout& L = ctx.record;
+  const StoreFile f("truss_test_store_messages.h5");
+  const std::int64_t n = 40;
+  {
+    ResultStore store(f.file, L, StoreOptions{2, 1});
+    store.extend(n);
+    for (std::int64_t r = 0; r < n; ++r) {
+      store.add(RecordView(test::distinct_record(L, r), L), 0);
+      while (store.write_pending()) store.write_next();
+    }
+    store.finish();
+  }
+  std::int64_t with_message = 0, nulls = 0;
+  for (std::int64_t k = 0; k < n / 2; ++k) {
+    const bool has = test::stalls(2 * k) || test::stalls(2 * k + 1);
+    with_message += has;
+    nulls += has ? 0 : 2;
+  }
+  const auto message = f.strings("runs/message", n);
+  CHECK(f.null_strings == nulls);
+  for (std::int64_t r = 0; r < n; ++r)
+    CHECK(message[static_cast<std::size_t>(r)] == (test::stalls(r) ? fmt::format("stall: run {}", r) : ""));
+  const hid_t d = H5Dopen2(f.file, "runs/message", H5P_DEFAULT);
+  const hid_t space = H5Dget_space(d);
+  hsize_t chunks = 0;
+  REQUIRE(H5Dget_num_chunks(d, space, &chunks) >= 0);
+  CHECK(static_cast<std::int64_t>(chunks) == with_message);  // 6 of the 20 chunks
+  H5Sclose(space);
+  H5Dclose(d);
 }
 
 TEST_CASE("result store: records in any order, over rounds that extend it, back at their rows", "[campaign][store]") {
