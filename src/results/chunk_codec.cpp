@@ -192,6 +192,7 @@ int find_igzip_level(int level) { return std::min(level, 3); }
 // `in` as one raw DEFLATE stream (its last block final) at the end of `out`, in at most `cap`
 // bytes in all; false if it does not fit.
 bool put_deflated(const unsigned char* in, std::size_t n, int level, std::size_t cap, std::string& out) {
+  if (n > UINT32_MAX) throw std::length_error(fmt::format("chunk of {} bytes: ISA-L takes under 4 GiB", n));
   const int igzip = find_igzip_level(level);
   thread_local std::vector<unsigned char> level_buf;  // level 1 needs none (ISA-L's stateless)
   const std::size_t need = igzip == 2 ? ISAL_DEF_LVL2_DEFAULT : igzip == 3 ? ISAL_DEF_LVL3_DEFAULT : 0;
