@@ -5,7 +5,7 @@ set -euo pipefail
 PKGS=(build-essential cmake pkg-config
       libeigen3-dev libopenmpi-dev openmpi-bin libhdf5-dev
       libsundials-dev catch2 libtomlplusplus-dev libcli11-dev libfmt-dev
-      libisal-dev         # ISA-L: the results file's chunk compression (13 times zlib's speed, same format), CRC-32
+      libisal-dev         # ISA-L: the results file's chunk compression (20 times zlib's speed, same format), CRC-32
       libboost-dev        # Boost.Math headers: Clopper-Pearson intervals, binomial CDF (src/sampling/stopping.cpp)
       python3-numpy python3-h5py python3-matplotlib python3-scipy python3-pandas
       python3-venv        # the truss-report package installed into a venv (test postproc_install)

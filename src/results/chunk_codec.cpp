@@ -184,7 +184,8 @@ std::size_t count_noise_planes(const unsigned char* shuffled, std::size_t plane,
 // ISA-L's igzip level for a zlib level: 1 -> 1 (its fastest with dynamic Huffman codes), 2 -> 2,
 // 3 to 9 -> 3 (its largest). On the Table-1 planes that compress, its level 1 takes 1.4 us a
 // result, zlib's 8.7 and libdeflate's 4.2 (2.6 ns a byte over the constant sign-and-exponent plane
-// that ends most chunks), for 189, 199 and 181 bytes: docs/benchmarks.md. ISA-L's levels 2 and 3
+// that ends most chunks), for 189, 199 and 181 bytes (each library alone on those planes of a
+// 10,000-run file; the whole codec: bench/bench_codec, docs/benchmarks.md). ISA-L's levels 2 and 3
 // give the same sizes here; the strongest deflate (libdeflate's level 12, 110 times slower) would
 // take 155 bytes, 1 % of the file (mostly stored noise planes).
 int find_igzip_level(int level) { return std::min(level, 3); }

@@ -2,10 +2,10 @@
 // filter (H5Z_FILTER_SHUFFLE, as H5Zshuffle.c) then the deflate filter (H5Z_FILTER_DEFLATE: a
 // zlib-format stream at the dataset's level, here from Intel's ISA-L, and HDF5 1.10's rule of
 // H5Zdeflate.c for a chunk that does not shrink). The results file's per-run datasets are written
-// chunk by chunk with H5Dwrite_chunk from these bytes: ISA-L's level 1 deflates these chunks 13
+// chunk by chunk with H5Dwrite_chunk from these bytes: this codec encodes Table-1 chunks about 20
 // times as fast as zlib's level 1, the call inside HDF5's own deflate filter, to the same size
-// (docs/benchmarks.md), and HDF5 1.10 does not let a program replace that predefined filter
-// (H5Zregister refuses its id). The leading byte planes that deflate would shrink by under a
+// (bench/bench_codec, docs/benchmarks.md), and HDF5 1.10 does not let a program replace that
+// predefined filter (H5Zregister refuses its id). The leading byte planes that deflate would shrink by under a
 // tenth (the low mantissa bytes of dispersed and computed values, random or nearly: told by their
 // byte entropy and repeats, without deflating them) go into the zlib stream as DEFLATE's stored
 // blocks, the rest is compressed, and a constant chunk is compressed once per value. Readers
