@@ -37,9 +37,10 @@ struct PhasePointT {
   T hinge_x_m = 0, hinge_y_m = 0;
   T drive_force_N = 0;
   // Drive force (N, along +y) that holds the mast at rest in this configuration: the diagonals'
-  // (spring) resistance alone, -dU/dy_m along the phase's path (no velocity, no acceleration).
-  // The inertial part of the drive force is drive_force_N - static_drive_force_N. NaN where not
-  // defined (the free stack, whose frames below the driven one have no rest configuration).
+  // (spring) resistance alone, dU/dy_m along the phase's path (no velocity, no acceleration); for
+  // the free stack with the deploying bay in its configuration and the frames below it in static
+  // equilibrium (model/static_resistance.hpp). The inertial part of the drive force is
+  // drive_force_N - static_drive_force_N.
   T static_drive_force_N = __builtin_nan("");
   T lambda_N = 0;                // rail multiplier (0 off the rail)
   T pin_force_N = 0;

@@ -82,8 +82,9 @@ struct RunResult {
   double motor_torque_margin_Nm = NAN_INIT();
   // The drive torque split into its resistances (the three screws together, along the run
   // direction, peaks over the smooth motion; impulses apart): static = the torque that holds the
-  // mast at rest in each configuration (the diagonals' springs, the model's only resistance), and
-  // inertial = drive torque - static (what accelerates the mast). NaN for the free stack.
+  // mast at rest in each configuration (the diagonals' springs, the model's only resistance; the
+  // free stack: with the deploying bay in its configuration, the frames below it in static
+  // equilibrium), and inertial = drive torque - static (what accelerates the mast).
   double peak_static_drive_torque_Nm = NAN_INIT();
   double peak_inertial_drive_torque_Nm = NAN_INIT();
   double peak_pin_force_N = NAN_INIT();

@@ -127,6 +127,11 @@ TEST_CASE("one-bay free stack equals the held stack (other coordinates, other im
     CHECK(fr.drive_work_J == Approx(held.drive_work_J).epsilon(1e-7));
     CHECK(fr.peak_drive_force_N == Approx(held.peak_drive_force_N).epsilon(1e-6));
     CHECK(fr.peak_pin_force_N == Approx(held.peak_pin_force_N).epsilon(1e-6));
+    // The static resistance is a function of the configuration (model/static_resistance.hpp), so
+    // its peak agrees as the other peaks do; the inertial part is the drive's minus it.
+    CHECK(fr.peak_static_drive_torque_Nm > 1e-4);
+    CHECK(fr.peak_static_drive_torque_Nm == Approx(held.peak_static_drive_torque_Nm).epsilon(1e-6));
+    CHECK(fr.peak_inertial_drive_torque_Nm == Approx(held.peak_inertial_drive_torque_Nm).epsilon(1e-6).margin(1e-12));
   }
 }
 
