@@ -20,7 +20,8 @@ of the friction-like terms is read from Table 4-2 (the equation's typesetting is
 This rigid, frictionless model has two of these resistances (the others are zero in it, and the
 report says they must be added by the user):
   S   = /runs/peak_static_drive_torque_Nm: the torque at the screws that holds the mast at rest in
-        each configuration of its path, (h / 2 pi) dU/dy_m, U the diagonals' strain energy (spring);
+        each configuration of its path, (h / 2 pi) dU/dy_m, U the diagonals' strain energy (spring;
+        the free stack: with the deploying bay in its configuration, the frames below at rest);
   T_D = /runs/peak_inertial_drive_torque_Nm: drive torque minus S, the torque that accelerates the
         mast (velocity drive: its prescribed motion is the acceleration requirement).
 Both are peaks over the run; they need not occur at the same instant, so S and T_D at their peaks
@@ -106,6 +107,11 @@ def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAI
             m.note = "the file has no /runs/motor_torque_at_speed_Nm"
             return m
         avail = c.motor_torque_at_speed
+        # The screw speed of the prescribed drive speed, 2 pi v / h (as section 4), and the motor's
+        # torque there, also when no margin can be computed.
+        m.omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
+        ok_avail = avail[c.ok & np.isfinite(avail)]
+        m.t_avail_min = float(np.min(ok_avail)) if ok_avail.size else float("nan")
     elif m.mode == "motor":
         avail = c.stall_torque
     else:
@@ -116,8 +122,7 @@ def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAI
         return m
     sel = c.ok & np.isfinite(s) & np.isfinite(d) & np.isfinite(avail)
     if not np.any(sel):
-        m.note = ("no ok run with a finite resistance and available torque (the free stack has no "
-                  "static resistance: NaN in the file)")
+        m.note = "no ok run with a finite resistance and available torque"
         return m
     s, d, avail = np.maximum(s[sel], 0.0), d[sel], avail[sel]   # S <= 0: the springs help
     t_min = _required(m, s, d)
@@ -143,7 +148,6 @@ def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAI
         na = e.nominal["motor_torque_at_speed_Nm"] if m.mode == "velocity" else m.stall_scene
         m.mf_nominal = (na - k_inertia * nd) / (k_uncertainty * e.nominal[STATIC])
     if m.mode == "velocity":
-        m.omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
         frac = 1.0 - m.omega / m.no_load_speed
         m.stall_needed = m.t_min_design / frac if frac > 0 else float("inf")
     else:

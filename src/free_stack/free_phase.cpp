@@ -21,7 +21,6 @@ FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m)
   active_.locked_mass_kg = ctx.locked_mass_kg;
   active_.panel_height_offset_m = ctx.panel_height_offset_m;
   layout_.frames = ctx.bay - lo + 1;
-  b2_m_ = calc_diagonal_offset_sq_m2(ctx.mast->frame(ctx.bay - 1), ctx.mast->frame(ctx.bay));
 }
 
 void FreePhaseA::expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const {
@@ -219,7 +218,7 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   p.hinge_y_m = 0.5 * (p.y_driven_m + p.y_lower_m);
   p.rail_distance_m = model::calc_rail_function_m(mast.rail, p.hinge_x_m, p.hinge_y_m) * std::sin(mast.rail.beta_rad);
   fill_bay_energies(mast, lo_, m, ys.data(), first, Md, Ms, qdot, p);
-  p.static_drive_force_N = model::calc_open_static_drive_force_N(mast.bay(m), b2_m_, D);
+  p.static_drive_force_N = model::calc_open_static_drive_force_N(-sys.spring_forces[sys.spring_forces.size() - 1]);
   p.mass_yy = Md[n - 1];
   return p;
 }

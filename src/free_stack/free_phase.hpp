@@ -98,7 +98,6 @@ class FreePhaseA final : public PhaseModel {
   double held_height_m_;
   bool watch_rail_top_ = false;
   ContactLayout layout_;
-  double b2_m_ = 0;  // b^2 of bay m (the static drive force, model/static_resistance.hpp)
   int rail_touch() const { return ctx_.direction > 0 ? 1 : 0; }  // deployment: the rail is a touch
   // Frame heights and velocities from frame max(lo - 1, 0) to m (the held frame lo - 1 included).
   void expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const;

@@ -25,10 +25,7 @@ FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, do
   active_.locked_mass_kg = ctx.locked_mass_kg;
   active_.panel_height_offset_m = ctx.panel_height_offset_m;
   layout_.frames = ctx.bay - lo;
-  const MastParams& mast = *ctx.mast;
-  rail_ = calc_rail_constants(mast.rail);
-  b2_m_ = calc_diagonal_offset_sq_m2(mast.frame(ctx.bay - 1), mast.frame(ctx.bay));
-  chain_slack_span_m_ = calc_chain_slack_span_m(mast, 1, ctx.bay - 1);
+  chain_slack_span_m_ = calc_chain_slack_span_m(*ctx.mast, 1, ctx.bay - 1);
 }
 
 void FreePhaseB::expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const {
@@ -218,7 +215,7 @@ PhasePoint FreePhaseB::evaluate(const double* q, const double* qdot, double* qdd
   p.rail_slope = c - x / s;
   // At rest with the hinge at x, bays 1..m-1 below frame m-1 pull with their chain's equilibrium tension.
   const double pull = m >= 2 ? calc_chain_pull_N(mast, 1, m - 1, y_l - held_height_m_, chain_slack_span_m_) : 0.0;
-  p.static_drive_force_N = calc_on_rail_static_drive_force_N(rail_, mast.bay(m), b2_m_, x, pull);
+  p.static_drive_force_N = calc_on_rail_static_drive_force_N(c, x / s, -sys.spring_forces[sys.spring_forces.size() - 1], pull);
   return p;
 }
 

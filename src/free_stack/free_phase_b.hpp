@@ -22,7 +22,6 @@
 #include <vector>
 
 #include "model/frames.hpp"
-#include "model/rail.hpp"
 #include "model/tridiagonal.hpp"
 #include "free_stack/free_contacts.hpp"
 #include "stages/phase.hpp"
@@ -72,10 +71,7 @@ class FreePhaseB final : public PhaseModel {
   int lo_;
   double held_height_m_, alpha_;
   ContactLayout layout_;
-  // The static drive force's constants (model/static_resistance.hpp): the rail's, bay m's b^2 and
-  // the slack span of bays 1..m-1.
-  model::RailConstants rail_;
-  double b2_m_ = 0, chain_slack_span_m_ = 0;
+  double chain_slack_span_m_ = 0;  // of bays 1..m-1 (the static drive force, model/static_resistance.hpp)
   PhasePoint evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, Eigen::VectorXd* mass_diag,
                       Eigen::VectorXd* mass_sub) const;
   // Heights and velocities of frames max(lo - 1, 0)..m (frame m from x).

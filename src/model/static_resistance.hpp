@@ -27,21 +27,17 @@
 
 #include "model/bay.hpp"
 #include "model/params.hpp"
-#include "model/rail.hpp"
 
 namespace truss::model {
 
-// Off the rail: F = U_m'(D_m), the pull of the deploying bay's diagonals (N).
-inline double calc_open_static_drive_force_N(const BayParams& bay_m, double offset_sq_m2, double D_m) {
-  return calc_bay_dU_dD_N(bay_m, offset_sq_m2, D_m);
-}
+// Off the rail: F = U_m'(D_m), the pull of the deploying bay's diagonals (N), which the frame
+// system already holds as minus the spring force on the driven frame (model/frames.hpp).
+inline double calc_open_static_drive_force_N(double bay_pull_N) { return bay_pull_N; }
 
-// On the rail, at hinge offset x, with the chain below pulling P (N).
-inline double calc_on_rail_static_drive_force_N(const RailConstants& rail, const BayParams& bay_m, double offset_sq_m2,
-                                                double x, double chain_pull_N) {
-  const OnRailKinematics k = calc_on_rail(rail, bay_m.strut_length_m, x);
-  const double dD_dx = -2.0 * k.x_over_s;
-  return (calc_bay_dU_dD_N(bay_m, offset_sq_m2, 2.0 * k.s) * dD_dx + chain_pull_N * k.dZ) / k.dY;
+// On the rail: bay m pulling U_m'(D) = bay_pull_N at the hinge offset with x / s = x_over_s, the
+// chain below pulling P = chain_pull_N; D' = -2 x / s, Z' = -c + x / s, Y' = -c - x / s.
+inline double calc_on_rail_static_drive_force_N(double cot_beta, double x_over_s, double bay_pull_N, double chain_pull_N) {
+  return (bay_pull_N * (-2.0 * x_over_s) + chain_pull_N * (x_over_s - cot_beta)) / (-cot_beta - x_over_s);
 }
 
 // d^2U/dD^2 of a bay (N/m): 0 while slack.
@@ -51,14 +47,15 @@ inline double calc_bay_d2U_dD2_N_per_m(const BayParams& b, double offset_sq_m2, 
   return 6.0 * b.diagonal_stiffness_N_per_m * (D * D / (L * L) + stretch * offset_sq_m2 / (L * L * L));
 }
 
-// The opening (m) at which bay b's diagonals pull with dU/dD = pull_N (>= 0): Newton's method
-// kept inside a shrinking bracket (bisection where a step leaves it), to the rounding of D.
-inline double calc_bay_opening_at_pull_m(const BayParams& b, double offset_sq_m2, double pull_N) {
+// The opening (m) at which bay b's diagonals pull with dU/dD = pull_N (>= 0): Newton's method from
+// guess_m (or straight) kept inside a shrinking bracket (bisection where a step leaves it), to the
+// rounding of D.
+inline double calc_bay_opening_at_pull_m(const BayParams& b, double offset_sq_m2, double pull_N, double guess_m = 1e300) {
   const double taut = std::max(calc_taut_opening_m(b, offset_sq_m2), 0.0), straight = 2.0 * b.strut_length_m;
   if (!(pull_N > 0.0)) return taut;
   if (!(calc_bay_dU_dD_N(b, offset_sq_m2, straight) > pull_N)) return straight;
   const double tol = 4.0 * std::numeric_limits<double>::epsilon() * straight;
-  double lo = taut, hi = straight, D = straight;
+  double lo = taut, hi = straight, D = guess_m > taut && guess_m < straight ? guess_m : straight;
   for (int it = 0; it < 100 && hi - lo > tol; ++it) {
     const double g = calc_bay_dU_dD_N(b, offset_sq_m2, D) - pull_N;
     if (g == 0.0) return D;
@@ -85,23 +82,30 @@ inline double calc_chain_slack_span_m(const MastParams& mast, int first_bay, int
 // last placed): 0 when span_m <= slack_span_m (calc_chain_slack_span_m), else the root of
 // sum_i D_i(P) = span_m, increasing in P, by Newton's method (d span / dP = sum 1 / U_i''(D_i)) kept
 // inside a shrinking bracket, to the rounding of P; +inf when the span needs every bay straight.
+// It starts from the mean pull at equal openings (the root itself when the bays are equal), each
+// bay's opening from that opening. A single bay pulls U'(span) directly.
 inline double calc_chain_pull_N(const MastParams& mast, int first_bay, int last_bay, double span_m, double slack_span_m) {
   if (!(span_m > slack_span_m) || last_bay < first_bay) return 0.0;
-  double lo = 0.0, hi = 0.0, straight = 0.0;
+  const int count = last_bay - first_bay + 1;
+  const double even = span_m / count;
+  double lo = 0.0, hi = 0.0, straight = 0.0, P = 0.0;
   for (int i = first_bay; i <= last_bay; ++i) {
     const BayParams& b = mast.bay(i);
+    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
     straight += 2.0 * b.strut_length_m;
-    hi = std::max(hi, calc_bay_dU_dD_N(b, calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i)), 2.0 * b.strut_length_m));
+    hi = std::max(hi, calc_bay_dU_dD_N(b, b2, 2.0 * b.strut_length_m));
+    P += calc_bay_dU_dD_N(b, b2, std::min(even, 2.0 * b.strut_length_m)) / count;
   }
   if (!(span_m < straight)) return std::numeric_limits<double>::infinity();
+  if (count == 1) return P;
   const double tol = 4.0 * std::numeric_limits<double>::epsilon() * hi;
-  double P = 0.5 * hi;
+  if (!(P > lo && P < hi)) P = 0.5 * hi;
   for (int it = 0; it < 200 && hi - lo > tol; ++it) {
     double g = -span_m, compliance = 0.0;
     for (int i = first_bay; i <= last_bay; ++i) {
       const BayParams& b = mast.bay(i);
       const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
-      const double D = calc_bay_opening_at_pull_m(b, b2, P);
+      const double D = calc_bay_opening_at_pull_m(b, b2, P, even);
       g += D;
       const double stiff = calc_bay_d2U_dD2_N_per_m(b, b2, D);
       if (stiff > 0.0 && D < 2.0 * b.strut_length_m) compliance += 1.0 / stiff;

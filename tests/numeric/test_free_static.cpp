@@ -13,6 +13,7 @@
 
 #include "free_stack/free_phase.hpp"
 #include "free_stack/free_phase_b.hpp"
+#include "model/rail.hpp"
 #include "model/static_resistance.hpp"
 #include "stages/held_phase.hpp"
 #include "test_helpers.hpp"
