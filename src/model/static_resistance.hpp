@@ -81,7 +81,8 @@ inline double calc_chain_slack_span_m(const MastParams& mast, int first_bay, int
 // The equilibrium pull P (N) of bays first..last in series spanning span_m (frame first-1 held, frame
 // last placed): 0 when span_m <= slack_span_m (calc_chain_slack_span_m), else the root of
 // sum_i D_i(P) = span_m, increasing in P, by Newton's method (d span / dP = sum 1 / U_i''(D_i)) kept
-// inside a shrinking bracket, to the rounding of P; +inf when the span needs every bay straight.
+// inside a shrinking bracket, to the rounding of P; at a span that needs every bay straight, the
+// largest pull of a bay at straight (the smallest pull that holds it there; continuous in the span).
 // It starts from the mean pull at equal openings (the root itself when the bays are equal), each
 // bay's opening from that opening. A single bay pulls U'(span) directly.
 inline double calc_chain_pull_N(const MastParams& mast, int first_bay, int last_bay, double span_m, double slack_span_m) {
@@ -96,7 +97,7 @@ inline double calc_chain_pull_N(const MastParams& mast, int first_bay, int last_
     hi = std::max(hi, calc_bay_dU_dD_N(b, b2, 2.0 * b.strut_length_m));
     P += calc_bay_dU_dD_N(b, b2, std::min(even, 2.0 * b.strut_length_m)) / count;
   }
-  if (!(span_m < straight)) return std::numeric_limits<double>::infinity();
+  if (!(span_m < straight)) return hi;
   if (count == 1) return P;
   const double tol = 4.0 * std::numeric_limits<double>::epsilon() * hi;
   if (!(P > lo && P < hi)) P = 0.5 * hi;
