@@ -335,10 +335,13 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       continue;
     }
     if (dot == std::string::npos ||
-        (tname != "ensemble" && tname != "campaign" && tname != "output" && !detail::is_method_table(c, tname)))
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, the method's tables "
-                                   "(failure.*) and base-scene keys (mast.n_bays=12 or scene.mast.n_bays=12) can be "
-                                   "set", arg));
+        (tname != "ensemble" && tname != "campaign" && tname != "output" && !detail::is_method_table(c, tname))) {
+      std::string tables;
+      for (const MethodSyntax* r : c.methods->list())
+        for (const std::string& t : r->root_tables) tables += ", " + t + ".*";
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*{} and base-scene keys "
+                                   "(mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg, tables));
+    }
     toml::table v = parse_override_value(value);
     std::string kname = key.substr(dot + 1);
     toml::table* t = &root;

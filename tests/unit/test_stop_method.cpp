@@ -68,6 +68,16 @@ TEST_CASE("[ensemble.stop]: a rule that can never be met, and other bad input, r
   CHECK(back.ensemble.method.as<methods::StopOptions>().rule.level == 0.99);
   CHECK(back.ensemble.method.as<methods::StopOptions>().rule.max_runs == 5000);
   CHECK(back.ensemble.method.as<methods::StopOptions>().output == "peak_drive_force_N");
+  // method = "stop" names the method that the table alone selects: the same resolved campaign (which
+  // keeps the table-alone form under "design"); under another method the table is refused at its line.
+  const campaign::CampaignOptions named =
+      methods::parse_campaign_text(stop_text("method = \"stop\"", kPercentile), "stop.toml", ".");
+  CHECK(named.ensemble.method.name() == "stop");
+  CHECK(campaign::resolved_campaign_toml(named) == campaign::resolved_campaign_toml(o));
+  CHECK(campaign::resolved_campaign_toml(o).find("method = \"design\"\n\n[ensemble.stop]\n") != std::string::npos);
+  CHECK(error_of(stop_text("method = \"subset\"", kPercentile))
+            .find("stop.toml:5: ensemble.stop: [ensemble.stop] goes with ensemble.method = \"stop\", not \"subset\"") !=
+        std::string::npos);
 }
 
 // Values uniform on (0, 1) by run (the Monte Carlo generator itself), every tenth run a stall:
