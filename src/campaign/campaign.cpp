@@ -95,7 +95,8 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
       detail::check_method_key(c, key, v);
     } else {
       std::string tables;
-      for (const std::string& m : detail::method_names(c)) tables += ", [ensemble." + m + "]";
+      for (const std::string& m : detail::method_names(c))
+        if (m != kDefaultMethod) tables += ", [ensemble." + m + "]";  // the design has no keys of its own
       c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
                              "ensemble.max_run_wall_time_s, ensemble.method{})", key, tables));
     }

@@ -86,9 +86,9 @@ using campaign::detail::get_integer;
 using campaign::detail::get_number;
 using campaign::detail::get_string;
 
-void parse_subset_table(const Ctx& c, const toml::table& t, SubsetSettings& s) {
+void parse_subset_table(const Ctx& c, const toml::table& t, const std::string& prefix, SubsetSettings& s) {
   for (const auto& [k, v] : t) {
-    const std::string key = "ensemble.subset." + std::string(k.str());
+    const std::string key = prefix + std::string(k.str());
     if (k == "n_per_level") s.n_per_level = get_integer(c, v, key);
     else if (k == "p0") s.p0 = get_number(c, v, key);
     else if (k == "max_levels") {
@@ -96,8 +96,8 @@ void parse_subset_table(const Ctx& c, const toml::table& t, SubsetSettings& s) {
       if (m < 1 || m > 1000) c.fail(&v, fmt::format("{}: {} (must lie in [1, 1000])", key, m));
       s.max_levels = static_cast<int>(m);
     } else if (k == "proposal_half_width") s.proposal_half_width = get_number(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.subset.n_per_level, ensemble.subset.p0, "
-                                "ensemble.subset.max_levels, ensemble.subset.proposal_half_width)", key));
+    else c.fail(&v, fmt::format("unknown key '{}' (known: {}n_per_level, {}p0, {}max_levels, {}proposal_half_width)",
+                                key, prefix, prefix, prefix, prefix));
   }
 }
 
@@ -136,7 +136,7 @@ void parse_failure_table(const Ctx& c, const toml::table& t, FailureOptions& f) 
 
 std::unique_ptr<campaign::MethodOptions> SubsetMethodOptions::parse(const campaign::MethodInput& in) {
   auto o = std::make_unique<SubsetMethodOptions>();
-  if (in.table != nullptr) parse_subset_table(in.ctx, *in.table, o->subset);
+  if (in.table != nullptr) parse_subset_table(in.ctx, *in.table, in.prefix, o->subset);
   if (const toml::table* f = in.root["failure"].as_table()) parse_failure_table(in.ctx, *f, o->failure);
   return o;
 }
