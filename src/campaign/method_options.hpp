@@ -19,14 +19,10 @@
 #include <typeinfo>
 #include <vector>
 
-#include <toml++/toml.h>
-
 namespace truss::campaign {
 
 struct CampaignOptions;
-namespace detail {
-struct Ctx;
-}
+struct MethodInput;  // what a row's parser reads (toml_read.hpp)
 
 inline constexpr const char* kDefaultMethod = "design";
 
@@ -90,14 +86,6 @@ class MethodChoice {
  private:
   std::string name_, written_;
   std::unique_ptr<MethodOptions> options_;
-};
-
-// What a row's parser reads: the campaign's tree, its own table and where messages point.
-struct MethodInput {
-  const detail::Ctx& ctx;      // file and --set of each value (campaign/toml_read.hpp's getters)
-  const toml::table& root;     // the campaign file (the row's root tables, e.g. [failure])
-  const toml::table* table;    // [ensemble.<name>], or null: the defaults
-  std::string prefix;          // "ensemble.<name>.": the keys' names in messages
 };
 
 // A row as the campaign parser sees it.

@@ -29,6 +29,23 @@ struct Ctx {
   }
 };
 
+}  // namespace truss::campaign::detail
+
+namespace truss::campaign {
+
+// What a method's row reads (method_options.hpp): the campaign's tree, its own table and where
+// messages point.
+struct MethodInput {
+  const detail::Ctx& ctx;      // file and --set of each value (the getters below); ctx.methods
+  const toml::table& root;     // the campaign file (the row's root tables, e.g. [failure])
+  const toml::table* table;    // [ensemble.<name>], or null: the defaults
+  std::string prefix;          // "ensemble.<name>.": the keys' names in messages
+};
+
+}  // namespace truss::campaign
+
+namespace truss::campaign::detail {
+
 inline std::string join(const std::vector<std::string>& v) {
   std::string s;
   for (const auto& x : v) s += (s.empty() ? "\"" : ", \"") + x + "\"";
