@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "methods/fixed_design.hpp"
+#include "methods/method_table.hpp"
 #include "sim/simulate.hpp"
 
 using namespace truss;
@@ -45,7 +46,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> sets;
   if (argc > 2) sets.push_back(std::string("ensemble.n_runs=") + argv[2]);
   const int repeats = argc > 3 ? std::max(1, std::atoi(argv[3])) : 3;
-  const campaign::CampaignContext ctx(campaign::parse_campaign_file(argv[1], sets));
+  const campaign::CampaignContext ctx(methods::parse_campaign_file(argv[1], sets));
   const methods::FixedDesign design(ctx);
   const methods::RoundPlan plan{0, 0, ctx.options.ensemble.n_runs, {}};
   const auto n = plan.n_runs;

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "methods/fixed_design.hpp"
+#include "methods/method_table.hpp"
 #include "results/campaign_file.hpp"
 #include "results/journal.hpp"
 #include "sim/simulate.hpp"
@@ -41,7 +42,7 @@ int main(int argc, char** argv) {
   const std::int64_t n = std::atoll(argv[2]);
   const int level = std::atoi(argv[3]);
   const std::string out = std::string(argv[4]) + "/bench_campaign_paired.h5";
-  const campaign::CampaignContext ctx(campaign::parse_campaign_file(argv[1], {"ensemble.n_runs=" + std::to_string(n)}));
+  const campaign::CampaignContext ctx(methods::parse_campaign_file(argv[1], {"ensemble.n_runs=" + std::to_string(n)}));
   const methods::FixedDesign design(ctx);
   const methods::RoundPlan plan{0, 0, n, {}};
   std::filesystem::remove(out + ".journal");

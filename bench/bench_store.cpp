@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "methods/fixed_design.hpp"
+#include "methods/method_table.hpp"
 #include "results/campaign_file.hpp"
 #include "results/journal.hpp"
 #include "util/bytes.hpp"
@@ -96,7 +97,7 @@ int main(int argc, char** argv) {
   const std::int64_t distinct = std::min<std::int64_t>(n, pos.size() > 3 ? std::atoll(pos[3].c_str()) : 2000);
   const std::string dir = pos.size() > 4 ? pos[4] : ".";
   sets.push_back("ensemble.n_runs=" + std::to_string(n));
-  const campaign::CampaignContext ctx(campaign::parse_campaign_file(pos[0], sets));
+  const campaign::CampaignContext ctx(methods::parse_campaign_file(pos[0], sets));
   const methods::FixedDesign design(ctx);
   const methods::RoundPlan plan{0, 0, n, {}};
   std::vector<std::string> frames(static_cast<std::size_t>(distinct));

@@ -90,21 +90,15 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
     } else if (k == "max_run_wall_time_s") {
       o.ensemble.max_run_wall_time_s = get_number(c, v, key);
     } else if (k == "method") {
-      const std::vector<std::string> names(std::begin(kEnsembleMethodNames), std::end(kEnsembleMethodNames));
-      o.ensemble.method = static_cast<EnsembleMethod>(index_of(names, get_string(c, v, key, names)));
-    } else if (k == "stop") {  // a table, or false (--set ensemble.stop=false: the file's n_runs, one round)
-      const toml::table* s = v.as_table();
-      if (s) detail::parse_stop_table(c, *s, o);
-      else if (v.value_exact<bool>() != std::optional<bool>(false))
-        c.fail(&v, "ensemble.stop must be a table ([ensemble.stop]), or false to run n_runs in one round");
-    } else if (k == "subset") {
-      const toml::table* s = v.as_table();
-      if (!s) c.fail(&v, "ensemble.subset must be a table ([ensemble.subset])");
-      detail::parse_subset_table(c, *s, o);
+      get_string(c, v, key, detail::method_names(c));  // the row reads its tables (detail::parse_method)
+    } else if (c.methods->find(k.str()) != nullptr) {
+      detail::check_method_key(c, key, v);
     } else {
+      std::string tables;
+      for (const std::string& m : detail::method_names(c))
+        if (m != kDefaultMethod) tables += ", [ensemble." + m + "]";  // the design has no keys of its own
       c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
-                             "ensemble.max_run_wall_time_s, ensemble.method, [ensemble.subset], "
-                             "[ensemble.stop])", key));
+                             "ensemble.max_run_wall_time_s, ensemble.method{})", key, tables));
     }
   }
 }
@@ -237,7 +231,8 @@ std::string validate_dispersion(const CampaignOptions& o, std::size_t i) {
   return {};
 }
 
-// The rules of the sampling method: a Saltelli design's blocks, and each plan's limits.
+}  // namespace
+
 std::string validate_sampling(const CampaignOptions& o) {
   const std::int64_t n = o.ensemble.n_runs;
   if (o.ensemble.sampling != SamplingMethod::saltelli) {
@@ -254,8 +249,6 @@ std::string validate_sampling(const CampaignOptions& o) {
                        b, b, 2 * b, n, std::max<std::int64_t>(2, n / b) * b);
   return {};
 }
-
-}  // namespace
 
 std::string CampaignOptions::validate() const {
   if (ensemble.n_runs < 1)
@@ -282,9 +275,8 @@ std::string CampaignOptions::validate() const {
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = check_dispersion_draws(*this, i); !e.empty())
       return fmt::format("dispersion[{}]: {}", i + 1, e);
-  if (std::string e = detail::validate_method(*this); !e.empty()) return e;
-  if (ensemble.method == EnsembleMethod::subset) return {};
-  return validate_sampling(*this);
+  if (!ensemble.method) return "ensemble.method: none chosen";
+  return ensemble.method.options().validate(*this);
 }
 
 // Which keys may be dispersed, and how: the scene key table (sim/scene_keys.hpp).
@@ -344,9 +336,13 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       continue;
     }
     if (dot == std::string::npos ||
-        (tname != "ensemble" && tname != "campaign" && tname != "output" && tname != "failure"))
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, failure.* and base-scene "
-                                   "keys (mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg));
+        (tname != "ensemble" && tname != "campaign" && tname != "output" && !detail::is_method_table(c, tname))) {
+      std::string tables;
+      for (const MethodSyntax* r : c.methods->list())
+        for (const std::string& t : r->root_tables) tables += ", " + t + ".*";
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*{} and base-scene keys "
+                                   "(mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg, tables));
+    }
     toml::table v = parse_override_value(value);
     std::string kname = key.substr(dot + 1);
     toml::table* t = &root;
@@ -369,10 +365,8 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
 
   CampaignOptions o;
   for (const auto& [k, v] : root) {
-    if (k == "failure") {
-      const toml::table* t = v.as_table();
-      if (!t) c.fail(&v, "'failure' must be a table");
-      detail::parse_failure_table(c, *t, o);
+    if (detail::is_method_table(c, k.str())) {
+      if (!v.as_table()) c.fail(&v, fmt::format("'{}' must be a table", k.str()));  // read by its method's row
     } else if (k == "campaign" || k == "ensemble" || k == "scene" || k == "output") {
       const toml::table* t = v.as_table();
       if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
@@ -386,11 +380,13 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       for (std::size_t i = 0; i < a->size(); ++i)
         o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
     } else {
-      c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, output, scene, failure, "
-                             "[[dispersion]])", k.str()));
+      std::string known = "campaign, ensemble, output, scene";
+      for (const MethodSyntax* r : c.methods->list())
+        for (const std::string& t : r->root_tables) known += ", " + t;
+      c.fail(&v, fmt::format("unknown table '{}' (known: {}, [[dispersion]])", k.str(), known));
     }
   }
-  detail::derive_subset_runs(c, root, o);
+  detail::parse_method(c, root, o);
   // Base scene: file relative to the campaign file, then inline tables, overrides, --set scene.*.
   std::vector<io::SceneSetting> sets = o.scene_settings;
   sets.insert(sets.end(), scene_sets.begin(), scene_sets.end());
@@ -418,8 +414,8 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
 }  // namespace
 
 CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name, const std::string& base_dir,
-                                    const std::vector<std::string>& overrides) {
-  Ctx c{source_name, {}};
+                                    const MethodCatalog& methods, const std::vector<std::string>& overrides) {
+  Ctx c{source_name, {}, &methods};
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -430,8 +426,9 @@ CampaignOptions parse_campaign_text(std::string_view text, const std::string& so
   return parse_campaign_root(std::move(root), c, base_dir, overrides);
 }
 
-CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides) {
-  Ctx c{path, {}};
+CampaignOptions parse_campaign_file(const std::string& path, const MethodCatalog& methods,
+                                    const std::vector<std::string>& overrides) {
+  Ctx c{path, {}, &methods};
   toml::table root;
   const std::string text = io::read_input_file(path, "campaign file");  // bounded in size
   try {

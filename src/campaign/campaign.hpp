@@ -4,15 +4,11 @@
 //
 //   [campaign]   name, description
 //   [ensemble]   n_runs, master_seed, sampling ("monte_carlo" | "latin_hypercube" | "sobol" |
-//                "saltelli"), max_run_wall_time_s, method ("design": the sampling's fixed design;
-//                "subset": subset simulation of a failure probability, its runs set by
-//                [ensemble.subset] n_per_level, p0, max_levels, proposal_half_width, not n_runs)
-//   [ensemble.stop]  sequential stopping of a Monte Carlo design: rounds (the first n_runs runs,
-//                then as many as the target asks) until target ("percentile_bound" of output at
-//                level; "probability_half_width" | "probability_relative_half_width" of the share of
-//                runs that are not ok) holds to width at confidence, or max_runs is reached
-//   [failure]    subset: the failure event, as margin = "<column>" (a margin column, failed when
-//                <= 0) or column = "<column>", above | below = threshold, unit = the column's unit
+//                "saltelli"), max_run_wall_time_s, method (a row of the method table,
+//                methods/method_table.hpp: "design", the sampling's fixed design (the default);
+//                "stop", sequential stopping; "subset", subset simulation of a failure probability)
+//   [ensemble.<method>] and the root tables a method claims ([failure]): the method's own options,
+//                read and checked by its row (method_options.hpp; docs/campaigns.md lists them)
 //   [output]     history_runs = [run indices], history_step_s (decimated histories stored)
 //   [scene]      file (path relative to the campaign file; default: Table 1 defaults),
 //                overrides = { "drive.mode" = "motor", ... }, and/or the scene inline as
@@ -26,10 +22,9 @@
 #include <string>
 #include <vector>
 
+#include "campaign/method_options.hpp"
 #include "io/scene_toml.hpp"
 #include "sampling/sampling.hpp"
-#include "sampling/stopping.hpp"
-#include "sampling/subset_simulation.hpp"
 #include "sim/scene.hpp"
 
 namespace truss::campaign {
@@ -52,44 +47,14 @@ struct DispersionOptions {
   int line = 0;                     // line of the [[dispersion]] entry, for messages
 };
 
-enum class EnsembleMethod { design, subset };
-inline constexpr const char* kEnsembleMethodNames[] = {"design", "subset"};
-
-// The settings of subset simulation a campaign file gives (sampling::SubsetOptions has its rules;
-// its dims and seed come from the dispersions and ensemble.master_seed).
-struct SubsetSettings {
-  std::int64_t n_per_level = 2000;
-  double p0 = 0.1;
-  int max_levels = 20;
-  double proposal_half_width = 1.0;
-};
-
-// The failure event of a subset campaign: a float64 column of /runs and its margin, in the
-// column's unit, positive when safe: margin: the column itself; above: threshold - value;
-// below: value - threshold.
-enum class FailureKind { none, margin, above, below };
-struct FailureOptions {
-  FailureKind kind = FailureKind::none;
-  std::string column;
-  double threshold = 0.0;
-  std::string unit;   // above / below: must be the column's unit
-  int line = 0;       // of the [failure] table, for messages
-};
-
 struct EnsembleOptions {
   std::int64_t n_runs = 100;                 // number of deployments
   std::uint64_t master_seed = 1;             // with the run index, the only source of randomness
   SamplingMethod sampling = SamplingMethod::monte_carlo;  // parsed from its name (sampling::kSamplingNames)
   double max_run_wall_time_s = 60.0;         // a run longer than this is stopped and recorded
-  EnsembleMethod method = EnsembleMethod::design;
-  SubsetSettings subset;                     // method = subset
-  // [ensemble.stop]: when `stop` is set, the design runs in rounds from n_runs up to
-  // stop_rule.max_runs until stop_rule holds for stop_output (percentile_bound) or for the share of
-  // runs that are not ok (the probability targets).
-  bool stop = false;
-  sampling::StopRule stop_rule;
-  std::string stop_output;
-  // method = subset: the cap on runs, N + (max_levels - 1)(N - N_c), is n_runs (set by the parser).
+  // The method (method_options.hpp): its row's name and its own options. Set by the parser;
+  // options built in code set it from a method table's row.
+  MethodChoice method;
 };
 
 struct OutputOptions {
@@ -106,7 +71,6 @@ struct CampaignOptions {
   std::vector<io::SceneSetting> scene_settings;  // inline tables, overrides and --set, in order
   sim::SceneOptions base;                     // the resolved base scene
   std::vector<DispersionOptions> dispersions;
-  FailureOptions failure;                     // method = subset
   std::vector<std::string> warnings;          // plausibility warnings of the base scene (not written back)
   // Every rule of a campaign, in one place: empty, or "field: reason" naming the first field that
   // breaks one ("ensemble.n_runs: ...", "output.history_runs: ...", "dispersion[2].per: ...").
@@ -118,27 +82,29 @@ struct CampaignOptions {
 
 // Reads, parses and validates a campaign file; `overrides` are --set arguments ("table.key=value"
 // for campaign keys such as ensemble.n_runs, or a base-scene key as truss-sim takes it,
-// "mast.n_bays=12", also written "scene.mast.n_bays=12").
+// "mast.n_bays=12", also written "scene.mast.n_bays=12"); `methods`: the rows ensemble.method
+// names (methods::builtin_methods(); methods::parse_campaign_file passes it).
 // Throws io::InputError with a message naming the file, key and line (or the --set).
-CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides = {});
+CampaignOptions parse_campaign_file(const std::string& path, const MethodCatalog& methods,
+                                    const std::vector<std::string>& overrides = {});
 
 // Same, for campaign text in memory; source_name names it in messages, and a relative scene.file is
 // resolved against base_dir.
 CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name,
-                                    const std::string& base_dir, const std::vector<std::string>& overrides = {});
+                                    const std::string& base_dir, const MethodCatalog& methods,
+                                    const std::vector<std::string>& overrides = {});
 
 // The campaign with everything resolved, as TOML that parse_campaign_text reads back to the same
 // options: the base scene inline (every key), every dispersion with all its parameters.
 std::string resolved_campaign_toml(const CampaignOptions& c);
 
-// The most runs the campaign can make: ensemble.n_runs, or with [ensemble.stop] its max_runs (a
-// subset campaign's n_runs is its cap already): what memory and disk are checked for.
-inline std::int64_t calc_max_runs(const CampaignOptions& c) {
-  return c.ensemble.stop ? c.ensemble.stop_rule.max_runs : c.ensemble.n_runs;
-}
+// The most runs the campaign can make (its method's; ensemble.n_runs unless the method runs more,
+// as stop's max_runs): what memory and disk are checked for.
+inline std::int64_t calc_max_runs(const CampaignOptions& c) { return c.ensemble.method.options().calc_max_runs(c); }
 
-// The subset options of a campaign (its dimensions and master seed filled in).
-sampling::SubsetOptions calc_subset_options(const CampaignOptions& c);
+// The rules of a fixed design over ensemble.n_runs and ensemble.sampling (a Saltelli design's
+// blocks, each plan's limits), for the methods whose points are the design's: "" or "field: reason".
+std::string validate_sampling(const CampaignOptions& c);
 // The unit of the float64 run field `name` (RunResult, io::run_result_fields), or "" if none.
 std::string find_run_column_unit(const std::string& name);
 

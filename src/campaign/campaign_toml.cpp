@@ -42,11 +42,12 @@ std::string toml_nums(const std::vector<double>& v) {
 std::string resolved_campaign_toml(const CampaignOptions& c) {
   std::string t = "# Resolved campaign: every value used, the base scene inline.\n[campaign]\n";
   t += fmt::format("name = {}\ndescription = {}\n\n[ensemble]\n", toml_str(c.name), toml_str(c.description));
-  if (c.ensemble.method != EnsembleMethod::subset) t += fmt::format("n_runs = {}\n", c.ensemble.n_runs);
+  const MethodOptions& method = c.ensemble.method.options();
+  if (method.chosen_runs().empty()) t += fmt::format("n_runs = {}\n", c.ensemble.n_runs);
   t += fmt::format("master_seed = {}\nsampling = {}\nmax_run_wall_time_s = {}\nmethod = \"{}\"\n\n",
                    c.ensemble.master_seed, toml_str(to_string(c.ensemble.sampling)),
-                   toml_num(c.ensemble.max_run_wall_time_s), kEnsembleMethodNames[static_cast<int>(c.ensemble.method)]);
-  t += detail::method_toml(c);
+                   toml_num(c.ensemble.max_run_wall_time_s), c.ensemble.method.written_name());
+  t += method.to_toml();
   t += "[output]\nhistory_runs = [";
   for (std::size_t i = 0; i < c.output.history_runs.size(); ++i)
     t += fmt::format("{}{}", i ? ", " : "", c.output.history_runs[i]);

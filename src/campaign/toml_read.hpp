@@ -1,5 +1,6 @@
-// Reading campaign TOML (campaign.cpp, campaign_method.cpp): where a value came from (file:line or
-// the --set that gave it) and typed getters that fail with it. Internal to the campaign parser.
+// Reading campaign TOML (campaign.cpp, campaign_method.cpp, and each method's parser of its own
+// tables, methods/): where a value came from (file:line or the --set that gave it) and typed
+// getters that fail with it.
 #pragma once
 #include <algorithm>
 #include <cstdint>
@@ -18,6 +19,7 @@ namespace truss::campaign::detail {
 struct Ctx {
   std::string file;
   std::map<const toml::node*, std::string> set_by;  // values put in the tree by --set: the argument
+  const MethodCatalog* methods = nullptr;           // the rows ensemble.method names
   [[noreturn]] void fail(const toml::node* at, const std::string& what) const {
     if (const auto it = set_by.find(at); it != set_by.end())
       throw io::InputError(fmt::format("error: --set {}: {}", it->second, what));
@@ -26,6 +28,23 @@ struct Ctx {
     throw io::InputError(fmt::format("error: {}: {}", file, what));
   }
 };
+
+}  // namespace truss::campaign::detail
+
+namespace truss::campaign {
+
+// What a method's row reads (method_options.hpp): the campaign's tree, its own table and where
+// messages point.
+struct MethodInput {
+  const detail::Ctx& ctx;      // file and --set of each value (the getters below); ctx.methods
+  const toml::table& root;     // the campaign file (the row's root tables, e.g. [failure])
+  const toml::table* table;    // [ensemble.<name>], or null: the defaults
+  std::string prefix;          // "ensemble.<name>.": the keys' names in messages
+};
+
+}  // namespace truss::campaign
+
+namespace truss::campaign::detail {
 
 inline std::string join(const std::vector<std::string>& v) {
   std::string s;
@@ -54,12 +73,12 @@ inline std::string get_string(const Ctx& c, const toml::node& n, const std::stri
   return *s;
 }
 
-// campaign_method.cpp: [ensemble.subset] and [failure] into the options; the subset's run cap as
-// ensemble.n_runs (refusing an n_runs written with method = "subset"); the rules of the method.
-void parse_subset_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
-void parse_failure_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
-void parse_stop_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
-void derive_subset_runs(const Ctx& c, const toml::table& root, CampaignOptions& o);
-std::string validate_method(const CampaignOptions& o);
-std::string method_toml(const CampaignOptions& o);  // [ensemble] method, [ensemble.subset], [failure]
+// campaign_method.cpp: ensemble.method and the method's own tables (method_options.hpp).
+std::vector<std::string> method_names(const Ctx& c);
+// [ensemble.<row>]: a table, or false (none).
+void check_method_key(const Ctx& c, const std::string& key, const toml::node& v);
+// A root table that a row of the catalog reads ([failure]).
+bool is_method_table(const Ctx& c, std::string_view root_table);
+// The chosen row reads its tables into o.ensemble.method; a run count it chooses is n_runs.
+void parse_method(const Ctx& c, const toml::table& root, CampaignOptions& o);
 }  // namespace truss::campaign::detail

@@ -5,6 +5,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
+#include "campaign/toml_read.hpp"
 #include "io/h5_util.hpp"
 #include "results/result_store.hpp"
 
@@ -23,6 +26,19 @@ sampling::SamplePlan make_plan(const campaign::CampaignContext& ctx) {
 constexpr std::uint64_t kBootstrapTag = 0x53454e53495449ULL;  // "SENSITI": bootstrap seed offset
 
 }  // namespace
+
+std::unique_ptr<campaign::MethodOptions> DesignOptions::parse(const campaign::MethodInput& in) {
+  if (in.table != nullptr)
+    for (const auto& [k, v] : *in.table)
+      in.ctx.fail(&v, fmt::format("unknown key '{}{}' (the design's keys are ensemble.n_runs and ensemble.sampling)",
+                                  in.prefix, k.str()));
+  return std::make_unique<DesignOptions>();
+}
+
+std::unique_ptr<Method> make_fixed_design(const campaign::CampaignContext& ctx, const MethodTable&) {
+  if (ctx.options.ensemble.sampling == sampling::SamplingMethod::saltelli) return std::make_unique<Saltelli>(ctx);
+  return std::make_unique<FixedDesign>(ctx);
+}
 
 FixedDesign::FixedDesign(const campaign::CampaignContext& ctx) : ctx_(ctx), plan_(make_plan(ctx)) {}
 

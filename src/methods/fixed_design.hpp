@@ -7,6 +7,18 @@
 
 namespace truss::methods {
 
+class MethodTable;
+
+// ensemble.method = "design": its points are ensemble.sampling's over ensemble.n_runs; no table of
+// its own ([ensemble.design] takes no key).
+struct DesignOptions : campaign::MethodOptionsOf<DesignOptions> {
+  std::string validate(const campaign::CampaignOptions& c) const override { return campaign::validate_sampling(c); }
+  static std::unique_ptr<campaign::MethodOptions> parse(const campaign::MethodInput& in);
+};
+
+// The design's method: Saltelli for ensemble.sampling = "saltelli", else FixedDesign.
+std::unique_ptr<Method> make_fixed_design(const campaign::CampaignContext& ctx, const MethodTable&);
+
 class FixedDesign : public Method {
  public:
   // The campaign's SamplePlan: ensemble.sampling over every dimension; saltelli: one factor per

@@ -1,8 +1,9 @@
 // How a campaign chooses its points: a method proposes them round by round. The engine
 // (parallel/engine.hpp) evaluates a round's runs on every rank and hands the method the records
 // of that round before it proposes the next one; a one-shot design (Monte Carlo, Latin hypercube,
-// Sobol', Saltelli) has one round. Adding a method is one class like the ones here and a line in
-// make_method: the scheduler, the journal and the results file do not change.
+// Sobol', Saltelli) has one round. Adding a method is one class like the ones here, its options,
+// and a row of the method table (method_table.hpp): the scheduler, the journal, the results file and
+// the campaign's options do not change.
 //
 // Run indices are global and contiguous across rounds: round r's runs are first_run ..
 // first_run + n_runs - 1, right after round r - 1's. The records a method reads come in run-index
@@ -73,8 +74,5 @@ class Method {
   // Rank 0, after write_results: the method's result for the terminal (lines), or nothing.
   virtual std::string calc_result_text() const { return {}; }
 };
-
-// The method of ensemble.sampling.
-std::unique_ptr<Method> make_method(const campaign::CampaignContext& ctx);
 
 }  // namespace truss::methods

@@ -5,39 +5,81 @@
 
 #include <fmt/format.h>
 
+#include "campaign/toml_read.hpp"
 #include "io/h5_util.hpp"
 
 namespace truss::methods {
 
-namespace {
-bool is_percentile(const campaign::EnsembleOptions& e) {
-  return e.stop_rule.target == sampling::StopTarget::percentile_bound;
+std::unique_ptr<campaign::MethodOptions> StopOptions::parse(const campaign::MethodInput& in) {
+  auto o = std::make_unique<StopOptions>();
+  if (in.table == nullptr) return o;
+  const campaign::detail::Ctx& c = in.ctx;
+  sampling::StopRule& r = o->rule;
+  const std::vector<std::string> targets(std::begin(sampling::kStopTargetNames), std::end(sampling::kStopTargetNames));
+  for (const auto& [k, v] : *in.table) {
+    const std::string key = in.prefix + std::string(k.str());
+    if (k == "target") {
+      const std::string s = campaign::detail::get_string(c, v, key, targets);
+      r.target = static_cast<sampling::StopTarget>(std::find(targets.begin(), targets.end(), s) - targets.begin());
+    } else if (k == "output") o->output = campaign::detail::get_string(c, v, key);
+    else if (k == "level") r.level = campaign::detail::get_number(c, v, key);
+    else if (k == "width") r.width = campaign::detail::get_number(c, v, key);
+    else if (k == "confidence") r.confidence = campaign::detail::get_number(c, v, key);
+    else if (k == "max_runs") r.max_runs = campaign::detail::get_integer(c, v, key);
+    else c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.stop.target, output, level, width, confidence, "
+                                "max_runs)", key));
+  }
+  return o;
 }
-}  // namespace
+
+std::string StopOptions::validate(const campaign::CampaignOptions& c) const {
+  const campaign::EnsembleOptions& e = c.ensemble;
+  if (e.sampling != sampling::SamplingMethod::monte_carlo)
+    return fmt::format("ensemble.sampling: [ensemble.stop] adds runs round by round, which only Monte Carlo points "
+                       "allow (\"{}\" fixes its design for n_runs)", sampling::to_string(e.sampling));
+  if (const std::string err = rule.validate(); !err.empty()) return "ensemble.stop." + err;
+  if (e.n_runs > rule.max_runs)
+    return fmt::format("ensemble.stop.max_runs: {} is below the first round's ensemble.n_runs = {}", rule.max_runs,
+                       e.n_runs);
+  if (is_percentile() && campaign::find_run_column_unit(output).empty())
+    return fmt::format("ensemble.stop.output: \"{}\" is not a float64 column of /runs (e.g. peak_drive_torque_Nm)",
+                       output);
+  if (!is_percentile() && !output.empty())
+    return "ensemble.stop.output: the probability targets count the runs that are not ok; output goes with "
+           "target = \"percentile_bound\"";
+  return campaign::validate_sampling(c);
+}
+
+std::string StopOptions::to_toml() const {
+  std::string t = fmt::format("[ensemble.stop]\ntarget = \"{}\"\n", sampling::to_string(rule.target));
+  if (!output.empty()) t += fmt::format("output = \"{}\"\n", output);
+  return t + fmt::format("level = {}\nwidth = {}\nconfidence = {}\nmax_runs = {}\n\n", rule.level, rule.width,
+                         rule.confidence, rule.max_runs);
+}
 
 StopMethod::StopMethod(const campaign::CampaignContext& ctx)
     : ctx_(ctx),
-      plan_(sampling::SamplingMethod::monte_carlo, ctx.options.ensemble.stop_rule.max_runs, std::max(1, ctx.dims.total),
+      opt_(ctx.options.ensemble.method.as<StopOptions>()),
+      plan_(sampling::SamplingMethod::monte_carlo, opt_.rule.max_runs, std::max(1, ctx.dims.total),
             ctx.options.ensemble.master_seed) {}
 
 std::vector<std::string> StopMethod::observed_outputs() const {
-  if (is_percentile(ctx_.options.ensemble)) return {ctx_.options.ensemble.stop_output};
+  if (opt_.is_percentile()) return {opt_.output};
   return {};
 }
 
 Proposal StopMethod::propose(std::int64_t round, const RoundRecords& previous) {
-  const campaign::EnsembleOptions& e = ctx_.options.ensemble;
-  if (round == 0) return {e.n_runs, {}};
+  if (round == 0) return {ctx_.options.ensemble.n_runs, {}};
   if (!decisions_.empty() && decisions_.back().state != sampling::StopState::more) return {};
   const auto ok = static_cast<std::int8_t>(sim::RunStatus::ok);
   for (std::size_t i = 0; i < previous.status.size(); ++i) {
     const bool is_ok = previous.status[i] == ok;
     failures_ += is_ok ? 0 : 1;
-    if (is_percentile(e)) values_.push_back(is_ok ? previous.outputs.at(0)[i] : std::nan(""));
+    if (opt_.is_percentile()) values_.push_back(is_ok ? previous.outputs.at(0)[i] : std::nan(""));
   }
   runs_ += static_cast<std::int64_t>(previous.status.size());
-  decisions_.push_back(is_percentile(e) ? sampling::decide_percentile_stop(e.stop_rule, values_)
-                                        : sampling::decide_probability_stop(e.stop_rule, failures_, runs_));
+  decisions_.push_back(opt_.is_percentile() ? sampling::decide_percentile_stop(opt_.rule, values_)
+                                             : sampling::decide_probability_stop(opt_.rule, failures_, runs_));
   const sampling::StopDecision& d = decisions_.back();
   if (d.state != sampling::StopState::more) return {};
   return {d.next_runs, {}};
@@ -49,11 +91,10 @@ void StopMethod::calc_uniforms(const RoundPlan&, std::int64_t run, double* u) co
 
 void StopMethod::write_results(hid_t file, std::int64_t) const {
   using namespace io::h5;
-  const campaign::EnsembleOptions& e = ctx_.options.ensemble;
-  const sampling::StopRule& r = e.stop_rule;
+  const sampling::StopRule& r = opt_.rule;
   Handle g = create_group(file, "stop");
   write_string_attribute(g.get(), "target", sampling::to_string(r.target));
-  write_string_attribute(g.get(), "output", e.stop_output);
+  write_string_attribute(g.get(), "output", opt_.output);
   write_double_attribute(g.get(), "level", r.level);
   write_double_attribute(g.get(), "width", r.width);
   write_double_attribute(g.get(), "confidence", r.confidence);
@@ -75,7 +116,7 @@ void StopMethod::write_results(hid_t file, std::int64_t) const {
     state[k] = sampling::to_string(d.state);
     reason[k] = d.reason;
   }
-  const std::string unit = is_percentile(e) ? campaign::find_run_column_unit(e.stop_output) : "1";
+  const std::string unit = opt_.is_percentile() ? campaign::find_run_column_unit(opt_.output) : "1";
   write_array(g.get(), "runs", "1", runs.data(), n);
   write_array(g.get(), "used", "1", used.data(), n);
   write_array(g.get(), "estimate", unit.c_str(), est.data(), n);

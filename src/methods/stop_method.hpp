@@ -1,10 +1,14 @@
-// Sequential stopping ([ensemble.stop], campaign.hpp): a Monte Carlo design run in rounds until a
-// statistical target holds or the cap on runs is reached (sampling/stopping.hpp's rules). Round 0
-// runs ensemble.n_runs; after each round the rule is decided over every run so far and, unless
-// met or capped, asks for the runs it estimates the target needs. Run i's point is the Monte Carlo
-// point i, whatever the rounds: the first n_runs runs are those of the one-shot design.
+// Sequential stopping (ensemble.method = "stop", or its table [ensemble.stop] alone): a Monte
+// Carlo design run in rounds until a statistical target holds or the cap on runs is reached
+// (sampling/stopping.hpp's rules). Round 0 runs ensemble.n_runs; after each round the rule is
+// decided over every run so far and, unless met or capped, asks for the runs it estimates the
+// target needs. Run i's point is the Monte Carlo point i, whatever the rounds: the first n_runs
+// runs are those of the one-shot design.
 //   percentile_bound: the output's values of the ok runs (the others count as runs without a
 //     value); probability targets: the share of runs that are not ok.
+// [ensemble.stop]: target ("percentile_bound" of output at level; "probability_half_width" |
+// "probability_relative_half_width" of the share of runs that are not ok), width, confidence,
+// max_runs. Its resolved TOML keeps the table under method = "design", the form that selects it.
 // The results: /stop (docs/hdf5-schema.md): the rule, and per round its runs, estimate, bound,
 // achieved width, state and reason; the last round's state and reason say why it stopped.
 #pragma once
@@ -13,6 +17,18 @@
 #include "sampling/stopping.hpp"
 
 namespace truss::methods {
+
+struct StopOptions : campaign::MethodOptionsOf<StopOptions> {
+  sampling::StopRule rule;
+  std::string output;  // percentile_bound: a float64 column of /runs
+  bool is_percentile() const { return rule.target == sampling::StopTarget::percentile_bound; }
+  // A Monte Carlo design (its points extend run by run), a rule that can be met within max_runs
+  // (StopRule::validate), a percentile of a float64 column; then the design's own rules.
+  std::string validate(const campaign::CampaignOptions& c) const override;
+  std::string to_toml() const override;
+  std::int64_t calc_max_runs(const campaign::CampaignOptions&) const override { return rule.max_runs; }
+  static std::unique_ptr<campaign::MethodOptions> parse(const campaign::MethodInput& in);
+};
 
 class StopMethod : public Method {
  public:
@@ -27,6 +43,7 @@ class StopMethod : public Method {
 
  private:
   const campaign::CampaignContext& ctx_;
+  const StopOptions& opt_;
   sampling::SamplePlan plan_;  // Monte Carlo over max_runs runs
   std::vector<double> values_;  // percentile: each run's output, NaN unless ok
   std::int64_t runs_ = 0, failures_ = 0;

@@ -5,6 +5,8 @@
 
 #include <fmt/format.h>
 
+#include "campaign/dispersion.hpp"
+#include "campaign/toml_read.hpp"
 #include "io/h5_util.hpp"
 #include "results/result_store.hpp"
 #include "sim/scene_keys.hpp"
@@ -12,19 +14,20 @@
 namespace truss::methods {
 
 SubsetMethod::SubsetMethod(const campaign::CampaignContext& ctx)
-    : ctx_(ctx), opt_(campaign::calc_subset_options(ctx.options)) {
-  if (ctx_.record.find_output(ctx_.options.failure.column) < 0)
-    throw std::logic_error(
-        fmt::format("subset: {} is not a float64 output of the record", ctx_.options.failure.column));
+    : ctx_(ctx),
+      opt_(ctx.options.ensemble.method.as<SubsetMethodOptions>()),
+      sim_opt_(opt_.calc_sim_options(ctx.options)) {
+  if (ctx_.record.find_output(opt_.failure.column) < 0)
+    throw std::logic_error(fmt::format("subset: {} is not a float64 output of the record", opt_.failure.column));
 }
 
-std::vector<double> SubsetMethod::calc_margins(const campaign::FailureOptions& f, const RoundRecords& r) {
+std::vector<double> SubsetMethod::calc_margins(const FailureOptions& f, const RoundRecords& r) {
   const std::vector<double>& y = r.outputs.at(0);
   std::vector<double> m(y.size());
   for (std::size_t i = 0; i < y.size(); ++i) {
-    const double v = f.kind == campaign::FailureKind::above   ? f.threshold - y[i]
-                     : f.kind == campaign::FailureKind::below ? y[i] - f.threshold
-                                                               : y[i];
+    const double v = f.kind == FailureKind::above   ? f.threshold - y[i]
+                     : f.kind == FailureKind::below ? y[i] - f.threshold
+                                                    : y[i];
     const bool says = r.status[i] == static_cast<std::int8_t>(sim::RunStatus::ok) || v <= 0.0;
     m[i] = says ? v : std::numeric_limits<double>::quiet_NaN();
   }
@@ -33,10 +36,10 @@ std::vector<double> SubsetMethod::calc_margins(const campaign::FailureOptions& f
 
 Proposal SubsetMethod::propose(std::int64_t round, const RoundRecords& previous) {
   if (round == 0) {
-    sim_.emplace(opt_);
+    sim_.emplace(sim_opt_);
   } else {
     if (!sim_ || sim_->done()) return {};
-    sim_->add_margins(calc_margins(ctx_.options.failure, previous));
+    sim_->add_margins(calc_margins(opt_.failure, previous));
     if (sim_->done()) return {};
   }
   const sampling::SubsetRound& r = sim_->round();
@@ -52,10 +55,122 @@ void SubsetMethod::calc_uniforms(const RoundPlan& plan, std::int64_t run, double
   {
     std::lock_guard<std::mutex> lock(mutex_);
     if (!decoded_ || decoded_->index != plan.round)
-      decoded_ = std::make_shared<const sampling::SubsetRound>(sampling::SubsetRound::decode(plan.state, opt_.dims));
+      decoded_ =
+          std::make_shared<const sampling::SubsetRound>(sampling::SubsetRound::decode(plan.state, sim_opt_.dims));
     r = decoded_;
   }
-  sampling::calc_round_uniforms(opt_, *r, run - plan.first_run, u);
+  sampling::calc_round_uniforms(sim_opt_, *r, run - plan.first_run, u);
+}
+
+sampling::SubsetOptions SubsetMethodOptions::calc_sim_options(const campaign::CampaignOptions& c) const {
+  const SubsetSettings& s = subset;
+  sampling::SubsetOptions o;
+  o.dims = campaign::calc_layout(c).total;
+  o.n_per_level = s.n_per_level;
+  o.p0 = s.p0;
+  o.max_levels = s.max_levels;
+  o.proposal_half_width = s.proposal_half_width;
+  o.seed = c.ensemble.master_seed;
+  return o;
+}
+
+std::int64_t SubsetMethodOptions::calc_n_runs(const campaign::CampaignOptions& c) const {
+  const sampling::SubsetOptions s = calc_sim_options(c);
+  return s.validate().empty() ? s.max_evaluations() : 0;
+}
+
+namespace {
+
+using campaign::detail::Ctx;
+using campaign::detail::get_integer;
+using campaign::detail::get_number;
+using campaign::detail::get_string;
+
+void parse_subset_table(const Ctx& c, const toml::table& t, const std::string& prefix, SubsetSettings& s) {
+  for (const auto& [k, v] : t) {
+    const std::string key = prefix + std::string(k.str());
+    if (k == "n_per_level") s.n_per_level = get_integer(c, v, key);
+    else if (k == "p0") s.p0 = get_number(c, v, key);
+    else if (k == "max_levels") {
+      const std::int64_t m = get_integer(c, v, key);
+      if (m < 1 || m > 1000) c.fail(&v, fmt::format("{}: {} (must lie in [1, 1000])", key, m));
+      s.max_levels = static_cast<int>(m);
+    } else if (k == "proposal_half_width") s.proposal_half_width = get_number(c, v, key);
+    else c.fail(&v, fmt::format("unknown key '{}' (known: {}n_per_level, {}p0, {}max_levels, {}proposal_half_width)",
+                                key, prefix, prefix, prefix, prefix));
+  }
+}
+
+void parse_failure_table(const Ctx& c, const toml::table& t, FailureOptions& f) {
+  f.line = static_cast<int>(t.source().begin.line);
+  const toml::node *margin = t.get("margin"), *column = t.get("column"), *above = t.get("above"),
+                   *below = t.get("below"), *unit = t.get("unit");
+  for (const auto& [k, v] : t)
+    if (k != "margin" && k != "column" && k != "above" && k != "below" && k != "unit")
+      c.fail(&v, fmt::format("unknown key 'failure.{}' (known: failure.margin, failure.column, failure.above, "
+                             "failure.below, failure.unit)", k.str()));
+  if ((margin != nullptr) == (column != nullptr))
+    c.fail(margin ? margin : column ? column : &t,
+           "failure: give either margin = \"<column>\" (failed when <= 0, e.g. \"rail_margin_m\") or column = "
+           "\"<column>\" with above = or below = a threshold and unit = the column's unit");
+  if (margin) {
+    if (above || below || unit)
+      c.fail(above ? above : below ? below : unit,
+             "failure: a margin fails at 0; above, below and unit go with column");
+    f.kind = FailureKind::margin;
+    f.column = get_string(c, *margin, "failure.margin");
+    return;
+  }
+  f.column = get_string(c, *column, "failure.column");
+  if ((above != nullptr) == (below != nullptr))
+    c.fail(above ? above : column, "failure: a column fails above or below a threshold: give one of above, below");
+  f.kind = above ? FailureKind::above : FailureKind::below;
+  f.threshold = get_number(c, above ? *above : *below, above ? "failure.above" : "failure.below");
+  if (!std::isfinite(f.threshold)) c.fail(above ? above : below, "failure: the threshold must be finite");
+  if (!unit) c.fail(column, fmt::format("failure.unit: missing: say the threshold's unit (the column {} is in {})",
+                                        f.column, campaign::find_run_column_unit(f.column)));
+  f.unit = get_string(c, *unit, "failure.unit");
+}
+
+}  // namespace
+
+std::unique_ptr<campaign::MethodOptions> SubsetMethodOptions::parse(const campaign::MethodInput& in) {
+  auto o = std::make_unique<SubsetMethodOptions>();
+  if (in.table != nullptr) parse_subset_table(in.ctx, *in.table, in.prefix, o->subset);
+  if (const toml::table* f = in.root["failure"].as_table()) parse_failure_table(in.ctx, *f, o->failure);
+  return o;
+}
+
+std::string SubsetMethodOptions::validate(const campaign::CampaignOptions& o) const {
+  const FailureOptions& f = failure;
+  if (o.ensemble.sampling != sampling::SamplingMethod::monte_carlo)
+    return "ensemble.sampling: method = \"subset\" draws its own points (standard normal, then Markov chains): "
+           "remove sampling";
+  if (o.dispersions.empty()) return "ensemble.method: subset simulation needs at least one [[dispersion]]";
+  if (const std::string e = calc_sim_options(o).validate(); !e.empty()) return "ensemble.subset." + e;
+  if (f.kind == FailureKind::none)
+    return "failure: method = \"subset\" needs a [failure] table: margin = \"rail_margin_m\", or column = "
+           "\"peak_drive_force_N\", above = 3.5, unit = \"N\"";
+  const std::string field = f.kind == FailureKind::margin ? "failure.margin" : "failure.column";
+  const std::string unit = campaign::find_run_column_unit(f.column);
+  if (unit.empty())
+    return fmt::format("{}: \"{}\" is not a float64 column of /runs (a RunResult output, e.g. rail_margin_m, "
+                       "peak_drive_force_N)", field, f.column);
+  if (f.kind != FailureKind::margin && f.unit != unit)
+    return fmt::format("failure.unit: \"{}\", but {} is in \"{}\" (give the threshold in the column's unit)", f.unit,
+                       f.column, unit);
+  return {};
+}
+
+std::string SubsetMethodOptions::to_toml() const {
+  const SubsetSettings& s = subset;
+  std::string t = fmt::format("[ensemble.subset]\nn_per_level = {}\np0 = {}\nmax_levels = {}\n"
+                              "proposal_half_width = {}\n\n[failure]\n",
+                              s.n_per_level, s.p0, s.max_levels, s.proposal_half_width);
+  const FailureOptions& f = failure;
+  if (f.kind == FailureKind::margin) return t + fmt::format("margin = \"{}\"\n\n", f.column);
+  return t + fmt::format("column = \"{}\"\n{} = {}\nunit = \"{}\"\n\n", f.column,
+                         f.kind == FailureKind::above ? "above" : "below", f.threshold, f.unit);
 }
 
 namespace {
@@ -93,20 +208,20 @@ void write_levels(hid_t g, const sampling::SubsetSummary& s, const char* unit) {
 void SubsetMethod::write_results(hid_t file, std::int64_t n_runs) const {
   if (!sim_) return;
   const sampling::SubsetSummary s = sim_->calc_summary();
-  const campaign::FailureOptions& f = ctx_.options.failure;
+  const FailureOptions& f = opt_.failure;
   const std::string unit = campaign::find_run_column_unit(f.column);
   Handle g = create_group(file, "subset");
   write_string_attribute(g.get(), "status", sampling::to_string(s.status));
   write_string_attribute(g.get(), "message", s.message);
   write_string_attribute(g.get(), "failure_column", f.column);
-  write_string_attribute(g.get(), "failure_kind", f.kind == campaign::FailureKind::margin  ? "margin"
-                                                  : f.kind == campaign::FailureKind::above ? "above"
+  write_string_attribute(g.get(), "failure_kind", f.kind == FailureKind::margin  ? "margin"
+                                                  : f.kind == FailureKind::above ? "above"
                                                                                            : "below");
-  write_double_attribute(g.get(), "failure_threshold", f.kind == campaign::FailureKind::margin ? 0.0 : f.threshold);
+  write_double_attribute(g.get(), "failure_threshold", f.kind == FailureKind::margin ? 0.0 : f.threshold);
   write_string_attribute(g.get(), "margin_units", unit);
-  write_int_attribute(g.get(), "n_per_level", opt_.n_per_level);
-  write_double_attribute(g.get(), "p0", opt_.p0);
-  write_int_attribute(g.get(), "max_levels", opt_.max_levels);
+  write_int_attribute(g.get(), "n_per_level", sim_opt_.n_per_level);
+  write_double_attribute(g.get(), "p0", sim_opt_.p0);
+  write_int_attribute(g.get(), "max_levels", sim_opt_.max_levels);
   write_scalar(g.get(), "p", "1", s.p);
   write_scalar(g.get(), "cov", "1", s.cov);
   write_scalar(g.get(), "cov_lineage", "1", s.cov_lineage);
@@ -122,11 +237,11 @@ void SubsetMethod::write_results(hid_t file, std::int64_t n_runs) const {
 std::string SubsetMethod::calc_result_text() const {
   if (!sim_) return {};
   const sampling::SubsetSummary s = sim_->calc_summary();
-  const campaign::FailureOptions& f = ctx_.options.failure;
+  const FailureOptions& f = opt_.failure;
   const std::string unit = campaign::find_run_column_unit(f.column);
-  const bool above = f.kind == campaign::FailureKind::above;
+  const bool above = f.kind == FailureKind::above;
   std::string t = fmt::format("[truss-campaign] subset simulation of P({} {} {} {}): {} ({})\n", f.column,
-                              above ? ">=" : "<=", f.kind == campaign::FailureKind::margin ? 0.0 : f.threshold, unit,
+                              above ? ">=" : "<=", f.kind == FailureKind::margin ? 0.0 : f.threshold, unit,
                               sampling::to_string(s.status), s.message);
   // With no failing sample (p = 0) there is no CoV to match: say so rather than print inf and NaN.
   const std::string crude = s.p > 0.0 ? fmt::format("crude Monte Carlo would need {:.3g} runs for that CoV",
@@ -148,7 +263,7 @@ std::string SubsetMethod::calc_result_text() const {
 // each with the base scene's value as its attribute `nominal` (the design-point table).
 void SubsetMethod::write_failure_samples(hid_t group, hid_t file, std::int64_t n_runs, const std::string& unit) const {
   const std::vector<sampling::SubsetSample> fs = sim_->calc_failure_samples();
-  const std::size_t n = fs.size(), d = static_cast<std::size_t>(opt_.dims);
+  const std::size_t n = fs.size(), d = static_cast<std::size_t>(sim_opt_.dims);
   Handle h = create_group(group, "failure_samples");
   std::vector<std::int64_t> run(n);
   std::vector<double> margin(n), z(n * d);

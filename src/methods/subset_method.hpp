@@ -1,7 +1,7 @@
 // Subset simulation as a method of the engine (ensemble.method = "subset"): a failure probability
 // p = P(margin <= 0) by Au & Beck's subset simulation (sampling/subset_simulation.hpp), each round
 // of the state machine one round of the engine. The failure's margin is a float64 column of the
-// run record ([failure] of the campaign file, campaign.hpp): the column itself (margin = ...), or
+// run record ([failure] of the campaign file): the column itself (margin = ...), or
 // its distance to a threshold in the column's unit (above: threshold - value, below: value -
 // threshold). A run's margin counts when the run is ok, or when it is <= 0 whatever the status
 // (the failure was seen before the run stopped: a rail miss, a peak past its allowable); any
@@ -21,10 +21,48 @@
 
 namespace truss::methods {
 
+// [ensemble.subset]: the settings of subset simulation a campaign file gives (sampling::SubsetOptions
+// has their rules; its dims and seed come from the dispersions and ensemble.master_seed).
+struct SubsetSettings {
+  std::int64_t n_per_level = 2000;
+  double p0 = 0.1;
+  int max_levels = 20;
+  double proposal_half_width = 1.0;
+};
+
+// [failure]: the failure event, a float64 column of /runs and its margin, in the column's unit,
+// positive when safe: margin = "<column>": the column itself; column = "<column>" with above =
+// threshold: threshold - value; with below = threshold: value - threshold; unit = the column's unit.
+enum class FailureKind { none, margin, above, below };
+struct FailureOptions {
+  FailureKind kind = FailureKind::none;
+  std::string column;
+  double threshold = 0.0;
+  std::string unit;   // above / below: must be the column's unit
+  int line = 0;       // of the [failure] table, for messages
+};
+
+// The subset method's options: it chooses its runs, the cap N + (max_levels - 1)(N - N_c) is the
+// campaign's n_runs (an n_runs in the file is refused), and it draws its own points (no sampling).
+struct SubsetMethodOptions : campaign::MethodOptionsOf<SubsetMethodOptions> {
+  SubsetSettings subset;
+  FailureOptions failure;
+  std::string validate(const campaign::CampaignOptions& c) const override;
+  std::string to_toml() const override;
+  std::string chosen_runs() const override {
+    return "[ensemble.subset] n_per_level, p0 and max_levels cap them";
+  }
+  std::int64_t calc_n_runs(const campaign::CampaignOptions& c) const override;
+  // The state machine's options (its dimensions and master seed from the campaign c): the one
+  // place the run counts come from (SubsetOptions::max_evaluations).
+  sampling::SubsetOptions calc_sim_options(const campaign::CampaignOptions& c) const;
+  static std::unique_ptr<campaign::MethodOptions> parse(const campaign::MethodInput& in);
+};
+
 class SubsetMethod : public Method {
  public:
   explicit SubsetMethod(const campaign::CampaignContext& ctx);
-  std::vector<std::string> observed_outputs() const override { return {ctx_.options.failure.column}; }
+  std::vector<std::string> observed_outputs() const override { return {opt_.failure.column}; }
   Proposal propose(std::int64_t round, const RoundRecords& previous) override;
   void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const override;
   void write_results(hid_t file, std::int64_t n_runs) const override;
@@ -32,7 +70,7 @@ class SubsetMethod : public Method {
   std::string calc_result_text() const override;  // p, its CoVs, beta, the levels' thresholds
 
   // The margins of a round's records (see above).
-  static std::vector<double> calc_margins(const campaign::FailureOptions& f, const RoundRecords& r);
+  static std::vector<double> calc_margins(const FailureOptions& f, const RoundRecords& r);
   // The state machine (after the last propose(): done, with its summary).
   const sampling::SubsetSimulation& simulation() const { return *sim_; }
 
@@ -40,7 +78,8 @@ class SubsetMethod : public Method {
   // /subset/failure_samples: run index, margin, z and the inputs of the last level's failing points.
   void write_failure_samples(hid_t group, hid_t file, std::int64_t n_runs, const std::string& unit) const;
   const campaign::CampaignContext& ctx_;
-  sampling::SubsetOptions opt_;
+  const SubsetMethodOptions& opt_;
+  sampling::SubsetOptions sim_opt_;
   std::optional<sampling::SubsetSimulation> sim_;
   // The round whose points were asked last, decoded once (every run of a round needs it).
   mutable std::mutex mutex_;

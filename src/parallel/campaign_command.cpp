@@ -261,12 +261,12 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
 // needs the output and journal paths (a multi-host run needs them on rank 0's host alone). Errors
 // are agreed on and reported once. Returns an exit status when the command is done (bad input,
 // --dry-run).
-std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions& o,
+std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions& o, const methods::MethodTable& methods,
                                  std::optional<campaign::CampaignContext>& ctx, std::string& campaign_text) {
   std::string error;
   try {
     if (root) {
-      ctx.emplace(campaign::parse_campaign_file(o.campaign_path, o.sets));
+      ctx.emplace(campaign::parse_campaign_file(o.campaign_path, methods, o.sets));
       for (const auto& w : ctx->options.warnings) std::cerr << w << '\n';
       campaign_text = campaign::resolved_campaign_toml(ctx->options);
     }
@@ -288,7 +288,7 @@ std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions&
   campaign_text.resize(static_cast<std::size_t>(len));
   MPI_Bcast(campaign_text.data(), static_cast<int>(len), MPI_CHAR, 0, comm);
   try {
-    if (!root) ctx.emplace(campaign::parse_campaign_text(campaign_text, "resolved campaign from rank 0", ".", {}));
+    if (!root) ctx.emplace(campaign::parse_campaign_text(campaign_text, "resolved campaign from rank 0", ".", methods));
   } catch (const std::exception& e) {
     error = fmt::format("error: the resolved campaign does not parse on rank {}: {}", root ? 0 : 1, e.what());
   }
@@ -336,7 +336,7 @@ void start_session(const CommandOptions& o, const campaign::CampaignContext& ctx
 
 }  // namespace
 
-int run_campaign_command(int argc, char** argv, MPI_Comm comm, const MakeMethod& make_method) {
+int run_campaign_command(int argc, char** argv, MPI_Comm comm, const methods::MethodTable& methods) {
   // Before any HDF5 call: a write that fails (disk full) leaves HDF5 1.10 an identifier whose
   // exit-time cleanup crashes (io/h5_util.cpp, write_file_atomically); every identifier is closed
   // by its owner, so the library's atexit cleanup is switched off.
@@ -354,8 +354,8 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm, const MakeMethod&
   if (auto rc = parse_command(argc, argv, root, o)) return *rc;
   std::optional<campaign::CampaignContext> ctx;
   std::string campaign_text;
-  if (auto rc = load_campaign(comm, root, o, ctx, campaign_text)) return *rc;
-  const std::unique_ptr<methods::Method> method = make_method(*ctx);
+  if (auto rc = load_campaign(comm, root, o, methods, ctx, campaign_text)) return *rc;
+  const std::unique_ptr<methods::Method> method = methods.make(*ctx);
   Rank0 r0;
   if (int rc = prepare_output_all(comm, root, o, campaign_text, *ctx, *method, r0); rc != kExitOk) return rc;
   if (root) start_session(o, *ctx, r0, t_start, size);

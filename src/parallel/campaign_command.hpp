@@ -17,7 +17,7 @@
 #include <functional>
 #include <memory>
 
-#include "methods/method.hpp"
+#include "methods/method_table.hpp"
 
 namespace truss::parallel {
 
@@ -26,11 +26,10 @@ inline constexpr int kExitBadInput = 2;
 inline constexpr int kExitIoError = 3;
 inline constexpr int kExitMostlyInvalid = 4;  // the file is written, but most runs are invalid input
 
-// The campaign's method, made on every rank from the same campaign (methods::make_method: the one
-// of ensemble.sampling; a test passes one of its own).
-using MakeMethod = std::function<std::unique_ptr<methods::Method>(const campaign::CampaignContext&)>;
-
-// Collective over comm; returns the exit status (the same on every rank).
-int run_campaign_command(int argc, char** argv, MPI_Comm comm, const MakeMethod& make_method = methods::make_method);
+// Collective over comm; returns the exit status (the same on every rank). `methods`: the rows
+// ensemble.method names, by which every rank parses the campaign and makes its method (a test
+// passes the built-in rows and one of its own).
+int run_campaign_command(int argc, char** argv, MPI_Comm comm,
+                         const methods::MethodTable& methods = methods::builtin_methods());
 
 }  // namespace truss::parallel

@@ -10,20 +10,21 @@
 #include <string_view>
 
 #include "campaign/campaign.hpp"
+#include "methods/method_table.hpp"
 #include "same_scene.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
   truss::campaign::CampaignOptions c;
   try {
-    c = truss::campaign::parse_campaign_text(text, "fuzz.toml", ".");
+    c = truss::methods::parse_campaign_text(text, "fuzz.toml", ".");
   } catch (const truss::io::InputError&) {
     return 0;
   }
   const std::string t1 = truss::campaign::resolved_campaign_toml(c);
   std::string t2;
   try {
-    const truss::campaign::CampaignOptions back = truss::campaign::parse_campaign_text(t1, "resolved.toml", ".");
+    const truss::campaign::CampaignOptions back = truss::methods::parse_campaign_text(t1, "resolved.toml", ".");
     if (const std::string d = truss::fuzz::find_scene_difference(c.base, back.base); !d.empty()) {
       std::fprintf(stderr, "round trip changed a base-scene value: %s\n%s\n", d.c_str(), t1.c_str());
       std::abort();

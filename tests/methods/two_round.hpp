@@ -8,6 +8,10 @@
 //            keyed by a digest of round 0's mean (the round's state), so they depend on round 0's
 //            outputs and a resume that re-planned from other records would give other points;
 //   round 2: done.
+// Its options are its own (method_options.hpp), a row added to the built-in method table
+// (two_round_row) with nothing else changed: ensemble.method = "two_round" and
+//   [ensemble.two_round]  output = a float64 column of /runs (default "peak_drive_force_N"),
+//                         rel_half_width = the target, positive (default 0.02).
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -15,11 +19,45 @@
 #include <string>
 #include <vector>
 
-#include "methods/method.hpp"
+#include <fmt/format.h>
+
+#include "campaign/toml_read.hpp"
+#include "methods/method_table.hpp"
 #include "sampling/sampling.hpp"
 #include "util/bytes.hpp"
 
 namespace truss::test {
+
+struct TwoRoundOptions : campaign::MethodOptionsOf<TwoRoundOptions> {
+  std::string output = "peak_drive_force_N";
+  double rel_half_width = 0.02;
+
+  std::string validate(const campaign::CampaignOptions&) const override {
+    if (campaign::find_run_column_unit(output).empty())
+      return fmt::format("ensemble.two_round.output: \"{}\" is not a float64 column of /runs", output);
+    if (!(rel_half_width > 0.0 && std::isfinite(rel_half_width)))
+      return fmt::format("ensemble.two_round.rel_half_width: must be positive and finite, got {}", rel_half_width);
+    return {};
+  }
+  std::string to_toml() const override {
+    return fmt::format("[ensemble.two_round]\noutput = \"{}\"\nrel_half_width = {}\n\n", output, rel_half_width);
+  }
+  // Round 0's n0 runs and at most 3 n0 in round 1.
+  std::int64_t calc_max_runs(const campaign::CampaignOptions& c) const override { return 4 * c.ensemble.n_runs; }
+
+  static std::unique_ptr<campaign::MethodOptions> parse(const campaign::MethodInput& in) {
+    auto o = std::make_unique<TwoRoundOptions>();
+    if (in.table == nullptr) return o;
+    for (const auto& [k, v] : *in.table) {
+      const std::string key = in.prefix + std::string(k.str());
+      if (k == "output") o->output = campaign::detail::get_string(in.ctx, v, key);
+      else if (k == "rel_half_width") o->rel_half_width = campaign::detail::get_number(in.ctx, v, key);
+      else
+        in.ctx.fail(&v, fmt::format("unknown key '{}' (known: {}output, {}rel_half_width)", key, in.prefix, in.prefix));
+    }
+    return o;
+  }
+};
 
 class TwoRound : public methods::Method {
  public:
@@ -67,5 +105,14 @@ class TwoRound : public methods::Method {
   std::string output_;
   double rel_;
 };
+
+// The method's row: its name, its table and how it is made.
+inline methods::MethodRow two_round_row() {
+  return {{"two_round", {}, false, &TwoRoundOptions::parse},
+          [](const campaign::CampaignContext& ctx, const methods::MethodTable&) -> std::unique_ptr<methods::Method> {
+            const auto& o = ctx.options.ensemble.method.as<TwoRoundOptions>();
+            return std::make_unique<TwoRound>(ctx, o.output, o.rel_half_width);
+          }};
+}
 
 }  // namespace truss::test

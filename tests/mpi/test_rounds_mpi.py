@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """A method of two rounds through the engine under a real mpirun (the toy method of
-tests/methods/two_round.hpp, driver tests/mpi/two_round_main.cpp): round 1 adds runs when round 0's
-95 % interval of the mean peak drive force is wider than TRUSS_TWO_ROUND_TARGET of the mean.
+tests/methods/two_round.hpp, a row added to the method table by the driver tests/mpi/two_round_main.cpp,
+chosen by --set ensemble.method=two_round): round 1 adds runs when round 0's 95 % interval of the
+mean peak drive force is wider than the method's own option ensemble.two_round.rel_half_width of
+the mean.
 
   test_rounds_mpi.py --case rounds|resume --driver truss_campaign_two_round --repo SRC --scratch DIR
 
@@ -10,7 +12,8 @@ rounds: the number of runs round 1 adds, recomputed here from round 0's rows of 
   enough; the same with real runs (a 4-bay Table-1 campaign) on 1 and 2 ranks.
 resume: kill -9 of the whole job in the middle of round 1, then --resume on 3 ranks: the same
   datasets as the uninterrupted campaign; a journal whose round 1 the method (run with another
-  target) does not propose again is refused with exit 2 and left as it was.
+  target, TRUSS_TWO_ROUND_TARGET: the same campaign) does not propose again is refused with exit 2
+  and left as it was.
 Synthetic runs (--synthetic-run-cost-s: they sleep; their outputs are pseudo-random in [0, 1),
 their inputs the dispersions' values at each run's point) keep it quick.
 """
@@ -32,9 +35,15 @@ TABLE1 = "campaigns/table1_dispersed.toml"
 N0 = 200
 
 
-def run(args, ranks, extra, target=None, **kw):
-    env = dict(ENV, TRUSS_TWO_ROUND_TARGET=str(target)) if target is not None else ENV
-    cmd = ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, *extra]
+def method_sets(target=None):
+    """The campaign's method: two_round, with the target as its option (default 0.02)."""
+    sets = ["--set", "ensemble.method=two_round"]
+    return sets + (["--set", f"ensemble.two_round.rel_half_width={target}"] if target is not None else [])
+
+
+def run(args, ranks, extra, target=None, env_target=None, **kw):
+    env = dict(ENV, TRUSS_TWO_ROUND_TARGET=str(env_target)) if env_target is not None else ENV
+    cmd = ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, *extra, *method_sets(target)]
     return subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300, **kw)
 
 
@@ -107,11 +116,18 @@ def case_rounds(args):
     check(check_rounds(real[2], 0.0002, "real runs") > 0, "real runs: round 1 ran")
     same, why = same_values(datasets(real[1]), datasets(real[2]))
     check(same, f"real runs: 1 and 2 ranks give the same datasets {why}")
+    # The method's option refused out of range, named by its --set: exit 2, nothing written.
+    bad = os.path.join(d, "bad.h5")
+    p = run(args, 2, synthetic(args, bad), target=-1)
+    check(p.returncode == 2 and "--set ensemble.two_round.rel_half_width=-1: ensemble.two_round.rel_half_width: must "
+          "be positive" in p.stderr and not os.path.exists(bad) and not os.path.exists(bad + ".journal"),
+          f"rel_half_width = -1: exit {p.returncode} ({p.stderr.strip()[-200:]})")
 
 
 def killed_in_round1(args, out, cost):
     """Starts the campaign and kills the whole job once a third of round 1's records are journaled."""
-    proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, *synthetic(args, out, cost)],
+    proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, *synthetic(args, out, cost),
+                             *method_sets()],
                             env=ENV, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     journal, t0, seen = out + ".journal", time.time(), (0, 0)
     while time.time() - t0 < 120 and proc.poll() is None:
@@ -150,7 +166,7 @@ def case_resume(args):
     other = os.path.join(d, "other.h5")
     killed_in_round1(args, other, cost)
     before = open(other + ".journal", "rb").read()
-    p = run(args, 2, synthetic(args, other, cost) + ["--resume"], target=10.0)
+    p = run(args, 2, synthetic(args, other, cost) + ["--resume"], env_target=10.0)
     check(p.returncode == 2 and "round 1 of the journal is not the round the method proposes" in p.stderr
           and open(other + ".journal", "rb").read() == before and not os.path.exists(other),
           f"a journal whose rounds the method does not propose again: exit {p.returncode}, journal untouched "

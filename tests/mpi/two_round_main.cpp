@@ -1,7 +1,8 @@
-// A test driver: truss-campaign with the toy two-round method of tests/methods/two_round.hpp in
-// place of the campaign's sampling method, over peak_drive_force_N; the engine, the journal and the
-// results file as they are. TRUSS_TWO_ROUND_TARGET sets the relative half-width of the mean's 95 %
-// interval that round 0 must reach (default 0.02).
+// A test driver: truss-campaign with the toy two-round method of tests/methods/two_round.hpp added
+// to the built-in method table (ensemble.method = "two_round", its options in [ensemble.two_round]);
+// the engine, the journal and the results file as they are. TRUSS_TWO_ROUND_TARGET, when set,
+// replaces the campaign's rel_half_width in the method alone (the campaign text unchanged): a
+// method that plans otherwise than the one that wrote a journal.
 #include <mpi.h>
 
 #include <cstdlib>
@@ -12,12 +13,15 @@
 
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
-  const char* target = std::getenv("TRUSS_TWO_ROUND_TARGET");
-  const double rel = target ? std::atof(target) : 0.02;
-  const int status = truss::parallel::run_campaign_command(
-      argc, argv, MPI_COMM_WORLD, [rel](const truss::campaign::CampaignContext& ctx) {
-        return std::make_unique<truss::test::TwoRound>(ctx, "peak_drive_force_N", rel);
-      });
+  using namespace truss;
+  methods::MethodRow row = test::two_round_row();
+  if (const char* target = std::getenv("TRUSS_TWO_ROUND_TARGET"))
+    row.make = [rel = std::atof(target)](const campaign::CampaignContext& ctx,
+                                         const methods::MethodTable&) -> std::unique_ptr<methods::Method> {
+      const auto& o = ctx.options.ensemble.method.as<test::TwoRoundOptions>();
+      return std::make_unique<test::TwoRound>(ctx, o.output, rel);
+    };
+  const int status = parallel::run_campaign_command(argc, argv, MPI_COMM_WORLD, methods::builtin_methods().with(row));
   MPI_Finalize();
   return status;
 }

@@ -11,6 +11,7 @@
 #include "campaign/campaign.hpp"
 #include "campaign/evaluate.hpp"
 #include "io/scene_toml.hpp"
+#include "methods/method_table.hpp"
 
 namespace truss::campaign::test {
 
@@ -41,14 +42,14 @@ distribution = "uniform"
 lower = -0.1
 upper = 0.1
 )", n_runs, sampling);
-  return parse_campaign_text(text, "small.toml", ".");
+  return methods::parse_campaign_text(text, "small.toml", ".");
 }
 
 // The message of the error a campaign text gives ("" if it parses), its source named `name`.
 inline std::string campaign_error(const std::string& text, const std::string& name,
                                   const std::vector<std::string>& sets = {}) {
   try {
-    parse_campaign_text(text, name, ".", sets);
+    methods::parse_campaign_text(text, name, ".", sets);
   } catch (const io::InputError& e) {
     return e.what();
   }

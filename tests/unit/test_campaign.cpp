@@ -7,6 +7,7 @@
 #include "campaign/campaign.hpp"
 #include "campaign/evaluate.hpp"
 #include "io/scene_toml.hpp"
+#include "methods/method_table.hpp"
 
 using namespace truss::campaign;
 namespace fs = std::filesystem;
@@ -21,7 +22,7 @@ std::string write_tmp(const std::string& name, const std::string& text) {
 }
 std::string error_of(const std::string& path, const std::vector<std::string>& sets = {}) {
   try {
-    parse_campaign_file(path, sets);
+    truss::methods::parse_campaign_file(path, sets);
   } catch (const truss::io::InputError& e) {
     return e.what();
   }
@@ -31,22 +32,22 @@ std::string error_of(const std::string& path, const std::vector<std::string>& se
 
 TEST_CASE("the shipped campaigns parse", "[campaign]") {
   const std::string root = TRUSS_SOURCE_DIR;
-  const CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
+  const CampaignOptions t1 = truss::methods::parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
   CHECK(t1.ensemble.n_runs == 10000);
   CHECK(t1.ensemble.sampling == truss::campaign::SamplingMethod::latin_hypercube);
   CHECK(t1.base.mast.n_bays == 30);
   CHECK(t1.base.run.output_step_s == 0.0);
   CHECK(t1.dispersions.size() == 8);
   CHECK(t1.dispersions[0].per == Per::bay);
-  const CampaignOptions m = parse_campaign_file(root + "/campaigns/motor_torque.toml");
+  const CampaignOptions m = truss::methods::parse_campaign_file(root + "/campaigns/motor_torque.toml");
   CHECK(m.base.drive.mode == truss::sim::DriveMode::motor);
   CHECK(m.base.drive.stall_torque_Nm == 0.0052);
-  const CampaignOptions b = parse_campaign_file(root + "/campaigns/bay_count.toml", {"ensemble.n_runs=40"});
+  const CampaignOptions b = truss::methods::parse_campaign_file(root + "/campaigns/bay_count.toml", {"ensemble.n_runs=40"});
   CHECK(b.ensemble.n_runs == 40);
   CHECK(b.dispersions[0].values.front() == 10);
   CHECK(b.dispersions[0].values.back() == 60);
   // --set of a scene key
-  const CampaignOptions s = parse_campaign_file(root + "/campaigns/bay_count.toml", {"scene.drive.mode=torque"});
+  const CampaignOptions s = truss::methods::parse_campaign_file(root + "/campaigns/bay_count.toml", {"scene.drive.mode=torque"});
   CHECK(s.base.drive.mode == truss::sim::DriveMode::torque);
 }
 
@@ -101,7 +102,7 @@ TEST_CASE("bad campaign files name the key and the line", "[campaign][input]") {
 
 TEST_CASE("CampaignOptions::validate names the field that breaks a rule, in code as in files", "[campaign][input]") {
   using namespace truss::campaign;
-  CampaignOptions c = parse_campaign_file(TRUSS_SOURCE_DIR "/campaigns/table1_dispersed.toml");
+  CampaignOptions c = truss::methods::parse_campaign_file(TRUSS_SOURCE_DIR "/campaigns/table1_dispersed.toml");
   CHECK(c.validate().empty());
   CampaignOptions bad = c;
   bad.ensemble.n_runs = 0;

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "campaign/dispersion.hpp"
+#include "methods/method_table.hpp"
 #include "sampling/sampling.hpp"
 #include "sim/simulate.hpp"
 
@@ -13,12 +14,12 @@ using truss::sampling::SamplePlan;
 
 TEST_CASE("dimension layout: per-bay and per-frame keys own n_max and n_max + 1 dimensions", "[dispersion]") {
   const std::string root = TRUSS_SOURCE_DIR;
-  const CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
+  const CampaignOptions t1 = truss::methods::parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
   const DimensionLayout L = calc_layout(t1);
   CHECK(L.n_bays_max == 30);
   // bay keys: mass, stiffness, strut length, free length (4 x 30); frame keys: mass, side (2 x 31); rail x, y
   CHECK(L.total == 4 * 30 + 2 * 31 + 2);
-  const CampaignOptions bc = parse_campaign_file(root + "/campaigns/bay_count.toml");
+  const CampaignOptions bc = truss::methods::parse_campaign_file(root + "/campaigns/bay_count.toml");
   const DimensionLayout Lb = calc_layout(bc);
   CHECK(Lb.n_bays_max == 60);
   CHECK(Lb.total == 1 + 60);
@@ -26,7 +27,7 @@ TEST_CASE("dimension layout: per-bay and per-frame keys own n_max and n_max + 1 
 
 TEST_CASE("uniforms map to the dispersed values through the inverse CDFs", "[dispersion]") {
   const std::string root = TRUSS_SOURCE_DIR;
-  const CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
+  const CampaignOptions t1 = truss::methods::parse_campaign_file(root + "/campaigns/table1_dispersed.toml");
   const DimensionLayout L = calc_layout(t1);
   std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);  // medians: every draw at its nominal
   RunInputs in = calc_run_inputs(t1, L, u.data());
@@ -50,7 +51,7 @@ TEST_CASE("uniforms map to the dispersed values through the inverse CDFs", "[dis
 
 TEST_CASE("a drawn bay count sizes the mast; bays beyond it are NaN in the inputs", "[dispersion]") {
   const std::string root = TRUSS_SOURCE_DIR;
-  const CampaignOptions bc = parse_campaign_file(root + "/campaigns/bay_count.toml");
+  const CampaignOptions bc = truss::methods::parse_campaign_file(root + "/campaigns/bay_count.toml");
   const DimensionLayout L = calc_layout(bc);
   std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);
   u[0] = 0.01;  // first of 11 equally weighted values
@@ -66,7 +67,7 @@ TEST_CASE("a drawn bay count sizes the mast; bays beyond it are NaN in the input
 
 TEST_CASE("dispersed Table-1 runs simulate and balance energy; draws depend on the run index only", "[dispersion]") {
   const std::string root = TRUSS_SOURCE_DIR;
-  CampaignOptions t1 = parse_campaign_file(root + "/campaigns/table1_dispersed.toml", {"ensemble.n_runs=24"});
+  CampaignOptions t1 = truss::methods::parse_campaign_file(root + "/campaigns/table1_dispersed.toml", {"ensemble.n_runs=24"});
   const DimensionLayout L = calc_layout(t1);
   const SamplePlan plan(SamplingMethod::latin_hypercube, t1.ensemble.n_runs, L.total, t1.ensemble.master_seed);
   REQUIRE(plan.validate().empty());
@@ -92,7 +93,7 @@ TEST_CASE("dispersed Table-1 runs simulate and balance energy; draws depend on t
 
 TEST_CASE("implausible dispersions are named before any run; plausible ones pass", "[dispersion][plausible]") {
   const std::string root = TRUSS_SOURCE_DIR;
-  CampaignOptions c = parse_campaign_file(root + "/campaigns/table1_dispersed.toml", {"ensemble.n_runs=24"});
+  CampaignOptions c = truss::methods::parse_campaign_file(root + "/campaigns/table1_dispersed.toml", {"ensemble.n_runs=24"});
   for (std::size_t i = 0; i < c.dispersions.size(); ++i) CHECK(check_dispersion_draws(c, i).empty());
   // A percentage typed as a fraction: std = 2 (200 %) on a relative strut mass. At -3 sigma the
   // draw is -6, the mass 0.1 (1 - 6) = -0.5 kg (-0.49999 at the quantile -2.99998 sigma); the

@@ -16,6 +16,7 @@
 
 #include "campaign/campaign.hpp"
 #include "campaign/evaluate.hpp"
+#include "methods/method_table.hpp"
 #include "results/resources.hpp"
 #include "sampling/sampling.hpp"
 #include "io/scene_toml.hpp"
@@ -133,19 +134,19 @@ TEST_CASE("input files are bounded in size", "[hardening][files]") {
 TEST_CASE("campaign messages name the --set or the campaign line", "[hardening][campaign]") {
   const std::string text = "[ensemble]\nn_runs = 10\n[scene]\nfile = \"/\"\n";
   // scene.file = "/" points at the campaign's line 4
-  CHECK_THAT(error_of([&] { truss::campaign::parse_campaign_text(text, "c.toml", "."); }),
+  CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text(text, "c.toml", "."); }),
              Contains("error: c.toml:4: scene.file = \"/\"") && Contains("is a directory"));
   const std::string ok = "[ensemble]\nn_runs = 10\n";
-  CHECK_THAT(error_of([&] { truss::campaign::parse_campaign_text(ok, "c.toml", ".", {"campaign.name=1"}); }),
+  CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text(ok, "c.toml", ".", {"campaign.name=1"}); }),
              Contains("error: --set campaign.name=1: campaign.name: expected a string"));
-  CHECK_THAT(error_of([&] { truss::campaign::parse_campaign_text(ok, "c.toml", ".", {"ensemble.n_run=5"}); }),
+  CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text(ok, "c.toml", ".", {"ensemble.n_run=5"}); }),
              Contains("error: --set ensemble.n_run=5: unknown key 'ensemble.n_run'"));
-  CHECK_THAT(error_of([&] { truss::campaign::parse_campaign_text(ok, "c.toml", ".", {"ensemble.n_runs=0"}); }),
+  CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text(ok, "c.toml", ".", {"ensemble.n_runs=0"}); }),
              Contains("--set ensemble.n_runs=0"));
-  CHECK_THAT(error_of([&] { truss::campaign::parse_campaign_text(ok, "c.toml", ".", {"mast.frame_mass_kg=1e308"}); }),
+  CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text(ok, "c.toml", ".", {"mast.frame_mass_kg=1e308"}); }),
              Contains("--set mast.frame_mass_kg=1e308") && Contains("must lie in"));
   // base-scene warnings are kept for the driver to print
-  const auto c = truss::campaign::parse_campaign_text(ok, "c.toml", ".", {"drive.speed_m_per_s=100"});
+  const auto c = truss::methods::parse_campaign_text(ok, "c.toml", ".", {"drive.speed_m_per_s=100"});
   REQUIRE(c.warnings.size() == 1);
   CHECK_THAT(c.warnings[0], Contains("--set drive.speed_m_per_s=100"));
 }
@@ -157,12 +158,12 @@ TEST_CASE("a dispersed value outside its hard range is a named failed run", "[ha
   const std::string text =
       "[ensemble]\nn_runs = 4\n[scene.mast]\nn_bays = 3\n[[dispersion]]\nkey = \"mast.frame_mass_kg\"\nper = \"frame\"\n"
       "apply = \"absolute\"\ndistribution = \"uniform\"\nlower = 2e5\nupper = 3e5\n";
-  CHECK_THAT(error_of([&] { truss::campaign::parse_campaign_text(text, "c.toml", "."); }),
+  CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text(text, "c.toml", "."); }),
              Contains("c.toml:5: dispersion[1]: mast.frame_mass_kg (absolute uniform) is implausible"));
   auto past_the_check = [](std::string file, const std::string& lower, const std::string& upper, double lo, double hi) {
     file.replace(file.find(lower), lower.size(), "lower = 1");
     file.replace(file.find(upper), upper.size(), "upper = 2");
-    truss::campaign::CampaignOptions o = truss::campaign::parse_campaign_text(file, "c.toml", ".");
+    truss::campaign::CampaignOptions o = truss::methods::parse_campaign_text(file, "c.toml", ".");
     o.dispersions[0].lower = lo;
     o.dispersions[0].upper = hi;
     return o;
@@ -193,7 +194,7 @@ TEST_CASE("resource check: n_runs against memory and disk, estimates in the mess
   const std::string text = "[ensemble]\nn_runs = 10\n";
   auto ctx_for = [&](std::int64_t n) {
     return truss::campaign::CampaignContext(
-        truss::campaign::parse_campaign_text(text, "c.toml", ".", {fmt::format("ensemble.n_runs={}", n)}));
+        truss::methods::parse_campaign_text(text, "c.toml", ".", {fmt::format("ensemble.n_runs={}", n)}));
   };
   const auto small = ctx_for(10);
   CHECK(truss::results::check_resources(small, "out.h5").empty());
@@ -210,7 +211,7 @@ TEST_CASE("resource check: n_runs against memory and disk, estimates in the mess
   for (const char* sampling : {"monte_carlo", "sobol", "latin_hypercube"}) {
     INFO(sampling);
     const std::string err = error_of([&] {
-      const truss::campaign::CampaignContext c(truss::campaign::parse_campaign_text(
+      const truss::campaign::CampaignContext c(truss::methods::parse_campaign_text(
           text, "c.toml", ".", {"ensemble.n_runs=9223372036854775807", std::string("ensemble.sampling=") + sampling}));
       if (const std::string m = truss::results::check_resources(c, "out.h5"); !m.empty()) throw InputError(m);
     });

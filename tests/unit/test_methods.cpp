@@ -6,6 +6,8 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
+
 #include "campaign_fixtures.hpp"
 #include "io/scene_toml.hpp"
 #include "methods/fixed_design.hpp"
@@ -165,4 +167,72 @@ TEST_CASE("two rounds: round 1 adds the runs that bring the mean's interval to i
     test::TwoRound m(ctx, "peak_drive_force_N", 0.001);  // far too wide: capped at 3 n0
     CHECK(m.propose(1, records(y, status)).n_runs == 300);
   }
+}
+
+// A configurable method added as one file and one row (tests/methods/two_round.hpp): its option set
+// in the campaign file changes its rounds; its bad values are refused with file, line and key.
+TEST_CASE("a method's own option: read by its row from the campaign file, its effect, its errors",
+          "[methods][rounds]") {
+  const MethodTable table = builtin_methods().with(test::two_round_row());
+  // Lines: 1 [ensemble], 2 method, 3 n_runs, 4 master_seed, 5 [ensemble.two_round], 6 the option.
+  auto text = [](const std::string& option) {
+    return fmt::format("[ensemble]\nmethod = \"two_round\"\nn_runs = 100\nmaster_seed = 11\n"
+                       "[ensemble.two_round]\n{}\n{}",
+                       option, campaign::test::kFourBaysStrutMass);
+  };
+  auto error_of = [&](const std::string& t, const std::vector<std::string>& sets = {}) -> std::string {
+    try {
+      campaign::parse_campaign_text(t, "two.toml", ".", table, sets);
+    } catch (const io::InputError& e) {
+      return e.what();
+    }
+    return {};
+  };
+  // Round 0 as in the test above: mean 2, half-width h = 1.96 sqrt(100/99) / 10 = 0.197.
+  std::vector<double> y;
+  std::vector<std::int8_t> status;
+  for (int i = 0; i < 100; ++i) {
+    y.push_back(i % 2 ? 3.0 : 1.0);
+    status.push_back(0);
+  }
+  const double h = 1.96 * std::sqrt(100.0 / 99.0) / 10.0;
+  auto context = [&](const std::string& option) {
+    return campaign::CampaignContext(campaign::parse_campaign_text(text(option), "two.toml", ".", table));
+  };
+  const campaign::CampaignContext tight = context("rel_half_width = 0.05"), loose = context("rel_half_width = 0.2"),
+                                  plain = context("");
+  CHECK(tight.options.ensemble.method.name() == "two_round");
+  const std::unique_ptr<Method> t = table.make(tight), l = table.make(loose), p = table.make(plain);
+  CHECK(t->propose(0, {}).n_runs == 100);
+  const auto wanted = static_cast<std::int64_t>(std::ceil(100.0 * (h / 0.1) * (h / 0.1) - 100.0));  // 289
+  CHECK(t->propose(1, records(y, status)).n_runs == wanted);
+  CHECK(l->propose(0, {}).n_runs == 100);
+  CHECK(l->propose(1, records(y, status)).n_runs == 0);  // target 0.4 > h
+  CHECK(p->propose(0, {}).n_runs == 100);
+  CHECK(p->propose(1, records(y, status)).n_runs == 300);  // the default 0.02: target 0.04, capped at 3 n0
+  CHECK(campaign::calc_max_runs(tight.options) == 400);
+  // Its resolved TOML reads back to the same option.
+  const campaign::CampaignOptions back =
+      campaign::parse_campaign_text(campaign::resolved_campaign_toml(tight.options), "resolved.toml", ".", table);
+  CHECK(back.ensemble.method.as<test::TwoRoundOptions>().rel_half_width == 0.05);
+  CHECK(campaign::resolved_campaign_toml(back) == campaign::resolved_campaign_toml(tight.options));
+  // Bad values, named by file, line and key (or the --set).
+  CHECK_THAT(error_of(text("rel_half_width = 0.0")),
+             Catch::Contains("two.toml:6: ensemble.two_round.rel_half_width: must be positive and finite, got 0"));
+  CHECK_THAT(error_of(text("rel_half_width = \"wide\"")),
+             Catch::Contains("two.toml:6: ensemble.two_round.rel_half_width: expected a number"));
+  CHECK_THAT(error_of(text("output = \"peak_drive_farce_N\"")),
+             Catch::Contains("two.toml:6: ensemble.two_round.output: \"peak_drive_farce_N\" is not a float64 column"));
+  CHECK_THAT(error_of(text("rel_halfwidth = 0.1")),
+             Catch::Contains("two.toml:6: unknown key 'ensemble.two_round.rel_halfwidth'"));
+  CHECK_THAT(error_of(text("rel_half_width = 0.05"), {"ensemble.two_round.rel_half_width=-2"}),
+             Catch::Contains("--set ensemble.two_round.rel_half_width=-2: ensemble.two_round.rel_half_width: must be "
+                             "positive"));
+  // Its table under another method, and the method without its row, refused.
+  CHECK_THAT(error_of(text("rel_half_width = 0.05"), {"ensemble.method=design"}),
+             Catch::Contains("two.toml:5: ensemble.two_round: [ensemble.two_round] goes with ensemble.method = "
+                             "\"two_round\", not \"design\""));
+  CHECK_THAT(campaign::test::campaign_error(text("rel_half_width = 0.05"), "two.toml"),
+             Catch::Contains("two.toml:2: ensemble.method: \"two_round\" is not one of \"design\", \"stop\", "
+                             "\"subset\""));
 }

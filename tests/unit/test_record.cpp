@@ -11,6 +11,7 @@
 #include "campaign/campaign.hpp"
 #include "campaign/evaluate.hpp"
 #include "io/scene_toml.hpp"
+#include "methods/method_table.hpp"
 #include "sampling/stats.hpp"
 #include "sim/simulate.hpp"
 #include "util/bytes.hpp"
@@ -134,7 +135,7 @@ TEST_CASE("a record that is not one of this campaign's is refused, with what is 
   bad[L.fields()[RecordLayout::kStatus].offset] = 42;
   CHECK_THAT(L.check(bad), Catch::Contains("unknown status 42"));
   // Another campaign (two more bays, no dispersions): its records are longer.
-  const CampaignContext other(parse_campaign_text("[ensemble]\nn_runs = 4\n[scene.mast]\nn_bays = 7\n", "o.toml", "."));
+  const CampaignContext other(truss::methods::parse_campaign_text("[ensemble]\nn_runs = 4\n[scene.mast]\nn_bays = 7\n", "o.toml", "."));
   REQUIRE(other.record.fixed_bytes() != L.fixed_bytes());
   CHECK(!other.record.check(rec).empty());
 }
@@ -193,9 +194,9 @@ TEST_CASE("the resolved campaign reads back to itself, scene inline", "[campaign
   const std::string root = TRUSS_SOURCE_DIR;
   for (const char* file : {"table1_dispersed.toml", "motor_torque.toml", "bay_count.toml"}) {
     INFO(file);
-    const CampaignOptions c = parse_campaign_file(root + "/campaigns/" + file, {"output.history_runs=[1, 2]"});
+    const CampaignOptions c = truss::methods::parse_campaign_file(root + "/campaigns/" + file, {"output.history_runs=[1, 2]"});
     const std::string text = resolved_campaign_toml(c);
-    const CampaignOptions back = parse_campaign_text(text, "resolved.toml", "/nonexistent");
+    const CampaignOptions back = truss::methods::parse_campaign_text(text, "resolved.toml", "/nonexistent");
     CHECK(resolved_campaign_toml(back) == text);
     CHECK(truss::io::resolved_scene_toml(back.base) == truss::io::resolved_scene_toml(c.base));
     CHECK(back.output.history_runs == std::vector<std::int64_t>{1, 2});
@@ -208,19 +209,19 @@ TEST_CASE("the resolved campaign reads back to itself, scene inline", "[campaign
 }
 
 TEST_CASE("an inline scene: applied after the file, errors at the campaign file's line", "[campaign][inline]") {
-  const CampaignOptions c = parse_campaign_text("[ensemble]\nn_runs = 3\n[scene.mast]\nn_bays = 7\n[scene.drive]\nmode = \"motor\"\n",
+  const CampaignOptions c = truss::methods::parse_campaign_text("[ensemble]\nn_runs = 3\n[scene.mast]\nn_bays = 7\n[scene.drive]\nmode = \"motor\"\n",
                                                 "inline.toml", ".");
   CHECK(c.base.mast.n_bays == 7);
   CHECK(c.base.drive.mode == truss::sim::DriveMode::motor);
   // --set takes base-scene keys as truss-sim does, with or without "scene.", after the file.
-  const CampaignOptions s = parse_campaign_text("[scene.mast]\nn_bays = 7\n", "inline.toml", ".",
+  const CampaignOptions s = truss::methods::parse_campaign_text("[scene.mast]\nn_bays = 7\n", "inline.toml", ".",
                                                 {"mast.n_bays=9", "scene.drive.mode=torque", "ensemble.n_runs=5"});
   CHECK(s.base.mast.n_bays == 9);
   CHECK(s.base.drive.mode == truss::sim::DriveMode::torque);
   CHECK(s.ensemble.n_runs == 5);
   auto error = [](const std::string& text) {
     try {
-      parse_campaign_text(text, "inline.toml", ".");
+      truss::methods::parse_campaign_text(text, "inline.toml", ".");
     } catch (const truss::io::InputError& e) {
       return std::string(e.what());
     }

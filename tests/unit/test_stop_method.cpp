@@ -10,6 +10,7 @@
 #include "campaign/evaluate.hpp"
 #include "campaign_fixtures.hpp"
 #include "io/scene_toml.hpp"
+#include "methods/method_table.hpp"
 #include "methods/fixed_design.hpp"
 #include "methods/stop_method.hpp"
 
@@ -55,18 +56,28 @@ TEST_CASE("[ensemble.stop]: a rule that can never be met, and other bad input, r
   CHECK(error_of(below).find("ensemble.stop.max_runs: 400 is below the first round's ensemble.n_runs = 500") !=
         std::string::npos);
   // --set ensemble.stop=false: one round of n_runs (and any design); anything but a table or false is refused.
-  CHECK_FALSE(campaign::parse_campaign_text(stop_text("sampling = \"latin_hypercube\"", kPercentile), "stop.toml", ".",
-                                            {"ensemble.stop=false"})
-                  .ensemble.stop);
+  CHECK(methods::parse_campaign_text(stop_text("sampling = \"latin_hypercube\"", kPercentile), "stop.toml", ".",
+                                     {"ensemble.stop=false"})
+            .ensemble.method.name() == "design");
   CHECK(campaign::test::campaign_error(stop_text("", kPercentile), "stop.toml", {"ensemble.stop=true"})
             .find("--set ensemble.stop=true: ensemble.stop must be a table") != std::string::npos);
-  const campaign::CampaignOptions o = campaign::parse_campaign_text(stop_text("", kPercentile), "stop.toml", ".");
+  const campaign::CampaignOptions o = methods::parse_campaign_text(stop_text("", kPercentile), "stop.toml", ".");
   const campaign::CampaignOptions back =
-      campaign::parse_campaign_text(campaign::resolved_campaign_toml(o), "resolved.toml", ".");
-  CHECK(back.ensemble.stop);
-  CHECK(back.ensemble.stop_rule.level == 0.99);
-  CHECK(back.ensemble.stop_rule.max_runs == 5000);
-  CHECK(back.ensemble.stop_output == "peak_drive_force_N");
+      methods::parse_campaign_text(campaign::resolved_campaign_toml(o), "resolved.toml", ".");
+  CHECK(back.ensemble.method.name() == "stop");
+  CHECK(back.ensemble.method.as<methods::StopOptions>().rule.level == 0.99);
+  CHECK(back.ensemble.method.as<methods::StopOptions>().rule.max_runs == 5000);
+  CHECK(back.ensemble.method.as<methods::StopOptions>().output == "peak_drive_force_N");
+  // method = "stop" names the method that the table alone selects: the same resolved campaign (which
+  // keeps the table-alone form under "design"); under another method the table is refused at its line.
+  const campaign::CampaignOptions named =
+      methods::parse_campaign_text(stop_text("method = \"stop\"", kPercentile), "stop.toml", ".");
+  CHECK(named.ensemble.method.name() == "stop");
+  CHECK(campaign::resolved_campaign_toml(named) == campaign::resolved_campaign_toml(o));
+  CHECK(campaign::resolved_campaign_toml(o).find("method = \"design\"\n\n[ensemble.stop]\n") != std::string::npos);
+  CHECK(error_of(stop_text("method = \"subset\"", kPercentile))
+            .find("stop.toml:5: ensemble.stop: [ensemble.stop] goes with ensemble.method = \"stop\", not \"subset\"") !=
+        std::string::npos);
 }
 
 // Values uniform on (0, 1) by run (the Monte Carlo generator itself), every tenth run a stall:
@@ -75,7 +86,7 @@ TEST_CASE("[ensemble.stop]: a rule that can never be met, and other bad input, r
 // same values, is met; the stalls count as runs without a value.
 TEST_CASE("[ensemble.stop]: rounds until the rule holds over all runs so far; Monte Carlo points by run",
           "[methods][stop]") {
-  const campaign::CampaignContext ctx(campaign::parse_campaign_text(stop_text("", kPercentile), "stop.toml", "."));
+  const campaign::CampaignContext ctx(methods::parse_campaign_text(stop_text("", kPercentile), "stop.toml", "."));
   methods::StopMethod m(ctx);
   CHECK(m.observed_outputs() == std::vector<std::string>{"peak_drive_force_N"});
   auto value = [](std::int64_t run) { return sampling::counter_uniform(99, run, 0); };
@@ -85,7 +96,8 @@ TEST_CASE("[ensemble.stop]: rounds until the rule holds over all runs so far; Mo
   for (std::int64_t round = 0;; ++round) {
     const methods::Proposal p = m.propose(round, prev);
     if (round > 0) {
-      const sampling::StopDecision want = sampling::decide_percentile_stop(ctx.options.ensemble.stop_rule, all);
+      const sampling::StopRule& rule = ctx.options.ensemble.method.as<methods::StopOptions>().rule;
+      const sampling::StopDecision want = sampling::decide_percentile_stop(rule, all);
       REQUIRE(m.decisions().size() == static_cast<std::size_t>(round));
       CHECK(m.decisions().back().runs == next);
       CHECK(m.decisions().back().estimate == want.estimate);
@@ -108,11 +120,11 @@ TEST_CASE("[ensemble.stop]: rounds until the rule holds over all runs so far; Mo
   CHECK(m.decisions().back().state == sampling::StopState::met);
   CHECK(next <= 5000);
   // Run i's point is the one-shot Monte Carlo design's point i, in any round.
-  const campaign::CampaignContext mc(campaign::parse_campaign_text(
+  const campaign::CampaignContext mc(methods::parse_campaign_text(
       stop_text("", kPercentile).replace(stop_text("", kPercentile).find("[ensemble.stop]"),
                                          16 + std::string(kPercentile).size(), ""),
       "mc.toml", "."));
-  REQUIRE(!mc.options.ensemble.stop);
+  REQUIRE(mc.options.ensemble.method.name() == "design");
   const methods::FixedDesign plain(mc);
   double u[1], v[1];
   for (std::int64_t run : {0L, 499L}) {

@@ -11,6 +11,7 @@
 #include "campaign/evaluate.hpp"
 #include "campaign_fixtures.hpp"
 #include "io/scene_toml.hpp"
+#include "methods/method_table.hpp"
 #include "methods/subset_method.hpp"
 
 using namespace truss;
@@ -68,15 +69,15 @@ TEST_CASE("subset campaign keys: bad input named by file, key and line; the run 
   design.replace(design.find("[ensemble.subset]\n" + ok_subset), 18 + ok_subset.size(), "");
   CHECK(error_of(design).find("failure: only ensemble.method = \"subset\" reads [failure]") != std::string::npos);
   // A valid one: n_runs is the cap N + (max_levels - 1)(N - N_c); its resolved TOML reads back to it.
-  const campaign::CampaignOptions o = campaign::parse_campaign_text(rare_text("", ok_subset, margin), "rare.toml", ".");
+  const campaign::CampaignOptions o = methods::parse_campaign_text(rare_text("", ok_subset, margin), "rare.toml", ".");
   CHECK(o.ensemble.n_runs == 100 + 3 * 90);
   const campaign::CampaignOptions back =
-      campaign::parse_campaign_text(campaign::resolved_campaign_toml(o), "resolved.toml", ".");
-  CHECK(back.ensemble.method == campaign::EnsembleMethod::subset);
+      methods::parse_campaign_text(campaign::resolved_campaign_toml(o), "resolved.toml", ".");
+  CHECK(back.ensemble.method.name() == "subset");
   CHECK(back.ensemble.n_runs == o.ensemble.n_runs);
-  CHECK(back.ensemble.subset.p0 == 0.1);
-  CHECK(back.failure.kind == campaign::FailureKind::margin);
-  CHECK(back.failure.column == "rail_margin_m");
+  CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().subset.p0 == 0.1);
+  CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().failure.kind == methods::FailureKind::margin);
+  CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().failure.column == "rail_margin_m");
 }
 
 TEST_CASE("subset method: margins from records; a failed run counts only when it shows the failure", "[methods][subset]") {
@@ -85,21 +86,21 @@ TEST_CASE("subset method: margins from records; a failed run counts only when it
              stall = static_cast<std::int8_t>(sim::RunStatus::stall);
   r.status = {ok, miss, stall, stall, ok};
   r.outputs = {{0.5, -0.2, 0.3, -0.1, std::nan("")}};
-  campaign::FailureOptions f;
-  f.kind = campaign::FailureKind::margin;
+  methods::FailureOptions f;
+  f.kind = methods::FailureKind::margin;
   std::vector<double> m = methods::SubsetMethod::calc_margins(f, r);
   CHECK(m[0] == 0.5);
   CHECK(m[1] == -0.2);
   CHECK(std::isnan(m[2]));  // a stall with a positive margin so far cannot say
   CHECK(m[3] == -0.1);      // it failed before it stalled
   CHECK(std::isnan(m[4]));
-  f.kind = campaign::FailureKind::above;
+  f.kind = methods::FailureKind::above;
   f.threshold = 0.4;
   m = methods::SubsetMethod::calc_margins(f, r);
   CHECK(m[0] == Approx(-0.1));
   CHECK(std::isnan(m[1]));  // a rail miss whose column stays below the allowable: cannot say
   CHECK(std::isnan(m[2]));
-  f.kind = campaign::FailureKind::below;
+  f.kind = methods::FailureKind::below;
   m = methods::SubsetMethod::calc_margins(f, r);
   CHECK(m[0] == Approx(0.1));
   CHECK(m[1] == Approx(-0.6));  // below the bound before the run stopped: a failure it shows
@@ -110,7 +111,7 @@ TEST_CASE("subset method: margins from records; a failed run counts only when it
 TEST_CASE("subset method: rounds of contiguous runs whose points give the exact failure probability",
           "[methods][subset]") {
   const double beta = 3.5;  // p = 2.326e-4
-  const campaign::CampaignContext ctx(campaign::parse_campaign_text(
+  const campaign::CampaignContext ctx(methods::parse_campaign_text(
       rare_text("", "n_per_level = 1000\np0 = 0.1", "margin = \"rail_margin_m\""), "rare.toml", "."));
   REQUIRE(ctx.dims.total == 2);
   methods::SubsetMethod m(ctx);

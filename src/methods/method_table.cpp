@@ -1,0 +1,62 @@
+#include "methods/method_table.hpp"
+
+#include <stdexcept>
+
+#include "methods/fixed_design.hpp"
+#include "methods/stop_method.hpp"
+#include "methods/subset_method.hpp"
+
+namespace truss::methods {
+
+MethodTable::MethodTable(std::vector<MethodRow> rows) : rows_(std::move(rows)) {
+  for (std::size_t i = 0; i < rows_.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j)
+      if (rows_[i].syntax.name == rows_[j].syntax.name)
+        throw std::logic_error("method table: two rows named " + rows_[i].syntax.name);
+}
+
+const campaign::MethodSyntax* MethodTable::find(std::string_view name) const {
+  for (const MethodRow& r : rows_)
+    if (r.syntax.name == name) return &r.syntax;
+  return nullptr;
+}
+
+std::vector<const campaign::MethodSyntax*> MethodTable::list() const {
+  std::vector<const campaign::MethodSyntax*> v;
+  for (const MethodRow& r : rows_) v.push_back(&r.syntax);
+  return v;
+}
+
+std::unique_ptr<Method> MethodTable::make(const campaign::CampaignContext& ctx) const {
+  for (const MethodRow& r : rows_)
+    if (r.syntax.name == ctx.options.ensemble.method.name()) return r.make(ctx, *this);
+  throw std::logic_error("ensemble.method \"" + ctx.options.ensemble.method.name() + "\" is not in the method table");
+}
+
+MethodTable MethodTable::with(MethodRow row) const {
+  std::vector<MethodRow> rows = rows_;
+  rows.push_back(std::move(row));
+  return MethodTable(std::move(rows));
+}
+
+const MethodTable& builtin_methods() {
+  static const MethodTable table({
+      {{campaign::kDefaultMethod, {}, false, &DesignOptions::parse}, &make_fixed_design},
+      {{"stop", {}, true, &StopOptions::parse}, &make_method_of<StopMethod>},
+      {{"subset", {"failure"}, false, &SubsetMethodOptions::parse}, &make_method_of<SubsetMethod>},
+  });
+  return table;
+}
+
+std::unique_ptr<Method> make_method(const campaign::CampaignContext& ctx) { return builtin_methods().make(ctx); }
+
+campaign::CampaignOptions parse_campaign_file(const std::string& path, const std::vector<std::string>& overrides) {
+  return campaign::parse_campaign_file(path, builtin_methods(), overrides);
+}
+
+campaign::CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name,
+                                              const std::string& base_dir, const std::vector<std::string>& overrides) {
+  return campaign::parse_campaign_text(text, source_name, base_dir, builtin_methods(), overrides);
+}
+
+}  // namespace truss::methods
