@@ -133,6 +133,7 @@ WindowCount count_window(const double* x, std::size_t n, double lo, double hi, d
   c.inside = k;
   return c;
 }
+
 }  // namespace
 
 Moments combine(const Moments& a, const Moments& b) {
