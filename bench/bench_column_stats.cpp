@@ -2,8 +2,9 @@
 // pays them: the first windows (ColumnStats::seed), each chunk's summary (calc_chunk_summary, as
 // the chunk is written) and its merge (ColumnStats::add). A normal column of N values in chunks of
 // 4,096; each summary is made against the windows of its moment and merged LAG chunks later (0: at
-// once, as rank 0 does); a merged summary's room is used again for the next, as rank 0 does. Each part is timed apart (steady clock); medians over REPEATS of the cost
-// per value of the column (the seed: per column).
+// once, as rank 0 does); a merged summary's room is used again for the next, as rank 0 does. Each
+// part is timed apart (steady clock); medians over REPEATS of the cost per value of the column (the
+// seed: per column).
 //   bench_column_stats [N=100000] [REPEATS=200] [LAG=0]
 #include <algorithm>
 #include <chrono>
