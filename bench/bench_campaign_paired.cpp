@@ -37,7 +37,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: bench_campaign_paired CAMPAIGN.toml N_RUNS LEVEL DIR\n");
     return 2;
   }
-  mallopt(M_MMAP_THRESHOLD, 64 << 20);  // as truss-campaign does (parallel/campaign_command.cpp): a chunk's
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);  // as truss-campaign does (mpi_driver/truss_campaign.cpp): a chunk's
   mallopt(M_TRIM_THRESHOLD, 256 << 20);  // blocks are reused from the heap, not mapped (and faulted in) anew
   const std::int64_t n = std::atoll(argv[2]);
   const int level = std::atoi(argv[3]);

@@ -79,7 +79,7 @@ Times replay(const campaign::CampaignContext& ctx, const std::vector<std::string
 }  // namespace
 
 int main(int argc, char** argv) {
-  mallopt(M_MMAP_THRESHOLD, 64 << 20);  // as truss-campaign does (parallel/campaign_command.cpp)
+  mallopt(M_MMAP_THRESHOLD, 64 << 20);  // as truss-campaign does (mpi_driver/truss_campaign.cpp)
   mallopt(M_TRIM_THRESHOLD, 256 << 20);
   if (argc < 3) {
     std::fprintf(stderr,

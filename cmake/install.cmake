@@ -1,12 +1,12 @@
 # install.cmake — `cmake --install build --prefix PREFIX` puts:
 #   bin/                          truss-sim, truss-campaign
 #   lib/                          the static libraries (truss_core, truss_io, truss_util,
-#                                 truss_sampling, truss_campaign, truss_results, truss_methods,
-#                                 truss_parallel)
+#                                 truss_statistics, truss_sampling, truss_campaign, truss_results,
+#                                 truss_methods, truss_parallel)
 #   include/truss_deploy/         the public headers, by folder (#include "sim/simulate.hpp")
 #   lib/cmake/truss_deploy/       package config: find_package(truss_deploy) gives the imported
 #                                 targets truss_deploy::truss_core, ::truss_io, ::truss_util,
-#                                 ::truss_sampling, ::truss_campaign, ::truss_results,
+#                                 ::truss_statistics, ::truss_sampling, ::truss_campaign, ::truss_results,
 #                                 ::truss_methods, ::truss_parallel, ::truss_model
 #   share/man/man1/               truss-sim.1, truss-campaign.1 (help2man, from --help, at install)
 #   share/truss_deploy/campaigns/ the shipped scene and campaign files
@@ -17,8 +17,8 @@ include(CMakePackageConfigHelpers)
 set(TRUSS_INSTALL_CMAKEDIR ${CMAKE_INSTALL_LIBDIR}/cmake/truss_deploy)
 set(TRUSS_INSTALL_INCLUDEDIR ${CMAKE_INSTALL_INCLUDEDIR}/truss_deploy)
 
-install(TARGETS truss_model truss_core truss_io truss_util truss_sampling truss_campaign truss_results truss_methods
-                truss_parallel
+install(TARGETS truss_model truss_core truss_io truss_util truss_statistics truss_sampling truss_campaign truss_results
+                truss_methods truss_parallel
         EXPORT truss_deployTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${TRUSS_INSTALL_INCLUDEDIR})  # installed targets find their headers here

@@ -23,7 +23,7 @@ source scripts/progress.sh
 ROOT=$(pwd)
 BUILD=${SAN_BUILD_DIR:-build-san}
 FUZZ_SECONDS=${FUZZ_SECONDS:-30}
-SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|free_stack|free_contacts|free_retract|integrators|truss_tests_io|campaign_files|engine_collector|util_units|truss_tests_sampling|cli_bad_input|stress_reduced|end_to_end_figures|postproc_frame_heights|report_fixture_run)$'}
+SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|free_stack|free_contacts|free_retract|integrators|truss_tests_io|statistics_units|campaign_files|engine_collector|util_units|truss_tests_sampling|cli_bad_input|stress_reduced|end_to_end_figures|postproc_frame_heights|report_fixture_run)$'}
 SAN_MPI_TESTS=${SAN_MPI_TESTS:-'^(report_fixture_(table1_dispersed|motor_torque|free_rail_miss|retract)|openturns_fixture_.*|mpi_(ranks|resume|failures|saltelli|bad_input|paths|hostile|journal|faults|layout|rounds_rounds|rounds_resume))$'}
 what=${1:-all}
 t0=$(date +%s)
@@ -36,7 +36,7 @@ watch_step build sanitize-configure "$BUILD.log" cmake -S . -B "$BUILD" -DCMAKE_
 targets=(fuzz_scene fuzz_campaign)
 if [ "$what" != fuzz ]; then
   targets+=(truss_tests_model truss_tests_stages truss_tests_free truss_tests_integrators truss_tests_io
-            truss_tests_campaign truss_tests_engine truss_tests_util truss_tests_sampling
+            truss_tests_statistics truss_tests_campaign truss_tests_engine truss_tests_util truss_tests_sampling
             truss-sim truss-campaign truss_campaign_two_round)
 fi
 watch_step build sanitize-build "$BUILD.log" cmake --build "$BUILD" -j"$(nproc)" --target "${targets[@]}"

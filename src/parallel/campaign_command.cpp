@@ -3,7 +3,6 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
-#include <malloc.h>
 
 #include <chrono>
 #include <ctime>
@@ -341,9 +340,6 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm, const methods::Me
   // exit-time cleanup crashes (io/h5_util.cpp, write_file_atomically); every identifier is closed
   // by its owner, so the library's atexit cleanup is switched off.
   H5dont_atexit();
-  // Megabyte buffers (chunks, messages) stay in the heap: no page faults for each new one.
-  mallopt(M_MMAP_THRESHOLD, 64 << 20);
-  mallopt(M_TRIM_THRESHOLD, 256 << 20);
   int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
   MPI_Comm_size(comm, &size);

@@ -23,7 +23,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-// Adds the wall time of its scope to a counter (steady clock, about 20 ns a read here).
+// Adds the wall time of its scope to a counter (steady clock).
 class ScopeTimer {
  public:
   explicit ScopeTimer(double& sum) : sum_(sum) {}

@@ -7,7 +7,6 @@
 #include <fmt/format.h>
 #include <hdf5_hl.h>
 
-#include "results/chunk_codec.hpp"
 #include "util/bytes.hpp"
 
 namespace truss::results {
@@ -21,8 +20,8 @@ using campaign::ValueType;
 // A chunk of runs in memory, until every row has arrived and the chunk is written: each record's
 // fields scattered on arrival into the chunk's column blocks, one per field (field f's block at
 // chunk_runs x f.offset, its row i at i x f.bytes()), so that a dataset chunk is one contiguous
-// block when it is written. Gathering a field from whole records at write time read one cache line
-// of a 3 kB record per value: 2.5 us a Table-1 result, now ~0.5 us for the scatter.
+// block when it is written (gathering a field from whole records at write time would read one cache
+// line of a record per value).
 struct ResultStore::Chunk {
   std::int64_t index = 0, filled = 0;
   std::unique_ptr<char[]> cols;  // chunk_runs x fixed_bytes, by field
@@ -173,8 +172,7 @@ void ResultStore::add(const campaign::RecordView& rec, std::int64_t session) {
   for (const campaign::Field& f : L_.fields()) {
     const std::size_t bytes = f.bytes();
     char* dst = cols + rows * f.offset + i * bytes;
-    if (bytes == 8) std::memcpy(dst, src + f.offset, 8);  // most fields: a move, not a call
-    else std::memcpy(dst, src + f.offset, bytes);
+    std::memcpy(dst, src + f.offset, bytes);
   }
   c.message[i].assign(rec.message());
   c.session[i] = session;
@@ -210,7 +208,7 @@ void ResultStore::write_dataset(Chunk& c, const Dataset& d, std::int64_t rows) {
                                                     : d.field == Dataset::kMessage ? "message" : "session");
   if (d.field == Dataset::kMessage) {  // variable-length strings: through HDF5's own filters
     // A chunk with no message (every run ok, as most are) is left unwritten: HDF5 reads it as empty
-    // strings (NULL in C), the vlen fill value, and writing 1,250 empty strings took 1.2 us a run.
+    // strings (NULL in C), the vlen fill value.
     if (std::all_of(c.message.begin(), c.message.begin() + static_cast<std::ptrdiff_t>(r),
                     [](const std::string& m) { return m.empty(); }))
       return;
@@ -229,7 +227,7 @@ void ResultStore::write_dataset(Chunk& c, const Dataset& d, std::int64_t rows) {
                     ? reinterpret_cast<char*>(c.session.data())
                     : c.cols.get() + n * L_.fields()[static_cast<std::size_t>(d.field)].offset;
   std::memset(block + r * bytes, 0, (n - r) * bytes);  // the rows past the last run of a partial chunk
-  const std::uint32_t mask = encode_chunk({block, n * bytes}, d.elem, deflate_, encoded_);
+  const std::uint32_t mask = codec_.encode({block, n * bytes}, d.elem, deflate_, encoded_);
   const hsize_t offset[2] = {static_cast<hsize_t>(c.index * chunk_), 0};
   check(H5Dwrite_chunk(d.ds.get(), H5P_DEFAULT, mask, offset, encoded_.size(), encoded_.data()), "write " + what);
   if (d.stats >= 0) merge_stats(d, block, c.index, c.use, rows);
@@ -239,10 +237,10 @@ void ResultStore::merge_stats(const Dataset& d, const char* block, std::int64_t 
                               const std::vector<std::uint8_t>& use, std::int64_t rows) {
   const auto r = static_cast<std::size_t>(rows);
   for (std::size_t b = 0; b < d.width; ++b) {
-    sampling::ColumnStats& col = col_[static_cast<std::size_t>(d.stats) + b];
+    statistics::ColumnStats& col = col_[static_cast<std::size_t>(d.stats) + b];
     const char* values = block + 8 * b;
     if (!col.seeded()) col.seed(values, r, d.width, use.data());
-    sampling::calc_chunk_summary(values, r, d.width, use.data(), col.windows(), summary_);
+    statistics::calc_chunk_summary(values, r, d.width, use.data(), col.windows(), summary_);
     col.add(chunk, summary_);
   }
 }
@@ -254,7 +252,7 @@ StreamedStats ResultStore::calc_stats() const {
     if (!col_[k].complete(n_chunks))
       throw std::runtime_error(fmt::format("internal: the statistics of column {} miss a chunk", k));
     bool ok = true;
-    const sampling::Stats st = col_[k].calc_stats(ok);
+    const statistics::Stats st = col_[k].calc_stats(ok);
     resolved.push_back(ok);
     return st;
   };

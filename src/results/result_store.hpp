@@ -3,7 +3,7 @@
 // chunk; a chunk whose rows have all arrived is written one dataset at a time (write_next, between
 // rank 0's other work, so that no worker waits for a whole chunk: a 4,096-run Table-1 chunk is
 // 18 MB), each dataset chunk shuffled and deflated (chunk_codec.hpp) and written with
-// H5Dwrite_chunk, and the statistics of its output columns merged (sampling/column_stats.hpp).
+// H5Dwrite_chunk, and the statistics of its output columns merged (statistics/column_stats.hpp).
 // Runs are handed out in index order, so only the chunks around the scheduling front are in
 // memory. What is written does not depend on the order of arrival: the file holds the same values
 // on any number of ranks and after --resume.
@@ -23,8 +23,9 @@
 
 #include "campaign/record.hpp"
 #include "io/h5_util.hpp"
-#include "sampling/column_stats.hpp"
-#include "sampling/stats.hpp"
+#include "results/chunk_codec.hpp"
+#include "statistics/column_stats.hpp"
+#include "statistics/stats.hpp"
 
 namespace truss::results {
 
@@ -39,10 +40,9 @@ struct StoreOptions {
 // 32,768 runs up; smaller campaigns get at least 8 chunks of at least 1,024 rows (and no chunk
 // longer than the campaign), so that writing the chunks overlaps the runs instead of all falling
 // on the end. Each chunk of each dataset has fixed costs (an H5Dwrite_chunk, a deflate call, each
-// column's statistics merged): at 10,000 runs, chunks of 1,250 rows take rank 0 about 4 us a result
-// less than 16 chunks of 625 did, for a last chunk (written after the last run) twice as long
-// (docs/benchmarks.md). A function of the campaign alone: the file is the same on any number of
-// ranks and after --resume.
+// column's statistics merged), so fewer, longer chunks cost rank 0 less a result, for a longer last
+// chunk (written after the last run; docs/benchmarks.md). A function of the campaign alone: the
+// file is the same on any number of ranks and after --resume.
 inline std::int64_t find_chunk_runs(std::int64_t n_runs) {
   const std::int64_t rows = std::clamp<std::int64_t>(n_runs / 8, 1024, 4096);
   return std::max<std::int64_t>(1, std::min(rows, n_runs));
@@ -52,9 +52,9 @@ inline std::int64_t find_chunk_runs(std::int64_t n_runs) {
 // and per bay of each per-bay output, in RecordLayout order. `resolved` 0: a percentile's order
 // statistics were not kept (its percentiles are NaN): compute them from the stored column.
 struct StreamedStats {
-  std::vector<sampling::Stats> f64;
+  std::vector<statistics::Stats> f64;
   std::vector<std::uint8_t> f64_resolved;
-  std::vector<std::vector<sampling::Stats>> bays;  // [field][bay - 1]
+  std::vector<std::vector<statistics::Stats>> bays;  // [field][bay - 1]
   std::vector<std::vector<std::uint8_t>> bays_resolved;
   std::size_t kept_values = 0;  // values held for the percentiles, all columns
 };
@@ -109,8 +109,9 @@ class ResultStore {
   std::deque<std::int64_t> complete_;                     // chunks to write, in the order they completed
   std::size_t next_dataset_ = 0;                          // of complete_.front()
   std::size_t peak_chunks_ = 0;
-  std::vector<sampling::ColumnStats> col_;                // one per output column (per bay for per-bay fields)
-  sampling::ChunkSummary summary_;                        // one column's chunk summary, its room used again
+  std::vector<statistics::ColumnStats> col_;                // one per output column (per bay for per-bay fields)
+  statistics::ChunkSummary summary_;                        // one column's chunk summary, its room used again
+  ChunkCodec codec_;                                      // shuffle + deflate of each dataset chunk
   std::string encoded_;                                   // a dataset chunk after the filters
 };
 

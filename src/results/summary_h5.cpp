@@ -12,7 +12,7 @@ namespace truss::results {
 
 using namespace io::h5;
 using namespace campaign;
-using sampling::Stats;
+using statistics::Stats;
 
 namespace {
 
@@ -35,8 +35,8 @@ void write_stats_group(hid_t loc, const Field& f, const std::vector<Stats>& s) {
   put("std", [](const Stats& x) { return x.std; });
   put("min", [](const Stats& x) { return x.min; });
   put("max", [](const Stats& x) { return x.max; });
-  for (std::size_t k = 0; k < sampling::kStatPercentiles.size(); ++k)
-    put(sampling::kStatPercentileNames[k], [k](const Stats& x) { return x.percentiles[k]; });
+  for (std::size_t k = 0; k < statistics::kStatPercentiles.size(); ++k)
+    put(statistics::kStatPercentileNames[k], [k](const Stats& x) { return x.percentiles[k]; });
 }
 
 void write_stats_attributes(hid_t stats, const std::vector<std::int8_t>& status) {
@@ -75,7 +75,7 @@ std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats s
   Handle bays = create_group(stats.get(), "bays");
   std::int64_t read_back = 0;
   auto resolve = [&](Stats& st, const std::vector<double>& column) {
-    st.percentiles = sampling::calc_stats(column, ok).percentiles;
+    st.percentiles = statistics::calc_stats(column, ok).percentiles;
     ++read_back;
   };
   std::size_t k = 0, j = 0;  // the k-th float64 output, the j-th per-bay one

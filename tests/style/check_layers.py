@@ -1,6 +1,10 @@
 #!/usr/bin/env python3
 """Layering of src/ (docs/architecture.md): each folder includes project headers only from the
 folders allowed here, and model/ and numerics/ include nothing but Eigen and the standard library.
+No file of src/ holds machine-specific code: no intrinsics header (<immintrin.h>, <emmintrin.h>,
+...), no test of the target architecture (__x86_64__, __SSE2__, __AVX2__, ...), no per-function
+target or clones attribute, no run-time CPU dispatch (__builtin_cpu_supports). SIMD_FILES lists
+the one optional file that may: sampling/simd_clones.hpp (CMake option TRUSS_SIMD_CLONES).
 Usage: check_layers.py SRC_DIR; exit 1 on a violation."""
 import pathlib
 import re
@@ -9,6 +13,7 @@ import sys
 SIM = {"sim", "free_stack", "stages", "model", "integrators", "numerics"}
 ALLOWED = {
     "util": {"util"},
+    "statistics": {"statistics"},
     "sampling": {"sampling"},
     "numerics": set(),
     "model": {"model"},
@@ -19,16 +24,19 @@ ALLOWED = {
     "io": {"io"} | SIM,
     "app": {"app", "io"} | SIM,
     "campaign": {"campaign", "sampling", "util", "io"} | SIM,
-    "results": {"results", "campaign", "sampling", "util", "io"} | SIM,
-    "methods": {"methods", "results", "campaign", "sampling", "util", "io"} | SIM,
-    "parallel": {"parallel", "methods", "results", "campaign", "sampling", "util", "io"} | SIM,
+    "results": {"results", "statistics", "campaign", "sampling", "util", "io"} | SIM,
+    "methods": {"methods", "results", "statistics", "campaign", "sampling", "util", "io"} | SIM,
+    "parallel": {"parallel", "methods", "results", "statistics", "campaign", "sampling", "util", "io"} | SIM,
 }
 # Besides the standard library: model/ and numerics/ take Eigen only; sampling/ (pure mathematics)
-# fmt, Boost.Math (the stopping rules' binomial law) and the compiler's x86 intrinsics (the AVX2
-# kernels of the column statistics, chosen at run time), util/ fmt and ISA-L (its CRC): no HDF5,
-# no MPI, no TOML.
-EXTERNAL_OK = {"numerics": ("",), "model": ("Eigen/",), "sampling": ("fmt/", "boost/math/", "immintrin.h"),
+# fmt and Boost.Math (the stopping rules' binomial law), statistics/ fmt, util/ fmt and ISA-L (its
+# CRC): no HDF5, no MPI, no TOML.
+EXTERNAL_OK = {"numerics": ("",), "model": ("Eigen/",), "sampling": ("fmt/", "boost/math/"), "statistics": ("fmt/",),
                "util": ("fmt/", "isa-l/")}
+# Machine-specific code, forbidden in src/ outside SIMD_FILES (paths relative to src/).
+SIMD_FILES = {"sampling/simd_clones.hpp"}
+MACHINE_SPECIFIC = re.compile(r"#\s*include\s*<\w*intrin\.h>|__x86_64__|__i386__|__aarch64__|__SSE\d?\w*__|__AVX\w*__"
+                              r"|__ARM_NEON|__attribute__\s*\(\(\s*target|target_clones|__builtin_cpu_supports")
 
 
 def main():
@@ -39,6 +47,10 @@ def main():
             continue
         folder = p.relative_to(src).parts[0]
         for n, line in enumerate(p.read_text().splitlines(), 1):
+            if MACHINE_SPECIFIC.search(line) and str(p.relative_to(src)) not in SIMD_FILES:
+                print(f"{p}:{n}: machine-specific code outside {sorted(SIMD_FILES) or 'an optional SIMD file'}: "
+                      f"{line.strip()}")
+                bad += 1
             m = re.match(r'\s*#include\s+"([^/"]+)/', line)
             if m and m.group(1) in ALLOWED and m.group(1) not in ALLOWED.get(folder, set()):
                 print(f"{p}:{n}: {folder}/ may not include {m.group(1)}/: {line.strip()}")

@@ -22,3 +22,27 @@ target_include_directories(truss_subset_analytic PRIVATE ${CMAKE_SOURCE_DIR}/tes
 # The same linear limit state through OpenTURNS' SubsetSampling: the 95 % intervals overlap (about 1 s).
 add_test(NAME subset_openturns COMMAND /usr/bin/python3 ${CMAKE_SOURCE_DIR}/tests/numeric/test_subset_openturns.py
          --tool $<TARGET_FILE:truss_subset_analytic>)
+
+# The optional x86-64-v4 clones (TRUSS_SIMD_CLONES, src/sampling/simd_clones.hpp) against the
+# portable build of the same sources: one program linked with each writes the uniforms and
+# quantiles of its plans; the two outputs must be equal byte for byte.
+if(TRUSS_SIMD_CLONES)
+  list(TRANSFORM TRUSS_SAMPLING_SOURCES PREPEND ${CMAKE_SOURCE_DIR}/ OUTPUT_VARIABLE portable_sources)
+  add_library(truss_sampling_portable STATIC ${portable_sources})
+  target_include_directories(truss_sampling_portable PUBLIC ${CMAKE_SOURCE_DIR}/src)
+  target_include_directories(truss_sampling_portable SYSTEM PRIVATE ${Boost_INCLUDE_DIRS})
+  target_link_libraries(truss_sampling_portable PUBLIC fmt::fmt)
+  target_compile_features(truss_sampling_portable PUBLIC cxx_std_20)
+  if(CMAKE_CXX_COMPILER_ID MATCHES "GNU|Clang")
+    target_compile_options(truss_sampling_portable PRIVATE -ffp-contract=off)
+  endif()
+  add_executable(sampling_simd_bits ${CMAKE_SOURCE_DIR}/tests/unit/sampling_simd_bits.cpp)
+  target_link_libraries(sampling_simd_bits PRIVATE truss_sampling)
+  add_executable(sampling_portable_bits ${CMAKE_SOURCE_DIR}/tests/unit/sampling_simd_bits.cpp)
+  target_link_libraries(sampling_portable_bits PRIVATE truss_sampling_portable)
+  add_test(NAME sampling_simd_bits
+           COMMAND sh -c "\"$1\" > sampling_simd.bin && \"$2\" > sampling_portable.bin && cmp sampling_simd.bin sampling_portable.bin && test -s sampling_simd.bin"
+                   sh $<TARGET_FILE:sampling_simd_bits> $<TARGET_FILE:sampling_portable_bits>
+           WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+  set_tests_properties(sampling_simd_bits PROPERTIES LABELS quick)
+endif()

@@ -1,6 +1,8 @@
-// Streamed column statistics (sampling/column_stats) against calc_stats on the whole column:
-// chunks completing in any order, summaries made against windows that have narrowed since, ties,
-// unusable rows; a drifting column must come back unresolved, never wrong.
+// Statistics of a column (statistics/stats: calc_stats, the one selection of order statistics) against
+// sorted values and hand-computed figures; streamed column statistics (statistics/column_stats)
+// against calc_stats on the whole column: chunks completing in any order, summaries made against
+// windows that have narrowed since, ties, unusable rows; a drifting column must come back
+// unresolved, never wrong.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -12,11 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "sampling/column_stats.hpp"
-#include "sampling/stats.hpp"
-#include "sampling/window_count.hpp"
+#include "statistics/column_stats.hpp"
+#include "statistics/stats.hpp"
 
-using namespace truss::sampling;
+using namespace truss::statistics;
 
 namespace {
 
@@ -297,7 +298,7 @@ bool same_bits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; 
 
 }  // namespace
 
-TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bit, with either kernel",
+TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bit",
           "[campaign][stats]") {
   // Random columns (continuous, NaN-laden, heavy ties, constant, signed zeros, signed zeros at the
   // min), random row counts (blocks of eight and four lanes, and the rows past them), strides, unused
@@ -307,8 +308,7 @@ TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bi
   std::normal_distribution<double> g(0.0, 1.0);
   const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
   ChunkSummary reused;  // made again and again into the same room, as rank 0 does
-  for (const bool avx2 : {false, true}) {
-    const bool used = use_avx2_kernels(avx2);
+  {
     for (int trial = 0; trial < 120; ++trial) {
       const std::size_t rows = 1 + rng() % 300, stride = 1 + rng() % 3, kind = trial % 6;
       std::vector<double> v(rows * stride, 1e300);
@@ -334,7 +334,7 @@ TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bi
         }
         if (!(win.lo <= win.hi)) win = {};  // a NaN end: the infinite window
       }
-      INFO("trial " << trial << ", rows " << rows << ", stride " << stride << ", AVX2 " << used);
+      INFO("trial " << trial << ", rows " << rows << ", stride " << stride);
       const ChunkSummary s = calc_chunk_summary(reinterpret_cast<const char*>(v.data()), rows, stride, use.data(), w);
       const ChunkSummary r = reference_summary(v, stride, use, w);
       calc_chunk_summary(reinterpret_cast<const char*>(v.data()), rows, stride, use.data(), w, reused);
@@ -357,10 +357,9 @@ TEST_CASE("streamed statistics: chunk summaries match the definitions bit for bi
       }
     }
   }
-  use_avx2_kernels(true);
 }
 
-TEST_CASE("streamed statistics: order statistics by branch-free quickselect are the sorted values' ones",
+TEST_CASE("statistics: order statistics selected are the sorted values' ones",
           "[campaign][stats]") {
   // Sizes around the partitions' four lanes and the short parts that std::sort finishes; continuous
   // values, heavy ties (the pivot's copies hold a rank), one value, values sorted up and down (a
@@ -368,8 +367,7 @@ TEST_CASE("streamed statistics: order statistics by branch-free quickselect are 
   // ranks, every rank of the small ones. The reference: std::sort.
   std::mt19937_64 rng(29);
   std::normal_distribution<double> g(0.0, 1.0);
-  for (const bool avx2 : {false, true}) {
-    const bool used = use_avx2_kernels(avx2);
+  {
     for (int trial = 0; trial < 300; ++trial) {
       const std::size_t n = 1 + rng() % (trial < 100 ? 70 : 3000), kind = trial % 5;
       std::vector<double> x(n);
@@ -393,7 +391,7 @@ TEST_CASE("streamed statistics: order statistics by branch-free quickselect are 
       std::vector<double> y = x;
       select_order_statistics(y.data(), n, ranks.data(), ranks.size());
       for (const std::size_t r : ranks) {
-        INFO("trial " << trial << ", n " << n << ", rank " << r << ", AVX2 " << used);
+        INFO("trial " << trial << ", n " << n << ", rank " << r);
         CHECK(y[r] == sorted[r]);
       }
       CHECK(negative_zeros(y) == negative_zeros(x));
@@ -401,5 +399,55 @@ TEST_CASE("streamed statistics: order statistics by branch-free quickselect are 
       CHECK(y == sorted);  // the same values, reordered
     }
   }
-  use_avx2_kernels(true);
+}
+
+TEST_CASE("statistics: ok runs with finite values, numpy's linear percentiles", "[campaign][stats]") {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  // Sorted 1, 2, 4, 10 (ok and finite); the 100 is a failed run, the NaN an ok run without value.
+  const std::vector<double> v = {4.0, 100.0, 1.0, nan, 10.0, 2.0};
+  const std::vector<std::uint8_t> ok = {1, 0, 1, 1, 1, 1};
+  const Stats s = calc_stats(v, ok);
+  CHECK(s.count == 4);
+  CHECK(s.min == 1.0);
+  CHECK(s.max == 10.0);
+  CHECK(s.mean == 4.25);
+  CHECK(s.std == Approx(std::sqrt((3.25 * 3.25 + 2.25 * 2.25 + 0.25 * 0.25 + 5.75 * 5.75) / 3.0)).epsilon(1e-15));
+  // Index h = q/100 * 3. p50: h = 1.5 -> 2 + 0.5 * 2 = 3. p5: h = 0.15 -> 1 + 0.15. p99.865:
+  // h = 2.99595, lerp from the upper end: 10 - 6 * (1 - 0.99595).
+  CHECK(s.percentiles[2] == 3.0);
+  CHECK(s.percentiles[1] == Approx(1.15).epsilon(1e-15));
+  CHECK(s.percentiles[5] == Approx(10.0 - 6.0 * (1.0 - 0.99595)).epsilon(1e-15));
+  const std::vector<double> sorted = {1, 2, 4, 10};
+  CHECK(calc_percentile_sorted(sorted, 0.0) == 1.0);
+  CHECK(calc_percentile_sorted(sorted, 100.0) == 10.0);
+  const Stats none = calc_stats({nan, 3.0}, {1, 0});
+  CHECK(none.count == 0);
+  CHECK(std::isnan(none.mean));
+  CHECK(std::isnan(none.percentiles[0]));
+  CHECK(std::isnan(calc_stats({3.0}, {1}).std));  // one value: no sample deviation
+}
+
+TEST_CASE("statistics of large columns: the order statistics of a full sort", "[campaign][stats]") {
+  // Large columns with narrow spread, heavy ties, an outlier and both signs: compare with std::sort
+  // and the same interpolation formula (exact equality: the same two order statistics, the same
+  // arithmetic).
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> g(1.25, 0.01);
+  const std::size_t n = 50000;
+  std::vector<std::vector<double>> columns(4, std::vector<double>(n));
+  for (std::size_t i = 0; i < n; ++i) {
+    columns[0][i] = g(rng);                                        // a load: narrow spread
+    columns[1][i] = static_cast<double>(rng() % 3) - 1.0;          // heavy ties: -1, 0, 1
+    columns[2][i] = i == 17 ? 1e300 : -g(rng) * 1e-6;              // one far outlier: nearly all in one bucket
+    columns[3][i] = (rng() % 2 ? 1.0 : -1.0) * std::exp(10 * g(rng));  // both signs, wide range
+  }
+  const std::vector<std::uint8_t> use(n, 1);
+  for (const auto& c : columns) {
+    const Stats st = calc_stats(c, use);
+    std::vector<double> sorted = c;
+    std::sort(sorted.begin(), sorted.end());
+    CHECK(st.min == sorted.front());
+    CHECK(st.max == sorted.back());
+    for (std::size_t k = 0; k < kStatPercentiles.size(); ++k) CHECK(st.percentiles[k] == calc_percentile_sorted(sorted, kStatPercentiles[k]));
+  }
 }

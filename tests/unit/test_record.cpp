@@ -12,7 +12,6 @@
 #include "campaign/evaluate.hpp"
 #include "io/scene_toml.hpp"
 #include "methods/method_table.hpp"
-#include "sampling/stats.hpp"
 #include "sim/simulate.hpp"
 #include "util/bytes.hpp"
 #include "campaign_fixtures.hpp"
@@ -138,56 +137,6 @@ TEST_CASE("a record that is not one of this campaign's is refused, with what is 
   const CampaignContext other(truss::methods::parse_campaign_text("[ensemble]\nn_runs = 4\n[scene.mast]\nn_bays = 7\n", "o.toml", "."));
   REQUIRE(other.record.fixed_bytes() != L.fixed_bytes());
   CHECK(!other.record.check(rec).empty());
-}
-
-TEST_CASE("statistics: ok runs with finite values, numpy's linear percentiles", "[campaign][stats]") {
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  // Sorted 1, 2, 4, 10 (ok and finite); the 100 is a failed run, the NaN an ok run without value.
-  const std::vector<double> v = {4.0, 100.0, 1.0, nan, 10.0, 2.0};
-  const std::vector<std::uint8_t> ok = {1, 0, 1, 1, 1, 1};
-  const Stats s = calc_stats(v, ok);
-  CHECK(s.count == 4);
-  CHECK(s.min == 1.0);
-  CHECK(s.max == 10.0);
-  CHECK(s.mean == 4.25);
-  CHECK(s.std == Approx(std::sqrt((3.25 * 3.25 + 2.25 * 2.25 + 0.25 * 0.25 + 5.75 * 5.75) / 3.0)).epsilon(1e-15));
-  // Index h = q/100 * 3. p50: h = 1.5 -> 2 + 0.5 * 2 = 3. p5: h = 0.15 -> 1 + 0.15. p99.865:
-  // h = 2.99595, lerp from the upper end: 10 - 6 * (1 - 0.99595).
-  CHECK(s.percentiles[2] == 3.0);
-  CHECK(s.percentiles[1] == Approx(1.15).epsilon(1e-15));
-  CHECK(s.percentiles[5] == Approx(10.0 - 6.0 * (1.0 - 0.99595)).epsilon(1e-15));
-  const std::vector<double> sorted = {1, 2, 4, 10};
-  CHECK(calc_percentile_sorted(sorted, 0.0) == 1.0);
-  CHECK(calc_percentile_sorted(sorted, 100.0) == 10.0);
-  const Stats none = calc_stats({nan, 3.0}, {1, 0});
-  CHECK(none.count == 0);
-  CHECK(std::isnan(none.mean));
-  CHECK(std::isnan(none.percentiles[0]));
-  CHECK(std::isnan(calc_stats({3.0}, {1}).std));  // one value: no sample deviation
-}
-
-TEST_CASE("statistics of large columns: the order statistics of a full sort", "[campaign][stats]") {
-  // Above 16,384 values calc_stats selects by bucketing: compare with std::sort and the same
-  // interpolation formula (exact equality: the same two order statistics, the same arithmetic).
-  std::mt19937_64 rng(7);
-  std::normal_distribution<double> g(1.25, 0.01);
-  const std::size_t n = 50000;
-  std::vector<std::vector<double>> columns(4, std::vector<double>(n));
-  for (std::size_t i = 0; i < n; ++i) {
-    columns[0][i] = g(rng);                                        // a load: narrow spread
-    columns[1][i] = static_cast<double>(rng() % 3) - 1.0;          // heavy ties: -1, 0, 1
-    columns[2][i] = i == 17 ? 1e300 : -g(rng) * 1e-6;              // one far outlier: nearly all in one bucket
-    columns[3][i] = (rng() % 2 ? 1.0 : -1.0) * std::exp(10 * g(rng));  // both signs, wide range
-  }
-  const std::vector<std::uint8_t> use(n, 1);
-  for (const auto& c : columns) {
-    const Stats st = calc_stats(c, use);
-    std::vector<double> sorted = c;
-    std::sort(sorted.begin(), sorted.end());
-    CHECK(st.min == sorted.front());
-    CHECK(st.max == sorted.back());
-    for (std::size_t k = 0; k < kStatPercentiles.size(); ++k) CHECK(st.percentiles[k] == calc_percentile_sorted(sorted, kStatPercentiles[k]));
-  }
 }
 
 TEST_CASE("the resolved campaign reads back to itself, scene inline", "[campaign][resolved]") {

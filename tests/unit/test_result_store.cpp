@@ -107,7 +107,8 @@ std::string encode_checked(const std::vector<unsigned char>& raw, std::vector<un
     for (std::size_t j = 0; j < 8; ++j) shuffled[j * n + i] = raw[8 * i + j];
   const std::string chunk(raw.begin(), raw.end());
   std::string mine;
-  REQUIRE(encode_chunk(chunk, 8, 1, mine) == 0);
+  ChunkCodec codec;
+  REQUIRE(codec.encode(chunk, 8, 1, mine) == 0);
   std::vector<unsigned char> inflated(raw.size());
   uLongf len = inflated.size();
   REQUIRE(uncompress(inflated.data(), &len, reinterpret_cast<const Bytef*>(mine.data()), mine.size()) == Z_OK);
@@ -132,35 +133,39 @@ TEST_CASE("chunk codec: chunks HDF5's shuffle + deflate filters read back, as sm
                         {random_doubles(4096 * 30, true, 3), H5T_NATIVE_DOUBLE, 8},  // a per-bay chunk (983 kB)
                         {random_doubles(1003, true, 4), H5T_NATIVE_DOUBLE, 8},  // not whole blocks of eight
                         {status, H5T_NATIVE_INT8, 1}};                            // statuses: shuffle is a no-op
+  ChunkCodec codec;
   for (int level : {1, 2, 6}) {  // ISA-L levels 1, 2 and 3
     for (const Case& c : cases) {
       std::uint32_t hdf5_mask = 99;
       const std::string hdf5 = hdf5_filtered_chunk(c.raw, c.type, c.es, level, hdf5_mask);
       std::string mine;
-      const std::uint32_t mask = encode_chunk(c.raw, c.es, level, mine);
+      const std::uint32_t mask = codec.encode(c.raw, c.es, level, mine);
       // The deflate stream is ISA-L's, not zlib's: not the same bytes, but HDF5 inflates it to
       // the same values and the same filters are skipped (HDF5's buffer rule). Size: both are
-      // DEFLATE at the same level with different match finders; chunk by chunk within 3 % of zlib's
-      // (+64 bytes of framing for tiny outputs) -- measured 0.93 to 1.01 of zlib's, and 0.58 to 1.21
-      // only on the 4 kB status chunk (tens of bytes).
+      // DEFLATE at the same level with different match finders and block choices; where zlib sends
+      // the noise planes of the low mantissa bytes as stored blocks, ISA-L codes them with Huffman
+      // codes a few % larger. Chunk by chunk within 5 % of zlib's (+64 bytes of framing for tiny
+      // outputs) -- measured 0.93 to 1.045 of zlib's, and 0.58 to 1.21 only on the 4 kB status
+      // chunk (tens of bytes).
       CHECK(mask == hdf5_mask);
       CHECK(hdf5_read_back(mine, mask, c.type, c.es, c.raw.size(), level) == c.raw);
       INFO("level " << level << ": " << mine.size() << " bytes against zlib's " << hdf5.size());
-      CHECK(mine.size() <= hdf5.size() + 3 * hdf5.size() / 100 + 64);
+      CHECK(mine.size() <= hdf5.size() + 5 * hdf5.size() / 100 + 64);
     }
   }
   std::string plain;
-  CHECK(encode_chunk(cases[0].raw, 8, 0, plain) == 0);
+  CHECK(codec.encode(cases[0].raw, 8, 0, plain) == 0);
   CHECK(plain == cases[0].raw);  // level 0: no filter, the raw bytes
 }
 
-// The byte planes of noise are stored, not compressed: a chunk of 4,096 doubles of narrow spread
-// whose 6 low planes are noise (bytes of a random generator) and whose 2 high planes are one
-// value each. Its stream is read by zlib's own inflater (uncompress, an implementation independent
-// of ISA-L) and by HDF5, and it holds the six noise planes verbatim as stored blocks (RFC
-// 1951: the 5-byte header 00 LEN NLEN, then the bytes): 24,576 bytes of the shuffled chunk found
-// as they are right after the 2-byte zlib header and the block header.
-TEST_CASE("chunk codec: noise planes go as stored blocks, the rest deflated", "[campaign][codec]") {
+// Every byte plane is deflated, noise too: a chunk of 4,096 doubles of narrow spread whose 6 low
+// planes are noise (bytes of a random generator) and whose 2 high planes are one value each. Its
+// stream is read by zlib's own inflater (uncompress, an implementation independent of ISA-L) and by
+// HDF5; DEFLATE cannot shrink the noise, but must not grow it past its stored size (RFC 1951 stored
+// blocks: 5 bytes of header per 65,535 bytes) by more than its block headers and Huffman tables
+// (1 %), while the two constant planes take almost nothing.
+TEST_CASE("chunk codec: noise planes deflated to no more than their size, the rest to almost nothing",
+          "[campaign][codec]") {
   const std::size_t n = 4096;
   std::vector<unsigned char> shuffled;
   const auto raw = chunk_of_planes(n, 7, [](std::size_t j, std::mt19937_64& rng) {
@@ -168,96 +173,7 @@ TEST_CASE("chunk codec: noise planes go as stored blocks, the rest deflated", "[
   });
   const std::string mine = encode_checked(raw, shuffled);
   const std::size_t noise = 6 * n;
-  REQUIRE(mine.size() > 7 + noise);
-  CHECK(static_cast<unsigned char>(mine[2]) == 0);  // BFINAL 0, BTYPE 00: a stored block
-  CHECK(std::memcmp(mine.data() + 7, shuffled.data(), noise) == 0);
-  CHECK(mine.size() < noise + 600);  // the two constant planes deflated to almost nothing
-}
-
-// A leading plane that deflate shrinks by under a tenth is stored too; the first plane that
-// shrinks by more ends the stored run. Plane 0: bytes uniform on 0..199 (entropy log2 200 = 7.64
-// bits a byte, so at best 95.5 % of its size, over 90 % with Huffman tables for 1 kB); plane 1:
-// uniform on 0..63 (6 bits, 75 %, plus its tables about 80 % of 1 kB); planes 2 to 7 one value each.
-// The stream must start with one stored block of exactly plane 0 (LEN 4,096) and inflate, by zlib
-// and by HDF5, to the chunk.
-TEST_CASE("chunk codec: planes deflate shrinks by under a tenth are stored", "[campaign][codec]") {
-  const std::size_t n = 4096;
-  std::vector<unsigned char> shuffled;
-  const auto raw = chunk_of_planes(n, 11, [](std::size_t j, std::mt19937_64& rng) {
-    return j == 0 ? rng() % 200 : j == 1 ? rng() % 64 : 0x40 + j;
-  });
-  const std::string mine = encode_checked(raw, shuffled);
-  REQUIRE(mine.size() > 7 + n);
-  CHECK(static_cast<unsigned char>(mine[2]) == 0);  // BFINAL 0, BTYPE 00: a stored block
-  const auto byte = [&](std::size_t i) { return static_cast<std::size_t>(static_cast<unsigned char>(mine[i])); };
-  CHECK(byte(3) + 256 * byte(4) == n);  // LEN: plane 0 alone
-  CHECK(std::memcmp(mine.data() + 7, shuffled.data(), n) == 0);
-  CHECK(mine.size() < 7 + n + 85 * n / 100);  // plane 1 deflated (to about 80 %), the rest to almost nothing
-}
-
-// Whether a leading plane is stored follows what deflate makes of its first kilobyte (at most):
-// stored when deflate cannot shrink it below 9/10. The codec estimates that without deflating;
-// the reference here is ISA-L itself at level 1, the compressor the codec would have run.
-// (zlib is no reference for this: its match finder takes runs of 3 that the fastest ones do not,
-// 858 against 1,021 bytes for a kilobyte of random bytes each repeated 3 times.) Plane 0 of
-// each chunk: bytes uniform on 0..m-1 (entropy log2 m), random bytes each repeated r times
-// (deflate's matches, not the byte counts, shrink those; with `distinct`, the values of a
-// kilobyte's runs are all different, so no 4 bytes repeat but within a run), and a random pattern
-// of p bytes repeated (full entropy, all matches). The two must agree wherever ISA-L's size is more than 6 % of
-// the sample off the 9/10 line (the estimate's Huffman tables and match costs are fitted).
-TEST_CASE("chunk codec: a plane is stored when deflate would shrink it by under a tenth", "[campaign][codec]") {
-  struct Kind {
-    int m, r, p;            // uniform on 0..m-1; each byte r times; a pattern of p bytes repeated (0: none)
-    bool distinct = false;  // runs of r bytes of 256 different values in turn
-  };
-  std::vector<Kind> kinds;
-  for (int m : {2, 16, 64, 128, 160, 200, 230, 256}) kinds.push_back({m, 1, 0});
-  for (int r : {2, 3, 4, 8}) kinds.push_back({256, r, 0});
-  for (int r : {3, 4}) kinds.push_back({256, r, 0, true});
-  for (int p : {16, 100, 300}) kinds.push_back({256, 1, p});
-  const auto igzip1 = [](const unsigned char* in, std::size_t n) {  // ISA-L level 1, raw DEFLATE
-    std::vector<unsigned char> z(2 * n + 64);
-    isal_zstream st;
-    isal_deflate_stateless_init(&st);
-    st.level = 1;
-    st.end_of_stream = 1;
-    st.next_in = const_cast<unsigned char*>(in);
-    st.avail_in = static_cast<std::uint32_t>(n);
-    st.next_out = z.data();
-    st.avail_out = static_cast<std::uint32_t>(z.size());
-    REQUIRE(isal_deflate_stateless(&st) == COMP_OK);
-    return static_cast<double>(st.total_out);
-  };
-  int decided = 0;
-  for (std::size_t n : {std::size_t{256}, std::size_t{625}, std::size_t{1024}, std::size_t{4096}})
-    for (const Kind& k : kinds) {
-      std::mt19937_64 rng(n * 1000 + static_cast<std::size_t>(k.m * 10 + k.r + k.p));
-      std::vector<unsigned char> plane(n), values(256);
-      std::iota(values.begin(), values.end(), 0);
-      std::shuffle(values.begin(), values.end(), rng);
-      for (std::size_t i = 0; i < n; ++i)
-        plane[i] = k.distinct ? values[i / static_cast<std::size_t>(k.r) % 256]
-                   : k.p > 0 && i >= static_cast<std::size_t>(k.p) ? plane[i - static_cast<std::size_t>(k.p)]
-                   : i % static_cast<std::size_t>(k.r) == 0   ? static_cast<unsigned char>(rng() % static_cast<unsigned>(k.m))
-                                                             : plane[i - 1];
-      const auto raw = chunk_of_planes(n, 5, [&](std::size_t j, std::mt19937_64&) { return j == 0 ? 0 : 0x40; });
-      std::vector<unsigned char> chunk = raw;
-      for (std::size_t i = 0; i < n; ++i) chunk[8 * i] = plane[i];
-      std::vector<unsigned char> shuffled;
-      const std::string mine = encode_checked(chunk, shuffled);
-      const bool stored = static_cast<unsigned char>(mine[2]) == 0 && static_cast<unsigned char>(mine[3]) +
-                                                                        256u * static_cast<unsigned char>(mine[4]) == n;
-      const std::size_t s = std::min<std::size_t>(n, 1024);
-      const double deflated = igzip1(plane.data(), s);
-      REQUIRE(deflated > 0);
-      const double line = 0.9 * static_cast<double>(s);
-      if (std::abs(deflated - line) <= 0.06 * static_cast<double>(s)) continue;
-      ++decided;
-      INFO("plane of " << n << " bytes, m " << k.m << ", r " << k.r << ", p " << k.p << (k.distinct ? ", distinct" : "") << ": ISA-L " << deflated
-                       << " bytes of " << s);
-      CHECK(stored == (deflated >= line));
-    }
-  CHECK(decided >= 50);  // most cases are clear-cut
+  CHECK(mine.size() < noise + noise / 100 + 600);
 }
 
 // Constant chunks are encoded once per value, size and level: each encoding, reused or not, must
@@ -273,12 +189,13 @@ TEST_CASE("chunk codec: constant chunks, each its own stream", "[campaign][codec
   double as_double = 0.0;
   std::memcpy(&as_double, &thirty, 8);
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  ChunkCodec codec;  // one codec, as one store: its memo of constant chunks serves the repeats
   for (int level : {1, 6})
     for (std::size_t n : {std::size_t{4096}, std::size_t{1250}})
       for (double v : {nan, 0.0, nan, as_double}) {
         const std::string raw = constant(v, n);
         std::string mine;
-        REQUIRE(encode_chunk(raw, 8, level, mine) == 0);
+        REQUIRE(codec.encode(raw, 8, level, mine) == 0);
         std::string inflated(raw.size(), '\1');
         uLongf len = inflated.size();
         REQUIRE(uncompress(reinterpret_cast<Bytef*>(inflated.data()), &len, reinterpret_cast<const Bytef*>(mine.data()),
@@ -458,14 +375,14 @@ TEST_CASE("result store: records in any order, over rounds that extend it, back 
     std::vector<std::uint8_t> use(static_cast<std::size_t>(n));
     for (std::int64_t r = 0; r < n; ++r) use[static_cast<std::size_t>(r)] = !test::stalls(r);
     const auto col = read_f64_column(f.file, "runs/peak_drive_force_N", n);
-    const truss::sampling::Stats exact = truss::sampling::calc_stats(col, use);
+    const truss::statistics::Stats exact = truss::statistics::calc_stats(col, use);
     const int k = L.find_output("peak_drive_force_N");
     int j = 0;  // its index among the float64 outputs
     for (int i = 0; i < k; ++i) {
       const Field& fd = L.fields()[static_cast<std::size_t>(i)];
       j += fd.statistics && fd.scale == Scale::none;
     }
-    const truss::sampling::Stats& s = stats.f64[static_cast<std::size_t>(j)];
+    const truss::statistics::Stats& s = stats.f64[static_cast<std::size_t>(j)];
     CHECK(s.count == exact.count);
     CHECK(s.min == exact.min);
     CHECK(s.max == exact.max);

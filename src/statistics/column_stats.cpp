@@ -1,6 +1,5 @@
-// Streaming column statistics: the equations and the window rule are in column_stats.hpp.
-#include "sampling/column_stats.hpp"
-#include "sampling/window_count.hpp"
+// Streamed column statistics: the equations and the window rule are in column_stats.hpp.
+#include "statistics/column_stats.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +8,7 @@
 
 #include <fmt/format.h>
 
-namespace truss::sampling {
+namespace truss::statistics {
 
 namespace {
 
@@ -79,6 +78,62 @@ Window calc_window(WindowValues v, std::int64_t below, std::int64_t n, double p,
   return cur;
 }
 
+
+// The values of x[0..n) (finite) against the window (lo, hi): those below lo and at each end
+// counted, those strictly inside stored to out[0..inside) in their order (out may be x: a store never
+// passes the value read).
+struct WindowCount {
+  std::int64_t below = 0, at_lo = 0, at_hi = 0;
+  std::size_t inside = 0;
+};
+
+// Values x[from..to) one by one into c and out[k...], without a branch on the values.
+void count_values(const double* x, std::size_t from, std::size_t to, double lo, double hi, WindowCount& c,
+                  double* out, std::size_t& k) {
+  for (std::size_t i = from; i < to; ++i) {
+    const double v = x[i];
+    c.below += v < lo;
+    c.at_lo += v == lo;
+    c.at_hi += v == hi;
+    out[k] = v;
+    k += (v > lo) & (v < hi);
+  }
+}
+
+// In two passes over blocks of kBlock values: the first counts the values below lo and lists the
+// blocks that hold a value in [lo, hi] (a minority once a window has narrowed), the second counts
+// and stores those blocks' values one by one. Neither branches on the values.
+constexpr std::size_t kBlock = 8;
+
+WindowCount count_window(const double* x, std::size_t n, double lo, double hi, double* out,
+                         std::vector<std::uint32_t>& blocks) {
+  const std::size_t n_blocks = n / kBlock;
+  if (blocks.size() < n_blocks) blocks.resize(n_blocks);
+  std::size_t listed = 0;
+  WindowCount c;
+  for (std::size_t b = 0; b < n_blocks; ++b) {
+    const double* xb = x + kBlock * b;
+    std::int64_t below = 0, in = 0;
+    for (std::size_t j = 0; j < kBlock; ++j) {
+      below += xb[j] < lo;
+      in += (xb[j] >= lo) & (xb[j] <= hi);
+    }
+    c.below += below;
+    blocks[listed] = static_cast<std::uint32_t>(b);
+    listed += in != 0;
+  }
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < listed; ++j) {
+    WindowCount cb;  // the block's values below lo are counted already
+    count_values(x + kBlock * blocks[j], 0, kBlock, lo, hi, cb, out, k);
+    c.at_lo += cb.at_lo;
+    c.at_hi += cb.at_hi;
+  }
+  count_values(x, kBlock * n_blocks, n, lo, hi, c, out, k);
+  c.inside = k;
+  return c;
+}
+
 }  // namespace
 
 Moments combine(const Moments& a, const Moments& b) {
@@ -104,54 +159,49 @@ ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_
 
 void calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                         const Windows& w, ChunkSummary& s) {
-  thread_local std::vector<double> x;
-  thread_local CountScratch scratch;
-  x.resize(rows);
   s.window = w;
   s.moments = {};
   s.below = s.at_lo = s.at_hi = {};
   for (std::vector<double>& k : s.kept) k.clear();  // their room is used again
-  Moments& m = s.moments;
-  const auto load = [&](std::size_t i) {
+  // The usable values in row order (branch-free: failed runs and NaN are not predictable).
+  std::vector<double>& x = s.work_values;
+  if (x.size() < rows) x.resize(rows);
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < rows; ++i) {
     double v;
     std::memcpy(&v, values + 8 * i * stride, 8);
-    return v;
-  };
-  std::size_t i = 0;
-  while (i < rows && !(use[i] != 0 && std::isfinite(load(i)))) ++i;
-  if (i == rows) return;
-  const Gathered g = gather_usable(values, rows, stride, use, i, x.data());
-  const std::size_t n = g.count;
-  const double x0 = x.front();
-  x.resize(n);
+    x[n] = v;
+    n += (use[i] != 0) & std::isfinite(v);
+  }
+  if (n == 0) return;
+  Moments& m = s.moments;
   m.count = static_cast<std::int64_t>(n);
-  m.min = g.min;
-  m.max = g.max;
-  const double dm = g.sum / static_cast<double>(n);  // the mean's shift from x0
+  const double x0 = x[0];
+  double sum = 0.0, lo = m.min, hi = m.max;
+  for (std::size_t i = 0; i < n; ++i) {
+    sum += x[i] - x0;
+    lo = std::min(lo, x[i]);
+    hi = std::max(hi, x[i]);
+  }
+  m.min = lo;
+  m.max = hi;
+  const double dm = sum / static_cast<double>(n);  // the mean's shift from x0
   m.mean = x0 + dm;
-  // Per target: a window past the chunk's values is settled by its min and max, the others are
-  // counted together, with the M2 pass. Rank 0 pays this as it writes the chunk (docs/benchmarks.md).
-  std::size_t nw = 0;
-  std::array<std::size_t, kStatTargets> target{};
-  std::array<double, kStatTargets> lo{}, hi{};
-  std::array<std::vector<double>*, kStatTargets> kept{};
+  double m2 = 0.0;
+  for (std::size_t i = 0; i < n; ++i) m2 += (x[i] - x0 - dm) * (x[i] - x0 - dm);
+  m.m2 = m2;
+  if (s.work_inside.size() < n) s.work_inside.resize(n);
+  // Per target: a window past the chunk's values is settled by its min and max, the others counted.
   for (std::size_t t = 0; t < kStatTargets; ++t) {
     if (m.max < w[t].lo) {
       s.below[t] = m.count;
     } else if (m.min <= w[t].hi) {
-      target[nw] = t;
-      lo[nw] = w[t].lo;
-      hi[nw] = w[t].hi;
-      kept[nw++] = &s.kept[t];
+      const WindowCount c = count_window(x.data(), n, w[t].lo, w[t].hi, s.work_inside.data(), s.work_blocks);
+      s.kept[t].assign(s.work_inside.data(), s.work_inside.data() + c.inside);
+      s.below[t] = c.below;
+      s.at_lo[t] = c.at_lo;
+      s.at_hi[t] = w[t].lo == w[t].hi ? 0 : c.at_hi;  // one end: its copies are at_lo
     }
-  }
-  std::array<WindowCount, kStatTargets> c;
-  m.m2 = count_windows_m2(x, x0, dm, nw, lo.data(), hi.data(), c.data(), kept.data(), scratch);
-  for (std::size_t j = 0; j < nw; ++j) {
-    const std::size_t t = target[j];
-    s.below[t] = c[j].below;
-    s.at_lo[t] = c[j].at_lo;
-    s.at_hi[t] = lo[j] == hi[j] ? 0 : c[j].at_hi;  // one end: its copies are at_lo
   }
 }
 
@@ -159,8 +209,7 @@ void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride,
   if (seeded_ || count_ > 0) return;
   seeded_ = true;
   // Every step-th row, at most about kSeedValues of them: the windows' half-width is in ranks of
-  // this sample, so a smaller sample only makes the first windows wider (rank 0 pays this once,
-  // serially: 260 columns of the Table-1 campaign).
+  // this sample, so a smaller sample only makes the first windows wider.
   const std::size_t step = (rows + kSeedValues - 1) / kSeedValues;
   std::vector<double> x;
   x.reserve(kSeedValues);
@@ -205,12 +254,10 @@ void ColumnStats::put(std::size_t t, double v, std::int64_t k) {
 // put(t, v, 1) for each of kept_[t][from..]: the values inside stay, in their order, the others are
 // counted or dropped (count_window: a value's side of the window ends is not predictable).
 void ColumnStats::classify_kept(std::size_t t, std::size_t from) {
-  thread_local CountScratch scratch;
   std::vector<double>& x = kept_[t];
   const double lo = win_[t].lo, hi = win_[t].hi;
-  const WindowCount c = count_window(x.data() + from, x.size() - from, lo, hi, scratch);
-  x.resize(from);
-  x.insert(x.end(), scratch.out.data(), scratch.out.data() + c.inside);
+  const WindowCount c = count_window(x.data() + from, x.size() - from, lo, hi, x.data() + from, blocks_);
+  x.resize(from + c.inside);
   below_[t] += c.below;
   at_lo_[t] += c.at_lo;
   at_hi_[t] += lo == hi ? 0 : c.at_hi;  // one end: its copies are at_lo (as put)
@@ -317,4 +364,4 @@ std::size_t ColumnStats::kept_values() const {
   return k;
 }
 
-}  // namespace truss::sampling
+}  // namespace truss::statistics

@@ -1,4 +1,4 @@
-// Streaming statistics of one output column (the Stats of stats.hpp), built from the run-index
+// Streamed statistics of one output column (the Stats of stats.hpp), built from the run-index
 // chunks of the results file as they are written, so that the end of a campaign does not read the
 // file back (the tail must not grow with the number of runs).
 //
@@ -25,18 +25,18 @@
 // A summary made against older, wider windows (windows only narrow) is re-classified exactly when
 // it is merged.
 //
-// The inner loops (window_count.hpp) have an AVX2 kernel, chosen at run time where the processor
-// has it, and a baseline one; both give these definitions to the bit (sums in index order, the
-// first of equal values kept as std::min does), so /stats does not depend on the machine.
+// Each chunk's usable values are gathered in row order, their shifted sum and M2 added in that
+// order, min and max taken as std::min/std::max take them in that order (the first of equal values:
+// -0.0 or +0.0), so a summary is a pure function of the chunk's bytes and the windows.
 #pragma once
 #include <array>
 #include <cstdint>
 #include <limits>
 #include <vector>
 
-#include "sampling/stats.hpp"
+#include "statistics/stats.hpp"
 
-namespace truss::sampling {
+namespace truss::statistics {
 
 inline constexpr std::size_t kStatTargets = kStatPercentiles.size();
 
@@ -60,6 +60,10 @@ struct ChunkSummary {
   std::array<std::int64_t, kStatTargets> at_lo{};   // == lo
   std::array<std::int64_t, kStatTargets> at_hi{};   // == hi (when hi > lo)
   std::array<std::vector<double>, kStatTargets> kept;  // lo < value < hi
+  // Work space of calc_chunk_summary, kept so that a summary made again into the same room
+  // allocates nothing: the usable values, the values inside a window, the blocks listed.
+  std::vector<double> work_values, work_inside;
+  std::vector<std::uint32_t> work_blocks;
 };
 
 // values[i * stride] (native float64 bytes, any alignment) for i < rows, used where use[i] != 0
@@ -69,11 +73,6 @@ ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_
 // The same into s, whose vectors' room is used again (rank 0 makes one summary per column and chunk).
 void calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                         const Windows& w, ChunkSummary& s);
-// Which counting kernel calc_chunk_summary uses: AVX2 where the processor has it (the default), or
-// the baseline SSE2 one (on = false), so that tests and benchmarks run both. Returns whether AVX2
-// is now used. Not thread-safe: call it before any summary is made.
-bool use_avx2_kernels(bool on);
-
 class ColumnStats {
  public:
   const Windows& windows() const { return win_; }
@@ -101,6 +100,7 @@ class ColumnStats {
   std::array<std::int64_t, kStatTargets> below_{}, at_lo_{}, at_hi_{};
   std::array<std::vector<double>, kStatTargets> kept_;
   std::array<std::size_t, kStatTargets> next_cut_{};  // kept size at which to try narrowing again
+  std::vector<std::uint32_t> blocks_;                  // work space of classify_kept
 };
 
-}  // namespace truss::sampling
+}  // namespace truss::statistics
