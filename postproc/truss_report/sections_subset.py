@@ -215,5 +215,8 @@ def subset_report(page, c, s, opts, nominal_html):
            "<a href='#limits'>Model limits</a> · <a href='#signoff'>Sign-off</a></nav>")
     body = [section_probability(s), section_levels(page, s), section_design_point(s, c), nominal_html]
     title = f"Failure-probability report: campaign “{c.attrs['campaign_name']}”"
+    from .sections_design import campaign_doc
+    verdict = (f"none: a failure-probability estimate, p = {esc(fmt(s['p'], 4))} "
+               f"({esc(s['status'])})")
     return html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
-                     + signoff_html(opts.revision))
+                     + signoff_html(opts.revision), campaign_doc(c, verdict))

@@ -13,7 +13,14 @@ truss-campaign are read by truss_report.read_campaign (postproc/).
 """
 import os as _os
 
-from . import _core
+try:
+    from . import _core
+except ImportError as _e:  # the package folder without its compiled part
+    _here = _os.path.dirname(_os.path.abspath(__file__))
+    raise ImportError(
+        f"truss_deploy: its compiled part _core is not built in {_here} ({_e}); build it with "
+        "`cmake --build build --target truss_deploy_core` (scripts/run_main.sh builds the "
+        "programs only), then import with PYTHONPATH=build/python") from None
 from ._core import (Result, RunStatus, Scene, bay_units, history_units, run_units, scene_keys,
                     simulate)
 

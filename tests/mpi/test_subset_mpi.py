@@ -146,8 +146,11 @@ def check_stop(args, d):
     p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc/report.py"), out, "-o", outdir,
                         "--force"], capture_output=True, text=True, timeout=300)
     html = open(os.path.join(outdir, "report.html"), encoding="utf-8").read()
-    check(p.returncode == 0 and "Sequential stopping" in html and report_value(html, f"stop.round{len(runs) - 1}.runs")
-          == runs[-1], "the report lists the rounds")
+    verdict = re.search(r"data-key='verdict' data-value='(\w+)'", html)
+    code = {"pass": 0, "fail": 3, "not_assessed": 4}.get(verdict.group(1) if verdict else "", -1)
+    check(p.returncode == code and "Sequential stopping" in html
+          and report_value(html, f"stop.round{len(runs) - 1}.runs") == runs[-1],
+          f"the report lists the rounds (exit {p.returncode}: its verdict's status {code})")
 
 
 def killed_mid_level(args, out):

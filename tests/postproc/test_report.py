@@ -24,6 +24,7 @@ import argparse
 import html.parser
 import math
 import os
+import re
 import shutil
 import struct
 import subprocess
@@ -457,8 +458,19 @@ def png_size(path):
 # --------------------------------------------------------------------------------------------
 
 def run_report(repo, h5, outdir, *extra):
+    """report.py without the PDF (tests/postproc/test_verdicts.py checks the PDF)."""
     return subprocess.run([PY, os.path.join(repo, "postproc", "report.py"), h5, "-o", outdir,
-                           *extra], capture_output=True, text=True)
+                           "--no-pdf", *extra], capture_output=True, text=True)
+
+
+VERDICT_EXIT = {"pass": 0, "fail": 3, "not_assessed": 4}   # report.py's documented exit codes
+
+
+def verdict_exit(outdir):
+    """The exit status report.py must give for the verdict written in outdir/report.html."""
+    with open(os.path.join(outdir, "report.html"), encoding="utf-8") as fh:
+        m = re.search(r"data-key='verdict' data-value='(\w+)'", fh.read())
+    return VERDICT_EXIT.get(m.group(1), -1) if m else 0
 
 
 def values_match(key, got, want):
@@ -554,7 +566,10 @@ def build_reports(repo, scratch, jobs):
 
 def check_campaign(name, h5, built, expect_imgs=()):
     outdir, r = built
-    if not check(r.returncode == 0, f"{name}: report.py exit 0 ({r.stderr.strip()[:300]})"):
+    written = os.path.exists(os.path.join(outdir, "report.html"))
+    if not check(written and r.returncode == verdict_exit(outdir),
+                 f"{name}: report.py exit {r.returncode}, its verdict's status "
+                 f"({r.stderr.strip()[:300]})"):
         return None
     parsed = parse_report(os.path.join(outdir, "report.html"))
     E, required = expected_campaign(h5)
@@ -681,7 +696,7 @@ def main():
     expect_error(repo, scratch, "non_empty_outdir", campaigns["five_runs"], "--force",
                  outdir=busy)
     r = run_report(repo, campaigns["five_runs"], busy, "--force")
-    check(r.returncode == 0 and os.path.exists(os.path.join(busy, "notes.txt"))
+    check(r.returncode in VERDICT_EXIT.values() and os.path.exists(os.path.join(busy, "notes.txt"))
           and os.path.exists(os.path.join(busy, "report.html")),
           "--force writes into a non-empty directory and leaves other files alone")
 
