@@ -3,8 +3,8 @@
 Source: ECSS-E-ST-33-01C (6 March 2009), "Space engineering - Mechanisms", clause 4.7.5.3.1
 "Motorization factors" and its Table 4-2 (uncertainty factors of the resistance contributors);
 later issues (Rev.1 2017, Rev.2 2019) may number or set them differently, so the report tells the
-user to confirm the factors against the issue in their contract (ECSS_CONFIRM). The clause: the components of resistance are multiplied by the minimum
-uncertainty factors of Table 4-2 (theoretical column: inertia I 1.1, spring S 1.2, motor magnetic
+user to confirm the factors against the issue in their contract (ECSS_CONFIRM). The clause: the
+components of resistance are multiplied by the minimum uncertainty factors of Table 4-2 (theoretical column: inertia I 1.1, spring S 1.2, motor magnetic
 losses H_M 1.5, friction F_R 3, hysteresis H_Y 3, others/harness H_A 3, adhesion H_D 3; measured
 column 1.1, 1.2, 1.2, 1.5, 1.5, 1.5, 3), and the minimum actuation torque is
 

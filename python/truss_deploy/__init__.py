@@ -76,6 +76,11 @@ def simulate_many(scenes, overrides=None, *, threads=None, bays=True):
         if isinstance(scenes, Scene):
             raise TypeError("simulate_many(scenes): give a list of scenes, or a base scene and the overrides")
         scene_list = list(scenes)
+        for i, s in enumerate(scene_list):
+            if not isinstance(s, Scene):
+                raise TypeError(f"simulate_many(scenes): element {i} is {type(s).__name__} "
+                                f"{s!r:.40}, not a Scene (Scene.from_toml(PATH), Scene.table1(), "
+                                "scene.with_(...)); or simulate_many(base, overrides)")
         cols = _core.simulate_many_scenes(scene_list, n_threads, bool(bays))
         inputs, index = None, pd.RangeIndex(len(scene_list), name="run")
     else:

@@ -69,7 +69,7 @@ void parse_campaign_table(const Ctx& c, const toml::table& t, CampaignOptions& o
     const std::string key = "campaign." + std::string(k.str());
     if (k == "name") o.name = get_string(c, v, key);
     else if (k == "description") o.description = get_string(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: campaign.name, campaign.description)", key));
+    else c.fail(&v, unknown_key_text(key, "campaign.name, campaign.description"));
   }
 }
 
@@ -102,9 +102,9 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
       if (!s) c.fail(&v, "ensemble.subset must be a table ([ensemble.subset])");
       detail::parse_subset_table(c, *s, o);
     } else {
-      c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
+      c.fail(&v, unknown_key_text(key, "ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
                              "ensemble.max_run_wall_time_s, ensemble.method, [ensemble.subset], "
-                             "[ensemble.stop])", key));
+                             "[ensemble.stop]"));
     }
   }
 }
@@ -144,8 +144,8 @@ void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
         inline_settings.push_back(
             {std::string(k.str()) + "." + std::string(sk.str()) + "=" + toml_value_text(sv), where_of(c, sv)});
     } else {
-      c.fail(&v, fmt::format("unknown key '{}' (known: scene.file, scene.overrides, and scene tables [scene.mast], "
-                             "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run])", key));
+      c.fail(&v, unknown_key_text(key, "scene.file, scene.overrides, and scene tables [scene.mast], "
+                             "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run]"));
     }
   }
   o.scene_settings = inline_settings;
@@ -167,7 +167,7 @@ void parse_output_table(const Ctx& c, const toml::table& t, CampaignOptions& o) 
     } else if (k == "history_step_s") {
       o.output.history_step_s = get_number(c, v, key);
     } else {
-      c.fail(&v, fmt::format("unknown key '{}' (known: output.history_runs, output.history_step_s)", key));
+      c.fail(&v, unknown_key_text(key, "output.history_runs, output.history_step_s"));
     }
   }
 }
@@ -199,8 +199,8 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
     else if (k == "sigma") d.sigma = get_number(c, v, key);
     else if (k == "values") d.values = get_numbers(c, v, key);
     else if (k == "weights") d.weights = get_numbers(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: key, per, apply, distribution, mean, std, lower, upper, "
-                                "mu, sigma, values, weights)", key));
+    else c.fail(&v, unknown_key_text(key, "key, per, apply, distribution, mean, std, lower, upper, "
+                                "mu, sigma, values, weights"));
   }
   if (!has_key) c.fail(&t, where + ": missing 'key' (the scene key to disperse, e.g. \"mast.strut_mass_kg\")");
   if (!has_dist) c.fail(&t, where + ": missing 'distribution' (one of " + join(kDistributions) + ")");
@@ -386,8 +386,9 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       for (std::size_t i = 0; i < a->size(); ++i)
         o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
     } else {
-      c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, output, scene, failure, "
-                             "[[dispersion]])", k.str()));
+      c.fail(&v, fmt::format("unknown table '{}'{} (known: campaign, ensemble, output, scene, failure, "
+                             "[[dispersion]])", k.str(), did_you_mean(std::string(k.str()), "campaign, ensemble, "
+                                                                      "output, scene, failure, [[dispersion]]")));
     }
   }
   detail::derive_subset_runs(c, root, o);

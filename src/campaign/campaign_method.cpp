@@ -45,8 +45,8 @@ void parse_subset_table(const Ctx& c, const toml::table& t, CampaignOptions& o) 
       if (m < 1 || m > 1000) c.fail(&v, fmt::format("{}: {} (must lie in [1, 1000])", key, m));
       s.max_levels = static_cast<int>(m);
     } else if (k == "proposal_half_width") s.proposal_half_width = get_number(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.subset.n_per_level, ensemble.subset.p0, "
-                                "ensemble.subset.max_levels, ensemble.subset.proposal_half_width)", key));
+    else c.fail(&v, unknown_key_text(key, "ensemble.subset.n_per_level, ensemble.subset.p0, "
+                                "ensemble.subset.max_levels, ensemble.subset.proposal_half_width"));
   }
 }
 
@@ -64,8 +64,8 @@ void parse_stop_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
     else if (k == "width") r.width = get_number(c, v, key);
     else if (k == "confidence") r.confidence = get_number(c, v, key);
     else if (k == "max_runs") r.max_runs = get_integer(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.stop.target, output, level, width, confidence, "
-                                "max_runs)", key));
+    else c.fail(&v, unknown_key_text(key, "ensemble.stop.target, output, level, width, confidence, "
+                                "max_runs"));
   }
 }
 
@@ -76,8 +76,8 @@ void parse_failure_table(const Ctx& c, const toml::table& t, CampaignOptions& o)
                    *below = t.get("below"), *unit = t.get("unit");
   for (const auto& [k, v] : t)
     if (k != "margin" && k != "column" && k != "above" && k != "below" && k != "unit")
-      c.fail(&v, fmt::format("unknown key 'failure.{}' (known: failure.margin, failure.column, failure.above, "
-                             "failure.below, failure.unit)", k.str()));
+      c.fail(&v, unknown_key_text("failure." + std::string(k.str()), "failure.margin, failure.column, failure.above, "
+                                                                  "failure.below, failure.unit"));
   if ((margin != nullptr) == (column != nullptr))
     c.fail(margin ? margin : column ? column : &t,
            "failure: give either margin = \"<column>\" (failed when <= 0, e.g. \"rail_margin_m\") or column = "

@@ -144,6 +144,15 @@ std::string SubsetMethod::calc_result_text() const {
   return t;
 }
 
+std::string SubsetMethod::progress_stage() const {
+  if (!sim_ || sim_->done()) return {};
+  const sampling::SubsetRound& r = sim_->round();
+  if (r.level == 0) return "level 0 (independent draws)";
+  const std::int64_t steps = (opt_.n_per_level + opt_.n_chains() - 1) / opt_.n_chains() - 1;  // a chain's longest walk
+  return fmt::format("level {} (margin <= {:.4g} {}), Markov step {} of {}", r.level, r.threshold,
+                     campaign::find_run_column_unit(ctx_.options.failure.column), r.step, steps);
+}
+
 // The failing points of the last level with their inputs as /runs/inputs has them (rows x width),
 // each with the base scene's value as its attribute `nominal` (the design-point table).
 void SubsetMethod::write_failure_samples(hid_t group, hid_t file, std::int64_t n_runs, const std::string& unit) const {
