@@ -40,19 +40,24 @@ def fmt(v, digits=5):
     return text[1:] if text.startswith("-") and float(text) == 0.0 else text   # never "-0"
 
 
-def digits_for(values, spread=None, least=3, most=10):
-    """Significant digits that show the spread of `values`: two significant digits of the spread
-    (max - min of the finite values, or `spread` when given) at the size of the largest |value|;
-    at least `least`, at most `most`."""
+def digits_for(values, least=3, most=8):
+    """Significant digits that show how the `values` (the numbers of one row or one quantity)
+    differ: two significant digits of their spread (max - min) and one of their smallest nonzero
+    gap, at the size of the largest |value|; at least `least`, at most `most`."""
     v = np.asarray(values, dtype=float)
     v = v[np.isfinite(v)]
-    if len(v) == 0:
+    big = float(np.max(np.abs(v))) if len(v) else 0.0
+    if not big > 0:
         return least
-    big = float(np.max(np.abs(v)))
-    width = float(np.ptp(v)) if spread is None else abs(float(spread))
-    if not (big > 0 and width > 0 and np.isfinite(width)):
-        return least
-    return int(min(most, max(least, np.floor(np.log10(big)) - np.floor(np.log10(width)) + 2)))
+    mag = np.floor(np.log10(big))
+    d = least
+    if np.ptp(v) > 0:
+        d = max(d, int(mag - np.floor(np.log10(np.ptp(v)))) + 2)
+    gaps = np.diff(np.unique(v))
+    gaps = gaps[gaps > 0]
+    if len(gaps):
+        d = max(d, int(mag - np.floor(np.log10(np.min(gaps)))) + 1)
+    return int(min(most, d))
 
 
 def data_value(v):

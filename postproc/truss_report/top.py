@@ -126,8 +126,8 @@ def cell(key, v, factor, unit_label, digits=5):
 
 def load_digits(d):
     """Significant digits of a design load's row: enough to show its spread over the runs."""
-    return digits_for([d.min, d.max, d.nominal] + [lv.estimate for lv in d.levels],
-                      spread=d.max - d.min if d.max > d.min else None, least=4)
+    return digits_for([d.min, d.max, d.nominal, d.mean] + [lv.estimate for lv in d.levels]
+                      + [lv.bound for lv in d.levels], least=4)
 
 
 def design_table_html(loads, confidence, sampling, units, n_bays):

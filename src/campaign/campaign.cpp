@@ -33,7 +33,9 @@ int index_of(const std::vector<std::string>& names, const std::string& s) {
 using detail::Ctx;
 using detail::get_number;
 using detail::get_string;
+using detail::did_you_mean;
 using detail::join;
+using detail::unknown_key_text;
 
 // A campaign key that becomes a scene's [run] key in every run (ensemble.max_run_wall_time_s ->
 // run.max_wall_time_s, output.history_step_s -> run.output_step_s) takes that key's hard range from

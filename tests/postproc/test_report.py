@@ -21,6 +21,7 @@ result), and checks:
 Prints one line per check; exits 0 when all pass, 1 otherwise.
 """
 import argparse
+import hashlib
 import html.parser
 import math
 import os
@@ -151,6 +152,12 @@ def text(v):
 # --------------------------------------------------------------------------------------------
 # Expected values from the HDF5 file
 # --------------------------------------------------------------------------------------------
+
+def sha256_of(path):
+    """The file's SHA-256, as the document block must show it (hashlib, read here)."""
+    with open(path, "rb") as fh:
+        return hashlib.sha256(fh.read()).hexdigest()
+
 
 def expected_campaign(path):
     """{data-key: value} of everything the report shows, and the keys it must show."""
@@ -349,6 +356,7 @@ def expected_campaign(path):
         E["_status"] = status
         E["_status_name"] = name_of
         E["_histories"] = sorted(int(k[4:]) for k in f["histories"]) if "histories" in f else []
+    E["_sha256"] = sha256_of(path)
     return E, required
 
 
@@ -393,6 +401,7 @@ def expected_single_run(path):
                 if name != "bay":
                     for i, b in enumerate(bay):
                         E[f"bays.{name}.bay{b}"] = float(ds[i])
+    E["_sha256"] = sha256_of(path)
     return E, required
 
 
@@ -496,8 +505,12 @@ def check_numbers(name, parsed, E, required):
         seen[key] += 1
         if key.startswith("failure_group."):
             continue      # checked against the grouped runs by check_failure_groups
-        if key.startswith(("design.", "verdict", "mech.", "nominal.", "revision")):
+        if key.startswith(("design.", "verdict", "mech.", "nominal.", "revision", "document")):
             continue      # the top of the report: tests/postproc/test_design_loads.py
+        if key == "sha256":   # the document block's SHA-256 of the results file
+            if vis.strip() != E["_sha256"]:
+                bad.append(f"sha256: report {vis.strip()!r}, the file's {E['_sha256']!r}")
+            continue
         if key not in E:
             unknown.append(key)
         elif not values_match(key, value, E[key]):
