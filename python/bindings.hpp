@@ -39,7 +39,8 @@ std::string setting_text(const std::string& key, pyb::handle value);
 // as Python wrote it ('mast.n_bays': 12), not as a --set option.
 io::SceneSetting python_setting(const std::string& key, pyb::handle value);
 
-// An input error's message for Python: the command line's "error: " prefix of each line dropped.
+// An input error's or warning's message for Python: the command line's "error: " and "warning: "
+// prefixes of its lines dropped.
 std::string python_message(const std::string& message);
 
 // A finished run and whether its histories were recorded.

@@ -201,7 +201,7 @@ void warn_once(const std::vector<std::string>& warning) {
     if (!warning[i].empty()) ++warned, first = i;
   if (warned == 0) return;
   const std::string w = fmt::format("simulate_many: {} of {} runs set a key outside its typical range; run {}: {}",
-                                    warned, warning.size(), first, warning[first]);
+                                    warned, warning.size(), first, python_message(warning[first]));
   if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw pyb::error_already_set();
 }
 

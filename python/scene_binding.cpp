@@ -130,8 +130,8 @@ Scene make_scene(std::string text, std::string source, std::vector<io::SceneSett
   } catch (const io::InputError& e) {
     throw pyb::value_error(python_message(e.what()));
   }
-  for (const auto& w : warnings)
-    if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw pyb::error_already_set();  // -W error
+  for (const auto& w : warnings)  // -W error: raised
+    if (PyErr_WarnEx(PyExc_UserWarning, python_message(w).c_str(), 1) != 0) throw pyb::error_already_set();
   return s;
 }
 
@@ -142,7 +142,8 @@ std::string python_message(const std::string& message) {
     std::size_t end = message.find('\n', start);
     if (end == std::string::npos) end = message.size();
     std::string_view line(message.data() + start, end - start);
-    if (line.starts_with("error: ")) line.remove_prefix(7);
+    for (std::string_view prefix : {"error: ", "warning: "})
+      if (line.starts_with(prefix)) line.remove_prefix(prefix.size());
     out.append(line);
     if (end < message.size()) out += '\n';
     start = end + 1;

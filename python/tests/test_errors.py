@@ -103,15 +103,17 @@ def test_warnings_are_truss_sim_warnings(repo, truss_sim):
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
         td.Scene.from_toml(path).with_(**sets)
-    assert [str(x.message) for x in w] == err.splitlines() and len(w) == 1
-    assert w[0].category is UserWarning
+    as_python = [(k, v, repr(v)) for k, v in sets.items()]
+    assert [str(x.message) for x in w] == py_message(err, as_python).removeprefix("warning: ").splitlines()
+    assert len(w) == 1 and w[0].category is UserWarning and "--set" not in str(w[0].message)
     # A batch warns once, naming how many runs and the first one's warning.
     with warnings.catch_warnings(record=True) as w:
         warnings.simplefilter("always")
         td.simulate_many(td.Scene.from_toml(path).with_(**{"mast.n_bays": 3}),
                          {"drive.torque_Nm": [0.01, 5.2, 6.0]}, bays=False)
+    row = py_message(err.splitlines()[0], [("drive.torque_Nm", 5.2, "5.2")]).removeprefix("warning: ")
     assert [str(x.message) for x in w] == ["simulate_many: 2 of 3 runs set a key outside its typical range; run 1: "
-                                           + err.splitlines()[0]]
+                                           + row]
 
 
 def test_wrong_types():
