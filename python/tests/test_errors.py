@@ -134,3 +134,18 @@ def test_wrong_types():
         td.simulate_many([1, 2])
     with pytest.raises(ValueError, match="threads: must be a positive integer"):
         td.simulate_many([s], threads=0)
+
+
+def test_unbuilt_package_says_how_to_build(repo, tmp_path):
+    """The package folder without its compiled part (a build of the programs only): importing it
+    raises ImportError with the command that builds it, not an AttributeError later."""
+    import shutil
+    import subprocess
+    import sys
+    pkg = tmp_path / "truss_deploy"
+    pkg.mkdir()
+    shutil.copy(repo / "python" / "truss_deploy" / "__init__.py", pkg / "__init__.py")
+    p = subprocess.run([sys.executable, "-c", "import truss_deploy"], capture_output=True, text=True,
+                       env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"})
+    assert p.returncode == 1
+    assert "ImportError" in p.stderr and "cmake --build build --target truss_deploy_core" in p.stderr, p.stderr
