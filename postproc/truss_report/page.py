@@ -29,6 +29,11 @@ def unit_text(u):
     return UNIT_SPELLING.get(u, u)
 
 
+def unit_html(u):
+    """A unit after a number in a table: its spelling, never broken across lines ("mN m")."""
+    return esc(unit_text(u)).replace(" ", "\u00a0")
+
+
 def fmt(v, digits=5):
     """Rounded text of a number (integers exact); DASH for NaN."""
     if isinstance(v, (int, np.integer)):
@@ -70,7 +75,7 @@ def num(key, v, unit="", digits=5, tag="td", factor=1.0):
     shown = v / factor if factor != 1.0 and not isinstance(v, (int, np.integer)) else v
     text = fmt(shown, digits)
     if unit and unit != "1" and text != DASH:
-        text += f" {esc(unit_text(unit))}"
+        text += "\u00a0" + unit_html(unit)
     cls = ' class="num"' if tag == "td" else ""
     return f'<{tag}{cls} data-key="{esc(key)}" data-value="{data_value(v)}">{text}</{tag}>'
 
@@ -183,7 +188,8 @@ table.document th { background: #f3f5f7; width: 200px; } table.document td { wor
 .dash { font-size: 11px; color: #444; }
 table.design td, table.design th { font-size: 12px; } table.design td small { color: #555; }
 h2#design, h2#mechanism { margin-top: 14px; }
-table.signoff td { min-width: 180px; height: 28px; }
+table.signoff td { min-width: 180px; height: 36px; }
+@media print { table.signoff { width: 100%; } table.signoff td { height: 14mm; } }
 @media print {
   body { font-size: 10pt; max-width: none; margin: 0; padding: 0; }
   nav, details > summary { display: none; } details { display: block; }

@@ -153,7 +153,7 @@ def campaign_report(page, c, e, opts):
            "limits</a> · <a href='#signoff'>Sign-off</a></nav>")
     title = f"Load report: campaign “{c.attrs['campaign_name']}”"
     return html_page(title, c.path, c.sha256, "\n".join(top) + toc + "\n".join(rest + body)
-                     + model_limits_html() + signoff_html(opts.revision),
+                     + model_limits_html() + signoff_html(opts.revision, c.path, c.sha256),
                      campaign_doc(c, f"<b>{VERDICT_WORDS[page.verdict]}</b>"))
 
 

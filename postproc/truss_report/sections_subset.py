@@ -288,4 +288,4 @@ def subset_report(page, c, s, opts, nominal_html):
     verdict = (f"none: a failure-probability estimate, p = {esc(fmt(s['p'], 4))} "
                f"({esc(s['status'])})")
     return html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
-                     + signoff_html(opts.revision), campaign_doc(c, verdict))
+                     + signoff_html(opts.revision, c.path, c.sha256), campaign_doc(c, verdict))

@@ -1,12 +1,13 @@
 """truss_report.top: the top of the campaign report: verdict banner, design-load table, mechanism
 margins (ECSS), model limits and the sign-off block; the verdict's lines for the terminal."""
 import html
+import os
 import re
 
 import numpy as np
 
 from .mechanism import ECSS_CLAUSE, ECSS_SHORT, ECSS_CONFIRM, available_at_speed, screw_speed
-from .page import digits_for, esc, fmt, num, table
+from .page import digits_for, esc, fmt, num, table, unit_html
 
 
 def too_few_items(loads):
@@ -120,7 +121,7 @@ def verdict_html(c, m, failed_checks, nominal_status, n_checks, loads=(), units=
 
 def cell(key, v, factor, unit_label, digits=5):
     """A number shown in readable units; data-value keeps the SI value."""
-    text = f"{fmt(v / factor, digits)} {esc(unit_label)}" if np.isfinite(v) else fmt(v)
+    text = f"{fmt(v / factor, digits)}\u00a0{unit_html(unit_label)}" if np.isfinite(v) else fmt(v)
     return f'<td class="num" data-key="{esc(key)}" data-value="{repr(float(v))}">{text}</td>'
 
 
@@ -319,8 +320,11 @@ def model_limits_html():
             + "".join(f"<li>{esc(t)}</li>" for t in MODEL_LIMITS) + "</ul>")
 
 
-def signoff_html(revision):
+def signoff_html(revision, path="", sha256=""):
+    """The sign-off block: revision, the results file the signatures cover, three rows to sign."""
     rows = [[f"<th>{r}</th>", "", "", ""] for r in ("Prepared", "Checked", "Approved")]
+    covers = (f" of the results file <code>{esc(os.path.basename(path))}</code>, SHA-256 "
+              f"<code>{esc(sha256)}</code>" if path else "")
     return ("<h2 id='signoff'>Sign-off</h2><p>Revision <b data-key='revision'>"
-            f"{esc(revision)}</b></p>"
+            f"{esc(revision)}</b>{covers}</p>"
             + table(["", "name", "date", "signature"], rows, "signoff"))
