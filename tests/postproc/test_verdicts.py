@@ -14,6 +14,7 @@ Usage:
    and the line asking to confirm the factors, and "page 1 of N" on the first page.
 3. No "NaN" in the text of the report of any shipped campaign (campaigns/*.toml, each with a few
    runs), and no "Nm" written as a unit.
+4. The report's figure style puts no offset on an axis (data spread 2e-6 around 145).
 Prints one line per check; exit 0 when all pass, 1 otherwise.
 """
 import argparse
@@ -152,6 +153,23 @@ def check_no_nan(a):
               f"{name}: every '—' has its footnote")
 
 
+def check_no_offset_axes(a):
+    """The report's figure style: ticks show values, never an offset ("1e-6+1.450568e2") however
+    small the spread of the data (a latch energy constant to 1e-9 J)."""
+    sys.path.insert(0, os.path.join(a.repo, "postproc"))
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from truss_report.cli import FIGURE_STYLE
+    with plt.rc_context(FIGURE_STYLE):
+        fig, ax = plt.subplots()
+        ax.plot([0, 1, 2], [145.0568, 145.0568 + 1e-6, 145.0568 + 2e-6])
+        fig.canvas.draw()
+        offset = ax.yaxis.get_major_formatter().get_offset()
+    plt.close(fig)
+    check(offset == "", f"figures: no offset on the axes (offset text {offset!r})")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repo", required=True)
@@ -165,6 +183,7 @@ def main():
     if run_campaign(a, "table1_dispersed", h5, ["--set", "ensemble.n_runs=60",
                                                 "--set", "campaign.name=table1-dispersed"]):
         check_pdf(a, h5, check_verdicts(a, h5))
+    check_no_offset_axes(a)
     check_no_nan(a)
     print(f"{len(FAILS)} failed" if FAILS else "all passed")
     return 1 if FAILS else 0
