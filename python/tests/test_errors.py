@@ -146,6 +146,6 @@ def test_unbuilt_package_says_how_to_build(repo, tmp_path):
     pkg.mkdir()
     shutil.copy(repo / "python" / "truss_deploy" / "__init__.py", pkg / "__init__.py")
     p = subprocess.run([sys.executable, "-c", "import truss_deploy"], capture_output=True, text=True,
-                       env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"})
+                       env={"PYTHONPATH": str(tmp_path), "PATH": "/usr/bin:/bin"}, cwd=tmp_path)
     assert p.returncode == 1
     assert "ImportError" in p.stderr and "cmake --build build --target truss_deploy_core" in p.stderr, p.stderr
