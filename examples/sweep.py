@@ -35,7 +35,13 @@ x_mNm = 1e3 * df["input:drive.stall_torque_Nm"]
 fig, (top, bottom) = plt.subplots(2, 1, sharex=True, figsize=(7, 6))
 top.plot(x_mNm[ok], df.deploy_time_s[ok], "o-", label="deployed")
 if (~ok).any():
-    top.axvspan(x_mNm.min(), x_mNm[~ok].max(), color="tab:red", alpha=0.15, label="motor stalls")
+    # The stall boundary lies between the largest stalled and the next deployed torque: the band
+    # ends half-way, so that it meets the deployed points without a gap (within half a step).
+    last_stall = x_mNm[~ok].max()
+    above = x_mNm[ok & (x_mNm > last_stall)]
+    edge = 0.5 * (last_stall + above.min()) if len(above) else last_stall
+    top.axvspan(x_mNm.min(), edge, color="tab:red", alpha=0.15,
+                label="motor stalls (boundary within half a step)")
 top.set_ylabel("deployment time (s)")
 top.legend()
 bottom.plot(x_mNm[ok], 1e3 * df.peak_latch_energy_J[ok], "o-", color="tab:green")

@@ -10,7 +10,14 @@ DIR/report.html, one self-contained HTML page, with its PNG figures beside it (r
 DIR must be new or empty unless --force is given (then files of the same names are replaced,
 other files are left alone). The path of the report is printed.
 
-Exit codes: 0 report written; 2 bad input (not an HDF5 file, damaged or truncated file, wrong
+DIR/report.pdf is the same report for signature (A4, numbered pages; WeasyPrint; --no-pdf skips it).
+Both begin with the document block: campaign, tool version, date, the results file's name and
+SHA-256, the verdict.
+
+Exit codes: 0 report written, verdict PASS (or a report without a verdict: a single run, a
+subset campaign); 3 report written, verdict FAIL (the evidence violates a requirement); 4 report
+written, verdict NOT ASSESSED (nothing fails, but the runs cannot decide every requirement, e.g.
+too few runs for the design level); 2 bad input (not an HDF5 file, damaged or truncated file, wrong
 kind or schema_version, a missing or malformed required dataset, an output directory that is
 not empty): one line `error: FILE: what is wrong` on stderr and nothing written.
 
@@ -20,8 +27,8 @@ the statistical methods.
 
 The code is the package truss_report/ beside this file (reading, statistics, figures, HTML).
 
-Needs numpy, scipy, h5py and matplotlib (Debian: python3-numpy python3-scipy python3-h5py
-python3-matplotlib) and Python >= 3.11.
+Needs numpy, scipy, h5py, matplotlib and WeasyPrint (Debian: python3-numpy python3-scipy
+python3-h5py python3-matplotlib weasyprint) and Python >= 3.11.
 """
 import os
 import sys

@@ -35,6 +35,14 @@ Scene make_scene(std::string text, std::string source, std::vector<io::SceneSett
 // a string as it is (a bare word is read as a string). TypeError for anything else.
 std::string setting_text(const std::string& key, pyb::handle value);
 
+// A key set from Python (with_(), simulate_many's overrides): its setting, whose messages name it
+// as Python wrote it ('mast.n_bays': 12), not as a --set option.
+io::SceneSetting python_setting(const std::string& key, pyb::handle value);
+
+// An input error's or warning's message for Python: the command line's "error: " and "warning: "
+// prefixes of its lines dropped.
+std::string python_message(const std::string& message);
+
 // A finished run and whether its histories were recorded.
 struct Result {
   sim::RunResult run;

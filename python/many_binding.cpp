@@ -189,7 +189,7 @@ Failure run_parallel(std::size_t n, int threads, const Work& work) {
 // Raises the failure, if any.
 void raise_failure(const Failure& f) {
   if (f.message.empty()) return;
-  const std::string msg = fmt::format("simulate_many: run {}: {}", f.index, f.message);
+  const std::string msg = fmt::format("simulate_many: run {}: {}", f.index, python_message(f.message));
   if (f.bad_input) throw pyb::value_error(msg);
   throw std::runtime_error(msg);
 }
@@ -201,7 +201,7 @@ void warn_once(const std::vector<std::string>& warning) {
     if (!warning[i].empty()) ++warned, first = i;
   if (warned == 0) return;
   const std::string w = fmt::format("simulate_many: {} of {} runs set a key outside its typical range; run {}: {}",
-                                    warned, warning.size(), first, warning[first]);
+                                    warned, warning.size(), first, python_message(warning[first]));
   if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw pyb::error_already_set();
 }
 
@@ -246,7 +246,7 @@ pyb::dict many_settings(const Scene& base, const pyb::sequence& rows, int thread
   for (const auto row : rows) {
     std::vector<io::SceneSetting> s;
     for (auto [k, v] : pyb::dict(pyb::reinterpret_borrow<pyb::object>(row)))
-      s.push_back({setting_text(pyb::str(k), v), {}});
+      s.push_back(python_setting(pyb::str(k), v));
     settings.push_back(std::move(s));
   }
   // Every row read first (in parallel): a bad row raises before any run, and the bay counts size

@@ -106,7 +106,7 @@ Result simulate_scene(const Scene& scene, bool histories) {
   }
   // truss-sim's exit 2 (simulate's own checks beyond the parser's; not reached by a parsed scene).
   if (res.run.status == sim::RunStatus::invalid_input)
-    throw pyb::value_error(fmt::format("error: {}: {}", scene.source, res.run.message));
+    throw pyb::value_error(fmt::format("{}: {}", scene.source, res.run.message));
   return res;
 }
 

@@ -1,5 +1,9 @@
 // truss_deploy.Scene and truss_deploy.scene_keys(): scenes read and checked exactly as truss-sim
 // reads them (io/scene_toml), keys, units and ranges from the one scene key table (sim/scene_keys).
+#include <cerrno>
+#include <filesystem>
+#include <string_view>
+
 #include <fmt/format.h>
 #include <pybind11/stl.h>
 
@@ -98,7 +102,7 @@ std::vector<io::SceneSetting> settings_of(const pyb::args& args, const pyb::kwar
   std::vector<io::SceneSetting> out;
   if (args.size() > 1) throw pyb::type_error("with_() takes at most one mapping besides the keyword arguments");
   auto add = [&](const pyb::dict& d) {
-    for (auto [k, v] : d) out.push_back({setting_text(pyb::str(k), v), {}});
+    for (auto [k, v] : d) out.push_back(python_setting(pyb::str(k), v));
   };
   if (args.size() == 1) add(pyb::dict(args[0]));
   add(kwargs);
@@ -124,21 +128,50 @@ Scene make_scene(std::string text, std::string source, std::vector<io::SceneSett
   try {
     s.options = io::parse_scene_text_with(s.text, s.source, s.settings, &warnings);
   } catch (const io::InputError& e) {
-    throw pyb::value_error(e.what());
+    throw pyb::value_error(python_message(e.what()));
   }
-  for (const auto& w : warnings)
-    if (PyErr_WarnEx(PyExc_UserWarning, w.c_str(), 1) != 0) throw pyb::error_already_set();  // -W error
+  for (const auto& w : warnings)  // -W error: raised
+    if (PyErr_WarnEx(PyExc_UserWarning, python_message(w).c_str(), 1) != 0) throw pyb::error_already_set();
   return s;
+}
+
+std::string python_message(const std::string& message) {
+  std::string out;
+  std::size_t start = 0;
+  while (start <= message.size()) {
+    std::size_t end = message.find('\n', start);
+    if (end == std::string::npos) end = message.size();
+    std::string_view line(message.data() + start, end - start);
+    for (std::string_view prefix : {"error: ", "warning: "})
+      if (line.starts_with(prefix)) line.remove_prefix(prefix.size());
+    out.append(line);
+    if (end < message.size()) out += '\n';
+    start = end + 1;
+  }
+  return out;
+}
+
+io::SceneSetting python_setting(const std::string& key, pyb::handle value) {
+  std::string text = setting_text(key, value);
+  return {std::move(text), fmt::format("{}: {}", pyb::repr(pyb::str(key)).cast<std::string>(),
+                                       pyb::repr(value).cast<std::string>())};
 }
 
 std::string setting_text(const std::string& key, pyb::handle value) {
   PyObject* p = value.ptr();
   const std::string type_name = pyb::str(pyb::type::of(value).attr("__name__"));
+  // An array (numpy's, of any shape but ()) is not one value: numpy scalars and 0-d arrays are.
+  if (PyObject_HasAttrString(p, "shape") && pyb::len(value.attr("shape")) != 0)
+    throw pyb::type_error(fmt::format("{}: expected a number, a bool or a string, got {} of shape {}", key, type_name,
+                                      pyb::repr(value.attr("shape")).cast<std::string>()));
   if (PyBool_Check(p) || type_name == "bool_") return key + "=" + (PyObject_IsTrue(p) ? "true" : "false");
   if (PyUnicode_Check(p)) return key + "=" + value.cast<std::string>();
   if (PyFloat_Check(p)) return key + "=" + io::toml_double(PyFloat_AsDouble(p));
-  if (PyIndex_Check(p))
-    return key + "=" + pyb::str(pyb::reinterpret_steal<pyb::object>(PyNumber_Index(p))).cast<std::string>();
+  if (PyIndex_Check(p)) {
+    PyObject* index = PyNumber_Index(p);
+    if (index == nullptr) throw pyb::error_already_set();
+    return key + "=" + pyb::str(pyb::reinterpret_steal<pyb::object>(index)).cast<std::string>();
+  }
   if (PyNumber_Check(p) && PyObject_HasAttrString(p, "__float__")) {  // numpy.float32 and the like
     const double v = PyFloat_AsDouble(p);
     if (v == -1.0 && PyErr_Occurred()) throw pyb::error_already_set();
@@ -153,13 +186,21 @@ checked as truss-sim reads them. Immutable: with_() returns a new scene.)")
       .def_static(
           "from_toml",
           [](const std::string& path) {
+            std::error_code ec;
+            if (!std::filesystem::exists(path, ec)) {  // Python's own error for a missing file
+              errno = ENOENT;
+              PyErr_SetFromErrnoWithFilename(PyExc_FileNotFoundError, path.c_str());
+              throw pyb::error_already_set();
+            }
             try {
               return make_scene(io::read_input_file(path, "scene file"), path, {});
             } catch (const io::InputError& e) {
-              throw pyb::value_error(e.what());
+              throw pyb::value_error(python_message(e.what()));
             }
           },
-          pyb::arg("path"), "A scene file (TOML), e.g. campaigns/scenes/table1.toml; ValueError as truss-sim's exit 2.")
+          pyb::arg("path"),
+          "A scene file (TOML), e.g. campaigns/scenes/table1.toml; FileNotFoundError when it does not exist, "
+          "ValueError (truss-sim's message) when it is not a valid scene.")
       .def_static(
           "table1", [] { return make_scene("", kTable1Source, {}); },
           "The paper's Table 1 mast with every default (docs/model.md §4), no time histories.")

@@ -9,6 +9,8 @@ PKGS=(build-essential cmake pkg-config
       libboost-dev        # Boost.Math headers: Clopper-Pearson intervals, binomial CDF (src/sampling/stopping.cpp)
       python3-numpy python3-h5py python3-matplotlib python3-scipy python3-pandas
       python3-venv        # the truss-report package installed into a venv (test postproc_install)
+      weasyprint          # the report's PDF for signature (postproc/report.py writes report.pdf)
+      poppler-utils       # pdftotext: the tests read the PDF's document block (postproc_verdicts)
       python3-xarray python3-h5netcdf  # xarray opens the campaign file with named dimensions (mpi_layout)
       help2man            # man pages from --help (cmake --install)
       python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests); examples/openturns_form.py

@@ -7,7 +7,7 @@ import warnings
 
 import run_figures as rf
 from run_figures import InputError
-from .constants import CONFIDENCE, EXIT_INPUT_ERROR, REPORT_NAME
+from .constants import CONFIDENCE, EXIT_INPUT_ERROR, EXIT_VERDICT, REPORT_NAME
 from .extras import load_extras
 from .h5read import H5, file_sha256, load_campaign, load_single_run, read_kind
 from .mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY
@@ -17,6 +17,7 @@ from .sections_subset import read_stop, read_subset, subset_report
 from .single_run import single_run_report
 
 CSV_NAME = "runs.csv"
+PDF_NAME = "report.pdf"
 
 
 def check_outdir(outdir, force):
@@ -30,7 +31,8 @@ def check_outdir(outdir, force):
 # Text in the figures: 10 pt (9 pt ticks and keys). A figure row is at most 15 inches at 150 dpi
 # and shows at about 0.6 of that on the page, so that 9 pt is still about 11 px on screen.
 FIGURE_STYLE = {"font.size": 10, "axes.titlesize": 10, "axes.labelsize": 10, "legend.fontsize": 9,
-                "xtick.labelsize": 9, "ytick.labelsize": 9, "figure.titlesize": 11}
+                "xtick.labelsize": 9, "ytick.labelsize": 9, "figure.titlesize": 11,
+                "axes.formatter.useoffset": False}   # ticks show the values, never "1e-6+145.06"
 
 
 class Progress:
@@ -69,9 +71,25 @@ def start_csv(path, staging):
     return proc
 
 
+def write_pdf(staging, progress):
+    """DIR/report.pdf from DIR/report.html (WeasyPrint: A4, page numbers in the footer)."""
+    import logging
+    logging.getLogger("weasyprint").setLevel(logging.ERROR)
+    logging.getLogger("fontTools").setLevel(logging.ERROR)
+    try:
+        import weasyprint
+    except ImportError:
+        raise InputError("the PDF needs WeasyPrint (Debian: apt-get install weasyprint); "
+                         "--no-pdf writes the HTML only") from None
+    progress(f"writing {PDF_NAME}")
+    weasyprint.HTML(filename=os.path.join(staging, REPORT_NAME)).write_pdf(
+        os.path.join(staging, PDF_NAME))
+
+
 def build(path, outdir, force, opts=None, progress=None):
     """Validate, then render into a staging directory beside OUTDIR and move the files in.
-    Returns (path of report.html, the verdict's lines for the terminal: empty for a single run)."""
+    Returns (path of report.html, the verdict's lines for the terminal: empty for a single run,
+    the verdict: "pass", "fail", "not_assessed", or None for a report without one)."""
     opts = opts or parse_args([path, "-o", outdir])
     progress = progress or Progress(quiet=True)
     check_outdir(outdir, force)
@@ -116,6 +134,9 @@ def build(path, outdir, force, opts=None, progress=None):
             page.files.append(CSV_NAME)
         with open(os.path.join(staging, REPORT_NAME), "w", encoding="utf-8") as fh:
             fh.write(text)
+        if opts.pdf:
+            write_pdf(staging, progress)
+            page.files.append(PDF_NAME)
         os.makedirs(outdir, exist_ok=True)
         for name in page.files + [REPORT_NAME]:   # report.html last
             os.replace(os.path.join(staging, name), os.path.join(outdir, name))
@@ -123,7 +144,8 @@ def build(path, outdir, force, opts=None, progress=None):
         if csv is not None and csv.is_alive():
             csv.terminate()
         shutil.rmtree(staging, ignore_errors=True)
-    return os.path.join(outdir, REPORT_NAME), getattr(page, "summary", [])
+    return os.path.join(outdir, REPORT_NAME), getattr(page, "summary", []), \
+        getattr(page, "verdict", None)
 
 
 def parse_args(argv=None):
@@ -153,6 +175,8 @@ def parse_args(argv=None):
     p.add_argument("--revision", default="draft", help="revision shown in the sign-off block")
     p.add_argument("--csv", action="store_true",
                    help=f"also write DIR/{CSV_NAME}: the run table, one row per run (campaigns)")
+    p.add_argument("--no-pdf", dest="pdf", action="store_false",
+                   help=f"do not write DIR/{PDF_NAME} (the report for signature, A4, numbered pages)")
     p.add_argument("--quiet", action="store_true",
                    help="no progress lines on stderr (errors and the verdict are still printed)")
     a = p.parse_args(argv)
@@ -173,7 +197,7 @@ def main(argv=None):
     args = parse_args(argv)
     progress = Progress(quiet=args.quiet)
     try:
-        report, summary = build(args.results, args.outdir, args.force, args, progress)
+        report, summary, verdict = build(args.results, args.outdir, args.force, args, progress)
     except InputError as e:
         sys.stderr.write(f"error: {e}\n")
         return EXIT_INPUT_ERROR
@@ -181,4 +205,4 @@ def main(argv=None):
     for line in summary:
         print(line)
     print(report)
-    return 0
+    return EXIT_VERDICT.get(verdict, 0)

@@ -11,6 +11,13 @@ SCHEMA_VERSIONS = {"single_run": (1,), "campaign": (1, 2, 3)}
 EXIT_INPUT_ERROR = 2
 
 
+# Exit status of a written campaign report, by its verdict (postproc/report.py's docstring):
+# 0 PASS (and every report without a verdict: a single run, a subset campaign), 3 FAIL (the
+# evidence violates a requirement), 4 NOT ASSESSED (nothing fails, but the runs cannot decide
+# every requirement). 1 is left to an unexpected error, 2 to bad input.
+EXIT_VERDICT = {"pass": 0, "fail": 3, "not_assessed": 4}
+
+
 CONFIDENCE = 0.95
 
 

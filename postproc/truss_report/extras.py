@@ -1,6 +1,6 @@
 """truss_report.extras: what the design-load part of the report reads beyond h5read.Campaign:
 every /runs/bays field, the peak locations and impulse columns of /runs, and the nominal run
-(/nominal, written by truss-campaign since issue 12; absent in older files)."""
+(/nominal: the base scene run once by truss-campaign; a file without it has no nominal column)."""
 from dataclasses import dataclass, field
 
 import numpy as np

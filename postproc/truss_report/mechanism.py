@@ -1,9 +1,10 @@
 """truss_report.mechanism: mechanism margins in the form of the ECSS mechanisms standard.
 
 Source: ECSS-E-ST-33-01C (6 March 2009), "Space engineering - Mechanisms", clause 4.7.5.3.1
-"Motorization factors" and its Table 4-2, read in a text copy of the standard (see ECSS_SOURCE;
-docs/report.md). The clause: the components of resistance are multiplied by the minimum
-uncertainty factors of Table 4-2 (theoretical column: inertia I 1.1, spring S 1.2, motor magnetic
+"Motorization factors" and its Table 4-2 (uncertainty factors of the resistance contributors);
+later issues (Rev.1 2017, Rev.2 2019) may number or set them differently, so the report tells the
+user to confirm the factors against the issue in their contract (ECSS_CONFIRM). The clause: the
+components of resistance are multiplied by the minimum uncertainty factors of Table 4-2 (theoretical column: inertia I 1.1, spring S 1.2, motor magnetic
 losses H_M 1.5, friction F_R 3, hysteresis H_Y 3, others/harness H_A 3, adhesion H_D 3; measured
 column 1.1, 1.2, 1.2, 1.5, 1.5, 1.5, 3), and the minimum actuation torque is
 
@@ -14,8 +15,7 @@ inertial resistance torque "to accelerate the inertia" under the acceleration th
 specifies (or deduces from speed or time requirements), T_L a deliverable output torque; the
 actuation torque T must be >= T_min over the full range of travel (4.7.5.3.2 b), and the kinetic
 energy of the moving parts must not be counted on to meet the motorisation factor (4.7.5.3.1 f).
-In the text copy the factors 2, 1.1, 1.2, 1.5 and 1.25 of the equation are legible; the factor 3
-of the friction-like terms is read from Table 4-2 (the equation's typesetting is garbled there).
+The factor 3 of the friction-like terms is that of Table 4-2.
 
 This rigid, frictionless model has two of these resistances (the others are zero in it, and the
 report says they must be added by the user):
@@ -44,9 +44,13 @@ import numpy as np
 
 from .stats import clopper_pearson
 
-ECSS_CLAUSE = "ECSS-E-ST-33-01C (6 March 2009), clause 4.7.5.3.1 and Table 4-2"
-ECSS_SOURCE = ("text copy of ECSS-E-ST-33-01C (6 March 2009) found by the project's reference "
-               "search (code corpus), pages 27-29; not checked against an ESA-issued PDF")
+ECSS_CLAUSE = ("ECSS-E-ST-33-01C (6 March 2009), Space engineering – Mechanisms, clause 4.7.5.3.1 "
+               "“Motorization factors” and Table 4-2 (uncertainty factors)")
+ECSS_SHORT = "ECSS-E-ST-33-01C, clause 4.7.5.3.1 and Table 4-2"
+ECSS_CONFIRM = ("Confirm the factors and the clause against the issue of the standard your "
+                "contract applies (later issues: Rev.1 of 15 February 2017, Rev.2 of 1 March "
+                "2019); set them with --motorisation-factor, --uncertainty-factor and "
+                "--inertia-factor.")
 DEFAULT_MF = 2.0
 DEFAULT_UNCERTAINTY = 1.2     # Table 4-2, spring (S), theoretical and measured
 DEFAULT_INERTIA = 1.25        # clause 4.7.5.3.1 equation, inertial resistance T_D
@@ -76,10 +80,33 @@ class Margins:
     no_load_speed: float = float("nan")
     omega: float = float("nan")
     note: str = ""
+    missing: bool = False         # the file holds no resistance to judge (not assessed)
 
     @property
     def fails(self):
         return self.n > 0 and self.n_below > 0
+
+
+def screw_speed(drive):
+    """Screw speed omega = 2 pi v / h (rad/s) of a velocity drive (NaN without v or h)."""
+    try:
+        return 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return float("nan")
+
+
+def available_at_speed(c, drive):
+    """Smallest torque the scene's motor gives at the prescribed screw speed: the file's
+    /runs/motor_torque_at_speed_Nm over the runs where finite, else the motor's line
+    T_s (1 - omega / omega_0) of the base scene."""
+    a = c.motor_torque_at_speed
+    if a is not None and np.any(np.isfinite(a)):
+        return float(np.nanmin(a))
+    try:
+        return float(drive["stall_torque_Nm"]) * (1.0 - screw_speed(drive)
+                                                  / float(drive["no_load_speed_rad_per_s"]))
+    except (KeyError, TypeError, ValueError, ZeroDivisionError):
+        return float("nan")
 
 
 def _required(m, s, d):
@@ -90,7 +117,7 @@ def _required(m, s, d):
 def _resistances(c, e, m):
     s, d = e.runs.get(STATIC), e.runs.get(INERTIAL)
     if s is None or d is None:
-        m.note = f"the file has no /runs/{STATIC} (written since issue 12)"
+        m.note, m.missing = f"the file has no /runs/{STATIC}", True
         return None, None
     d = np.maximum(d, 0.0) if m.mode == "velocity" else np.zeros_like(d)
     return s, d
@@ -107,11 +134,7 @@ def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAI
             m.note = "the file has no /runs/motor_torque_at_speed_Nm"
             return m
         avail = c.motor_torque_at_speed
-        # The screw speed of the prescribed drive speed, 2 pi v / h (as section 4), and the motor's
-        # torque there, also when no margin can be computed.
-        m.omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
-        ok_avail = avail[c.ok & np.isfinite(avail)]
-        m.t_avail_min = float(np.min(ok_avail)) if ok_avail.size else float("nan")
+        m.omega = screw_speed(drive)   # also when no margin can be computed
     elif m.mode == "motor":
         avail = c.stall_torque
     else:
@@ -122,7 +145,9 @@ def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAI
         return m
     sel = c.ok & np.isfinite(s) & np.isfinite(d) & np.isfinite(avail)
     if not np.any(sel):
-        m.note = "no ok run with a finite resistance and available torque"
+        m.note = ("no ok run has a finite static resistance and available torque "
+                  f"(/runs/{STATIC} holds none for this campaign)")
+        m.missing = True
         return m
     s, d, avail = np.maximum(s[sel], 0.0), d[sel], avail[sel]   # S <= 0: the springs help
     t_min = _required(m, s, d)

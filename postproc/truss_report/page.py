@@ -13,15 +13,56 @@ def esc(s):
     return html.escape(str(s), quote=True)
 
 
+# Shown for a value that does not apply or is not defined (the DASH_NOTE footnote says so).
+DASH = "—"
+DASH_NOTE = ("— : the value does not apply here or is not defined by the data (for example the "
+             "interval after the last bay to lock, a bound the sample is too small for, the "
+             "acceptance of a level without Markov steps, a resistance the file does not hold); "
+             "the text beside each table says which.")
+
+# Units as the report spells them: a space between the factors (SI style, as "mN m").
+UNIT_SPELLING = {"Nm": "N m", "Ns": "N s", "Nm/rad": "N m/rad", "N/m": "N/m"}
+
+
+def unit_text(u):
+    """A unit as the page spells it ("Nm" in a dataset's units attribute is shown "N m")."""
+    return UNIT_SPELLING.get(u, u)
+
+
+def unit_html(u):
+    """A unit after a number in a table: its spelling, never broken across lines ("mN m")."""
+    return esc(unit_text(u)).replace(" ", "\u00a0")
+
+
 def fmt(v, digits=5):
-    """Rounded text of a number (integers exact)."""
+    """Rounded text of a number (integers exact); DASH for NaN."""
     if isinstance(v, (int, np.integer)):
         return str(int(v))
     v = float(v)
     if np.isnan(v):
-        return "NaN"
+        return DASH
     text = f"{v:.{digits}g}".replace("inf", "∞")
     return text[1:] if text.startswith("-") and float(text) == 0.0 else text   # never "-0"
+
+
+def digits_for(values, least=3, most=8):
+    """Significant digits that show how the `values` (the numbers of one row or one quantity)
+    differ: two significant digits of their spread (max - min) and one of their smallest nonzero
+    gap, at the size of the largest |value|; at least `least`, at most `most`."""
+    v = np.asarray(values, dtype=float)
+    v = v[np.isfinite(v)]
+    big = float(np.max(np.abs(v))) if len(v) else 0.0
+    if not big > 0:
+        return least
+    mag = np.floor(np.log10(big))
+    d = least
+    if np.ptp(v) > 0:
+        d = max(d, int(mag - np.floor(np.log10(np.ptp(v)))) + 2)
+    gaps = np.diff(np.unique(v))
+    gaps = gaps[gaps > 0]
+    if len(gaps):
+        d = max(d, int(mag - np.floor(np.log10(np.min(gaps)))) + 1)
+    return int(min(most, d))
 
 
 def data_value(v):
@@ -32,7 +73,9 @@ def num(key, v, unit="", digits=5, tag="td", factor=1.0):
     """A table cell (or span) holding one number, with its data-key and full-precision value;
     shown as v / factor in `unit` (a display unit: factor 1e-3 for "mN"), kept in SI."""
     shown = v / factor if factor != 1.0 and not isinstance(v, (int, np.integer)) else v
-    text = fmt(shown, digits) + (f" {esc(unit)}" if unit and unit != "1" else "")
+    text = fmt(shown, digits)
+    if unit and unit != "1" and text != DASH:
+        text += "\u00a0" + unit_html(unit)
     cls = ' class="num"' if tag == "td" else ""
     return f'<{tag}{cls} data-key="{esc(key)}" data-value="{data_value(v)}">{text}</{tag}>'
 
@@ -51,7 +94,7 @@ def table(headers, rows, cls="", attrs=None):
 
 
 def unit_label(u):
-    return "" if u == "1" else f" ({u})"
+    return "" if u == "1" else f" ({unit_text(u)})"
 
 
 class Page:
@@ -140,24 +183,47 @@ details { margin: 6px 0 12px 0; } summary { cursor: pointer; color: #234; }
 .verdict ul { margin: 4px 0 4px 18px; padding: 0; } .small { font-size: 11px; color: #444; }
 .verdict.fail { background: #fde8e8; border: 2px solid #c00; }
 .verdict.pass { background: #e7f6e7; border: 2px solid #176b17; }
+.verdict.not_assessed { background: #fff4d6; border: 2px solid #b37400; }
+table.document th { background: #f3f5f7; width: 200px; } table.document td { word-break: break-all; }
+.dash { font-size: 11px; color: #444; }
 table.design td, table.design th { font-size: 12px; } table.design td small { color: #555; }
 h2#design, h2#mechanism { margin-top: 14px; }
-table.signoff td { min-width: 180px; height: 28px; }
+table.signoff td { min-width: 180px; height: 36px; }
+@media print { table.signoff { width: 100%; } table.signoff td { height: 14mm; } }
 @media print {
   body { font-size: 10pt; max-width: none; margin: 0; padding: 0; }
   nav, details > summary { display: none; } details { display: block; }
   h2 { page-break-after: avoid; } figure, table, .verdict { page-break-inside: avoid; }
   figure img { max-width: 100%; border: none; } a { color: inherit; text-decoration: none; }
-  .grid { display: block; } @page { size: A4; margin: 15mm; }
+  .grid { display: block; } table { font-size: 8pt; } table.design td, table.design th { font-size: 7pt; }
+  td.num { white-space: normal; } pre { white-space: pre-wrap; font-size: 7pt; }
 }
+@page { size: A4; margin: 15mm 12mm 18mm 12mm;
+        @bottom-left { content: string(doctitle); font-size: 8pt; color: #555; }
+        @bottom-right { content: "page " counter(page) " of " counter(pages); font-size: 8pt;
+                        color: #555; } }
+h1 { string-set: doctitle content(); }
 """
 
 
-def html_page(title, path, sha256, body):
+def document_block(rows):
+    """The document block: what was judged, by which tool, from which file (name and SHA-256),
+    when, and the verdict; the same on the HTML page and in the PDF."""
+    return ("<table class='kv document' data-key='document'>"
+            + "".join(f"<tr><th>{esc(k)}</th><td data-doc='{esc(k)}'>{v}</td></tr>"
+                      for k, v in rows) + "</table>")
+
+
+def html_page(title, path, sha256, body, doc=()):
+    """The page: title, document block (`doc`: extra (name, html) rows, e.g. campaign, tool,
+    verdict), the "—" footnote, then `body`."""
     now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    rows = list(doc) + [("report built (UTC)", esc(now)),
+                        ("results file", f"<code>{esc(os.path.basename(path))}</code>"),
+                        ("results file SHA-256", f"<code data-key='sha256'>{esc(sha256)}</code>"),
+                        ("results file path", f"<code>{esc(os.path.abspath(path))}</code>")]
     return (f'<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
             f"<title>{esc(title)}</title><style>{CSS}</style></head><body>\n"
-            f"<h1>{esc(title)}</h1>\n<p class='meta'>Built {now} by "
-            "<code>postproc/report.py</code> "
-            f"from <code>{esc(os.path.abspath(path))}</code> (SHA-256 <code>{sha256}</code>).</p>\n"
+            f"<h1>{esc(title)}</h1>\n{document_block(rows)}\n"
+            f"<p class='dash' id='dash'>{esc(DASH_NOTE)}</p>\n"
             f"{body}\n</body></html>\n")

@@ -1,5 +1,5 @@
 """truss_report.run_read: reading a single-run HDF5 file (truss-sim -o RUN.h5) into plain data,
-with the text helpers and error type the whole report uses. Split from run_figures.py."""
+with the text helpers and error type the whole report uses (run_figures.py re-exports them)."""
 import argparse
 import os
 import sys

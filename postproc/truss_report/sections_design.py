@@ -12,8 +12,8 @@ from .sections_campaign import section_campaign, section_loads, section_lock_tim
 from .sections_free import section_rail_miss
 from .sections_margins import (input_axis, input_columns, rank_correlations, section_checks,
                                section_histories, section_margins, section_sensitivity)
-from .top import (design_table_html, mechanism_html, model_limits_html, signoff_html,
-                  terminal_summary, verdict_html, verdict_items)
+from .top import (VERDICT_WORDS, design_table_html, mechanism_html, model_limits_html,
+                  signoff_html, terminal_summary, verdict_html, verdict_items, verdict_of)
 
 
 def section_nominal(page, e):
@@ -135,13 +135,13 @@ def campaign_report(page, c, e, opts):
     body.append(section_checks(page, n_checks))
     m = compute_margins(c, e, opts.motorisation_factor, opts.uncertainty_factor, opts.inertia_factor)
     failed = [what for what, passed, _ in page.checks if not passed]
+    items = verdict_items(c, m, failed, e.nominal_status, loads)
+    page.verdict = verdict_of(items)
     top = [verdict_html(c, m, failed, e.nominal_status, len(page.checks), loads, c.display_units),
            design_table_html(loads, opts.confidence, c.attrs["sampling"], c.display_units,
                              c.attrs["n_bays_max"]),
            mechanism_html(m, c.display_units)]
-    page.summary = terminal_summary(c, m, loads, verdict_items(c, m, failed, e.nominal_status,
-                                                               loads),
-                                    c.display_units, opts.confidence)
+    page.summary = terminal_summary(c, m, loads, items, c.display_units, opts.confidence)
     rest = [section_nominal(page, e), section_plots(page, c, e, loads, opts)]
     toc = ("<nav><a href='#design'>Design loads</a> · <a href='#mechanism'>Mechanism margins</a> · "
            "<a href='#nominal'>Nominal run</a> · <a href='#plots'>Plots</a> · "
@@ -153,4 +153,17 @@ def campaign_report(page, c, e, opts):
            "limits</a> · <a href='#signoff'>Sign-off</a></nav>")
     title = f"Load report: campaign “{c.attrs['campaign_name']}”"
     return html_page(title, c.path, c.sha256, "\n".join(top) + toc + "\n".join(rest + body)
-                     + model_limits_html() + signoff_html(opts.revision))
+                     + model_limits_html() + signoff_html(opts.revision, c.path, c.sha256),
+                     campaign_doc(c, f"<b>{VERDICT_WORDS[page.verdict]}</b>"))
+
+
+def campaign_doc(c, verdict_html_text):
+    """The campaign's rows of the document block."""
+    a = c.attrs
+    return [("campaign", f"{esc(a['campaign_name'])} ({c.n} runs, {esc(a['direction'])}, "
+                         f"{esc(a['drive_mode'])} drive)"),
+            ("tool", f"truss {esc(a['software_version'])}, git revision "
+                     f"<code>{esc(a['git_revision'])}</code> (wrote the file; "
+                     "<code>postproc/report.py</code> of the same repository wrote the report)"),
+            ("campaign run (UTC)", f"{esc(a['start_utc'])} to {esc(a['end_utc'])}"),
+            ("verdict", verdict_html_text)]

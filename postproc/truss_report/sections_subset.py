@@ -181,12 +181,71 @@ def design_point_rows(s, c):
     return [r for _, r in rows]
 
 
+def design_point(s, c):
+    """The most probable failure point among the failure samples: the one of highest
+    standard-normal density, i.e. smallest |z| (a FORM design point estimated from the samples,
+    not refined). Returns None without failure samples, else a dict: run index, |z*|, and per
+    dispersed key (in the order of z's columns) its physical value at that point (the mean over
+    the bays / frames of a per-bay / per-frame key), its z* (the mean over bays likewise) and its
+    importance: the direction cosines alpha_i = -z*_i / |z*| of its columns; alpha^2 summed over
+    a key's columns is its share of |z*|^2 (the shares sum to 1)."""
+    z = np.asarray(s["failure_z"], dtype=float)
+    if z.ndim != 2 or len(z) == 0:
+        return None
+    norms = np.sqrt(np.sum(z * z, axis=1))
+    i = int(np.argmin(norms))
+    zs, beta = z[i], float(norms[i])
+    alpha = -zs / beta if beta > 0 else np.zeros_like(zs)
+    rows, col = [], 0
+    for d in c.dispersions:
+        if d.key not in s["failure_inputs"]:
+            continue
+        x, nominal, unit = s["failure_inputs"][d.key]
+        w = 1 if x.ndim == 1 else x.shape[1]
+        xi = float(x[i]) if x.ndim == 1 else float(np.nanmean(x[i]))
+        a = alpha[col:col + w]
+        rows.append({"key": d.key, "width": w, "per": d.per, "nominal": float(nominal), "unit": unit,
+                     "value": xi, "z": float(np.mean(zs[col:col + w])),
+                     "alpha": float(a[0]) if w == 1 else float("nan"),
+                     "share": float(np.sum(a * a))})
+        col += w
+    rows.sort(key=lambda r: -r["share"])
+    return {"run": int(s["failure_runs"][i]), "beta": beta, "rows": rows,
+            "margin": float(s["failure_margin"][i])}
+
+
+def design_point_html(dp, s):
+    rows = []
+    for r in dp["rows"]:
+        per = "" if r["width"] == 1 else f" (mean over {r['width']} {r['per']}s)"
+        k = r["key"]
+        rows.append([f"<code>{esc(k)}</code>{per}", num(f"subset.mpp.{k}.nominal", r["nominal"], r["unit"]),
+                     num(f"subset.mpp.{k}.value", r["value"], r["unit"], digits=6),
+                     num(f"subset.mpp.{k}.z", r["z"], digits=3),
+                     num(f"subset.mpp.{k}.alpha", r["alpha"], digits=3),
+                     num(f"subset.mpp.{k}.share", r["share"], digits=3)])
+    return ("<h3>Design point (most probable failure point)</h3>"
+            f"<p>Of the failure samples, the one of highest standard-normal density (smallest "
+            f"|z|): run {dp['run']}, margin {fmt(dp['margin'], 4)} {esc(s['margin_units'])}, "
+            "|z*| = " + num("subset.mpp.beta", dp["beta"], digits=4, tag="span")
+            + f" (the FORM index it gives, against β = {fmt(s['beta'], 4)} from p). Its inputs "
+            "in physical units, and each input's importance: the direction cosines α<sub>i</sub> "
+            "= −z*<sub>i</sub> / |z*| of the design point (α &lt; 0: the input must rise for the "
+            "failure), and α<sup>2</sup>, the input's share of |z*|<sup>2</sup> (the shares sum "
+            "to 1; for a per-bay or per-frame dispersion, summed over its bays or frames, whose "
+            "α is then shown as —). Sorted by share.</p>"
+            + table(["input", "nominal", "at the design point", "z* (σ)", "α", "α²"], rows, "narrow"))
+
+
 def section_design_point(s, c):
     n = len(s["failure_runs"])
     if n == 0:
         return ("<section id='designpoint'><h2>Failure samples</h2><p>No failing sample: the "
                 "estimate did not reach the failure.</p></section>")
+    dp = design_point(s, c)
     return ("<section id='designpoint'><h2>What drives the failure</h2>"
+            + (design_point_html(dp, s) if dp else "")
+            + "<h3>Failure samples against the population</h3>"
             f"<p>The {n} distinct failing points of the last level (<code>/subset/failure_samples</code>) "
             "against the nominal and the population (the median over level 0, plain draws of the "
             "dispersions). The last column is the failure samples' mean coordinate in the standard "
@@ -204,7 +263,17 @@ def terminal_lines(c, s):
             f"{fmt(s['failure_threshold'])} {s['margin_units']}) = {fmt(s['p'], 4)}",
             f"  95 % interval [{fmt(lo, 3)}, {fmt(hi, 3)}], beta = {fmt(s['beta'], 4)}, CoV "
             f"{fmt(s['cov_lineage'], 3)} (lineage; Au & Beck {fmt(s['cov'], 3)}); crude Monte Carlo "
-            f"would need {fmt(s['crude_mc_runs'], 3)} runs"]
+            f"would need {fmt(s['crude_mc_runs'], 3)} runs"] + design_point_lines(c, s)
+
+
+def design_point_lines(c, s):
+    dp = design_point(s, c)
+    if dp is None:
+        return []
+    top = ", ".join(f"{r['key']} {fmt(r['value'], 6)} {r['unit']} (alpha^2 {fmt(r['share'], 2)})"
+                    for r in dp["rows"][:3])
+    return [f"  design point (failure sample of smallest |z|, run {dp['run']}): |z*| = "
+            f"{fmt(dp['beta'], 4)}; {top}"]
 
 
 def subset_report(page, c, s, opts, nominal_html):
@@ -215,5 +284,8 @@ def subset_report(page, c, s, opts, nominal_html):
            "<a href='#limits'>Model limits</a> · <a href='#signoff'>Sign-off</a></nav>")
     body = [section_probability(s), section_levels(page, s), section_design_point(s, c), nominal_html]
     title = f"Failure-probability report: campaign “{c.attrs['campaign_name']}”"
+    from .sections_design import campaign_doc
+    verdict = (f"none: a failure-probability estimate, p = {esc(fmt(s['p'], 4))} "
+               f"({esc(s['status'])})")
     return html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
-                     + signoff_html(opts.revision))
+                     + signoff_html(opts.revision, c.path, c.sha256), campaign_doc(c, verdict))

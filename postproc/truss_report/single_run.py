@@ -27,7 +27,11 @@ def single_run_report(page, run):
              table(["field", "value", "units"], rows, "narrow"), "</section>",
              single_run_bays(run), single_run_figures(page, run["figures"])]
     title = f"Single-run report: {os.path.basename(run['path'])} (status {status})"
-    return html_page(title, run["path"], run["sha256"], "\n".join(parts))
+    doc = [("run", f"single run, status <b>{esc(status)}</b>"),
+           ("tool", f"truss {esc(run['software_version'])}, git revision "
+                    f"<code>{esc(run['git_revision'])}</code>"),
+           ("verdict", "none: a single run is not judged")]
+    return html_page(title, run["path"], run["sha256"], "\n".join(parts), doc)
 
 
 def single_run_bays(run):

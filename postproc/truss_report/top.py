@@ -1,12 +1,13 @@
 """truss_report.top: the top of the campaign report: verdict banner, design-load table, mechanism
 margins (ECSS), model limits and the sign-off block; the verdict's lines for the terminal."""
 import html
+import os
 import re
 
 import numpy as np
 
-from .mechanism import ECSS_CLAUSE, ECSS_SOURCE
-from .page import esc, fmt, num, table
+from .mechanism import ECSS_CLAUSE, ECSS_SHORT, ECSS_CONFIRM, available_at_speed, screw_speed
+from .page import digits_for, esc, fmt, num, table, unit_html
 
 
 def too_few_items(loads):
@@ -19,34 +20,57 @@ def too_few_items(loads):
     return res
 
 
+# Run statuses that are evidence about the mechanism (it stalled, missed the rail, locked up): a
+# run with one of them violates a requirement. The others (caps, solver and accuracy flags, bad
+# input) say the run gave no evidence: the verdict cannot count it either way.
+PHYSICAL_STATUSES = ("rail miss", "stall", "singular configuration")
+FAIL, NOT_ASSESSED, PASS = "fail", "not_assessed", "pass"
+VERDICT_WORDS = {PASS: "PASS", FAIL: "FAIL", NOT_ASSESSED: "NOT ASSESSED"}
+
+
+def verdict_of(items):
+    """PASS when no item; FAIL when the evidence violates a requirement (any FAIL item);
+    NOT ASSESSED when nothing fails but some requirement cannot be decided from the runs."""
+    kinds = {kind for _, _, kind in items}
+    return FAIL if FAIL in kinds else NOT_ASSESSED if kinds else PASS
+
+
 def verdict_items(c, m, failed_checks, nominal_status, loads=()):
-    """[(key, text)] of everything that fails: margins below the required factor, every run
-    status other than ok (names from the file's enum: stalls, rail misses, solver or accuracy
-    flags), a nominal run that is not ok, design loads without a bound (too few runs), and
-    failed consistency checks."""
+    """[(key, text, kind)] of every requirement that fails (kind FAIL: a margin below the required
+    factor, a run whose status is physical (PHYSICAL_STATUSES), a nominal run that is not ok, a
+    failed consistency check of the file) or cannot be decided (kind NOT_ASSESSED: runs without a
+    result (caps, solver or accuracy flags), design loads without a bound (too few runs, with the
+    number needed), mechanism margins the file has no resistance for)."""
     items = []
     if m.fails:
         items.append(("margin", f"motorisation factor below the required {fmt(m.mf_required)} in "
                       + num("verdict.mf_n_below", m.n_below, tag="span") + f" of {m.n} ok runs "
-                      "(smallest " + num("verdict.mf_min", m.mf_min, digits=4, tag="span") + ")"))
+                      "(smallest " + num("verdict.mf_min", m.mf_min, digits=4, tag="span") + ")",
+                      FAIL))
+    elif getattr(m, "missing", False):
+        items.append(("margin.missing", f"mechanism margins not computed: {esc(m.note)}",
+                      NOT_ASSESSED))
     for code in sorted(c.status_name):
         name = c.status_name[code]
         k = int(np.sum(c.status == code))
         if name != "ok" and k:
+            physical = name in PHYSICAL_STATUSES
             items.append((f"status.{name}", num(f"verdict.status.{name}", k, tag="span")
                           + f" of {c.n} runs <b>{esc(name)}</b> ("
                           + num(f"verdict.status.{name}.fraction", k / c.n, digits=4, tag="span")
-                          + ")"))
+                          + ")" + ("" if physical else ": these runs gave no result"),
+                          FAIL if physical else NOT_ASSESSED))
     if nominal_status and nominal_status != "ok":
-        items.append(("nominal", f"the nominal run is <b>{esc(nominal_status)}</b>"))
+        items.append(("nominal", f"the nominal run is <b>{esc(nominal_status)}</b>",
+                      FAIL if nominal_status in PHYSICAL_STATUSES else NOT_ASSESSED))
     for q, n, need in too_few_items(list(loads)):
         items.append((f"too_few.p{fmt(q)}", "too few runs for the design loads: P" + fmt(q)
                       + " has no upper confidence bound from " + num(f"verdict.too_few.p{fmt(q)}.n",
                                                                      n, tag="span")
-                      + " ok runs (it needs ≥ " + num(f"verdict.too_few.p{fmt(q)}", need, tag="span")
-                      + "); run more"))
+                      + " ok runs; it needs ≥ " + num(f"verdict.too_few.p{fmt(q)}", need, tag="span")
+                      + " ok runs", NOT_ASSESSED))
     for what in failed_checks:
-        items.append(("check", f"consistency check failed: {esc(what)}"))
+        items.append(("check", f"consistency check failed: {esc(what)}", FAIL))
     return items
 
 
@@ -55,10 +79,12 @@ def drive_text(c, m, units):
     drive = c.base_scene.get("drive") or {}
     lab, f = units.get("torque", "Nm")
     if m.mode == "velocity":
+        omega = m.omega if np.isfinite(m.omega) else screw_speed(drive)
+        avail = m.t_avail_min if np.isfinite(m.t_avail_min) else available_at_speed(c, drive)
         return (f"velocity drive at {fmt(float(drive.get('speed_m_per_s', np.nan)))} m/s by the "
                 f"scene's motor: stall torque {fmt(m.stall_scene / f)} {lab}, no-load "
-                f"speed {fmt(m.no_load_speed)} rad/s (it gives {fmt(m.t_avail_min / f)} {lab} at the "
-                f"screw speed {fmt(m.omega, 4)} rad/s)")
+                f"speed {fmt(m.no_load_speed)} rad/s (it gives {fmt(avail / f)} {lab} at the "
+                f"screw speed {fmt(omega, 5)} rad/s)")
     if m.mode == "motor":
         dispersed = [d.key for d in c.dispersions if d.key.startswith("drive.")]
         return (f"motor drive by a motor of stall torque {fmt(m.stall_scene / f)} {lab}, no-load "
@@ -69,28 +95,40 @@ def drive_text(c, m, units):
 
 def verdict_html(c, m, failed_checks, nominal_status, n_checks, loads=(), units=None):
     items = verdict_items(c, m, failed_checks, nominal_status, loads)
-    checked = (f"checked: motorisation factor ≥ {fmt(m.mf_required)} ({esc(ECSS_CLAUSE)}; "
+    verdict = verdict_of(items)
+    checked = (f"checked: motorisation factor ≥ {fmt(m.mf_required)} ({esc(ECSS_SHORT)}; "
                f"spring factor {fmt(m.k_uncertainty)}"
                + (f", inertial factor {fmt(m.k_inertia)})" if m.mode == "velocity" else ")")
                if m.n > 0 else f"drive mode {esc(m.mode)}: margins not computed ({esc(m.note)})")
     checked += (f"; outcome of all {c.n} runs; an upper bound of every design load; {n_checks} "
                 "consistency checks of the file.")
-    against = ("<br>Judged against: " + esc(drive_text(c, m, units)) + ".") if units else ""
-    if not items:
-        return ("<div class='verdict pass' data-key='verdict' data-value='pass'>"
-                "<b>VERDICT: PASS</b> — nothing fails." + against + "<br><span class='small'>"
-                + checked + "</span></div>")
-    return ("<div class='verdict fail' data-key='verdict' data-value='fail'><b>VERDICT: "
-            f"{len(items)} item{'s' if len(items) > 1 else ''} FAIL</b><ul>"
-            + "".join(f"<li data-item='{esc(k)}'>{t}</li>" for k, t in items)
-            + f"</ul>{against[4:]}<br><span class='small'>{checked}</span></div>")
+    against = ("Judged against: " + esc(drive_text(c, m, units)) + ".") if units else ""
+    head = {PASS: "nothing fails and every requirement was assessed.",
+            FAIL: "the evidence violates a requirement.",
+            NOT_ASSESSED: "nothing fails, but the evidence cannot decide every requirement."}
+    lists = ""
+    for kind, title in ((FAIL, "fails"), (NOT_ASSESSED, "not assessed")):
+        mine = [(k, t) for k, t, kk in items if kk == kind]
+        if mine:
+            lists += (f"<div class='small'><b>{title}:</b></div><ul>"
+                      + "".join(f"<li data-item='{esc(k)}' data-kind='{kind}'>{t}</li>"
+                                for k, t in mine) + "</ul>")
+    return (f"<div class='verdict {verdict}' data-key='verdict' data-value='{verdict}'>"
+            f"<b>VERDICT: {VERDICT_WORDS[verdict]}</b> — {head[verdict]}{lists}"
+            + (f"<br>{against}" if against and not lists else against)
+            + f"<br><span class='small'>{checked}</span></div>")
 
 
 def cell(key, v, factor, unit_label, digits=5):
     """A number shown in readable units; data-value keeps the SI value."""
-    shown = v / factor if np.isfinite(v) else v
-    return (f'<td class="num" data-key="{esc(key)}" data-value="{repr(float(v))}">'
-            f"{fmt(shown, digits)} {esc(unit_label)}</td>")
+    text = f"{fmt(v / factor, digits)}\u00a0{unit_html(unit_label)}" if np.isfinite(v) else fmt(v)
+    return f'<td class="num" data-key="{esc(key)}" data-value="{repr(float(v))}">{text}</td>'
+
+
+def load_digits(d):
+    """Significant digits of a design load's row: enough to show its spread over the runs."""
+    return digits_for([d.min, d.max, d.nominal, d.mean] + [lv.estimate for lv in d.levels]
+                      + [lv.bound for lv in d.levels], least=4)
 
 
 def design_table_html(loads, confidence, sampling, units, n_bays):
@@ -102,22 +140,23 @@ def design_table_html(loads, confidence, sampling, units, n_bays):
     rows = []
     for d in loads:
         lab, f = units.get(d.key, d.unit)
+        dg = load_digits(d)
         row = [f"<b>{esc(d.label)}</b><br><code>{esc(d.key)}</code>",
                f"<small>{esc(d.definition)}</small>",
-               cell(f"design.{d.key}.nominal", d.nominal, f, lab),
-               cell(f"design.{d.key}.mean", d.mean, f, lab)]
+               cell(f"design.{d.key}.nominal", d.nominal, f, lab, dg),
+               cell(f"design.{d.key}.mean", d.mean, f, lab, dg)]
         for lv in d.levels:
             tag = f"design.{d.key}.p{fmt(lv.level)}"
-            row.append(cell(tag, lv.estimate, f, lab))
+            row.append(cell(tag, lv.estimate, f, lab, dg))
             if lv.rank:
-                row.append(cell(tag + ".ucb", lv.bound, f, lab)[:-5]
+                row.append(cell(tag + ".ucb", lv.bound, f, lab, dg)[:-5]
                            + f" <small>(k = <span data-key='{tag}.ucb_rank' data-value="
                            f"'{lv.rank}'>{lv.rank}</span> of {d.n})</small></td>")
             else:
                 row.append(f"<td class='num toosmall' data-key='{tag}.ucb' data-value='nan'>"
                            f"n = {d.n} too small (needs ≥ <span data-key='{tag}.ucb_n_needed' "
                            f"data-value='{lv.n_needed}'>{lv.n_needed}</span>)</td>")
-        row.append(num(f"design.{d.key}.ratio", d.ratio, digits=4))
+        row.append(num(f"design.{d.key}.ratio", d.ratio, digits=max(4, dg)))
         rows.append(row)
     return ("<h2 id='design'>Design loads</h2>" + table(heads, rows, "design")
             + design_table_note(loads, confidence, sampling, n_bays))
@@ -144,10 +183,23 @@ def design_table_note(loads, confidence, sampling, n_bays):
 
 
 def mechanism_html(m, units):
-    head = f"<h2 id='mechanism'>Mechanism margins ({esc(ECSS_CLAUSE)})</h2>"
-    if m.n == 0:
+    """The ECSS table. With no resistance in the file (m.missing) the table is still shown, its
+    values "—" and a footnote saying why; with no resistance to overcome, a sentence."""
+    head = f"<h2 id='mechanism'>Mechanism margins ({esc(ECSS_SHORT)})</h2>"
+    if m.n == 0 and not m.missing:
         return head + f"<p>Not computed: {esc(m.note)}.</p>"
     lab, f = units.get("torque", "Nm")
+    rows = mechanism_rows(m, lab, f)
+    if m.missing:    # counts of runs would read as results: shown as "—" too
+        rows = [[a, "<td class='num'>—</td>" if "data-key=\"mech.n" in b else b] for a, b in rows]
+    note = (f"<p class='small'>— : {esc(m.note)}; these margins are not assessed.</p>"
+            if m.missing else "")
+    return (head + mechanism_text(m) + table(["", "value"], [[f"<th>{a}</th>", b] for a, b in rows],
+                                            "kv") + note)
+
+
+def mechanism_rows(m, lab, f):
+    """[(label html, value cell)] of the ECSS table (torques shown in lab = SI / f)."""
     lo, hi = m.p_below_ci
     vel = m.mode == "velocity"
     avail = ("the scene's motor at the prescribed screw speed" if vel else
@@ -184,7 +236,13 @@ def mechanism_html(m, units):
                                                "(1 − ω/ω<sub>0</sub>))" if vel else ""),
               cell("mech.stall_needed", m.stall_needed, f, lab)],
              ["stall torque of the scene's motor", cell("mech.stall_scene", m.stall_scene, f, lab)]]
-    text = ("<p>T<sub>min</sub> = 2 (1.1 I + 1.2 S + 1.5 H<sub>M</sub> + 3 F<sub>R</sub> + "
+    return rows
+
+
+def mechanism_text(m):
+    """The clause's equation and what of it this model holds, with the source."""
+    vel = m.mode == "velocity"
+    return ("<p>T<sub>min</sub> = 2 (1.1 I + 1.2 S + 1.5 H<sub>M</sub> + 3 F<sub>R</sub> + "
             "3 H<sub>Y</sub> + 3 H<sub>A</sub> + 3 H<sub>D</sub>) + 1.25 T<sub>D</sub> + "
             "T<sub>L</sub> (clause 4.7.5.3.1; uncertainty factors of Table 4-2, theoretical "
             "column). Torques are at the screws, the three together: the torque of one motor "
@@ -198,35 +256,43 @@ def mechanism_html(m, units):
             + "Each is its peak over the run, so T<sub>min</sub> is an upper bound. I, "
             "H<sub>M</sub>, F<sub>R</sub>, H<sub>Y</sub>, H<sub>A</sub>, H<sub>D</sub> and "
             "T<sub>L</sub> are zero in the model: friction, hysteresis, harness and adhesion "
-            "(factor 3) must be added by the user. Source of the clause: "
-            f"{esc(ECSS_SOURCE)}.</p>")
-    return head + text + table(["", "value"], [[f"<th>{a}</th>", b] for a, b in rows], "kv")
+            "(factor 3) must be added by the user.</p><p class='small'>Source: "
+            f"{esc(ECSS_CLAUSE)}. {esc(ECSS_CONFIRM)}</p>")
+
+
+def qty(v, lab, digits=5):
+    """A value with its unit in plain text; "—" alone when it does not apply."""
+    return f"{fmt(v, digits)} {lab}" if np.isfinite(v) else fmt(v)
 
 
 def terminal_summary(c, m, loads, items, units, confidence):
     """The verdict and its key figures as plain text lines, for the terminal."""
     tags = re.compile(r"<[^>]+>")
-    lines = [("VERDICT: PASS — nothing fails" if not items else
-              f"VERDICT: FAIL — {len(items)} item{'s' if len(items) > 1 else ''}")
+    verdict = verdict_of(items)
+    counts = ", ".join(f"{sum(1 for *_, k in items if k == kind)} {VERDICT_WORDS[kind].lower()}"
+                       for kind in (FAIL, NOT_ASSESSED) if any(k == kind for *_, k in items))
+    lines = [f"VERDICT: {VERDICT_WORDS[verdict]}" + (f" — {counts}" if counts else " — nothing fails")
              + f" ({c.attrs['campaign_name']}, {c.n} runs, {c.attrs['direction']})"]
-    lines += ["  FAIL: " + html.unescape(tags.sub("", t)) for _, t in items]
+    lines += [("  FAIL: " if kind == FAIL else "  NOT ASSESSED: ")
+              + html.unescape(tags.sub("", t)) for _, t, kind in items]
     lines.append("  judged against: " + drive_text(c, m, units))
     if m.n > 0:
         lab, f = units.get("torque", "Nm")
         lines.append(f"  ECSS motorisation factor {fmt(m.mf_required)}: torque needed "
-                     f"{fmt(m.t_min_design / f)} {lab}, available {fmt(m.t_avail_min / f)} {lab} "
+                     f"{qty(m.t_min_design / f, lab)}, available {qty(m.t_avail_min / f, lab)} "
                      f"(smallest margin {m.tm_min * 100:+.1f} %); stall torque needed "
-                     f"{fmt(m.stall_needed / f)} {lab}")
+                     f"{qty(m.stall_needed / f, lab)}")
     for d in loads:
         if d.key not in ("peak_drive_force_N", "peak_drive_torque_Nm", "peak_pin_force_N",
                          "deploy_time_s"):
             continue
         lab, f = units.get(d.key, d.unit)
         lv = d.levels[-1]
-        bound = (f"upper {confidence * 100:g} % bound {fmt(lv.bound / f)} {lab}" if lv.rank else
-                 f"no bound: n = {d.n} too few, needs >= {lv.n_needed}")
-        lines.append(f"  {d.label}: P{fmt(lv.level)} {fmt(lv.estimate / f)} {lab} ({bound}), "
-                     f"nominal {fmt(d.nominal / f)} {lab}")
+        dg = load_digits(d)
+        bound = (f"upper {confidence * 100:g} % bound {qty(lv.bound / f, lab, dg)}" if lv.rank
+                 else f"no bound: n = {d.n} too few, needs >= {lv.n_needed}")
+        lines.append(f"  {d.label}: P{fmt(lv.level)} {qty(lv.estimate / f, lab, dg)} ({bound}), "
+                     f"nominal {qty(d.nominal / f, lab, dg)}")
     return lines
 
 
@@ -254,8 +320,11 @@ def model_limits_html():
             + "".join(f"<li>{esc(t)}</li>" for t in MODEL_LIMITS) + "</ul>")
 
 
-def signoff_html(revision):
+def signoff_html(revision, path="", sha256=""):
+    """The sign-off block: revision, the results file the signatures cover, three rows to sign."""
     rows = [[f"<th>{r}</th>", "", "", ""] for r in ("Prepared", "Checked", "Approved")]
+    covers = (f" of the results file <code>{esc(os.path.basename(path))}</code>, SHA-256 "
+              f"<code>{esc(sha256)}</code>" if path else "")
     return ("<h2 id='signoff'>Sign-off</h2><p>Revision <b data-key='revision'>"
-            f"{esc(revision)}</b></p>"
+            f"{esc(revision)}</b>{covers}</p>"
             + table(["", "name", "date", "signature"], rows, "signoff"))

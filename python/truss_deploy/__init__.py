@@ -13,7 +13,14 @@ truss-campaign are read by truss_report.read_campaign (postproc/).
 """
 import os as _os
 
-from . import _core
+try:
+    from . import _core
+except ImportError as _e:  # the package folder without its compiled part
+    _here = _os.path.dirname(_os.path.abspath(__file__))
+    raise ImportError(
+        f"truss_deploy: its compiled part _core is not built in {_here} ({_e}); build it with "
+        "`cmake --build build --target truss_deploy_core` (scripts/run_main.sh builds the "
+        "programs only), then import with PYTHONPATH=build/python") from None
 from ._core import (Result, RunStatus, Scene, bay_units, history_units, run_units, scene_keys,
                     simulate)
 
@@ -69,6 +76,11 @@ def simulate_many(scenes, overrides=None, *, threads=None, bays=True):
         if isinstance(scenes, Scene):
             raise TypeError("simulate_many(scenes): give a list of scenes, or a base scene and the overrides")
         scene_list = list(scenes)
+        for i, s in enumerate(scene_list):
+            if not isinstance(s, Scene):
+                raise TypeError(f"simulate_many(scenes): element {i} is {type(s).__name__} "
+                                f"{s!r:.40}, not a Scene (Scene.from_toml(PATH), Scene.table1(), "
+                                "scene.with_(...)); or simulate_many(base, overrides)")
         cols = _core.simulate_many_scenes(scene_list, n_threads, bool(bays))
         inputs, index = None, pd.RangeIndex(len(scene_list), name="run")
     else:

@@ -33,7 +33,9 @@ int index_of(const std::vector<std::string>& names, const std::string& s) {
 using detail::Ctx;
 using detail::get_number;
 using detail::get_string;
+using detail::did_you_mean;
 using detail::join;
+using detail::unknown_key_text;
 
 // A campaign key that becomes a scene's [run] key in every run (ensemble.max_run_wall_time_s ->
 // run.max_wall_time_s, output.history_step_s -> run.output_step_s) takes that key's hard range from
@@ -69,7 +71,7 @@ void parse_campaign_table(const Ctx& c, const toml::table& t, CampaignOptions& o
     const std::string key = "campaign." + std::string(k.str());
     if (k == "name") o.name = get_string(c, v, key);
     else if (k == "description") o.description = get_string(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: campaign.name, campaign.description)", key));
+    else c.fail(&v, unknown_key_text(key, "campaign.name, campaign.description"));
   }
 }
 
@@ -94,11 +96,11 @@ void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o
     } else if (c.methods->find(k.str()) != nullptr) {
       detail::check_method_key(c, key, v);
     } else {
-      std::string tables;
+      std::string known = "ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
+                          "ensemble.max_run_wall_time_s, ensemble.method";
       for (const std::string& m : detail::method_names(c))
-        if (m != kDefaultMethod) tables += ", [ensemble." + m + "]";  // the design has no keys of its own
-      c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
-                             "ensemble.max_run_wall_time_s, ensemble.method{})", key, tables));
+        if (m != kDefaultMethod) known += ", [ensemble." + m + "]";  // the design has no keys of its own
+      c.fail(&v, unknown_key_text(key, known));
     }
   }
 }
@@ -138,8 +140,8 @@ void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
         inline_settings.push_back(
             {std::string(k.str()) + "." + std::string(sk.str()) + "=" + toml_value_text(sv), where_of(c, sv)});
     } else {
-      c.fail(&v, fmt::format("unknown key '{}' (known: scene.file, scene.overrides, and scene tables [scene.mast], "
-                             "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run])", key));
+      c.fail(&v, unknown_key_text(key, "scene.file, scene.overrides, and scene tables [scene.mast], "
+                             "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run]"));
     }
   }
   o.scene_settings = inline_settings;
@@ -161,7 +163,7 @@ void parse_output_table(const Ctx& c, const toml::table& t, CampaignOptions& o) 
     } else if (k == "history_step_s") {
       o.output.history_step_s = get_number(c, v, key);
     } else {
-      c.fail(&v, fmt::format("unknown key '{}' (known: output.history_runs, output.history_step_s)", key));
+      c.fail(&v, unknown_key_text(key, "output.history_runs, output.history_step_s"));
     }
   }
 }
@@ -193,8 +195,8 @@ DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size
     else if (k == "sigma") d.sigma = get_number(c, v, key);
     else if (k == "values") d.values = get_numbers(c, v, key);
     else if (k == "weights") d.weights = get_numbers(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: key, per, apply, distribution, mean, std, lower, upper, "
-                                "mu, sigma, values, weights)", key));
+    else c.fail(&v, unknown_key_text(key, "key, per, apply, distribution, mean, std, lower, upper, "
+                                "mu, sigma, values, weights"));
   }
   if (!has_key) c.fail(&t, where + ": missing 'key' (the scene key to disperse, e.g. \"mast.strut_mass_kg\")");
   if (!has_dist) c.fail(&t, where + ": missing 'distribution' (one of " + join(kDistributions) + ")");
@@ -383,7 +385,9 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       std::string known = "campaign, ensemble, output, scene";
       for (const MethodSyntax* r : c.methods->list())
         for (const std::string& t : r->root_tables) known += ", " + t;
-      c.fail(&v, fmt::format("unknown table '{}' (known: {}, [[dispersion]])", k.str(), known));
+      known += ", [[dispersion]]";
+      c.fail(&v, fmt::format("unknown table '{}'{} (known: {})", k.str(), did_you_mean(std::string(k.str()), known),
+                             known));
     }
   }
   detail::parse_method(c, root, o);

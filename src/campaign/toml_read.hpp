@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <fmt/format.h>
@@ -13,6 +14,7 @@
 
 #include "campaign/campaign.hpp"
 #include "io/scene_toml.hpp"
+#include "io/suggest.hpp"
 
 namespace truss::campaign::detail {
 
@@ -29,6 +31,36 @@ struct Ctx {
   }
 };
 
+// "; did you mean ensemble.n_runs?" when a name of `known` (a message's list, "a, b, [c.d]": a
+// name without a dot lies in the typed key's table) is close to `typed` as io::suggest_value
+// judges closeness (the scene keys' rule); "" otherwise.
+inline std::string did_you_mean(const std::string& typed, std::string_view known) {
+  const std::size_t dot = typed.rfind('.');
+  const std::string table = dot == std::string::npos ? "" : typed.substr(0, dot + 1);
+  std::vector<std::string> full, last;
+  for (std::size_t start = 0; start < known.size();) {
+    std::size_t end = known.find(',', start);
+    if (end == std::string_view::npos) end = known.size();
+    std::string name(known.substr(start, end - start));
+    name = name.substr(name.find_last_of(' ') == std::string::npos ? 0 : name.find_last_of(' ') + 1);
+    std::erase_if(name, [](char ch) { return ch == '[' || ch == ']'; });
+    if (!name.empty()) {
+      full.push_back(name.find('.') == std::string::npos ? table + name : name);
+      last.push_back(full.back().substr(full.back().rfind('.') + 1));
+    }
+    start = end + 1;
+  }
+  const std::vector<std::string_view> views(last.begin(), last.end());
+  const auto best = io::suggest_value(dot == std::string::npos ? typed : typed.substr(dot + 1), views);
+  if (!best) return {};
+  const auto at = static_cast<std::size_t>(std::find(last.begin(), last.end(), *best) - last.begin());
+  return fmt::format("; did you mean {}?", full[at]);
+}
+
+// "unknown key 'KEY'; did you mean ...? (known: KNOWN)".
+inline std::string unknown_key_text(const std::string& key, std::string_view known) {
+  return fmt::format("unknown key '{}'{} (known: {})", key, did_you_mean(key, known), known);
+}
 }  // namespace truss::campaign::detail
 
 namespace truss::campaign {

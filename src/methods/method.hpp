@@ -73,6 +73,11 @@ class Method {
   virtual bool runs_are_draws() const { return true; }
   // Rank 0, after write_results: the method's result for the terminal (lines), or nothing.
   virtual std::string calc_result_text() const { return {}; }
+  // Rank 0, after propose(): what the progress line says of the round being run (subset: "level
+  // 2 (margin <= 0.0013 m), Markov step 3 of 9"), empty for a one-shot design; and the cap on the
+  // runs of all rounds it counts against (0: the runs of the rounds proposed so far).
+  virtual std::string progress_stage() const { return {}; }
+  virtual std::int64_t run_cap() const { return 0; }
 };
 
 }  // namespace truss::methods

@@ -26,8 +26,8 @@ std::unique_ptr<campaign::MethodOptions> StopOptions::parse(const campaign::Meth
     else if (k == "width") r.width = campaign::detail::get_number(c, v, key);
     else if (k == "confidence") r.confidence = campaign::detail::get_number(c, v, key);
     else if (k == "max_runs") r.max_runs = campaign::detail::get_integer(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: ensemble.stop.target, output, level, width, confidence, "
-                                "max_runs)", key));
+    else c.fail(&v, campaign::detail::unknown_key_text(key, in.prefix + "target, output, level, width, confidence, "
+                                                           "max_runs"));
   }
   return o;
 }

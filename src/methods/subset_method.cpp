@@ -96,8 +96,8 @@ void parse_subset_table(const Ctx& c, const toml::table& t, const std::string& p
       if (m < 1 || m > 1000) c.fail(&v, fmt::format("{}: {} (must lie in [1, 1000])", key, m));
       s.max_levels = static_cast<int>(m);
     } else if (k == "proposal_half_width") s.proposal_half_width = get_number(c, v, key);
-    else c.fail(&v, fmt::format("unknown key '{}' (known: {}n_per_level, {}p0, {}max_levels, {}proposal_half_width)",
-                                key, prefix, prefix, prefix, prefix));
+    else c.fail(&v, campaign::detail::unknown_key_text(key, fmt::format("{0}n_per_level, {0}p0, {0}max_levels, "
+                                                                        "{0}proposal_half_width", prefix)));
   }
 }
 
@@ -107,8 +107,9 @@ void parse_failure_table(const Ctx& c, const toml::table& t, FailureOptions& f) 
                    *below = t.get("below"), *unit = t.get("unit");
   for (const auto& [k, v] : t)
     if (k != "margin" && k != "column" && k != "above" && k != "below" && k != "unit")
-      c.fail(&v, fmt::format("unknown key 'failure.{}' (known: failure.margin, failure.column, failure.above, "
-                             "failure.below, failure.unit)", k.str()));
+      c.fail(&v, campaign::detail::unknown_key_text("failure." + std::string(k.str()),
+                                                    "failure.margin, failure.column, failure.above, failure.below, "
+                                                    "failure.unit"));
   if ((margin != nullptr) == (column != nullptr))
     c.fail(margin ? margin : column ? column : &t,
            "failure: give either margin = \"<column>\" (failed when <= 0, e.g. \"rail_margin_m\") or column = "
@@ -257,6 +258,15 @@ std::string SubsetMethod::calc_result_text() const {
                      s.levels[k].runs, acceptance);
   }
   return t;
+}
+
+std::string SubsetMethod::progress_stage() const {
+  if (!sim_ || sim_->done()) return {};
+  const sampling::SubsetRound& r = sim_->round();
+  if (r.level == 0) return "level 0 (independent draws)";
+  const std::int64_t steps = (opt_.n_per_level + opt_.n_chains() - 1) / opt_.n_chains() - 1;  // a chain's longest walk
+  return fmt::format("level {} (margin <= {:.4g} {}), Markov step {} of {}", r.level, r.threshold,
+                     campaign::find_run_column_unit(ctx_.options.failure.column), r.step, steps);
 }
 
 // The failing points of the last level with their inputs as /runs/inputs has them (rows x width),

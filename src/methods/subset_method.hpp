@@ -68,6 +68,8 @@ class SubsetMethod : public Method {
   void write_results(hid_t file, std::int64_t n_runs) const override;
   bool runs_are_draws() const override { return false; }
   std::string calc_result_text() const override;  // p, its CoVs, beta, the levels' thresholds
+  std::string progress_stage() const override;    // the level, its margin threshold, the Markov step
+  std::int64_t run_cap() const override { return ctx_.options.ensemble.n_runs; }  // N + (max_levels - 1)(N - N_c)
 
   // The margins of a round's records (see above).
   static std::vector<double> calc_margins(const FailureOptions& f, const RoundRecords& r);

@@ -160,6 +160,7 @@ methods::RoundPlan Collector::plan_round(std::int64_t round, std::int64_t first_
   if (plan.n_runs > 0) {
     file_.store().extend(plan.end_run());
     progress_.set_total(plan.end_run());
+    progress_.set_stage(method_.progress_stage(), method_.run_cap());
   }
   return plan;
 }

@@ -56,6 +56,16 @@ void Progress::finish(std::int64_t done, const StatusCounts& counts) {
 void Progress::print(std::int64_t done, const StatusCounts& counts, bool final) {
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   const double rate = elapsed > 0.0 ? static_cast<double>(done - restored_) / elapsed : 0.0;
+  if (!stage_.empty() && cap_ > 0 && !final) {
+    const double most = rate > 0.0 ? static_cast<double>(cap_ - done) / rate : -1.0;
+    const std::string line =
+        fmt::format("[truss-campaign] {}: {} runs so far of at most {}: {}; {:.0f} runs/s, at most {} left", stage_,
+                    done, cap_, format_status_counts(counts), rate, format_duration(most));
+    if (terminal_) fmt::print(out_, "\r\033[K{}", line);
+    else fmt::print(out_, "{}\n", line);
+    std::fflush(out_);
+    return;
+  }
   const double left = rate > 0.0 ? static_cast<double>(total_ - done) / rate : -1.0;
   std::string line = fmt::format("[truss-campaign] {}/{} runs ({:.1f} %): {}; {:.0f} runs/s, ", done, total_,
                                  total_ ? 100.0 * static_cast<double>(done) / static_cast<double>(total_) : 100.0,

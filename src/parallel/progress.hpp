@@ -31,6 +31,13 @@ class Progress {
            std::FILE* out = stderr);
   void banner(const std::string& campaign, int ranks, const std::string& output);
   void set_total(std::int64_t total) { total_ = total; }
+  // A method of rounds (subset simulation): the line names the stage ("level 2 (margin <= ...)")
+  // and counts the runs so far against `cap` (the most the campaign may make) instead of against
+  // the rounds proposed so far; its time left is then an upper bound. Empty stage, 0: plain line.
+  void set_stage(std::string stage, std::int64_t cap) {
+    stage_ = std::move(stage);
+    cap_ = cap;
+  }
   // Cheap unless due: `counts` is called only when a line is printed.
   template <class CountsFn>
   void update(std::int64_t done, CountsFn&& counts) {
@@ -44,6 +51,8 @@ class Progress {
   bool due();
   void print(std::int64_t done, const StatusCounts& counts, bool final);
   std::int64_t total_, restored_;
+  std::string stage_;
+  std::int64_t cap_ = 0;
   bool terminal_, enabled_;
   double interval_s_;
   std::FILE* out_;

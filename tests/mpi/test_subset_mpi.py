@@ -114,6 +114,22 @@ def check_report(args, path, outdir):
     check(abs(report_value(html, "subset.dp.mast.diagonal_free_length_m.z") - mz) < 1e-9,
           f"report: the design point's free-length coordinate, {mz:.4g} sigma, from the failure samples' inputs")
     check("design loads" not in html.lower() and "subset_levels.png" in html, "report: a level plot, no design loads")
+    # The design point: the failure sample of smallest |z| (found here from /subset/failure_samples/z),
+    # its free length in metres, whose coordinate is (l - l_0) / std (the dispersion's law, written out
+    # here), and the direction cosines alpha = -z / |z| with shares alpha^2 summing to 1.
+    with h5py.File(path, "r") as f:
+        zs = f["subset/failure_samples/z"][()]
+        keys = list(f["subset/failure_samples/inputs"])
+    i = int(np.argmin(np.sum(zs * zs, axis=1)))
+    xi = float(x[i])
+    shares = [report_value(html, f"subset.mpp.{k}.share") for k in keys]
+    check(report_value(html, "subset.mpp.mast.diagonal_free_length_m.value") == xi
+          and abs(report_value(html, "subset.mpp.beta") - float(np.linalg.norm(zs[i]))) < 1e-12
+          and abs(report_value(html, "subset.mpp.mast.diagonal_free_length_m.alpha")
+                  + ((xi - 0.483) / 0.005) / float(np.linalg.norm(zs[i]))) < 1e-9
+          and abs(sum(shares) - 1.0) < 1e-12,
+          f"report: design point = failure sample {i} of smallest |z| ({xi:.6g} m), alpha from (l - l_0) / std, "
+          "shares sum to 1")
 
 
 def check_stop(args, d):
@@ -146,8 +162,11 @@ def check_stop(args, d):
     p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc/report.py"), out, "-o", outdir,
                         "--force"], capture_output=True, text=True, timeout=300)
     html = open(os.path.join(outdir, "report.html"), encoding="utf-8").read()
-    check(p.returncode == 0 and "Sequential stopping" in html and report_value(html, f"stop.round{len(runs) - 1}.runs")
-          == runs[-1], "the report lists the rounds")
+    verdict = re.search(r"data-key='verdict' data-value='(\w+)'", html)
+    code = {"pass": 0, "fail": 3, "not_assessed": 4}.get(verdict.group(1) if verdict else "", -1)
+    check(p.returncode == code and "Sequential stopping" in html
+          and report_value(html, f"stop.round{len(runs) - 1}.runs") == runs[-1],
+          f"the report lists the rounds (exit {p.returncode}: its verdict's status {code})")
 
 
 def killed_mid_level(args, out):

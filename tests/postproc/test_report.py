@@ -21,9 +21,11 @@ result), and checks:
 Prints one line per check; exits 0 when all pass, 1 otherwise.
 """
 import argparse
+import hashlib
 import html.parser
 import math
 import os
+import re
 import shutil
 import struct
 import subprocess
@@ -150,6 +152,12 @@ def text(v):
 # --------------------------------------------------------------------------------------------
 # Expected values from the HDF5 file
 # --------------------------------------------------------------------------------------------
+
+def sha256_of(path):
+    """The file's SHA-256, as the document block must show it (hashlib, read here)."""
+    with open(path, "rb") as fh:
+        return hashlib.sha256(fh.read()).hexdigest()
+
 
 def expected_campaign(path):
     """{data-key: value} of everything the report shows, and the keys it must show."""
@@ -348,6 +356,7 @@ def expected_campaign(path):
         E["_status"] = status
         E["_status_name"] = name_of
         E["_histories"] = sorted(int(k[4:]) for k in f["histories"]) if "histories" in f else []
+    E["_sha256"] = sha256_of(path)
     return E, required
 
 
@@ -392,6 +401,7 @@ def expected_single_run(path):
                 if name != "bay":
                     for i, b in enumerate(bay):
                         E[f"bays.{name}.bay{b}"] = float(ds[i])
+    E["_sha256"] = sha256_of(path)
     return E, required
 
 
@@ -457,8 +467,19 @@ def png_size(path):
 # --------------------------------------------------------------------------------------------
 
 def run_report(repo, h5, outdir, *extra):
+    """report.py without the PDF (tests/postproc/test_verdicts.py checks the PDF)."""
     return subprocess.run([PY, os.path.join(repo, "postproc", "report.py"), h5, "-o", outdir,
-                           *extra], capture_output=True, text=True)
+                           "--no-pdf", *extra], capture_output=True, text=True)
+
+
+VERDICT_EXIT = {"pass": 0, "fail": 3, "not_assessed": 4}   # report.py's documented exit codes
+
+
+def verdict_exit(outdir):
+    """The exit status report.py must give for the verdict written in outdir/report.html."""
+    with open(os.path.join(outdir, "report.html"), encoding="utf-8") as fh:
+        m = re.search(r"data-key='verdict' data-value='(\w+)'", fh.read())
+    return VERDICT_EXIT.get(m.group(1), -1) if m else 0
 
 
 def values_match(key, got, want):
@@ -484,8 +505,12 @@ def check_numbers(name, parsed, E, required):
         seen[key] += 1
         if key.startswith("failure_group."):
             continue      # checked against the grouped runs by check_failure_groups
-        if key.startswith(("design.", "verdict", "mech.", "nominal.", "revision")):
+        if key.startswith(("design.", "verdict", "mech.", "nominal.", "revision", "document")):
             continue      # the top of the report: tests/postproc/test_design_loads.py
+        if key == "sha256":   # the document block's SHA-256 of the results file
+            if vis.strip() != E["_sha256"]:
+                bad.append(f"sha256: report {vis.strip()!r}, the file's {E['_sha256']!r}")
+            continue
         if key not in E:
             unknown.append(key)
         elif not values_match(key, value, E[key]):
@@ -554,7 +579,10 @@ def build_reports(repo, scratch, jobs):
 
 def check_campaign(name, h5, built, expect_imgs=()):
     outdir, r = built
-    if not check(r.returncode == 0, f"{name}: report.py exit 0 ({r.stderr.strip()[:300]})"):
+    written = os.path.exists(os.path.join(outdir, "report.html"))
+    if not check(written and r.returncode == verdict_exit(outdir),
+                 f"{name}: report.py exit {r.returncode}, its verdict's status "
+                 f"({r.stderr.strip()[:300]})"):
         return None
     parsed = parse_report(os.path.join(outdir, "report.html"))
     E, required = expected_campaign(h5)
@@ -681,7 +709,7 @@ def main():
     expect_error(repo, scratch, "non_empty_outdir", campaigns["five_runs"], "--force",
                  outdir=busy)
     r = run_report(repo, campaigns["five_runs"], busy, "--force")
-    check(r.returncode == 0 and os.path.exists(os.path.join(busy, "notes.txt"))
+    check(r.returncode in VERDICT_EXIT.values() and os.path.exists(os.path.join(busy, "notes.txt"))
           and os.path.exists(os.path.join(busy, "report.html")),
           "--force writes into a non-empty directory and leaves other files alone")
 

@@ -143,6 +143,19 @@ TEST_CASE("campaign messages name the --set or the campaign line", "[hardening][
              Contains("error: --set ensemble.n_run=5: unknown key 'ensemble.n_run'"));
   CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text(ok, "c.toml", ".", {"ensemble.n_runs=0"}); }),
              Contains("--set ensemble.n_runs=0"));
+  // "did you mean" for campaign keys, as for scene keys: the closest known key of the table, none
+  // for a name far from every key.
+  CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text("[ensemble]\nn_run = 2000\n", "c.toml", "."); }),
+             Contains("error: c.toml:2: unknown key 'ensemble.n_run'; did you mean ensemble.n_runs?"));
+  CHECK_THAT(error_of([&] {
+               truss::methods::parse_campaign_text(ok + "[ensemble.stop]\ntarget = \"percentile_bound\"\nwidht = 0.1\n",
+                                                    "c.toml", ".");
+             }),
+             Contains("did you mean ensemble.stop.width?"));
+  CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text("[ensembel]\nn_runs = 10\n", "c.toml", "."); }),
+             Contains("unknown table 'ensembel'; did you mean ensemble?"));
+  const std::string far = error_of([&] { truss::methods::parse_campaign_text("[ensemble]\ncolour = 3\n", "c.toml", "."); });
+  CHECK_THAT(far, Contains("unknown key 'ensemble.colour' (known:") && !Contains("did you mean"));
   CHECK_THAT(error_of([&] { truss::methods::parse_campaign_text(ok, "c.toml", ".", {"mast.frame_mass_kg=1e308"}); }),
              Contains("--set mast.frame_mass_kg=1e308") && Contains("must lie in"));
   // base-scene warnings are kept for the driver to print

@@ -46,3 +46,24 @@ TEST_CASE("end of a campaign: mostly invalid input is an error, some a warning",
   CHECK(1.0 - std::pow(0.99865, 2218.0) >= 0.95);
   CHECK(1.0 - std::pow(0.99865, 2217.0) < 0.95);
 }
+
+TEST_CASE("progress line of a method of rounds: stage and runs against the cap", "[campaign][progress]") {
+  std::FILE* f = std::tmpfile();
+  Progress p(750, 0, ProgressMode::lines, 0.0, f);  // a line at every update
+  StatusCounts counts{};
+  counts[static_cast<std::size_t>(truss::sim::RunStatus::ok)] = 744;
+  p.update(744, [&] { return counts; });                     // plain: runs against the rounds so far
+  p.set_stage("level 2 (margin <= 0.0013 m), Markov step 3 of 9", 5950);
+  p.update(744, [&] { return counts; });                     // staged: runs against the cap
+  p.set_stage("", 0);
+  p.finish(750, counts);
+  std::rewind(f);
+  std::string text;
+  for (int c; (c = std::fgetc(f)) != EOF;) text += static_cast<char>(c);
+  std::fclose(f);
+  CHECK_THAT(text, Catch::Contains("744/750 runs (99.2 %)"));
+  CHECK_THAT(text, Catch::Contains("level 2 (margin <= 0.0013 m), Markov step 3 of 9: 744 runs so far of at most "
+                                   "5950: 744 ok;") &&
+                       Catch::Contains("at most"));
+  CHECK_THAT(text, Catch::Contains("750/750 runs") && Catch::Contains("done in"));
+}
