@@ -1,6 +1,7 @@
 #include "integrators/ida_integrator.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <exception>
@@ -48,10 +49,23 @@ struct UserData {
   long res_evals = 0;
   long nonfinite_res = 0;     // evaluations that returned NaN or inf (IDA retried smaller steps)
   std::exception_ptr error;   // thrown inside a callback, rethrown after IDASolve returns
+  // The wall-time cap (StepObserver::deadline), read by the residual every kClockEvery
+  // evaluations (IDACalcIC's and the difference-quotient Jacobian's included); past it the
+  // residual returns an unrecoverable flag and IDA returns.
+  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
+  long clock_count = 0;
+  bool deadline_hit = false;
+  static constexpr long kClockEvery = 8;
+  bool past_deadline() {
+    if (deadline == std::chrono::steady_clock::time_point::max() || ++clock_count % kClockEvery != 0) return deadline_hit;
+    if (std::chrono::steady_clock::now() > deadline) deadline_hit = true;
+    return deadline_hit;
+  }
 };
 
 int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
   auto* d = static_cast<UserData*>(ud);
+  if (d->past_deadline()) return -1;  // unrecoverable: reported as IntegratorStatus::deadline
   const Layout& L = d->layout;
   const double* w = L.gather(yy, L.w);
   double* r = L.r.data();
@@ -203,6 +217,8 @@ struct IdaIntegrator::Solver {
     ud.res_evals = 0;
     ud.nonfinite_res = 0;
     ud.error = nullptr;
+    ud.clock_count = 0;
+    ud.deadline_hit = false;
     // (y, z) and (y', z') in the system's order, then into IDA's.
     std::vector<double> w(static_cast<std::size_t>(n), 0.0), wp(w.size(), 0.0);
     std::copy(y0, y0 + n_ode, w.begin());
@@ -297,9 +313,17 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
     s.free_problem();
     std::rethrow_exception(e);
   };
+  s.ud.deadline = observer ? observer->deadline() : std::chrono::steady_clock::time_point::max();
+  auto past_deadline = [&] {
+    if (!s.ud.deadline_hit) return false;
+    sum.status = IntegratorStatus::deadline;
+    sum.message = fmt::format("wall-clock deadline passed inside an IDA step at t = {:.9g} s", sum.t);
+    return true;
+  };
   int ic_flag = IDA_SUCCESS;
   bool prepared = s.prepare(sys, *dae, t0, t_end, y0, opts_, sum, true, ic_flag);
   rethrow();
+  if (!prepared && past_deadline()) return failed();
   if (!prepared && ic_flag == IDA_CONV_FAIL && s.guessed) {
     // At rtol ~1e-13 IDACalcIC's convergence test sits at the rounding level of the guess, which
     // the system computed consistent to rounding (the direct solve): start from the guess as it is.
@@ -308,7 +332,10 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
     prepared = s.prepare(sys, *dae, t0, t_end, y0, opts_, sum, false, ic_flag);
     rethrow();
   }
-  if (!prepared) return failed();
+  if (!prepared) {
+    past_deadline();
+    return failed();
+  }
   const int ne = sys.num_events();
   auto copy_state = [&] {
     const double* p = s.ud.layout.gather(s.yy, s.ud.layout.w);
@@ -339,6 +366,7 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
     sum.rhs_evals = s.ud.res_evals;
     sum.t = t;
     copy_state();
+    if (flag < 0 && past_deadline()) return failed();
     if (flag < 0) {
       sum.status = flag == IDA_TOO_MUCH_WORK ? IntegratorStatus::step_limit : IntegratorStatus::failure;
       sum.message = fmt::format("IDA flag {} ({}) at t = {:.9g} s ({} residual evaluations returned NaN or inf)",
