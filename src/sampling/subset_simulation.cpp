@@ -51,6 +51,16 @@ std::string SubsetOptions::validate() const {
   if (max_levels < 1 || max_levels > 1000) return fmt::format("max_levels: {} (must lie in [1, 1000])", max_levels);
   if (!(proposal_half_width > 0.0 && std::isfinite(proposal_half_width)))
     return fmt::format("proposal_half_width: {} (must be positive and finite)", proposal_half_width);
+  // The run cap N + (max_levels - 1) (N - N_c) and a level's N x dims normals, in 64-bit counts
+  // (n_chains() is at most N here).
+  constexpr std::int64_t kMaxCount = std::int64_t{1} << 53;
+  std::int64_t steps = 0, total = 0, normals = 0;
+  if (__builtin_mul_overflow(static_cast<std::int64_t>(max_levels - 1), n_per_level - n_chains(), &steps) ||
+      __builtin_add_overflow(n_per_level, steps, &total) || total > kMaxCount)
+    return fmt::format("n_per_level: {} samples per level over max_levels = {} levels is more than 2^53 runs",
+                       n_per_level, max_levels);
+  if (__builtin_mul_overflow(n_per_level, static_cast<std::int64_t>(dims), &normals) || normals > kMaxCount)
+    return fmt::format("n_per_level: {} samples per level of {} dimensions is more than 2^53 numbers", n_per_level, dims);
   return "";
 }
 
