@@ -72,6 +72,8 @@ class Method {
   virtual bool runs_are_draws() const { return true; }
   // Rank 0, after write_results: the method's result for the terminal (lines), or nothing.
   virtual std::string calc_result_text() const { return {}; }
+  // Empty when the method's result stands; else why there is none (the campaign then exits 5).
+  virtual std::string calc_result_failure() const { return {}; }
 };
 
 // The method of ensemble.sampling.

@@ -30,6 +30,7 @@ class SubsetMethod : public Method {
   void write_results(hid_t file, std::int64_t n_runs) const override;
   bool runs_are_draws() const override { return false; }
   std::string calc_result_text() const override;  // p, its CoVs, beta, the levels' thresholds
+  std::string calc_result_failure() const override;  // chains that never moved: no estimate
 
   // The margins of a round's records (see above).
   static std::vector<double> calc_margins(const campaign::FailureOptions& f, const RoundRecords& r);
