@@ -108,6 +108,12 @@ TEST_CASE("geometry errors name the keys involved and where each came from", "[h
   const std::string e = error_of([] { truss::io::parse_scene_text("[rail]\nbeta_deg = 80\n", "scene.toml", {"rail.x_m=0.05"}); });
   CHECK_THAT(e, Contains("never meets the rail") && Contains("keys involved"));
   CHECK_THAT(e, Contains("rail.beta_deg = 80 deg (scene.toml:2)"));
+  // A beta whose cotangent overflows (5e-324 deg is 0 rad in doubles) is refused with its value,
+  // not reported as "0 deg >= 45 deg".
+  const std::string tiny = error_of([] { truss::io::parse_scene_text("", "scene.toml", {"rail.beta_deg=5e-324"}); });
+  CHECK_THAT(tiny, Contains("rail.beta_deg: 5e-324 deg is too small") && !Contains("= 0 deg") && !Contains(">= 45"));
+  CHECK(error_of([] { truss::io::parse_scene_text("", "scene.toml", {"rail.beta_deg=1e-300"}); }).find("too small") ==
+        std::string::npos);
   CHECK_THAT(e, Contains("rail.x_m = 0.05 m (--set rail.x_m=0.05)"));
   CHECK_THAT(e, Contains("rail.y_m = 0.15 m (default)"));
   CHECK_THAT(e, Contains("mast.strut_length_m = 0.18 m (default)"));
