@@ -179,6 +179,11 @@ struct IdaIntegrator::Solver {
     // are exact up to rounding, and the line search only fails on that rounding at tight atol
     // (IDA_LINESEARCH_FAIL at rtol 1e-12 in a rail entry).
     if (!check_flag(IDASetLineSearchOffIC(mem, SUNTRUE), "IDASetLineSearchOffIC", sum)) return false;
+    // Newton iterations per step: 10 rather than IDA's 4. Near a singular configuration (a bay
+    // within a few 1e-4 l_s of straight) the iteration converges, but slowly (its matrix nears
+    // singular); with 4 IDA cut the step to the resolution of t and failed (IDA_CONV_FAIL) short of
+    // the model's singular-configuration stop that the ODE integrators reach.
+    if (!check_flag(IDASetMaxNonlinIters(mem, 10), "IDASetMaxNonlinIters", sum)) return false;
     n = n_new;
     n_ode = n_ode_new;
     lower = lo;
