@@ -270,6 +270,11 @@ def main():
     print(f"  NaN in ok runs: {nan_ok}; timeouts: {timeouts}; exit codes outside 0/1/2: "
           f"{sum(r['rc'] not in (0, 1, 2) for r in results)}")
     print(f"  process wall time (s): median {pct(0.5):.3f}, p90 {pct(0.9):.3f}, p99 {pct(0.99):.3f}, max {walls[-1]:.3f}")
+    if a.caps:
+        capped = [r["json"]["wall_time_s"] for r in results if r.get("json", {}).get("status") == "wall-time limit"]
+        if capped:
+            print(f"  runs to the cap: {len(capped)}, their own wall time {min(capped):.3f}-{max(capped):.3f} s "
+                  f"(bound {cap_bound_s(cap):.3f} s)")
     show = set(filter(None, a.show.split(",")))
     for r in results:
         st = r.get("json", {}).get("status", "refused (exit 2)" if r["rc"] == 2 else None)

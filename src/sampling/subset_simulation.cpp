@@ -62,7 +62,8 @@ std::string SubsetOptions::validate() const {
     return fmt::format("n_per_level: {} samples per level over max_levels = {} levels is more than 2^53 runs",
                        n_per_level, max_levels);
   if (__builtin_mul_overflow(n_per_level, static_cast<std::int64_t>(dims), &normals) || normals > kMaxCount)
-    return fmt::format("n_per_level: {} samples per level of {} dimensions is more than 2^53 numbers", n_per_level, dims);
+    return fmt::format("n_per_level: {} samples per level of {} dimensions is more than 2^53 numbers", n_per_level,
+                       dims);
   return "";
 }
 

@@ -126,7 +126,8 @@ struct SubsetLevel {
 // chains_stuck: a level >= 1 whose Markov chains never moved (acceptance 0): its samples only
 // repeat its seeds, so there is no estimate (p and beta NaN).
 enum class SubsetStatus { running, converged, level_cap, no_progress, chains_stuck };
-inline constexpr const char* kSubsetStatusNames[] = {"running", "converged", "level_cap", "no_progress", "chains_stuck"};
+inline constexpr const char* kSubsetStatusNames[] = {"running",     "converged",   "level_cap",
+                                                     "no_progress", "chains_stuck"};
 inline const char* to_string(SubsetStatus s) { return kSubsetStatusNames[static_cast<int>(s)]; }
 
 struct SubsetSummary {
