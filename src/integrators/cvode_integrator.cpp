@@ -16,6 +16,7 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include "integrators/callback_deadline.hpp"
 #include "integrators/sundials_checks.hpp"
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
@@ -33,23 +34,14 @@ struct UserData {
   long rhs_evals = 0;
   long nonfinite_rhs = 0;    // evaluations that returned NaN or inf (CVODE retried smaller steps)
   std::exception_ptr error;  // thrown by the system inside a callback, rethrown after CVode returns
-  // The wall-time cap (StepObserver::deadline), read by the callbacks: the right-hand side every
-  // kClockEvery evaluations (so every few columns of a difference-quotient Jacobian) and the LU
-  // after every column (lu_setup). Past it they return an unrecoverable flag and CVode returns.
-  Clock::time_point deadline = Clock::time_point::max();
-  long clock_count = 0;
-  static constexpr long kClockEvery = 8;
-  bool past_deadline() {
-    if (deadline == Clock::time_point::max() || ++clock_count % kClockEvery != 0) return deadline_hit;
-    if (Clock::now() > deadline) deadline_hit = true;
-    return deadline_hit;
-  }
-  bool deadline_hit = false;
+  // The wall-time cap: the right-hand side reads it every few evaluations (so every few columns of
+  // a difference-quotient Jacobian) and the LU after every column (lu_setup).
+  CallbackDeadline clock;
 };
 
 int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  if (d->past_deadline()) return -1;  // unrecoverable: CVode returns, reported as IntegratorStatus::deadline
+  if (d->clock.passed_every()) return -1;  // unrecoverable: CVode returns, reported as IntegratorStatus::deadline
   try {
     d->sys->calc_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
   } catch (...) {
@@ -117,10 +109,7 @@ int lu_setup(SUNLinearSolver S, SUNMatrix A) {
   const sunindextype m = SUNDenseMatrix_Rows(A), n = SUNDenseMatrix_Columns(A);
   UserData* d = lu_user_data;
   for (sunindextype k = 0; k < n; ++k) {
-    if (d && d->deadline != Clock::time_point::max() && Clock::now() > d->deadline) {
-      d->deadline_hit = true;
-      return content->last_flag = SUNLS_PACKAGE_FAIL_UNREC;  // CVode returns CV_LSETUP_FAIL
-    }
+    if (d && d->clock.passed_now()) return content->last_flag = SUNLS_PACKAGE_FAIL_UNREC;  // CVode: CV_LSETUP_FAIL
     realtype* col_k = a[k];
     sunindextype l = k;
     for (sunindextype i = k + 1; i < m; ++i)
@@ -260,8 +249,6 @@ struct CvodeIntegrator::Solver {
     ud.rhs_evals = 0;
     ud.nonfinite_rhs = 0;
     ud.error = nullptr;
-    ud.deadline_hit = false;
-    ud.clock_count = 0;
     double* p = N_VGetArrayPointer(y);
     for (int i = 0; i < n; ++i) p[i] = y0[i];
     // History, order, step counters and initial step choice start afresh.
@@ -312,7 +299,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
     solver_->method = method_;
   }
   Solver& cv = *solver_;
-  cv.ud.deadline = observer ? observer->deadline() : Clock::time_point::max();
+  cv.ud.clock.reset(observer ? observer->deadline() : Clock::time_point::max());
   if (!cv.prepare(sys, t0, t_end, y0, opts_, sum)) {
     cv.free_problem();  // start from new SUNDIALS objects next time
     return sum;
@@ -359,7 +346,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
 
     sum.rhs_evals = cv.ud.rhs_evals;
     sum.t = t;
-    if (flag < 0 && cv.ud.deadline_hit) {
+    if (flag < 0 && cv.ud.clock.hit) {
       copy_state();
       sum.status = IntegratorStatus::deadline;
       sum.message = fmt::format("wall-clock deadline passed inside a CVODE step at t = {:.9g} s", t);

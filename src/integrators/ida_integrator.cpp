@@ -17,6 +17,7 @@
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunmatrix/sunmatrix_band.h>
 
+#include "integrators/callback_deadline.hpp"
 #include "integrators/sundials_checks.hpp"
 
 namespace truss::integrators {
@@ -49,23 +50,14 @@ struct UserData {
   long res_evals = 0;
   long nonfinite_res = 0;     // evaluations that returned NaN or inf (IDA retried smaller steps)
   std::exception_ptr error;   // thrown inside a callback, rethrown after IDASolve returns
-  // The wall-time cap (StepObserver::deadline), read by the residual every kClockEvery
-  // evaluations (IDACalcIC's and the difference-quotient Jacobian's included); past it the
-  // residual returns an unrecoverable flag and IDA returns.
-  std::chrono::steady_clock::time_point deadline = std::chrono::steady_clock::time_point::max();
-  long clock_count = 0;
-  bool deadline_hit = false;
-  static constexpr long kClockEvery = 8;
-  bool past_deadline() {
-    if (deadline == std::chrono::steady_clock::time_point::max() || ++clock_count % kClockEvery != 0) return deadline_hit;
-    if (std::chrono::steady_clock::now() > deadline) deadline_hit = true;
-    return deadline_hit;
-  }
+  // The wall-time cap: the residual reads it every few evaluations (IDACalcIC's and the
+  // difference-quotient Jacobian's included).
+  CallbackDeadline clock;
 };
 
 int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  if (d->past_deadline()) return -1;  // unrecoverable: reported as IntegratorStatus::deadline
+  if (d->clock.passed_every()) return -1;  // unrecoverable: reported as IntegratorStatus::deadline
   const Layout& L = d->layout;
   const double* w = L.gather(yy, L.w);
   double* r = L.r.data();
@@ -222,8 +214,6 @@ struct IdaIntegrator::Solver {
     ud.res_evals = 0;
     ud.nonfinite_res = 0;
     ud.error = nullptr;
-    ud.clock_count = 0;
-    ud.deadline_hit = false;
     // (y, z) and (y', z') in the system's order, then into IDA's.
     std::vector<double> w(static_cast<std::size_t>(n), 0.0), wp(w.size(), 0.0);
     std::copy(y0, y0 + n_ode, w.begin());
@@ -318,9 +308,9 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
     s.free_problem();
     std::rethrow_exception(e);
   };
-  s.ud.deadline = observer ? observer->deadline() : std::chrono::steady_clock::time_point::max();
+  s.ud.clock.reset(observer ? observer->deadline() : std::chrono::steady_clock::time_point::max());
   auto past_deadline = [&] {
-    if (!s.ud.deadline_hit) return false;
+    if (!s.ud.clock.hit) return false;
     sum.status = IntegratorStatus::deadline;
     sum.message = fmt::format("wall-clock deadline passed inside an IDA step at t = {:.9g} s", sum.t);
     return true;
