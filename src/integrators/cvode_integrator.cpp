@@ -18,6 +18,7 @@
 
 #include "integrators/callback_deadline.hpp"
 #include "integrators/sundials_checks.hpp"
+#include "integrators/sundials_common.hpp"
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 namespace truss::integrators {
@@ -135,44 +136,25 @@ int lu_setup(SUNLinearSolver S, SUNMatrix A) {
 
 int root_fn(realtype t, N_Vector y, realtype* g, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  try {
-    d->sys->calc_events(t, N_VGetArrayPointer(y), g);
-  } catch (...) {
-    d->error = std::current_exception();
-    return -1;
-  }
-  return 0;
+  return sundials::call_events(*d->sys, d->error, t, N_VGetArrayPointer(y), g);
 }
 
 std::string flag_name(int flag) { return sunflags::flag_name(CVodeGetReturnFlagName, flag); }
 bool check_flag(int flag, const char* function, IntegratorSummary& sum) {
   return sunflags::check_flag(flag, "CVODE", CVodeGetReturnFlagName, function, sum);
 }
-bool check_sundials(int flag, const char* function, IntegratorSummary& sum) {
-  return sunflags::check_sundials(flag, "CVODE", function, sum);
-}
 bool check_null(const void* p, const char* function, IntegratorSummary& sum) {
   return sunflags::check_null(p, "CVODE", function, sum);
 }
 
-class CvodeDense : public DenseOutput {
- public:
-  void* mem = nullptr;
-  N_Vector tmp = nullptr;
-  mutable int flag = CV_SUCCESS;  // first failed CVodeGetDky of the step, checked after on_step
-  void calc_state(double t, double* y) const override {
-    const int f = CVodeGetDky(mem, t, 0, tmp);
-    const double* p = N_VGetArrayPointer(tmp);
-    for (sunindextype i = 0; i < N_VGetLength(tmp); ++i) y[i] = f < 0 ? std::nan("") : p[i];
-    if (f < 0 && flag >= 0) flag = f;
-  }
-};
+// y: CVODE's vector as it is.
+void copy_vector(N_Vector v, double* y) { std::copy_n(N_VGetArrayPointer(v), N_VGetLength(v), y); }
 
 }  // namespace
 
 // The SUNDIALS objects of one integrator, kept across integrate() calls.
 struct CvodeIntegrator::Solver {
-  SUNContext ctx = nullptr;
+  sundials::Context ctx;  // first: freed last
   void* mem = nullptr;
   N_Vector y = nullptr, tmp = nullptr, ewt = nullptr;
   SUNNonlinearSolver nls = nullptr;  // adams: fixed point (bdf: CVODE's own Newton solver)
@@ -184,7 +166,6 @@ struct CvodeIntegrator::Solver {
 
   ~Solver() {
     free_problem();
-    if (ctx) SUNContext_Free(&ctx);
   }
   // Everything but the context (in the order of the SUNDIALS examples).
   void free_problem() {
@@ -205,15 +186,15 @@ struct CvodeIntegrator::Solver {
   // CVODE memory, vectors and the method's solvers for systems of size n_new.
   bool create(int n_new, double t0, IntegratorSummary& sum) {
     free_problem();
-    if (!ctx && !check_sundials(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", sum)) return false;
-    y = N_VNew_Serial(n_new, ctx);
+    if (!ctx.ensure("CVODE", sum)) return false;
+    y = N_VNew_Serial(n_new, ctx.get());
     if (!check_null(y, "N_VNew_Serial", sum)) return false;
-    tmp = N_VNew_Serial(n_new, ctx);
+    tmp = N_VNew_Serial(n_new, ctx.get());
     if (!check_null(tmp, "N_VNew_Serial", sum)) return false;
-    ewt = N_VNew_Serial(n_new, ctx);
+    ewt = N_VNew_Serial(n_new, ctx.get());
     if (!check_null(ewt, "N_VNew_Serial", sum)) return false;
     N_VConst(0.0, y);
-    mem = CVodeCreate(method == CvodeMethod::bdf ? CV_BDF : CV_ADAMS, ctx);
+    mem = CVodeCreate(method == CvodeMethod::bdf ? CV_BDF : CV_ADAMS, ctx.get());
     if (!check_null(mem, "CVodeCreate", sum)) return false;
     if (!check_flag(CVodeSetErrHandlerFn(mem, sunflags::silent, nullptr), "CVodeSetErrHandlerFn", sum)) return false;
     if (!check_flag(CVodeInit(mem, rhs_fn, t0, y), "CVodeInit", sum)) return false;
@@ -223,15 +204,15 @@ struct CvodeIntegrator::Solver {
     if (method == CvodeMethod::bdf) {
       // Newton (CVODE's default nonlinear solver) on a dense matrix; difference quotients (jac_fn)
       // cost n extra right-hand sides per Jacobian.
-      A = SUNDenseMatrix(n_new, n_new, ctx);
+      A = SUNDenseMatrix(n_new, n_new, ctx.get());
       if (!check_null(A, "SUNDenseMatrix", sum)) return false;
-      ls = SUNLinSol_Dense(y, A, ctx);
+      ls = SUNLinSol_Dense(y, A, ctx.get());
       if (!check_null(ls, "SUNLinSol_Dense", sum)) return false;
       ls->ops->setup = lu_setup;  // the same LU, stoppable at the wall-time cap
       if (!check_flag(CVodeSetLinearSolver(mem, ls, A), "CVodeSetLinearSolver", sum)) return false;
       if (!check_flag(CVodeSetJacFn(mem, jac_fn), "CVodeSetJacFn", sum)) return false;
     } else {
-      nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
+      nls = SUNNonlinSol_FixedPoint(y, 0, ctx.get());
       if (!check_null(nls, "SUNNonlinSol_FixedPoint", sum)) return false;
       if (!check_flag(CVodeSetNonlinearSolver(mem, nls), "CVodeSetNonlinearSolver", sum)) return false;
       if (!check_flag(CVodeSetMaxOrd(mem, 12), "CVodeSetMaxOrd", sum)) return false;
@@ -316,9 +297,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
     cv.free_problem();
     return sum;
   };
-  CvodeDense dense;
-  dense.mem = cv.mem;
-  dense.tmp = cv.tmp;
+  sundials::Dense dense(CVodeGetDky, cv.mem, cv.tmp, n, copy_vector);
   double t = t0;
   std::vector<int> roots(ne);
   while (true) {

@@ -19,6 +19,7 @@
 
 #include "integrators/callback_deadline.hpp"
 #include "integrators/sundials_checks.hpp"
+#include "integrators/sundials_common.hpp"
 
 namespace truss::integrators {
 
@@ -79,47 +80,23 @@ int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
 
 int root_fn(realtype t, N_Vector yy, N_Vector, realtype* g, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  try {
-    d->sys->calc_events(t, d->layout.gather(yy, d->layout.w), g);
-  } catch (...) {
-    d->error = std::current_exception();
-    return -1;
-  }
-  return 0;
+  return sundials::call_events(*d->sys, d->error, t, d->layout.gather(yy, d->layout.w), g);
 }
 
 std::string flag_name(int flag) { return sunflags::flag_name(IDAGetReturnFlagName, flag); }
 bool check_flag(int flag, const char* function, IntegratorSummary& sum) {
   return sunflags::check_flag(flag, "IDA", IDAGetReturnFlagName, function, sum);
 }
-bool check_sundials(int flag, const char* function, IntegratorSummary& sum) {
-  return sunflags::check_sundials(flag, "IDA", function, sum);
-}
 bool check_null(const void* p, const char* function, IntegratorSummary& sum) {
   return sunflags::check_null(p, "IDA", function, sum);
 }
 
-// Dense output of y (the first n_ode unknowns).
-class IdaDense : public DenseOutput {
- public:
-  void* mem = nullptr;
-  N_Vector tmp = nullptr;
-  int n_ode = 0;
-  const Layout* layout = nullptr;
-  mutable int flag = IDA_SUCCESS;  // first failed IDAGetDky of the step, checked after on_step
-  void calc_state(double t, double* y) const override {
-    const int f = IDAGetDky(mem, t, 0, tmp);
-    const double* p = layout->gather(tmp, layout->w);
-    for (int i = 0; i < n_ode; ++i) y[i] = f < 0 ? std::nan("") : p[i];
-    if (f < 0 && flag >= 0) flag = f;
-  }
-};
 
 }  // namespace
 
 // The SUNDIALS objects of one integrator, kept across integrate() calls.
 struct IdaIntegrator::Solver {
-  SUNContext ctx = nullptr;
+  sundials::Context ctx;  // first: freed last
   void* mem = nullptr;
   N_Vector yy = nullptr, yp = nullptr, id = nullptr, tmp = nullptr;
   SUNMatrix A = nullptr;
@@ -131,7 +108,6 @@ struct IdaIntegrator::Solver {
 
   ~Solver() {
     free_problem();
-    if (ctx) SUNContext_Free(&ctx);
   }
   void free_problem() {
     if (mem) IDAFree(&mem);
@@ -150,20 +126,20 @@ struct IdaIntegrator::Solver {
   // lo, up.
   bool create(int n_new, int n_ode_new, int lo, int up, double t0, IntegratorSummary& sum) {
     free_problem();
-    if (!ctx && !check_sundials(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", sum)) return false;
+    if (!ctx.ensure("IDA", sum)) return false;
     for (N_Vector* v : {&yy, &yp, &id, &tmp}) {
-      *v = N_VNew_Serial(n_new, ctx);
+      *v = N_VNew_Serial(n_new, ctx.get());
       if (!check_null(*v, "N_VNew_Serial", sum)) return false;
       N_VConst(0.0, *v);
     }
-    mem = IDACreate(ctx);
+    mem = IDACreate(ctx.get());
     if (!check_null(mem, "IDACreate", sum)) return false;
     if (!check_flag(IDASetErrHandlerFn(mem, sunflags::silent, nullptr), "IDASetErrHandlerFn", sum)) return false;
     if (!check_flag(IDAInit(mem, res_fn, t0, yy, yp), "IDAInit", sum)) return false;
     if (!check_flag(IDASetUserData(mem, &ud), "IDASetUserData", sum)) return false;
-    A = SUNBandMatrix(n_new, up, lo, ctx);
+    A = SUNBandMatrix(n_new, up, lo, ctx.get());
     if (!check_null(A, "SUNBandMatrix", sum)) return false;
-    ls = SUNLinSol_Band(yy, A, ctx);
+    ls = SUNLinSol_Band(yy, A, ctx.get());
     if (!check_null(ls, "SUNLinSol_Band", sum)) return false;
     if (!check_flag(IDASetLinearSolver(mem, ls, A), "IDASetLinearSolver", sum)) return false;
     if (!check_flag(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", sum)) return false;
@@ -336,11 +312,12 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
     const double* p = s.ud.layout.gather(s.yy, s.ud.layout.w);
     for (int i = 0; i < s.n_ode; ++i) y0[i] = p[i];
   };
-  IdaDense dense;
-  dense.mem = s.mem;
-  dense.tmp = s.tmp;
-  dense.n_ode = s.n_ode;
-  dense.layout = &s.ud.layout;
+  // Dense output of y (the first n_ode unknowns, in the system's order).
+  const Layout& layout = s.ud.layout;
+  const int n_ode = s.n_ode;
+  sundials::Dense dense(IDAGetDky, s.mem, s.tmp, n_ode, [&layout, n_ode](N_Vector v, double* y) {
+    std::copy_n(layout.gather(v, layout.w), n_ode, y);
+  });
   double t = t0;
   std::vector<int> roots(static_cast<std::size_t>(ne));
   while (true) {
