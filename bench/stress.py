@@ -20,6 +20,13 @@ percentiles, and exits 1 if a promise was broken.
 
   bench/stress.py --sim build/truss-sim                 # the full grid (about 3,000 runs)
   bench/stress.py --sim build/truss-sim --reduced       # about a minute: the ctest `stress_reduced`
+  bench/stress.py --sim build/truss-sim --caps --cap-s 2   # the wall-cap cases: about a minute
+
+--caps runs the wall-cap cases instead of the grid: the hostile cases of long stacks (CVODE's dense
+Newton matrix at 2,000 bays, torque drives of 1,200 bays with short phases) and a long-stack
+family (200, 600 and 2,000 bays; every integrator; held and free stack), and checks that each run
+ends within its cap plus 5 % or 0.5 s, whichever is larger, and says `wall-time limit` when it
+runs to the cap.
 """
 import argparse
 import collections
@@ -106,9 +113,52 @@ def free_cases(reduced, rng):
     return out
 
 
+PAPER_FREE = os.path.join(HERE, "..", "campaigns", "scenes", "paper_free.toml")
+INTEGRATORS = ["dopri54", "cvode", "cvode_adams", "auto", "ida"]
+
+
+def cap_cases():
+    """Hostile long-stack cases and the long-stack family (--caps); "scene" picks the scene file."""
+    free = {"stack.mode": "free", "scene": PAPER_FREE}
+    out = [
+        dict(free, **{"stack.contacts": "false", "drive.mode": "velocity", "run.integrator": "cvode",
+                      "mast.n_bays": 2000, "mast.diagonal_stiffness_N_per_m": 2415084.4848208167,
+                      "mast.diagonal_free_length_m": 0.08339880851519334, "stack.start": start})
+        for start in ("rest", "kick")]
+    out.append(dict(free, **{"run.integrator": "cvode", "mast.n_bays": 2000, "drive.mode": "torque",
+                             "mast.frame_mass_kg": 0.37641676509820243,
+                             "mast.diagonal_stiffness_N_per_m": 0.043178328733144165,
+                             "mast.frame_side_m": 2.48698767044309, "drive.torque_Nm": 0.46415925696786214,
+                             "drive.screw_lead_m": 0.0003165702424885785, "run.rtol": 1.1842477732355108e-08,
+                             "run.atol": 1.2178614245628708e-07}))
+    out.append({"stack.mode": "free", "run.integrator": "dopri54", "mast.n_bays": 1222, "drive.mode": "torque",
+                "drive.speed_m_per_s": 1.777290805037229e-05})
+    out.append(dict(free, **{"run.integrator": "dopri54", "mast.n_bays": 1202, "rail.x_m": 0.09850821610554285,
+                             "rail.y_m": 0.10555789738322481, "rail.beta_deg": 42.89853345116937,
+                             "drive.mode": "torque", "drive.no_load_speed_rad_per_s": 64189.44773945941,
+                             "run.rtol": 4.6793448256631464e-05}))
+    out.append(dict(free, **{"run.integrator": "auto", "mast.n_bays": 1209, "drive.mode": "torque"}))
+    out.append(dict(free, **{"run.integrator": "cvode_adams", "mast.n_bays": 619, "drive.mode": "motor",
+                             "stack.contacts": "true"}))
+    for n, integrator, stack in itertools.product([200, 600, 2000], INTEGRATORS, ["held", "free"]):
+        if integrator == "ida" and stack == "held":
+            continue  # ida solves the free stack's phases only
+        c = {"mast.n_bays": n, "run.integrator": integrator, "stack.mode": stack, "drive.mode": "torque",
+             "drive.torque_Nm": 0.002}
+        out.append(dict(c, scene=PAPER_FREE) if stack == "free" else c)
+    return out
+
+
+def cap_bound_s(cap):
+    """The wall-time promise: the cap plus 5 % or 0.5 s, whichever is larger."""
+    return cap + max(0.05 * cap, 0.5)
+
+
 def run_one(sim, case, cap_s):
     # GNU time's last stderr line: the process's peak resident memory (KiB)
-    args = ["/usr/bin/time", "-f", "maxrss_kib=%M", sim, SCENE, "--json", "--set", "run.output_step_s=0",
+    case = dict(case)
+    scene = case.pop("scene", SCENE)
+    args = ["/usr/bin/time", "-f", "maxrss_kib=%M", sim, scene, "--json", "--set", "run.output_step_s=0",
             "--set", f"run.max_wall_time_s={cap_s}", "--set", f"run.max_history_bytes={HISTORY_BYTES}"]
     for k, v in case.items():
         value = v if isinstance(v, str) else str(int(v)) if k == "mast.n_bays" else repr(float(v))
@@ -120,7 +170,7 @@ def run_one(sim, case, cap_s):
         return {"case": case, "rc": "timeout", "wall": time.monotonic() - t0}
     rss = [line for line in p.stderr.splitlines() if line.startswith("maxrss_kib=")]
     stderr = "\n".join(line for line in p.stderr.splitlines() if not line.startswith("maxrss_kib="))
-    r = {"case": case, "rc": p.returncode, "wall": time.monotonic() - t0, "stderr": stderr[-300:],
+    r = {"case": dict(case, scene=os.path.basename(scene)), "rc": p.returncode, "wall": time.monotonic() - t0, "stderr": stderr[-300:],
          "rss_bytes": 1024 * int(rss[-1].split("=")[1]) if rss else 0}
     if p.returncode in (0, 1) and p.stdout.strip():
         try:
@@ -164,6 +214,18 @@ def promise_problems(r, js, cap):
     return out
 
 
+def cap_problems(r, js, cap):
+    """--caps: the run ends within cap_bound_s (its own clock; the process gets 2 s more for its
+    start and output) and says `wall-time limit` when it ran to the cap."""
+    out, case = [], r["case"]
+    if js.get("wall_time_s", 0.0) > cap_bound_s(cap) or r["wall"] > cap_bound_s(cap) + 2.0:
+        out.append(f"over its cap ({js.get('wall_time_s', 0.0):.2f} s, process {r['wall']:.2f} s > "
+                   f"{cap_bound_s(cap):.2f} s): {case}")
+    if js.get("wall_time_s", 0.0) >= cap and js["status"] != "wall-time limit":
+        out.append(f"ran {js['wall_time_s']:.2f} s to its cap of {cap} s but says {js['status']!r}: {case}")
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--sim", required=True, help="path to truss-sim")
@@ -171,10 +233,11 @@ def main():
     ap.add_argument("--seed", type=int, default=20261123)
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 2)
     ap.add_argument("--cap-s", type=float, default=None, help="run.max_wall_time_s of every run")
+    ap.add_argument("--caps", action="store_true", help="the wall-cap cases (cap_cases) instead of the grid")
     ap.add_argument("--show", default="", help="comma-separated statuses whose cases and messages to print")
     a = ap.parse_args()
     cap = a.cap_s if a.cap_s is not None else (2.0 if a.reduced else 20.0)
-    todo = cases(a.reduced, a.seed)
+    todo = cap_cases() if a.caps else cases(a.reduced, a.seed)
     t0 = time.monotonic()
     with cf.ThreadPoolExecutor(a.jobs) as ex:
         results = list(ex.map(lambda c: run_one(a.sim, c, cap), todo))
@@ -184,6 +247,8 @@ def main():
         if r["rc"] == 2:
             by_status["refused (exit 2)"] += 1
             continue
+        if a.caps and r["rc"] == "timeout":
+            problems.append(f"over its cap (killed after {r['wall']:.1f} s): {r['case']}")
         if r["rc"] not in (0, 1) or "json" not in r:
             problems.append(f"exit {r['rc']}: {r['case']} {r.get('stderr', '')!r}")
             by_status[f"exit {r['rc']}"] += 1
@@ -194,7 +259,7 @@ def main():
             problems.append(f"status {js['status']} with exit {r['rc']}: {r['case']}")
         if js["status"] == "ok" and (bad := nonfinite_fields(js)):
             problems.append(f"NaN in ok run ({', '.join(bad[:4])}): {r['case']}")
-        problems += promise_problems(r, js, cap)
+        problems += cap_problems(r, js, cap) if a.caps else promise_problems(r, js, cap)
     walls.sort()
     pct = lambda q: walls[min(len(walls) - 1, int(q * len(walls)))]
     print(f"stress grid: {len(results)} runs (seed {a.seed}, cap {cap} s, {a.jobs} jobs) in {time.monotonic() - t0:.1f} s")
@@ -205,6 +270,11 @@ def main():
     print(f"  NaN in ok runs: {nan_ok}; timeouts: {timeouts}; exit codes outside 0/1/2: "
           f"{sum(r['rc'] not in (0, 1, 2) for r in results)}")
     print(f"  process wall time (s): median {pct(0.5):.3f}, p90 {pct(0.9):.3f}, p99 {pct(0.99):.3f}, max {walls[-1]:.3f}")
+    if a.caps:
+        capped = [r["json"]["wall_time_s"] for r in results if r.get("json", {}).get("status") == "wall-time limit"]
+        if capped:
+            print(f"  runs to the cap: {len(capped)}, their own wall time {min(capped):.3f}-{max(capped):.3f} s "
+                  f"(bound {cap_bound_s(cap):.3f} s)")
     show = set(filter(None, a.show.split(",")))
     for r in results:
         st = r.get("json", {}).get("status", "refused (exit 2)" if r["rc"] == 2 else None)

@@ -16,7 +16,9 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
+#include "integrators/callback_deadline.hpp"
 #include "integrators/sundials_checks.hpp"
+#include "integrators/sundials_common.hpp"
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 namespace truss::integrators {
@@ -24,7 +26,6 @@ namespace truss::integrators {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
 // What CVODE's callbacks need; the system changes with every integrate() call.
 struct UserData {
@@ -34,24 +35,14 @@ struct UserData {
   long rhs_evals = 0;
   long nonfinite_rhs = 0;    // evaluations that returned NaN or inf (CVODE retried smaller steps)
   std::exception_ptr error;  // thrown by the system inside a callback, rethrown after CVode returns
-  // The wall-time cap (StepObserver::deadline). A Newton-matrix set-up (the Jacobian's n
-  // right-hand sides and the dense LU, O(n^3): about 3 s at n = 4,000 here) is not started when the
-  // last one's duration would end past it.
-  Clock::time_point deadline = Clock::time_point::max();
-  Clock::time_point setup_start{};
-  bool setup_running = false;  // from jac_fn's start to the next right-hand side (after the LU)
-  double setup_s = 0.0;        // the last set-up's duration (s); 0 before the first
-  double setup_n = 0.0;        // ... at this system size: the prediction scales with n^3
-  bool deadline_hit = false;
+  // The wall-time cap: the right-hand side reads it every few evaluations (so every few columns of
+  // a difference-quotient Jacobian) and the LU after every column (lu_setup).
+  CallbackDeadline clock;
 };
 
 int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  if (d->setup_running) {  // the first right-hand side after a set-up: its Jacobian and LU are done
-    d->setup_s = seconds(Clock::now() - d->setup_start);
-    d->setup_n = static_cast<double>(N_VGetLength(y));
-    d->setup_running = false;
-  }
+  if (d->clock.passed_every()) return -1;  // unrecoverable: CVode returns, reported as IntegratorStatus::deadline
   try {
     d->sys->calc_rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
   } catch (...) {
@@ -75,15 +66,6 @@ int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* ud) {
 // region where the equations hold, and without this every Jacobian failed at any step size.
 int jac_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector ftemp, N_Vector, N_Vector) {
   auto* d = static_cast<UserData*>(ud);
-  const Clock::time_point now = Clock::now();
-  const double n_ratio = d->setup_n > 0 ? static_cast<double>(N_VGetLength(y)) / d->setup_n : 0.0;
-  const double predicted_s = d->setup_s * n_ratio * n_ratio * n_ratio;
-  if (d->deadline != Clock::time_point::max() &&
-      now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(predicted_s)) > d->deadline) {
-    d->deadline_hit = true;
-    return -1;  // unrecoverable: CVode returns CV_LSETUP_FAIL, reported as IntegratorStatus::deadline
-  }
-  d->setup_start = now;
   realtype h = 0.0;
   if (CVodeGetCurrentStep(d->mem, &h) < 0 || CVodeGetErrWeights(d->mem, d->ewt) < 0) return -1;
   const sunindextype n = N_VGetLength(y);
@@ -106,52 +88,73 @@ int jac_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector 
       break;
     }
     yd[j] = yj;
-    if (flag != 0) return flag;  // recoverable (1): CVODE cuts the step; an exception (-1): fatal
+    if (flag != 0) return flag;  // recoverable (1): CVODE cuts the step; an exception or the deadline (-1): fatal
   }
-  d->setup_running = true;  // the LU follows; the next right-hand side ends the set-up's timing
   return 0;
+}
+
+// The LU of the Newton matrix for the dense linear solver, as SUNLinSolSetup_Dense does it (the
+// same operations in the same order as SUNDlsMat_denseGETRF: partial pivoting by rows, then the
+// column-wise update, so the factors are the same to the bit), with the wall-time cap read after
+// every column: the LU costs 2n^3/3 operations, tens of seconds for n = 4,000, and cannot be
+// stopped from outside. CVODE's callbacks carry no user data into the linear solver, so the
+// integrator sets the active UserData (one per thread) around its CVode calls.
+thread_local UserData* lu_user_data = nullptr;
+
+int lu_setup(SUNLinearSolver S, SUNMatrix A) {
+  auto* content = static_cast<SUNLinearSolverContent_Dense>(S->content);
+  if (SUNMatGetID(A) != SUNMATRIX_DENSE) return content->last_flag = SUNLS_ILL_INPUT;
+  realtype** a = SUNDenseMatrix_Cols(A);
+  sunindextype* p = content->pivots;
+  if (!a || !p) return content->last_flag = SUNLS_MEM_FAIL;
+  const sunindextype m = SUNDenseMatrix_Rows(A), n = SUNDenseMatrix_Columns(A);
+  UserData* d = lu_user_data;
+  for (sunindextype k = 0; k < n; ++k) {
+    if (d && d->clock.passed_now()) return content->last_flag = SUNLS_PACKAGE_FAIL_UNREC;  // CVode: CV_LSETUP_FAIL
+    realtype* col_k = a[k];
+    sunindextype l = k;
+    for (sunindextype i = k + 1; i < m; ++i)
+      if (std::abs(col_k[i]) > std::abs(col_k[l])) l = i;
+    p[k] = l;
+    if (col_k[l] == 0.0) {
+      content->last_flag = k + 1;
+      return SUNLS_LUFACT_FAIL;  // recoverable: CVODE cuts the step
+    }
+    if (l != k)
+      for (sunindextype i = 0; i < n; ++i) std::swap(a[i][l], a[i][k]);
+    const realtype mult = 1.0 / col_k[k];
+    for (sunindextype i = k + 1; i < m; ++i) col_k[i] *= mult;
+    for (sunindextype j = k + 1; j < n; ++j) {
+      realtype* col_j = a[j];
+      const realtype a_kj = col_j[k];
+      if (a_kj != 0.0)
+        for (sunindextype i = k + 1; i < m; ++i) col_j[i] -= a_kj * col_k[i];
+    }
+  }
+  return content->last_flag = SUNLS_SUCCESS;
 }
 
 int root_fn(realtype t, N_Vector y, realtype* g, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  try {
-    d->sys->calc_events(t, N_VGetArrayPointer(y), g);
-  } catch (...) {
-    d->error = std::current_exception();
-    return -1;
-  }
-  return 0;
+  return sundials::call_events(*d->sys, d->error, t, N_VGetArrayPointer(y), g);
 }
 
 std::string flag_name(int flag) { return sunflags::flag_name(CVodeGetReturnFlagName, flag); }
 bool check_flag(int flag, const char* function, IntegratorSummary& sum) {
   return sunflags::check_flag(flag, "CVODE", CVodeGetReturnFlagName, function, sum);
 }
-bool check_sundials(int flag, const char* function, IntegratorSummary& sum) {
-  return sunflags::check_sundials(flag, "CVODE", function, sum);
-}
 bool check_null(const void* p, const char* function, IntegratorSummary& sum) {
   return sunflags::check_null(p, "CVODE", function, sum);
 }
 
-class CvodeDense : public DenseOutput {
- public:
-  void* mem = nullptr;
-  N_Vector tmp = nullptr;
-  mutable int flag = CV_SUCCESS;  // first failed CVodeGetDky of the step, checked after on_step
-  void calc_state(double t, double* y) const override {
-    const int f = CVodeGetDky(mem, t, 0, tmp);
-    const double* p = N_VGetArrayPointer(tmp);
-    for (sunindextype i = 0; i < N_VGetLength(tmp); ++i) y[i] = f < 0 ? std::nan("") : p[i];
-    if (f < 0 && flag >= 0) flag = f;
-  }
-};
+// y: CVODE's vector as it is.
+void copy_vector(N_Vector v, double* y) { std::copy_n(N_VGetArrayPointer(v), N_VGetLength(v), y); }
 
 }  // namespace
 
 // The SUNDIALS objects of one integrator, kept across integrate() calls.
 struct CvodeIntegrator::Solver {
-  SUNContext ctx = nullptr;
+  sundials::Context ctx;  // first: freed last
   void* mem = nullptr;
   N_Vector y = nullptr, tmp = nullptr, ewt = nullptr;
   SUNNonlinearSolver nls = nullptr;  // adams: fixed point (bdf: CVODE's own Newton solver)
@@ -163,7 +166,6 @@ struct CvodeIntegrator::Solver {
 
   ~Solver() {
     free_problem();
-    if (ctx) SUNContext_Free(&ctx);
   }
   // Everything but the context (in the order of the SUNDIALS examples).
   void free_problem() {
@@ -184,15 +186,15 @@ struct CvodeIntegrator::Solver {
   // CVODE memory, vectors and the method's solvers for systems of size n_new.
   bool create(int n_new, double t0, IntegratorSummary& sum) {
     free_problem();
-    if (!ctx && !check_sundials(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", sum)) return false;
-    y = N_VNew_Serial(n_new, ctx);
+    if (!ctx.ensure("CVODE", sum)) return false;
+    y = N_VNew_Serial(n_new, ctx.get());
     if (!check_null(y, "N_VNew_Serial", sum)) return false;
-    tmp = N_VNew_Serial(n_new, ctx);
+    tmp = N_VNew_Serial(n_new, ctx.get());
     if (!check_null(tmp, "N_VNew_Serial", sum)) return false;
-    ewt = N_VNew_Serial(n_new, ctx);
+    ewt = N_VNew_Serial(n_new, ctx.get());
     if (!check_null(ewt, "N_VNew_Serial", sum)) return false;
     N_VConst(0.0, y);
-    mem = CVodeCreate(method == CvodeMethod::bdf ? CV_BDF : CV_ADAMS, ctx);
+    mem = CVodeCreate(method == CvodeMethod::bdf ? CV_BDF : CV_ADAMS, ctx.get());
     if (!check_null(mem, "CVodeCreate", sum)) return false;
     if (!check_flag(CVodeSetErrHandlerFn(mem, sunflags::silent, nullptr), "CVodeSetErrHandlerFn", sum)) return false;
     if (!check_flag(CVodeInit(mem, rhs_fn, t0, y), "CVodeInit", sum)) return false;
@@ -202,14 +204,15 @@ struct CvodeIntegrator::Solver {
     if (method == CvodeMethod::bdf) {
       // Newton (CVODE's default nonlinear solver) on a dense matrix; difference quotients (jac_fn)
       // cost n extra right-hand sides per Jacobian.
-      A = SUNDenseMatrix(n_new, n_new, ctx);
+      A = SUNDenseMatrix(n_new, n_new, ctx.get());
       if (!check_null(A, "SUNDenseMatrix", sum)) return false;
-      ls = SUNLinSol_Dense(y, A, ctx);
+      ls = SUNLinSol_Dense(y, A, ctx.get());
       if (!check_null(ls, "SUNLinSol_Dense", sum)) return false;
+      ls->ops->setup = lu_setup;  // the same LU, stoppable at the wall-time cap
       if (!check_flag(CVodeSetLinearSolver(mem, ls, A), "CVodeSetLinearSolver", sum)) return false;
       if (!check_flag(CVodeSetJacFn(mem, jac_fn), "CVodeSetJacFn", sum)) return false;
     } else {
-      nls = SUNNonlinSol_FixedPoint(y, 0, ctx);
+      nls = SUNNonlinSol_FixedPoint(y, 0, ctx.get());
       if (!check_null(nls, "SUNNonlinSol_FixedPoint", sum)) return false;
       if (!check_flag(CVodeSetNonlinearSolver(mem, nls), "CVodeSetNonlinearSolver", sum)) return false;
       if (!check_flag(CVodeSetMaxOrd(mem, 12), "CVodeSetMaxOrd", sum)) return false;
@@ -227,8 +230,6 @@ struct CvodeIntegrator::Solver {
     ud.rhs_evals = 0;
     ud.nonfinite_rhs = 0;
     ud.error = nullptr;
-    ud.deadline_hit = false;
-    ud.setup_running = false;
     double* p = N_VGetArrayPointer(y);
     for (int i = 0; i < n; ++i) p[i] = y0[i];
     // History, order, step counters and initial step choice start afresh.
@@ -279,7 +280,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
     solver_->method = method_;
   }
   Solver& cv = *solver_;
-  cv.ud.deadline = observer ? observer->deadline() : Clock::time_point::max();
+  cv.ud.clock.reset(observer ? observer->deadline() : Clock::time_point::max());
   if (!cv.prepare(sys, t0, t_end, y0, opts_, sum)) {
     cv.free_problem();  // start from new SUNDIALS objects next time
     return sum;
@@ -296,9 +297,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
     cv.free_problem();
     return sum;
   };
-  CvodeDense dense;
-  dense.mem = cv.mem;
-  dense.tmp = cv.tmp;
+  sundials::Dense dense(CVodeGetDky, cv.mem, cv.tmp, n, copy_vector);
   double t = t0;
   std::vector<int> roots(ne);
   while (true) {
@@ -310,7 +309,9 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
       return sum;
     }
     double t_prev = t;
+    lu_user_data = &cv.ud;
     const int flag = CVode(cv.mem, t_end, cv.y, &t, CV_ONE_STEP);
+    lu_user_data = nullptr;
     if (cv.ud.error) {
       const std::exception_ptr e = cv.ud.error;
       cv.free_problem();
@@ -324,10 +325,10 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
 
     sum.rhs_evals = cv.ud.rhs_evals;
     sum.t = t;
-    if (flag < 0 && cv.ud.deadline_hit) {
+    if (flag < 0 && cv.ud.clock.hit) {
       copy_state();
       sum.status = IntegratorStatus::deadline;
-      sum.message = fmt::format("wall-clock deadline: the next Newton-matrix set-up (last {:.3g} s) would pass it", cv.ud.setup_s);
+      sum.message = fmt::format("wall-clock deadline passed inside a CVODE step at t = {:.9g} s", t);
       return failed();
     }
     if (flag < 0) {

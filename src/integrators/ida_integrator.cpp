@@ -1,6 +1,7 @@
 #include "integrators/ida_integrator.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <exception>
@@ -16,7 +17,9 @@
 #include <sunlinsol/sunlinsol_band.h>
 #include <sunmatrix/sunmatrix_band.h>
 
+#include "integrators/callback_deadline.hpp"
 #include "integrators/sundials_checks.hpp"
+#include "integrators/sundials_common.hpp"
 
 namespace truss::integrators {
 
@@ -48,10 +51,14 @@ struct UserData {
   long res_evals = 0;
   long nonfinite_res = 0;     // evaluations that returned NaN or inf (IDA retried smaller steps)
   std::exception_ptr error;   // thrown inside a callback, rethrown after IDASolve returns
+  // The wall-time cap: the residual reads it every few evaluations (IDACalcIC's and the
+  // difference-quotient Jacobian's included).
+  CallbackDeadline clock;
 };
 
 int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
   auto* d = static_cast<UserData*>(ud);
+  if (d->clock.passed_every()) return -1;  // unrecoverable: reported as IntegratorStatus::deadline
   const Layout& L = d->layout;
   const double* w = L.gather(yy, L.w);
   double* r = L.r.data();
@@ -73,47 +80,23 @@ int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
 
 int root_fn(realtype t, N_Vector yy, N_Vector, realtype* g, void* ud) {
   auto* d = static_cast<UserData*>(ud);
-  try {
-    d->sys->calc_events(t, d->layout.gather(yy, d->layout.w), g);
-  } catch (...) {
-    d->error = std::current_exception();
-    return -1;
-  }
-  return 0;
+  return sundials::call_events(*d->sys, d->error, t, d->layout.gather(yy, d->layout.w), g);
 }
 
 std::string flag_name(int flag) { return sunflags::flag_name(IDAGetReturnFlagName, flag); }
 bool check_flag(int flag, const char* function, IntegratorSummary& sum) {
   return sunflags::check_flag(flag, "IDA", IDAGetReturnFlagName, function, sum);
 }
-bool check_sundials(int flag, const char* function, IntegratorSummary& sum) {
-  return sunflags::check_sundials(flag, "IDA", function, sum);
-}
 bool check_null(const void* p, const char* function, IntegratorSummary& sum) {
   return sunflags::check_null(p, "IDA", function, sum);
 }
 
-// Dense output of y (the first n_ode unknowns).
-class IdaDense : public DenseOutput {
- public:
-  void* mem = nullptr;
-  N_Vector tmp = nullptr;
-  int n_ode = 0;
-  const Layout* layout = nullptr;
-  mutable int flag = IDA_SUCCESS;  // first failed IDAGetDky of the step, checked after on_step
-  void calc_state(double t, double* y) const override {
-    const int f = IDAGetDky(mem, t, 0, tmp);
-    const double* p = layout->gather(tmp, layout->w);
-    for (int i = 0; i < n_ode; ++i) y[i] = f < 0 ? std::nan("") : p[i];
-    if (f < 0 && flag >= 0) flag = f;
-  }
-};
 
 }  // namespace
 
 // The SUNDIALS objects of one integrator, kept across integrate() calls.
 struct IdaIntegrator::Solver {
-  SUNContext ctx = nullptr;
+  sundials::Context ctx;  // first: freed last
   void* mem = nullptr;
   N_Vector yy = nullptr, yp = nullptr, id = nullptr, tmp = nullptr;
   SUNMatrix A = nullptr;
@@ -125,7 +108,6 @@ struct IdaIntegrator::Solver {
 
   ~Solver() {
     free_problem();
-    if (ctx) SUNContext_Free(&ctx);
   }
   void free_problem() {
     if (mem) IDAFree(&mem);
@@ -144,20 +126,20 @@ struct IdaIntegrator::Solver {
   // lo, up.
   bool create(int n_new, int n_ode_new, int lo, int up, double t0, IntegratorSummary& sum) {
     free_problem();
-    if (!ctx && !check_sundials(SUNContext_Create(nullptr, &ctx), "SUNContext_Create", sum)) return false;
+    if (!ctx.ensure("IDA", sum)) return false;
     for (N_Vector* v : {&yy, &yp, &id, &tmp}) {
-      *v = N_VNew_Serial(n_new, ctx);
+      *v = N_VNew_Serial(n_new, ctx.get());
       if (!check_null(*v, "N_VNew_Serial", sum)) return false;
       N_VConst(0.0, *v);
     }
-    mem = IDACreate(ctx);
+    mem = IDACreate(ctx.get());
     if (!check_null(mem, "IDACreate", sum)) return false;
     if (!check_flag(IDASetErrHandlerFn(mem, sunflags::silent, nullptr), "IDASetErrHandlerFn", sum)) return false;
     if (!check_flag(IDAInit(mem, res_fn, t0, yy, yp), "IDAInit", sum)) return false;
     if (!check_flag(IDASetUserData(mem, &ud), "IDASetUserData", sum)) return false;
-    A = SUNBandMatrix(n_new, up, lo, ctx);
+    A = SUNBandMatrix(n_new, up, lo, ctx.get());
     if (!check_null(A, "SUNBandMatrix", sum)) return false;
-    ls = SUNLinSol_Band(yy, A, ctx);
+    ls = SUNLinSol_Band(yy, A, ctx.get());
     if (!check_null(ls, "SUNLinSol_Band", sum)) return false;
     if (!check_flag(IDASetLinearSolver(mem, ls, A), "IDASetLinearSolver", sum)) return false;
     if (!check_flag(IDASetSuppressAlg(mem, SUNTRUE), "IDASetSuppressAlg", sum)) return false;
@@ -165,6 +147,11 @@ struct IdaIntegrator::Solver {
     // are exact up to rounding, and the line search only fails on that rounding at tight atol
     // (IDA_LINESEARCH_FAIL at rtol 1e-12 in a rail entry).
     if (!check_flag(IDASetLineSearchOffIC(mem, SUNTRUE), "IDASetLineSearchOffIC", sum)) return false;
+    // Newton iterations per step: 10 rather than IDA's 4. Near a singular configuration (a bay
+    // within a few 1e-4 l_s of straight) the iteration converges, but slowly (its matrix nears
+    // singular); with 4 IDA cut the step to the resolution of t and failed (IDA_CONV_FAIL) short of
+    // the model's singular-configuration stop that the ODE integrators reach.
+    if (!check_flag(IDASetMaxNonlinIters(mem, 10), "IDASetMaxNonlinIters", sum)) return false;
     n = n_new;
     n_ode = n_ode_new;
     lower = lo;
@@ -297,9 +284,17 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
     s.free_problem();
     std::rethrow_exception(e);
   };
+  s.ud.clock.reset(observer ? observer->deadline() : std::chrono::steady_clock::time_point::max());
+  auto past_deadline = [&] {
+    if (!s.ud.clock.hit) return false;
+    sum.status = IntegratorStatus::deadline;
+    sum.message = fmt::format("wall-clock deadline passed inside an IDA step at t = {:.9g} s", sum.t);
+    return true;
+  };
   int ic_flag = IDA_SUCCESS;
   bool prepared = s.prepare(sys, *dae, t0, t_end, y0, opts_, sum, true, ic_flag);
   rethrow();
+  if (!prepared && past_deadline()) return failed();
   if (!prepared && ic_flag == IDA_CONV_FAIL && s.guessed) {
     // At rtol ~1e-13 IDACalcIC's convergence test sits at the rounding level of the guess, which
     // the system computed consistent to rounding (the direct solve): start from the guess as it is.
@@ -308,17 +303,21 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
     prepared = s.prepare(sys, *dae, t0, t_end, y0, opts_, sum, false, ic_flag);
     rethrow();
   }
-  if (!prepared) return failed();
+  if (!prepared) {
+    past_deadline();
+    return failed();
+  }
   const int ne = sys.num_events();
   auto copy_state = [&] {
     const double* p = s.ud.layout.gather(s.yy, s.ud.layout.w);
     for (int i = 0; i < s.n_ode; ++i) y0[i] = p[i];
   };
-  IdaDense dense;
-  dense.mem = s.mem;
-  dense.tmp = s.tmp;
-  dense.n_ode = s.n_ode;
-  dense.layout = &s.ud.layout;
+  // Dense output of y (the first n_ode unknowns, in the system's order).
+  const Layout& layout = s.ud.layout;
+  const int n_ode = s.n_ode;
+  sundials::Dense dense(IDAGetDky, s.mem, s.tmp, n_ode, [&layout, n_ode](N_Vector v, double* y) {
+    std::copy_n(layout.gather(v, layout.w), n_ode, y);
+  });
   double t = t0;
   std::vector<int> roots(static_cast<std::size_t>(ne));
   while (true) {
@@ -339,6 +338,7 @@ IntegratorSummary IdaIntegrator::integrate(OdeSystem& sys, double t0, double t_e
     sum.rhs_evals = s.ud.res_evals;
     sum.t = t;
     copy_state();
+    if (flag < 0 && past_deadline()) return failed();
     if (flag < 0) {
       sum.status = flag == IDA_TOO_MUCH_WORK ? IntegratorStatus::step_limit : IntegratorStatus::failure;
       sum.message = fmt::format("IDA flag {} ({}) at t = {:.9g} s ({} residual evaluations returned NaN or inf)",

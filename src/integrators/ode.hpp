@@ -68,8 +68,8 @@ class StepObserver {
   virtual bool on_step(const DenseOutput& step) = 0;
   // The wall-clock time by which the integration must have stopped (the run's wall-time cap;
   // max(): none). The observer stops it after a step past it; an integrator whose single steps can
-  // take long (CVODE's dense Newton matrix, O(n^3) to factorize) also declines to start work it
-  // predicts would carry it past, and returns IntegratorStatus::deadline.
+  // take long (the SUNDIALS ones: difference-quotient Jacobians, CVODE's dense LU of O(n^3)) also
+  // reads it inside the step, stops there and returns IntegratorStatus::deadline.
   virtual std::chrono::steady_clock::time_point deadline() const { return std::chrono::steady_clock::time_point::max(); }
 };
 

@@ -78,6 +78,8 @@ class Method {
   // runs of all rounds it counts against (0: the runs of the rounds proposed so far).
   virtual std::string progress_stage() const { return {}; }
   virtual std::int64_t run_cap() const { return 0; }
+  // Empty when the method's result stands; else why there is none (the campaign then exits 5).
+  virtual std::string calc_result_failure() const { return {}; }
 };
 
 }  // namespace truss::methods

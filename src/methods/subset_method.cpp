@@ -235,6 +235,13 @@ void SubsetMethod::write_results(hid_t file, std::int64_t n_runs) const {
   write_failure_samples(g.get(), file, n_runs, unit);
 }
 
+std::string SubsetMethod::calc_result_failure() const {
+  if (!sim_) return {};
+  const sampling::SubsetSummary s = sim_->calc_summary();
+  if (s.status != sampling::SubsetStatus::chains_stuck) return {};
+  return fmt::format("subset simulation has no estimate ({}): {}", sampling::to_string(s.status), s.message);
+}
+
 std::string SubsetMethod::calc_result_text() const {
   if (!sim_) return {};
   const sampling::SubsetSummary s = sim_->calc_summary();

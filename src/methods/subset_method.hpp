@@ -70,6 +70,7 @@ class SubsetMethod : public Method {
   std::string calc_result_text() const override;  // p, its CoVs, beta, the levels' thresholds
   std::string progress_stage() const override;    // the level, its margin threshold, the Markov step
   std::int64_t run_cap() const override { return ctx_.options.ensemble.n_runs; }  // N + (max_levels - 1)(N - N_c)
+  std::string calc_result_failure() const override;  // chains that never moved: no estimate
 
   // The margins of a round's records (see above).
   static std::vector<double> calc_margins(const FailureOptions& f, const RoundRecords& r);

@@ -131,7 +131,9 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
     throw io::InputError(std::string(o.resume ? "error: --resume: " : "error: ") + e.what());
   }
   r0.progress = std::make_unique<Progress>(ctx.options.ensemble.n_runs, 0, ProgressMode::none, 1.0);
-  r0.collector = std::make_unique<Collector>(ctx.record, method, *r0.journal, *r0.file, *r0.progress, o.engine);
+  EngineOptions engine = o.engine;
+  engine.max_runs = campaign::calc_max_runs(ctx.options);
+  r0.collector = std::make_unique<Collector>(ctx.record, method, *r0.journal, *r0.file, *r0.progress, engine);
   if (o.resume) r0.scan = r0.collector->restore();
 }
 
@@ -245,7 +247,12 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
                              s.runs_by_rank0, per * (s.rank0_poll_s + s.rank0_write_s + s.rank0_tick_s),
                              per * s.rank0_handle_cpu_s, peak_chunks, chunk_runs);
     const std::string example = results::read_example_message(o.output_path, n_runs, sim::RunStatus::invalid_input);
-    return print_campaign_verdict(stderr, counts, example) ? kExitOk : kExitMostlyInvalid;
+    const bool verdict_ok = print_campaign_verdict(stderr, counts, example);
+    if (const std::string why = method.calc_result_failure(); !why.empty()) {
+      std::cerr << "error: " << why << "\n";
+      return kExitNoResult;
+    }
+    return verdict_ok ? kExitOk : kExitMostlyInvalid;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
     return kExitBadInput;
@@ -376,7 +383,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm, const methods::Me
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
       status = kExitIoError;
     }
-    if (status != kExitOk && status != kExitMostlyInvalid) r0.drop();
+    if (status != kExitOk && status != kExitMostlyInvalid && status != kExitNoResult) r0.drop();
   }
   return broadcast_int_idle(comm, status);
 }

@@ -115,6 +115,11 @@ void Collector::restore_plan(const FrameCheck& check) {
     check.refuse(e.what());
   }
   const std::int64_t first = plans_.empty() ? 0 : plans_.back().end_run();
+  // Before anything is allocated for its runs: a plan within the campaign's cap (first <= the cap
+  // by the earlier plans' check, so the difference does not overflow).
+  if (p.first_run == first && p.n_runs > opts_.max_runs - first)
+    check.refuse(fmt::format("round {} plans {} runs from run {}, past the campaign's cap of {} runs", p.round,
+                             p.n_runs, p.first_run, opts_.max_runs));
   if (p.round != static_cast<std::int64_t>(plans_.size()) || p.first_run != first || p.n_runs < 0)
     check.refuse(fmt::format("round {} (runs {} to {}) does not follow round {}", p.round, p.first_run,
                              p.end_run() - 1, static_cast<std::int64_t>(plans_.size()) - 1));

@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -43,6 +44,8 @@ struct EngineOptions {
   int batches_per_rank = 4;       // guided scheduling: batch = remaining / (batches_per_rank * ranks)
   double tick_interval_s = 0.25;  // how often rank 0 looks at the clock (journal syncs, progress)
   double flush_interval_s = 2.0;  // journal syncs
+  // The campaign's cap on runs (campaign::calc_max_runs): a journal's round plan past it is refused.
+  std::int64_t max_runs = std::numeric_limits<std::int64_t>::max();
   std::string validate() const;
 };
 

@@ -115,9 +115,12 @@ class Journal::Reader {
       throw std::runtime_error(fmt::format("{} is not a truss-campaign journal", path_));
     const auto version = util::get_at<std::uint32_t>(view(head).data() + sizeof kMagic);
     const auto len = util::get_at<std::uint32_t>(view(head).data() + sizeof kMagic + 4);
-    if (version != kVersion || !need(head + len + 4))
+    if (version != kVersion)
       throw std::runtime_error(fmt::format("{}: unreadable journal header (version {}, this program writes {})", path_,
                                            version, kVersion));
+    if (!need(head + len + 4))
+      throw std::runtime_error(fmt::format("{}: truncated journal header ({} bytes of the file, the header says {})",
+                                           path_, size_, head + len + 4));
     const std::string_view text = view(head + len).substr(head);
     if (util::get_at<std::uint32_t>(view(head + len + 4).data() + head + len) != util::calc_crc32(text))
       throw std::runtime_error(fmt::format("{}: damaged journal header", path_));

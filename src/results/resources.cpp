@@ -26,6 +26,15 @@ std::string human(double bytes) {
   while (bytes >= 1024.0 && u < 7) { bytes /= 1024.0; ++u; }
   return fmt::format("{:.4g} {}", bytes, units[u]);  // 1020 KiB, not 1.02e+03
 }
+// The keys the user wrote that set calc_max_runs, with their values ("ensemble.stop.max_runs =
+// 1000000", "ensemble.subset.n_per_level = 2000 (max_levels = 20: at most 36200 runs)").
+std::string describe_max_runs(const campaign::CampaignOptions& c) {
+  if (c.ensemble.stop) return fmt::format("ensemble.stop.max_runs = {}", c.ensemble.stop_rule.max_runs);
+  if (c.ensemble.method == campaign::EnsembleMethod::subset)
+    return fmt::format("ensemble.subset.n_per_level = {} (max_levels = {}: at most {} runs)",
+                       c.ensemble.subset.n_per_level, c.ensemble.subset.max_levels, c.ensemble.n_runs);
+  return fmt::format("ensemble.n_runs = {}", c.ensemble.n_runs);
+}
 }  // namespace
 
 ResourceEstimate estimate_resources(const campaign::CampaignContext& ctx) {
@@ -73,10 +82,10 @@ double free_disk_bytes(const std::string& dir) {
 std::string check_resources(const campaign::CampaignContext& ctx, const std::string& output_path,
                             double journal_on_disk_bytes) {
   const ResourceEstimate e = estimate_resources(ctx);
-  const std::int64_t n = campaign::calc_max_runs(ctx.options);
+  const std::string n = describe_max_runs(ctx.options);
   const double mem = available_memory_bytes();
   if (e.memory_bytes > 0.8 * mem)
-    return fmt::format("error: ensemble.n_runs = {}: rank 0 would need about {} in memory ({} bytes per run: run "
+    return fmt::format("error: {}: rank 0 would need about {} in memory ({} bytes per run: run "
                        "flags, one column for the statistics), more than 80 % of the {} available; use fewer runs "
                        "(at most about {})",
                        n, human(e.memory_bytes), e.bytes_per_run, human(mem),
@@ -86,7 +95,7 @@ std::string check_resources(const campaign::CampaignContext& ctx, const std::str
   const double disk = free_disk_bytes(dir);
   const double journal_to_write = std::max(0.0, e.journal_bytes - journal_on_disk_bytes);
   if (e.output_bytes + journal_to_write > disk)
-    return fmt::format("error: ensemble.n_runs = {}: the results file (about {}) and the journal (about {}{}) need "
+    return fmt::format("error: {}: the results file (about {}) and the journal (about {}{}) need "
                        "more than the {} free in {}; free space or use fewer runs",
                        n, human(e.output_bytes), human(e.journal_bytes),
                        journal_on_disk_bytes > 0 ? fmt::format(", {} of it written", human(journal_on_disk_bytes)) : "",
@@ -95,7 +104,7 @@ std::string check_resources(const campaign::CampaignContext& ctx, const std::str
   rlimit fsize{};
   if (::getrlimit(RLIMIT_FSIZE, &fsize) == 0 && fsize.rlim_cur != RLIM_INFINITY &&
       e.journal_bytes > static_cast<double>(fsize.rlim_cur))
-    return fmt::format("error: ensemble.n_runs = {}: the journal (about {}) would pass the file-size limit of this "
+    return fmt::format("error: {}: the journal (about {}) would pass the file-size limit of this "
                        "process ({}, ulimit -f); raise the limit or use fewer runs",
                        n, human(e.journal_bytes), human(static_cast<double>(fsize.rlim_cur)));
   return {};

@@ -90,6 +90,9 @@ std::string StopRule::validate() const {
   if (!(confidence > 0.0 && confidence < 1.0)) return fmt::format("confidence: {} (must lie in (0, 1))", confidence);
   if (!(width > 0.0 && std::isfinite(width))) return fmt::format("width: {} (must be positive and finite)", width);
   if (max_runs < 1) return fmt::format("max_runs: {} (at least 1)", max_runs);
+  // Run counts stay exact in doubles (the next round's size is computed in them, up to 4 times the
+  // runs so far).
+  if (max_runs > (std::int64_t{1} << 53)) return fmt::format("max_runs: {} (at most 2^53 runs)", max_runs);
   if (target == StopTarget::percentile_bound) {
     if (!(level > 0.0 && level < 1.0)) return fmt::format("level: {} (a quantile level in (0, 1))", level);
     const std::int64_t need = calc_runs_for_upper_bound(level, confidence);

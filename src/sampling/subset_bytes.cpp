@@ -154,7 +154,7 @@ SubsetSimulation SubsetSimulation::load(std::string_view bytes) {
   s.opt_.seed = r.get<std::uint64_t>();
   if (const std::string why = s.opt_.validate(); !why.empty()) throw std::runtime_error("subset state: " + why);
   const auto status = r.get<std::int32_t>();
-  if (status < 0 || status > static_cast<int>(SubsetStatus::no_progress))
+  if (status < 0 || status > static_cast<int>(SubsetStatus::chains_stuck))
     throw std::runtime_error(fmt::format("subset state: status {}", status));
   s.status_ = static_cast<SubsetStatus>(status);
   const auto message = r.get_all<char>();

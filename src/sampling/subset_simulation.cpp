@@ -16,6 +16,7 @@ namespace truss::sampling {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // A NaN margin is safe at every level.
 double order_key(double margin) { return std::isnan(margin) ? kInf : margin; }
@@ -49,8 +50,20 @@ std::string SubsetOptions::validate() const {
     return fmt::format("p0: n_per_level * p0 = {} * {} = {} is not a whole number of chains >= 1", n_per_level, p0,
                        chains);
   if (max_levels < 1 || max_levels > 1000) return fmt::format("max_levels: {} (must lie in [1, 1000])", max_levels);
-  if (!(proposal_half_width > 0.0 && std::isfinite(proposal_half_width)))
-    return fmt::format("proposal_half_width: {} (must be positive and finite)", proposal_half_width);
+  if (!(proposal_half_width >= kMinProposalHalfWidth && proposal_half_width <= kMaxProposalHalfWidth))
+    return fmt::format("proposal_half_width: {:.17g} (must lie in [{}, {}] standard deviations)", proposal_half_width,
+                       kMinProposalHalfWidth, kMaxProposalHalfWidth);
+  // The run cap N + (max_levels - 1) (N - N_c) and a level's N x dims normals, in 64-bit counts
+  // (n_chains() is at most N here).
+  constexpr std::int64_t kMaxCount = std::int64_t{1} << 53;
+  std::int64_t steps = 0, total = 0, normals = 0;
+  if (__builtin_mul_overflow(static_cast<std::int64_t>(max_levels - 1), n_per_level - n_chains(), &steps) ||
+      __builtin_add_overflow(n_per_level, steps, &total) || total > kMaxCount)
+    return fmt::format("n_per_level: {} samples per level over max_levels = {} levels is more than 2^53 runs",
+                       n_per_level, max_levels);
+  if (__builtin_mul_overflow(n_per_level, static_cast<std::int64_t>(dims), &normals) || normals > kMaxCount)
+    return fmt::format("n_per_level: {} samples per level of {} dimensions is more than 2^53 numbers", n_per_level,
+                       dims);
   return "";
 }
 
@@ -202,6 +215,17 @@ void SubsetSimulation::finish_level() {
   std::sort(order.begin(), order.begin() + nc, less);
   const double b = order_key(samples_[static_cast<std::size_t>(order[static_cast<std::size_t>(nc - 1)])].margin);
   SubsetLevel& level = levels_.back();
+  if (levels_.size() > 1 && level.moved == 0) {  // the chains stood still: the level repeats its seeds
+    level.threshold = level.probability = level.cov = kNaN;
+    status_ = SubsetStatus::chains_stuck;
+    message_ = fmt::format("level {}: no Markov chain moved in its {} steps (acceptance 0, proposal_half_width = "
+                           "{:.17g}): the level only repeats its seeds, so there is no estimate",
+                           levels_.size() - 1, level.steps, opt_.proposal_half_width);
+    round_ = SubsetRound{};
+    round_.index = rounds_;
+    round_.first_evaluation = evaluations_;
+    return;
+  }
   const bool reached = b <= 0.0;
   const bool capped = !reached && static_cast<int>(levels_.size()) >= opt_.max_levels;
   const bool stuck = !reached && !capped && b >= domain_;  // level 0: more than N - N_c NaN margins
@@ -305,6 +329,7 @@ SubsetSummary SubsetSimulation::calc_summary() const {
   std::sort(roots.begin(), roots.end());
   s.lineages = std::unique(roots.begin(), roots.end()) - roots.begin();
   s.beta = -normal_quantile(p);
+  if (status_ == SubsetStatus::chains_stuck) s.p = s.beta = s.cov = s.cov_lineage = kNaN;
   return s;
 }
 

@@ -72,7 +72,11 @@ struct SubsetOptions {
   std::int64_t n_per_level = 2000;   // N: samples per level
   double p0 = 0.1;                   // conditional probability per level, in (0, 0.5]
   int max_levels = 20;               // levels including level 0; the estimate stops there
-  double proposal_half_width = 1.0;  // a: uniform proposal on [z - a, z + a] (width 2, as Au & Beck)
+  double proposal_half_width = 1.0;  // a: uniform proposal on [z - a, z + a] (width 2, as Au & Beck), in
+                                     // [kMinProposalHalfWidth, kMaxProposalHalfWidth]
+  // The range of a (standard deviations): below it steps are lost in the rounding of z, above it
+  // nearly every candidate lies where phi is negligible; outside it the chains stand still.
+  static constexpr double kMinProposalHalfWidth = 1e-3, kMaxProposalHalfWidth = 10.0;
   std::uint64_t seed = 0;            // master seed of the campaign
 
   // "" when usable, else "field: reason". N p0 must be a whole number of chains N_c >= 1.
@@ -119,8 +123,11 @@ struct SubsetLevel {
   }
 };
 
-enum class SubsetStatus { running, converged, level_cap, no_progress };
-inline constexpr const char* kSubsetStatusNames[] = {"running", "converged", "level_cap", "no_progress"};
+// chains_stuck: a level >= 1 whose Markov chains never moved (acceptance 0): its samples only
+// repeat its seeds, so there is no estimate (p and beta NaN).
+enum class SubsetStatus { running, converged, level_cap, no_progress, chains_stuck };
+inline constexpr const char* kSubsetStatusNames[] = {"running",     "converged",   "level_cap",
+                                                     "no_progress", "chains_stuck"};
 inline const char* to_string(SubsetStatus s) { return kSubsetStatusNames[static_cast<int>(s)]; }
 
 struct SubsetSummary {

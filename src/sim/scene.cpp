@@ -43,6 +43,11 @@ std::string SceneOptions::validate() const {
   CHECK(finite("rail.y_m", rail.y_m));
   if (!(rail.beta_deg > 0.0 && rail.beta_deg < 90.0))
     return fmt::format("rail.beta_deg: must lie in (0, 90) degrees, got {}", rail.beta_deg);
+  // The model reads the rail through cot(beta): a beta whose cotangent overflows (below about
+  // 1e-306 deg) is a rail parallel to the mast to double precision.
+  if (const double beta_rad = rail.beta_deg * M_PI / 180.0; !std::isfinite(1.0 / std::tan(beta_rad)))
+    return fmt::format("rail.beta_deg: {} deg is too small: its cotangent is not a finite double (the rail would be "
+                       "parallel to the mast); give at least 1e-300 deg", rail.beta_deg);
   CHECK(positive("drive.speed_m_per_s", drive.speed_m_per_s));
   CHECK(positive("drive.screw_lead_m", drive.screw_lead_m));
   CHECK(positive("drive.torque_Nm", drive.torque_Nm));

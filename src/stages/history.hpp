@@ -62,11 +62,13 @@ class HistoryRecorder {
   }
 
  private:
-  // Every column's capacity grows in step (doubling, never past max_rows_): memory stays under the cap.
+  // Every column reserves the rows of the cap with the first row, and never moves after: a column
+  // that grew by doubling would hold its old and its new block at once (1.5 times the cap at the
+  // last doubling). The pages no row reaches are never touched, so they are not resident: the
+  // memory in use is the rows held, at most the cap.
   void reserve_rows() {
-    if (out_->t_s.size() < out_->t_s.capacity()) return;
-    const std::size_t rows = std::min<std::size_t>(static_cast<std::size_t>(max_rows_),
-                                                   std::max<std::size_t>(64, 2 * out_->t_s.size()));
+    const auto rows = static_cast<std::size_t>(max_rows_);
+    if (out_->t_s.capacity() >= rows) return;
     for (auto* v : {&out_->t_s, &out_->y_driven_m, &out_->y_lower_m, &out_->hinge_x_m, &out_->hinge_y_m,
                     &out_->drive_force_N, &out_->drive_torque_Nm, &out_->pin_force_N, &out_->diagonal_tension_N,
                     &out_->driven_speed_m_per_s})

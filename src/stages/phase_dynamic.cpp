@@ -185,8 +185,12 @@ class PhaseObserver final : public integrators::StepObserver {
       d.calc_state(t1, touch_state.data());
       return false;
     }
-    // The clock every 16 steps (a step costs microseconds; the cap holds to a few tens of them).
-    if (!in_time || ((++steps_ & 15) == 0 && std::chrono::steady_clock::now() > sinks_.deadline)) {
+    // The clock every PhaseSinks::kClockWork state values stepped over the run.
+    long& work = sinks_.clock_work ? *sinks_.clock_work : work_;
+    work += 2 * n_ + 1;
+    const bool read_clock = work >= PhaseSinks::kClockWork;
+    if (read_clock) work = 0;
+    if (!in_time || (read_clock && std::chrono::steady_clock::now() > sinks_.deadline)) {
       timed_out = true;
       return false;
     }
@@ -198,7 +202,7 @@ class PhaseObserver final : public integrators::StepObserver {
   PhaseSinks& sinks_;
   PhaseScratch& scratch_;
   int n_;
-  long steps_ = 0;
+  long work_ = 0;
   TouchWatch touches_;
   std::vector<double> state_, sample_;
 };

@@ -47,6 +47,11 @@ struct PhaseSinks {
   // segment (a cap overshoots by at most that many phases: tens of microseconds).
   bool check_clock = true;
   static constexpr int kClockEvery = 8;
+  // Time stepping reads the clock once per kClockWork state values stepped over the run (a step
+  // of a system of size N counts N; the count goes on across phases, which may be a step or two
+  // each): every step of a system of 256 values or more, every 85th of one bay's 3.
+  long* clock_work = nullptr;  // the run's count; nullptr: the phase's own
+  static constexpr long kClockWork = 256;
 };
 
 // Start of a phase: time and the state (q, q') of its model.

@@ -3,6 +3,7 @@
 // names the first bad field; it is part of SceneOptions::validate(), which the run's entry point
 // (sim::simulate) calls once: the stage loop does not check its options again.
 #pragma once
+#include <chrono>
 #include <string>
 
 #include "integrators/ode.hpp"
@@ -32,6 +33,9 @@ struct RunnerOptions {
   model::DriveParams drive;                  // the scene's [drive] table
   RunOptions run;                            // the scene's [run] table
   int peak_samples_per_piece = 4;            // velocity mode: samples a smooth piece, with their loads' rates (>= 3)
+  // When the run started (its wall-time cap counts from here, the stage plan and the stack
+  // model's set-up included); the epoch: when run_stages starts.
+  std::chrono::steady_clock::time_point wall_start{};
   // Integrator options of the run (tolerances; the step budget is set per phase).
   integrators::IntegratorOptions calc_integrator_options() const;
 };

@@ -32,7 +32,7 @@ class StageLoop {
     return {tracker_, phase_peaks_, history_,
             wall_start_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
                               std::chrono::duration<double>(opts_.run.max_wall_time_s)),
-            segments_++ % PhaseSinks::kClockEvery == 0};
+            segments_++ % PhaseSinks::kClockEvery == 0, &clock_work_};
   }
   void account(const PhaseOutcome& o, const StageSpec& s, const PhaseSpec& ph);
   bool book(const StackEvent& e);
@@ -64,6 +64,7 @@ class StageLoop {
   long evals_ = 0;
   long steps_left_ = 0;
   long segments_ = 0;  // phase segments begun (PhaseSinks::check_clock)
+  long clock_work_ = 0;  // PhaseSinks::clock_work
   PhasePoint last_;          // last evaluated point of the run
   const StageSpec* last_stage_ = nullptr;
   const PhaseSpec* last_phase_ = nullptr;
@@ -74,7 +75,8 @@ class StageLoop {
 StageLoop::StageLoop(const MastParams& mast, const std::vector<StageSpec>& stages, const RunnerOptions& opts,
                      std::unique_ptr<StackModel> stack)
     : mast_(mast), stages_(stages), opts_(opts), dir_(calc_direction_sign(opts.run.direction)),
-      wall_start_(std::chrono::steady_clock::now()), ledger_(mast),
+      wall_start_(opts.wall_start == std::chrono::steady_clock::time_point{} ? std::chrono::steady_clock::now() : opts.wall_start),
+      ledger_(mast),
       history_(&r_.history, opts.run.output_step_s, opts_.drive, opts.run.max_history_bytes),
       stack_(std::move(stack)), steps_left_(opts.run.max_steps) {
   const int n = mast.n_bays();
@@ -169,6 +171,13 @@ void StageLoop::run_phase(const StageSpec& s, const PhaseSpec& ph) {
     if (!book(seg.start_events)) return;
     creep_reference_m_per_s_ = seg.creep_reference_m_per_s;
     PhaseSinks sinks = make_sinks();
+    if (sinks.check_clock && std::chrono::steady_clock::now() > sinks.deadline) {  // the set-up of the segments
+      PhaseOutcome late;
+      late.reason = PhaseEndReason::wall_time;
+      late.t_end_s = t_;
+      late.end = last_;
+      return fail_phase(late, s.bay);
+    }
     const PhaseOutcome o = seg.solver->solve({t_, seg.q, seg.qdot, calc_creep_speed_m_per_s()}, sinks);
     account(o, s, ph);
     const SegmentEnd e = stack_->end_segment(o, t_, tracker_.stage_rail_approach);

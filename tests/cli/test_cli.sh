@@ -234,6 +234,23 @@ else
   echo "skip tmpfs disk-full checks (not root or no tmpfs)"
 fi
 
+# History memory: a run whose history reaches run.max_history_bytes holds at most 1.1 times the cap
+# plus its own working set, measured as the same run's peak resident memory with a cap of a few
+# rows (GNU time's %M, KiB). The case: 164 free-stack bays retracting, a row every 0.1 ms (1,404 B
+# a row), which fills a 100 MB cap before its end.
+hist_args=("$TABLE1" --set stack.mode=free --set run.direction=retract --set mast.n_bays=164
+           --set run.output_step_s=0.0001)
+/usr/bin/time -f "%M" -o hist_small.rss "$SIM" "${hist_args[@]}" --set run.max_history_bytes=20000 >/dev/null 2>&1
+/usr/bin/time -f "%M" -o hist_big.rss "$SIM" "${hist_args[@]}" --set run.max_history_bytes=100000000 >/dev/null 2>&1
+small_kib=$(tail -1 hist_small.rss)
+big_kib=$(tail -1 hist_big.rss)
+bound_kib=$(( (110000000 / 1024) + small_kib ))
+if [ "$big_kib" -le "$bound_kib" ]; then
+  ok "history memory: ${big_kib} KiB resident with a 100 MB cap, within 1.1 x the cap + the run's own ${small_kib} KiB"
+else
+  bad "history memory: ${big_kib} KiB resident with a 100 MB cap, over 1.1 x the cap + the run's own ${small_kib} KiB"
+fi
+
 echo "$passed passed, $failed failed"
 if [ "$failed" -eq 0 ]; then
   cd / && rm -rf "$WORK"

@@ -5,7 +5,8 @@
 
 journal: crafted journals (records that pass their CRC but make no sense: a run twice, a short
   payload, a run index out of range or from a rank its session did not have, a short heartbeat, NaN,
-  negative or backward times, a session on no ranks, a frame before the first session) make --resume exit 2 naming the record and
+  negative or backward times, a session on no ranks, a frame before the first session, a round plan
+  of 2^62 runs) make --resume exit 2 naming the record and
   leave the journal byte for byte as it was and nothing written; a flipped byte in the middle is
   reported as a damaged middle with the counts of records kept and dropped (counted here by an
   independent parser of the journal format), and stale .NAME.tmp.PID files are removed on --resume.
@@ -166,6 +167,11 @@ def case_journal(args):
             "a wall time of nan s")
     plan = next(pl for _, k, pl in frames if k == b"P")
     refused("before_session", header + frame(b"P", plan), "a record before the first session record")
+    # A round plan (i64 round, i64 first_run, i64 n_runs, u32 state length, state) of 2^62 runs after
+    # round 0's N_RUNS: refused before anything is allocated for its runs.
+    huge = struct.pack("<qqqI", 1, N_RUNS, 2 ** 62, 0)
+    refused("huge_plan", blob + frame(b"P", huge),
+            f"round 1 plans {2 ** 62} runs from run {N_RUNS}, past the campaign's cap of {N_RUNS} runs")
 
     # A flipped byte inside a run record in the middle: the records before it are kept, the valid
     # ones after it dropped (recomputed), and the message says so with both counts.

@@ -109,6 +109,12 @@ TEST_CASE("geometry errors name the keys involved and where each came from", "[h
   const std::string e = error_of([] { truss::io::parse_scene_text("[rail]\nbeta_deg = 80\n", "scene.toml", {"rail.x_m=0.05"}); });
   CHECK_THAT(e, Contains("never meets the rail") && Contains("keys involved"));
   CHECK_THAT(e, Contains("rail.beta_deg = 80 deg (scene.toml:2)"));
+  // A beta whose cotangent overflows (5e-324 deg is 0 rad in doubles) is refused with its value,
+  // not reported as "0 deg >= 45 deg".
+  const std::string tiny = error_of([] { truss::io::parse_scene_text("", "scene.toml", {"rail.beta_deg=5e-324"}); });
+  CHECK_THAT(tiny, Contains("rail.beta_deg: 5e-324 deg is too small") && !Contains("= 0 deg") && !Contains(">= 45"));
+  CHECK(error_of([] { truss::io::parse_scene_text("", "scene.toml", {"rail.beta_deg=1e-300"}); }).find("too small") ==
+        std::string::npos);
   CHECK_THAT(e, Contains("rail.x_m = 0.05 m (--set rail.x_m=0.05)"));
   CHECK_THAT(e, Contains("rail.y_m = 0.15 m (default)"));
   CHECK_THAT(e, Contains("mast.strut_length_m = 0.18 m (default)"));
@@ -230,4 +236,11 @@ TEST_CASE("resource check: n_runs against memory and disk, estimates in the mess
     });
     CHECK_THAT(err, Contains("9223372036854775807") || Contains("at most 2^"));
   }
+  // A run cap from [ensemble.stop] is named by the key the user wrote.
+  const truss::campaign::CampaignContext stop(truss::campaign::parse_campaign_text(
+      "[ensemble]\nn_runs = 100\n[ensemble.stop]\ntarget = \"probability_relative_half_width\"\nwidth = 0.5\n",
+      "c.toml", ".", {"ensemble.stop.max_runs=1000000000000"}));
+  const std::string stop_msg = truss::results::check_resources(stop, "out.h5");
+  CHECK_THAT(stop_msg, Contains("ensemble.stop.max_runs = 1000000000000") && Contains("in memory") &&
+                           !Contains("ensemble.n_runs"));
 }

@@ -383,10 +383,11 @@ class DeadlineObserver : public StepObserver {
 };
 }  // namespace
 
-TEST_CASE("CVODE BDF keeps a wall-clock deadline: no Newton-matrix set-up that would pass it", "[integrators][cvode]") {
+TEST_CASE("CVODE BDF keeps a wall-clock deadline inside a Newton-matrix set-up", "[integrators][cvode]") {
   // 300 equations: a set-up takes 300 x 0.5 ms = 0.15 s, steps a few ms. Set-ups come every few
-  // steps, so without the prediction the run ends up to one set-up (0.15 s) past the deadline;
-  // with it, within a step of it. The observer alone checks only after a step.
+  // steps, so if only the observer read the clock (after a step) the run would end up to one
+  // set-up (0.15 s) past the deadline; the right-hand side reads it every few evaluations, so the
+  // run ends within a few of them (a few ms).
   SlowStiffSystem sys(300);
   IntegratorOptions o;
   o.rtol = 1e-6;
@@ -401,4 +402,50 @@ TEST_CASE("CVODE BDF keeps a wall-clock deadline: no Newton-matrix set-up that w
   INFO(s.to_string() << ", took " << took_s << " s");
   CHECK((s.status == IntegratorStatus::deadline || s.status == IntegratorStatus::stopped_by_observer));
   CHECK(took_s < budget_s + 0.05);  // a step (a few right-hand sides) past it at most, not a 0.15 s set-up
+}
+
+namespace {
+// n linear equations y_i' = -1e3 y_i + 0.1 sum_j y_j + 1, coupled densely: cheap right-hand sides,
+// so a Newton-matrix set-up is all LU (2n^3/3 operations: seconds at n = 3,000). From y = 1 the
+// difference quotients of the coupling (0.1 x sqrt(eps)) stand well above the rounding of f, so
+// the Newton matrix is full.
+class DenseCoupledSystem : public OdeSystem {
+ public:
+  explicit DenseCoupledSystem(int n) : n_(n) {}
+  int size() const override { return n_; }
+  void calc_rhs(double, const double* y, double* dy) override {
+    double sum = 0.0;
+    for (int i = 0; i < n_; ++i) sum += y[i];
+    for (int i = 0; i < n_; ++i) dy[i] = -1e3 * y[i] + 0.1 * sum + 1.0;
+  }
+ private:
+  int n_;
+};
+}  // namespace
+
+TEST_CASE("CVODE BDF stops inside its first Newton-matrix LU at a wall-clock deadline", "[integrators][cvode]") {
+  // n = 3,000: the first LU alone (2n^3/3 = 1.8e10 operations in SUNDIALS' column-wise dense LU)
+  // takes several seconds, the Jacobian before it (n cheap right-hand sides) a small part of the
+  // 0.4 s to the deadline. The promise of a run's cap: it ends within 0.5 s of the deadline (the
+  // cap plus 5 % or 0.5 s), with the deadline's status.
+  DenseCoupledSystem sys(3000);
+  IntegratorOptions o;
+  o.rtol = 1e-6;
+  o.atol = 1e-8;
+  CvodeIntegrator cvode(o);
+  std::vector<double> y(3000, 1.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  DeadlineObserver obs(t0 + std::chrono::milliseconds(400));
+  const IntegratorSummary s = cvode.integrate(sys, 0.0, 1e3, y.data(), &obs);
+  const double took_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  INFO(s.to_string() << ", took " << took_s << " s");
+  CHECK(s.status == IntegratorStatus::deadline);
+  CHECK(took_s < 0.4 + 0.5);
+  // The same solver object goes on after a deadline (new SUNDIALS objects): a small system to its end.
+  DenseCoupledSystem small(3);
+  std::vector<double> y3(3, 0.0);
+  const IntegratorSummary s3 = cvode.integrate(small, 0.0, 1.0, y3.data(), nullptr);
+  CHECK(s3.status == IntegratorStatus::reached_end);
+  // y_i' = -1e3 y_i + 0.1 (y_1 + y_2 + y_3) + 1 at rest: y_i = 1 / (1e3 - 0.3).
+  CHECK(y3[0] == Approx(1.0 / (1e3 - 0.3)).epsilon(1e-5));
 }

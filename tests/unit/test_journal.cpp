@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "results/journal.hpp"
 #include "results/lock_file.hpp"
 #include "util/bytes.hpp"
@@ -152,6 +154,19 @@ TEST_CASE("the journal keeps every complete frame and drops a torn or damaged ta
 
   // Another campaign's journal is refused.
   CHECK_THROWS_AS(Journal::open_existing(path, "campaign B"), JournalRefused);
+
+  // A header cut one byte before its end (magic 8, version 4, length 4, text, CRC 4): truncated,
+  // not a version mismatch (the version it holds is this program's).
+  const auto header = 8 + 4 + 4 + std::string("campaign A").size() + 4;
+  fs::resize_file(path, header - 1);
+  try {
+    (void)Journal::open_existing(path, "campaign A");
+    FAIL("a cut header was read");
+  } catch (const std::runtime_error& e) {
+    CHECK_THAT(std::string(e.what()), Catch::Contains(fmt::format("truncated journal header ({} bytes of the file, the "
+                                                                  "header says {})", header - 1, header)) &&
+                                          !Catch::Contains("version"));
+  }
 }
 
 TEST_CASE("frames written through many buffers come back whole and in order", "[campaign][journal]") {

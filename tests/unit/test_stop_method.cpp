@@ -55,6 +55,14 @@ TEST_CASE("[ensemble.stop]: a rule that can never be met, and other bad input, r
   below.replace(below.find("max_runs = 5000"), 15, "max_runs = 400");
   CHECK(error_of(below).find("ensemble.stop.max_runs: 400 is below the first round's ensemble.n_runs = 500") !=
         std::string::npos);
+  // A cap past 2^53 runs (the next round is sized in doubles, up to 4 times the runs so far): refused
+  // naming the key written, not ensemble.n_runs.
+  for (const char* huge : {"9223372036854775807", "9007199254740993"}) {
+    std::string big = stop_text("", kPercentile);
+    big.replace(big.find("max_runs = 5000"), 15, std::string("max_runs = ") + huge);
+    CHECK(error_of(big).find(std::string("stop.toml:10: ensemble.stop.max_runs: ") + huge + " (at most 2^53 runs)") !=
+          std::string::npos);
+  }
   // --set ensemble.stop=false: one round of n_runs (and any design); anything but a table or false is refused.
   CHECK(methods::parse_campaign_text(stop_text("sampling = \"latin_hypercube\"", kPercentile), "stop.toml", ".",
                                      {"ensemble.stop=false"})

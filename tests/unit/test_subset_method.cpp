@@ -80,6 +80,24 @@ TEST_CASE("subset campaign keys: bad input named by file, key and line; the run 
   CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().failure.column == "rail_margin_m");
 }
 
+TEST_CASE("subset campaign keys: a run cap past 64-bit counts is refused naming n_per_level", "[methods][subset]") {
+  const std::string margin = "margin = \"rail_margin_m\"";
+  const std::string base = rare_text("", "n_per_level = 100\np0 = 0.1\nmax_levels = 3", margin);
+  // N + (max_levels - 1)(N - N_c) at N = 2^63 - 1, p0 = 0.1: 2.9 N, past 2^63 (it wrapped to a
+  // negative n_runs); at N = 2^62: 2.8 N, likewise; at N = 10^17 it fits 64 bits but not 2^53.
+  for (const char* n : {"9223372036854775807", "4611686018427387904", "100000000000000000"}) {
+    INFO(n);
+    const std::string e = error_of(base, {fmt::format("ensemble.subset.n_per_level={}", n)});
+    CHECK(e.find(fmt::format("ensemble.subset.n_per_level: {} samples per level over max_levels = 3 levels is more "
+                             "than 2^53 runs", n)) != std::string::npos);
+    CHECK(e.find("ensemble.n_runs") == std::string::npos);
+  }
+  // 2^53 / 2.8 rounded down to a multiple of 10 (whole chains) still fits: 3216855356317750 N.
+  const campaign::CampaignOptions o =
+      campaign::parse_campaign_text(base, "rare.toml", ".", {"ensemble.subset.n_per_level=3216855356317750"});
+  CHECK(o.ensemble.n_runs == 3216855356317750 + 2 * (3216855356317750 - 321685535631775));
+}
+
 TEST_CASE("subset method: margins from records; a failed run counts only when it shows the failure", "[methods][subset]") {
   methods::RoundRecords r;
   const auto ok = static_cast<std::int8_t>(sim::RunStatus::ok), miss = static_cast<std::int8_t>(sim::RunStatus::rail_miss),

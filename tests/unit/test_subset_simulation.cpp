@@ -8,6 +8,8 @@
 #include <cmath>
 #include <vector>
 
+#include <fmt/format.h>
+
 #include "numeric/subset_cases.hpp"
 
 using namespace truss::sampling;
@@ -51,6 +53,16 @@ TEST_CASE("Subset options: each bad field named", "[subset]") {
   SubsetOptions o = make_options(2000, 0.1, 1);
   o.proposal_half_width = 0.0;
   CHECK_THAT(o.validate(), Contains("proposal_half_width"));
+  // Outside [1e-3, 10] standard deviations the chains stand still (z + a rounds to z, or every
+  // candidate has phi(e) / phi(z) = 0): refused, the value printed in full.
+  for (const double a : {5e-324, 9.99e-4, 10.01, 1e308}) {
+    o.proposal_half_width = a;
+    CHECK_THAT(o.validate(), Contains(fmt::format("proposal_half_width: {:.17g} (must lie in [0.001, 10]", a)));
+  }
+  for (const double a : {1e-3, 1.0, 10.0}) {
+    o.proposal_half_width = a;
+    CHECK(o.validate().empty());
+  }
   o = make_options(2000, 0.1, 1);
   o.max_levels = 0;
   CHECK_THAT(o.validate(), Contains("max_levels"));
@@ -156,7 +168,9 @@ TEST_CASE("Subset state: save/load anywhere and go on gives the same bytes", "[s
 //   level 2: 20 values x 100 copies; b_3 = m_(2); P = 0.1; gamma = 9;
 //   level 3: 2 values x 1000 copies; b_4 = m_(1); P = 1000 / 2000 = 0.5 (800 ties); gamma = 9;
 //   level 4: m_(1) x 2000: the threshold does not decrease: no_progress, P = #{<= 0} / N = 0.
-TEST_CASE("Subset bookkeeping on frozen chains: thresholds, gamma, ties, acceptance by hand", "[subset]") {
+TEST_CASE("Subset on frozen chains: no estimate (chains_stuck), level 0's bookkeeping by hand", "[subset]") {
+  // Every Markov candidate's margin is NaN (a run that cannot say): no chain ever moves, level 1
+  // only repeats level 0's 200 seeds, and the simulation ends there without an estimate.
   const LinearCase c{4.75};
   SubsetSimulation sim(make_options(2000, 0.1, 5));
   std::vector<double> level0 = calc_margins(sim, c);
@@ -165,31 +179,25 @@ TEST_CASE("Subset bookkeeping on frozen chains: thresholds, gamma, ties, accepta
   REQUIRE(level0.front() > 0.0);
   while (!sim.done()) sim.add_margins(std::vector<double>(static_cast<std::size_t>(sim.round().n_points), NAN));
   const SubsetSummary s = sim.calc_summary();
-  CHECK(s.status == SubsetStatus::no_progress);
-  REQUIRE(s.levels.size() == 5);
-  const double thresholds[] = {level0[199], level0[19], level0[1], level0[0], 0.0};
-  const double probabilities[] = {0.1, 0.1, 0.1, 0.5, 0.0};
-  const std::int64_t ties[] = {0, 0, 0, 800, 0};
-  for (std::size_t k = 0; k < 5; ++k) {
-    INFO("level " << k);
-    const SubsetLevel& l = s.levels[k];
-    CHECK(l.threshold == thresholds[k]);
-    CHECK(l.probability == probabilities[k]);
-    CHECK(l.ties == ties[k]);
-    CHECK(l.gamma == Approx(k == 0 || k == 4 ? 0.0 : 9.0).epsilon(1e-12));  // level 4: P = 0
-    CHECK(l.steps == (k == 0 ? 0 : 1800));
-    CHECK(l.runs <= (k == 0 ? 2000 : 1800));  // a candidate equal to its state is not evaluated
-    CHECK(l.moved == 0);
-    CHECK(l.unusable == (k == 0 ? 0 : l.runs));  // NaN candidates are runs, never states
-    if (k > 0) CHECK(l.acceptance() == 0.0);
-  }
-  // delta_1^2 = (1 - 0.1) / (2000 * 0.1) * (1 + 9): the seeds' 200 draws, each counted 10 times.
-  CHECK(s.levels[1].cov == Approx(std::sqrt(0.9 / 200.0 * 10.0)).epsilon(1e-12));
-  CHECK(s.levels[0].cov == Approx(std::sqrt(0.9 / 200.0)).epsilon(1e-12));
-  CHECK(s.p == 0.0);
-  CHECK(std::isinf(s.cov));
-  CHECK(s.beta == std::numeric_limits<double>::infinity());
-  CHECK(s.rounds == 1 + 4 * 9);
+  CHECK(s.status == SubsetStatus::chains_stuck);
+  CHECK_THAT(s.message, Contains("level 1: no Markov chain moved in its 1800 steps"));
+  REQUIRE(s.levels.size() == 2);
+  const SubsetLevel& l0 = s.levels[0];
+  CHECK(l0.threshold == level0[199]);
+  CHECK(l0.probability == 0.1);
+  CHECK(l0.steps == 0);
+  CHECK(l0.cov == Approx(std::sqrt(0.9 / 200.0)).epsilon(1e-12));
+  const SubsetLevel& l1 = s.levels[1];
+  CHECK(l1.steps == 1800);  // N - N_c: the 200 seeds are the chains' first states
+  CHECK(l1.runs <= 1800);   // a candidate equal to its state is not evaluated
+  CHECK(l1.moved == 0);
+  CHECK(l1.unusable == l1.runs);  // NaN candidates are runs, never states
+  CHECK(l1.acceptance() == 0.0);
+  CHECK(std::isnan(l1.probability));
+  CHECK(std::isnan(s.p));
+  CHECK(std::isnan(s.beta));
+  CHECK(std::isnan(s.cov));
+  CHECK(s.rounds == 1 + 9);  // level 0, then the 9 Markov steps of chains of 10 states
   CHECK(sim.calc_failure_samples().empty());
 }
 
