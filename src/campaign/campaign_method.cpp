@@ -11,6 +11,9 @@
 namespace truss::campaign {
 
 std::int64_t MethodOptions::calc_max_runs(const CampaignOptions& c) const { return c.ensemble.n_runs; }
+std::string MethodOptions::describe_max_runs(const CampaignOptions& c) const {
+  return fmt::format("ensemble.n_runs = {}", c.ensemble.n_runs);
+}
 
 std::string find_run_column_unit(const std::string& name) {
   if (name == "wall_time_s") return {};  // the record's run_wall_time_s: not an output

@@ -44,6 +44,9 @@ class MethodOptions {
   virtual std::int64_t calc_n_runs(const CampaignOptions&) const { return 0; }
   // The most runs the campaign can make, what memory and disk are checked for.
   virtual std::int64_t calc_max_runs(const CampaignOptions& c) const;
+  // The keys the user wrote that set calc_max_runs, with their values, for messages that refuse
+  // the cap ("ensemble.stop.max_runs = 1000000").
+  virtual std::string describe_max_runs(const CampaignOptions& c) const;
 };
 
 // Copies a MethodOptions subclass T with the campaign (clone()).

@@ -27,6 +27,9 @@ struct StopOptions : campaign::MethodOptionsOf<StopOptions> {
   std::string validate(const campaign::CampaignOptions& c) const override;
   std::string to_toml() const override;
   std::int64_t calc_max_runs(const campaign::CampaignOptions&) const override { return rule.max_runs; }
+  std::string describe_max_runs(const campaign::CampaignOptions&) const override {
+    return "ensemble.stop.max_runs = " + std::to_string(rule.max_runs);
+  }
   static std::unique_ptr<campaign::MethodOptions> parse(const campaign::MethodInput& in);
 };
 

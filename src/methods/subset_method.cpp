@@ -79,6 +79,11 @@ std::int64_t SubsetMethodOptions::calc_n_runs(const campaign::CampaignOptions& c
   return s.validate().empty() ? s.max_evaluations() : 0;
 }
 
+std::string SubsetMethodOptions::describe_max_runs(const campaign::CampaignOptions& c) const {
+  return fmt::format("ensemble.subset.n_per_level = {} (max_levels = {}: at most {} runs)", subset.n_per_level,
+                     subset.max_levels, c.ensemble.n_runs);
+}
+
 namespace {
 
 using campaign::detail::Ctx;

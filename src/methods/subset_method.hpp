@@ -53,6 +53,7 @@ struct SubsetMethodOptions : campaign::MethodOptionsOf<SubsetMethodOptions> {
     return "[ensemble.subset] n_per_level, p0 and max_levels cap them";
   }
   std::int64_t calc_n_runs(const campaign::CampaignOptions& c) const override;
+  std::string describe_max_runs(const campaign::CampaignOptions& c) const override;
   // The state machine's options (its dimensions and master seed from the campaign c): the one
   // place the run counts come from (SubsetOptions::max_evaluations).
   sampling::SubsetOptions calc_sim_options(const campaign::CampaignOptions& c) const;

@@ -29,11 +29,7 @@ std::string human(double bytes) {
 // The keys the user wrote that set calc_max_runs, with their values ("ensemble.stop.max_runs =
 // 1000000", "ensemble.subset.n_per_level = 2000 (max_levels = 20: at most 36200 runs)").
 std::string describe_max_runs(const campaign::CampaignOptions& c) {
-  if (c.ensemble.stop) return fmt::format("ensemble.stop.max_runs = {}", c.ensemble.stop_rule.max_runs);
-  if (c.ensemble.method == campaign::EnsembleMethod::subset)
-    return fmt::format("ensemble.subset.n_per_level = {} (max_levels = {}: at most {} runs)",
-                       c.ensemble.subset.n_per_level, c.ensemble.subset.max_levels, c.ensemble.n_runs);
-  return fmt::format("ensemble.n_runs = {}", c.ensemble.n_runs);
+  return c.ensemble.method.options().describe_max_runs(c);
 }
 }  // namespace
 

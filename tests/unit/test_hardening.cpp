@@ -237,7 +237,7 @@ TEST_CASE("resource check: n_runs against memory and disk, estimates in the mess
     CHECK_THAT(err, Contains("9223372036854775807") || Contains("at most 2^"));
   }
   // A run cap from [ensemble.stop] is named by the key the user wrote.
-  const truss::campaign::CampaignContext stop(truss::campaign::parse_campaign_text(
+  const truss::campaign::CampaignContext stop(truss::methods::parse_campaign_text(
       "[ensemble]\nn_runs = 100\n[ensemble.stop]\ntarget = \"probability_relative_half_width\"\nwidth = 0.5\n",
       "c.toml", ".", {"ensemble.stop.max_runs=1000000000000"}));
   const std::string stop_msg = truss::results::check_resources(stop, "out.h5");

@@ -94,7 +94,7 @@ TEST_CASE("subset campaign keys: a run cap past 64-bit counts is refused naming 
   }
   // 2^53 / 2.8 rounded down to a multiple of 10 (whole chains) still fits: 3216855356317750 N.
   const campaign::CampaignOptions o =
-      campaign::parse_campaign_text(base, "rare.toml", ".", {"ensemble.subset.n_per_level=3216855356317750"});
+      methods::parse_campaign_text(base, "rare.toml", ".", {"ensemble.subset.n_per_level=3216855356317750"});
   CHECK(o.ensemble.n_runs == 3216855356317750 + 2 * (3216855356317750 - 321685535631775));
 }
 
