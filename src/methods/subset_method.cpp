@@ -276,7 +276,8 @@ std::string SubsetMethod::progress_stage() const {
   if (!sim_ || sim_->done()) return {};
   const sampling::SubsetRound& r = sim_->round();
   if (r.level == 0) return "level 0 (independent draws)";
-  const std::int64_t steps = (sim_opt_.n_per_level + sim_opt_.n_chains() - 1) / sim_opt_.n_chains() - 1;  // a chain's longest walk
+  // A chain's longest walk.
+  const std::int64_t steps = (sim_opt_.n_per_level + sim_opt_.n_chains() - 1) / sim_opt_.n_chains() - 1;
   return fmt::format("level {} (margin <= {:.4g} {}), Markov step {} of {}", r.level, r.threshold,
                      campaign::find_run_column_unit(opt_.failure.column), r.step, steps);
 }
