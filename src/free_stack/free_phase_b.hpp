@@ -22,8 +22,10 @@
 #include <vector>
 
 #include "model/frames.hpp"
+#include "model/rail.hpp"
 #include "model/tridiagonal.hpp"
 #include "free_stack/free_contacts.hpp"
+#include "free_stack/free_phase_work.hpp"
 #include "stages/phase.hpp"
 
 namespace truss::stages {
@@ -43,6 +45,8 @@ class FreePhaseB final : public PhaseModel {
   PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override {
     return evaluate(q, qdot, qddot, scratch, nullptr, nullptr);
   }
+  // Time stepping's part of calc_point: the accelerations and the drive power F y_m'.
+  double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
   double calc_driven_speed_m_per_s(const double* q, const double* qdot) const override;
   double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[dof() - 1] - ctx_.q_end); }
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[dof() - 1]; }
@@ -71,6 +75,14 @@ class FreePhaseB final : public PhaseModel {
   int lo_;
   double held_height_m_, alpha_;
   ContactLayout layout_;
+  model::RailConstants rail_;   // cot(beta), y_r, 3 sin(beta) of the phase's rail
+  mutable FreePhaseWork work_;  // scratch of the evaluations (free_phase_work.hpp)
+  // The bordered system at (q, q') (assemble) solved: accelerations into qddot, the rail's lambda
+  // and the drive force; the terms (mass matrix) and the frame heights point_ys stay in work_.
+  struct Motion {
+    double drive_force_N, lambda_N;
+  };
+  Motion solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const;
   PhasePoint evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, Eigen::VectorXd* mass_diag,
                       Eigen::VectorXd* mass_sub) const;
   // Heights and velocities of frames max(lo - 1, 0)..m (frame m from x).
