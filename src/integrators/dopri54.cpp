@@ -196,7 +196,7 @@ bool StiffnessTest::update(double h, const std::vector<double>& k7, const std::v
     den += (y7[i] - y6[i]) * (y7[i] - y6[i]);
   }
   if (!(den > 0.0)) return false;
-  if (h * std::sqrt(num / den) > 3.25) {
+  if (h * std::sqrt(num / den) > boundary) {
     non_stiff = 0;
     return ++stiff_steps >= 15;
   }
