@@ -20,6 +20,7 @@ FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m)
   active_.locked_mass_kg = ctx.locked_mass_kg;
   active_.panel_height_offset_m = ctx.panel_height_offset_m;
   layout_.frames = ctx.bay - lo + 1;
+  work_.memo.keep_system = true;  // calc_point reads the mass matrix from the frame-level system
 }
 
 void FreePhaseA::expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const {
@@ -109,6 +110,7 @@ void FreePhaseA::calc_touches(const double* q, const double* qdot, double* h, do
 }
 
 bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratch& sys, PhaseDaeTerms& t) const {
+  work_.memo.valid = false;  // point_ys is rewritten
   std::vector<double>&ys = work_.point_ys, &vs = work_.point_vs;
   expand_frames(q, qdot, ys, vs);
   calc_frame_system(*ctx_.mast, active_, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys);
@@ -173,12 +175,18 @@ bool FreePhaseA::calc_frame_heights(const double* q, double* y) const {
 FreePhaseA::Motion FreePhaseA::solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
   const int n = dof();
   FreePhaseWork& w = work_;
+  const bool reduce = layout_.reduces();
+  if (w.memo.matches(q, qdot, n)) {  // the work space still holds this state's solve
+    w.memo.restore_system(sys);
+    for (int k = 0; k < n; ++k) qddot[k] = w.memo.qddot[static_cast<std::size_t>(k)];
+    return Motion{reduce ? &w.diag : &sys.diag, reduce ? &w.sub : &sys.sub, w.memo.drive_force_N};
+  }
+  w.memo.valid = false;
   // Heights and velocities from frame lo - 1 (held) when it exists, so that bay lo sees it.
   expand_frames(q, qdot, w.point_ys, w.point_vs);
   calc_frame_system(*ctx_.mast, active_, w.point_ys.data(), w.point_vs.data(), std::max(lo_ - 1, 0), sys);
   w.rhs = sys.velocity_terms + sys.spring_forces;
   // Stack contacts: frames in closed contact move as clusters (model/contacts.hpp).
-  const bool reduce = layout_.reduces();
   if (reduce) model::reduce_to_clusters(sys.diag, sys.sub, w.rhs, layout_.starts, w.diag, w.sub, w.rhs_reduced);
   const Eigen::VectorXd& Md = reduce ? w.diag : sys.diag;
   const Eigen::VectorXd& Ms = reduce ? w.sub : sys.sub;
@@ -203,7 +211,10 @@ FreePhaseA::Motion FreePhaseA::solve_motion(const double* q, const double* qdot,
   if (!solved) {
     for (int k = 0; k < n; ++k) qddot[k] = std::numeric_limits<double>::quiet_NaN();
     out.drive_force_N = qddot[0];
+    return out;
   }
+  w.memo.store(q, qdot, qddot, n, sys);
+  w.memo.drive_force_N = out.drive_force_N;
   return out;
 }
 

@@ -43,7 +43,10 @@ class FreePhaseA final : public PhaseModel {
   int dof() const override { return layout_.clusters(); }
   const PhaseContext& context() const override { return ctx_; }
   // Stack contacts: clusters of frames lo..m (the driven frame m alone in the last one).
-  void set_contacts(ContactLayout layout) { layout_ = std::move(layout); }
+  void set_contacts(ContactLayout layout) {
+    layout_ = std::move(layout);
+    work_.memo.valid = false;
+  }
   ContactWatch calc_contact_watch(const double* q, const double* qdot) const;
   // The mass matrix in the phase's coordinates (diag, sub; the contact impacts).
   void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;

@@ -37,7 +37,11 @@ class FreePhaseB final : public PhaseModel {
   FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s);
   int dof() const override { return layout_.clusters() + 1; }
   // Stack contacts: clusters of frames lo..m-1.
-  void set_contacts(ContactLayout layout) { layout_ = std::move(layout); }
+  void set_contacts(ContactLayout layout) {
+    layout_ = std::move(layout);
+    work_.memo.keep_system = layout_.enabled;
+    work_.memo.valid = false;
+  }
   ContactWatch calc_contact_watch(const double* q, const double* qdot) const;
   // The mass matrix in p (diag, sub; the contact impacts).
   void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;
