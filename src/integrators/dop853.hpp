@@ -1,8 +1,8 @@
 // DOP853: Hairer's explicit Runge-Kutta pair of order 8 with error estimators of orders 5 and 3
 // (coefficients and equations in dop853_tableau.hpp), FSAL, step control on that error in the RMS
 // norm scaled by atol + rtol |y| (exponent 1/8, step ratio in [1/3, 6], as dop853.f). Its order
-// suits tight tolerances (rtol 1e-8 and below), where it takes several times fewer steps than
-// DP5(4) at twice the stages a step. Dense output of order 7 from three more stages, computed only
+// suits tight tolerances, where its error falls fastest with the step size (docs/benchmarks.md,
+// free stack: work-precision). Dense output of order 7 from three more stages, computed only
 // when a time inside the step is asked for (an event or touch located, a history sample), so that
 // steps that only end cost 12 right-hand sides. Events are located on the dense output by the
 // Illinois method to IntegratorOptions::event_time_tol, as DormandPrince54 does.
