@@ -61,9 +61,10 @@ ContactWatch calc_contact_watch(const MastParams& mast, const ContactLayout& lay
 }
 
 ContactWatch calc_contact_watch(const PhaseModel& phase, const ContactLayout& layout, int lo, const double* q,
-                                const double* qdot, const double* ys, const double* vs) {
-  thread_local PhaseScratch sys;
-  thread_local std::vector<double> acc, a;
+                                const double* qdot, const double* ys, const double* vs, ContactWatchWork& work) {
+  PhaseScratch& sys = work.sys;
+  std::vector<double>& acc = work.acc;
+  std::vector<double>& a = work.a;
   acc.resize(static_cast<std::size_t>(phase.dof()));
   a.resize(static_cast<std::size_t>(layout.frames));
   phase.calc_point(q, qdot, acc.data(), sys);

@@ -48,10 +48,16 @@ struct ContactWatch {
 ContactWatch calc_contact_watch(const model::MastParams& mast, const ContactLayout& layout, int lo, int m,
                                 const double* ys, const double* vs, int first, const model::FrameSystem& sys,
                                 const double* a);
+// Work space of the watch below, owned by the phase that calls it: the phase's evaluation and the
+// frames' accelerations.
+struct ContactWatchWork {
+  PhaseScratch sys;
+  std::vector<double> acc, a;
+};
 // The same for a free phase at (q, q'): the accelerations from the phase's own evaluation
 // (calc_point), so that the watched contact forces are those of the motion being integrated.
 // ys, vs: the phase's frame heights and velocities at (q, q') as above.
 ContactWatch calc_contact_watch(const PhaseModel& phase, const ContactLayout& layout, int lo, const double* q,
-                                const double* qdot, const double* ys, const double* vs);
+                                const double* qdot, const double* ys, const double* vs, ContactWatchWork& work);
 
 }  // namespace truss::stages

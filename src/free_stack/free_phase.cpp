@@ -15,12 +15,13 @@ namespace truss::stages {
 using namespace truss::model;
 
 FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m)
-    : ctx_(ctx), lo_(lo), held_height_m_(held_height_m) {
+    : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), rail_(calc_rail_constants(ctx.mast->rail)) {
   active_.lo = lo;
   active_.m = ctx.bay;
   active_.locked_mass_kg = ctx.locked_mass_kg;
   active_.panel_height_offset_m = ctx.panel_height_offset_m;
   layout_.frames = ctx.bay - lo + 1;
+  work_.memo.keep_system = true;  // calc_point reads the mass matrix from the frame-level system
 }
 
 void FreePhaseA::expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const {
@@ -42,16 +43,16 @@ void FreePhaseA::calc_mass(const double* q, const double* qdot, Eigen::VectorXd&
 }
 
 ContactWatch FreePhaseA::calc_contact_watch(const double* q, const double* qdot) const {
-  thread_local std::vector<double> ys, vs;
+  std::vector<double>&ys = work_.ys, &vs = work_.vs;
   expand_frames(q, qdot, ys, vs);
-  return stages::calc_contact_watch(*this, layout_, lo_, q, qdot, ys.data(), vs.data());
+  return stages::calc_contact_watch(*this, layout_, lo_, q, qdot, ys.data(), vs.data(), work_.contact);
 }
 
 double FreePhaseA::calc_rail_function_m(const double* q) const {
   const int n = dof();
   const double y_m = q[n - 1], y_l = n >= 2 ? q[n - 2] : held_height_m_;
   const double x = calc_hinge_offset_m(ctx_.mast->bay(ctx_.bay), y_m - y_l);
-  return model::calc_rail_function_m(ctx_.mast->rail, x, 0.5 * (y_m + y_l));
+  return model::calc_rail_function_m(ctx_.mast->rail, rail_, x, 0.5 * (y_m + y_l));
 }
 
 double FreePhaseA::calc_rail_entry_margin_m(const double* q, const double* qdot, const double* qddot) const {
@@ -65,12 +66,12 @@ double FreePhaseA::calc_rail_entry_margin_m(const double* q, const double* qdot,
 void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
-  const double l = mast.bay(m).strut_length_m, yr = mast.rail.axis_height_m();
+  const double l = mast.bay(m).strut_length_m, yr = rail_.axis_height_m;
   const double y_m = q[n - 1], y_l = n >= 2 ? q[n - 2] : held_height_m_;
   g[past_miss_height] = y_m - (yr + 3.0 * l);
   g[deploying_straight] = kStraightFraction * l - calc_hinge_offset_m(mast.bay(m), y_m - y_l);
   double worst = -kStraightFraction * l;  // no bay below m moves: never fires
-  thread_local std::vector<double> ys, vs;
+  std::vector<double>&ys = work_.ys, &vs = work_.vs;
   expand_frames(q, qdot, ys, vs);
   const int first = std::max(lo_ - 1, 0);
   for (int i = std::max(lo_, 1); i < m; ++i) {
@@ -98,19 +99,20 @@ void FreePhaseA::calc_bay_touches(const MastParams& mast, int first_bay, int las
 
 void FreePhaseA::calc_touches(const double* q, const double* qdot, double* h, double* rate) const {
   const int n = dof(), m = ctx_.bay;
-  thread_local std::vector<double> ys, vs;
+  std::vector<double>&ys = work_.ys, &vs = work_.vs;
   expand_frames(q, qdot, ys, vs);
   if (rail_touch()) {  // h = -f, f' = (u + w)/2 + c x' with x' = -D (u - w) / (4 x)
     const double u = qdot[n - 1], w = n >= 2 ? qdot[n - 2] : 0.0, D = ys.back() - ys[ys.size() - 2];
     const double x = std::max(calc_hinge_offset_m(ctx_.mast->bay(m), D), kStraightFraction * ctx_.mast->bay(m).strut_length_m);
     *h++ = -calc_rail_function_m(q);
-    *rate++ = ctx_.mast->rail.cot_beta() * D * (u - w) / (4.0 * x) - 0.5 * (u + w);
+    *rate++ = rail_.cot_beta * D * (u - w) / (4.0 * x) - 0.5 * (u + w);
   }
   calc_bay_touches(*ctx_.mast, std::max(lo_, 1), m, ys.data(), vs.data(), std::max(lo_ - 1, 0), h, rate);
 }
 
 bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratch& sys, PhaseDaeTerms& t) const {
-  thread_local std::vector<double> ys, vs;
+  work_.memo.valid = false;  // point_ys is rewritten
+  std::vector<double>&ys = work_.point_ys, &vs = work_.point_vs;
   expand_frames(q, qdot, ys, vs);
   calc_frame_system(*ctx_.mast, active_, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys);
   const int n = dof();
@@ -162,7 +164,7 @@ void FreePhaseA::fill_locked_heights(const MastParams& mast, int m, double* y) {
 
 bool FreePhaseA::calc_frame_heights(const double* q, double* y) const {
   const int m = ctx_.bay, first = std::max(lo_ - 1, 0);
-  thread_local std::vector<double> ys, vs, zero;
+  std::vector<double>&ys = work_.ys, &vs = work_.vs, &zero = work_.zero;
   zero.assign(static_cast<std::size_t>(dof()), 0.0);
   expand_frames(q, zero.data(), ys, vs);  // frames first..m, clusters expanded
   for (int k = 0; k < first; ++k) y[k] = held_height_m_;
@@ -171,44 +173,64 @@ bool FreePhaseA::calc_frame_heights(const double* q, double* y) const {
   return true;
 }
 
-PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
-  const MastParams& mast = *ctx_.mast;
-  const int n = dof(), m = ctx_.bay;
-  // Heights and velocities from frame lo - 1 (held) when it exists, so that bay lo sees it.
-  const int first = std::max(lo_ - 1, 0);
-  thread_local std::vector<double> ys, vs;  // work space of the heights only; M, r, Q live in sys
-  expand_frames(q, qdot, ys, vs);
-  calc_frame_system(mast, active_, ys.data(), vs.data(), first, sys);
-  Eigen::VectorXd rhs = sys.velocity_terms + sys.spring_forces;
-  // Stack contacts: frames in closed contact move as clusters (model/contacts.hpp).
-  thread_local Eigen::VectorXd dc, sc, rc;
+FreePhaseA::Motion FreePhaseA::solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  const int n = dof();
+  FreePhaseWork& w = work_;
   const bool reduce = layout_.reduces();
-  if (reduce) { model::reduce_to_clusters(sys.diag, sys.sub, rhs, layout_.starts, dc, sc, rc); rhs = rc; }
-  const Eigen::VectorXd& Md = reduce ? dc : sys.diag;
-  const Eigen::VectorXd& Ms = reduce ? sc : sys.sub;
-  PhasePoint p;
-  const double u = qdot[n - 1];
-  TridiagonalWork w;
-  Eigen::VectorXd acc(n);
+  if (w.memo.matches(q, qdot, n)) {  // the work space still holds this state's solve
+    w.memo.restore_system(sys);
+    for (int k = 0; k < n; ++k) qddot[k] = w.memo.qddot[static_cast<std::size_t>(k)];
+    return Motion{reduce ? &w.diag : &sys.diag, reduce ? &w.sub : &sys.sub, w.memo.drive_force_N};
+  }
+  w.memo.valid = false;
+  // Heights and velocities from frame lo - 1 (held) when it exists, so that bay lo sees it.
+  expand_frames(q, qdot, w.point_ys, w.point_vs);
+  calc_frame_system(*ctx_.mast, active_, w.point_ys.data(), w.point_vs.data(), std::max(lo_ - 1, 0), sys);
+  w.rhs = sys.velocity_terms + sys.spring_forces;
+  // Stack contacts: frames in closed contact move as clusters (model/contacts.hpp).
+  if (reduce) model::reduce_to_clusters(sys.diag, sys.sub, w.rhs, layout_.starts, w.diag, w.sub, w.rhs_reduced);
+  const Eigen::VectorXd& Md = reduce ? w.diag : sys.diag;
+  const Eigen::VectorXd& Ms = reduce ? w.sub : sys.sub;
+  Eigen::VectorXd& rhs = reduce ? w.rhs_reduced : w.rhs;
+  Motion out{&Md, &Ms, 0.0};
   // A mass matrix that is not positive definite (a bay past straight inside a trial step) gives
   // NaN accelerations: the integrator rejects the step and the stop events end the phase.
   bool solved = true;
   if (ctx_.drive.mode == DriveMode::velocity) {
-    acc.setZero();
+    for (int k = 0; k < n; ++k) qddot[k] = 0.0;
     if (n > 1) {
-      Eigen::VectorXd a;
-      solved = solve_tridiagonal(Md.head(n - 1), Ms.head(n - 1), rhs.head(n - 1), a, w);
-      if (solved) acc.head(n - 1) = a;
+      solved = solve_tridiagonal(Md.head(n - 1), Ms.head(n - 1), rhs.head(n - 1), w.acc, w.solve);
+      if (solved) for (int k = 0; k + 1 < n; ++k) qddot[k] = w.acc[k];
     }
-    p.drive_force_N = (n > 1 ? Ms[n - 1] * acc[n - 2] : 0.0) - rhs[n - 1];
+    out.drive_force_N = (n > 1 ? Ms[n - 1] * qddot[n - 2] : 0.0) - rhs[n - 1];
   } else {
-    p.drive_force_N = ctx_.drive.calc_force_N(u, ctx_.direction);
-    rhs[n - 1] += p.drive_force_N;
-    solved = solve_tridiagonal(Md, Ms, rhs, acc, w);
+    out.drive_force_N = ctx_.drive.calc_force_N(qdot[n - 1], ctx_.direction);
+    rhs[n - 1] += out.drive_force_N;
+    solved = solve_tridiagonal(Md, Ms, rhs, w.acc, w.solve);
+    if (solved) for (int k = 0; k < n; ++k) qddot[k] = w.acc[k];
   }
-  if (!solved) { acc.setConstant(n, std::numeric_limits<double>::quiet_NaN()); p.drive_force_N = acc[0]; }
-  for (int k = 0; k < n; ++k) qddot[k] = acc[k];
-  p.q = q[n - 1]; p.qdot = u; p.qddot = acc[n - 1];
+  if (!solved) {
+    for (int k = 0; k < n; ++k) qddot[k] = std::numeric_limits<double>::quiet_NaN();
+    out.drive_force_N = qddot[0];
+    return out;
+  }
+  w.memo.store(q, qdot, qddot, n, sys);
+  w.memo.drive_force_N = out.drive_force_N;
+  return out;
+}
+
+double FreePhaseA::calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  return solve_motion(q, qdot, qddot, sys).drive_force_N * qdot[dof() - 1];
+}
+
+PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  const MastParams& mast = *ctx_.mast;
+  const int n = dof(), m = ctx_.bay;
+  const Motion mo = solve_motion(q, qdot, qddot, sys);
+  PhasePoint p;
+  p.drive_force_N = mo.drive_force_N;
+  const double u = qdot[n - 1];
+  p.q = q[n - 1]; p.qdot = u; p.qddot = qddot[n - 1];
   p.y_driven_m = q[n - 1];
   p.y_lower_m = n >= 2 ? q[n - 2] : held_height_m_;
   p.u_m_per_s = u;
@@ -216,10 +238,10 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   const double D = p.y_driven_m - p.y_lower_m;
   p.hinge_x_m = calc_hinge_offset_m(mast.bay(m), D);
   p.hinge_y_m = 0.5 * (p.y_driven_m + p.y_lower_m);
-  p.rail_distance_m = model::calc_rail_function_m(mast.rail, p.hinge_x_m, p.hinge_y_m) * std::sin(mast.rail.beta_rad);
-  fill_bay_energies(mast, lo_, m, ys.data(), first, Md, Ms, qdot, p);
+  p.rail_distance_m = model::calc_rail_function_m(mast.rail, rail_, p.hinge_x_m, p.hinge_y_m) * std::sin(mast.rail.beta_rad);
+  fill_bay_energies(mast, lo_, m, work_.point_ys.data(), std::max(lo_ - 1, 0), *mo.diag, *mo.sub, qdot, p);
   p.static_drive_force_N = model::calc_open_static_drive_force_N(-sys.spring_forces[sys.spring_forces.size() - 1]);
-  p.mass_yy = Md[n - 1];
+  p.mass_yy = (*mo.diag)[n - 1];
   return p;
 }
 

@@ -28,8 +28,10 @@
 #include <vector>
 
 #include "model/frames.hpp"
+#include "model/rail.hpp"
 #include "model/tridiagonal.hpp"
 #include "free_stack/free_contacts.hpp"
+#include "free_stack/free_phase_work.hpp"
 #include "stages/phase.hpp"
 
 namespace truss::stages {
@@ -41,11 +43,16 @@ class FreePhaseA final : public PhaseModel {
   int dof() const override { return layout_.clusters(); }
   const PhaseContext& context() const override { return ctx_; }
   // Stack contacts: clusters of frames lo..m (the driven frame m alone in the last one).
-  void set_contacts(ContactLayout layout) { layout_ = std::move(layout); }
+  void set_contacts(ContactLayout layout) {
+    layout_ = std::move(layout);
+    work_.memo.valid = false;
+  }
   ContactWatch calc_contact_watch(const double* q, const double* qdot) const;
   // The mass matrix in the phase's coordinates (diag, sub; the contact impacts).
   void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;
   PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
+  // Time stepping's part of calc_point: the accelerations and the drive power F y_m'.
+  double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
   double calc_driven_speed_m_per_s(const double*, const double* qdot) const override { return qdot[dof() - 1]; }
   // Deployment: rail entry (f falls to 0). Retraction: the driven frame back down at ctx.q_end.
   double calc_end_gap(const double* q) const override {
@@ -98,6 +105,16 @@ class FreePhaseA final : public PhaseModel {
   double held_height_m_;
   bool watch_rail_top_ = false;
   ContactLayout layout_;
+  model::RailConstants rail_;   // cot(beta), y_r, 3 sin(beta) of the phase's rail
+  mutable FreePhaseWork work_;  // scratch of the evaluations (free_phase_work.hpp)
+  // The system of calc_point at (q, q') solved: accelerations into qddot; its mass matrix (reduced
+  // to the clusters with stack contacts) and the frame heights point_ys stay in work_.
+  struct Motion {
+    const Eigen::VectorXd* diag;
+    const Eigen::VectorXd* sub;
+    double drive_force_N;
+  };
+  Motion solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const;
   int rail_touch() const { return ctx_.direction > 0 ? 1 : 0; }  // deployment: the rail is a touch
   // Frame heights and velocities from frame max(lo - 1, 0) to m (the held frame lo - 1 included).
   void expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const;

@@ -5,8 +5,6 @@
 #include <limits>
 #include <vector>
 
-#include <Eigen/LU>
-
 #include "model/bay.hpp"
 #include "model/contacts.hpp"
 #include "model/rail.hpp"
@@ -18,7 +16,7 @@ namespace truss::stages {
 using namespace truss::model;
 
 FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s)
-    : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), alpha_(alpha_per_s) {
+    : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), alpha_(alpha_per_s), rail_(calc_rail_constants(ctx.mast->rail)) {
   active_.lo = lo;
   active_.m = ctx.bay;
   active_.bay_m_in_hinge_coordinate = true;
@@ -40,17 +38,16 @@ void FreePhaseB::expand_frames(const double* q, const double* qdot, std::vector<
 }
 
 void FreePhaseB::calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const {
-  thread_local std::vector<double> acc;
-  acc.resize(static_cast<std::size_t>(dof()));
+  std::vector<double> acc(static_cast<std::size_t>(dof()));
   PhaseScratch sys;
   const PhasePoint p = evaluate(q, qdot, acc.data(), sys, &diag, &sub);
   (void)p;
 }
 
 ContactWatch FreePhaseB::calc_contact_watch(const double* q, const double* qdot) const {
-  thread_local std::vector<double> ys, vs;
+  std::vector<double>&ys = work_.ys, &vs = work_.vs;
   expand_frames(q, qdot, ys, vs);
-  return stages::calc_contact_watch(*this, layout_, lo_, q, qdot, ys.data(), vs.data());
+  return stages::calc_contact_watch(*this, layout_, lo_, q, qdot, ys.data(), vs.data(), work_.contact);
 }
 
 double FreePhaseB::calc_rail_function_m(const double* q) const {
@@ -58,14 +55,13 @@ double FreePhaseB::calc_rail_function_m(const double* q) const {
   const double x = q[n - 1];
   const double l = ctx_.mast->bay(ctx_.bay).strut_length_m;
   const double s = std::sqrt(l * l - x * x);
-  const RailParams& r = ctx_.mast->rail;
-  return q[n - 2 >= 0 ? n - 2 : 0] + s - r.axis_height_m() + r.cot_beta() * x;
+  return q[n - 2 >= 0 ? n - 2 : 0] + s - rail_.axis_height_m + rail_.cot_beta * x;
 }
 
 void FreePhaseB::calc_stop_events(const double* q, const double* qdot, double* g) const {
   const MastParams& mast = *ctx_.mast;
   double worst = -FreePhaseA::kStraightFraction * mast.bay(ctx_.bay).strut_length_m;  // none: never fires
-  thread_local std::vector<double> ys, vs;
+  std::vector<double>&ys = work_.ys, &vs = work_.vs;
   expand_frames(q, qdot, ys, vs);
   const int first = std::max(lo_ - 1, 0);
   for (int i = std::max(lo_, 1); i < ctx_.bay; ++i) {
@@ -81,7 +77,7 @@ void FreePhaseB::calc_stop_events(const double* q, const double* qdot, double* g
 }
 
 void FreePhaseB::calc_touches(const double* q, const double* qdot, double* h, double* rate) const {
-  thread_local std::vector<double> ys, vs;
+  std::vector<double>&ys = work_.ys, &vs = work_.vs;
   expand_frames(q, qdot, ys, vs);
   FreePhaseA::calc_bay_touches(*ctx_.mast, std::max(lo_, 1), ctx_.bay - 1, ys.data(), vs.data(), std::max(lo_ - 1, 0), h, rate);
 }
@@ -99,7 +95,7 @@ bool FreePhaseB::assemble(const double* q, const double* qdot, PhaseScratch& sys
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
   const BayParams& bay = mast.bay(m);
-  const double l = bay.strut_length_m, c = mast.rail.cot_beta();
+  const double l = bay.strut_length_m, c = rail_.cot_beta;
   const double x = q[n - 1], xi = qdot[n - 1], xi2 = xi * xi;
   const double s = std::sqrt(l * l - x * x), k = 2.0 * x / s, kx = 2.0 * l * l / (s * s * s);
   // Frame heights first..m (frame lo - 1 held when it exists).
@@ -131,7 +127,7 @@ bool FreePhaseB::assemble(const double* q, const double* qdot, PhaseScratch& sys
   b = Eigen::VectorXd::Zero(n);
   a[n - 2] = 1.0; a[n - 1] = c - x / s;
   b[n - 2] = 1.0; b[n - 1] = -k;
-  const double f = y_l + s - mast.rail.axis_height_m() + c * x, fdot = a.dot(Eigen::Map<const Eigen::VectorXd>(qdot, n));
+  const double f = y_l + s - rail_.axis_height_m + c * x, fdot = a.dot(Eigen::Map<const Eigen::VectorXd>(qdot, n));
   t.s[0] = l * l / (s * s * s) * xi2 - 2.0 * alpha_ * fdot - alpha_ * alpha_ * f;
   t.driven_speed_m_per_s = u;
   t.num_multipliers = num_multipliers();
@@ -148,13 +144,13 @@ bool FreePhaseB::assemble(const double* q, const double* qdot, PhaseScratch& sys
 }
 
 bool FreePhaseB::calc_dae_terms(const double* q, const double* qdot, PhaseScratch& sys, PhaseDaeTerms& t) const {
-  thread_local std::vector<double> ys, vs;
-  return assemble(q, qdot, sys, ys, vs, t);
+  work_.memo.valid = false;  // point_ys is rewritten
+  return assemble(q, qdot, sys, work_.point_ys, work_.point_vs, t);
 }
 
 bool FreePhaseB::calc_frame_heights(const double* q, double* y) const {
   const int m = ctx_.bay, first = std::max(lo_ - 1, 0);
-  thread_local std::vector<double> ys, vs, zero;
+  std::vector<double>&ys = work_.ys, &vs = work_.vs, &zero = work_.zero;
   zero.assign(static_cast<std::size_t>(dof()), 0.0);
   expand_frames(q, zero.data(), ys, vs);  // frames first..m, clusters expanded, frame m from x
   for (int k = 0; k < first; ++k) y[k] = held_height_m_;
@@ -163,59 +159,74 @@ bool FreePhaseB::calc_frame_heights(const double* q, double* y) const {
   return true;
 }
 
+FreePhaseB::Motion FreePhaseB::solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  const int n = dof();
+  FreePhaseWork& w = work_;
+  PhaseDaeTerms& t = w.terms;
+  if (w.memo.matches(q, qdot, n)) {  // the work space still holds this state's solve
+    w.memo.restore_system(sys);
+    for (int i = 0; i < n; ++i) qddot[i] = w.memo.qddot[static_cast<std::size_t>(i)];
+    return Motion{w.memo.drive_force_N, w.memo.lambda_N};
+  }
+  w.memo.valid = false;
+  assemble(q, qdot, sys, w.point_ys, w.point_vs, t);
+  // The rail row (and in velocity mode the row y_m'' = 0, the drive force as its multiplier); a
+  // and b are zero but on the last two coordinates (model/tridiagonal.hpp, solve_tail_constrained).
+  const int k = ctx_.drive.mode == DriveMode::velocity ? 2 : 1;
+  double mu[2] = {0.0, 0.0};
+  Motion out{t.drive_force_N, 0.0};
+  const bool solved = solve_tail_constrained(t.diag, t.sub, t.rhs, t.c, k, t.s, w.acc, mu, w.solve);
+  // Not positive definite (a bay past straight inside a trial step): NaN, the step is rejected.
+  if (!solved) {
+    for (int i = 0; i < n; ++i) qddot[i] = std::numeric_limits<double>::quiet_NaN();
+    out.lambda_N = out.drive_force_N = qddot[0];
+    return out;
+  }
+  for (int i = 0; i < n; ++i) qddot[i] = w.acc[i];
+  out.lambda_N = mu[0];
+  if (k == 2) out.drive_force_N = mu[1];
+  w.memo.store(q, qdot, qddot, n, sys);
+  w.memo.drive_force_N = out.drive_force_N;
+  w.memo.lambda_N = out.lambda_N;
+  return out;
+}
+
+double FreePhaseB::calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+  const Motion mo = solve_motion(q, qdot, qddot, sys);
+  return mo.drive_force_N * work_.point_vs.back();
+}
+
 PhasePoint FreePhaseB::evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, Eigen::VectorXd* mass_diag,
                                 Eigen::VectorXd* mass_sub) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
-  const double l = mast.bay(m).strut_length_m, c = mast.rail.cot_beta();
+  const double l = mast.bay(m).strut_length_m, c = rail_.cot_beta;
   const double x = q[n - 1], xi = qdot[n - 1], s = std::sqrt(l * l - x * x);
-  const int first = std::max(lo_ - 1, 0);
-  thread_local std::vector<double> ys, vs;
-  thread_local PhaseDaeTerms t;
-  assemble(q, qdot, sys, ys, vs, t);
+  const Motion mo = solve_motion(q, qdot, qddot, sys);
+  const PhaseDaeTerms& t = work_.terms;
   if (mass_diag) { *mass_diag = t.diag; *mass_sub = t.sub; }
-  const Eigen::VectorXd &diag = t.diag, &sub = t.sub, &a = t.c[0], &b = t.c[1];
-  const double y_l = q[n - 2], w = qdot[n - 2], y_m = ys.back(), u = vs.back();
-  const double f = calc_rail_function_m(q);
+  const Eigen::VectorXd &diag = t.diag, &sub = t.sub;
+  const std::vector<double>&ys = work_.point_ys, &vs = work_.point_vs;
   PhasePoint p;
-  TridiagonalWork wk;
-  Eigen::VectorXd acc;
-  double lambda = 0.0;
-  bool solved = true;
-  if (ctx_.drive.mode == DriveMode::velocity) {
-    // Two rows: the rail and y_m'' = 0 (drive force as the multiplier): three solves and a 2x2.
-    Eigen::VectorXd y0, za, zb;
-    solved = solve_tridiagonal(diag, sub, t.rhs, y0, wk) && solve_tridiagonal(diag, sub, a, za, wk) &&
-             solve_tridiagonal(diag, sub, b, zb, wk);
-    if (!solved) { y0 = za = zb = Eigen::VectorXd::Zero(n); }
-    Eigen::Matrix2d S;
-    S << a.dot(za), a.dot(zb), b.dot(za), b.dot(zb);
-    const Eigen::Vector2d mult = S.partialPivLu().solve(Eigen::Vector2d(t.s[0] - a.dot(y0), t.s[1] - b.dot(y0)));
-    lambda = mult[0];
-    p.drive_force_N = mult[1];
-    acc = y0 + lambda * za + p.drive_force_N * zb;
-  } else {
-    p.drive_force_N = t.drive_force_N;
-    double lam_neg = 0.0;
-    solved = solve_bordered(diag, sub, a, t.rhs, t.s[0], acc, lam_neg, wk);
-    lambda = -lam_neg;
-  }
-  // Not positive definite (a bay past straight inside a trial step): NaN, the step is rejected.
-  if (!solved) { acc.setConstant(n, std::numeric_limits<double>::quiet_NaN()); lambda = p.drive_force_N = acc[0]; }
-  for (int i = 0; i < n; ++i) qddot[i] = acc[i];
-  p.q = x; p.qdot = xi; p.qddot = acc[n - 1];
-  p.y_driven_m = y_m; p.y_lower_m = y_l;
-  p.u_m_per_s = u; p.w_m_per_s = w;
-  p.hinge_x_m = x; p.hinge_y_m = y_l + s;
-  p.lambda_N = lambda;
-  p.pin_force_N = calc_pin_force_N(mast.rail, lambda);
-  p.rail_residual_m = std::abs(f);
-  FreePhaseA::fill_bay_energies(mast, lo_, m, ys.data(), first, diag, sub, qdot, p);
+  p.drive_force_N = mo.drive_force_N;
+  p.q = x; p.qdot = xi; p.qddot = qddot[n - 1];
+  p.y_driven_m = ys.back(); p.y_lower_m = q[n - 2];
+  p.u_m_per_s = vs.back(); p.w_m_per_s = qdot[n - 2];
+  p.hinge_x_m = x; p.hinge_y_m = q[n - 2] + s;
+  p.lambda_N = mo.lambda_N;
+  p.pin_force_N = calc_pin_force_N(rail_, mo.lambda_N);
+  p.rail_residual_m = std::abs(calc_rail_function_m(q));
+  FreePhaseA::fill_bay_energies(mast, lo_, m, ys.data(), std::max(lo_ - 1, 0), diag, sub, qdot, p);
   p.mass_yy = diag[n - 2]; p.mass_yx = sub[n - 1]; p.mass_xx = diag[n - 1];
   p.rail_slope = c - x / s;
   // At rest with the hinge at x, bays 1..m-1 below frame m-1 pull with their chain's equilibrium tension.
+  // The deploying bay's pull U_m'(D_m) from the model, not from the caller's scratch (a memo hit
+  // may leave that scratch holding another state's system).
+  const double y_l = q[n - 2];
   const double pull = m >= 2 ? calc_chain_pull_N(mast, 1, m - 1, y_l - held_height_m_, chain_slack_span_m_) : 0.0;
-  p.static_drive_force_N = calc_on_rail_static_drive_force_N(c, x / s, -sys.spring_forces[sys.spring_forces.size() - 1], pull);
+  const double bay_pull_N =
+      calc_bay_dU_dD_N(mast.bay(m), calc_diagonal_offset_sq_m2(mast.frame(m - 1), mast.frame(m)), ys.back() - y_l);
+  p.static_drive_force_N = calc_on_rail_static_drive_force_N(c, x / s, bay_pull_N, pull);
   return p;
 }
 

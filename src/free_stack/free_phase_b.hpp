@@ -22,8 +22,10 @@
 #include <vector>
 
 #include "model/frames.hpp"
+#include "model/rail.hpp"
 #include "model/tridiagonal.hpp"
 #include "free_stack/free_contacts.hpp"
+#include "free_stack/free_phase_work.hpp"
 #include "stages/phase.hpp"
 
 namespace truss::stages {
@@ -35,7 +37,11 @@ class FreePhaseB final : public PhaseModel {
   FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s);
   int dof() const override { return layout_.clusters() + 1; }
   // Stack contacts: clusters of frames lo..m-1.
-  void set_contacts(ContactLayout layout) { layout_ = std::move(layout); }
+  void set_contacts(ContactLayout layout) {
+    layout_ = std::move(layout);
+    work_.memo.keep_system = layout_.enabled;
+    work_.memo.valid = false;
+  }
   ContactWatch calc_contact_watch(const double* q, const double* qdot) const;
   // The mass matrix in p (diag, sub; the contact impacts).
   void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;
@@ -43,6 +49,8 @@ class FreePhaseB final : public PhaseModel {
   PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override {
     return evaluate(q, qdot, qddot, scratch, nullptr, nullptr);
   }
+  // Time stepping's part of calc_point: the accelerations and the drive power F y_m'.
+  double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
   double calc_driven_speed_m_per_s(const double* q, const double* qdot) const override;
   double calc_end_gap(const double* q) const override { return ctx_.sign_q * (q[dof() - 1] - ctx_.q_end); }
   double calc_end_gap_acceleration(const double* qddot) const override { return ctx_.sign_q * qddot[dof() - 1]; }
@@ -72,6 +80,14 @@ class FreePhaseB final : public PhaseModel {
   double held_height_m_, alpha_;
   ContactLayout layout_;
   double chain_slack_span_m_ = 0;  // of bays 1..m-1 (the static drive force, model/static_resistance.hpp)
+  model::RailConstants rail_;   // cot(beta), y_r, 3 sin(beta) of the phase's rail
+  mutable FreePhaseWork work_;  // scratch of the evaluations (free_phase_work.hpp)
+  // The bordered system at (q, q') (assemble) solved: accelerations into qddot, the rail's lambda
+  // and the drive force; the terms (mass matrix) and the frame heights point_ys stay in work_.
+  struct Motion {
+    double drive_force_N, lambda_N;
+  };
+  Motion solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const;
   PhasePoint evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, Eigen::VectorXd* mass_diag,
                       Eigen::VectorXd* mass_sub) const;
   // Heights and velocities of frames max(lo - 1, 0)..m (frame m from x).

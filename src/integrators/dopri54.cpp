@@ -61,9 +61,14 @@ constexpr double d1 = -12715105075.0 / 11282082432, d3 = 87487479700.0 / 3270041
 class Dopri5Dense : public DenseOutput {
  public:
   const std::vector<double>* rc = nullptr;  // 5 coefficient vectors
+  const double* y_end = nullptr;             // the step's end state: returned as is at t0 + h
   double t0 = 0, h = 0;
   int n = 0;
   void calc_state(double t, double* y) const override {
+    if (y_end && t == t0 + h) {
+      std::copy(y_end, y_end + n, y);
+      return;
+    }
     const double th = (t - t0) / h, th1 = 1.0 - th;
     for (int i = 0; i < n; ++i)
       y[i] = rc[0][i] + th * (rc[1][i] + th1 * (rc[2][i] + th * (rc[3][i] + th1 * rc[4][i])));
@@ -196,7 +201,7 @@ bool StiffnessTest::update(double h, const std::vector<double>& k7, const std::v
     den += (y7[i] - y6[i]) * (y7[i] - y6[i]);
   }
   if (!(den > 0.0)) return false;
-  if (h * std::sqrt(num / den) > 3.25) {
+  if (h * std::sqrt(num / den) > boundary) {
     non_stiff = 0;
     return ++stiff_steps >= 15;
   }
@@ -235,6 +240,7 @@ IntegratorSummary DormandPrince54::integrate(OdeSystem& sys, double t0, double t
   StiffnessTest stiffness;
   Dopri5Dense dense;
   dense.rc = rc_;
+  dense.y_end = ynew_.data();
   dense.n = n;
   auto finish = [&](IntegratorStatus st, double t_at, std::string msg = {}) {
     sum.status = st;

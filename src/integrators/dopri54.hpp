@@ -15,7 +15,9 @@ namespace truss::integrators {
 // |k7 - k6| / |y7 - y6| of the last two stages estimates |lambda| along the step; h |lambda| beyond
 // 3.25 (the stability boundary of DP5 on the negative real axis is about 3.3) on 15 accepted steps
 // means the step size is set by stability, not accuracy.
+// DOP853 applies the same test with its own boundary, 6.1 (dop853.f), on its last two stages.
 struct StiffnessTest {
+  double boundary = 3.25;  // h |lambda| beyond which a step counts as stiff
   int stiff_steps = 0, non_stiff = 0;
   // True once the test has fired.
   bool update(double h, const std::vector<double>& k7, const std::vector<double>& k6, const std::vector<double>& y7,

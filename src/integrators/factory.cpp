@@ -2,6 +2,7 @@
 
 #include "integrators/auto_integrator.hpp"
 #include "integrators/cvode_integrator.hpp"
+#include "integrators/dop853.hpp"
 #include "integrators/dopri54.hpp"
 #include "integrators/ida_integrator.hpp"
 
@@ -13,6 +14,7 @@ std::unique_ptr<Integrator> make_integrator(IntegratorKind kind, const Integrato
     case IntegratorKind::cvode_adams: return std::make_unique<CvodeIntegrator>(io, CvodeMethod::adams);
     case IntegratorKind::automatic: return std::make_unique<AutoIntegrator>(io);
     case IntegratorKind::ida: return std::make_unique<IdaIntegrator>(io);
+    case IntegratorKind::dop853: return std::make_unique<Dop853>(io);
     case IntegratorKind::dopri54: break;
   }
   return std::make_unique<DormandPrince54>(io);

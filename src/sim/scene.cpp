@@ -55,7 +55,7 @@ std::string SceneOptions::validate() const {
   CHECK(positive("drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s));
   if (run.integrator == IntegratorKind::ida && stack.mode != StackMode::free)
     return "run.integrator: \"ida\" solves the free stack's phases only (stack.mode = \"free\"); the held stack "
-           "has one coordinate per phase and no rail multiplier: use \"dopri54\", \"cvode\", \"cvode_adams\" or \"auto\"";
+           "has one coordinate per phase and no rail multiplier: use \"dopri54\", \"dop853\", \"cvode\", \"cvode_adams\" or \"auto\"";
   if (stack.contacts == StackContacts::on && stack.mode != StackMode::free)
     return "stack.contacts: contacts between stowed frames apply to the free stack only (stack.mode = \"free\"); the held stack's canister holds them";
   if (stack.start == StackStart::rest && stack.mode != StackMode::free)

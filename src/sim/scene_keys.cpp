@@ -101,7 +101,7 @@ std::vector<SceneKey> make_table() {
       R(TRUSS_REAL(run, output_step_s, "s", "s, time-history sample step, 0 = no histories", kFixed), C(0, 1e3), C(0, 1)),
       R(TRUSS_REAL(run, rtol, "1", "1, relative tolerance of the ODE integrators", kFixed), C(stages::kMinRtol, stages::kMaxRtol), C(1e-13, 1e-3)),
       R(TRUSS_REAL(run, atol, "1", "absolute tolerance (m, m/s, J) of the ODE integrators", kFixed), P(stages::kMaxAtol), C(1e-15, 1e-4)),
-      TRUSS_ENUM(run, integrator, "\"dopri54\" | \"cvode\" (BDF) | \"cvode_adams\" | \"auto\" | \"ida\" (free stack)", "dopri54", "cvode", "cvode_adams", "auto", "ida"),
+      TRUSS_ENUM(run, integrator, "\"dopri54\" | \"cvode\" (BDF) | \"cvode_adams\" | \"auto\" | \"ida\" (free stack) | \"dop853\"", "dopri54", "cvode", "cvode_adams", "auto", "ida", "dop853"),
       R(TRUSS_INT(run, max_steps, "1", "cap on accepted integrator steps over the run", kFixed), C(1, 1e15), C(1e3, 1e10)),
       R(TRUSS_REAL(run, max_wall_time_s, "s", "s, wall-time cap for one run", kFixed), P(1e7), C(0.01, 86400)),
       R(TRUSS_INT(run, max_history_bytes, "B",

@@ -54,7 +54,7 @@ struct Hill {
 
 // Work space of the closed-form peak search, owned by the run (HeldStack) and reused phase after
 // phase: no allocation per phase, and no thread_local (in a shared object such as the Python
-// module every use of one is a call to __tls_get_addr: 7 % of a velocity run's instructions).
+// module every use of one is a call to __tls_get_addr).
 struct RatedPeakWork {
   std::vector<RatedSample> samples;  // the phase's samples, in time order
   std::vector<detail::Hill> hills;   // one quantity's candidate maxima

@@ -48,9 +48,8 @@ class PhaseOde final : public integrators::OdeSystem, public integrators::DaeFor
   bool calc_initial_guess(double t, const double* y, double* yp, double* mu) override {
     calc_rhs(t, y, yp);
     if (!m_.calc_dae_terms(y, y + n_, scratch_, terms_)) return false;
-    thread_local std::vector<double> acc;
-    acc.resize(static_cast<std::size_t>(n_));
-    const PhasePoint p = m_.calc_point(y, y + n_, acc.data(), scratch_);
+    acc_.resize(static_cast<std::size_t>(n_));
+    const PhasePoint p = m_.calc_point(y, y + n_, acc_.data(), scratch_);
     for (int j = 0; j < terms_.num_multipliers; ++j) mu[j] = j == terms_.drive_multiplier ? p.drive_force_N : p.lambda_N;
     return std::isfinite(yp[0]);
   }
@@ -94,6 +93,7 @@ class PhaseOde final : public integrators::OdeSystem, public integrators::DaeFor
   double creep_;
   PhaseScratch scratch_;
   PhaseDaeTerms terms_;
+  std::vector<double> acc_;  // the initial guess's accelerations
 };
 
 // Watches the model's grazing touches (PhaseModel::num_touches) between step ends: a touch whose

@@ -190,3 +190,46 @@ TEST_CASE("free phase B: energy balance and rail residual of the n-DOF DAE under
   CHECK(std::abs(drift) < 1e-9 * std::max(1.0, std::abs(y[12])));
   CHECK(max_f < 1e-11);  // Baumgarte-stabilised: the residual stays at the integration error
 }
+
+TEST_CASE("free phases answer a state asked again with the bits of a fresh phase's evaluation", "[numeric][free]") {
+  // The phases keep their last solve (free_phase_work.hpp, MotionMemo): a state asked again, from
+  // another caller's scratch, must give what a phase that never saw it gives, bit for bit, in the
+  // point (loads, energies, mass terms) and the accelerations; a state in between must not leak.
+  const model::MastParams mast = make_mast();
+  for (auto kind : {stages::PhaseKind::open, stages::PhaseKind::on_rail}) {
+    stages::PhaseContext ctx;
+    ctx.mast = &mast;
+    ctx.bay = 6;
+    ctx.kind = kind;
+    ctx.locked_mass_kg = mast.tip_mass_kg;
+    ctx.drive.mode = model::DriveMode::velocity;
+    const bool a = kind == stages::PhaseKind::open;
+    const stages::FreePhaseA pa(ctx, 1, 0.0), fresh_a(ctx, 1, 0.0);
+    const stages::FreePhaseB pb(ctx, 1, 0.0, 10.0), fresh_b(ctx, 1, 0.0, 10.0);
+    const stages::PhaseModel& used = a ? static_cast<const stages::PhaseModel&>(pa) : pb;
+    const stages::PhaseModel& fresh = a ? static_cast<const stages::PhaseModel&>(fresh_a) : fresh_b;
+    const int n = used.dof();
+    // Frames slightly open and moving; in phase B the last coordinate is the hinge offset x.
+    std::vector<double> q = {0.01, 0.03, 0.06, 0.33, 0.62, 0.91}, v = {0.0, 0.01, -0.02, 0.05, 0.0, 0.1};
+    if (!a) { q[5] = 0.05; v[5] = -0.02; }
+    std::vector<double> q2 = q;
+    q2[3] += 1e-3;
+    std::vector<double> acc(6), acc2(6), acc_fresh(6);
+    stages::PhaseScratch s1, s2, s3, s4;
+    used.calc_motion(q.data(), v.data(), acc.data(), s1);   // the integrator's stage at q
+    used.calc_point(q2.data(), v.data(), acc2.data(), s2);  // another state in between
+    used.calc_motion(q.data(), v.data(), acc.data(), s1);
+    const stages::PhasePoint p = used.calc_point(q.data(), v.data(), acc.data(), s3);  // asked again, other scratch
+    const stages::PhasePoint pf = fresh.calc_point(q.data(), v.data(), acc_fresh.data(), s4);
+    INFO((a ? "phase A" : "phase B"));
+    for (int k = 0; k < n; ++k) CHECK(acc[static_cast<std::size_t>(k)] == acc_fresh[static_cast<std::size_t>(k)]);
+    CHECK(p.drive_force_N == pf.drive_force_N);
+    CHECK(p.lambda_N == pf.lambda_N);
+    CHECK(p.kinetic_energy_J == pf.kinetic_energy_J);
+    CHECK(p.potential_energy_J == pf.potential_energy_J);
+    CHECK(p.mass_yy == pf.mass_yy);
+    CHECK(p.diagonal_tension_N == pf.diagonal_tension_N);
+    CHECK(std::isfinite(p.drive_force_N));
+    CHECK(acc2 != acc);  // the state in between was a different one
+  }
+}

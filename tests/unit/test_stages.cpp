@@ -290,6 +290,55 @@ TEST_CASE("tridiagonal and bordered solves agree with a dense LU of the same sys
   CHECK_FALSE(model::solve_tridiagonal(bad, sub, r, x, w));
 }
 
+TEST_CASE("tail-constrained solve agrees with a dense LU of the bordered system, one and two rows", "[unit][tridiagonal]") {
+  // M x = r + C mu, C' x = s with C's columns zero but on the last two rows (phase B's rail and
+  // drive rows), against the dense (n + k) x (n + k) system [M -C; C' 0] [x; mu] = [r; s].
+  for (int n : {2, 3, 9}) {
+    Eigen::VectorXd diag(n), sub(n), r(n), cols[2] = {Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n)};
+    for (int k = 0; k < n; ++k) {
+      diag[k] = 3.0 + 0.3 * k;
+      sub[k] = k > 0 ? -0.9 + 0.1 * k : 0.0;
+      r[k] = std::sin(1.0 + k);
+    }
+    cols[0][n - 2] = 1.0; cols[0][n - 1] = 0.37;   // rail gradient (.., 1, c - x/s)
+    cols[1][n - 2] = 1.0; cols[1][n - 1] = -0.81;  // drive row (.., 1, -k)
+    const double s[2] = {0.02, -0.3};
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(n, n);
+    for (int k = 0; k < n; ++k) {
+      M(k, k) = diag[k];
+      if (k > 0) M(k, k - 1) = M(k - 1, k) = sub[k];
+    }
+    for (int kc = 1; kc <= 2; ++kc) {
+      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(n + kc, n + kc);
+      Eigen::VectorXd rb(n + kc);
+      B.topLeftCorner(n, n) = M;
+      rb.head(n) = r;
+      for (int j = 0; j < kc; ++j) {
+        B.block(0, n + j, n, 1) = -cols[j];
+        B.block(n + j, 0, 1, n) = cols[j].transpose();
+        rb[n + j] = s[j];
+      }
+      const Eigen::VectorXd xb = B.partialPivLu().solve(rb);
+      model::TridiagonalWork w;
+      Eigen::VectorXd x;
+      double mu[2] = {0.0, 0.0};
+      REQUIRE(model::solve_tail_constrained(diag, sub, r, cols, kc, s, x, mu, w));
+      // Both backward stable on a well-conditioned system: agreement to a few ulps of its size.
+      CHECK((x - xb.head(n)).norm() < 1e-13 * xb.norm());
+      for (int j = 0; j < kc; ++j) {
+        CHECK(mu[j] == Approx(xb[n + j]).epsilon(1e-12));
+        CHECK(cols[j].dot(x) == Approx(s[j]).epsilon(1e-12));
+      }
+    }
+    Eigen::VectorXd bad = diag;
+    bad[n - 1] = -1.0;
+    Eigen::VectorXd x;
+    double mu[2];
+    model::TridiagonalWork w;
+    CHECK_FALSE(model::solve_tail_constrained(bad, sub, r, cols, 2, s, x, mu, w));
+  }
+}
+
 #include "sim/simulate.hpp"
 
 TEST_CASE("velocity mode reports the scene's motor torque at the prescribed speed; other modes NaN", "[unit][drive]") {
