@@ -13,7 +13,8 @@
 #include <fmt/format.h>
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_dense.h>
+#include <sundials/sundials_dense.h>
+#include <sundials/sundials_linearsolver.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
 #include "integrators/callback_deadline.hpp"
@@ -93,31 +94,36 @@ int jac_fn(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void* ud, N_Vector 
   return 0;
 }
 
-// The LU of the Newton matrix for the dense linear solver, as SUNLinSolSetup_Dense does it (the
-// same operations in the same order as SUNDlsMat_denseGETRF: partial pivoting by rows, then the
-// column-wise update, so the factors are the same to the bit), with the wall-time cap read after
-// every column: the LU costs 2n^3/3 operations, tens of seconds for n = 4,000, and cannot be
-// stopped from outside. CVODE's callbacks carry no user data into the linear solver, so the
-// integrator sets the active UserData (one per thread) around its CVode calls.
-thread_local UserData* lu_user_data = nullptr;
+// The dense direct linear solver of the Newton systems: SUNDIALS' dense LU (the operations of
+// SUNDlsMat_denseGETRF in its order: partial pivoting by rows, then the column-wise update, so the
+// factors are those of SUNLinSol_Dense to the bit) and its solve (SUNDlsMat_denseGETRS), with the
+// wall-time cap read after every column of the LU: it costs 2n^3/3 operations, tens of seconds for
+// n = 4,000, and SUNDIALS' own cannot be stopped from outside. The solver's content owns its
+// pivots and points at its integrator's UserData (CVODE passes the linear solver no user data).
+struct DenseLu {
+  std::vector<sunindextype> pivots;
+  UserData* ud = nullptr;
+  sunindextype last_flag = SUNLS_SUCCESS;
+};
+
+DenseLu& lu_of(SUNLinearSolver S) { return *static_cast<DenseLu*>(S->content); }
 
 int lu_setup(SUNLinearSolver S, SUNMatrix A) {
-  auto* content = static_cast<SUNLinearSolverContent_Dense>(S->content);
-  if (SUNMatGetID(A) != SUNMATRIX_DENSE) return content->last_flag = SUNLS_ILL_INPUT;
+  DenseLu& lu = lu_of(S);
+  if (SUNMatGetID(A) != SUNMATRIX_DENSE) return static_cast<int>(lu.last_flag = SUNLS_ILL_INPUT);
   realtype** a = SUNDenseMatrix_Cols(A);
-  sunindextype* p = content->pivots;
-  if (!a || !p) return content->last_flag = SUNLS_MEM_FAIL;
   const sunindextype m = SUNDenseMatrix_Rows(A), n = SUNDenseMatrix_Columns(A);
-  UserData* d = lu_user_data;
+  lu.pivots.resize(static_cast<std::size_t>(n));
+  sunindextype* p = lu.pivots.data();
   for (sunindextype k = 0; k < n; ++k) {
-    if (d && d->clock.passed_now()) return content->last_flag = SUNLS_PACKAGE_FAIL_UNREC;  // CVode: CV_LSETUP_FAIL
+    if (lu.ud->clock.passed_now()) return static_cast<int>(lu.last_flag = SUNLS_PACKAGE_FAIL_UNREC);  // CV_LSETUP_FAIL
     realtype* col_k = a[k];
     sunindextype l = k;
     for (sunindextype i = k + 1; i < m; ++i)
       if (std::abs(col_k[i]) > std::abs(col_k[l])) l = i;
     p[k] = l;
     if (col_k[l] == 0.0) {
-      content->last_flag = k + 1;
+      lu.last_flag = k + 1;
       return SUNLS_LUFACT_FAIL;  // recoverable: CVODE cuts the step
     }
     if (l != k)
@@ -131,7 +137,37 @@ int lu_setup(SUNLinearSolver S, SUNMatrix A) {
         for (sunindextype i = k + 1; i < m; ++i) col_j[i] -= a_kj * col_k[i];
     }
   }
-  return content->last_flag = SUNLS_SUCCESS;
+  return static_cast<int>(lu.last_flag = SUNLS_SUCCESS);
+}
+
+int lu_solve(SUNLinearSolver S, SUNMatrix A, N_Vector x, N_Vector b, realtype /*tol*/) {
+  DenseLu& lu = lu_of(S);
+  N_VScale(1.0, b, x);
+  SUNDlsMat_denseGETRS(SUNDenseMatrix_Cols(A), SUNDenseMatrix_Rows(A), lu.pivots.data(), N_VGetArrayPointer(x));
+  return static_cast<int>(lu.last_flag = SUNLS_SUCCESS);
+}
+
+int lu_free(SUNLinearSolver S) {
+  if (S == nullptr) return SUNLS_SUCCESS;
+  delete static_cast<DenseLu*>(S->content);
+  S->content = nullptr;
+  SUNLinSolFreeEmpty(S);
+  return SUNLS_SUCCESS;
+}
+
+// A DenseLu solver for the integrator whose callbacks use `ud`; null if SUNDIALS cannot allocate.
+SUNLinearSolver make_dense_lu(SUNContext ctx, UserData* ud) {
+  SUNLinearSolver S = SUNLinSolNewEmpty(ctx);
+  if (S == nullptr) return nullptr;
+  S->ops->gettype = [](SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; };
+  S->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
+  S->ops->initialize = [](SUNLinearSolver L) { return static_cast<int>(lu_of(L).last_flag = SUNLS_SUCCESS); };
+  S->ops->setup = lu_setup;
+  S->ops->solve = lu_solve;
+  S->ops->lastflag = [](SUNLinearSolver L) { return lu_of(L).last_flag; };
+  S->ops->free = lu_free;
+  S->content = new DenseLu{{}, ud, SUNLS_SUCCESS};
+  return S;
 }
 
 int root_fn(realtype t, N_Vector y, realtype* g, void* ud) {
@@ -206,9 +242,8 @@ struct CvodeIntegrator::Solver {
       // cost n extra right-hand sides per Jacobian.
       A = SUNDenseMatrix(n_new, n_new, ctx.get());
       if (!check_null(A, "SUNDenseMatrix", sum)) return false;
-      ls = SUNLinSol_Dense(y, A, ctx.get());
-      if (!check_null(ls, "SUNLinSol_Dense", sum)) return false;
-      ls->ops->setup = lu_setup;  // the same LU, stoppable at the wall-time cap
+      ls = make_dense_lu(ctx.get(), &ud);  // SUNLinSol_Dense's LU, stoppable at the wall-time cap
+      if (!check_null(ls, "SUNLinSolNewEmpty", sum)) return false;
       if (!check_flag(CVodeSetLinearSolver(mem, ls, A), "CVodeSetLinearSolver", sum)) return false;
       if (!check_flag(CVodeSetJacFn(mem, jac_fn), "CVodeSetJacFn", sum)) return false;
     } else {
@@ -309,9 +344,7 @@ IntegratorSummary CvodeIntegrator::integrate(OdeSystem& sys, double t0, double t
       return sum;
     }
     double t_prev = t;
-    lu_user_data = &cv.ud;
     const int flag = CVode(cv.mem, t_end, cv.y, &t, CV_ONE_STEP);
-    lu_user_data = nullptr;
     if (cv.ud.error) {
       const std::exception_ptr e = cv.ud.error;
       cv.free_problem();

@@ -22,8 +22,7 @@ std::string read_input_file(const std::string& path, const char* what, std::size
     throw InputError(fmt::format("error: {}: cannot read {}: {}", path, what, err ? std::strerror(err) : "cannot open"));
   }
   // Read in blocks until the end or past max_bytes: a device such as /dev/zero or a huge file is
-  // refused, not slurped, and a small file costs its size (a buffer of max_bytes zero-filled first
-  // cost ~5 ms a file, more than a whole Table-1 run).
+  // refused, not slurped, and a small file costs its size, not max_bytes.
   std::string text;
   std::array<char, 1 << 16> block;
   do {

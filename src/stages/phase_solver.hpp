@@ -42,9 +42,9 @@ struct PhaseSinks {
   PhasePeaks& phase_peaks;  // reset by the solver at the phase start
   HistoryRecorder& history;
   std::chrono::steady_clock::time_point deadline;
-  // Whether a closed-form phase reads the clock at its start: one read costs ~40 ns here (the
-  // vDSO on a VM), a closed-form phase ~1.5 us, so the stage loop asks every kClockEvery-th
-  // segment (a cap overshoots by at most that many phases: tens of microseconds).
+  // Whether a closed-form phase reads the clock at its start: a clock read is a sizeable share of
+  // a closed-form phase (docs/benchmarks.md), so the stage loop asks every kClockEvery-th segment
+  // (a cap overshoots by at most that many phases).
   bool check_clock = true;
   static constexpr int kClockEvery = 8;
   // Time stepping reads the clock once per kClockWork state values stepped over the run (a step
