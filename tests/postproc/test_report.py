@@ -482,7 +482,10 @@ def verdict_exit(outdir):
     return VERDICT_EXIT.get(m.group(1), -1) if m else 0
 
 
-def values_match(key, got, want):
+def values_match(key, got, want, scale=0.0):
+    """`scale`: for a standard deviation, the magnitude of its column (largest |value|): two
+    correct computations of a std differ by a few ulps of the values, not of the std, which can be
+    1e-12 of them (deployment times that agree to a nanosecond)."""
     if isinstance(want, (int, np.integer)) and not isinstance(want, bool):
         try:
             return int(got) == int(want)
@@ -492,9 +495,18 @@ def values_match(key, got, want):
     if math.isnan(want) or math.isnan(g):
         return math.isnan(want) and math.isnan(g)
     tol = RTOL * max(abs(g), abs(want))
+    if key.endswith(".std"):
+        tol = max(tol, 64 * np.finfo(float).eps * scale)
     if key.startswith(("spearman.", "check.")) or key.endswith("ci_coverage"):
         tol = max(tol, ATOL_DIMENSIONLESS)
     return abs(g - want) <= tol
+
+
+def column_scale(E, key):
+    """Largest |min|, |max| of the column of a statistic key ("deploy_time_s.std"), 0 if unknown."""
+    base = key.rsplit(".", 1)[0]
+    vals = [E.get(f"{base}.{k}") for k in ("min", "max")]
+    return max([abs(v) for v in vals if isinstance(v, float) and math.isfinite(v)], default=0.0)
 
 
 def check_numbers(name, parsed, E, required):
@@ -513,7 +525,7 @@ def check_numbers(name, parsed, E, required):
             continue
         if key not in E:
             unknown.append(key)
-        elif not values_match(key, value, E[key]):
+        elif not values_match(key, value, E[key], column_scale(E, key)):
             bad.append(f"{key}: report {value}, expected {E[key]!r}")
         elif isinstance(E[key], float) and math.isnan(E[key]) and ".ci_" in key \
                 and "n too small" not in vis:
