@@ -278,6 +278,9 @@ std::string CampaignOptions::validate() const {
   }
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = validate_dispersion(*this, i); !e.empty()) return e;
+  // A sweep's values, each checked with the dispersions at it, before the dispersions at the
+  // campaign's own values.
+  if (std::string e = validate_sweep(*this); !e.empty()) return e;
   // Implausible dispersions (most runs would be invalid input), once every dispersion is well formed.
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = check_dispersion_draws(*this, i); !e.empty())
@@ -344,8 +347,9 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       continue;
     }
     if (dot == std::string::npos ||
-        (tname != "ensemble" && tname != "campaign" && tname != "output" && tname != "failure"))
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, failure.* and base-scene "
+        (tname != "ensemble" && tname != "campaign" && tname != "output" && tname != "failure" &&
+         tname != "sweep"))
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, failure.*, sweep.* and base-scene "
                                    "keys (mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg));
     toml::table v = parse_override_value(value);
     std::string kname = key.substr(dot + 1);
@@ -369,10 +373,11 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
 
   CampaignOptions o;
   for (const auto& [k, v] : root) {
-    if (k == "failure") {
+    if (k == "failure" || k == "sweep") {
       const toml::table* t = v.as_table();
-      if (!t) c.fail(&v, "'failure' must be a table");
-      detail::parse_failure_table(c, *t, o);
+      if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
+      if (k == "failure") detail::parse_failure_table(c, *t, o);
+      else detail::parse_sweep_table(c, *t, o);
     } else if (k == "campaign" || k == "ensemble" || k == "scene" || k == "output") {
       const toml::table* t = v.as_table();
       if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
@@ -387,7 +392,7 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
         o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
     } else {
       c.fail(&v, fmt::format("unknown table '{}' (known: campaign, ensemble, output, scene, failure, "
-                             "[[dispersion]])", k.str()));
+                             "sweep, [[dispersion]])", k.str()));
     }
   }
   detail::derive_subset_runs(c, root, o);

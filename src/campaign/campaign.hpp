@@ -13,6 +13,8 @@
 //                runs that are not ok) holds to width at confidence, or max_runs is reached
 //   [failure]    subset: the failure event, as margin = "<column>" (a margin column, failed when
 //                <= 0) or column = "<column>", above | below = threshold, unit = the column's unit
+//   [sweep]      a design sweep (campaign/sweep.hpp): the [failure] event's probability at each value
+//                of a scene key's nominal value or of a dispersion's spread, and the allowable
 //   [output]     history_runs = [run indices], history_step_s (decimated histories stored)
 //   [scene]      file (path relative to the campaign file; default: Table 1 defaults),
 //                overrides = { "drive.mode" = "motor", ... }, and/or the scene inline as
@@ -30,6 +32,7 @@
 #include "sampling/sampling.hpp"
 #include "sampling/stopping.hpp"
 #include "sampling/subset_simulation.hpp"
+#include "campaign/sweep.hpp"
 #include "sim/scene.hpp"
 
 namespace truss::campaign {
@@ -106,7 +109,8 @@ struct CampaignOptions {
   std::vector<io::SceneSetting> scene_settings;  // inline tables, overrides and --set, in order
   sim::SceneOptions base;                     // the resolved base scene
   std::vector<DispersionOptions> dispersions;
-  FailureOptions failure;                     // method = subset
+  FailureOptions failure;                     // method = subset, or a sweep's event
+  SweepOptions sweep;                         // [sweep] (campaign/sweep.hpp): one campaign per design value
   std::vector<std::string> warnings;          // plausibility warnings of the base scene (not written back)
   // Every rule of a campaign, in one place: empty, or "field: reason" naming the first field that
   // breaks one ("ensemble.n_runs: ...", "output.history_runs: ...", "dispersion[2].per: ...").
@@ -134,7 +138,8 @@ std::string resolved_campaign_toml(const CampaignOptions& c);
 // The most runs the campaign can make: ensemble.n_runs, or with [ensemble.stop] its max_runs (a
 // subset campaign's n_runs is its cap already): what memory and disk are checked for.
 inline std::int64_t calc_max_runs(const CampaignOptions& c) {
-  return c.ensemble.stop ? c.ensemble.stop_rule.max_runs : c.ensemble.n_runs;
+  const std::int64_t per_value = c.ensemble.stop ? c.ensemble.stop_rule.max_runs : c.ensemble.n_runs;
+  return c.sweep.active ? per_value * static_cast<std::int64_t>(c.sweep.n_values()) : per_value;
 }
 
 // The subset options of a campaign (its dimensions and master seed filled in).

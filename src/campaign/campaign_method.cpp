@@ -15,7 +15,7 @@ namespace truss::campaign {
 sampling::SubsetOptions calc_subset_options(const CampaignOptions& c) {
   const SubsetSettings& s = c.ensemble.subset;
   sampling::SubsetOptions o;
-  o.dims = calc_layout(c).total;
+  o.dims = calc_layout(c).dispersion_dims();
   o.n_per_level = s.n_per_level;
   o.p0 = s.p0;
   o.max_levels = s.max_levels;
@@ -138,7 +138,9 @@ std::string validate_method(const CampaignOptions& o) {
     if (std::string e = validate_stop(o); !e.empty()) return e;
   const FailureOptions& f = o.failure;
   if (o.ensemble.method != EnsembleMethod::subset)
-    return f.kind == FailureKind::none ? "" : "failure: only ensemble.method = \"subset\" reads [failure]";
+    return f.kind == FailureKind::none || o.sweep.active
+               ? ""
+               : "failure: only ensemble.method = \"subset\" and a [sweep] read [failure]";
   if (o.ensemble.sampling != SamplingMethod::monte_carlo)
     return "ensemble.sampling: method = \"subset\" draws its own points (standard normal, then Markov chains): "
            "remove sampling";
@@ -159,21 +161,22 @@ std::string validate_method(const CampaignOptions& o) {
 }
 
 std::string method_toml(const CampaignOptions& o) {
+  std::string t;
   if (o.ensemble.stop) {
     const sampling::StopRule& r = o.ensemble.stop_rule;
-    std::string t = fmt::format("[ensemble.stop]\ntarget = \"{}\"\n", sampling::to_string(r.target));
+    t = fmt::format("[ensemble.stop]\ntarget = \"{}\"\n", sampling::to_string(r.target));
     if (!o.ensemble.stop_output.empty()) t += fmt::format("output = \"{}\"\n", o.ensemble.stop_output);
-    return t + fmt::format("level = {}\nwidth = {}\nconfidence = {}\nmax_runs = {}\n\n", r.level, r.width,
-                           r.confidence, r.max_runs);
+    t += fmt::format("level = {}\nwidth = {}\nconfidence = {}\nmax_runs = {}\n\n", r.level, r.width, r.confidence,
+                     r.max_runs);
+  } else if (o.ensemble.method == EnsembleMethod::subset) {
+    const SubsetSettings& s = o.ensemble.subset;
+    t = fmt::format("[ensemble.subset]\nn_per_level = {}\np0 = {}\nmax_levels = {}\nproposal_half_width = {}\n\n",
+                    s.n_per_level, s.p0, s.max_levels, s.proposal_half_width);
   }
-  if (o.ensemble.method != EnsembleMethod::subset) return {};
-  const SubsetSettings& s = o.ensemble.subset;
-  std::string t = fmt::format("[ensemble.subset]\nn_per_level = {}\np0 = {}\nmax_levels = {}\n"
-                              "proposal_half_width = {}\n\n[failure]\n",
-                              s.n_per_level, s.p0, s.max_levels, s.proposal_half_width);
-  const FailureOptions& f = o.failure;
-  if (f.kind == FailureKind::margin) return t + fmt::format("margin = \"{}\"\n\n", f.column);
-  return t + fmt::format("column = \"{}\"\n{} = {}\nunit = \"{}\"\n\n", f.column,
+  const FailureOptions& f = o.failure;  // subset simulation's event, or a sweep's
+  if (f.kind == FailureKind::none) return t;
+  if (f.kind == FailureKind::margin) return t + fmt::format("[failure]\nmargin = \"{}\"\n\n", f.column);
+  return t + fmt::format("[failure]\ncolumn = \"{}\"\n{} = {}\nunit = \"{}\"\n\n", f.column,
                          f.kind == FailureKind::above ? "above" : "below", f.threshold, f.unit);
 }
 

@@ -3,6 +3,7 @@
 #include "methods/fixed_design.hpp"
 #include "methods/stop_method.hpp"
 #include "methods/subset_method.hpp"
+#include "methods/sweep_method.hpp"
 #include "util/bytes.hpp"
 
 namespace truss::methods {
@@ -31,6 +32,7 @@ RoundPlan RoundPlan::from_bytes(std::string_view bytes) {
 void Method::write_results(hid_t, std::int64_t) const {}
 
 std::unique_ptr<Method> make_method(const campaign::CampaignContext& ctx) {
+  if (ctx.options.sweep.active) return std::make_unique<SweepMethod>(ctx);
   if (ctx.options.ensemble.method == campaign::EnsembleMethod::subset) return std::make_unique<SubsetMethod>(ctx);
   if (ctx.options.ensemble.stop) return std::make_unique<StopMethod>(ctx);
   if (ctx.options.ensemble.sampling == sampling::SamplingMethod::saltelli) return std::make_unique<Saltelli>(ctx);
