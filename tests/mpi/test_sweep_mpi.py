@@ -155,6 +155,46 @@ def case_ranks(args):
     check(same, f"1 and 3 ranks: the same datasets ({why})")
     with h5py.File(outs[3], "r") as f:
         check(f.attrs["n_rounds"] > 10 and "sweep" in f, f"{f.attrs['n_rounds']} rounds, /sweep written")
+    check_allowable_and_report(args, outs[3], d)
+
+
+def crossing(x, y, target):
+    """The crossing of y with the target from the largest x down (p falls with x here), linear in ln y."""
+    for j in range(len(x) - 1, 0, -1):
+        if y[j] <= target < y[j - 1]:
+            t = (math.log(target) - math.log(y[j])) / (math.log(y[j - 1]) - math.log(y[j]))
+            return x[j] + (x[j - 1] - x[j]) * t
+    return float("nan")
+
+
+def check_allowable_and_report(args, path, d):
+    """The allowable recomputed from /sweep's columns; the report and the DataFrame show it."""
+    s = read_sweep(path)
+    a = s["allowable"]
+    x = s["values"]
+    for name, col in (("value", "upper_bound"), ("estimate", "p"), ("upper", "upper"), ("lower", "lower")):
+        ref = crossing(x, s[col], 1e-6)
+        check(math.isclose(a[name], ref, rel_tol=1e-12), f"allowable {name} {a[name]:.9g}: the crossing of {col} "
+              f"recomputed ({ref:.9g})")
+    check(a["safe_side"] == "above" and a["verdict"] == "PASS", "safe side above; the own 20 mN m passes")
+    out = os.path.join(d, "report")
+    p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc", "report.py"), path, "-o", out],
+                       capture_output=True, text=True, timeout=300)
+    check(p.returncode == 0, f"report: exit 0 ({p.stderr.strip()[-300:]})")
+    html = open(os.path.join(out, "report.html"), encoding="utf-8").read()
+    m = re.search(r'data-key="sweep.allowable" data-value="([^"]+)"', html)
+    check(m and float(m.group(1)) == a["value"], "the report's allowable is /sweep/allowable/value")
+    want = f"drive.stall_torque_Nm ≥ {a['value'] * 1e3:.5g} mN m (95 % upper bound"
+    check("VERDICT: PASS" in p.stdout and want in p.stdout, f"the verdict says PASS and '{want}'")
+    check(os.path.exists(os.path.join(out, "sweep.png")), "the sweep figure is drawn")
+    sys.path.insert(0, os.path.join(args.repo, "postproc"))
+    import truss_report
+    df = truss_report.read_campaign(path)
+    sw = df.attrs["sweep"]
+    check(list(sw["value"]) == list(x) and list(sw["p"]) == list(s["p"]) and sw.attrs["allowable"]["value"] == a["value"]
+          and sw.attrs["units"]["value"] == "Nm" and (df["sweep_value"].value_counts().sort_index().to_numpy()
+                                                      == s["runs"]).all(),
+          "read_campaign: the sweep's table in df.attrs['sweep'], the runs' sweep_value column")
 
 
 def kill_mid(args, out):
