@@ -140,7 +140,7 @@ std::string validate_method(const CampaignOptions& o) {
   if (o.ensemble.method != EnsembleMethod::subset)
     return f.kind == FailureKind::none || o.sweep.active
                ? ""
-               : "failure: only ensemble.method = \"subset\" and a [sweep] read [failure]";
+               : "failure: only ensemble.method = \"subset\" reads [failure] (or a [sweep], at each of its values)";
   if (o.ensemble.sampling != SamplingMethod::monte_carlo)
     return "ensemble.sampling: method = \"subset\" draws its own points (standard normal, then Markov chains): "
            "remove sampling";
