@@ -349,7 +349,8 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
     if (dot == std::string::npos ||
         (tname != "ensemble" && tname != "campaign" && tname != "output" && tname != "failure" &&
          tname != "sweep"))
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, failure.*, sweep.* and base-scene "
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, failure.*, sweep.* and "
+                                   "base-scene "
                                    "keys (mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg));
     toml::table v = parse_override_value(value);
     std::string kname = key.substr(dot + 1);

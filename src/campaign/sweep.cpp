@@ -121,7 +121,8 @@ std::string check_values(const CampaignOptions& c) {
                          sweep_variable_units(c), why);
     for (std::size_t i = 0; i < at.dispersions.size(); ++i) {
       const std::string e = make_distribution(at.dispersions[i]).validate();
-      if (!e.empty()) return fmt::format("sweep.values: at {} = {}: dispersion[{}]: {}", sweep_variable_name(c), v, i + 1, e);
+      if (!e.empty())
+        return fmt::format("sweep.values: at {} = {}: dispersion[{}]: {}", sweep_variable_name(c), v, i + 1, e);
       if (std::string d = check_dispersion_draws(at, i); !d.empty())
         return fmt::format("sweep.values: at {} = {}: dispersion[{}]: {}", sweep_variable_name(c), v, i + 1, d);
     }
@@ -192,8 +193,8 @@ std::string validate_sweep(const CampaignOptions& c) {
 
 std::string sweep_toml(const SweepOptions& s) {
   if (!s.active) return {};
-  std::string t = fmt::format("[sweep]\n{} = \"{}\"\nvalues = [", s.variable == SweepVariable::spread ? "spread" : "key",
-                              s.key);
+  std::string t = fmt::format("[sweep]\n{} = \"{}\"\nvalues = [",
+                              s.variable == SweepVariable::spread ? "spread" : "key", s.key);
   for (std::size_t i = 0; i < s.values.size(); ++i) t += (i ? ", " : "") + toml_num(s.values[i]);
   return t + fmt::format("]\ntarget_probability = {}\nconfidence = {}\n\n", toml_num(s.target_probability),
                          toml_num(s.confidence));

@@ -61,7 +61,7 @@ void parse_failure_table(const Ctx& c, const toml::table& t, CampaignOptions& o)
 void parse_stop_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
 void derive_subset_runs(const Ctx& c, const toml::table& root, CampaignOptions& o);
 std::string validate_method(const CampaignOptions& o);
-std::string method_toml(const CampaignOptions& o);
+std::string method_toml(const CampaignOptions& o);  // [ensemble] method, [ensemble.subset], [failure]
 // sweep.cpp: [sweep] into o.sweep (its rules: validate_sweep).
-void parse_sweep_table(const Ctx& c, const toml::table& t, CampaignOptions& o);  // [ensemble] method, [ensemble.subset], [failure]
+void parse_sweep_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
 }  // namespace truss::campaign::detail

@@ -157,7 +157,8 @@ void SweepMethod::calc_uniforms(const RoundPlan& plan, std::int64_t run, double*
   const std::int64_t i = run - plan.first_run;
   const auto it = std::upper_bound(d->slices.begin(), d->slices.end(), i,
                                    [](std::int64_t x, const Slice& s) { return x < s.offset; });
-  if (it == d->slices.begin() || i >= plan.n_runs) throw std::out_of_range(fmt::format("sweep: run {} not in its round", run));
+  if (it == d->slices.begin() || i >= plan.n_runs)
+    throw std::out_of_range(fmt::format("sweep: run {} not in its round", run));
   const Slice& s = *std::prev(it);
   const Value& v = values_[s.value];
   const std::int64_t local = i - s.offset;

@@ -122,8 +122,8 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
   r.value = u.x;
   r.bracket_safe = u.a;
   r.bracket_unsafe = u.b;
-  r.message = fmt::format("the upper bound on p crosses the target between values {} and {}", x[static_cast<std::size_t>(u.a)],
-                          x[static_cast<std::size_t>(u.b)]);
+  r.message = fmt::format("the upper bound on p crosses the target between values {} and {}",
+                          x[static_cast<std::size_t>(u.a)], x[static_cast<std::size_t>(u.b)]);
   return r;
 }
 
