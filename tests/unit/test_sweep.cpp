@@ -1,0 +1,100 @@
+// test_sweep.cpp — a design sweep's campaign side (campaign/sweep.hpp): a run's design coordinate
+// (k + 0.5) / n applies value k, to the base scene (a nominal sweep) or to the dispersion's spread,
+// and the run's last input is that value; value k's standalone campaign and its seed; the resolved
+// TOML reads back to the same sweep. Expected values by hand: an offset normal draw at u = Phi(1)
+// is nominal + std (the normal quantile, exact to ~1e-16 relative).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <string>
+
+#include "campaign/campaign.hpp"
+#include "campaign/dispersion.hpp"
+#include "campaign/record.hpp"
+#include "sampling/sampling.hpp"
+
+using namespace truss::campaign;
+
+namespace {
+
+const char* kBase = R"(
+[ensemble]
+method = "subset"
+master_seed = 5
+[ensemble.subset]
+n_per_level = 100
+[failure]
+margin = "motor_torque_margin_Nm"
+[scene.drive]
+stall_torque_Nm = 0.03
+[[dispersion]]
+key = "drive.stall_torque_Nm"
+apply = "offset"
+distribution = "normal"
+std = 0.001
+[[dispersion]]
+key = "mast.strut_mass_kg"
+per = "bay"
+apply = "relative"
+distribution = "normal"
+std = 0.01
+)";
+
+CampaignOptions parse(const std::string& sweep) { return parse_campaign_text(std::string(kBase) + sweep, "t", "."); }
+
+const double kPhi1 = 0.8413447460685429;  // Phi(1)
+
+}  // namespace
+
+TEST_CASE("a nominal sweep sets the key before the draws; the run records its value", "[sweep]") {
+  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02, 0.04]\n"
+                                  "target_probability = 1e-6\n");
+  const DimensionLayout L = calc_layout(c);
+  REQUIRE(L.design == L.total - 1);
+  REQUIRE(L.dispersion_dims() == 1 + L.n_bays_max);
+  std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);
+  u[0] = kPhi1;
+  for (std::size_t k = 0; k < 3; ++k) {
+    u[static_cast<std::size_t>(L.design)] = (static_cast<double>(k) + 0.5) / 3.0;
+    const RunInputs in = calc_run_inputs(c, L, u.data());
+    const double want = c.sweep.values[k] + 0.001;  // the swept nominal plus one std
+    CHECK(in.scene.drive.stall_torque_Nm == Approx(want).epsilon(1e-12));
+    CHECK(in.values[0][0] == Approx(want).epsilon(1e-12));
+    CHECK(in.values.back() == std::vector<double>{c.sweep.values[k]});
+  }
+  const RecordLayout R(c, L);
+  CHECK(R.fields().back().name == "sweep_value");
+  CHECK(R.fields().back().units == "Nm");
+  CHECK(calc_sweep_own_value(c) == 0.03);
+}
+
+TEST_CASE("a spread sweep sets the dispersion's std at each value", "[sweep]") {
+  const CampaignOptions c = parse("[sweep]\nspread = \"drive.stall_torque_Nm\"\nfrom = 0.001\nto = 0.003\n"
+                                  "count = 3\ntarget_probability = 1e-6\n");
+  CHECK(c.sweep.values == std::vector<double>{0.001, 0.002, 0.003});
+  CHECK(sweep_variable_name(c) == "drive.stall_torque_Nm std");
+  const DimensionLayout L = calc_layout(c);
+  std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);
+  u[0] = kPhi1;
+  u[static_cast<std::size_t>(L.design)] = 2.5 / 3.0;
+  CHECK(calc_run_inputs(c, L, u.data()).values[0][0] == Approx(0.03 + 0.003).epsilon(1e-12));
+  // Value 1's standalone campaign: no sweep, std 0.002, its own seed; the base scene untouched.
+  const CampaignOptions at = calc_campaign_at(c, 1);
+  CHECK_FALSE(at.sweep.active);
+  CHECK(at.dispersions[0].std == 0.002);
+  CHECK(at.base.drive.stall_torque_Nm == 0.03);
+  CHECK(at.ensemble.master_seed == calc_sweep_seed(5, 1));
+  CHECK(calc_sweep_seed(5, 1) != calc_sweep_seed(5, 2));
+  CHECK(calc_sweep_seed(5, 1) < (std::uint64_t{1} << 63));  // a campaign file's integer
+}
+
+TEST_CASE("the resolved campaign reads back to the same sweep", "[sweep]") {
+  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nfrom = 0.01\nto = 0.02\ncount = 4\n"
+                                  "target_probability = 2e-5\nconfidence = 0.9\n");
+  const CampaignOptions back = parse_campaign_text(resolved_campaign_toml(c), "resolved", ".");
+  CHECK(back.sweep.values == c.sweep.values);
+  CHECK(back.sweep.key == c.sweep.key);
+  CHECK(back.sweep.target_probability == 2e-5);
+  CHECK(back.sweep.confidence == 0.9);
+  CHECK(resolved_campaign_toml(back) == resolved_campaign_toml(c));
+}
