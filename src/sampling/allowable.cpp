@@ -92,10 +92,14 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
   r.safe_side = ub[last] < ub[first] ? +1 : -1;
   std::vector<int> from_safe(usable.begin(), usable.end());
   if (r.safe_side > 0) std::reverse(from_safe.begin(), from_safe.end());
-  const char* safe_end = r.safe_side > 0 ? "largest" : "smallest";
-  const char* unsafe_end = r.safe_side > 0 ? "smallest" : "largest";
+  // The ends named by their values: the safe and unsafe ends of the values that have an estimate.
+  const double safe_x = x[static_cast<std::size_t>(from_safe.front())];
+  const double unsafe_x = x[static_cast<std::size_t>(from_safe.back())];
   const char* extend_safe = r.safe_side > 0 ? "above" : "below";
   const char* extend_unsafe = r.safe_side > 0 ? "below" : "above";
+  const std::string skipped =
+      usable.size() < x.size() ? fmt::format(" ({} of {} values have no estimate)", x.size() - usable.size(), x.size())
+                               : std::string();
   const Crossing u = cross(x, ub, from_safe, target);
   const Crossing e = cross(x, p, from_safe, target);
   const Crossing band_hi = cross(x, hi, from_safe, target), band_lo = cross(x, lo, from_safe, target);
@@ -106,16 +110,16 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
   r.estimate = e.x;
   if (u.starts_above) {
     r.status = AllowableStatus::beyond_safe_end;
-    r.message = fmt::format("even the {} value's upper bound on p exceeds the target: the allowable lies beyond the "
-                            "swept range; extend it {} the {} value",
-                            safe_end, extend_safe, safe_end);
+    r.message = fmt::format("even the upper bound on p at {:g}, the safest value with an estimate, exceeds the "
+                            "target: the allowable lies beyond it; extend the sweep {} {:g}{}",
+                            safe_x, extend_safe, safe_x, skipped);
     return r;
   }
   if (u.never) {
     r.status = AllowableStatus::beyond_unsafe_end;
     r.message = fmt::format("every value's upper bound on p is at or below the target: the allowable lies beyond "
-                            "the swept range; extend it {} the {} value",
-                            extend_unsafe, unsafe_end);
+                            "the swept range; extend it {} {:g}{}",
+                            extend_unsafe, unsafe_x, skipped);
     return r;
   }
   r.status = AllowableStatus::found;

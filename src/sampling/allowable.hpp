@@ -25,8 +25,9 @@
 //                 with probability c) and ln p is close to linear between them.
 //   outside       no value's upper bound at or below T: the allowable lies beyond the safe end
 //                 (extend the sweep that way); every value's at or below T: it lies beyond the
-//                 other end (the sweep has not reached the target: extend it past that end). An
-//                 interval end that lies outside the swept values is NaN.
+//                 other end (the sweep has not reached the target: extend it past that end). The
+//                 ends are those of the values with an estimate. An interval end that lies
+//                 outside the swept values is NaN.
 #pragma once
 
 #include <cstdint>
