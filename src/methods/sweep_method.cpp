@@ -220,7 +220,8 @@ std::vector<SweepMethod::ValueResult> SweepMethod::calc_value_results() const {
 sampling::Allowable SweepMethod::calc_allowable() const {
   std::vector<sampling::ProbabilityBounds> b;
   for (const ValueResult& r : calc_value_results()) b.push_back(r.bounds);
-  return sampling::find_allowable(ctx_.options.sweep.values, b, ctx_.options.sweep.target_probability);
+  return sampling::find_allowable(ctx_.options.sweep.values, b, ctx_.options.sweep.target_probability,
+                                  campaign::sweep_variable_units(ctx_.options));
 }
 
 namespace {
@@ -348,6 +349,13 @@ void SweepMethod::write_results(hid_t file, std::int64_t) const {
   for (std::size_t k = 0; k < n; ++k) write_inner(inner.get(), k);
 }
 
+namespace {
+
+// An end of the allowable's interval: its value, or "beyond the swept values" (NaN).
+std::string interval_end(double v) { return std::isfinite(v) ? fmt::format("{:.6g}", v) : "beyond the swept values"; }
+
+}  // namespace
+
 std::string SweepMethod::calc_result_text() const {
   const campaign::CampaignOptions& c = ctx_.options;
   const std::string name = campaign::sweep_variable_name(c), units = campaign::sweep_variable_units(c);
@@ -361,9 +369,10 @@ std::string SweepMethod::calc_result_text() const {
   const sampling::Allowable a = calc_allowable();
   if (a.status == sampling::AllowableStatus::found)
     t += fmt::format("[truss-campaign]   allowable: {} {} {:.6g} {} ({:g} % upper bound on p <= {:g}); estimate "
-                     "{:.6g}, interval [{:.6g}, {:.6g}] {}; the campaign's own value {:.6g} {}\n",
+                     "{:.6g}, interval [{}, {}] {}; the campaign's own value {:.6g} {}\n",
                      name, a.safe_side > 0 ? ">=" : "<=", a.value, units, conf, c.sweep.target_probability,
-                     a.estimate, a.lower, a.upper, units, campaign::calc_sweep_own_value(c), units);
+                     a.estimate, interval_end(a.lower), interval_end(a.upper), units,
+                     campaign::calc_sweep_own_value(c), units);
   else
     t += fmt::format("[truss-campaign]   allowable: {}: {}\n", sampling::to_string(a.status), a.message);
   return t;

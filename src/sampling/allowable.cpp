@@ -71,7 +71,8 @@ Crossing cross(const std::vector<double>& x, const std::vector<double>& y, const
 
 }  // namespace
 
-Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target) {
+Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target,
+                         const std::string& units) {
   if (x.size() != b.size()) throw std::invalid_argument("find_allowable: one bounds per value");
   Allowable r;
   std::vector<int> usable;
@@ -95,6 +96,7 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
   // The ends named by their values: the safe and unsafe ends of the values that have an estimate.
   const double safe_x = x[static_cast<std::size_t>(from_safe.front())];
   const double unsafe_x = x[static_cast<std::size_t>(from_safe.back())];
+  const std::string unit = units.empty() ? std::string() : " " + units;
   const char* extend_safe = r.safe_side > 0 ? "above" : "below";
   const char* extend_unsafe = r.safe_side > 0 ? "below" : "above";
   const std::string skipped =
@@ -110,24 +112,24 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
   r.estimate = e.x;
   if (u.starts_above) {
     r.status = AllowableStatus::beyond_safe_end;
-    r.message = fmt::format("even the upper bound on p at {:g}, the safest value with an estimate, exceeds the "
-                            "target: the allowable lies beyond it; extend the sweep {} {:g}{}",
-                            safe_x, extend_safe, safe_x, skipped);
+    r.message = fmt::format("even the upper bound on p at {:g}{}, the safest value with an estimate, exceeds the "
+                            "target: the allowable lies beyond it; extend the sweep {} {:g}{}{}",
+                            safe_x, unit, extend_safe, safe_x, unit, skipped);
     return r;
   }
   if (u.never) {
     r.status = AllowableStatus::beyond_unsafe_end;
     r.message = fmt::format("every value's upper bound on p is at or below the target: the allowable lies beyond "
-                            "the swept range; extend it {} {:g}{}",
-                            extend_unsafe, unsafe_x, skipped);
+                            "the swept range; extend it {} {:g}{}{}",
+                            extend_unsafe, unsafe_x, unit, skipped);
     return r;
   }
   r.status = AllowableStatus::found;
   r.value = u.x;
   r.bracket_safe = u.a;
   r.bracket_unsafe = u.b;
-  r.message = fmt::format("the upper bound on p crosses the target between values {} and {}",
-                          x[static_cast<std::size_t>(u.a)], x[static_cast<std::size_t>(u.b)]);
+  r.message = fmt::format("the upper bound on p crosses the target between values {} and {}{}",
+                          x[static_cast<std::size_t>(u.a)], x[static_cast<std::size_t>(u.b)], unit);
   return r;
 }
 

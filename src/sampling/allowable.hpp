@@ -68,7 +68,8 @@ struct Allowable {
   std::string message;  // one sentence: what was found, or which way to extend the sweep
 };
 
-// x ascending, one bounds per value; target in (0, 1).
-Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target);
+// x ascending, one bounds per value; target in (0, 1); units: x's unit, for the message.
+Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target,
+                         const std::string& units = "");
 
 }  // namespace truss::sampling

@@ -86,6 +86,9 @@ TEST_CASE("a target outside the swept range is said, with the way to extend", "[
   CHECK(all_safe.status == AllowableStatus::beyond_unsafe_end);
   CHECK_THAT(all_safe.message, Contains("extend it below 1"));
   CHECK(std::isnan(all_safe.value));
+  // The design variable's unit, when given, follows each value the message names.
+  CHECK_THAT(find_allowable(x, b, 1e-8, "Nm").message, Contains("at 4 Nm,") && Contains("extend the sweep above 4 Nm"));
+  CHECK_THAT(find_allowable(x, b, 1e-3, "Nm").message, Contains("extend it below 1 Nm"));
 }
 
 TEST_CASE("the first crossing from the safe end, unusable values skipped", "[allowable]") {
