@@ -106,7 +106,8 @@ def verdict_lines(c, s):
     lines = [head, f"  allowable: {allowable_sentence(s)}"]
     if a["status"] == "found":
         lo, hi = a["lower"], a["upper"]
-        lines.append(f"  estimate (p = target): {fmt(a['estimate'] / factor, 5)} {unit}; "
+        est = a["estimate"]
+        lines.append(f"  estimate (p = target): {fmt(est / factor, 5)}{' ' + unit if math.isfinite(est) else ''}; "
                      f"{fmt(100 * at['confidence'])} % interval of the crossing "
                      f"[{fmt(lo / factor, 5)}, {fmt(hi / factor, 5)}] {unit} (—: beyond the swept range)")
     lines.append(f"  {len(s)} values of {at['variable']}, {at['inner_method']} at each, {int(s['runs'].sum())} runs")

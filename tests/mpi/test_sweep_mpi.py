@@ -195,6 +195,26 @@ def check_allowable_and_report(args, path, d):
           and sw.attrs["units"]["value"] == "Nm" and (df["sweep_value"].value_counts().sort_index().to_numpy()
                                                       == s["runs"]).all(),
           "read_campaign: the sweep's table in df.attrs['sweep'], the runs' sweep_value column")
+    check_other_verdicts(args, d)
+
+
+def check_other_verdicts(args, d):
+    """The report's other verdicts and exit codes: FAIL (3) with the scene's own stall torque below
+    the allowable (about 4.9 mN m), NOT ASSESSED (4) when no value's bound reaches the target; no
+    NaN shown on either page."""
+    for name, sets, verdict, code in (("fail", ["drive.stall_torque_Nm=0.003"], "FAIL", 3),
+                                      ("not_assessed", ["sweep.target_probability=1e-30"], "NOT ASSESSED", 4)):
+        path = os.path.join(d, f"{name}.h5")
+        p = run(args, path, sets=sets)
+        check(p.returncode == 0, f"{name}: the campaign exits 0 ({p.stderr.strip()[-300:]})")
+        check(read_sweep(path)["allowable"]["verdict"] == verdict, f"{name}: /sweep/allowable verdict {verdict}")
+        out = os.path.join(d, f"report_{name}")
+        p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc", "report.py"), path, "-o", out,
+                            "--no-pdf"], capture_output=True, text=True, timeout=300)
+        text = re.sub(r"<[^>]+>", " ", open(os.path.join(out, "report.html"), encoding="utf-8").read())
+        check(p.returncode == code and f"VERDICT: {verdict}" in p.stdout and not re.search(r"\bnan\b", text, re.I)
+              and "nan" not in p.stdout.lower(),
+              f"{name}: report exit {p.returncode} (want {code}), 'VERDICT: {verdict}', no NaN on the page")
 
 
 def kill_mid(args, out):
