@@ -9,6 +9,7 @@ Modules:
     figures            matplotlib figures
     sections_campaign  campaign, status, failures, dispersions, loads, lock timing sections
     sections_margins   margins, sensitivity, histories, consistency checks; the campaign report
+    sections_sweep     a design sweep's report (/sweep): p against the design value, the allowable
     single_run         the single-run report (paper Fig. 4 and 5)
     cli                output directory handling, build(), main()
 """
@@ -22,6 +23,19 @@ if _HERE not in sys.path:
 
 
 def read_campaign(path):
-    """A campaign file as a pandas DataFrame (truss_report.dataframe.read_campaign)."""
+    """A campaign file as a pandas DataFrame (truss_report.dataframe.read_campaign); a design
+    sweep's per-value table (read_sweep) in df.attrs["sweep"]."""
     from .dataframe import read_campaign as _read
+    from .sections_sweep import read_sweep as _sweep
+    df = _read(path)
+    sweep = _sweep(path)
+    if sweep is not None:
+        df.attrs["sweep"] = sweep
+    return df
+
+
+def read_sweep(path):
+    """A design sweep's /sweep as a pandas DataFrame, one row per design value, the allowable in
+    df.attrs["allowable"] (truss_report.sections_sweep.read_sweep); None without a sweep."""
+    from .sections_sweep import read_sweep as _read
     return _read(path)

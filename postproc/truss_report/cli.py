@@ -14,6 +14,7 @@ from .mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY
 from .page import Page
 from .sections_design import campaign_report, section_nominal
 from .sections_subset import read_stop, read_subset, subset_report
+from .sections_sweep import read_sweep, sweep_report
 from .single_run import single_run_report
 
 CSV_NAME = "runs.csv"
@@ -106,6 +107,7 @@ def build(path, outdir, force, opts=None, progress=None):
             try:
                 data = load_campaign(h5, sha256) if kind == "campaign" else load_single_run(h5, sha256)
                 subset = read_subset(f) if kind == "campaign" else None
+                sweep = read_sweep(f) if kind == "campaign" else None
                 if kind == "campaign":
                     data.stop = read_stop(f)
                 extras = load_extras(h5, data) if kind == "campaign" else None
@@ -121,7 +123,9 @@ def build(path, outdir, force, opts=None, progress=None):
             page = Page(staging, plt, progress)
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RuntimeWarning)
-                if subset is not None:  # the runs are not draws: no design loads
+                if sweep is not None:  # runs of one campaign per design value: no design loads
+                    text = sweep_report(page, data, sweep, opts, section_nominal(page, extras))
+                elif subset is not None:  # the runs are not draws: no design loads
                     text = subset_report(page, data, subset, opts, section_nominal(page, extras))
                 else:
                     text = (campaign_report(page, data, extras, opts) if kind == "campaign"

@@ -273,6 +273,9 @@ std::string CampaignOptions::validate() const {
   }
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = validate_dispersion(*this, i); !e.empty()) return e;
+  // A sweep's values, each checked with the dispersions at it, before the dispersions at the
+  // campaign's own values.
+  if (std::string e = validate_sweep(*this); !e.empty()) return e;
   // Implausible dispersions (most runs would be invalid input), once every dispersion is well formed.
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = check_dispersion_draws(*this, i); !e.empty())
@@ -338,12 +341,12 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       continue;
     }
     if (dot == std::string::npos ||
-        (tname != "ensemble" && tname != "campaign" && tname != "output" && !detail::is_method_table(c, tname))) {
+        (tname != "ensemble" && tname != "campaign" && tname != "output" && tname != "sweep" &&
+         !detail::is_method_table(c, tname))) {
       std::string tables;
-      for (const MethodSyntax* r : c.methods->list())
-        for (const std::string& t : r->root_tables) tables += ", " + t + ".*";
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*{} and base-scene keys "
-                                   "(mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg, tables));
+      for (const std::string& t : detail::method_root_tables(c)) tables += ", " + t + ".*";
+      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, sweep.*{} and base-scene "
+                                   "keys (mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg, tables));
     }
     toml::table v = parse_override_value(value);
     std::string kname = key.substr(dot + 1);
@@ -367,7 +370,11 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
 
   CampaignOptions o;
   for (const auto& [k, v] : root) {
-    if (detail::is_method_table(c, k.str())) {
+    if (k == "sweep") {
+      const toml::table* t = v.as_table();
+      if (!t) c.fail(&v, "'sweep' must be a table");
+      detail::parse_sweep_table(c, *t, o);
+    } else if (detail::is_method_table(c, k.str())) {
       if (!v.as_table()) c.fail(&v, fmt::format("'{}' must be a table", k.str()));  // read by its method's row
     } else if (k == "campaign" || k == "ensemble" || k == "scene" || k == "output") {
       const toml::table* t = v.as_table();
@@ -382,9 +389,8 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
       for (std::size_t i = 0; i < a->size(); ++i)
         o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
     } else {
-      std::string known = "campaign, ensemble, output, scene";
-      for (const MethodSyntax* r : c.methods->list())
-        for (const std::string& t : r->root_tables) known += ", " + t;
+      std::string known = "campaign, ensemble, output, scene, sweep";
+      for (const std::string& t : detail::method_root_tables(c)) known += ", " + t;
       known += ", [[dispersion]]";
       c.fail(&v, fmt::format("unknown table '{}'{} (known: {})", k.str(), did_you_mean(std::string(k.str()), known),
                              known));

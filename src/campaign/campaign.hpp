@@ -9,6 +9,9 @@
 //                "stop", sequential stopping; "subset", subset simulation of a failure probability)
 //   [ensemble.<method>] and the root tables a method claims ([failure]): the method's own options,
 //                read and checked by its row (method_options.hpp; docs/campaigns.md lists them)
+//   [sweep]      a design sweep (campaign/sweep.hpp): the [failure] event's probability at each value
+//                of a scene key's nominal value or of a dispersion's spread, and the allowable; the
+//                method (design: Monte Carlo, stop, subset) runs at each value and reads [failure]
 //   [output]     history_runs = [run indices], history_step_s (decimated histories stored)
 //   [scene]      file (path relative to the campaign file; default: Table 1 defaults),
 //                overrides = { "drive.mode" = "motor", ... }, and/or the scene inline as
@@ -23,6 +26,7 @@
 #include <vector>
 
 #include "campaign/method_options.hpp"
+#include "campaign/sweep.hpp"
 #include "io/scene_toml.hpp"
 #include "sampling/sampling.hpp"
 #include "sim/scene.hpp"
@@ -71,6 +75,7 @@ struct CampaignOptions {
   std::vector<io::SceneSetting> scene_settings;  // inline tables, overrides and --set, in order
   sim::SceneOptions base;                     // the resolved base scene
   std::vector<DispersionOptions> dispersions;
+  SweepOptions sweep;                         // [sweep] (campaign/sweep.hpp): one campaign per design value
   std::vector<std::string> warnings;          // plausibility warnings of the base scene (not written back)
   // Every rule of a campaign, in one place: empty, or "field: reason" naming the first field that
   // breaks one ("ensemble.n_runs: ...", "output.history_runs: ...", "dispersion[2].per: ...").
@@ -99,8 +104,12 @@ CampaignOptions parse_campaign_text(std::string_view text, const std::string& so
 std::string resolved_campaign_toml(const CampaignOptions& c);
 
 // The most runs the campaign can make (its method's; ensemble.n_runs unless the method runs more,
-// as stop's max_runs): what memory and disk are checked for.
-inline std::int64_t calc_max_runs(const CampaignOptions& c) { return c.ensemble.method.options().calc_max_runs(c); }
+// as stop's max_runs; with a [sweep], that many at each of its values): what memory and disk are
+// checked for.
+inline std::int64_t calc_max_runs(const CampaignOptions& c) {
+  const std::int64_t per_value = c.ensemble.method.options().calc_max_runs(c);
+  return c.sweep.active ? per_value * static_cast<std::int64_t>(c.sweep.n_values()) : per_value;
+}
 
 // The rules of a fixed design over ensemble.n_runs and ensemble.sampling (a Saltelli design's
 // blocks, each plan's limits), for the methods whose points are the design's: "" or "field: reason".

@@ -58,6 +58,14 @@ bool is_method_table(const Ctx& c, std::string_view root_table) {
   return false;
 }
 
+std::vector<std::string> method_root_tables(const Ctx& c) {
+  std::vector<std::string> tables;
+  for (const MethodSyntax* r : c.methods->list())
+    for (const std::string& t : r->root_tables)
+      if (std::find(tables.begin(), tables.end(), t) == tables.end()) tables.push_back(t);
+  return tables;
+}
+
 void check_method_key(const Ctx& c, const std::string& key, const toml::node& v) {
   if (v.as_table() == nullptr && v.value_exact<bool>() != std::optional<bool>(false))
     c.fail(&v, fmt::format("{} must be a table ([{}]), or false for none", key, key));

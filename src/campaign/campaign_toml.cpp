@@ -48,6 +48,7 @@ std::string resolved_campaign_toml(const CampaignOptions& c) {
                    c.ensemble.master_seed, toml_str(to_string(c.ensemble.sampling)),
                    toml_num(c.ensemble.max_run_wall_time_s), c.ensemble.method.written_name());
   t += method.to_toml();
+  t += sweep_toml(c.sweep);
   t += "[output]\nhistory_runs = [";
   for (std::size_t i = 0; i < c.output.history_runs.size(); ++i)
     t += fmt::format("{}{}", i ? ", " : "", c.output.history_runs[i]);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -88,6 +89,15 @@ DimensionLayout calc_layout(const CampaignOptions& c) {
     const std::string e = L.distributions.back().validate();
     if (!e.empty()) throw std::invalid_argument("dispersion of " + d.key + ": " + e);
   }
+  if (c.sweep.active) {
+    L.design = L.total++;
+    L.sweep_dispersion = find_sweep_dispersion(c);
+    if (L.sweep_dispersion < 0) L.sweep_key = sim::find_scene_key(c.sweep.key);
+    else
+      for (std::size_t k = 0; k < c.sweep.n_values(); ++k)
+        L.sweep_distributions.push_back(make_distribution(
+            calc_campaign_at(c, k).dispersions[static_cast<std::size_t>(L.sweep_dispersion)]));
+  }
   return L;
 }
 
@@ -116,7 +126,7 @@ std::string check_dispersion_draws(const CampaignOptions& c, std::size_t i) {
   const DimensionLayout L = calc_layout(c);
   const Distribution& dist = L.distributions[i];
   for (double level : plausibility_levels(dist)) {
-    std::vector<double> u(static_cast<std::size_t>(std::max(1, L.total)), 0.5);
+    std::vector<double> u(static_cast<std::size_t>(std::max(1, L.total)), 0.5);  // a sweep: its middle value
     for (int k = 0; k < L.count[i]; ++k) u[static_cast<std::size_t>(L.offset[i] + k)] = level;
     const double draw = dist.calc_quantile(level);
     std::string why, value;
@@ -149,14 +159,27 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
   RunInputs in;
   in.scene = c.base;
   in.values.resize(c.dispersions.size());
+  // A sweep's value: into the base scene (the nominal the draws apply to) or the swept distribution.
+  std::size_t sweep_k = 0;
+  if (L.design >= 0) {
+    sweep_k = L.find_sweep_index(u[L.design], c.sweep.n_values());
+    if (L.sweep_key) L.sweep_key->set_real(in.scene, c.sweep.values[sweep_k]);
+    in.values.push_back({c.sweep.values[sweep_k]});
+  }
+  std::optional<sim::SceneOptions> swept;
+  if (L.sweep_key) swept = in.scene;
+  const sim::SceneOptions& base = swept ? *swept : c.base;
+  auto dist = [&](std::size_t i) -> const Distribution& {
+    return static_cast<int>(i) == L.sweep_dispersion ? L.sweep_distributions[sweep_k] : L.distributions[i];
+  };
   // Per-run draws first (the bay count among them), then the mast is built and dispersed.
   for (std::size_t i = 0; i < c.dispersions.size(); ++i) {
     const auto& d = c.dispersions[i];
     if (d.per != Per::run) continue;
     const sim::SceneKey* key = L.keys[i];
     const double nominal =
-        key && key->is_dispersible() ? key->get_real(c.base) : std::numeric_limits<double>::quiet_NaN();
-    const double v = applied(d.apply, nominal, L.distributions[i].calc_quantile(u[L.offset[i]]));
+        key && key->is_dispersible() ? key->get_real(base) : std::numeric_limits<double>::quiet_NaN();
+    const double v = applied(d.apply, nominal, dist(i).calc_quantile(u[L.offset[i]]));
     in.values[i] = {v};
     if (key && key->set_real) key->set_real(in.scene, v);
   }
@@ -169,7 +192,7 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
     auto& vals = in.values[i];
     vals.assign(static_cast<std::size_t>(L.count[i]), std::numeric_limits<double>::quiet_NaN());
     const int drawn = d.per == Per::bay ? n : n + 1;
-    L.distributions[i].calc_quantiles(u + L.offset[i], vals.data(), static_cast<std::size_t>(drawn));
+    dist(i).calc_quantiles(u + L.offset[i], vals.data(), static_cast<std::size_t>(drawn));
     const sim::SceneKey& key = *L.keys[i];
     if (d.per == Per::bay)
       apply_draws(d.apply, [&](std::size_t k) { return key.bay_field(in.mast.bays[k]); }, vals.data(), drawn);

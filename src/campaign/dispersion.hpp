@@ -3,6 +3,7 @@
 // bay count the campaign can draw, so that a run's draws depend only on (seed, run index) and
 // never on the bay count drawn for it: bay k gets the same draw in a 10-bay and a 60-bay run.
 #pragma once
+#include <algorithm>
 #include <vector>
 
 #include "campaign/campaign.hpp"
@@ -23,6 +24,19 @@ struct DimensionLayout {
   std::vector<const sim::SceneKey*> keys;   // each dispersion's scene key, looked up once
   // Each bay's J_c follows its (dispersed) strut mass and length: J_c neither set nor dispersed.
   bool strut_inertia_follows = true;
+  // A sweep (campaign/sweep.hpp): the design coordinate is the last dimension, u = (k + 0.5) / n for
+  // value k (-1: no sweep); a nominal sweep's scene key, or a spread sweep's dispersion and its
+  // distribution at each value.
+  int design = -1;
+  const sim::SceneKey* sweep_key = nullptr;
+  int sweep_dispersion = -1;
+  std::vector<Distribution> sweep_distributions;
+  // The dimensions the dispersions draw (a method's points): all but the design coordinate.
+  int dispersion_dims() const { return design >= 0 ? design : total; }
+  // The sweep's value index of a run's design coordinate.
+  std::size_t find_sweep_index(double u, std::size_t n_values) const {
+    return std::min(n_values - 1, static_cast<std::size_t>(u * static_cast<double>(n_values)));
+  }
 };
 
 // Throws std::invalid_argument naming the dispersion if a distribution is unusable (the campaign
@@ -49,7 +63,8 @@ struct RunInputs {
   sim::SceneOptions scene;               // base scene with the per-run draws applied
   model::MastParams mast;                // per-bay and per-frame values applied
   // Sampled values per dispersion: 1 entry (per run) or n_max / n_max + 1 entries (per bay /
-  // frame), NaN for bays or frames beyond the run's bay count. In the key's own units.
+  // frame), NaN for bays or frames beyond the run's bay count. In the key's own units. A sweep's
+  // run has one more entry: its design value.
   std::vector<std::vector<double>> values;
 };
 

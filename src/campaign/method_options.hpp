@@ -22,6 +22,7 @@
 namespace truss::campaign {
 
 struct CampaignOptions;
+struct FailureOptions;  // failure.hpp
 struct MethodInput;  // what a row's parser reads (toml_read.hpp)
 
 inline constexpr const char* kDefaultMethod = "design";
@@ -47,6 +48,9 @@ class MethodOptions {
   // The keys the user wrote that set calc_max_runs, with their values, for messages that refuse
   // the cap ("ensemble.stop.max_runs = 1000000").
   virtual std::string describe_max_runs(const CampaignOptions& c) const;
+  // The failure event ([failure], failure.hpp) whose probability the method estimates, or null
+  // when it reads none (a design sweep needs one at each of its values).
+  virtual const FailureOptions* failure_event() const { return nullptr; }
 };
 
 // Copies a MethodOptions subclass T with the campaign (clone()).

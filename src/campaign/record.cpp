@@ -58,6 +58,11 @@ RecordLayout::RecordLayout(const CampaignOptions& c, const DimensionLayout& dims
     in.dispersion = static_cast<int>(k);
     add(std::move(in));
   }
+  if (c.sweep.active) {  // a sweep's design value (the run's last input, calc_run_inputs)
+    Field in{"sweep_value", Group::runs, ValueType::f64, 1, Scale::none, sweep_variable_units(c)};
+    in.dispersion = static_cast<int>(c.dispersions.size());
+    add(std::move(in));
+  }
   blank_.assign(fixed_bytes_, '\0');
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (const Field& f : fields_)

@@ -13,6 +13,7 @@
 #include <toml++/toml.h>
 
 #include "campaign/campaign.hpp"
+#include "campaign/failure.hpp"
 #include "io/scene_toml.hpp"
 #include "io/suggest.hpp"
 
@@ -111,6 +112,15 @@ std::vector<std::string> method_names(const Ctx& c);
 void check_method_key(const Ctx& c, const std::string& key, const toml::node& v);
 // A root table that a row of the catalog reads ([failure]).
 bool is_method_table(const Ctx& c, std::string_view root_table);
+// The root tables the rows of the catalog read, each once, in table order.
+std::vector<std::string> method_root_tables(const Ctx& c);
 // The chosen row reads its tables into o.ensemble.method; a run count it chooses is n_runs.
 void parse_method(const Ctx& c, const toml::table& root, CampaignOptions& o);
+// failure.cpp: [failure] into f (failure.hpp), for the rows that read it.
+void parse_failure_table(const Ctx& c, const toml::table& t, FailureOptions& f);
+// A row that reads [failure] only as a design sweep's event (design, stop): [failure] of root into
+// f when root has a [sweep]; without one, [failure] is refused (subset simulation reads it).
+void parse_sweep_failure(const Ctx& c, const toml::table& root, FailureOptions& f);
+// sweep.cpp: [sweep] into o.sweep (its rules: validate_sweep).
+void parse_sweep_table(const Ctx& c, const toml::table& t, CampaignOptions& o);
 }  // namespace truss::campaign::detail

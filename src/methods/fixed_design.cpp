@@ -32,7 +32,9 @@ std::unique_ptr<campaign::MethodOptions> DesignOptions::parse(const campaign::Me
     for (const auto& [k, v] : *in.table)
       in.ctx.fail(&v, fmt::format("unknown key '{}{}' (the design's keys are ensemble.n_runs and ensemble.sampling)",
                                   in.prefix, k.str()));
-  return std::make_unique<DesignOptions>();
+  auto o = std::make_unique<DesignOptions>();
+  campaign::detail::parse_sweep_failure(in.ctx, in.root, o->failure);
+  return o;
 }
 
 std::unique_ptr<Method> make_fixed_design(const campaign::CampaignContext& ctx, const MethodTable&) {

@@ -2,6 +2,7 @@
 // over the campaign's dimensions), n_runs runs in one round. Monte Carlo, Latin hypercube and
 // Sobol' are FixedDesign; Saltelli adds the Sobol' indices of its design to the results file.
 #pragma once
+#include "campaign/failure.hpp"
 #include "methods/method.hpp"
 #include "sampling/sampling.hpp"
 
@@ -10,9 +11,13 @@ namespace truss::methods {
 class MethodTable;
 
 // ensemble.method = "design": its points are ensemble.sampling's over ensemble.n_runs; no table of
-// its own ([ensemble.design] takes no key).
+// its own ([ensemble.design] takes no key). With a [sweep] (campaign/sweep.hpp) it is Monte Carlo at
+// each value and reads the [failure] event whose probability it estimates.
 struct DesignOptions : campaign::MethodOptionsOf<DesignOptions> {
+  campaign::FailureOptions failure;  // [failure]: a sweep's event (none without a sweep)
   std::string validate(const campaign::CampaignOptions& c) const override { return campaign::validate_sampling(c); }
+  std::string to_toml() const override { return campaign::failure_toml(failure); }
+  const campaign::FailureOptions* failure_event() const override { return &failure; }
   static std::unique_ptr<campaign::MethodOptions> parse(const campaign::MethodInput& in);
 };
 

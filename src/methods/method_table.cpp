@@ -5,6 +5,7 @@
 #include "methods/fixed_design.hpp"
 #include "methods/stop_method.hpp"
 #include "methods/subset_method.hpp"
+#include "methods/sweep_method.hpp"
 
 namespace truss::methods {
 
@@ -28,6 +29,8 @@ std::vector<const campaign::MethodSyntax*> MethodTable::list() const {
 }
 
 std::unique_ptr<Method> MethodTable::make(const campaign::CampaignContext& ctx) const {
+  // A [sweep] runs the method of ensemble.method at each of its values (sweep_method.hpp).
+  if (ctx.options.sweep.active) return std::make_unique<SweepMethod>(ctx);
   for (const MethodRow& r : rows_)
     if (r.syntax.name == ctx.options.ensemble.method.name()) return r.make(ctx, *this);
   throw std::logic_error("ensemble.method \"" + ctx.options.ensemble.method.name() + "\" is not in the method table");
@@ -41,8 +44,9 @@ MethodTable MethodTable::with(MethodRow row) const {
 
 const MethodTable& builtin_methods() {
   static const MethodTable table({
-      {{campaign::kDefaultMethod, {}, false, &DesignOptions::parse}, &make_fixed_design},
-      {{"stop", {}, true, &StopOptions::parse}, &make_method_of<StopMethod>},
+      // design and stop read [failure] only as a [sweep]'s event (campaign/failure.hpp).
+      {{campaign::kDefaultMethod, {"failure"}, false, &DesignOptions::parse}, &make_fixed_design},
+      {{"stop", {"failure"}, true, &StopOptions::parse}, &make_method_of<StopMethod>},
       {{"subset", {"failure"}, false, &SubsetMethodOptions::parse}, &make_method_of<SubsetMethod>},
   });
   return table;

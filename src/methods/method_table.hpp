@@ -29,7 +29,8 @@ class MethodTable final : public campaign::MethodCatalog {
   explicit MethodTable(std::vector<MethodRow> rows);
   const campaign::MethodSyntax* find(std::string_view name) const override;
   std::vector<const campaign::MethodSyntax*> list() const override;
-  // The method of ctx.options.ensemble.method.
+  // The method of ctx.options.ensemble.method; with a [sweep], the SweepMethod that runs it at each
+  // of the sweep's values.
   std::unique_ptr<Method> make(const campaign::CampaignContext& ctx) const;
   // This table and one row more (a test's method).
   MethodTable with(MethodRow row) const;

@@ -12,6 +12,7 @@ namespace truss::methods {
 
 std::unique_ptr<campaign::MethodOptions> StopOptions::parse(const campaign::MethodInput& in) {
   auto o = std::make_unique<StopOptions>();
+  campaign::detail::parse_sweep_failure(in.ctx, in.root, o->failure);
   if (in.table == nullptr) return o;
   const campaign::detail::Ctx& c = in.ctx;
   sampling::StopRule& r = o->rule;
@@ -44,6 +45,10 @@ std::string StopOptions::validate(const campaign::CampaignOptions& c) const {
   if (is_percentile() && campaign::find_run_column_unit(output).empty())
     return fmt::format("ensemble.stop.output: \"{}\" is not a float64 column of /runs (e.g. peak_drive_torque_Nm)",
                        output);
+  if (c.sweep.active && is_percentile())
+    return "ensemble.stop.target: \"percentile_bound\" estimates a percentile, not a probability: a sweep's inner "
+           "method is subset simulation (ensemble.method = \"subset\"), Monte Carlo, or [ensemble.stop] with a "
+           "probability target";
   if (!is_percentile() && !output.empty())
     return "ensemble.stop.output: the probability targets count the runs that are not ok; output goes with "
            "target = \"percentile_bound\"";
@@ -54,7 +59,7 @@ std::string StopOptions::to_toml() const {
   std::string t = fmt::format("[ensemble.stop]\ntarget = \"{}\"\n", sampling::to_string(rule.target));
   if (!output.empty()) t += fmt::format("output = \"{}\"\n", output);
   return t + fmt::format("level = {}\nwidth = {}\nconfidence = {}\nmax_runs = {}\n\n", rule.level, rule.width,
-                         rule.confidence, rule.max_runs);
+                         rule.confidence, rule.max_runs) + campaign::failure_toml(failure);
 }
 
 StopMethod::StopMethod(const campaign::CampaignContext& ctx)

@@ -12,6 +12,7 @@
 // The results: /stop (docs/hdf5-schema.md): the rule, and per round its runs, estimate, bound,
 // achieved width, state and reason; the last round's state and reason say why it stopped.
 #pragma once
+#include "campaign/failure.hpp"
 #include "methods/method.hpp"
 #include "sampling/sampling.hpp"
 #include "sampling/stopping.hpp"
@@ -21,9 +22,12 @@ namespace truss::methods {
 struct StopOptions : campaign::MethodOptionsOf<StopOptions> {
   sampling::StopRule rule;
   std::string output;  // percentile_bound: a float64 column of /runs
+  campaign::FailureOptions failure;  // [failure]: a sweep's event (none without a sweep)
+  const campaign::FailureOptions* failure_event() const override { return &failure; }
   bool is_percentile() const { return rule.target == sampling::StopTarget::percentile_bound; }
   // A Monte Carlo design (its points extend run by run), a rule that can be met within max_runs
-  // (StopRule::validate), a percentile of a float64 column; then the design's own rules.
+  // (StopRule::validate), a percentile of a float64 column; then the design's own rules. In a
+  // [sweep], a probability target (the sweep estimates the [failure] event's probability).
   std::string validate(const campaign::CampaignOptions& c) const override;
   std::string to_toml() const override;
   std::int64_t calc_max_runs(const campaign::CampaignOptions&) const override { return rule.max_runs; }

@@ -89,7 +89,6 @@ namespace {
 using campaign::detail::Ctx;
 using campaign::detail::get_integer;
 using campaign::detail::get_number;
-using campaign::detail::get_string;
 
 void parse_subset_table(const Ctx& c, const toml::table& t, const std::string& prefix, SubsetSettings& s) {
   for (const auto& [k, v] : t) {
@@ -106,44 +105,13 @@ void parse_subset_table(const Ctx& c, const toml::table& t, const std::string& p
   }
 }
 
-void parse_failure_table(const Ctx& c, const toml::table& t, FailureOptions& f) {
-  f.line = static_cast<int>(t.source().begin.line);
-  const toml::node *margin = t.get("margin"), *column = t.get("column"), *above = t.get("above"),
-                   *below = t.get("below"), *unit = t.get("unit");
-  for (const auto& [k, v] : t)
-    if (k != "margin" && k != "column" && k != "above" && k != "below" && k != "unit")
-      c.fail(&v, campaign::detail::unknown_key_text("failure." + std::string(k.str()),
-                                                    "failure.margin, failure.column, failure.above, failure.below, "
-                                                    "failure.unit"));
-  if ((margin != nullptr) == (column != nullptr))
-    c.fail(margin ? margin : column ? column : &t,
-           "failure: give either margin = \"<column>\" (failed when <= 0, e.g. \"rail_margin_m\") or column = "
-           "\"<column>\" with above = or below = a threshold and unit = the column's unit");
-  if (margin) {
-    if (above || below || unit)
-      c.fail(above ? above : below ? below : unit,
-             "failure: a margin fails at 0; above, below and unit go with column");
-    f.kind = FailureKind::margin;
-    f.column = get_string(c, *margin, "failure.margin");
-    return;
-  }
-  f.column = get_string(c, *column, "failure.column");
-  if ((above != nullptr) == (below != nullptr))
-    c.fail(above ? above : column, "failure: a column fails above or below a threshold: give one of above, below");
-  f.kind = above ? FailureKind::above : FailureKind::below;
-  f.threshold = get_number(c, above ? *above : *below, above ? "failure.above" : "failure.below");
-  if (!std::isfinite(f.threshold)) c.fail(above ? above : below, "failure: the threshold must be finite");
-  if (!unit) c.fail(column, fmt::format("failure.unit: missing: say the threshold's unit (the column {} is in {})",
-                                        f.column, campaign::find_run_column_unit(f.column)));
-  f.unit = get_string(c, *unit, "failure.unit");
-}
-
 }  // namespace
 
 std::unique_ptr<campaign::MethodOptions> SubsetMethodOptions::parse(const campaign::MethodInput& in) {
   auto o = std::make_unique<SubsetMethodOptions>();
   if (in.table != nullptr) parse_subset_table(in.ctx, *in.table, in.prefix, o->subset);
-  if (const toml::table* f = in.root["failure"].as_table()) parse_failure_table(in.ctx, *f, o->failure);
+  if (const toml::table* f = in.root["failure"].as_table())
+    campaign::detail::parse_failure_table(in.ctx, *f, o->failure);
   return o;
 }
 
@@ -157,26 +125,15 @@ std::string SubsetMethodOptions::validate(const campaign::CampaignOptions& o) co
   if (f.kind == FailureKind::none)
     return "failure: method = \"subset\" needs a [failure] table: margin = \"rail_margin_m\", or column = "
            "\"peak_drive_force_N\", above = 3.5, unit = \"N\"";
-  const std::string field = f.kind == FailureKind::margin ? "failure.margin" : "failure.column";
-  const std::string unit = campaign::find_run_column_unit(f.column);
-  if (unit.empty())
-    return fmt::format("{}: \"{}\" is not a float64 column of /runs (a RunResult output, e.g. rail_margin_m, "
-                       "peak_drive_force_N)", field, f.column);
-  if (f.kind != FailureKind::margin && f.unit != unit)
-    return fmt::format("failure.unit: \"{}\", but {} is in \"{}\" (give the threshold in the column's unit)", f.unit,
-                       f.column, unit);
-  return {};
+  return campaign::validate_failure_column(f);
 }
 
 std::string SubsetMethodOptions::to_toml() const {
   const SubsetSettings& s = subset;
   std::string t = fmt::format("[ensemble.subset]\nn_per_level = {}\np0 = {}\nmax_levels = {}\n"
-                              "proposal_half_width = {}\n\n[failure]\n",
+                              "proposal_half_width = {}\n\n",
                               s.n_per_level, s.p0, s.max_levels, s.proposal_half_width);
-  const FailureOptions& f = failure;
-  if (f.kind == FailureKind::margin) return t + fmt::format("margin = \"{}\"\n\n", f.column);
-  return t + fmt::format("column = \"{}\"\n{} = {}\nunit = \"{}\"\n\n", f.column,
-                         f.kind == FailureKind::above ? "above" : "below", f.threshold, f.unit);
+  return t + campaign::failure_toml(failure);
 }
 
 namespace {

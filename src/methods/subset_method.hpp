@@ -16,6 +16,7 @@
 #include <mutex>
 #include <optional>
 
+#include "campaign/failure.hpp"
 #include "methods/method.hpp"
 #include "sampling/subset_simulation.hpp"
 
@@ -30,17 +31,9 @@ struct SubsetSettings {
   double proposal_half_width = 1.0;
 };
 
-// [failure]: the failure event, a float64 column of /runs and its margin, in the column's unit,
-// positive when safe: margin = "<column>": the column itself; column = "<column>" with above =
-// threshold: threshold - value; with below = threshold: value - threshold; unit = the column's unit.
-enum class FailureKind { none, margin, above, below };
-struct FailureOptions {
-  FailureKind kind = FailureKind::none;
-  std::string column;
-  double threshold = 0.0;
-  std::string unit;   // above / below: must be the column's unit
-  int line = 0;       // of the [failure] table, for messages
-};
+// [failure]: the failure event (campaign/failure.hpp).
+using campaign::FailureKind;
+using campaign::FailureOptions;
 
 // The subset method's options: it chooses its runs, the cap N + (max_levels - 1)(N - N_c) is the
 // campaign's n_runs (an n_runs in the file is refused), and it draws its own points (no sampling).
@@ -54,6 +47,7 @@ struct SubsetMethodOptions : campaign::MethodOptionsOf<SubsetMethodOptions> {
   }
   std::int64_t calc_n_runs(const campaign::CampaignOptions& c) const override;
   std::string describe_max_runs(const campaign::CampaignOptions& c) const override;
+  const FailureOptions* failure_event() const override { return &failure; }
   // The state machine's options (its dimensions and master seed from the campaign c): the one
   // place the run counts come from (SubsetOptions::max_evaluations).
   sampling::SubsetOptions calc_sim_options(const campaign::CampaignOptions& c) const;

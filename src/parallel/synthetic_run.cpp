@@ -4,6 +4,7 @@
 #include <ctime>
 #include <limits>
 
+#include "campaign/failure.hpp"
 #include "sampling/sampling.hpp"
 
 namespace truss::parallel {
@@ -32,12 +33,17 @@ void append_synthetic_record(const campaign::CampaignContext& ctx, const double*
   const auto t0 = std::chrono::steady_clock::now();
   sleep_for(cost_s);
   std::vector<double> inputs;
+  double limit_state = 0.0;  // the sum of each dispersion's first applied value
   try {
-    for (const auto& values : campaign::calc_run_inputs(ctx.options, ctx.dims, u).values)
-      inputs.insert(inputs.end(), values.begin(), values.end());
+    const campaign::RunInputs in = campaign::calc_run_inputs(ctx.options, ctx.dims, u);
+    for (const auto& values : in.values) inputs.insert(inputs.end(), values.begin(), values.end());
+    for (std::size_t i = 0; i < ctx.options.dispersions.size(); ++i) limit_state += in.values[i].front();
   } catch (const std::exception&) {
     inputs.assign(static_cast<std::size_t>(ctx.dims.total), std::numeric_limits<double>::quiet_NaN());
+    limit_state = std::numeric_limits<double>::quiet_NaN();
   }
+  const campaign::FailureOptions* failure = ctx.options.ensemble.method.options().failure_event();
+  const std::string failure_column = failure ? failure->column : std::string();
   const campaign::RecordLayout& L = ctx.record;
   campaign::RecordWriter w(L, out);
   w.set_i64(campaign::RecordLayout::kRun, head.run);
@@ -50,6 +56,9 @@ void append_synthetic_record(const campaign::CampaignContext& ctx, const double*
     for (int j = 0; j < fd.width; ++j) {
       if (fd.dispersion >= 0) {
         w.set_f64(f, inputs[k++], j);
+      } else if (fd.run && fd.name == failure_column) {
+        w.set_f64(f, limit_state, j);
+        ++column;
       } else if (fd.type == campaign::ValueType::i64) {
         w.set_i64(f, static_cast<std::int64_t>(1000.0 * pseudo_value(head.run, column++)), j);
       } else {

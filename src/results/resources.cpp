@@ -29,7 +29,8 @@ std::string human(double bytes) {
 // The keys the user wrote that set calc_max_runs, with their values ("ensemble.stop.max_runs =
 // 1000000", "ensemble.subset.n_per_level = 2000 (max_levels = 20: at most 36200 runs)").
 std::string describe_max_runs(const campaign::CampaignOptions& c) {
-  return c.ensemble.method.options().describe_max_runs(c);
+  const std::string d = c.ensemble.method.options().describe_max_runs(c);
+  return c.sweep.active ? fmt::format("{} at each of the {} sweep.values", d, c.sweep.n_values()) : d;
 }
 }  // namespace
 

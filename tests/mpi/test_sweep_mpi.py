@@ -1,0 +1,347 @@
+#!/usr/bin/python3
+"""Design sweeps ([sweep], methods/sweep_method.hpp) through the engine under a real mpirun.
+
+  test_sweep_mpi.py --case reference|ranks|resume|standalone|bad_input --driver truss-campaign
+                    --repo SRC --scratch DIR
+
+The runs are synthetic (--synthetic-run-cost-s): their [failure] column is the sum of the
+dispersions' first applied values (parallel/synthetic_run.hpp). tests/mpi/sweep_analytic.toml
+disperses the stall torque as x + N(0, sigma), sigma = 1 mN m, so its margin fails with
+p(x) = Phi(-x / sigma) (scipy here, not the code under test), and p(x) = 1e-6 at
+x* = -Phi^-1(1e-6) sigma = 4.7534 mN m. A spread sweep of the same dispersion with x = 5 mN m fixed:
+p(sigma) = Phi(-x / sigma), 1e-6 at sigma* = x / 4.7534.
+
+- reference: 20 master seeds of each sweep: the allowable's interval contains the true crossing in at
+  least 18 of 20; the allowable (the crossing of the one-sided 95 % upper bound) lies on the safe side
+  of the true crossing as often; each value's two-sided 95 % interval holds the true p in at least
+  80 % of the 80 estimates. Measured: 70/80 (nominal) and 68/80 (spread), below the nominal 95 %:
+  subset simulation's CoV estimate at 500 samples a level is itself noisy and its lognormal interval
+  under-covers (Au & Beck's CoV gives 68/80 on the nominal sweep, the larger of the two 71/80); the
+  allowable's interval, two such intervals combined, still holds the crossing in 19-20 of 20.
+  Then Monte Carlo as the inner method at a p where it resolves: each value's failure count and
+  Clopper-Pearson bounds recomputed from its rows (scipy's beta quantiles).
+- ranks: the same file (every dataset but the timing) on 1 and 3 ranks.
+- resume: kill -9 of the whole job after some of its rounds are journaled, --resume: the same file.
+- standalone: value k of the sweep against the campaign without [sweep] at that value
+  (--set drive.stall_torque_Nm=x_k, ensemble.master_seed = /sweep/master_seed[k]): the same p, CoVs
+  and levels, and the value's rows (by run index) the standalone campaign's rows; also with Monte
+  Carlo as the inner method.
+- bad_input: each refusal exits 2 with file:line and the key, writing nothing.
+"""
+import argparse
+import math
+import os
+import re
+import subprocess
+import sys
+import time
+
+import h5py
+import numpy as np
+from scipy.stats import beta as beta_dist, norm
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from test_campaign_mpi import ENV, check, datasets, fresh, same_values  # noqa: E402
+from test_journal_faults import kill_job, parse_journal  # noqa: E402
+
+SIGMA = 0.001
+Z_TARGET = -norm.ppf(1e-6)
+
+
+def campaign_path(args):
+    return os.path.join(args.repo, "tests", "mpi", "sweep_analytic.toml")
+
+
+def run(args, out, ranks=2, sets=(), cost="0", extra=(), campaign=None, timeout=600):
+    cmd = ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, campaign or campaign_path(args), "-o", out,
+           "--synthetic-run-cost-s", cost, "--progress", "none"]
+    for s in sets:
+        cmd += ["--set", s]
+    return subprocess.run(cmd + list(extra), env=ENV, capture_output=True, text=True, timeout=timeout)
+
+
+def read_sweep(path):
+    with h5py.File(path, "r") as f:
+        g = f["sweep"]
+        s = {k: g[k][()] for k in ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "master_seed")}
+        a = g["allowable"]
+        s["allowable"] = {k: float(a[k][()]) for k in ("value", "estimate", "lower", "upper")}
+        s["allowable"].update({k: a.attrs[k] for k in ("status", "safe_side", "verdict")})
+        return s
+
+
+SPREAD_CAMPAIGN = """
+[campaign]
+name = "sweep-analytic-spread"
+[ensemble]
+master_seed = 11
+method = "subset"
+[ensemble.subset]
+n_per_level = 500
+p0 = 0.1
+max_levels = 12
+[failure]
+margin = "rail_margin_m"
+[scene.drive]
+stall_torque_Nm = 0.005
+[sweep]
+spread = "drive.stall_torque_Nm"
+values = [0.0009, 0.001, 0.0011, 0.0012]
+target_probability = 1e-6
+[[dispersion]]
+key = "drive.stall_torque_Nm"
+apply = "offset"
+distribution = "normal"
+std = 0.001
+"""
+
+
+def case_reference(args):
+    d = fresh(args, "sweep_reference")
+    spread_camp = os.path.join(d, "spread.toml")
+    open(spread_camp, "w").write(SPREAD_CAMPAIGN)
+    cases = [("nominal", None, SIGMA * Z_TARGET, lambda x: norm.cdf(-x / SIGMA)),
+             ("spread", spread_camp, 0.005 / Z_TARGET, lambda s: norm.cdf(-0.005 / s))]
+    for name, camp, truth, p_true in cases:
+        inside = safe = covered = n_est = 0
+        for seed in range(1, 21):
+            out = os.path.join(d, f"{name}_{seed}.h5")
+            p = run(args, out, sets=[f"ensemble.master_seed={seed}"], campaign=camp)
+            check(p.returncode == 0, f"{name}, seed {seed}: exit 0 ({p.stderr.strip()[-300:]})")
+            s = read_sweep(out)
+            a = s["allowable"]
+            check(a["status"] == "found", f"{name}, seed {seed}: the allowable is found ({a})")
+            inside += a["lower"] <= truth <= a["upper"]
+            # The allowable is on the safe side of the truth: above it when p falls with the value.
+            safe += (a["value"] >= truth) if a["safe_side"] == "above" else (a["value"] <= truth)
+            pt = p_true(s["values"])
+            covered += int(np.sum((s["lower"] <= pt) & (pt <= s["upper"])))
+            n_est += len(pt)
+            os.remove(out)
+        print(f"  {name}: interval holds the true crossing {truth:.6g} in {inside}/20 seeds; allowable on the safe "
+              f"side in {safe}/20; p's interval holds the true p in {covered}/{n_est}")
+        check(inside >= 18, f"{name}: the allowable's interval contains the true crossing in {inside} >= 18 of 20")
+        check(safe >= 18, f"{name}: the allowable lies on the safe side of the true crossing in {safe} >= 18 of 20")
+        check(covered >= 0.80 * n_est, f"{name}: each value's 95 % interval holds the true p in {covered}/{n_est}")
+    # Monte Carlo as the inner method, where 20,000 runs resolve p (1e-3 .. 1e-4): k / n and the
+    # Clopper-Pearson bounds recomputed from the rows (scipy's beta quantiles).
+    out = os.path.join(d, "mc.h5")
+    p = run(args, out, sets=["ensemble.method=design", "ensemble.subset=false", "ensemble.n_runs=20000",
+                             "sweep.target_probability=3e-4", "sweep.from=0.0031", "sweep.to=0.0037"])
+    check(p.returncode == 0, f"Monte Carlo inner: exit 0 ({p.stderr.strip()[-300:]})")
+    s = read_sweep(out)
+    with h5py.File(out, "r") as f:
+        v, m = f["runs/sweep_value"][:], f["runs/rail_margin_m"][:]
+    for k, x in enumerate(s["values"]):
+        rows = m[v == x]
+        n, kf = rows.size, int(np.sum(rows <= 0))
+        lo = beta_dist.ppf(0.025, kf, n - kf + 1) if kf > 0 else 0.0
+        hi = beta_dist.ppf(0.975, kf + 1, n - kf) if kf < n else 1.0
+        ub = beta_dist.ppf(0.95, kf + 1, n - kf)
+        check(n == 20000 and s["p"][k] == kf / n and math.isclose(s["lower"][k], lo, rel_tol=1e-9)
+              and math.isclose(s["upper"][k], hi, rel_tol=1e-9) and math.isclose(s["upper_bound"][k], ub, rel_tol=1e-9),
+              f"Monte Carlo value {x}: p = {kf}/{n} and its Clopper-Pearson bounds from the rows")
+        print(f"  Monte Carlo value {x}: {kf} failures, {n * norm.cdf(-x / SIGMA):.1f} expected")
+
+
+def case_ranks(args):
+    d = fresh(args, "sweep_ranks")
+    outs = {}
+    for ranks in (1, 3):
+        outs[ranks] = os.path.join(d, f"r{ranks}.h5")
+        p = run(args, outs[ranks], ranks=ranks)
+        check(p.returncode == 0, f"{ranks} ranks: exit 0 ({p.stderr.strip()[-300:]})")
+    same, why = same_values(datasets(outs[1]), datasets(outs[3]))
+    check(same, f"1 and 3 ranks: the same datasets ({why})")
+    with h5py.File(outs[3], "r") as f:
+        check(f.attrs["n_rounds"] > 10 and "sweep" in f, f"{f.attrs['n_rounds']} rounds, /sweep written")
+    check_allowable_and_report(args, outs[3], d)
+
+
+def crossing(x, y, target):
+    """The crossing of y with the target from the largest x down (p falls with x here), linear in ln y."""
+    for j in range(len(x) - 1, 0, -1):
+        if y[j] <= target < y[j - 1]:
+            t = (math.log(target) - math.log(y[j])) / (math.log(y[j - 1]) - math.log(y[j]))
+            return x[j] + (x[j - 1] - x[j]) * t
+    return float("nan")
+
+
+def check_allowable_and_report(args, path, d):
+    """The allowable recomputed from /sweep's columns; the report and the DataFrame show it."""
+    s = read_sweep(path)
+    a = s["allowable"]
+    x = s["values"]
+    for name, col in (("value", "upper_bound"), ("estimate", "p"), ("upper", "upper"), ("lower", "lower")):
+        ref = crossing(x, s[col], 1e-6)
+        check(math.isclose(a[name], ref, rel_tol=1e-12), f"allowable {name} {a[name]:.9g}: the crossing of {col} "
+              f"recomputed ({ref:.9g})")
+    check(a["safe_side"] == "above" and a["verdict"] == "PASS", "safe side above; the own 20 mN m passes")
+    out = os.path.join(d, "report")
+    p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc", "report.py"), path, "-o", out],
+                       capture_output=True, text=True, timeout=300)
+    check(p.returncode == 0, f"report: exit 0 ({p.stderr.strip()[-300:]})")
+    html = open(os.path.join(out, "report.html"), encoding="utf-8").read()
+    m = re.search(r'data-key="sweep.allowable" data-value="([^"]+)"', html)
+    check(m and float(m.group(1)) == a["value"], "the report's allowable is /sweep/allowable/value")
+    want = f"drive.stall_torque_Nm ≥ {a['value'] * 1e3:.5g} mN m (95 % upper bound"
+    check("VERDICT: PASS" in p.stdout and want in p.stdout, f"the verdict says PASS and '{want}'")
+    check(os.path.exists(os.path.join(out, "sweep.png")), "the sweep figure is drawn")
+    sys.path.insert(0, os.path.join(args.repo, "postproc"))
+    import truss_report
+    df = truss_report.read_campaign(path)
+    sw = df.attrs["sweep"]
+    check(list(sw["value"]) == list(x) and list(sw["p"]) == list(s["p"]) and sw.attrs["allowable"]["value"] == a["value"]
+          and sw.attrs["units"]["value"] == "Nm" and (df["sweep_value"].value_counts().sort_index().to_numpy()
+                                                      == s["runs"]).all(),
+          "read_campaign: the sweep's table in df.attrs['sweep'], the runs' sweep_value column")
+    check_other_verdicts(args, d)
+
+
+def check_other_verdicts(args, d):
+    """The report's other verdicts and exit codes: FAIL (3) with the scene's own stall torque below
+    the allowable (about 4.9 mN m), NOT ASSESSED (4) when no value's bound reaches the target; no
+    NaN shown on either page."""
+    for name, sets, verdict, code in (("fail", ["drive.stall_torque_Nm=0.003"], "FAIL", 3),
+                                      ("not_assessed", ["sweep.target_probability=1e-30"], "NOT ASSESSED", 4)):
+        path = os.path.join(d, f"{name}.h5")
+        p = run(args, path, sets=sets)
+        check(p.returncode == 0, f"{name}: the campaign exits 0 ({p.stderr.strip()[-300:]})")
+        check(read_sweep(path)["allowable"]["verdict"] == verdict, f"{name}: /sweep/allowable verdict {verdict}")
+        out = os.path.join(d, f"report_{name}")
+        p = subprocess.run(["/usr/bin/python3", os.path.join(args.repo, "postproc", "report.py"), path, "-o", out,
+                            "--no-pdf"], capture_output=True, text=True, timeout=300)
+        text = re.sub(r"<[^>]+>", " ", open(os.path.join(out, "report.html"), encoding="utf-8").read())
+        check(p.returncode == code and f"VERDICT: {verdict}" in p.stdout and not re.search(r"\bnan\b", text, re.I)
+              and "nan" not in p.stdout.lower(),
+              f"{name}: report exit {p.returncode} (want {code}), 'VERDICT: {verdict}', no NaN on the page")
+
+
+def kill_mid(args, out):
+    cmd = ["mpirun", "--oversubscribe", "-np", "2", args.driver, campaign_path(args), "-o", out,
+           "--synthetic-run-cost-s", "0.001", "--progress", "none", "--flush-interval", "0.02"]
+    proc = subprocess.Popen(cmd, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    journal, t0, plans = out + ".journal", time.time(), 0
+    while time.time() - t0 < 300 and proc.poll() is None:
+        if os.path.exists(journal):
+            _, frames = parse_journal(open(journal, "rb").read())
+            plans = sum(1 for _, k, _ in frames if k == b"P")
+            if plans >= 12:
+                break
+        time.sleep(0.005)
+    kill_job(proc)
+    return plans
+
+
+def case_resume(args):
+    d = fresh(args, "sweep_resume")
+    ref = os.path.join(d, "ref.h5")
+    p = run(args, ref, cost="0.001")
+    check(p.returncode == 0, f"uninterrupted: exit 0 ({p.stderr.strip()[-300:]})")
+    out = os.path.join(d, "killed.h5")
+    plans = kill_mid(args, out)
+    check(not os.path.exists(out) and os.path.exists(out + ".journal"),
+          f"kill -9 after {plans} rounds planned: no results file, the journal kept")
+    p = run(args, out, cost="0.001", extra=["--resume"])
+    check(p.returncode == 0 and "resuming" in p.stderr, f"--resume: exit 0 ({p.stderr.strip()[-300:]})")
+    same, why = same_values(datasets(ref), datasets(out))
+    check(same, f"killed and resumed: the same datasets as uninterrupted ({why})")
+
+
+def case_standalone(args):
+    d = fresh(args, "sweep_standalone")
+    camp = campaign_path(args)
+    text = open(camp).read()
+    # The campaign without [sweep] (and for Monte Carlo without [failure], which only subset reads).
+    open(os.path.join(d, "plain_subset.toml"), "w").write(re.sub(r"^\[sweep\][^\[]*", "", text, flags=re.M))
+    open(os.path.join(d, "plain_monte_carlo.toml"), "w").write(re.sub(r"^\[(sweep|failure)\][^\[]*", "", text,
+                                                                            flags=re.M))
+    for inner, sets in (("subset", []), ("monte_carlo", ["ensemble.method=design", "ensemble.subset=false",
+                                                          "ensemble.n_runs=3000"])):
+        plain = os.path.join(d, f"plain_{inner}.toml")
+        sweep = os.path.join(d, f"sweep_{inner}.h5")
+        p = run(args, sweep, sets=sets)
+        check(p.returncode == 0, f"{inner}: the sweep: exit 0 ({p.stderr.strip()[-300:]})")
+        s = read_sweep(sweep)
+        with h5py.File(sweep, "r") as f:
+            v, m, runs = f["runs/sweep_value"][:], f["runs/inputs/drive.stall_torque_Nm"][:], f["runs/run_index"][:]
+            inner_groups = {k: {n: f[f"sweep/inner/{k}/{n}"][()] for n in f[f"sweep/inner/{k}"]}
+                            for k in f["sweep/inner"]}
+        for k in (0, 2):
+            x, seed = s["values"][k], int(s["master_seed"][k])
+            alone = os.path.join(d, f"alone_{inner}_{k}.h5")
+            p = run(args, alone, campaign=plain,
+                    sets=sets + [f"drive.stall_torque_Nm={x!r}", f"ensemble.master_seed={seed}"])
+            check(p.returncode == 0, f"{inner}, value {k}: the standalone campaign: exit 0 ({p.stderr.strip()[-300:]})")
+            with h5py.File(alone, "r") as f:
+                # The points: the applied stall torque (the synthetic margin) of every run.
+                rows = f["runs/inputs/drive.stall_torque_Nm"][:]
+                mine = m[np.argsort(runs)][v[np.argsort(runs)] == x]
+                check(mine.tobytes() == rows.tobytes(),
+                      f"{inner}, value {k}: its {mine.size} points in run order are the standalone campaign's {rows.size}")
+                if inner == "subset":
+                    g = f["subset"]
+                    got = inner_groups[str(k)]
+                    check(g["p"][()] == s["p"][k] == got["p"] and g["cov_lineage"][()] == got["cov_lineage"]
+                          and g["cov"][()] == got["cov"]
+                          and g["levels/threshold"][:].tobytes() == got["level_threshold"].tobytes(),
+                          f"subset, value {k}: p = {s['p'][k]:.6g}, its CoVs and levels as the standalone /subset")
+                else:
+                    kf = int(np.sum(rows <= 0))
+                    check(s["p"][k] == kf / rows.size, f"monte_carlo, value {k}: p = {kf}/{rows.size} as alone")
+
+
+BAD = {
+    # name: (what to change in the analytic campaign, line of the message, words)
+    "not_a_key": (("key = \"drive.stall_torque_Nm\"\nfrom", "key = \"drive.stall_torqe_Nm\"\nfrom"), 23,
+                  "sweep.key: \"drive.stall_torqe_Nm\" is not a real-valued scene key"),
+    "not_dispersed": (("key = \"drive.stall_torque_Nm\"\nfrom", "spread = \"mast.strut_mass_kg\"\nfrom"), 23,
+                      "sweep.spread: \"mast.strut_mass_kg\" is not the key of a [[dispersion]]"),
+    "out_of_range": (("from = 0.004", "from = -0.004"), 22, "sweep.values: drive.stall_torque_Nm"),
+    "one_value": (("from = 0.004\nto = 0.0055\ncount = 4", "values = [0.005]"), 24,
+                  "sweep.values: a sweep needs at least 2 values, got 1"),
+    "target_outside": (("target_probability = 1e-6", "target_probability = 1.5"), 27,
+                       "sweep.target_probability: must lie in (0, 1), got 1.5"),
+    "no_probability": (("method = \"subset\"\n\n[ensemble.subset]\nn_per_level = 500\np0 = 0.1\nmax_levels = 10\n",
+                        "method = \"design\"\nn_runs = 100\nsampling = \"latin_hypercube\"\n"),
+                       14, "ensemble.sampling: \"latin_hypercube\" gives no binomial interval of a probability"),
+}
+
+
+def case_bad_input(args):
+    d = fresh(args, "sweep_bad")
+    text = open(campaign_path(args)).read()
+    for name, ((old, new), line, words) in BAD.items():
+        check(old in text, f"{name}: the campaign has '{old}'")
+        camp = os.path.join(d, f"{name}.toml")
+        open(camp, "w").write(text.replace(old, new))
+        out = os.path.join(d, f"{name}.h5")
+        p = run(args, out, ranks=2, campaign=camp)
+        msg = p.stderr.strip()
+        check(p.returncode == 2 and f"{camp}:{line}:" in msg and words in msg and msg.count("error:") == 1
+              and not os.path.exists(out) and not os.path.exists(out + ".journal"),
+              f"{name}: exit 2, '{msg.splitlines()[0][:200] if msg else ''}', nothing written")
+    p = run(args, os.path.join(d, "x.h5"), sets=["ensemble.stop.target=\"percentile_bound\"",
+                                                 "ensemble.method=design", "ensemble.subset=false",
+                                                 "ensemble.n_runs=100",
+                                                 "ensemble.stop.output=\"peak_drive_force_N\""])
+    check(p.returncode == 2 and "ensemble.stop.target" in p.stderr and "not a probability" in p.stderr,
+          f"a percentile stop rule as the inner method: exit 2 ({p.stderr.strip()[:200]})")
+    written = [f for f in os.listdir(d) if not f.endswith(".toml")]
+    check(written == [], f"nothing written by any refused run ({written})")
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--case", required=True,
+                    choices=["reference", "ranks", "resume", "standalone", "bad_input"])
+    ap.add_argument("--driver", required=True)
+    ap.add_argument("--repo", required=True)
+    ap.add_argument("--scratch", required=True)
+    args = ap.parse_args()
+    globals()["case_" + args.case](args)
+    print("all checks passed")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,161 @@
+// test_sweep.cpp — a design sweep's campaign side (campaign/sweep.hpp): a run's design coordinate
+// (k + 0.5) / n applies value k, to the base scene (a nominal sweep) or to the dispersion's spread,
+// and the run's last input is that value; value k's standalone campaign and its seed; the resolved
+// TOML reads back to the same sweep; the design and stop methods read [failure] only with a [sweep],
+// and a sweep's run cap is its method's per value. Expected values by hand: an offset normal draw
+// at u = Phi(1) is nominal + std (the normal quantile, exact to ~1e-16 relative).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <string>
+
+#include "campaign/campaign.hpp"
+#include "campaign/dispersion.hpp"
+#include "campaign/failure.hpp"
+#include "campaign/record.hpp"
+#include "methods/method_table.hpp"
+#include "sampling/sampling.hpp"
+
+using namespace truss::campaign;
+
+namespace {
+
+const char* kBase = R"(
+[ensemble]
+method = "subset"
+master_seed = 5
+[ensemble.subset]
+n_per_level = 100
+[failure]
+margin = "motor_torque_margin_Nm"
+[scene.drive]
+stall_torque_Nm = 0.03
+[[dispersion]]
+key = "drive.stall_torque_Nm"
+apply = "offset"
+distribution = "normal"
+std = 0.001
+[[dispersion]]
+key = "mast.strut_mass_kg"
+per = "bay"
+apply = "relative"
+distribution = "normal"
+std = 0.01
+)";
+
+CampaignOptions parse(const std::string& sweep) {
+  return truss::methods::parse_campaign_text(std::string(kBase) + sweep, "t", ".");
+}
+
+const double kPhi1 = 0.8413447460685429;  // Phi(1)
+
+}  // namespace
+
+TEST_CASE("a nominal sweep sets the key before the draws; the run records its value", "[sweep]") {
+  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02, 0.04]\n"
+                                  "target_probability = 1e-6\n");
+  const DimensionLayout L = calc_layout(c);
+  REQUIRE(L.design == L.total - 1);
+  REQUIRE(L.dispersion_dims() == 1 + L.n_bays_max);
+  std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);
+  u[0] = kPhi1;
+  for (std::size_t k = 0; k < 3; ++k) {
+    u[static_cast<std::size_t>(L.design)] = (static_cast<double>(k) + 0.5) / 3.0;
+    const RunInputs in = calc_run_inputs(c, L, u.data());
+    const double want = c.sweep.values[k] + 0.001;  // the swept nominal plus one std
+    CHECK(in.scene.drive.stall_torque_Nm == Approx(want).epsilon(1e-12));
+    CHECK(in.values[0][0] == Approx(want).epsilon(1e-12));
+    CHECK(in.values.back() == std::vector<double>{c.sweep.values[k]});
+  }
+  const RecordLayout R(c, L);
+  CHECK(R.fields().back().name == "sweep_value");
+  CHECK(R.fields().back().units == "Nm");
+  CHECK(calc_sweep_own_value(c) == 0.03);
+}
+
+TEST_CASE("a spread sweep sets the dispersion's std at each value", "[sweep]") {
+  const CampaignOptions c = parse("[sweep]\nspread = \"drive.stall_torque_Nm\"\nfrom = 0.001\nto = 0.003\n"
+                                  "count = 3\ntarget_probability = 1e-6\n");
+  CHECK(c.sweep.values == std::vector<double>{0.001, 0.002, 0.003});
+  CHECK(sweep_variable_name(c) == "drive.stall_torque_Nm std");
+  const DimensionLayout L = calc_layout(c);
+  std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);
+  u[0] = kPhi1;
+  u[static_cast<std::size_t>(L.design)] = 2.5 / 3.0;
+  CHECK(calc_run_inputs(c, L, u.data()).values[0][0] == Approx(0.03 + 0.003).epsilon(1e-12));
+  // Value 1's standalone campaign: no sweep, std 0.002, its own seed; the base scene untouched.
+  const CampaignOptions at = calc_campaign_at(c, 1);
+  CHECK_FALSE(at.sweep.active);
+  CHECK(at.dispersions[0].std == 0.002);
+  CHECK(at.base.drive.stall_torque_Nm == 0.03);
+  CHECK(at.ensemble.master_seed == calc_sweep_seed(5, 1));
+  CHECK(calc_sweep_seed(5, 1) != calc_sweep_seed(5, 2));
+  CHECK(calc_sweep_seed(5, 1) < (std::uint64_t{1} << 63));  // a campaign file's integer
+}
+
+TEST_CASE("the resolved campaign reads back to the same sweep", "[sweep]") {
+  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nfrom = 0.01\nto = 0.02\ncount = 4\n"
+                                  "target_probability = 2e-5\nconfidence = 0.9\n");
+  const CampaignOptions back = truss::methods::parse_campaign_text(resolved_campaign_toml(c), "resolved", ".");
+  CHECK(back.sweep.values == c.sweep.values);
+  CHECK(back.sweep.key == c.sweep.key);
+  CHECK(back.sweep.target_probability == 2e-5);
+  CHECK(back.sweep.confidence == 0.9);
+  CHECK(resolved_campaign_toml(back) == resolved_campaign_toml(c));
+}
+
+TEST_CASE("a Monte Carlo or stop sweep: the method's row reads [failure], the runs cap is per value", "[sweep]") {
+  // The design and stop rows read [failure] only with a [sweep]; the cap is the method's per value
+  // times the values (3 here).
+  const std::string mc = R"(
+[ensemble]
+n_runs = 400
+master_seed = 5
+[failure]
+column = "peak_drive_force_N"
+above = 3.5
+unit = "N"
+[[dispersion]]
+key = "drive.stall_torque_Nm"
+apply = "offset"
+distribution = "normal"
+std = 0.001
+)";
+  const std::string sweep = "[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02, 0.04]\n"
+                            "target_probability = 1e-2\n";
+  const CampaignOptions c = truss::methods::parse_campaign_text(mc + sweep, "mc.toml", ".");
+  REQUIRE(c.ensemble.method.options().failure_event() != nullptr);
+  CHECK(c.ensemble.method.options().failure_event()->column == "peak_drive_force_N");
+  CHECK(calc_max_runs(c) == 3 * 400);
+  const CampaignOptions back = truss::methods::parse_campaign_text(resolved_campaign_toml(c), "resolved", ".");
+  CHECK(back.ensemble.method.options().failure_event()->threshold == 3.5);
+  CHECK(resolved_campaign_toml(back) == resolved_campaign_toml(c));
+
+  const std::string stop = "[ensemble.stop]\ntarget = \"probability_half_width\"\nwidth = 0.05\nmax_runs = 2000\n";
+  const CampaignOptions s = truss::methods::parse_campaign_text(mc + stop + sweep, "stop.toml", ".");
+  CHECK(s.ensemble.method.name() == "stop");
+  CHECK(s.ensemble.method.options().failure_event()->kind == FailureKind::above);
+  CHECK(calc_max_runs(s) == 3 * 2000);
+
+  auto error_of = [](const std::string& text) {
+    try {
+      truss::methods::parse_campaign_text(text, "bad.toml", ".");
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  // Without a sweep, only subset simulation reads [failure] (line 5).
+  CHECK(error_of(mc).find("bad.toml:5: failure: only ensemble.method = \"subset\" reads [failure]") !=
+        std::string::npos);
+  CHECK(error_of(mc + "[ensemble.stop]\ntarget = \"probability_half_width\"\nwidth = 0.05\n")
+            .find("failure: only ensemble.method = \"subset\" reads [failure]") != std::string::npos);
+  // A percentile stop rule estimates no probability.
+  CHECK(error_of(mc + "[ensemble.stop]\ntarget = \"percentile_bound\"\noutput = \"peak_drive_force_N\"\n" + sweep)
+            .find("ensemble.stop.target: \"percentile_bound\" estimates a percentile, not a probability") !=
+        std::string::npos);
+  // A sweep without [failure].
+  const std::string no_failure = mc.substr(0, mc.find("[failure]")) + mc.substr(mc.find("[[dispersion]]"));
+  CHECK(error_of(no_failure + sweep).find("failure: a sweep estimates the probability of a [failure] event") !=
+        std::string::npos);
+}
