@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from .page import esc, fmt, html_page, num, table
+from .page import esc, fmt, html_page, num, table, unit_text
 from .top import FAIL, NOT_ASSESSED, PASS, VERDICT_WORDS, model_limits_html, signoff_html
 
 COLUMNS = ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "failures", "master_seed")
@@ -78,7 +78,7 @@ def allowable_sentence(s):
 
 def failure_text(at, html=True):
     col = f"<code>{esc(at['failure_column'])}</code>" if html else at["failure_column"]
-    unit = at.get("failure_units", "")
+    unit = unit_text(at.get("failure_units", ""))
     if at["failure_kind"] == "margin":
         return f"{col} ≤ 0 {unit}".strip()
     return f"{col} {'≥' if at['failure_kind'] == 'above' else '≤'} {fmt(at['failure_threshold'])} {unit}".strip()

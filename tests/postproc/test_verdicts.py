@@ -35,7 +35,11 @@ BANNER = {"pass": "VERDICT: PASS", "fail": "VERDICT: FAIL", "not_assessed": "VER
 SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],     # 4 blocks of 8 + 2
          "free_rail_miss_rare": ["--set", "ensemble.subset.n_per_level=40",
                                  "--set", "ensemble.subset.max_levels=2"],
-         "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"]}
+         "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"],
+         # design sweeps: a small subset simulation at each value
+         "motor_sizing": ["--set", "ensemble.subset.n_per_level=40", "--set", "ensemble.subset.max_levels=2"],
+         "tolerance_allocation": ["--set", "ensemble.subset.n_per_level=40",
+                                  "--set", "ensemble.subset.max_levels=2"]}
 
 
 def check(cond, what):
