@@ -66,6 +66,15 @@ def parse_journal(blob):
     return header, frames
 
 
+def poll_journal_frames(path):
+    """The frames of a journal that a live campaign is writing, or [] while its header is not
+    complete yet (a poller may open the file between its creation and the header's write)."""
+    blob = open(path, "rb").read()
+    if len(blob) < 16 or len(blob) < 16 + struct.unpack_from("<I", blob, 12)[0] + 4:
+        return []
+    return parse_journal(blob)[1]
+
+
 def frame(kind, payload):
     return kind + struct.pack("<II", len(payload), zlib.crc32(kind + payload)) + payload
 
@@ -78,7 +87,7 @@ def killed_journal(args, d, cost=0.02):
     t0 = time.time()
     while time.time() - t0 < 120:
         if os.path.exists(out + ".journal"):
-            _, frames = parse_journal(open(out + ".journal", "rb").read())
+            frames = poll_journal_frames(out + ".journal")
             if sum(k == b"R" for _, k, _ in frames) >= N_RUNS // 3:
                 break
         time.sleep(0.02)

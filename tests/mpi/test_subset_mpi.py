@@ -39,7 +39,7 @@ from scipy.stats import binom, norm
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_campaign_mpi import ENV, check, datasets, fresh, same_values  # noqa: E402
-from test_journal_faults import kill_job, parse_journal  # noqa: E402
+from test_journal_faults import kill_job, poll_journal_frames  # noqa: E402
 
 CAMPAIGN = "campaigns/free_rail_miss_rare.toml"
 N, NC = 100, 10
@@ -175,7 +175,7 @@ def killed_mid_level(args, out):
     journal, t0, seen = out + ".journal", time.time(), (0, 0)
     while time.time() - t0 < 300 and proc.poll() is None:
         if os.path.exists(journal):
-            _, frames = parse_journal(open(journal, "rb").read())
+            frames = poll_journal_frames(journal)
             plans = sum(1 for _, k, _ in frames if k == b"P")
             in_last = sum(1 for _, k, pl in frames if k == b"R" and int.from_bytes(pl[8:16], "little") == plans - 1)
             seen = (plans, in_last)

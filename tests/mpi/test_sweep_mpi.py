@@ -42,7 +42,7 @@ from scipy.stats import beta as beta_dist, norm
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_campaign_mpi import ENV, check, datasets, fresh, same_values  # noqa: E402
-from test_journal_faults import kill_job, parse_journal  # noqa: E402
+from test_journal_faults import kill_job, poll_journal_frames  # noqa: E402
 
 SIGMA = 0.001
 Z_TARGET = -norm.ppf(1e-6)
@@ -224,7 +224,7 @@ def kill_mid(args, out):
     journal, t0, plans = out + ".journal", time.time(), 0
     while time.time() - t0 < 300 and proc.poll() is None:
         if os.path.exists(journal):
-            _, frames = parse_journal(open(journal, "rb").read())
+            frames = poll_journal_frames(journal)
             plans = sum(1 for _, k, _ in frames if k == b"P")
             if plans >= 12:
                 break
