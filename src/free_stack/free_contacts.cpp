@@ -11,11 +11,7 @@ namespace truss::stages {
 
 using namespace truss::model;
 
-void ContactLayout::expand(const double* cluster, double* frame) const {
-  if (!enabled) {
-    for (int k = 0; k < frames; ++k) frame[k] = cluster[k];
-    return;
-  }
+void ContactLayout::expand_clusters(const double* cluster, double* frame) const {
   const int C = static_cast<int>(starts.size());
   for (int c = 0; c < C; ++c) {
     const int q = c + 1 < C ? starts[static_cast<std::size_t>(c + 1)] : frames;

@@ -12,6 +12,7 @@
 // The tolerances keep an event from firing at the instant the contact was just made or broken
 // (the gap starts at 0, the force at 0) and are far below the integration error of the heights.
 #pragma once
+#include <algorithm>
 #include <vector>
 
 #include "model/frames.hpp"
@@ -31,7 +32,13 @@ struct ContactLayout {
   bool reduces() const { return enabled && static_cast<int>(starts.size()) != frames; }
   int clusters() const { return enabled ? static_cast<int>(starts.size()) : frames; }
   // Cluster values (one per cluster) to frame values (frames lo..top).
-  void expand(const double* cluster, double* frame) const;
+  void expand(const double* cluster, double* frame) const {
+    if (enabled) expand_clusters(cluster, frame);
+    else std::copy(cluster, cluster + frames, frame);  // one frame a cluster
+  }
+
+ private:
+  void expand_clusters(const double* cluster, double* frame) const;
 };
 
 // The watched contact quantities at one state (see above) and where they are.

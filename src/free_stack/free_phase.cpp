@@ -14,8 +14,9 @@ namespace truss::stages {
 
 using namespace truss::model;
 
-FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m)
+FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m, const BayConstants* bays)
     : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), rail_(calc_rail_constants(ctx.mast->rail)) {
+  active_.bays = bays;
   active_.lo = lo;
   active_.m = ctx.bay;
   active_.locked_mass_kg = ctx.locked_mass_kg;
@@ -26,8 +27,9 @@ FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m)
 
 void FreePhaseA::expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const {
   const int first = std::max(lo_ - 1, 0), off = lo_ - first;
-  ys.assign(static_cast<std::size_t>(ctx_.bay - first + 1), held_height_m_);
-  vs.assign(ys.size(), 0.0);
+  ys.resize(static_cast<std::size_t>(ctx_.bay - first + 1));
+  vs.resize(ys.size());
+  if (off > 0) { ys[0] = held_height_m_; vs[0] = 0.0; }  // frame lo - 1, held
   layout_.expand(q, ys.data() + off);
   layout_.expand(qdot, vs.data() + off);
 }
@@ -139,7 +141,7 @@ bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratc
   return true;
 }
 
-void FreePhaseA::fill_bay_energies(const MastParams& mast, int lo, int m, const double* ys, int first, const Eigen::VectorXd& diag,
+void FreePhaseA::fill_bay_energies(const BayConstants* bays, int lo, int m, const double* ys, int first, const Eigen::VectorXd& diag,
                                    const Eigen::VectorXd& sub, const double* qdot, PhasePoint& p) {
   double T = 0.0, U = 0.0, tension = 0.0;
   for (Eigen::Index k = 0; k < diag.size(); ++k) {
@@ -147,11 +149,11 @@ void FreePhaseA::fill_bay_energies(const MastParams& mast, int lo, int m, const 
     if (k > 0) T += sub[k] * qdot[k] * qdot[k - 1];
   }
   for (int i = std::max(lo, 1); i <= m; ++i) {
-    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    const DiagonalConstants& c = bays[i].diagonals;
     const double Di = ys[i - first] - ys[i - 1 - first];
-    U += calc_bay_potential_J(mast.bay(i), b2, Di);
+    U += calc_bay_potential_J(c, Di);
     p.min_bay_opening_m = std::min(p.min_bay_opening_m, Di);
-    tension = std::max(tension, calc_diagonal_tension_N(mast.bay(i), b2, Di));
+    tension = std::max(tension, calc_diagonal_tension_N(c, Di));
   }
   p.kinetic_energy_J = T;
   p.potential_energy_J = U;
@@ -239,7 +241,7 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   p.hinge_x_m = calc_hinge_offset_m(mast.bay(m), D);
   p.hinge_y_m = 0.5 * (p.y_driven_m + p.y_lower_m);
   p.rail_distance_m = model::calc_rail_function_m(mast.rail, rail_, p.hinge_x_m, p.hinge_y_m) * std::sin(mast.rail.beta_rad);
-  fill_bay_energies(mast, lo_, m, work_.point_ys.data(), std::max(lo_ - 1, 0), *mo.diag, *mo.sub, qdot, p);
+  fill_bay_energies(active_.bays, lo_, m, work_.point_ys.data(), std::max(lo_ - 1, 0), *mo.diag, *mo.sub, qdot, p);
   p.static_drive_force_N = model::calc_open_static_drive_force_N(-sys.spring_forces[sys.spring_forces.size() - 1]);
   p.mass_yy = (*mo.diag)[n - 1];
   return p;

@@ -38,8 +38,9 @@ namespace truss::stages {
 
 class FreePhaseA final : public PhaseModel {
  public:
-  // ctx.bay = m; frames lo..m move; frames below lo are held at height held_height_m.
-  FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m);
+  // ctx.bay = m; frames lo..m move; frames below lo are held at height held_height_m. bays: the
+  // mast's bay constants (model::calc_bay_table), kept by the caller for the phase's life.
+  FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m, const model::BayConstants* bays);
   int dof() const override { return layout_.clusters(); }
   const PhaseContext& context() const override { return ctx_; }
   // Stack contacts: clusters of frames lo..m (the driven frame m alone in the last one).
@@ -93,9 +94,9 @@ class FreePhaseA final : public PhaseModel {
   static void fill_locked_heights(const model::MastParams& mast, int m, double* y);
   // The point's kinetic energy (from the phase's mass matrix diag, sub), and the potential energy,
   // smallest opening and largest diagonal tension of the moving bays max(lo, 1)..m (ys: heights of
-  // frames first..m). One computation for phases A and B, so that the energy ledger and the peaks
-  // see the same quantities on either side of rail entry.
-  static void fill_bay_energies(const model::MastParams& mast, int lo, int m, const double* ys, int first,
+  // frames first..m; bays: the bay constants). One computation for phases A and B, so that the
+  // energy ledger and the peaks see the same quantities on either side of rail entry.
+  static void fill_bay_energies(const model::BayConstants* bays, int lo, int m, const double* ys, int first,
                                 const Eigen::VectorXd& diag, const Eigen::VectorXd& sub, const double* qdot, PhasePoint& p);
 
  private:

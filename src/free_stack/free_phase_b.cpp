@@ -15,8 +15,9 @@ namespace truss::stages {
 
 using namespace truss::model;
 
-FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s)
+FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s, const BayConstants* bays)
     : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), alpha_(alpha_per_s), rail_(calc_rail_constants(ctx.mast->rail)) {
+  active_.bays = bays;
   active_.lo = lo;
   active_.m = ctx.bay;
   active_.bay_m_in_hinge_coordinate = true;
@@ -28,8 +29,9 @@ FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, do
 
 void FreePhaseB::expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const {
   const int n = dof(), m = ctx_.bay, first = std::max(lo_ - 1, 0), off = lo_ - first;
-  ys.assign(static_cast<std::size_t>(m - first + 1), held_height_m_);
-  vs.assign(ys.size(), 0.0);
+  ys.resize(static_cast<std::size_t>(m - first + 1));
+  vs.resize(ys.size());
+  if (off > 0) { ys[0] = held_height_m_; vs[0] = 0.0; }  // frame lo - 1, held
   layout_.expand(q, ys.data() + off);
   layout_.expand(qdot, vs.data() + off);
   const double x = q[n - 1], l = ctx_.mast->bay(m).strut_length_m, s = std::sqrt(l * l - x * x);
@@ -216,7 +218,7 @@ PhasePoint FreePhaseB::evaluate(const double* q, const double* qdot, double* qdd
   p.lambda_N = mo.lambda_N;
   p.pin_force_N = calc_pin_force_N(rail_, mo.lambda_N);
   p.rail_residual_m = std::abs(calc_rail_function_m(q));
-  FreePhaseA::fill_bay_energies(mast, lo_, m, ys.data(), std::max(lo_ - 1, 0), diag, sub, qdot, p);
+  FreePhaseA::fill_bay_energies(active_.bays, lo_, m, ys.data(), std::max(lo_ - 1, 0), diag, sub, qdot, p);
   p.mass_yy = diag[n - 2]; p.mass_yx = sub[n - 1]; p.mass_xx = diag[n - 1];
   p.rail_slope = c - x / s;
   // At rest with the hinge at x, bays 1..m-1 below frame m-1 pull with their chain's equilibrium tension.
@@ -224,8 +226,7 @@ PhasePoint FreePhaseB::evaluate(const double* q, const double* qdot, double* qdd
   // may leave that scratch holding another state's system).
   const double y_l = q[n - 2];
   const double pull = m >= 2 ? calc_chain_pull_N(mast, 1, m - 1, y_l - held_height_m_, chain_slack_span_m_) : 0.0;
-  const double bay_pull_N =
-      calc_bay_dU_dD_N(mast.bay(m), calc_diagonal_offset_sq_m2(mast.frame(m - 1), mast.frame(m)), ys.back() - y_l);
+  const double bay_pull_N = calc_bay_dU_dD_N(active_.bays[m].diagonals, ys.back() - y_l);
   p.static_drive_force_N = calc_on_rail_static_drive_force_N(c, x / s, bay_pull_N, pull);
   return p;
 }

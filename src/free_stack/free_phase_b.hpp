@@ -33,8 +33,9 @@ namespace truss::stages {
 class FreePhaseB final : public PhaseModel {
  public:
   // ctx.bay = m; frames lo..m-1 and x move; frames below lo are held at held_height_m.
-  // alpha: Baumgarte rate (1/s) of the rail and drive-speed constraints.
-  FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s);
+  // alpha: Baumgarte rate (1/s) of the rail and drive-speed constraints. bays: the mast's bay
+  // constants (model::calc_bay_table), kept by the caller for the phase's life.
+  FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s, const model::BayConstants* bays);
   int dof() const override { return layout_.clusters() + 1; }
   // Stack contacts: clusters of frames lo..m-1.
   void set_contacts(ContactLayout layout) {

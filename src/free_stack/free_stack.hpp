@@ -115,6 +115,7 @@ class FreeStack {
   FreeContactEvent land(const PhaseContext& ctx, int bay, bool drive_holds_speed);  // plastic landing of bay's contact
   void open_contact(int j);
   const model::MastParams& mast_;
+  std::vector<model::BayConstants> bays_;  // the bays' constants of the frame system (model/frames.hpp)
   const bool contacts_;
   std::vector<double> y_, v_;  // frames 0..n (frames above the driven one: not used)
   std::vector<char> closed_;   // contacts: closed_[i], bay i's contact D_i = 0 is closed
