@@ -12,6 +12,8 @@
 //     system C' M^-1 C mu = s - C' M^-1 r from the last two rows of the sweeps, and one back
 //     substitution of r + C mu -- the cost of a single tridiagonal solve.
 // diag[k] = M[k,k], sub[k] = M[k,k-1] (sub[0] unused), as model/frames.hpp assembles them.
+// The sweeps carry the previous row's values in locals, not through the work vectors, so that the
+// chain of dependent divisions does not also wait on a store and a load per row.
 #pragma once
 #include <Eigen/Core>
 
@@ -30,17 +32,21 @@ inline bool solve_tridiagonal(const Eigen::Ref<const Eigen::VectorXd>& diag, con
   w.d.resize(n);
   double piv = diag[0];
   if (!(piv > 0.0)) return false;
-  w.c[0] = n > 1 ? sub[1] / piv : 0.0;
-  w.d[0] = r[0] / piv;
+  double c = n > 1 ? sub[1] / piv : 0.0, d = r[0] / piv;
+  w.c[0] = c;
+  w.d[0] = d;
   for (Eigen::Index k = 1; k < n; ++k) {
-    piv = diag[k] - sub[k] * w.c[k - 1];
+    piv = diag[k] - sub[k] * c;
     if (!(piv > 0.0)) return false;
-    w.c[k] = k + 1 < n ? sub[k + 1] / piv : 0.0;
-    w.d[k] = (r[k] - sub[k] * w.d[k - 1]) / piv;
+    c = k + 1 < n ? sub[k + 1] / piv : 0.0;
+    d = (r[k] - sub[k] * d) / piv;
+    w.c[k] = c;
+    w.d[k] = d;
   }
   x.resize(n);
-  x[n - 1] = w.d[n - 1];
-  for (Eigen::Index k = n - 2; k >= 0; --k) x[k] = w.d[k] - w.c[k] * x[k + 1];
+  double xk = d;
+  x[n - 1] = xk;
+  for (Eigen::Index k = n - 2; k >= 0; --k) x[k] = xk = w.d[k] - w.c[k] * xk;
   return true;
 }
 
@@ -70,14 +76,17 @@ inline bool solve_tail_constrained(const Eigen::VectorXd& diag, const Eigen::Vec
   w.d.resize(n);
   double piv = diag[0], piv_tail[2] = {0.0, 0.0};
   if (!(piv > 0.0)) return false;
-  w.c[0] = sub[1] / piv;
-  w.d[0] = r[0] / piv;
+  double c = sub[1] / piv, d = r[0] / piv;
+  w.c[0] = c;
+  w.d[0] = d;
   piv_tail[0] = piv;  // n == 2: row n-2 is row 0
   for (Eigen::Index i = 1; i < n; ++i) {
-    piv = diag[i] - sub[i] * w.c[i - 1];
+    piv = diag[i] - sub[i] * c;
     if (!(piv > 0.0)) return false;
-    w.c[i] = i + 1 < n ? sub[i + 1] / piv : 0.0;
-    w.d[i] = (r[i] - sub[i] * w.d[i - 1]) / piv;
+    c = i + 1 < n ? sub[i + 1] / piv : 0.0;
+    d = (r[i] - sub[i] * d) / piv;
+    w.c[i] = c;
+    w.d[i] = d;
     if (i >= n - 2) piv_tail[i - (n - 2)] = piv;
   }
   // Rows n-2, n-1 of the forward sweep (e) and of the solution (z) for r (index 2) and each column.
@@ -111,8 +120,9 @@ inline bool solve_tail_constrained(const Eigen::VectorXd& diag, const Eigen::Vec
     w.d[b] += mu[j] * e1[j];
   }
   x.resize(n);
-  x[b] = w.d[b];
-  for (Eigen::Index i = n - 2; i >= 0; --i) x[i] = w.d[i] - w.c[i] * x[i + 1];
+  double xi = w.d[b];
+  x[b] = xi;
+  for (Eigen::Index i = n - 2; i >= 0; --i) x[i] = xi = w.d[i] - w.c[i] * xi;
   return true;
 }
 
