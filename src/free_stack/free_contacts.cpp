@@ -63,7 +63,7 @@ ContactWatch calc_contact_watch(const PhaseModel& phase, const ContactLayout& la
   std::vector<double>& a = work.a;
   acc.resize(static_cast<std::size_t>(phase.dof()));
   a.resize(static_cast<std::size_t>(layout.frames));
-  phase.calc_point(q, qdot, acc.data(), sys);
+  phase.calc_motion(q, qdot, acc.data(), sys);
   layout.expand(acc.data(), a.data());
   const PhaseContext& ctx = phase.context();
   return calc_contact_watch(*ctx.mast, layout, lo, ctx.bay, ys, vs, std::max(lo - 1, 0), sys, a.data());

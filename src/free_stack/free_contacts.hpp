@@ -62,7 +62,7 @@ struct ContactWatchWork {
   std::vector<double> acc, a;
 };
 // The same for a free phase at (q, q'): the accelerations from the phase's own evaluation
-// (calc_point), so that the watched contact forces are those of the motion being integrated.
+// (calc_motion), so that the watched contact forces are those of the motion being integrated.
 // ys, vs: the phase's frame heights and velocities at (q, q') as above.
 ContactWatch calc_contact_watch(const PhaseModel& phase, const ContactLayout& layout, int lo, const double* q,
                                 const double* qdot, const double* ys, const double* vs, ContactWatchWork& work);

@@ -142,16 +142,17 @@ bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratc
 }
 
 void FreePhaseA::fill_bay_energies(const BayConstants* bays, int lo, int m, const double* ys, int first, const Eigen::VectorXd& diag,
-                                   const Eigen::VectorXd& sub, const double* qdot, PhasePoint& p) {
+                                   const Eigen::VectorXd& sub, const double* qdot, PhasePoint& p, PointFields fields) {
+  const bool energies = fields == PointFields::all;
   double T = 0.0, U = 0.0, tension = 0.0;
-  for (Eigen::Index k = 0; k < diag.size(); ++k) {
+  for (Eigen::Index k = 0; energies && k < diag.size(); ++k) {
     T += 0.5 * diag[k] * qdot[k] * qdot[k];
     if (k > 0) T += sub[k] * qdot[k] * qdot[k - 1];
   }
   for (int i = std::max(lo, 1); i <= m; ++i) {
     const DiagonalConstants& c = bays[i].diagonals;
     const double Di = ys[i - first] - ys[i - 1 - first];
-    U += calc_bay_potential_J(c, Di);
+    if (energies) U += calc_bay_potential_J(c, Di);
     p.min_bay_opening_m = std::min(p.min_bay_opening_m, Di);
     tension = std::max(tension, calc_diagonal_tension_N(c, Di));
   }
@@ -225,7 +226,7 @@ double FreePhaseA::calc_motion(const double* q, const double* qdot, double* qddo
   return solve_motion(q, qdot, qddot, sys).drive_force_N * qdot[dof() - 1];
 }
 
-PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
+PhasePoint FreePhaseA::evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, PointFields fields) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
   const Motion mo = solve_motion(q, qdot, qddot, sys);
@@ -241,7 +242,7 @@ PhasePoint FreePhaseA::calc_point(const double* q, const double* qdot, double* q
   p.hinge_x_m = calc_hinge_offset_m(mast.bay(m), D);
   p.hinge_y_m = 0.5 * (p.y_driven_m + p.y_lower_m);
   p.rail_distance_m = model::calc_rail_function_m(mast.rail, rail_, p.hinge_x_m, p.hinge_y_m) * std::sin(mast.rail.beta_rad);
-  fill_bay_energies(active_.bays, lo_, m, work_.point_ys.data(), std::max(lo_ - 1, 0), *mo.diag, *mo.sub, qdot, p);
+  fill_bay_energies(active_.bays, lo_, m, work_.point_ys.data(), std::max(lo_ - 1, 0), *mo.diag, *mo.sub, qdot, p, fields);
   p.static_drive_force_N = model::calc_open_static_drive_force_N(-sys.spring_forces[sys.spring_forces.size() - 1]);
   p.mass_yy = (*mo.diag)[n - 1];
   return p;

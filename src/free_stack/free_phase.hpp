@@ -51,7 +51,13 @@ class FreePhaseA final : public PhaseModel {
   ContactWatch calc_contact_watch(const double* q, const double* qdot) const;
   // The mass matrix in the phase's coordinates (diag, sub; the contact impacts).
   void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;
-  PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
+  PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override {
+    return evaluate(q, qdot, qddot, scratch, PointFields::all);
+  }
+  // The peaks' part of calc_point (PointFields::loads): all but the kinetic and potential energy.
+  PhasePoint calc_loads(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override {
+    return evaluate(q, qdot, qddot, scratch, PointFields::loads);
+  }
   // Time stepping's part of calc_point: the accelerations and the drive power F y_m'.
   double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
   double calc_driven_speed_m_per_s(const double*, const double* qdot) const override { return qdot[dof() - 1]; }
@@ -94,10 +100,12 @@ class FreePhaseA final : public PhaseModel {
   static void fill_locked_heights(const model::MastParams& mast, int m, double* y);
   // The point's kinetic energy (from the phase's mass matrix diag, sub), and the potential energy,
   // smallest opening and largest diagonal tension of the moving bays max(lo, 1)..m (ys: heights of
-  // frames first..m; bays: the bay constants). One computation for phases A and B, so that the
-  // energy ledger and the peaks see the same quantities on either side of rail entry.
+  // frames first..m; bays: the bay constants); PointFields::loads: the opening and the tension
+  // alone. One computation for phases A and B, so that the energy ledger and the peaks see the
+  // same quantities on either side of rail entry.
   static void fill_bay_energies(const model::BayConstants* bays, int lo, int m, const double* ys, int first,
-                                const Eigen::VectorXd& diag, const Eigen::VectorXd& sub, const double* qdot, PhasePoint& p);
+                                const Eigen::VectorXd& diag, const Eigen::VectorXd& sub, const double* qdot, PhasePoint& p,
+                                PointFields fields = PointFields::all);
 
  private:
   PhaseContext ctx_;
@@ -116,6 +124,7 @@ class FreePhaseA final : public PhaseModel {
     double drive_force_N;
   };
   Motion solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const;
+  PhasePoint evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, PointFields fields) const;
   int rail_touch() const { return ctx_.direction > 0 ? 1 : 0; }  // deployment: the rail is a touch
   // Frame heights and velocities from frame max(lo - 1, 0) to m (the held frame lo - 1 included).
   void expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const;

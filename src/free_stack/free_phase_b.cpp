@@ -42,7 +42,7 @@ void FreePhaseB::expand_frames(const double* q, const double* qdot, std::vector<
 void FreePhaseB::calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const {
   std::vector<double> acc(static_cast<std::size_t>(dof()));
   PhaseScratch sys;
-  const PhasePoint p = evaluate(q, qdot, acc.data(), sys, &diag, &sub);
+  const PhasePoint p = evaluate(q, qdot, acc.data(), sys, &diag, &sub, PointFields::loads);
   (void)p;
 }
 
@@ -123,13 +123,13 @@ bool FreePhaseB::assemble(const double* q, const double* qdot, PhaseScratch& sys
   t.diag[n - 1] = k * k * A_mm + 2.0 * g;
   t.rhs[n - 2] = R_l + R_m - (A_ml + A_mm) * h;
   t.rhs[n - 1] = -k * (R_m - A_mm * h) - dg * xi2;
+  // a and b are zero but on the last two rows (written here, the other rows only by the resize).
   Eigen::VectorXd& a = t.c[0];
   Eigen::VectorXd& b = t.c[1];
-  a = Eigen::VectorXd::Zero(n);
-  b = Eigen::VectorXd::Zero(n);
+  if (a.size() != n || b.size() != n) { a.setZero(n); b.setZero(n); }
   a[n - 2] = 1.0; a[n - 1] = c - x / s;
   b[n - 2] = 1.0; b[n - 1] = -k;
-  const double f = y_l + s - rail_.axis_height_m + c * x, fdot = a.dot(Eigen::Map<const Eigen::VectorXd>(qdot, n));
+  const double f = y_l + s - rail_.axis_height_m + c * x, fdot = qdot[n - 2] + a[n - 1] * qdot[n - 1];  // f' = a . dq/dt
   t.s[0] = l * l / (s * s * s) * xi2 - 2.0 * alpha_ * fdot - alpha_ * alpha_ * f;
   t.driven_speed_m_per_s = u;
   t.num_multipliers = num_multipliers();
@@ -199,7 +199,7 @@ double FreePhaseB::calc_motion(const double* q, const double* qdot, double* qddo
 }
 
 PhasePoint FreePhaseB::evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, Eigen::VectorXd* mass_diag,
-                                Eigen::VectorXd* mass_sub) const {
+                                Eigen::VectorXd* mass_sub, PointFields fields) const {
   const MastParams& mast = *ctx_.mast;
   const int n = dof(), m = ctx_.bay;
   const double l = mast.bay(m).strut_length_m, c = rail_.cot_beta;
@@ -218,7 +218,7 @@ PhasePoint FreePhaseB::evaluate(const double* q, const double* qdot, double* qdd
   p.lambda_N = mo.lambda_N;
   p.pin_force_N = calc_pin_force_N(rail_, mo.lambda_N);
   p.rail_residual_m = std::abs(calc_rail_function_m(q));
-  FreePhaseA::fill_bay_energies(active_.bays, lo_, m, ys.data(), std::max(lo_ - 1, 0), diag, sub, qdot, p);
+  FreePhaseA::fill_bay_energies(active_.bays, lo_, m, ys.data(), std::max(lo_ - 1, 0), diag, sub, qdot, p, fields);
   p.mass_yy = diag[n - 2]; p.mass_yx = sub[n - 1]; p.mass_xx = diag[n - 1];
   p.rail_slope = c - x / s;
   // At rest with the hinge at x, bays 1..m-1 below frame m-1 pull with their chain's equilibrium tension.

@@ -48,7 +48,11 @@ class FreePhaseB final : public PhaseModel {
   void calc_mass(const double* q, const double* qdot, Eigen::VectorXd& diag, Eigen::VectorXd& sub) const;
   const PhaseContext& context() const override { return ctx_; }
   PhasePoint calc_point(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override {
-    return evaluate(q, qdot, qddot, scratch, nullptr, nullptr);
+    return evaluate(q, qdot, qddot, scratch, nullptr, nullptr, PointFields::all);
+  }
+  // The peaks' part of calc_point (PointFields::loads): all but the kinetic and potential energy.
+  PhasePoint calc_loads(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override {
+    return evaluate(q, qdot, qddot, scratch, nullptr, nullptr, PointFields::loads);
   }
   // Time stepping's part of calc_point: the accelerations and the drive power F y_m'.
   double calc_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& scratch) const override;
@@ -90,7 +94,7 @@ class FreePhaseB final : public PhaseModel {
   };
   Motion solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const;
   PhasePoint evaluate(const double* q, const double* qdot, double* qddot, PhaseScratch& sys, Eigen::VectorXd* mass_diag,
-                      Eigen::VectorXd* mass_sub) const;
+                      Eigen::VectorXd* mass_sub, PointFields fields) const;
   // Heights and velocities of frames max(lo - 1, 0)..m (frame m from x).
   void expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const;
 };

@@ -111,9 +111,10 @@ class PhasePeaks {
   // state: (q, q', q'') of the sample, 3 dof values (nullptr, 0 in closed form).
   void feed(double t, const PhasePoint& p, const double* state = nullptr, int n = 0);
   // eval(t, span) gives the phase point at t inside the span [a, b] of two consecutive samples.
-  // first: the earliest of equal maxima, else the highest sample's.
+  // first: the earliest of equal maxima, else the highest sample's. search false: the quantity is
+  // the same at every instant of the phase, its best sample is its peak (no evaluation).
   template <class Eval>
-  void refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time) const;
+  void refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time, bool search = true) const;
   double best(int q) const { return b_[static_cast<std::size_t>(q)].top.value; }
   // Whether the earliest of equal maxima is another than the highest sample's.
   bool has_earlier_tie(int q) const {
@@ -176,26 +177,28 @@ class PeakTracker {
     if (q == kRailApproach) return stage_rail_approach;
     return run[static_cast<std::size_t>(q)];
   }
-  // Refines each quantity of a finished phase whose best sample could beat the record.
+  // Refines each quantity of a finished phase whose best sample could beat the record; bit q of
+  // constant set: quantity q is the same at every instant of the phase (not searched).
   template <class Eval>
-  void absorb(const PhasePeaks& pp, Eval&& eval, double xtol) {
+  void absorb(const PhasePeaks& pp, Eval&& eval, double xtol, unsigned constant = 0) {
     max_rail_residual = std::max(max_rail_residual, pp.max_rail_residual);
     for (int q = 0; q < kQuantityCount; ++q) {
       Extremum& tr = target(q);
       if (!could_improve(q, pp.best(q))) continue;
+      const bool search = !((constant >> q) & 1u);
       double v, t;
       if (pp.has_earlier_tie(q)) {  // the first of equal maxima, then the highest
-        pp.refine(q, true, eval, xtol, v, t);
+        pp.refine(q, true, eval, xtol, v, t, search);
         tr.offer(v, t, bay);
       }
-      pp.refine(q, false, eval, xtol, v, t);
+      pp.refine(q, false, eval, xtol, v, t, search);
       tr.offer(v, t, bay);
     }
   }
 };
 
 template <class Eval>
-void PhasePeaks::refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time) const {
+void PhasePeaks::refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time, bool search) const {
   const Hill& b = first ? b_[static_cast<std::size_t>(q)].first : b_[static_cast<std::size_t>(q)].top;
   value = b.value;
   time = kNaN;
@@ -204,7 +207,7 @@ void PhasePeaks::refine(int q, bool first, Eval&& eval, double xtol, double& val
   const Sample& best = get(b, 1);
   const Sample& next = get(b, 2);
   time = best.t;
-  if (!std::isfinite(b.value)) return;
+  if (!std::isfinite(b.value) || !search) return;
   for (const HermiteSpan span : {HermiteSpan{&prev, &best}, HermiteSpan{&best, &next}}) {
     const double len = span.b->t - span.a->t;
     if (!(len > 0.0)) continue;

@@ -262,13 +262,15 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
     ++out.evals;
   }
   out.end_state.assign(y.begin(), y.begin() + 2 * n);
-  // Peaks of the phase: best step-end samples refined on the Hermite interpolant.
+  // Peaks of the phase: best step-end samples refined on the Hermite interpolant. Off the rail the
+  // pin force is zero at every instant (PhasePoint::pin_force_N): nothing to search.
   std::vector<double> q(static_cast<std::size_t>(n)), qd(static_cast<std::size_t>(n));
+  const unsigned constant = model_.context().kind == PhaseKind::open ? 1u << kPin : 0u;
   sinks.peaks.absorb(sinks.phase_peaks, [&](double tt, const HermiteSpan& span) {
     span.calc(tt, q.data(), qd.data());
     ++out.evals;
     return model_.calc_loads(q.data(), qd.data(), qddot.data(), scratch);
-  }, 1e-10 * std::max(1.0, out.t_end_s));
+  }, 1e-10 * std::max(1.0, out.t_end_s), constant);
   if (reached) return out;
   out.end = model_.calc_point(y.data(), y.data() + n, qddot.data(), scratch);
   out.message = sum.message;
