@@ -16,7 +16,8 @@ using namespace truss::model;
 
 FreePhaseA::FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m, const BayConstants* bays)
     : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), rail_(calc_rail_constants(ctx.mast->rail)) {
-  active_.bays = bays;
+  if (!bays) own_bays_ = calc_bay_table(*ctx.mast);
+  active_.bays = bays ? bays : own_bays_.data();
   active_.lo = lo;
   active_.m = ctx.bay;
   active_.locked_mass_kg = ctx.locked_mass_kg;

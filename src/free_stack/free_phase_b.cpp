@@ -17,7 +17,8 @@ using namespace truss::model;
 
 FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s, const BayConstants* bays)
     : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), alpha_(alpha_per_s), rail_(calc_rail_constants(ctx.mast->rail)) {
-  active_.bays = bays;
+  if (!bays) own_bays_ = calc_bay_table(*ctx.mast);
+  active_.bays = bays ? bays : own_bays_.data();
   active_.lo = lo;
   active_.m = ctx.bay;
   active_.bay_m_in_hinge_coordinate = true;
