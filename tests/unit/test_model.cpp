@@ -45,15 +45,23 @@ double paper_U(const MastParams& mast, const std::vector<double>& y, int top) {
 
 TEST_CASE("mass matrix, velocity terms and spring forces match finite differences of the paper's energies", "[model]") {
   // J_c = 2.7 m_s l_s^2/12 (make_uneven_mast): misprint 1 of docs/model.md would show here.
-  for (bool panels : {false, true}) {
+  // Openings 0.05-0.22 m: every bay slack (taut from about 0.27 m); openings 0.30 m: bays 2 and 4
+  // taut. With and without the bay table (its slack bound skips the square root of slack bays).
+  for (int combo = 0; combo < 8; ++combo) {
+    const bool panels = combo & 1, taut = combo & 2, table = combo & 4;
     MastParams mast = make_uneven_mast(6);
     if (panels) mast.panels = PanelParams{12, 0.9, 0.3, 0.36};
+    const std::vector<BayConstants> bays = calc_bay_table(mast);
     ActiveFrames a;
     a.lo = 1; a.m = 4; a.locked_mass_kg = 2.2; a.panel_height_offset_m = 0.8;
-    std::vector<double> y = {0.0, 0.05, 0.21, 0.40, 0.62, 0.0, 0.0};
+    if (table) a.bays = bays.data();
+    std::vector<double> y = taut ? std::vector<double>{0.0, 0.05, 0.35, 0.50, 0.80, 0.0, 0.0}
+                                 : std::vector<double>{0.0, 0.05, 0.21, 0.40, 0.62, 0.0, 0.0};
     std::vector<double> v = {0.0, 0.03, -0.07, 0.11, 0.09, 0.0, 0.0};
     FrameSystem sys;
     calc_frame_system(mast, a, y.data(), v.data(), 0, sys);
+    INFO("panels " << panels << " taut " << taut << " table " << table);
+    if (taut) CHECK(sys.spring_forces[1] != 0.0);
     const int N = a.size();
     // M_jk = d2T / dv_j dv_k: T is quadratic in v, so a central difference is exact up to rounding.
     const double hv = 1e-3;
@@ -192,6 +200,68 @@ TEST_CASE("diagonals: tension only, tension and potential consistent", "[model]"
   CHECK(calc_bay_dU_dD_N(b, b2, D) == Approx(6 * calc_diagonal_tension_N(b, b2, D) * D / calc_diagonal_length_m(b2, D)).epsilon(1e-13));
   // equal frames: the offset is the frame side
   CHECK(calc_diagonal_offset_sq_m2({0.36, 0.5}, {0.36, 0.5}) == Approx(0.36 * 0.36).epsilon(1e-15));
+}
+
+// The slack bound (DiagonalConstants): at and below it the stretch sqrt(b^2 + D^2) - l_0, computed
+// here as the paper writes it, is not positive, so the laws' zero without the square root is
+// their exact value; and it lies within 1e-8 relative of the exact l_0^2 - b^2 (a bound far below
+// it would leave the square root in most slack bays). Above the taut opening the laws with the
+// bound are those without it, bit for bit.
+TEST_CASE("diagonals: the slack bound gives the exact zero and is tight", "[model]") {
+  const MastParams mast = make_uneven_mast(8);
+  for (int i = 1; i <= mast.n_bays(); ++i) {
+    const BayParams& b = mast.bay(i);
+    const double b2 = calc_diagonal_offset_sq_m2(mast.frame(i - 1), mast.frame(i));
+    const double l0 = b.diagonal_free_length_m, t = calc_slack_opening_sq_m2(b2, l0);
+    INFO("bay " << i);
+    REQUIRE(t > 0.0);
+    CHECK(t <= l0 * l0 - b2);
+    CHECK(t >= (l0 * l0 - b2) * (1.0 - 1e-8));
+    // The largest D whose D * D is at the bound, and D = 0: the paper's stretch is not positive.
+    double D = std::sqrt(t);
+    while (D * D > t) D = std::nextafter(D, 0.0);
+    while (std::nextafter(D, 1.0) * std::nextafter(D, 1.0) <= t) D = std::nextafter(D, 1.0);
+    for (double d : {0.0, D, -D}) CHECK(std::sqrt(b2 + d * d) - l0 <= 0.0);
+    const DiagonalConstants with = calc_bay_table(mast)[static_cast<std::size_t>(i)].diagonals;
+    CHECK(with.slack_opening_sq_m2 == t);
+    const double Dt = calc_taut_opening_m(b, b2);
+    for (double d : {0.5 * Dt, D, Dt * (1.0 + 1e-6), 1.2 * Dt}) {
+      CHECK(calc_bay_dU_dD_N(with, d) == calc_bay_dU_dD_N(b, b2, d));
+      CHECK(calc_diagonal_tension_N(with, d) == calc_diagonal_tension_N(b, b2, d));
+      CHECK(calc_bay_potential_J(with, d) == calc_bay_potential_J(b, b2, d));
+    }
+    CHECK(calc_diagonal_tension_N(with, Dt * (1.0 + 1e-6)) > 0.0);
+  }
+  // Taut at D = 0 (l_0 < b): no bound.
+  CHECK(calc_slack_opening_sq_m2(0.36 * 0.36, 0.30) == -1.0);
+}
+
+// The frame system with the bays' constants kept (model::calc_bay_table) is the one computed from
+// the parameters at each evaluation, bit for bit, whichever bays are slack or taut.
+TEST_CASE("frame system: the same bits with and without the bay table", "[model]") {
+  const MastParams mast = make_uneven_mast(12);
+  const std::vector<BayConstants> bays = calc_bay_table(mast);
+  for (int lo : {0, 1, 4}) {
+    ActiveFrames a, t;
+    a.lo = t.lo = lo; a.m = t.m = 11; a.locked_mass_kg = t.locked_mass_kg = 1.7;
+    a.bay_m_in_hinge_coordinate = t.bay_m_in_hinge_coordinate = lo == 4;
+    t.bays = bays.data();
+    std::vector<double> y(13), v(13);
+    for (int k = 0; k <= 12; ++k) {
+      y[k] = k == 0 ? 0.0 : y[k - 1] + 0.32 * (0.5 + 0.5 * std::sin(1.3 * k));  // openings 0.01-0.32 m
+      v[k] = k < lo ? 0.0 : 0.05 * std::cos(0.7 * k);
+    }
+    FrameSystem s0, s1;
+    calc_frame_system(mast, a, y.data(), v.data(), 0, s0);
+    calc_frame_system(mast, t, y.data(), v.data(), 0, s1);
+    INFO("lo " << lo);
+    for (int k = 0; k < a.size(); ++k) {
+      CHECK(s1.diag[k] == s0.diag[k]);
+      CHECK((k == 0 || s1.sub[k] == s0.sub[k]));
+      CHECK(s1.velocity_terms[k] == s0.velocity_terms[k]);
+      CHECK(s1.spring_forces[k] == s0.spring_forces[k]);
+    }
+  }
 }
 
 // The rail margin of an entry (model/rail.hpp): the dip below the rail line of phase A continued
