@@ -82,6 +82,11 @@ T calc_peak_quantity(int q, const PhasePointT<T>& p, double direction) {
   }
 }
 
+// The quantities that do not change during a phase of this kind, so that their best sample is their
+// peak (PeakTracker::absorb searches nothing for them): off the rail the pin force, zero there
+// (PhasePoint::pin_force_N). A bit set for each, 1 << quantity.
+inline unsigned find_constant_quantities(PhaseKind kind) { return kind == PhaseKind::open ? 1u << kPin : 0u; }
+
 struct Sample {
   double t = 0;
   PhasePoint p;

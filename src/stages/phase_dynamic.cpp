@@ -262,10 +262,10 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
     ++out.evals;
   }
   out.end_state.assign(y.begin(), y.begin() + 2 * n);
-  // Peaks of the phase: best step-end samples refined on the Hermite interpolant. Off the rail the
-  // pin force is zero at every instant (PhasePoint::pin_force_N): nothing to search.
+  // Peaks of the phase: best step-end samples refined on the Hermite interpolant (the quantities
+  // that do not change in the phase, not searched).
   std::vector<double> q(static_cast<std::size_t>(n)), qd(static_cast<std::size_t>(n));
-  const unsigned constant = model_.context().kind == PhaseKind::open ? 1u << kPin : 0u;
+  const unsigned constant = find_constant_quantities(model_.context().kind);
   sinks.peaks.absorb(sinks.phase_peaks, [&](double tt, const HermiteSpan& span) {
     span.calc(tt, q.data(), qd.data());
     ++out.evals;

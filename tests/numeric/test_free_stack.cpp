@@ -10,6 +10,8 @@
 #include "integrators/dopri54.hpp"
 #include "sim/scene.hpp"
 #include "free_stack/free_phase.hpp"
+#include "free_stack/free_phase_b.hpp"
+#include "stages/peaks.hpp"
 
 using namespace truss;
 using Catch::Detail::Approx;
@@ -231,5 +233,49 @@ TEST_CASE("free phases answer a state asked again with the bits of a fresh phase
     CHECK(p.diagonal_tension_N == pf.diagonal_tension_N);
     CHECK(std::isfinite(p.drive_force_N));
     CHECK(acc2 != acc);  // the state in between was a different one
+  }
+}
+
+// The peaks' search skips the quantities that find_constant_quantities declares constant in a phase
+// of that kind: each must have one value at every state of such a phase (here: states spread over
+// phases A and B of the free stack, torque and velocity drive), and a quantity that changes from
+// state to state must not be declared.
+TEST_CASE("free phases: the quantities declared constant for the peaks do not change", "[numeric][free]") {
+  const model::MastParams mast = make_mast();
+  for (auto mode : {model::DriveMode::torque, model::DriveMode::velocity}) {
+    for (auto kind : {stages::PhaseKind::open, stages::PhaseKind::on_rail}) {
+      stages::PhaseContext ctx;
+      ctx.mast = &mast;
+      ctx.bay = 6;
+      ctx.kind = kind;
+      ctx.locked_mass_kg = mast.tip_mass_kg;
+      ctx.drive.mode = mode;
+      ctx.drive.torque_Nm = 0.01;
+      const stages::FreePhaseA a(ctx, 1, 0.0);
+      const stages::FreePhaseB b(ctx, 1, 0.0, 10.0);
+      const stages::PhaseModel& phase = kind == stages::PhaseKind::open ? static_cast<const stages::PhaseModel&>(a) : b;
+      const int n = phase.dof();
+      std::vector<std::vector<double>> values(stages::kQuantityCount);
+      for (int s = 0; s < 5; ++s) {  // frames opening bay by bay, moving; on the rail x from 0.17 to 0.09 m
+        std::vector<double> q(static_cast<std::size_t>(n)), qd(q.size()), acc(q.size());
+        for (int k = 0; k < n; ++k) {
+          q[k] = 0.01 * (k + 1) + (k >= 3 ? 0.29 * (k - 2) : 0.0) + 0.003 * s * k;
+          qd[k] = 0.01 * std::sin(1.3 * k + s);
+        }
+        if (kind == stages::PhaseKind::on_rail) { q[n - 1] = 0.17 - 0.02 * s; qd[n - 1] = -0.05 - 0.01 * s; }
+        stages::PhaseScratch scratch;
+        const stages::PhasePoint p = phase.calc_loads(q.data(), qd.data(), acc.data(), scratch);
+        for (int i = 0; i < stages::kQuantityCount; ++i) values[i].push_back(stages::calc_peak_quantity(i, p, 1.0));
+      }
+      const unsigned constant = stages::find_constant_quantities(kind);
+      for (int i = 0; i < stages::kQuantityCount; ++i) {
+        bool same = true;
+        for (double v : values[i]) same = same && (v == values[i][0] || (std::isnan(v) && std::isnan(values[i][0])));
+        INFO("mode " << model::to_string(mode) << " on rail " << (kind == stages::PhaseKind::on_rail) << " quantity " << i);
+        if ((constant >> i) & 1u) CHECK(same);
+        if (!same) CHECK(!((constant >> i) & 1u));
+      }
+      CHECK(!values[stages::kForce].empty());
+    }
   }
 }
