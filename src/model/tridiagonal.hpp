@@ -10,7 +10,11 @@
 //     but on the last two rows, the rail and drive rows of the free stack's phase B):
 //     one forward elimination of r, the columns' elimination on their two rows only, the k x k
 //     system C' M^-1 C mu = s - C' M^-1 r from the last two rows of the sweeps, and one back
-//     substitution of r + C mu -- the cost of a single tridiagonal solve.
+//     substitution of r + C mu -- the cost of a single tridiagonal solve. From kTwistedRows rows
+//     on, twisted (a "burn at both ends" factorization, Meurant, SIAM J. Matrix Anal. Appl. 13
+//     (1992) 707): rows 0..p-1 eliminated downwards and rows n-1..p+1 upwards at the same time
+//     (p = n/2), the two chains of dependent divisions side by side, joined at row p; the columns
+//     C ride the upward sweep, their solution rows n-2, n-1 come from its substitution down from p.
 // diag[k] = M[k,k], sub[k] = M[k,k-1] (sub[0] unused), as model/frames.hpp assembles them.
 // The sweeps carry the previous row's values in locals, not through the work vectors, so that the
 // chain of dependent divisions does not also wait on a store and a load per row.
@@ -64,6 +68,83 @@ inline bool solve_bordered(const Eigen::VectorXd& diag, const Eigen::VectorXd& s
   return true;
 }
 
+// The k x k system S mu = s - C' y of solve_tail_constrained from rows a, b of y = M^-1 r (ya, yb)
+// and of M^-1 cols[j] (za[j], zb[j]); false if S is singular.
+inline bool solve_tail_multipliers(const Eigen::VectorXd* cols, int k, const double* s, Eigen::Index a, Eigen::Index b,
+                                   double ya, double yb, const double* za, const double* zb, double* mu) {
+  const auto dot = [&](int i, double zai, double zbi) { return cols[i][a] * zai + cols[i][b] * zbi; };
+  if (k == 1) {
+    const double S = dot(0, za[0], zb[0]);
+    if (!(S != 0.0)) return false;
+    mu[0] = (s[0] - dot(0, ya, yb)) / S;
+    return true;
+  }
+  const double S00 = dot(0, za[0], zb[0]), S01 = dot(0, za[1], zb[1]), S10 = dot(1, za[0], zb[0]), S11 = dot(1, za[1], zb[1]);
+  const double det = S00 * S11 - S01 * S10, r0 = s[0] - dot(0, ya, yb), r1 = s[1] - dot(1, ya, yb);
+  if (!(det != 0.0)) return false;
+  mu[0] = (r0 * S11 - S01 * r1) / det;
+  mu[1] = (S00 * r1 - S10 * r0) / det;
+  return true;
+}
+
+// From this many rows on, solve_tail_constrained runs twisted (the header).
+inline constexpr Eigen::Index kTwistedRows = 8;
+
+// solve_tail_constrained for n >= kTwistedRows, twisted at p = n/2 (the header). Work: c, d hold
+// the downward sweep's ratios and right-hand side on rows < p and the upward sweep's on rows > p,
+// then y = M^-1 r on rows >= p; y, z the upward sweeps of the columns, then their solutions.
+inline bool solve_tail_twisted(const Eigen::VectorXd& diag, const Eigen::VectorXd& sub, const Eigen::VectorXd& r,
+                               const Eigen::VectorXd* cols, int k, const double* s, Eigen::VectorXd& x, double* mu,
+                               TridiagonalWork& w) {
+  const Eigen::Index n = diag.size(), p = n / 2, a = n - 2, b = n - 1;
+  w.c.resize(n); w.d.resize(n); w.y.resize(n); w.z.resize(n);
+  double piv = diag[0], q = diag[b];
+  if (!(piv > 0.0) || !(q > 0.0)) return false;
+  double c = sub[1] / piv, d = r[0] / piv;  // downward: x_i = d_i - c_i x_{i+1}
+  double e = sub[b] / q, rq = 1.0 / q;      // upward: x_i = f_i - e_i x_{i-1}
+  double f = r[b] * rq, g0 = cols[0][b] * rq, g1 = k > 1 ? cols[1][b] * rq : 0.0;
+  w.c[0] = c; w.d[0] = d;
+  w.c[b] = e; w.d[b] = f; w.y[b] = g0; w.z[b] = g1;
+  for (Eigen::Index t = 1; t < p || b - t > p; ++t) {
+    if (t < p) {
+      piv = diag[t] - sub[t] * c;
+      if (!(piv > 0.0)) return false;
+      c = sub[t + 1] / piv;
+      d = (r[t] - sub[t] * d) / piv;
+      w.c[t] = c; w.d[t] = d;
+    }
+    const Eigen::Index i = b - t;
+    if (i > p) {
+      q = diag[i] - sub[i + 1] * e;
+      if (!(q > 0.0)) return false;
+      e = sub[i] / q;
+      rq = 1.0 / q;
+      f = (r[i] - sub[i + 1] * f) * rq;
+      g0 = ((i == a ? cols[0][a] : 0.0) - sub[i + 1] * g0) * rq;
+      g1 = k > 1 ? ((i == a ? cols[1][a] : 0.0) - sub[i + 1] * g1) * rq : 0.0;
+      w.c[i] = e; w.d[i] = f; w.y[i] = g0; w.z[i] = g1;
+    }
+  }
+  // Row p joins the sweeps; then rows p+1..n-1 of y and of the columns' solutions.
+  const double gamma = diag[p] - sub[p] * c - sub[p + 1] * e;
+  if (!(gamma > 0.0)) return false;
+  double yv = (r[p] - sub[p] * d - sub[p + 1] * f) / gamma, z0 = -sub[p + 1] * g0 / gamma, z1 = -sub[p + 1] * g1 / gamma;
+  w.d[p] = yv; w.y[p] = z0; w.z[p] = z1;
+  for (Eigen::Index i = p + 1; i < n; ++i) {
+    w.d[i] = yv = w.d[i] - w.c[i] * yv;
+    w.y[i] = z0 = w.y[i] - w.c[i] * z0;
+    w.z[i] = z1 = w.z[i] - w.c[i] * z1;
+  }
+  const double za[2] = {w.y[a], w.z[a]}, zb[2] = {w.y[b], w.z[b]};
+  if (!solve_tail_multipliers(cols, k, s, a, b, w.d[a], w.d[b], za, zb, mu)) return false;
+  const double mu1 = k > 1 ? mu[1] : 0.0;
+  x.resize(n);
+  for (Eigen::Index i = p; i < n; ++i) x[i] = w.d[i] + mu[0] * w.y[i] + mu1 * w.z[i];
+  double xi = x[p];
+  for (Eigen::Index i = p - 1; i >= 0; --i) x[i] = xi = w.d[i] - w.c[i] * xi;
+  return true;
+}
+
 // Solves M x = r + sum_j mu_j cols[j], cols[j]' x = s[j], j < k (k = 1 or 2), where every cols[j] is
 // zero but on rows n-2, n-1 (the other rows are not read). Returns false if M is not SPD or the
 // k x k system C' M^-1 C is singular.
@@ -72,6 +153,7 @@ inline bool solve_tail_constrained(const Eigen::VectorXd& diag, const Eigen::Vec
                                    TridiagonalWork& w) {
   const Eigen::Index n = diag.size();
   if (n < 2 || k < 1 || k > 2) return false;
+  if (n >= kTwistedRows) return solve_tail_twisted(diag, sub, r, cols, k, s, x, mu, w);
   w.c.resize(n);
   w.d.resize(n);
   double piv = diag[0], piv_tail[2] = {0.0, 0.0};

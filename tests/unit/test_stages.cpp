@@ -293,7 +293,7 @@ TEST_CASE("tridiagonal and bordered solves agree with a dense LU of the same sys
 TEST_CASE("tail-constrained solve agrees with a dense LU of the bordered system, one and two rows", "[unit][tridiagonal]") {
   // M x = r + C mu, C' x = s with C's columns zero but on the last two rows (phase B's rail and
   // drive rows), against the dense (n + k) x (n + k) system [M -C; C' 0] [x; mu] = [r; s].
-  for (int n : {2, 3, 9}) {
+  for (int n : {2, 3, 7, 8, 9, 30, 31}) {  // below and from kTwistedRows
     Eigen::VectorXd diag(n), sub(n), r(n), cols[2] = {Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n)};
     for (int k = 0; k < n; ++k) {
       diag[k] = 3.0 + 0.3 * k;
