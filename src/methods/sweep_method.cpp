@@ -195,8 +195,8 @@ std::vector<SweepMethod::ValueResult> SweepMethod::calc_value_results() const {
     if (inner_ == Inner::subset) {
       if (!v.sim) continue;
       const sampling::SubsetSummary s = v.sim->calc_summary();
-      r.cov = s.cov_lineage;
-      r.bounds = sampling::calc_lognormal_bounds(s.p, s.cov_lineage, sw.confidence);
+      r.cov = s.cov_bound;
+      r.bounds = sampling::calc_lognormal_bounds(s.p, s.cov_bound, sw.confidence);
       r.bounds.p = s.p;
       r.status = sampling::to_string(s.status);
       r.message = s.message;
@@ -261,6 +261,7 @@ void SweepMethod::write_inner(hid_t group, std::size_t k) const {
     write_scalar(g.get(), "p", "1", s.p);
     write_scalar(g.get(), "cov", "1", s.cov);
     write_scalar(g.get(), "cov_lineage", "1", s.cov_lineage);
+    write_scalar(g.get(), "cov_bound", "1", s.cov_bound);
     write_scalar(g.get(), "runs", "1", s.runs);
     const std::size_t n = s.levels.size();
     std::vector<double> threshold(n), prob(n);

@@ -13,11 +13,11 @@ p(sigma) = Phi(-x / sigma), 1e-6 at sigma* = x / 4.7534.
 
 - reference: 20 master seeds of each sweep: the allowable's interval contains the true crossing in at
   least 18 of 20; the allowable (the crossing of the one-sided 95 % upper bound) lies on the safe side
-  of the true crossing as often; each value's two-sided 95 % interval holds the true p in at least
-  80 % of the 80 estimates. Measured: 70/80 (nominal) and 68/80 (spread), below the nominal 95 %:
-  subset simulation's CoV estimate at 500 samples a level is itself noisy and its lognormal interval
-  under-covers (Au & Beck's CoV gives 68/80 on the nominal sweep, the larger of the two 71/80); the
-  allowable's interval, two such intervals combined, still holds the crossing in 19-20 of 20.
+  of the true crossing as often; each value's two-sided 95 % interval holds the true p as often as its
+  confidence says: of the 80 estimates at least 71 (the count is binomial; at a true coverage of 95 %
+  it falls below 71 with probability 0.7 %). The intervals use SubsetSummary::cov_bound; with the
+  lineage CoV alone they held p in 70/80 and 68/80 here (the one-input limit state leaves the failure
+  samples few roots, docs/campaigns.md "Which CoV to read").
   Then Monte Carlo as the inner method at a p where it resolves: each value's failure count and
   Clopper-Pearson bounds recomputed from its rows (scipy's beta quantiles).
 - ranks: the same file (every dataset but the timing) on 1 and 3 ranks.
@@ -103,7 +103,7 @@ def case_reference(args):
     cases = [("nominal", None, SIGMA * Z_TARGET, lambda x: norm.cdf(-x / SIGMA)),
              ("spread", spread_camp, 0.005 / Z_TARGET, lambda s: norm.cdf(-0.005 / s))]
     for name, camp, truth, p_true in cases:
-        inside = safe = covered = n_est = 0
+        inside = safe = covered = n_est = open_ends = 0
         for seed in range(1, 21):
             out = os.path.join(d, f"{name}_{seed}.h5")
             p = run(args, out, sets=[f"ensemble.master_seed={seed}"], campaign=camp)
@@ -111,18 +111,23 @@ def case_reference(args):
             s = read_sweep(out)
             a = s["allowable"]
             check(a["status"] == "found", f"{name}, seed {seed}: the allowable is found ({a})")
-            inside += a["lower"] <= truth <= a["upper"]
+            # A NaN end: the interval reaches beyond the swept values on that side (hdf5-schema.md).
+            inside += (math.isnan(a["lower"]) or a["lower"] <= truth) and (math.isnan(a["upper"]) or truth <= a["upper"])
+            open_ends += math.isnan(a["lower"]) + math.isnan(a["upper"])
             # The allowable is on the safe side of the truth: above it when p falls with the value.
             safe += (a["value"] >= truth) if a["safe_side"] == "above" else (a["value"] <= truth)
             pt = p_true(s["values"])
             covered += int(np.sum((s["lower"] <= pt) & (pt <= s["upper"])))
             n_est += len(pt)
             os.remove(out)
-        print(f"  {name}: interval holds the true crossing {truth:.6g} in {inside}/20 seeds; allowable on the safe "
+        print(f"  {name}: interval holds the true crossing {truth:.6g} in {inside}/20 seeds ({open_ends} open ends); "
+              f"allowable on the safe "
               f"side in {safe}/20; p's interval holds the true p in {covered}/{n_est}")
         check(inside >= 18, f"{name}: the allowable's interval contains the true crossing in {inside} >= 18 of 20")
         check(safe >= 18, f"{name}: the allowable lies on the safe side of the true crossing in {safe} >= 18 of 20")
-        check(covered >= 0.80 * n_est, f"{name}: each value's 95 % interval holds the true p in {covered}/{n_est}")
+        # Binomial(80, 0.95) falls 2.2 standard deviations below its mean (under 71) with probability 0.7 %.
+        need = math.floor(0.95 * n_est - 2.2 * math.sqrt(n_est * 0.95 * 0.05))
+        check(covered >= need, f"{name}: each value's 95 % interval holds the true p in {covered}/{n_est} (>= {need})")
     # Monte Carlo as the inner method, where 20,000 runs resolve p (1e-3 .. 1e-4): k / n and the
     # Clopper-Pearson bounds recomputed from the rows (scipy's beta quantiles).
     out = os.path.join(d, "mc.h5")
