@@ -152,6 +152,34 @@ def case_reference(args):
               and math.isclose(s["upper"][k], hi, rel_tol=1e-9) and math.isclose(s["upper_bound"][k], ub, rel_tol=1e-9),
               f"Monte Carlo value {x}: p = {kf}/{n} and its Clopper-Pearson bounds from the rows")
         print(f"  Monte Carlo value {x}: {kf} failures, {n * norm.cdf(-x / SIGMA):.1f} expected")
+    check_no_failure(args, d)
+
+
+def check_no_failure(args, d):
+    """Monte Carlo far on the safe side (8-10 sigma: no failure at any value, every bound the same):
+    the safe side comes from the runs' smallest margins (p falls as the stall torque grows: extend
+    below the smallest value); the message names each end's smallest margin, recomputed from the
+    rows (the synthetic margin is the column rail_margin_m, in m). For a spread sweep of the same
+    margin the smallest margins fall as the spread grows."""
+    for name, camp, sets, side, extend in (
+            ("nominal", None, ["sweep.from=0.008", "sweep.to=0.010"], "above", "extend it below 0.008 Nm"),
+            ("spread", os.path.join(d, "spread.toml"), ["sweep.values=[0.0005,0.0006]"], "below",
+             "extend it above 0.0006 Nm")):
+        out = os.path.join(d, f"no_failure_{name}.h5")
+        p = run(args, out, campaign=camp, sets=sets + ["ensemble.method=design", "ensemble.subset=false",
+                                                       "ensemble.n_runs=2000", "sweep.target_probability=1e-2"])
+        check(p.returncode == 0, f"{name}, no failure: exit 0 ({p.stderr.strip()[-300:]})")
+        s = read_sweep(out)
+        a = s["allowable"]
+        with h5py.File(out, "r") as f:
+            v, m = f["runs/sweep_value"][:], f["runs/rail_margin_m"][:]
+            msg = f["sweep/allowable"].attrs["message"]
+        lo_min, hi_min = np.min(m[v == s["values"][0]]), np.min(m[v == s["values"][-1]])
+        near, far = (lo_min, hi_min) if side == "above" else (hi_min, lo_min)
+        check(np.all(s["p"] == 0) and a["status"] == "beyond_unsafe_end" and a["safe_side"] == side
+              and extend in msg and f"smallest margin {near:.4g} m against {far:.4g} m" in msg,
+              f"{name}, no failure at any value: safe side {a['safe_side']} from the smallest margins "
+              f"({near:.4g} against {far:.4g} m): '{msg}'")
 
 
 
