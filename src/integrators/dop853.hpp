@@ -8,28 +8,17 @@
 // EmbeddedRungeKutta.
 #pragma once
 #include <memory>
-#include <vector>
 
 #include "integrators/embedded_rk.hpp"
 
 namespace truss::integrators {
 
-class Dop853Pair final : public RkPair {
- public:
-  const RkPairTraits& traits() const override;
-  void resize(int n) override;
-  double attempt_step(OdeSystem& sys, double t, double h, const double* y, RkStages& s,
-                      const ErrorScale& scale) override;
-  long fill_dense(OdeSystem& sys, double t, double h, const double* y, RkStages& s) override;
-  void calc_dense(double theta, double* y) const override;
-
- private:
-  std::vector<double> rc_[7], ystart_, ydense_;  // dense output: coefficients, the step's start, its stages' states
-};
+// The pair, for EmbeddedRungeKutta.
+std::unique_ptr<RkPair> make_dop853_pair();
 
 class Dop853 final : public EmbeddedRungeKutta {
  public:
-  explicit Dop853(const IntegratorOptions& opts) : EmbeddedRungeKutta(opts, std::make_unique<Dop853Pair>()) {}
+  explicit Dop853(const IntegratorOptions& opts) : EmbeddedRungeKutta(opts, make_dop853_pair()) {}
 };
 
 }  // namespace truss::integrators

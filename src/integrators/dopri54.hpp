@@ -4,28 +4,17 @@
 // in [0.2, 10]), stiffness boundary h |lambda| = 3.25. Driven by EmbeddedRungeKutta.
 #pragma once
 #include <memory>
-#include <vector>
 
 #include "integrators/embedded_rk.hpp"
 
 namespace truss::integrators {
 
-class Dopri54Pair final : public RkPair {
- public:
-  const RkPairTraits& traits() const override;
-  void resize(int n) override;
-  double attempt_step(OdeSystem& sys, double t, double h, const double* y, RkStages& s,
-                      const ErrorScale& scale) override;
-  long fill_dense(OdeSystem& sys, double t, double h, const double* y, RkStages& s) override;
-  void calc_dense(double theta, double* y) const override;
-
- private:
-  std::vector<double> rc_[5];  // dense output coefficients
-};
+// The pair, for EmbeddedRungeKutta.
+std::unique_ptr<RkPair> make_dopri54_pair();
 
 class DormandPrince54 final : public EmbeddedRungeKutta {
  public:
-  explicit DormandPrince54(const IntegratorOptions& opts) : EmbeddedRungeKutta(opts, std::make_unique<Dopri54Pair>()) {}
+  explicit DormandPrince54(const IntegratorOptions& opts) : EmbeddedRungeKutta(opts, make_dopri54_pair()) {}
 };
 
 }  // namespace truss::integrators

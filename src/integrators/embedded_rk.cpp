@@ -36,11 +36,41 @@ class EmbeddedRungeKutta::Dense final : public DenseOutput {
 };
 
 namespace {
+
 bool crosses(double g0, double g1, int dir) {
   if (dir >= 0 && g0 < 0.0 && g1 >= 0.0) return true;
   if (dir <= 0 && g0 > 0.0 && g1 <= 0.0) return true;
   return false;
 }
+
+// The step-size controller: the ratio h_new / h after a rejected step, 0.9 err^(-1/q) within
+// [ratio_min, 1], and after an accepted one, the PI law (Gustafsson; Hairer's DOPRI5 with beta =
+// 0.04; beta = 0, DOP853's elementary controller) within [ratio_min, ratio_max], no growth right
+// after a rejection.
+class StepControl {
+ public:
+  explicit StepControl(const RkPairTraits& tr) : tr_(tr), inv_q_(1.0 / tr.order) {}
+  double reject(double err) {
+    last_rejected_ = true;
+    return std::clamp(0.9 * std::pow(err, -inv_q_), tr_.ratio_min, 1.0);
+  }
+  double accept(double err) {
+    const double e = std::max(err, 1e-10);
+    const double fac = 0.9 * std::pow(e, -inv_q_ + tr_.pi_beta * 0.75) * std::pow(err_prev_, tr_.pi_beta);
+    const double ratio = std::clamp(fac, tr_.ratio_min, last_rejected_ ? 1.0 : tr_.ratio_max);
+    err_prev_ = std::max(err, 1e-4);
+    last_rejected_ = false;
+    return ratio;
+  }
+  void reject_non_finite() { last_rejected_ = true; }
+
+ private:
+  const RkPairTraits& tr_;
+  double inv_q_;
+  double err_prev_ = 1e-4;  // PI controller memory
+  bool last_rejected_ = false;
+};
+
 }  // namespace
 
 bool StiffnessTest::update(double h, const std::vector<double>& kb, const std::vector<double>& ka,
@@ -61,6 +91,18 @@ bool StiffnessTest::update(double h, const std::vector<double>& kb, const std::v
 
 EmbeddedRungeKutta::EmbeddedRungeKutta(const IntegratorOptions& opts, std::unique_ptr<RkPair> pair)
     : opts_(opts), pair_(std::move(pair)) {}
+
+void EmbeddedRungeKutta::resize(int n, int num_events) {
+  st_.k.resize(static_cast<std::size_t>(pair_->traits().num_stages));
+  for (auto& k : st_.k) k.assign(n, 0.0);
+  st_.ytmp.assign(n, 0.0);
+  st_.y1.assign(n, 0.0);
+  yev_.assign(n, 0.0);
+  pair_->resize(n);
+  g0_.assign(num_events, 0.0);
+  g1_.assign(num_events, 0.0);
+  gt_.assign(num_events, 0.0);
+}
 
 // Initial step: the fixed or asked step, else the last accepted step of the previous call, else
 // Hairer's heuristic (Solving ODEs I, II.4) with one explicit Euler probe (st_.k[0] holds f(t, y)).
@@ -136,14 +178,8 @@ IntegratorSummary EmbeddedRungeKutta::integrate(OdeSystem& sys, double t0, doubl
     return sum;
   }
   const RkPairTraits& tr = pair_->traits();
-  const int n = sys.size();
-  st_.k.resize(static_cast<std::size_t>(tr.num_stages));
-  for (auto& k : st_.k) k.assign(n, 0.0);
-  st_.ytmp.assign(n, 0.0);
-  st_.y1.assign(n, 0.0);
-  pair_->resize(n);
+  resize(sys.size(), sys.num_events());
   const int ne = sys.num_events();
-  g0_.assign(ne, 0.0); g1_.assign(ne, 0.0); gt_.assign(ne, 0.0); yev_.assign(n, 0.0);
 
   const double span = t_end - t0;
   double t = t0;
@@ -156,9 +192,7 @@ IntegratorSummary EmbeddedRungeKutta::integrate(OdeSystem& sys, double t0, doubl
   double h = calc_initial_step(sys, t, y, span, sum);
 
   const ErrorScale scale{opts_.atol, opts_.rtol};
-  const double inv_q = 1.0 / tr.order;
-  double err_prev = 1e-4;  // PI controller memory
-  bool last_rejected = false;
+  StepControl control(tr);
   StiffnessTest stiffness;
   stiffness.boundary = tr.stiff_boundary;
   Dense dense;
@@ -183,12 +217,11 @@ IntegratorSummary EmbeddedRungeKutta::integrate(OdeSystem& sys, double t0, doubl
     if (!std::isfinite(err)) {
       if (fixed || h < 1e-14 * std::max(1.0, std::abs(t)))
         return finish(IntegratorStatus::failure, t, fmt::format("non-finite state at t = {:.9g} s", t));
-      h *= 0.25; last_rejected = true; ++sum.rejected_steps;
+      h *= 0.25; control.reject_non_finite(); ++sum.rejected_steps;
       continue;
     }
     if (!fixed && err > 1.0) {
-      h *= std::clamp(0.9 * std::pow(err, -inv_q), tr.ratio_min, 1.0);
-      last_rejected = true;
+      h *= control.reject(err);
       ++sum.rejected_steps;
       if (h < 1e-14 * std::max(1.0, std::abs(t)))
         return finish(IntegratorStatus::failure, t, fmt::format("step size underflow at t = {:.9g} s", t));
@@ -225,15 +258,8 @@ IntegratorSummary EmbeddedRungeKutta::integrate(OdeSystem& sys, double t0, doubl
       return finish(IntegratorStatus::stiff, t,
                     fmt::format("stiff at t = {:.9g} s (h |lambda| > {} on 15 steps)", t, tr.stiff_boundary));
     if (!fixed) {
-      // PI step control (Hairer's DOPRI5; beta = 0: the elementary controller of DOP853), no
-      // growth right after a rejection.
-      const double e = std::max(err, 1e-10);
-      double fac = 0.9 * std::pow(e, -inv_q + tr.pi_beta * 0.75) * std::pow(err_prev, tr.pi_beta);
-      fac = std::clamp(fac, tr.ratio_min, last_rejected ? 1.0 : tr.ratio_max);
-      err_prev = std::max(err, 1e-4);
-      h = std::min(h * fac, opts_.max_step);
+      h = std::min(h * control.accept(err), opts_.max_step);
       h_last_ = h;
-      last_rejected = false;
     }
   }
 }

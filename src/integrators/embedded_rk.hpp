@@ -79,6 +79,7 @@ class EmbeddedRungeKutta : public Integrator {
 
  private:
   class Dense;
+  void resize(int n, int num_events);
   double calc_initial_step(OdeSystem& sys, double t, const double* y, double span, IntegratorSummary& sum);
   int find_event(OdeSystem& sys, double t, double t_new, const DenseOutput& dense, double& t_ev);
   IntegratorOptions opts_;
