@@ -1,6 +1,6 @@
 // DOP853 (integrators/dop853.hpp) against closed-form solutions: its order 8 at a fixed step on
-// a nonlinear system, the order of its dense output, accuracy that follows rtol, event times, the
-// stiffness test.
+// a nonlinear system, the order of its dense output, accuracy that follows rtol, event times (its
+// stiffness test: test_robustness.cpp, beside DOPRI5's).
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -134,75 +134,5 @@ TEST_CASE("DOP853 adaptive: the error follows rtol; events located against the a
     CHECK(std::abs(s.t - t_exact) < s.steps * 2.0 * (o.rtol + o.atol) + o.event_time_tol);
     CHECK(std::abs(y[1]) <= o.event_time_tol + 1e-14);  // the returned state is on the event surface
     CHECK(y[3] * dir > 0.0);
-  }
-}
-
-namespace {
-
-// y' = -k (y - cos t) - sin t, y(0) = 1: the solution is y = cos t for every k; for k = 1e5 an
-// explicit pair is held by stability to h k below its boundary on the negative real axis (6.39
-// for DOP853), not by accuracy. The difference of two stages at the same time t + h is exactly
-// -k times the difference of their states, so Hairer's estimate of h |lambda| is h k itself.
-class StiffCosine : public OdeSystem {
- public:
-  explicit StiffCosine(double k) : k_(k) {}
-  int size() const override { return 1; }
-  void calc_rhs(double t, const double* y, double* dy) override { dy[0] = -k_ * (y[0] - std::cos(t)) - std::sin(t); }
-
- private:
-  double k_;
-};
-
-}  // namespace
-
-TEST_CASE("DOP853's stiffness test fires on a stiff problem, never on the orbit", "[integrators][dop853][stiff]") {
-  IntegratorOptions o;
-  o.rtol = 1e-8;
-  o.atol = 1e-10;
-  o.stop_when_stiff = true;
-  {
-    StiffCosine sys(1e5);
-    Dop853 dop(o);
-    double y = 1.0;
-    const IntegratorSummary s = dop.integrate(sys, 0.0, 10.0, &y, nullptr);
-    INFO(s.to_string());
-    REQUIRE(s.status == IntegratorStatus::stiff);
-    // The test needs 15 steps with h k > 6.1; reaching t = 10 s at h k <= 6.1 would take over
-    // 10 k / 6.1 = 1.6e5 steps. It stops at an accepted state: on y = cos t to the tolerance.
-    CHECK(s.steps >= 15);
-    CHECK(s.steps < 1000);
-    CHECK(s.t < 10.0);
-    CHECK(std::abs(y - std::cos(s.t)) < 1e-6);
-  }
-  {
-    // Without the test the same pair goes on to the end, at the cost stability sets: its
-    // stability function has |R(-x)| = 1 at x = 6.39 (R(z) = 1 + z b^T (I - z A)^-1 1 of the
-    // tableau), so the accepted steps cannot average h k much above that (7 leaves room for the
-    // controller's excursions; an unstable step grows the error and is rejected).
-    IntegratorOptions free = o;
-    free.stop_when_stiff = false;
-    StiffCosine sys(1e5);
-    Dop853 dop(free);
-    double y = 1.0;
-    const IntegratorSummary s = dop.integrate(sys, 0.0, 1.0, &y, nullptr);
-    REQUIRE(s.status == IntegratorStatus::reached_end);
-    CHECK(s.steps > 1e5 / 7.0);
-    CHECK(std::abs(y - std::cos(1.0)) < 1e-6);
-  }
-  {
-    // The orbit is not stiff (|lambda| ~ 1 and h < 1): the test never fires, and asking for it
-    // changes nothing.
-    Dop853 a(o);
-    IntegratorOptions off = o;
-    off.stop_when_stiff = false;
-    Dop853 b(off);
-    Orbit orbit;
-    double ya[4] = {1.0, 0.0, 0.0, 1.0}, yb[4] = {1.0, 0.0, 0.0, 1.0};
-    const IntegratorSummary sa = a.integrate(orbit, 0.0, 20.0, ya, nullptr);
-    const IntegratorSummary sb = b.integrate(orbit, 0.0, 20.0, yb, nullptr);
-    CHECK(sa.status == IntegratorStatus::reached_end);
-    CHECK(sa.steps == sb.steps);
-    CHECK(ya[0] == yb[0]);
-    CHECK(ya[1] == yb[1]);
   }
 }
