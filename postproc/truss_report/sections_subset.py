@@ -26,6 +26,10 @@ def read_subset(f):
     s = {k: (v.decode() if isinstance(v, bytes) else v) for k, v in g.attrs.items()}
     for k in ("p", "cov", "cov_lineage", "beta", "crude_mc_runs"):
         s[k] = float(g[k][()])
+    # The CoV of the interval (the larger of Au & Beck's fully correlated bound and the lineage
+    # CoV, docs/campaigns.md "Which CoV to read"); a file without it: the lineage CoV.
+    s["cov_interval"] = float(g["cov_bound"][()]) if "cov_bound" in g else s["cov_lineage"]
+    s["cov_interval_name"] = "bound" if "cov_bound" in g else "lineage"
     s["runs"], s["lineages"] = int(g["runs"][()]), int(g["lineages"][()])
     s["levels"] = {k: g["levels"][k][()] for k in g["levels"]}
     s["level_units"] = g["levels/threshold"].attrs["units"]
@@ -88,16 +92,19 @@ def event_text(s):
 
 
 def section_probability(s):
-    lo, hi = interval(s["p"], s["cov_lineage"])
+    lo, hi = interval(s["p"], s["cov_interval"])
     rows = [["failure probability p", num("subset.p", s["p"], digits=4)],
-            ["95 % interval, low (lognormal, lineage CoV)", num("subset.p.ci_lo", lo, digits=4)],
+            [f"95 % interval, low (lognormal, {s['cov_interval_name']} CoV)", num("subset.p.ci_lo", lo, digits=4)],
             ["95 % interval, high", num("subset.p.ci_hi", hi, digits=4)],
             ["reliability index β = −Φ⁻¹(p)", num("subset.beta", s["beta"], digits=4)],
+            ["coefficient of variation of the interval (the larger of Au & Beck's bound for correlated "
+             "levels and the lineage estimator)", num("subset.cov_bound", s["cov_interval"], digits=3)],
             ["coefficient of variation (lineage estimator)", num("subset.cov_lineage", s["cov_lineage"], digits=3)],
             ["coefficient of variation (Au & Beck)", num("subset.cov", s["cov"], digits=3)],
             ["runs used", num("subset.runs", s["runs"])],
             ["levels", num("subset.levels", len(s["levels"]["threshold"]))],
-            ["crude Monte Carlo runs for the same CoV", num("subset.crude_mc_runs", s["crude_mc_runs"], digits=3)],
+            ["crude Monte Carlo runs for an interval as narrow", num("subset.crude_mc_runs", s["crude_mc_runs"],
+                                                                    digits=3)],
             ["distinct level-0 ancestors of the last level", num("subset.lineages", s["lineages"])]]
     warn = ""
     if s["status"] != "converged":
@@ -107,7 +114,8 @@ def section_probability(s):
                 "raise max_levels.</p>")
     elif s["lineages"] < 20:
         warn = (f"<p class='warn'>Only {s['lineages']} level-0 ancestors survive to the last level: "
-                "both CoVs then understate the spread; take them as an indication, or raise "
+                "the lineage and Au &amp; Beck CoVs then understate the spread (the interval uses the "
+                "larger bound); raise "
                 "n_per_level.</p>")
     return ("<section id='probability'><h2>Failure probability</h2>"
             f"<p>Failure event: {event_text(s)}, estimated by subset simulation (Au &amp; Beck "
@@ -257,12 +265,13 @@ def section_design_point(s, c):
 
 
 def terminal_lines(c, s):
-    lo, hi = interval(s["p"], s["cov_lineage"])
+    lo, hi = interval(s["p"], s["cov_interval"])
     return [f"SUBSET SIMULATION ({c.attrs['campaign_name']}, {s['runs']} runs, {s['status']}): "
             f"P({s['failure_column']} {'>=' if s['failure_kind'] == 'above' else '<='} "
             f"{fmt(s['failure_threshold'])} {s['margin_units']}) = {fmt(s['p'], 4)}",
             f"  95 % interval [{fmt(lo, 3)}, {fmt(hi, 3)}], beta = {fmt(s['beta'], 4)}, CoV "
-            f"{fmt(s['cov_lineage'], 3)} (lineage; Au & Beck {fmt(s['cov'], 3)}); crude Monte Carlo "
+            f"{fmt(s['cov_interval'], 3)} ({s['cov_interval_name']}; lineage {fmt(s['cov_lineage'], 3)}, Au & Beck "
+            f"{fmt(s['cov'], 3)}); crude Monte Carlo "
             f"would need {fmt(s['crude_mc_runs'], 3)} runs"] + design_point_lines(c, s)
 
 

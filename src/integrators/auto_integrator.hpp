@@ -1,6 +1,6 @@
 // Automatic method choice (run.integrator = "auto"): the explicit Dormand-Prince pair while the
 // problem is non-stiff, SUNDIALS CVODE BDF/Newton from the moment Hairer's stiffness test fires
-// (dopri54.hpp, StiffnessTest), or its step size collapses, to the end of the run. Stiffness in this model comes from the
+// (embedded_rk.hpp, StiffnessTest), or its step size collapses, to the end of the run. Stiffness in this model comes from the
 // scene (a strong motor's torque-speed line is a damper with time constant J_eff / c_motor; stiff
 // diagonals), not from a passing phase, so the switch is kept for the rest of the run rather than
 // tested back. Non-stiff runs never leave dopri54 and give the same numbers as run.integrator =

@@ -83,8 +83,8 @@ struct IntegratorOptions {
   double fixed_step = 0.0;    // > 0: no error control, constant step (convergence studies)
   long max_steps = 1'000'000; // per call; the run fails with step_limit beyond it
   double event_time_tol = 1e-13;  // absolute tolerance (s) of located event times
-  // dopri54: stop with IntegratorStatus::stiff when Hairer's test (DOPRI5: h |lambda| > 3.25 on
-  // 15 accepted steps, 6 non-stiff steps reset the count) says the problem has become stiff.
+  // dopri54, dop853: stop with IntegratorStatus::stiff when Hairer's test (embedded_rk.hpp,
+  // StiffnessTest) says the problem has become stiff.
   bool stop_when_stiff = false;
   std::string validate() const;   // empty or "field: reason"
 };

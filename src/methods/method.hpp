@@ -58,6 +58,9 @@ class Method {
   virtual ~Method() = default;
   // The float64 outputs of a run's record (RunResult fields, by name) that propose() reads.
   virtual std::vector<std::string> observed_outputs() const { return {}; }
+  // Whether propose() reads the previous round's records (the statuses at least); a method that
+  // observes an output does. Without it, `previous` is empty (a one-shot design keeps no table).
+  virtual bool reads_records() const { return !observed_outputs().empty(); }
   // Rank 0: round `round`'s runs. `previous` holds round - 1's records (nothing for round 0). The
   // engine calls it once per round, in order, so a method may keep what it learns from one call to
   // the next; it must depend on nothing else: on --resume the engine calls it again with the same

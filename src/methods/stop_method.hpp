@@ -41,6 +41,7 @@ class StopMethod : public Method {
  public:
   explicit StopMethod(const campaign::CampaignContext& ctx);
   std::vector<std::string> observed_outputs() const override;
+  bool reads_records() const override { return true; }  // a probability target reads the statuses alone
   Proposal propose(std::int64_t round, const RoundRecords& previous) override;
   void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const override;
   void write_results(hid_t file, std::int64_t n_runs) const override;

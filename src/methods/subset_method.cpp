@@ -188,11 +188,12 @@ void SubsetMethod::write_results(hid_t file, std::int64_t n_runs) const {
   write_scalar(g.get(), "p", "1", s.p);
   write_scalar(g.get(), "cov", "1", s.cov);
   write_scalar(g.get(), "cov_lineage", "1", s.cov_lineage);
+  write_scalar(g.get(), "cov_bound", "1", s.cov_bound);
   write_scalar(g.get(), "beta", "1", s.beta);
   write_scalar(g.get(), "runs", "1", s.runs);
   write_scalar(g.get(), "lineages", "1", s.lineages);
-  // Crude Monte Carlo runs for the same CoV as the lineage estimate (the headline): (1 - p) / (p cov^2).
-  write_scalar(g.get(), "crude_mc_runs", "1", (1.0 - s.p) / (s.p * s.cov_lineage * s.cov_lineage));
+  // Crude Monte Carlo runs for an interval as narrow as the estimate's (cov_bound): (1 - p) / (p cov^2).
+  write_scalar(g.get(), "crude_mc_runs", "1", (1.0 - s.p) / (s.p * s.cov_bound * s.cov_bound));
   write_levels(g.get(), s, unit.c_str());
   write_failure_samples(g.get(), file, n_runs, unit);
 }
@@ -215,10 +216,11 @@ std::string SubsetMethod::calc_result_text() const {
                               sampling::to_string(s.status), s.message);
   // With no failing sample (p = 0) there is no CoV to match: say so rather than print inf and NaN.
   const std::string crude = s.p > 0.0 ? fmt::format("crude Monte Carlo would need {:.3g} runs for that CoV",
-                                                     (1.0 - s.p) / (s.p * s.cov_lineage * s.cov_lineage))
+                                                     (1.0 - s.p) / (s.p * s.cov_bound * s.cov_bound))
                                       : std::string("no failing sample");
-  t += fmt::format("[truss-campaign]   p = {:.4g}, CoV {:.3g} (lineage; Au & Beck {:.3g}), beta = {:.4g}, {} runs in "
-                   "{} levels ({})\n", s.p, s.cov_lineage, s.cov, s.beta, s.runs, s.levels.size(), crude);
+  t += fmt::format("[truss-campaign]   p = {:.4g}, CoV {:.3g} (the bound the interval uses; lineage {:.3g}, Au & Beck "
+                   "{:.3g}), beta = {:.4g}, {} runs in {} levels ({})\n", s.p, s.cov_bound, s.cov_lineage, s.cov, s.beta,
+                   s.runs, s.levels.size(), crude);
   for (std::size_t k = 0; k < s.levels.size(); ++k) {
     const std::string acceptance = k == 0 ? std::string("- (independent draws)")
                                           : fmt::format("{:.3g}", s.levels[k].acceptance());

@@ -81,6 +81,8 @@ void SweepMethod::take_records(std::size_t k, const RoundRecords& r) {
   Value& v = values_[k];
   const std::vector<double> m = SubsetMethod::calc_margins(failure_, r);
   v.runs += static_cast<std::int64_t>(m.size());
+  for (double x : m)
+    if (std::isfinite(x) && !(x >= v.nearest_margin)) v.nearest_margin = x;  // NaN: none yet
   if (inner_ == Inner::subset) {
     v.sim->add_margins(m);
     return;
@@ -96,6 +98,7 @@ Proposal SweepMethod::propose(std::int64_t round, const RoundRecords& previous) 
     for (Value& v : values_) {
       v.sim.reset();
       v.runs = v.failures = 0;
+      v.nearest_margin = std::nan("");
       v.decisions.clear();
       v.done = false;
     }
@@ -195,8 +198,8 @@ std::vector<SweepMethod::ValueResult> SweepMethod::calc_value_results() const {
     if (inner_ == Inner::subset) {
       if (!v.sim) continue;
       const sampling::SubsetSummary s = v.sim->calc_summary();
-      r.cov = s.cov_lineage;
-      r.bounds = sampling::calc_lognormal_bounds(s.p, s.cov_lineage, sw.confidence);
+      r.cov = s.cov_bound;
+      r.bounds = sampling::calc_lognormal_bounds(s.p, s.cov_bound, sw.confidence);
       r.bounds.p = s.p;
       r.status = sampling::to_string(s.status);
       r.message = s.message;
@@ -220,8 +223,10 @@ std::vector<SweepMethod::ValueResult> SweepMethod::calc_value_results() const {
 sampling::Allowable SweepMethod::calc_allowable() const {
   std::vector<sampling::ProbabilityBounds> b;
   for (const ValueResult& r : calc_value_results()) b.push_back(r.bounds);
+  sampling::NearestMargins nearest{{}, campaign::find_run_column_unit(failure_.column)};
+  for (const Value& v : values_) nearest.margin.push_back(v.nearest_margin);
   return sampling::find_allowable(ctx_.options.sweep.values, b, ctx_.options.sweep.target_probability,
-                                  campaign::sweep_variable_units(ctx_.options));
+                                  campaign::sweep_variable_units(ctx_.options), nearest);
 }
 
 namespace {
@@ -261,6 +266,7 @@ void SweepMethod::write_inner(hid_t group, std::size_t k) const {
     write_scalar(g.get(), "p", "1", s.p);
     write_scalar(g.get(), "cov", "1", s.cov);
     write_scalar(g.get(), "cov_lineage", "1", s.cov_lineage);
+    write_scalar(g.get(), "cov_bound", "1", s.cov_bound);
     write_scalar(g.get(), "runs", "1", s.runs);
     const std::size_t n = s.levels.size();
     std::vector<double> threshold(n), prob(n);

@@ -11,7 +11,9 @@
 // The method's options (ensemble.method) hold the [failure] event (MethodOptions::failure_event()).
 // The method table makes a SweepMethod for every campaign with a [sweep] (method_table.cpp).
 // A run fails when its margin ([failure], SubsetMethod::calc_margins) is <= 0; a run that cannot
-// say (NaN margin) counts as safe, as in subset simulation.
+// say (NaN margin) counts as safe, as in subset simulation. The smallest margin of each value's runs
+// (its nearest approach to failure) tells the allowable the safe side where the estimates cannot
+// (p = 0 at both ends: sampling/allowable.hpp).
 //
 // Scheduling: round r of the sweep is the union of round r of every value's inner method that is
 // not done, value by value in order; the state is, per value, (value index, its first local
@@ -67,6 +69,7 @@ class SweepMethod : public Method {
     std::optional<sampling::SubsetSimulation> sim;
     std::optional<sampling::SamplePlan> plan;  // Monte Carlo, over the most runs the value can make
     std::int64_t runs = 0, failures = 0;
+    double nearest_margin = std::numeric_limits<double>::quiet_NaN();  // the smallest finite margin of its runs
     std::vector<sampling::StopDecision> decisions;
     bool done = false;
   };

@@ -15,7 +15,13 @@ using results::FrameKind;
 
 Collector::Collector(const campaign::RecordLayout& layout, methods::Method& method, results::Journal& journal,
                      results::CampaignFile& file, Progress& progress, const EngineOptions& opts)
-    : L_(layout), method_(method), journal_(journal), file_(file), progress_(progress), opts_(opts) {
+    : L_(layout),
+      method_(method),
+      journal_(journal),
+      file_(file),
+      progress_(progress),
+      opts_(opts),
+      reads_records_(method.reads_records()) {
   for (const std::string& name : method.observed_outputs()) {
     const int f = layout.find_output(name);
     if (f < 0)
@@ -171,7 +177,7 @@ methods::RoundPlan Collector::plan_round(std::int64_t round, std::int64_t first_
 }
 
 void Collector::observe(const campaign::RecordView& rec) {
-  if (observed_.empty()) return;
+  if (!reads_records_) return;
   const std::int64_t round = rec.round();
   methods::RoundRecords& r = records_[round];
   if (r.status.empty()) {  // the round's first record: its table, every status -1 (not in yet)

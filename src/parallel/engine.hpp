@@ -113,6 +113,7 @@ class Collector {
   std::size_t n_journaled_ = 0;
   std::int32_t session_ranks_ = 0;  // while restoring: the rank count of the session being read
   std::vector<std::size_t> observed_;                      // the record fields of method_.observed_outputs()
+  bool reads_records_ = false;                             // method_.reads_records(): keep records_
   std::map<std::int64_t, methods::RoundRecords> records_;  // by round, for the method
   std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now(), last_sync_ = wall0_;
   double journal_s_ = 0.0;

@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include "util/vector_state.hpp"
+
 namespace truss::results {
 
 namespace {
@@ -72,6 +74,7 @@ bool ChunkCodec::put_deflated(const unsigned char* in, std::size_t n, int level,
   s.next_out = reinterpret_cast<unsigned char*>(out.data() + at);
   s.avail_out = static_cast<std::uint32_t>(cap - at);
   const int r = isal_deflate_stateless(&s);
+  util::clear_upper_vector_state();  // ISA-L's kernels leave the vector state dirty (util/vector_state.hpp)
   if (r == STATELESS_OVERFLOW) return false;
   if (r != COMP_OK) throw std::runtime_error(fmt::format("ISA-L deflate (level {}): error {}", igzip, r));
   out.resize(at + s.total_out);
@@ -96,6 +99,7 @@ std::uint32_t ChunkCodec::encode_filtered(std::string_view raw, std::size_t elem
     return kDeflateSkipped;
   }
   const std::uint32_t adler = isal_adler32(1, sh, raw.size());
+  util::clear_upper_vector_state();
   for (const int shift : {24, 16, 8, 0}) out.push_back(static_cast<char>((adler >> shift) & 0xff));
   return 0;
 }

@@ -69,10 +69,55 @@ Crossing cross(const std::vector<double>& x, const std::vector<double>& y, const
   return c;
 }
 
+// The safe side (allowable.hpp) from the usable ends `first` and `last`, and when the estimates
+// there are equal, a sentence on how it was found, or why it is unknown (side 0).
+struct SafeSide {
+  int side = 0;
+  std::string why;
+};
+
+SafeSide find_safe_side(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, std::size_t first,
+                        std::size_t last, const NearestMargins& nearest, const std::string& unit) {
+  SafeSide r;
+  if (b[first].p != b[last].p) {
+    r.side = b[last].upper_bound < b[first].upper_bound ? +1 : -1;
+    return r;
+  }
+  const bool known = nearest.margin.size() == x.size();
+  const double m_first = known ? nearest.margin[first] : std::nan("");
+  const double m_last = known ? nearest.margin[last] : std::nan("");
+  const std::string mu = nearest.margin_units.empty() ? std::string() : " " + nearest.margin_units;
+  if (std::isfinite(m_first) && std::isfinite(m_last) && m_first != m_last) {
+    r.side = m_last > m_first ? +1 : -1;
+    const std::size_t near = r.side > 0 ? first : last, far = r.side > 0 ? last : first;
+    r.why = fmt::format(" (p = {:g} at both ends; the runs at {:g}{} came nearer to failure, smallest margin {:.4g}{} "
+                        "against {:.4g}{} at {:g}{})",
+                        b[first].p, x[near], unit, nearest.margin[near], mu, nearest.margin[far], mu, x[far], unit);
+    return r;
+  }
+  r.why = fmt::format("p = {:g} at both ends ({:g}{} and {:g}{}), and {}", b[first].p, x[first], unit, x[last], unit,
+                      std::isfinite(m_first) && std::isfinite(m_last)
+                          ? fmt::format("their runs came equally near to failure (smallest margin {:.4g}{})",
+                                        m_first, mu)
+                          : std::string("the runs' nearest approach to failure is not known at both"));
+  return r;
+}
+
+// The message when the safe side is unknown: where the upper bounds lie against the target.
+std::string direction_unknown_text(const std::vector<double>& ub, const std::vector<int>& usable, double target,
+                                   const std::string& why) {
+  std::size_t at_or_below = 0;
+  for (int i : usable) at_or_below += ub[static_cast<std::size_t>(i)] <= target ? 1 : 0;
+  const std::string where = at_or_below == usable.size() ? "every value's upper bound on p is at or below the target"
+                            : at_or_below == 0          ? "no value's upper bound on p is at or below the target"
+                                                        : "the upper bounds on p cross the target";
+  return fmt::format("{}, but the direction in which p falls is unknown: {}; sweep a wider range", where, why);
+}
+
 }  // namespace
 
 Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target,
-                         const std::string& units) {
+                         const std::string& units, const NearestMargins& nearest) {
   if (x.size() != b.size()) throw std::invalid_argument("find_allowable: one bounds per value");
   Allowable r;
   std::vector<int> usable;
@@ -90,18 +135,25 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
     hi[i] = b[i].upper;
   }
   const auto first = static_cast<std::size_t>(usable.front()), last = static_cast<std::size_t>(usable.back());
-  r.safe_side = ub[last] < ub[first] ? +1 : -1;
+  const std::string unit = units.empty() ? std::string() : " " + units;
+  const SafeSide side = find_safe_side(x, b, first, last, nearest, unit);
+  r.safe_side = side.side;
+  if (r.safe_side == 0) {
+    r.status = AllowableStatus::direction_unknown;
+    r.message = direction_unknown_text(ub, usable, target, side.why);
+    return r;
+  }
   std::vector<int> from_safe(usable.begin(), usable.end());
   if (r.safe_side > 0) std::reverse(from_safe.begin(), from_safe.end());
   // The ends named by their values: the safe and unsafe ends of the values that have an estimate.
   const double safe_x = x[static_cast<std::size_t>(from_safe.front())];
   const double unsafe_x = x[static_cast<std::size_t>(from_safe.back())];
-  const std::string unit = units.empty() ? std::string() : " " + units;
   const char* extend_safe = r.safe_side > 0 ? "above" : "below";
   const char* extend_unsafe = r.safe_side > 0 ? "below" : "above";
-  const std::string skipped =
-      usable.size() < x.size() ? fmt::format(" ({} of {} values have no estimate)", x.size() - usable.size(), x.size())
-                               : std::string();
+  const std::string notes =
+      side.why + (usable.size() < x.size()
+                      ? fmt::format(" ({} of {} values have no estimate)", x.size() - usable.size(), x.size())
+                      : std::string());
   const Crossing u = cross(x, ub, from_safe, target);
   const Crossing e = cross(x, p, from_safe, target);
   const Crossing band_hi = cross(x, hi, from_safe, target), band_lo = cross(x, lo, from_safe, target);
@@ -114,22 +166,22 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
     r.status = AllowableStatus::beyond_safe_end;
     r.message = fmt::format("even the upper bound on p at {:g}{}, the safest value with an estimate, exceeds the "
                             "target: the allowable lies beyond it; extend the sweep {} {:g}{}{}",
-                            safe_x, unit, extend_safe, safe_x, unit, skipped);
+                            safe_x, unit, extend_safe, safe_x, unit, notes);
     return r;
   }
   if (u.never) {
     r.status = AllowableStatus::beyond_unsafe_end;
     r.message = fmt::format("every value's upper bound on p is at or below the target: the allowable lies beyond "
                             "the swept range; extend it {} {:g}{}{}",
-                            extend_unsafe, unsafe_x, unit, skipped);
+                            extend_unsafe, unsafe_x, unit, notes);
     return r;
   }
   r.status = AllowableStatus::found;
   r.value = u.x;
   r.bracket_safe = u.a;
   r.bracket_unsafe = u.b;
-  r.message = fmt::format("the upper bound on p crosses the target between values {} and {}{}",
-                          x[static_cast<std::size_t>(u.a)], x[static_cast<std::size_t>(u.b)], unit);
+  r.message = fmt::format("the upper bound on p crosses the target between values {} and {}{}{}",
+                          x[static_cast<std::size_t>(u.a)], x[static_cast<std::size_t>(u.b)], unit, side.why);
   return r;
 }
 

@@ -314,22 +314,24 @@ SubsetSummary SubsetSimulation::calc_summary() const {
     s.levels.pop_back();  // the level being sampled has no estimate yet
     return s;
   }
-  double p = 1.0, cov2 = 0.0;
+  double p = 1.0, cov2 = 0.0, cov_sum = 0.0;
   for (const SubsetLevel& l : levels_) {
     p *= l.probability;
     cov2 += l.cov * l.cov;
+    cov_sum += l.cov;
   }
   s.p = p;
   s.cov = std::sqrt(cov2);
   double lineage2 = 0.0;
   for (double x : lineage_) lineage2 += x * x;
   s.cov_lineage = p > 0.0 ? std::sqrt(lineage2) : kInf;
+  s.cov_bound = p > 0.0 ? std::max(cov_sum, s.cov_lineage) : kInf;
   std::vector<std::int64_t> roots;
   for (const Sample& x : samples_) roots.push_back(x.root);
   std::sort(roots.begin(), roots.end());
   s.lineages = std::unique(roots.begin(), roots.end()) - roots.begin();
   s.beta = -normal_quantile(p);
-  if (status_ == SubsetStatus::chains_stuck) s.p = s.beta = s.cov = s.cov_lineage = kNaN;
+  if (status_ == SubsetStatus::chains_stuck) s.p = s.beta = s.cov = s.cov_lineage = s.cov_bound = kNaN;
   return s;
 }
 

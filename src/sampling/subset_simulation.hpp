@@ -46,6 +46,12 @@
 //                are taken as independent, those of one root as arbitrarily dependent, within a
 //                level and across levels: cov_lineage^2 = sum_r (sum_{k, i: root r}
 //                (I_ki - P_k) / (N P_k))^2. It needs many surviving roots (SubsetSummary::lineages).
+//   bound CoV    the CoV the intervals use: cov_bound = max(sum_k delta_k, cov_lineage). sum_k delta_k
+//                is Au & Beck's bound for fully correlated levels (delta^2 <= sum_{i,j}
+//                delta_i delta_j); cov_lineage alone under-covers when the failure samples descend
+//                from few roots (a limit state governed by one or two inputs: its variance is then
+//                estimated from a handful of independent groups and is too often too small).
+//                Measured coverage: docs/campaigns.md "Which CoV to read".
 //   beta         -Phi^-1(p).
 // Random numbers are keyed by (master seed, level, chain, step, dimension, stream) with the
 // counter-based generator of sampling.hpp: never by rank or arrival order. Level 0's point k is
@@ -136,6 +142,7 @@ struct SubsetSummary {
   double p = std::numeric_limits<double>::quiet_NaN();     // failure probability estimate
   double cov = std::numeric_limits<double>::quiet_NaN();   // its coefficient of variation (Au & Beck)
   double cov_lineage = std::numeric_limits<double>::quiet_NaN();  // the ancestral estimate (see above)
+  double cov_bound = std::numeric_limits<double>::quiet_NaN();  // the CoV of the intervals (see above)
   std::int64_t lineages = 0;  // distinct roots among the last level's samples
   double beta = std::numeric_limits<double>::quiet_NaN();  // -Phi^-1(p)
   std::int64_t runs = 0;     // evaluations

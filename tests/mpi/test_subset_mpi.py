@@ -102,7 +102,11 @@ def check_report(args, path, outdir):
     html = open(os.path.join(outdir, "report.html"), encoding="utf-8").read()
     with h5py.File(path, "r") as f:
         g = f["subset"]
-        pr, cov = float(g["p"][()]), float(g["cov_lineage"][()])
+        pr, cov = float(g["p"][()]), float(g["cov_bound"][()])
+        # The interval's CoV: the larger of Au & Beck's bound for fully correlated levels (the sum of
+        # the levels' CoVs) and the lineage CoV (docs/campaigns.md "Which CoV to read").
+        want_cov = max(float(np.sum(g["levels/cov"][()])), float(g["cov_lineage"][()]))
+        check(abs(cov / want_cov - 1) < 1e-12, f"cov_bound {cov:.6g} = max(sum of the levels' CoVs, lineage) {want_cov:.6g}")
         x = g["failure_samples/inputs/mast.diagonal_free_length_m"][:]
     s = math.sqrt(math.log(1 + cov * cov))
     z = norm.ppf(0.975)

@@ -23,9 +23,9 @@ void print_run(const truss::sampling::SubsetOptions& o, const Case& c) {
                           "\"acceptance\": {:.17g}, \"runs\": {}}}", levels.empty() ? "" : ", ", l.threshold,
                           l.probability, l.gamma, l.cov, std::isnan(l.acceptance()) ? -1.0 : l.acceptance(), l.runs);
   fmt::print("{{\"seed\": {}, \"status\": \"{}\", \"p\": {:.17g}, \"cov\": {:.17g}, \"cov_lineage\": {:.17g}, "
-             "\"lineages\": {}, \"beta\": {:.17g}, \"runs\": {}, \"rounds\": {}, \"exact_p\": {:.17g}, "
+             "\"cov_bound\": {:.17g}, \"lineages\": {}, \"beta\": {:.17g}, \"runs\": {}, \"rounds\": {}, \"exact_p\": {:.17g}, "
              "\"levels\": [{}]}}\n",
-             o.seed, to_string(s.status), s.p, s.cov, s.cov_lineage, s.lineages, s.beta, s.runs, s.rounds,
+             o.seed, to_string(s.status), s.p, s.cov, s.cov_lineage, s.cov_bound, s.lineages, s.beta, s.runs, s.rounds,
              c.calc_exact_p(o.dims), levels);
 }
 

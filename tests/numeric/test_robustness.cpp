@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "integrators/auto_integrator.hpp"
+#include "integrators/dop853.hpp"
 #include "sim/simulate.hpp"
 #include "stages/phase_dynamic.hpp"
 
@@ -79,6 +80,59 @@ TEST_CASE("auto integrator: a stiff problem goes to CVODE BDF, a non-stiff one s
     const auto sa = a.integrate(sys, 0.0, 50.0, ya, nullptr);
     const auto sb = d.integrate(sys, 0.0, 50.0, yb, nullptr);
     CHECK(std::isnan(a.get_switch_time_s()));
+    CHECK(sa.steps == sb.steps);
+    CHECK(ya[0] == yb[0]);
+    CHECK(ya[1] == yb[1]);
+  }
+}
+
+TEST_CASE("DOP853's stiffness test fires on a stiff problem, never on the oscillator", "[robust][stiff]") {
+  // On StiffCosine two stages at the same time t + h differ by exactly -k times their states'
+  // difference, so Hairer's estimate of h |lambda| is h k itself. DOP853's stability function has
+  // |R(-x)| = 1 at x = 6.39 (R(z) = 1 + z b^T (I - z A)^-1 1 of its tableau): a step with h k above
+  // its boundary 6.1 counts as stiff, and without the test the accepted steps cannot average h k
+  // much above 6.39 (7 leaves room for the controller's excursions; an unstable step grows the
+  // error and is rejected).
+  integrators::IntegratorOptions o;
+  o.rtol = 1e-8;
+  o.atol = 1e-10;
+  o.stop_when_stiff = true;
+  {
+    StiffCosine sys(1e5);
+    integrators::Dop853 dop(o);
+    double y = 1.0;
+    const auto s = dop.integrate(sys, 0.0, 10.0, &y, nullptr);
+    INFO(s.to_string());
+    REQUIRE(s.status == integrators::IntegratorStatus::stiff);
+    // The test needs 15 steps with h k > 6.1; reaching t = 10 s at h k <= 6.39 would take over
+    // 1.5e5 steps. It stops at an accepted state: on y = cos t to the tolerance.
+    CHECK(s.steps >= 15);
+    CHECK(s.steps < 1000);
+    CHECK(s.t < 10.0);
+    CHECK(std::abs(y - std::cos(s.t)) < 1e-6);
+  }
+  {
+    integrators::IntegratorOptions free = o;
+    free.stop_when_stiff = false;
+    StiffCosine sys(1e5);
+    integrators::Dop853 dop(free);
+    double y = 1.0;
+    const auto s = dop.integrate(sys, 0.0, 1.0, &y, nullptr);
+    REQUIRE(s.status == integrators::IntegratorStatus::reached_end);
+    CHECK(s.steps > 1e5 / 7.0);
+    CHECK(std::abs(y - std::cos(1.0)) < 1e-6);
+  }
+  {
+    // The oscillator is not stiff (|lambda| = 1, h < 1): the test never fires, and asking for it
+    // changes nothing.
+    integrators::IntegratorOptions off = o;
+    off.stop_when_stiff = false;
+    integrators::Dop853 a(o), b(off);
+    Oscillator sys;
+    double ya[2] = {1.0, 0.0}, yb[2] = {1.0, 0.0};
+    const auto sa = a.integrate(sys, 0.0, 50.0, ya, nullptr);
+    const auto sb = b.integrate(sys, 0.0, 50.0, yb, nullptr);
+    CHECK(sa.status == integrators::IntegratorStatus::reached_end);
     CHECK(sa.steps == sb.steps);
     CHECK(ya[0] == yb[0]);
     CHECK(ya[1] == yb[1]);

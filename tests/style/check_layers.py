@@ -4,7 +4,8 @@ folders allowed here, and model/ and numerics/ include nothing but Eigen and the
 No file of src/ holds machine-specific code: no intrinsics header (<immintrin.h>, <emmintrin.h>,
 ...), no test of the target architecture (__x86_64__, __SSE2__, __AVX2__, ...), no per-function
 target or clones attribute, no run-time CPU dispatch (__builtin_cpu_supports). SIMD_FILES lists
-the one optional file that may: sampling/simd_clones.hpp (CMake option TRUSS_SIMD_CLONES).
+the files that may: sampling/simd_clones.hpp (the optional clones, CMake option TRUSS_SIMD_CLONES)
+and util/vector_state.cpp (VZEROUPPER after ISA-L's vector kernels, where the CPU has AVX).
 Usage: check_layers.py SRC_DIR; exit 1 on a violation."""
 import pathlib
 import re
@@ -34,7 +35,7 @@ ALLOWED = {
 EXTERNAL_OK = {"numerics": ("",), "model": ("Eigen/",), "sampling": ("fmt/", "boost/math/"), "statistics": ("fmt/",),
                "util": ("fmt/", "isa-l/")}
 # Machine-specific code, forbidden in src/ outside SIMD_FILES (paths relative to src/).
-SIMD_FILES = {"sampling/simd_clones.hpp"}
+SIMD_FILES = {"sampling/simd_clones.hpp", "util/vector_state.cpp"}
 MACHINE_SPECIFIC = re.compile(r"#\s*include\s*<\w*intrin\.h>|__x86_64__|__i386__|__aarch64__|__SSE\d?\w*__|__AVX\w*__"
                               r"|__ARM_NEON|__attribute__\s*\(\(\s*target|target_clones|__builtin_cpu_supports")
 

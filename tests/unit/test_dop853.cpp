@@ -1,5 +1,6 @@
 // DOP853 (integrators/dop853.hpp) against closed-form solutions: its order 8 at a fixed step on
-// a nonlinear system, the order of its dense output, accuracy that follows rtol, event times.
+// a nonlinear system, the order of its dense output, accuracy that follows rtol, event times (its
+// stiffness test: test_robustness.cpp, beside DOPRI5's).
 #include <catch2/catch.hpp>
 
 #include <algorithm>
