@@ -83,6 +83,35 @@ def interval(p, cov):
     return p * math.exp(-Z95 * sd), p * math.exp(Z95 * sd)
 
 
+# A level "on a plateau" of the margin: its threshold moved less than this share of its distance
+# to the failure (b_k - b_{k+1} < PLATEAU_SHARE b_k). From PLATEAU_LEVELS such levels on, the report
+# warns that the estimate may be biased low.
+PLATEAU_SHARE = 0.01
+PLATEAU_LEVELS = 3
+
+
+def count_plateau_levels(thresholds):
+    """How many levels moved their threshold by less than PLATEAU_SHARE of its distance to 0.
+
+    On such a plateau the margin hardly depends on the inputs that lead to the failure: the levels
+    select on the others (an input's scatter that moves the margin a little everywhere), the Markov
+    chains condition on them, and the region where the margin falls to failure is reached, if at all,
+    by a chain that must cross from one to the other. Each such level still multiplies p by about
+    p0, so the estimate can lie far below the failure probability, beyond what its CoV says."""
+    b = [float(x) for x in thresholds]
+    return sum(1 for k in range(len(b) - 1) if b[k] > 0 and b[k] - b[k + 1] < PLATEAU_SHARE * b[k])
+
+
+def plateau_warning(n):
+    """The report's sentence for n plateau levels (empty below PLATEAU_LEVELS)."""
+    if n < PLATEAU_LEVELS:
+        return ""
+    return (f"the margin is nearly flat over {n} levels (each threshold within {fmt(100 * PLATEAU_SHARE)} % of the "
+            "previous one): the levels select on inputs that do not lead to the failure, and the estimate can lie "
+            "far below the failure probability, beyond its interval; use a margin that falls towards the failure "
+            "in the inputs that cause it, or check the estimate another way")
+
+
 def event_text(s):
     col, kind = esc(s["failure_column"]), s["failure_kind"]
     unit = s["margin_units"]
@@ -112,6 +141,9 @@ def section_probability(s):
                 f"({esc(s['message'])}). With <code>level_cap</code> the failure was not reached "
                 "within max_levels: p is at most the last level's threshold share times p0^levels; "
                 "raise max_levels.</p>")
+    elif plateau_warning(count_plateau_levels(s["levels"]["threshold"])):
+        warn = (f"<p class='warn'>Biased low? {esc(plateau_warning(count_plateau_levels(s['levels']['threshold'])))}"
+                ".</p>")
     elif s["lineages"] < 20:
         warn = (f"<p class='warn'>Only {s['lineages']} level-0 ancestors survive to the last level: "
                 "the lineage and Au &amp; Beck CoVs then understate the spread (the interval uses the "

@@ -14,6 +14,7 @@ import math
 import numpy as np
 
 from .page import esc, fmt, html_page, num, table, unit_text
+from .sections_subset import count_plateau_levels, plateau_warning
 from .top import FAIL, NOT_ASSESSED, PASS, VERDICT_WORDS, model_limits_html, signoff_html
 
 COLUMNS = ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "failures", "master_seed")
@@ -27,7 +28,8 @@ def read_sweep(source):
     """/sweep as a DataFrame, one row per design value: value (the design value), p, cov,
     upper_bound (one-sided, at the confidence), lower and upper (two-sided interval), runs,
     failures (Monte Carlo's count; -1 for subset simulation), master_seed (of the value's
-    standalone campaign), status, message. df.attrs: the /sweep attributes (variable, units,
+    standalone campaign), status, message, plateau_levels (subset simulation's levels on a plateau
+    of the margin, sections_subset.count_plateau_levels; 0 for the other methods). df.attrs: the /sweep attributes (variable, units,
     target_probability, confidence, inner_method, failure event; the design variable's unit as
     design_units), "units" per column, and
     "allowable" (a dict: status, value, estimate, lower, upper, own_value, safe_side, verdict,
@@ -43,10 +45,16 @@ def read_sweep(source):
     cols = {("value" if k == "values" else k): g[k][()] for k in COLUMNS}
     cols["status"] = [_text(v) for v in g["status"][()]]
     cols["message"] = [_text(v) for v in g["message"][()]]
+    # Levels on a plateau of the margin, per value (subset simulation; 0 otherwise).
+    inner = g["inner"] if "inner" in g else {}
+    cols["plateau_levels"] = [count_plateau_levels(inner[str(k)]["level_threshold"][()])
+                              if str(k) in inner and "level_threshold" in inner[str(k)] else 0
+                              for k in range(len(cols["value"]))]
     df = pd.DataFrame(cols)
     df.attrs.update({k: (_text(v) if isinstance(v, (bytes, str)) else v) for k, v in g.attrs.items()})
     df.attrs["design_units"] = df.attrs.pop("units")  # the design variable's unit
     df.attrs["units"] = {("value" if k == "values" else k): _text(g[k].attrs["units"]) for k in COLUMNS}
+    df.attrs["units"]["plateau_levels"] = "1"
     a = g["allowable"]
     allow = {k: _text(v) for k, v in a.attrs.items()}
     for k in ("value", "estimate", "lower", "upper", "own_value"):
@@ -84,10 +92,19 @@ def failure_text(at, html=True):
     return f"{col} {'≥' if at['failure_kind'] == 'above' else '≤'} {fmt(at['failure_threshold'])} {unit}".strip()
 
 
+def flat_values(s):
+    """Indices of the values whose subset estimate crossed a plateau of the margin (may be biased low)."""
+    return [k for k, n in enumerate(s["plateau_levels"]) if plateau_warning(int(n))]
+
+
 def sweep_verdict(s):
     """PASS, FAIL or NOT_ASSESSED (top.py) of /sweep/allowable's verdict: the design's own value on
-    the safe or the unsafe side of the allowable, or no allowable in the swept range."""
+    the safe or the unsafe side of the allowable, or no allowable in the swept range. A PASS with a
+    value whose estimate may be biased low (a plateau of the margin) is NOT_ASSESSED: an estimate
+    below the true p moves the allowable to the unsafe side; a FAIL stays a FAIL."""
     v = s.attrs["allowable"].get("verdict", "")
+    if v == "PASS" and flat_values(s):
+        return NOT_ASSESSED
     return PASS if v == "PASS" else FAIL if v == "FAIL" else NOT_ASSESSED
 
 
@@ -97,7 +114,13 @@ def verdict_lines(c, s):
     unit, factor = _design_unit(at["design_units"])
     own = f"{fmt(a['own_value'] / factor, 5)} {unit}"
     verdict = sweep_verdict(s)
-    if verdict == NOT_ASSESSED:
+    flat = flat_values(s)
+    if verdict == NOT_ASSESSED and a.get("verdict", "") == "PASS":
+        head = (f"VERDICT: {VERDICT_WORDS[verdict]} — the estimates at "
+                f"{', '.join(fmt(float(s['value'].iloc[k]) / factor, 4) for k in flat)} {unit} may be biased low "
+                f"(a plateau of the margin), so the allowable may lie on the unsafe side "
+                f"({c.attrs['campaign_name']}, sweep)")
+    elif verdict == NOT_ASSESSED:
         head = (f"VERDICT: {VERDICT_WORDS[verdict]} — {a['message']} ({c.attrs['campaign_name']}, sweep)")
     else:
         side = "on the safe side of" if verdict == PASS else "on the unsafe side of"
@@ -111,6 +134,9 @@ def verdict_lines(c, s):
                      f"{fmt(100 * at['confidence'])} % interval of the crossing "
                      f"[{fmt(lo / factor, 5)}, {fmt(hi / factor, 5)}] {unit} (—: beyond the swept range)")
     lines.append(f"  {len(s)} values of {at['variable']}, {at['inner_method']} at each, {int(s['runs'].sum())} runs")
+    if flat:
+        lines.append(f"  warning: at {fmt(float(s['value'].iloc[flat[0]]) / factor, 4)} {unit} "
+                     f"{plateau_warning(int(s['plateau_levels'].iloc[flat[0]]))}")
     return lines
 
 
@@ -149,7 +175,13 @@ def section_sweep(page, s):
              num(f"sweep.cov{k}", float(r.cov), digits=3), num(f"sweep.lower{k}", float(r.lower), digits=3),
              num(f"sweep.upper{k}", float(r.upper), digits=3),
              num(f"sweep.upper_bound{k}", float(r.upper_bound), digits=3), num(f"sweep.runs{k}", int(r.runs)),
-             esc(r.status)] for k, r in enumerate(s.itertuples())]
+             esc(r.status), num(f"sweep.plateau{k}", int(r.plateau_levels))] for k, r in enumerate(s.itertuples())]
+    flat = flat_values(s)
+    warn = ""
+    if flat:
+        at_values = ", ".join(fmt(float(s["value"].iloc[k]) / factor, 4) for k in flat)
+        warn = (f"<p class='warn'>Biased low? At {at_values} {esc(unit)}, "
+                f"{esc(plateau_warning(int(s['plateau_levels'].iloc[flat[0]])))}.</p>")
     return ("<section id='sweep'><h2>Failure probability against the design variable</h2>"
             f"<p>Failure event: {failure_text(at)}. At each value of <code>{esc(at['variable'])}</code> "
             f"the campaign ran as a campaign of its own ({esc(at['inner_method'])}; its seed in "
@@ -158,8 +190,8 @@ def section_sweep(page, s):
             f"the target {fmt(at['target_probability'])}.</p>"
             + page.figure(fig_sweep(page.plt, s), "sweep.png",
                           "failure probability against the design value (log axis), target and allowable")
-            + table(["value", "p", "CoV", f"{conf} % low", f"{conf} % high", f"{conf} % upper bound", "runs",
-                     "status"], rows, "narrow") + "</section>")
+            + warn + table(["value", "p", "CoV", f"{conf} % low", f"{conf} % high", f"{conf} % upper bound", "runs",
+                            "status", "plateau levels"], rows, "narrow") + "</section>")
 
 
 def section_allowable(s):

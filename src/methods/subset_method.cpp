@@ -215,12 +215,13 @@ std::string SubsetMethod::calc_result_text() const {
                               above ? ">=" : "<=", f.kind == FailureKind::margin ? 0.0 : f.threshold, unit,
                               sampling::to_string(s.status), s.message);
   // With no failing sample (p = 0) there is no CoV to match: say so rather than print inf and NaN.
-  const std::string crude = s.p > 0.0 ? fmt::format("crude Monte Carlo would need {:.3g} runs for that CoV",
-                                                     (1.0 - s.p) / (s.p * s.cov_bound * s.cov_bound))
-                                      : std::string("no failing sample");
+  const std::string crude =
+      s.p > 0.0 ? fmt::format("crude Monte Carlo would need {:.3g} runs for an interval as narrow",
+                              (1.0 - s.p) / (s.p * s.cov_bound * s.cov_bound))
+                : std::string("no failing sample");
   t += fmt::format("[truss-campaign]   p = {:.4g}, CoV {:.3g} (the bound the interval uses; lineage {:.3g}, Au & Beck "
-                   "{:.3g}), beta = {:.4g}, {} runs in {} levels ({})\n", s.p, s.cov_bound, s.cov_lineage, s.cov, s.beta,
-                   s.runs, s.levels.size(), crude);
+                   "{:.3g}), beta = {:.4g}, {} runs in {} levels ({})\n", s.p, s.cov_bound, s.cov_lineage, s.cov,
+                   s.beta, s.runs, s.levels.size(), crude);
   for (std::size_t k = 0; k < s.levels.size(); ++k) {
     const std::string acceptance = k == 0 ? std::string("- (independent draws)")
                                           : fmt::format("{:.3g}", s.levels[k].acceptance());

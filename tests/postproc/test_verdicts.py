@@ -174,6 +174,28 @@ def check_no_offset_axes(a):
     check(offset == "", f"figures: no offset on the axes (offset text {offset!r})")
 
 
+def check_plateau(a):
+    """Levels on a plateau of the margin (sections_subset.count_plateau_levels) and their effect on a
+    sweep's verdict. The thresholds are those of a free-stack tolerance sweep at a diagonal-length
+    standard deviation of 3.7 mm (the first seven moves are 0.1-0.22 % of the threshold, by hand) and
+    of the rare-failure campaign (one such move)."""
+    sys.path.insert(0, os.path.join(a.repo, "postproc"))
+    import pandas as pd
+    from truss_report.sections_subset import count_plateau_levels
+    from truss_report.sections_sweep import sweep_verdict
+    from truss_report.top import FAIL, NOT_ASSESSED, PASS
+    flat = [0.10587291, 0.10564159, 0.1054759, 0.10535398, 0.10523497, 0.10512915, 0.10503073, 0.10491016,
+            0.06158238, 0.01592114, 0.0049516, 0.00155649, 0.0]
+    check(count_plateau_levels(flat) == 7, f"7 plateau levels in the 3.7 mm sweep value's thresholds "
+                                           f"(got {count_plateau_levels(flat)})")
+    check(count_plateau_levels([0.10584856, 0.10547424, 0.01141385, 0.00216291, 0.0]) == 1,
+          "1 plateau level in the rare-failure campaign's thresholds")
+    for verdict, plateaus, want in (("PASS", [0, 7], NOT_ASSESSED), ("PASS", [1, 2], PASS), ("FAIL", [7, 0], FAIL)):
+        s = pd.DataFrame({"value": [0.0037, 0.004], "plateau_levels": plateaus})
+        s.attrs["allowable"] = {"verdict": verdict}
+        check(sweep_verdict(s) == want, f"a {verdict} with plateau levels {plateaus}: {want}")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repo", required=True)
@@ -189,6 +211,7 @@ def main():
         check_pdf(a, h5, check_verdicts(a, h5))
     check_no_offset_axes(a)
     check_no_nan(a)
+    check_plateau(a)
     print(f"{len(FAILS)} failed" if FAILS else "all passed")
     return 1 if FAILS else 0
 
