@@ -4,10 +4,9 @@
 // call unchanged (the x86-64 ABI saves no vector register across calls, and VZEROUPPER keeps the
 // low 128 bits), and only clears the state the CPU tracks for the upper halves of the YMM/ZMM
 // registers. Why: ISA-L's AVX2/AVX-512 kernels (CRC-32, DEFLATE, Adler-32) return with that state
-// dirty; the scalar SSE2 code compiled for the model then pays a false dependency on every
-// instruction, and a whole deployment ran 2-3 times slower after one checksum (measured in
-// docs/benchmarks.md, "The vector state after ISA-L"). Call it after every ISA-L call. A no-op
-// on CPUs without AVX and outside x86-64.
+// dirty; the scalar SSE2 code compiled for the model then pays for that state on every
+// instruction until it is cleared (the cost: docs/benchmarks.md, "The vector state after ISA-L's
+// kernels"). Call it after every ISA-L call. A no-op on CPUs without AVX and outside x86-64.
 #pragma once
 
 namespace truss::util {
