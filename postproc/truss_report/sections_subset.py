@@ -136,14 +136,14 @@ def section_probability(s):
                                                                     digits=3)],
             ["distinct level-0 ancestors of the last level", num("subset.lineages", s["lineages"])]]
     warn = ""
+    plateau = plateau_warning(count_plateau_levels(s["levels"]["threshold"]))
     if s["status"] != "converged":
         warn = (f"<p class='warn'>The estimate did not converge: <b>{esc(s['status'])}</b> "
                 f"({esc(s['message'])}). With <code>level_cap</code> the failure was not reached "
                 "within max_levels: p is at most the last level's threshold share times p0^levels; "
                 "raise max_levels.</p>")
-    elif plateau_warning(count_plateau_levels(s["levels"]["threshold"])):
-        warn = (f"<p class='warn'>Biased low? {esc(plateau_warning(count_plateau_levels(s['levels']['threshold'])))}"
-                ".</p>")
+    elif plateau:
+        warn = f"<p class='warn'>Biased low? {esc(plateau)}.</p>"
     elif s["lineages"] < 20:
         warn = (f"<p class='warn'>Only {s['lineages']} level-0 ancestors survive to the last level: "
                 "the lineage and Au &amp; Beck CoVs then understate the spread (the interval uses the "
