@@ -221,10 +221,13 @@ def case_resume(args):
     uninterrupted campaign, finished runs not recomputed."""
     d = fresh(args, "resume")
     camp = os.path.join(args.repo, TABLE1)
-    # Under the sanitizer stage (scripts/sanitize.sh sets TRUSS_SANITIZED=1) every run costs ~10x:
-    # 2,000 runs (~9.4 MB of records) still leave the kill (at ~2 MB on disk) well inside the campaign.
-    n = 2000 if os.environ.get("TRUSS_SANITIZED") else 5000
-    sets = ["--set", f"ensemble.n_runs={n}"]
+    # Real runs that integrate (the motor drive, about 1.3 ms each; the velocity drive's closed form
+    # takes 20 us, and 5,000 such runs ended 0.3 s after the start, before the poller below could
+    # see a flush under CI's load). 4,000 runs put ~19 MB of records on disk in ~2.5 s on 2 ranks,
+    # so the kill at ~2 MB comes ~0.3 s into the computing, after ~30 flush intervals. Under the
+    # sanitizer stage (scripts/sanitize.sh sets TRUSS_SANITIZED=1) every run costs ~10x: 1,500 runs.
+    n = 1500 if os.environ.get("TRUSS_SANITIZED") else 4000
+    sets = ["--set", f"ensemble.n_runs={n}", "--set", "drive.mode=motor"]
     ref = os.path.join(d, "ref.h5")
     t_ref = time.time()
     p = mpirun(args, 2, [camp, "-o", ref, *sets, "--progress", "none"])
@@ -237,7 +240,7 @@ def case_resume(args):
            "--flush-interval", "0.01", "--progress", "none"]
     proc = subprocess.Popen(cmd, env=ENV, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     t0 = time.time()
-    # Kill once ~2 MB of records (~400 runs of ~4.7 kB) are on disk, well before the end (~23 MB).
+    # Kill once ~2 MB of records (~400 runs of ~4.7 kB) are on disk, well before the end.
     seen = []  # journal sizes observed while the job runs
     while time.time() - t0 < 120:
         if os.path.exists(journal):
