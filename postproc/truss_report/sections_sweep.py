@@ -17,7 +17,8 @@ from .page import esc, fmt, html_page, num, table, unit_text
 from .sections_subset import count_plateau_levels, plateau_warning
 from .top import FAIL, NOT_ASSESSED, PASS, VERDICT_WORDS, model_limits_html, signoff_html
 
-COLUMNS = ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "failures", "master_seed")
+COLUMNS = ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "failures", "master_seed", "index",
+           "refinement")
 
 
 def _text(v):
@@ -28,7 +29,9 @@ def read_sweep(source):
     """/sweep as a DataFrame, one row per design value: value (the design value), p, cov,
     upper_bound (one-sided, at the confidence), lower and upper (two-sided interval), runs,
     failures (Monte Carlo's count; -1 for subset simulation), master_seed (of the value's
-    standalone campaign), status, message, plateau_levels (subset simulation's levels on a plateau
+    standalone campaign), index (the design value's index k: /sweep/inner/<k>), refinement (True
+    for a value the refinement placed inside the bracket of the listed values' allowable), status,
+    message, plateau_levels (subset simulation's levels on a plateau
     of the margin, sections_subset.count_plateau_levels; 0 for the other methods). df.attrs: the /sweep attributes (variable, units,
     target_probability, confidence, inner_method, failure event; the design variable's unit as
     design_units), "units" per column, and
@@ -43,13 +46,14 @@ def read_sweep(source):
         return None
     g = source["sweep"]
     cols = {("value" if k == "values" else k): g[k][()] for k in COLUMNS}
+    cols["refinement"] = cols["refinement"].astype(bool)
     cols["status"] = [_text(v) for v in g["status"][()]]
     cols["message"] = [_text(v) for v in g["message"][()]]
     # Levels on a plateau of the margin, per value (subset simulation; 0 otherwise).
     inner = g["inner"] if "inner" in g else {}
     cols["plateau_levels"] = [count_plateau_levels(inner[str(k)]["level_threshold"][()])
                               if str(k) in inner and "level_threshold" in inner[str(k)] else 0
-                              for k in range(len(cols["value"]))]
+                              for k in cols["index"]]
     df = pd.DataFrame(cols)
     df.attrs.update({k: (_text(v) if isinstance(v, (bytes, str)) else v) for k, v in g.attrs.items()})
     df.attrs["design_units"] = df.attrs.pop("units")  # the design variable's unit
@@ -133,7 +137,10 @@ def verdict_lines(c, s):
         lines.append(f"  estimate (p = target): {fmt(est / factor, 5)}{' ' + unit if math.isfinite(est) else ''}; "
                      f"{fmt(100 * at['confidence'])} % interval of the crossing "
                      f"[{fmt(lo / factor, 5)}, {fmt(hi / factor, 5)}] {unit} (—: beyond the swept range)")
-    lines.append(f"  {len(s)} values of {at['variable']}, {at['inner_method']} at each, {int(s['runs'].sum())} runs")
+    refined = int(s["refinement"].sum())
+    lines.append(f"  {len(s)} values of {at['variable']}"
+                 f"{f' ({refined} placed by the refinement)' if refined else ''}, {at['inner_method']} at each, "
+                 f"{int(s['runs'].sum())} runs")
     if flat:
         lines.append(f"  warning: at {fmt(float(s['value'].iloc[flat[0]]) / factor, 4)} {unit} "
                      f"{plateau_warning(int(s['plateau_levels'].iloc[flat[0]]))}")
@@ -150,6 +157,9 @@ def fig_sweep(plt, s):
     ax.fill_between(x, lo, s["upper"], color="C0", alpha=0.2,
                     label=f"{fmt(100 * at['confidence'])} % interval of p")
     ax.plot(x[ok], s["p"][ok], "o-", color="C0", label="estimate p")
+    fine = ok & s["refinement"].to_numpy()
+    if fine.any():
+        ax.plot(x[fine], s["p"][fine], "s", color="C0", mfc="white", label="estimate p, refinement values")
     ax.plot(x, s["upper_bound"], "v--", color="C1", label=f"one-sided {fmt(100 * at['confidence'])} % upper bound")
     ax.axhline(at["target_probability"], color="C3", lw=1.2, label=f"target {fmt(at['target_probability'])}")
     if a["status"] == "found":
@@ -175,7 +185,8 @@ def section_sweep(page, s):
              num(f"sweep.cov{k}", float(r.cov), digits=3), num(f"sweep.lower{k}", float(r.lower), digits=3),
              num(f"sweep.upper{k}", float(r.upper), digits=3),
              num(f"sweep.upper_bound{k}", float(r.upper_bound), digits=3), num(f"sweep.runs{k}", int(r.runs)),
-             esc(r.status), num(f"sweep.plateau{k}", int(r.plateau_levels))] for k, r in enumerate(s.itertuples())]
+             esc(r.status), num(f"sweep.plateau{k}", int(r.plateau_levels)),
+             "refinement" if r.refinement else "listed"] for k, r in enumerate(s.itertuples())]
     flat = flat_values(s)
     warn = ""
     if flat:
@@ -190,8 +201,18 @@ def section_sweep(page, s):
             f"the target {fmt(at['target_probability'])}.</p>"
             + page.figure(fig_sweep(page.plt, s), "sweep.png",
                           "failure probability against the design value (log axis), target and allowable")
-            + warn + table(["value", "p", "CoV", f"{conf} % low", f"{conf} % high", f"{conf} % upper bound", "runs",
-                            "status", "plateau levels"], rows, "narrow") + "</section>")
+            + refine_html(at) + warn
+            + table(["value", "p", "CoV", f"{conf} % low", f"{conf} % high", f"{conf} % upper bound", "runs",
+                     "status", "plateau levels", "placed"], rows, "narrow") + "</section>")
+
+
+def refine_html(at):
+    """What the refinement did (sweep.refine values inside the bracket of the listed values'
+    allowable, docs/campaigns.md), or nothing when the campaign asked for none."""
+    if int(at.get("refine", 0)) == 0:
+        return ""
+    return (f"<p>Refinement (<code>sweep.refine = {int(at['refine'])}</code>): "
+            f"{esc(at['refine_message'])}. The allowable is read from all values, listed and placed.</p>")
 
 
 def section_allowable(s):

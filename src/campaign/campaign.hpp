@@ -104,11 +104,11 @@ CampaignOptions parse_campaign_text(std::string_view text, const std::string& so
 std::string resolved_campaign_toml(const CampaignOptions& c);
 
 // The most runs the campaign can make (its method's; ensemble.n_runs unless the method runs more,
-// as stop's max_runs; with a [sweep], that many at each of its values): what memory and disk are
+// as stop's max_runs; with a [sweep], that many at each value it can run): what memory and disk are
 // checked for.
 inline std::int64_t calc_max_runs(const CampaignOptions& c) {
   const std::int64_t per_value = c.ensemble.method.options().calc_max_runs(c);
-  return c.sweep.active ? per_value * static_cast<std::int64_t>(c.sweep.n_values()) : per_value;
+  return c.sweep.active ? per_value * static_cast<std::int64_t>(calc_max_design_values(c.sweep)) : per_value;
 }
 
 // The rules of a fixed design over ensemble.n_runs and ensemble.sampling (a Saltelli design's

@@ -94,7 +94,7 @@ DimensionLayout calc_layout(const CampaignOptions& c) {
     L.sweep_dispersion = find_sweep_dispersion(c);
     if (L.sweep_dispersion < 0) L.sweep_key = sim::find_scene_key(c.sweep.key);
     else
-      for (std::size_t k = 0; k < c.sweep.n_values(); ++k)
+      for (std::size_t k = 0; k < c.sweep.n_design_values(); ++k)
         L.sweep_distributions.push_back(make_distribution(
             calc_campaign_at(c, k).dispersions[static_cast<std::size_t>(L.sweep_dispersion)]));
   }
@@ -162,9 +162,10 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
   // A sweep's value: into the base scene (the nominal the draws apply to) or the swept distribution.
   std::size_t sweep_k = 0;
   if (L.design >= 0) {
-    sweep_k = L.find_sweep_index(u[L.design], c.sweep.n_values());
-    if (L.sweep_key) L.sweep_key->set_real(in.scene, c.sweep.values[sweep_k]);
-    in.values.push_back({c.sweep.values[sweep_k]});
+    sweep_k = L.find_sweep_index(u[L.design], c.sweep.n_design_values());
+    const double value = c.sweep.find_value(sweep_k);
+    if (L.sweep_key) L.sweep_key->set_real(in.scene, value);
+    in.values.push_back({value});
   }
   std::optional<sim::SceneOptions> swept;
   if (L.sweep_key) swept = in.scene;

@@ -25,8 +25,8 @@ struct DimensionLayout {
   // Each bay's J_c follows its (dispersed) strut mass and length: J_c neither set nor dispersed.
   bool strut_inertia_follows = true;
   // A sweep (campaign/sweep.hpp): the design coordinate is the last dimension, u = (k + 0.5) / n for
-  // value k (-1: no sweep); a nominal sweep's scene key, or a spread sweep's dispersion and its
-  // distribution at each value.
+  // design value k of n (-1: no sweep); a nominal sweep's scene key, or a spread sweep's dispersion
+  // and its distribution at each design value.
   int design = -1;
   const sim::SceneKey* sweep_key = nullptr;
   int sweep_dispersion = -1;
@@ -34,8 +34,8 @@ struct DimensionLayout {
   // The dimensions the dispersions draw (a method's points): all but the design coordinate.
   int dispersion_dims() const { return design >= 0 ? design : total; }
   // The sweep's value index of a run's design coordinate.
-  std::size_t find_sweep_index(double u, std::size_t n_values) const {
-    return std::min(n_values - 1, static_cast<std::size_t>(u * static_cast<double>(n_values)));
+  std::size_t find_sweep_index(double u, std::size_t n_design_values) const {
+    return std::min(n_design_values - 1, static_cast<std::size_t>(u * static_cast<double>(n_design_values)));
   }
 };
 

@@ -18,6 +18,9 @@ namespace truss::campaign {
 namespace {
 
 constexpr std::uint64_t kTagSweep = 0x5357454550ULL;  // "SWEEP": the per-value seeds
+// Candidates per bracket: 20 place the crossing to 5 % of the bracket, well below what the
+// estimates' scatter resolves at the runs a value takes.
+constexpr int kMaxRefine = 20;
 
 // The spread parameter a spread sweep sets, by distribution; nullptr for a discrete table.
 const char* spread_name(DistributionKind k) {
@@ -109,6 +112,10 @@ std::string check_values(const CampaignOptions& c) {
     if (s.variable == SweepVariable::nominal)
       if (std::string e = sim::check_hard_range(*sim::find_scene_key(s.key), v); !e.empty())
         return "sweep.values: " + e;
+  }
+  // Every value the sweep can run: the listed ones and the refinement's candidates between them.
+  for (std::size_t k = 0; k < s.n_design_values(); ++k) {
+    const double v = s.find_value(k);
     const CampaignOptions at = calc_campaign_at(c, k);
     std::string why = at.base.validate();
     if (why.empty()) {
@@ -118,15 +125,17 @@ std::string check_values(const CampaignOptions& c) {
         why = e.what();
       }
     }
+    // A candidate is named as such: the user wrote its neighbours, not it.
+    const std::string field = k < s.n_values() ? "sweep.values" : "sweep.refine";
+    const std::string at_v = k < s.n_values() ? fmt::format("{} = {}", sweep_variable_name(c), v)
+                                              : fmt::format("the candidate {} = {}", sweep_variable_name(c), v);
     if (!why.empty())
-      return fmt::format("sweep.values: {} = {} {} gives a scene the model refuses: {}", sweep_variable_name(c), v,
-                         sweep_variable_units(c), why);
+      return fmt::format("{}: {} {} gives a scene the model refuses: {}", field, at_v, sweep_variable_units(c), why);
     for (std::size_t i = 0; i < at.dispersions.size(); ++i) {
       const std::string e = make_distribution(at.dispersions[i]).validate();
-      if (!e.empty())
-        return fmt::format("sweep.values: at {} = {}: dispersion[{}]: {}", sweep_variable_name(c), v, i + 1, e);
+      if (!e.empty()) return fmt::format("{}: at {}: dispersion[{}]: {}", field, at_v, i + 1, e);
       if (std::string d = check_dispersion_draws(at, i); !d.empty())
-        return fmt::format("sweep.values: at {} = {}: dispersion[{}]: {}", sweep_variable_name(c), v, i + 1, d);
+        return fmt::format("{}: at {}: dispersion[{}]: {}", field, at_v, i + 1, d);
     }
   }
   return {};
@@ -164,6 +173,14 @@ double calc_sweep_own_value(const CampaignOptions& c) {
   return k && k->get_real ? k->get_real(c.base) : std::nan("");
 }
 
+double SweepOptions::find_value(std::size_t k) const {
+  const std::size_t n = values.size();
+  if (k < n) return values[k];
+  const std::size_t m = static_cast<std::size_t>(refine), i = (k - n) / m, j = (k - n) % m;
+  const double a = values.at(i), b = values.at(i + 1);
+  return a + static_cast<double>(j + 1) * (b - a) / static_cast<double>(m + 1);
+}
+
 std::uint64_t calc_sweep_seed(std::uint64_t master_seed, std::size_t k) {
   return sampling::splitmix_at(master_seed ^ kTagSweep, static_cast<std::uint64_t>(k)) >> 1;
 }
@@ -172,7 +189,8 @@ CampaignOptions calc_campaign_at(const CampaignOptions& c, std::size_t k) {
   CampaignOptions at = c;
   at.sweep = SweepOptions{};
   at.ensemble.master_seed = calc_sweep_seed(c.ensemble.master_seed, k);
-  const double v = c.sweep.values.at(k);
+  if (k >= c.sweep.n_design_values()) throw std::out_of_range(fmt::format("sweep: no design value {}", k));
+  const double v = c.sweep.find_value(k);
   if (const int i = find_sweep_dispersion(c); i >= 0) {
     set_spread(at.dispersions[static_cast<std::size_t>(i)], v);
   } else if (const sim::SceneKey* key = sim::find_scene_key(c.sweep.key); key && key->set_real) {
@@ -188,6 +206,8 @@ std::string validate_sweep(const CampaignOptions& c) {
     return fmt::format("sweep.target_probability: must lie in (0, 1), got {}", s.target_probability);
   if (!(s.confidence > 0.5 && s.confidence < 1.0))
     return fmt::format("sweep.confidence: must lie in (0.5, 1), got {}", s.confidence);
+  if (s.refine < 0 || s.refine > kMaxRefine)
+    return fmt::format("sweep.refine: must lie in [0, {}], got {}", kMaxRefine, s.refine);
   if (std::string e = check_inner_method(c); !e.empty()) return e;
   if (std::string e = check_variable(c); !e.empty()) return e;
   return check_values(c);
@@ -198,8 +218,10 @@ std::string sweep_toml(const SweepOptions& s) {
   std::string t = fmt::format("[sweep]\n{} = \"{}\"\nvalues = [",
                               s.variable == SweepVariable::spread ? "spread" : "key", s.key);
   for (std::size_t i = 0; i < s.values.size(); ++i) t += (i ? ", " : "") + toml_num(s.values[i]);
-  return t + fmt::format("]\ntarget_probability = {}\nconfidence = {}\n\n", toml_num(s.target_probability),
-                         toml_num(s.confidence));
+  t += fmt::format("]\ntarget_probability = {}\nconfidence = {}\n", toml_num(s.target_probability),
+                   toml_num(s.confidence));
+  if (s.refine > 0) t += fmt::format("refine = {}\n", s.refine);
+  return t + "\n";
 }
 
 namespace detail {
@@ -212,9 +234,10 @@ void parse_sweep_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
                    *to = t.get("to"), *count = t.get("count");
   for (const auto& [k, v] : t)
     if (k != "key" && k != "spread" && k != "values" && k != "from" && k != "to" && k != "count" &&
-        k != "target_probability" && k != "confidence")
+        k != "target_probability" && k != "confidence" && k != "refine")
       c.fail(&v, fmt::format("unknown key 'sweep.{}' (known: sweep.key, sweep.spread, sweep.values, sweep.from, "
-                             "sweep.to, sweep.count, sweep.target_probability, sweep.confidence)", k.str()));
+                             "sweep.to, sweep.count, sweep.target_probability, sweep.confidence, sweep.refine)",
+                             k.str()));
   if ((key != nullptr) == (spread != nullptr))
     c.fail(key ? key : spread ? spread : &t,
            "sweep: give either key = \"<scene key>\" (its nominal value is swept) or spread = \"<dispersed key>\" "
@@ -241,6 +264,11 @@ void parse_sweep_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
   if (!target) c.fail(&t, "sweep.target_probability: missing (the failure probability the allowable keeps, e.g. 1e-6)");
   s.target_probability = get_number(c, *target, "sweep.target_probability");
   if (const toml::node* conf = t.get("confidence")) s.confidence = get_number(c, *conf, "sweep.confidence");
+  if (const toml::node* refine = t.get("refine")) {
+    const std::int64_t m = get_integer(c, *refine, "sweep.refine");
+    if (m < 0 || m > kMaxRefine) c.fail(refine, fmt::format("sweep.refine: must lie in [0, {}], got {}", kMaxRefine, m));
+    s.refine = static_cast<int>(m);
+  }
 }
 
 }  // namespace detail

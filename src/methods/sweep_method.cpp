@@ -46,7 +46,7 @@ SweepMethod::SweepMethod(const campaign::CampaignContext& ctx)
   if (!c.sweep.active || ctx_.dims.design != dims_) throw std::logic_error("sweep: a campaign without [sweep]");
   if (ctx_.record.find_output(failure_.column) < 0)
     throw std::logic_error(fmt::format("sweep: {} is not a float64 output of the record", failure_.column));
-  values_.resize(c.sweep.n_values());
+  values_.resize(c.sweep.n_design_values());
   for (std::size_t k = 0; k < values_.size(); ++k) {
     const campaign::CampaignOptions at = campaign::calc_campaign_at(c, k);
     Value& v = values_[k];
@@ -57,13 +57,15 @@ SweepMethod::SweepMethod(const campaign::CampaignContext& ctx)
   }
 }
 
-// Value k's first round: the inner method of calc_campaign_at(c, k).
-Proposal SweepMethod::propose_value(std::size_t k, std::int64_t round, Slice& slice) {
+// Value k's next round: the inner method of calc_campaign_at(c, k).
+Proposal SweepMethod::propose_value(std::size_t k, Slice& slice) {
   Value& v = values_[k];
   slice.value = static_cast<std::uint32_t>(k);
   slice.local_first = v.runs;
+  const bool first = !v.started;
+  v.started = true;
   if (inner_ == Inner::subset) {
-    if (round == 0) v.sim.emplace(v.subset);
+    if (first) v.sim.emplace(v.subset);
     if (v.sim->done()) return {};
     const sampling::SubsetRound& r = v.sim->round();
     if (r.first_evaluation != v.runs)
@@ -72,7 +74,7 @@ Proposal SweepMethod::propose_value(std::size_t k, std::int64_t round, Slice& sl
     return {r.n_points, r.encode()};
   }
   const campaign::EnsembleOptions& e = ctx_.options.ensemble;
-  if (round == 0) return {e.n_runs, {}};
+  if (first) return {e.n_runs, {}};
   if (inner_ == Inner::monte_carlo || v.decisions.back().state != sampling::StopState::more) return {};
   return {v.decisions.back().next_runs, {}};
 }
@@ -95,13 +97,18 @@ void SweepMethod::take_records(std::size_t k, const RoundRecords& r) {
 
 Proposal SweepMethod::propose(std::int64_t round, const RoundRecords& previous) {
   if (round == 0) {
-    for (Value& v : values_) {
+    for (std::size_t k = 0; k < values_.size(); ++k) {
+      Value& v = values_[k];
       v.sim.reset();
       v.runs = v.failures = 0;
       v.nearest_margin = std::nan("");
       v.decisions.clear();
-      v.done = false;
+      v.queued = k < ctx_.options.sweep.n_values();
+      v.started = v.done = false;
     }
+    refined_ = ctx_.options.sweep.refine == 0;
+    refine_message_.clear();
+    refine_low_ = refine_high_ = std::nan("");
   } else {
     std::size_t at = 0;
     for (const Slice& s : last_) {  // the previous round's records, value by value
@@ -117,13 +124,23 @@ Proposal SweepMethod::propose(std::int64_t round, const RoundRecords& previous) 
       at += n;
     }
   }
+  Proposal p = propose_queued();
+  if (p.n_runs == 0 && !refined_) {  // the listed values are done: refine around their allowable
+    queue_refinement();
+    p = propose_queued();
+  }
+  return p;
+}
+
+// The round: the next round of every queued value that is not done, in order of k.
+Proposal SweepMethod::propose_queued() {
   last_.clear();
   std::string state;
   std::int64_t total = 0;
   for (std::size_t k = 0; k < values_.size(); ++k) {
-    if (values_[k].done) continue;
+    if (!values_[k].queued || values_[k].done) continue;
     Slice s;
-    const Proposal p = propose_value(k, round, s);
+    const Proposal p = propose_value(k, s);
     if (p.n_runs == 0) {
       values_[k].done = true;
       continue;
@@ -140,6 +157,37 @@ Proposal SweepMethod::propose(std::int64_t round, const RoundRecords& previous) 
   }
   if (total == 0) return {};
   return {total, state};
+}
+
+// The listed values' allowable picks the bracket (x_i, x_{i+1}) that holds it; its candidates run.
+void SweepMethod::queue_refinement() {
+  refined_ = true;
+  const campaign::SweepOptions& sw = ctx_.options.sweep;
+  const sampling::Allowable a = calc_allowable();
+  if (a.status != sampling::AllowableStatus::found) {
+    refine_message_ = fmt::format("not refined: the listed values give no allowable ({}: {})",
+                                  sampling::to_string(a.status), a.message);
+    return;
+  }
+  std::size_t i = 0;
+  while (i + 2 < sw.n_values() && sw.values[i + 1] <= a.value) ++i;
+  refine_low_ = sw.values[i];
+  refine_high_ = sw.values[i + 1];
+  for (int j = 0; j < sw.refine; ++j) values_[sw.find_candidate_index(i, j)].queued = true;
+  refine_message_ = fmt::format("refined between {:.6g} and {:.6g} {} (the bracket of the listed values' allowable "
+                                "{:.6g}) with {} values",
+                                refine_low_, refine_high_, campaign::sweep_variable_units(ctx_.options), a.value,
+                                sw.refine);
+}
+
+std::vector<std::size_t> SweepMethod::find_run_order() const {
+  std::vector<std::size_t> order;
+  for (std::size_t k = 0; k < values_.size(); ++k)
+    if (values_[k].queued) order.push_back(k);
+  const campaign::SweepOptions& sw = ctx_.options.sweep;
+  std::sort(order.begin(), order.end(),
+            [&](std::size_t a, std::size_t b) { return sw.find_value(a) < sw.find_value(b); });
+  return order;
 }
 
 std::shared_ptr<const SweepMethod::Decoded> SweepMethod::decode(const RoundPlan& plan) const {
@@ -159,7 +207,7 @@ std::shared_ptr<const SweepMethod::Decoded> SweepMethod::decode(const RoundPlan&
     s.state = std::string(r.get_bytes(r.get<std::uint32_t>()));
     s.offset = offset;
     offset += s.n_runs;
-    if (s.value >= ctx_.options.sweep.n_values() || s.n_runs < 1)
+    if (s.value >= ctx_.options.sweep.n_design_values() || s.n_runs < 1)
       throw std::runtime_error(fmt::format("a sweep round with value {} of {} runs", s.value, s.n_runs));
     if (inner_ == Inner::subset)
       s.round = std::make_shared<const sampling::SubsetRound>(sampling::SubsetRound::decode(s.state, dims_));
@@ -183,16 +231,20 @@ void SweepMethod::calc_uniforms(const RoundPlan& plan, std::int64_t run, double*
   const std::int64_t local = i - s.offset;
   if (inner_ == Inner::subset) sampling::calc_round_uniforms(v.subset, *s.round, local, u);
   else v.plan->calc_uniforms(s.local_first + local, u);
-  u[dims_] = (static_cast<double>(s.value) + 0.5) / static_cast<double>(ctx_.options.sweep.n_values());
+  u[dims_] = (static_cast<double>(s.value) + 0.5) / static_cast<double>(ctx_.options.sweep.n_design_values());
 }
 
 std::vector<SweepMethod::ValueResult> SweepMethod::calc_value_results() const {
   const campaign::SweepOptions& sw = ctx_.options.sweep;
-  std::vector<ValueResult> out(values_.size());
-  for (std::size_t k = 0; k < values_.size(); ++k) {
+  const std::vector<std::size_t> order = find_run_order();
+  std::vector<ValueResult> out(order.size());
+  for (std::size_t row = 0; row < order.size(); ++row) {
+    const std::size_t k = order[row];
     const Value& v = values_[k];
-    ValueResult& r = out[k];
-    r.value = sw.values[k];
+    ValueResult& r = out[row];
+    r.index = k;
+    r.refinement = k >= sw.n_values();
+    r.value = sw.find_value(k);
     r.seed = v.seed;
     r.runs = v.runs;
     if (inner_ == Inner::subset) {
@@ -221,11 +273,15 @@ std::vector<SweepMethod::ValueResult> SweepMethod::calc_value_results() const {
 }
 
 sampling::Allowable SweepMethod::calc_allowable() const {
+  std::vector<double> x;
   std::vector<sampling::ProbabilityBounds> b;
-  for (const ValueResult& r : calc_value_results()) b.push_back(r.bounds);
   sampling::NearestMargins nearest{{}, campaign::find_run_column_unit(failure_.column)};
-  for (const Value& v : values_) nearest.margin.push_back(v.nearest_margin);
-  return sampling::find_allowable(ctx_.options.sweep.values, b, ctx_.options.sweep.target_probability,
+  for (const ValueResult& r : calc_value_results()) {
+    x.push_back(r.value);
+    b.push_back(r.bounds);
+    nearest.margin.push_back(values_[r.index].nearest_margin);
+  }
+  return sampling::find_allowable(x, b, ctx_.options.sweep.target_probability,
                                   campaign::sweep_variable_units(ctx_.options), nearest);
 }
 
@@ -322,9 +378,13 @@ void SweepMethod::write_results(hid_t file, std::int64_t) const {
   write_string_attribute(g.get(), "failure_units", campaign::find_run_column_unit(f.column));
   write_double_attribute(g.get(), "target_probability", c.sweep.target_probability);
   write_double_attribute(g.get(), "confidence", c.sweep.confidence);
+  write_int_attribute(g.get(), "refine", c.sweep.refine);
+  write_string_attribute(g.get(), "refine_message", refine_message_);
+  write_double_attribute(g.get(), "refine_low", refine_low_);
+  write_double_attribute(g.get(), "refine_high", refine_high_);
   const std::size_t n = vr.size();
   std::vector<double> value(n), p(n), cov(n), ub(n), lo(n), hi(n);
-  std::vector<std::int64_t> runs(n), failures(n), seed(n);
+  std::vector<std::int64_t> runs(n), failures(n), seed(n), index(n), refinement(n);
   std::vector<std::string> status(n), message(n);
   for (std::size_t k = 0; k < n; ++k) {
     value[k] = vr[k].value;
@@ -336,6 +396,8 @@ void SweepMethod::write_results(hid_t file, std::int64_t) const {
     runs[k] = vr[k].runs;
     failures[k] = vr[k].failures;
     seed[k] = static_cast<std::int64_t>(vr[k].seed);
+    index[k] = static_cast<std::int64_t>(vr[k].index);
+    refinement[k] = vr[k].refinement ? 1 : 0;
     status[k] = vr[k].status;
     message[k] = vr[k].message;
   }
@@ -348,11 +410,13 @@ void SweepMethod::write_results(hid_t file, std::int64_t) const {
   write_array(g.get(), "runs", "1", runs.data(), n);
   write_array(g.get(), "failures", "1", failures.data(), n);
   write_array(g.get(), "master_seed", "1", seed.data(), n);
+  write_array(g.get(), "index", "1", index.data(), n);
+  write_array(g.get(), "refinement", "1", refinement.data(), n);
   write_strings(g.get(), "status", status);
   write_strings(g.get(), "message", message);
   write_allowable(g.get(), calc_allowable(), units, campaign::calc_sweep_own_value(c));
   Handle inner = create_group(g.get(), "inner");
-  for (std::size_t k = 0; k < n; ++k) write_inner(inner.get(), k);
+  for (const ValueResult& r : vr) write_inner(inner.get(), r.index);
 }
 
 namespace {
@@ -367,11 +431,13 @@ std::string SweepMethod::calc_result_text() const {
   const std::string name = campaign::sweep_variable_name(c), units = campaign::sweep_variable_units(c);
   const double conf = 100.0 * c.sweep.confidence;
   std::string t = fmt::format("[truss-campaign] sweep of {} ({} values, {} at each) for P({} fails), target {:g}:\n",
-                              name, c.sweep.n_values(), inner_name(inner_), failure_.column,
+                              name, calc_value_results().size(), inner_name(inner_), failure_.column,
                               c.sweep.target_probability);
   for (const ValueResult& r : calc_value_results())
-    t += fmt::format("[truss-campaign]   {} = {:.6g} {}: p = {:.4g} ({:g} % upper bound {:.4g}), {} runs, {}\n", name,
-                     r.value, units, r.bounds.p, conf, r.bounds.upper_bound, r.runs, r.status);
+    t += fmt::format("[truss-campaign]   {} = {:.6g} {}: p = {:.4g} ({:g} % upper bound {:.4g}), {} runs, {}{}\n",
+                     name, r.value, units, r.bounds.p, conf, r.bounds.upper_bound, r.runs, r.status,
+                     r.refinement ? " (refinement)" : "");
+  if (c.sweep.refine > 0) t += fmt::format("[truss-campaign]   {}\n", refine_message_);
   const sampling::Allowable a = calc_allowable();
   if (a.status == sampling::AllowableStatus::found)
     t += fmt::format("[truss-campaign]   allowable: {} {} {:.6g} {} ({:g} % upper bound on p <= {:g}); estimate "

@@ -15,12 +15,20 @@
 // (its nearest approach to failure) tells the allowable the safe side where the estimates cannot
 // (p = 0 at both ends: sampling/allowable.hpp).
 //
-// Scheduling: round r of the sweep is the union of round r of every value's inner method that is
-// not done, value by value in order; the state is, per value, (value index, its first local
-// run, its runs, its inner state bytes). Value k's inner method is the one of the standalone
-// campaign calc_campaign_at(c, k) (its own seed): its run ordinals (local runs) and its points are
-// that campaign's, so its estimate is the same bytes in the sweep, alone, on any rank count and
-// after --resume. The point's last uniform is the design coordinate (k + 0.5) / n_values.
+// Scheduling: round r of the sweep is the union of the next round of every running value's inner
+// method that is not done, value by value in order of k; the state is, per value, (design value
+// index k, its first local run, its runs, its inner state bytes). Value k's inner method is the one
+// of the standalone campaign calc_campaign_at(c, k) (its own seed): its run ordinals (local runs)
+// and its points are that campaign's, so its estimate is the same bytes in the sweep, alone, on any
+// rank count and after --resume. The point's last uniform is the design coordinate
+// (k + 0.5) / n_design_values.
+//
+// Refinement (sweep.refine = m > 0): the listed values run first. When all are done and their
+// allowable is found, the m candidates of the bracket of listed values that holds it
+// (campaign/sweep.hpp) start, in the next round; the allowable is then read from every value that
+// ran, in order of value. Which bracket is a function of the listed values' records alone, so a
+// resumed or re-ranked sweep refines the same one. Without an allowable (the target outside the
+// listed values, no safe side) nothing is refined and the file says why.
 //
 // The results: /sweep (docs/hdf5-schema.md): per value p, CoV, bounds, runs, status; the
 // allowable with its interval; each value's inner results under /sweep/inner/<k>.
@@ -51,6 +59,8 @@ class SweepMethod : public Method {
 
   // One value's result (after the last propose()).
   struct ValueResult {
+    std::size_t index = 0;    // its design value index k (campaign::SweepOptions::find_value)
+    bool refinement = false;  // a refinement candidate (k >= n_values)
     double value = 0.0;
     std::uint64_t seed = 0;
     sampling::ProbabilityBounds bounds;
@@ -58,6 +68,7 @@ class SweepMethod : public Method {
     std::int64_t runs = 0, failures = -1;  // failures: Monte Carlo's count (-1 for subset)
     std::string status, message;
   };
+  // The values that ran, in ascending order of value.
   std::vector<ValueResult> calc_value_results() const;
   sampling::Allowable calc_allowable() const;
   Inner inner() const { return inner_; }
@@ -71,6 +82,8 @@ class SweepMethod : public Method {
     std::int64_t runs = 0, failures = 0;
     double nearest_margin = std::numeric_limits<double>::quiet_NaN();  // the smallest finite margin of its runs
     std::vector<sampling::StopDecision> decisions;
+    bool queued = false;   // it runs (every listed value; one bracket's candidates)
+    bool started = false;  // its inner method has proposed its first round
     bool done = false;
   };
   // One value's part of a round, as its state holds it.
@@ -84,7 +97,10 @@ class SweepMethod : public Method {
     std::int64_t round = -1;
     std::vector<Slice> slices;
   };
-  Proposal propose_value(std::size_t k, std::int64_t round, Slice& slice);
+  Proposal propose_value(std::size_t k, Slice& slice);
+  Proposal propose_queued();
+  void queue_refinement();
+  std::vector<std::size_t> find_run_order() const;  // the queued values' k, ascending in value
   void take_records(std::size_t k, const RoundRecords& r);
   std::shared_ptr<const Decoded> decode(const RoundPlan& plan) const;
   void write_inner(hid_t group, std::size_t k) const;
@@ -95,6 +111,9 @@ class SweepMethod : public Method {
   int dims_ = 0;  // the dispersions' dimensions (the design coordinate is u[dims_])
   std::vector<Value> values_;
   std::vector<Slice> last_;  // the slices of the round proposed last
+  bool refined_ = false;     // the refinement's candidates are queued (or it was decided against)
+  std::string refine_message_;  // what the refinement did, or why it did not run
+  double refine_low_ = std::numeric_limits<double>::quiet_NaN(), refine_high_ = refine_low_;  // its bracket
   mutable std::mutex mutex_;
   mutable std::shared_ptr<const Decoded> decoded_;
 };

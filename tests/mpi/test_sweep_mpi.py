@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Design sweeps ([sweep], methods/sweep_method.hpp) through the engine under a real mpirun.
 
-  test_sweep_mpi.py --case reference|motor_reference|stop|ranks|resume|standalone|bad_input
+  test_sweep_mpi.py --case reference|motor_reference|stop|refine|ranks|resume|standalone|bad_input
                     --driver truss-campaign --repo SRC --scratch DIR
 
 The runs are synthetic (--synthetic-run-cost-s): their [failure] column is the sum of the
@@ -30,18 +30,27 @@ p(sigma) = Phi(-x / sigma), 1e-6 at sigma* = x / 4.7534.
 - stop: [ensemble.stop] (probability target) as the inner method on real free-stack runs: each
   value's rounds recomputed from its rows, its bounds Clopper-Pearson (scipy), the allowable the
   crossing of those bounds, values 0 and 2 the standalone stop campaign's rounds and estimates.
-- ranks: the same file (every dataset but the timing) on 1 and 3 ranks.
-- resume: kill -9 of the whole job after some of its rounds are journaled, --resume: the same file.
+- refine: sweep.refine = 4 (values placed evenly inside the bracket of the listed values'
+  allowable): the listed values' columns are those of the sweep without refinement, byte for byte;
+  the placed values are evenly inside the bracket found here from the listed values' columns; the
+  allowable is recomputed from all values' columns. On a coarse sweep (3 and 6 mN m: the chord of
+  the concave ln p lies below it, so the listed values' allowable can fall on the unsafe side), over
+  20 seeds the refined allowable lies on the safe side of the true crossing and its interval holds
+  it in at least 18 each. With a target no listed value's bound reaches, nothing is refined and
+  /sweep says why.
+- ranks: the same file (every dataset but the timing) on 1 and 3 ranks, with a refinement.
+- resume: kill -9 of the whole job during the refinement, --resume: the same file.
 - standalone: value k of the sweep against the campaign without [sweep] at that value
   (--set drive.stall_torque_Nm=x_k, ensemble.master_seed = /sweep/master_seed[k]): the same p, CoVs
-  and levels, and the value's rows (by run index) the standalone campaign's rows; also with Monte
-  Carlo as the inner method.
+  and levels, and the value's rows (by run index) the standalone campaign's rows, for two listed
+  values and one the refinement placed; also with Monte Carlo as the inner method.
 - bad_input: each refusal exits 2 with file:line and the key, writing nothing.
 """
 import argparse
 import math
 import os
 import re
+import struct
 import subprocess
 import sys
 import time
@@ -74,7 +83,9 @@ def run(args, out, ranks=2, sets=(), cost="0", extra=(), campaign=None, timeout=
 def read_sweep(path):
     with h5py.File(path, "r") as f:
         g = f["sweep"]
-        s = {k: g[k][()] for k in ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "master_seed")}
+        s = {k: g[k][()] for k in ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "master_seed",
+                                   "index", "refinement")}
+        s.update({k: g.attrs[k] for k in ("refine", "refine_message", "refine_low", "refine_high")})
         a = g["allowable"]
         s["allowable"] = {k: float(a[k][()]) for k in ("value", "estimate", "lower", "upper")}
         s["allowable"].update({k: a.attrs[k] for k in ("status", "safe_side", "verdict")})
@@ -400,17 +411,87 @@ def case_stop(args):
                   and st["upper"][:].tobytes() == g["stop_upper"].tobytes() and st["estimate"][-1] == s["p"][k],
                   f"value {k}: rounds {list(g['stop_runs'])}, estimates and intervals as the standalone /stop")
 
+def listed_crossing(s, col, target):
+    """The crossing of column col over the listed values only (refinement == 0), p falling with x."""
+    listed = s["refinement"] == 0
+    return crossing(s["values"][listed], s[col][listed], target)
+
+
+def case_refine(args):
+    d = fresh(args, "sweep_refine")
+    m = 4
+    plain, fine = os.path.join(d, "plain.h5"), os.path.join(d, "fine.h5")
+    for out, sets in ((plain, []), (fine, [f"sweep.refine={m}"])):
+        p = run(args, out, sets=sets)
+        check(p.returncode == 0, f"refine {sets}: exit 0 ({p.stderr.strip()[-300:]})")
+    a, b = read_sweep(plain), read_sweep(fine)
+    listed = b["refinement"] == 0
+    check(all(a[k].tobytes() == b[k][listed].tobytes() for k in ("values", "p", "cov", "upper_bound", "lower", "upper",
+                                                                 "runs", "master_seed", "index")),
+          "the listed values' columns are the sweep's without refinement, byte for byte")
+    # The bracket that holds the listed values' allowable (the crossing of their upper bounds).
+    x_listed = b["values"][listed]
+    first = listed_crossing(b, "upper_bound", 1e-6)
+    i = max(j for j in range(len(x_listed) - 1) if x_listed[j] <= first)
+    lo, hi = x_listed[i], x_listed[i + 1]
+    want = [lo + (j + 1) * (hi - lo) / (m + 1) for j in range(m)]
+    placed = b["values"][~listed]
+    check(len(placed) == m and np.allclose(placed, want, rtol=0, atol=1e-15 * hi)
+          and b["refine_low"] == lo and b["refine_high"] == hi and np.all(np.diff(b["values"]) > 0),
+          f"the placed values {list(placed)} lie evenly inside ({lo}, {hi}), the bracket of the listed "
+          f"allowable {first:.6g}; the rows ascend in value")
+    n = len(x_listed)
+    check(list(b["index"][~listed]) == [n + i * m + j for j in range(m)],
+          f"the placed values' indices {list(b['index'][~listed])}: n + i m + j")
+    al = b["allowable"]
+    for name, col in (("value", "upper_bound"), ("estimate", "p"), ("upper", "upper"), ("lower", "lower")):
+        ref = crossing(b["values"], b[col], 1e-6)
+        check((math.isnan(ref) and math.isnan(al[name])) or math.isclose(al[name], ref, rel_tol=1e-12),
+              f"allowable {name} {al[name]:.9g}: the crossing of {col} over all values ({ref:.9g})")
+    # A coarse sweep, 3 and 6 mN m alone: ln p = ln Phi(-x / sigma) is concave, so its chord lies
+    # below it and the listed values' allowable comes out on the unsafe side of the true crossing
+    # in some seeds (their bounds hold, the interpolation between them does not). The refinement's
+    # 4 values put it back on the safe side, and its interval holds the truth.
+    truth = SIGMA * Z_TARGET
+    inside = safe = safe_listed = 0
+    for seed in range(1, 21):
+        out = os.path.join(d, f"seed{seed}.h5")
+        p = run(args, out, sets=[f"ensemble.master_seed={seed}", f"sweep.refine={m}", "sweep.from=0.003",
+                                 "sweep.to=0.006", "sweep.count=2"])
+        check(p.returncode == 0, f"seed {seed}: exit 0 ({p.stderr.strip()[-300:]})")
+        s = read_sweep(out)
+        a = s["allowable"]
+        check(a["status"] == "found" and s["refinement"].sum() == m, f"seed {seed}: found, {m} values placed")
+        inside += (math.isnan(a["lower"]) or a["lower"] <= truth) and (math.isnan(a["upper"]) or truth <= a["upper"])
+        safe += a["value"] >= truth
+        safe_listed += listed_crossing(s, "upper_bound", 1e-6) >= truth
+        os.remove(out)
+    print(f"  coarse sweep, refine = {m}: the allowable on the safe side of the true crossing in {safe}/20 (from the "
+          f"listed values alone: {safe_listed}/20); its interval holds the true crossing in {inside}/20")
+    check(safe >= 18, f"refined: the allowable lies on the safe side of the true crossing in {safe} >= 18 of 20")
+    check(inside >= 18, f"refined: the allowable's interval contains the true crossing in {inside} >= 18 of 20")
+    # A target the listed values cannot reach: nothing placed, and the file says why.
+    out = os.path.join(d, "unreached.h5")
+    p = run(args, out, sets=[f"sweep.refine={m}", "sweep.target_probability=1e-30"])
+    s = read_sweep(out)
+    check(p.returncode == 0 and s["refinement"].sum() == 0 and len(s["values"]) == 4
+          and s["refine_message"].startswith("not refined: the listed values give no allowable (beyond_safe_end")
+          and math.isnan(s["refine_low"]),
+          f"target 1e-30: nothing refined ({s['refine_message'][:120]})")
+
+
 def case_ranks(args):
     d = fresh(args, "sweep_ranks")
     outs = {}
     for ranks in (1, 3):
         outs[ranks] = os.path.join(d, f"r{ranks}.h5")
-        p = run(args, outs[ranks], ranks=ranks)
+        p = run(args, outs[ranks], ranks=ranks, sets=["sweep.refine=2"])
         check(p.returncode == 0, f"{ranks} ranks: exit 0 ({p.stderr.strip()[-300:]})")
     same, why = same_values(datasets(outs[1]), datasets(outs[3]))
     check(same, f"1 and 3 ranks: the same datasets ({why})")
     with h5py.File(outs[3], "r") as f:
-        check(f.attrs["n_rounds"] > 10 and "sweep" in f, f"{f.attrs['n_rounds']} rounds, /sweep written")
+        check(f.attrs["n_rounds"] > 10 and "sweep" in f and f["sweep/refinement"][:].sum() == 2,
+              f"{f.attrs['n_rounds']} rounds, /sweep written, 2 values placed by the refinement")
     check_allowable_and_report(args, outs[3], d)
 
 
@@ -473,32 +554,52 @@ def check_other_verdicts(args, d):
               f"{name}: report exit {p.returncode} (want {code}), 'VERDICT: {verdict}', no NaN on the page")
 
 
-def kill_mid(args, out):
+def plan_values(payload):
+    """The design value indices of a journaled sweep round (methods/method.hpp RoundPlan: i64 round,
+    i64 first_run, i64 n_runs, u32 state length, state; the sweep's state: per value u32 index,
+    i64 first local run, i64 runs, u32 length, inner state)."""
+    (n,) = struct.unpack_from("<I", payload, 24)
+    state, at, out = payload[28:28 + n], 0, []
+    while at < len(state):
+        k, _, _, size = struct.unpack_from("<IqqI", state, at)
+        out.append(k)
+        at += 24 + size
+    return out
+
+
+def kill_mid(args, out, sets):
+    """Kill -9 of the whole job once a refinement round (a value index >= the 4 listed) has records."""
     cmd = ["mpirun", "--oversubscribe", "-np", "2", args.driver, campaign_path(args), "-o", out,
            "--synthetic-run-cost-s", "0.001", "--progress", "none", "--flush-interval", "0.02"]
+    for x in sets:
+        cmd += ["--set", x]
     proc = subprocess.Popen(cmd, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    journal, t0, plans = out + ".journal", time.time(), 0
+    journal, t0, plans, refining = out + ".journal", time.time(), 0, False
     while time.time() - t0 < 300 and proc.poll() is None:
         if os.path.exists(journal):
             frames = poll_journal_frames(journal)
-            plans = sum(1 for _, k, _ in frames if k == b"P")
-            if plans >= 12:
+            kinds = [k for _, k, _ in frames]
+            plans = kinds.count(b"P")
+            refining = any(k == b"P" and max(plan_values(pl)) >= 4 and b"R" in kinds[i + 1:]
+                           for i, (_, k, pl) in enumerate(frames))
+            if refining:
                 break
         time.sleep(0.005)
     kill_job(proc)
-    return plans
+    return plans, refining
 
 
 def case_resume(args):
     d = fresh(args, "sweep_resume")
     ref = os.path.join(d, "ref.h5")
-    p = run(args, ref, cost="0.001")
+    sets = ["sweep.refine=3"]
+    p = run(args, ref, cost="0.001", sets=sets)
     check(p.returncode == 0, f"uninterrupted: exit 0 ({p.stderr.strip()[-300:]})")
     out = os.path.join(d, "killed.h5")
-    plans = kill_mid(args, out)
-    check(not os.path.exists(out) and os.path.exists(out + ".journal"),
-          f"kill -9 after {plans} rounds planned: no results file, the journal kept")
-    p = run(args, out, cost="0.001", extra=["--resume"])
+    plans, refining = kill_mid(args, out, sets)
+    check(refining and not os.path.exists(out) and os.path.exists(out + ".journal"),
+          f"kill -9 after {plans} rounds planned, in the refinement: no results file, the journal kept")
+    p = run(args, out, cost="0.001", sets=sets, extra=["--resume"])
     check(p.returncode == 0 and "resuming" in p.stderr, f"--resume: exit 0 ({p.stderr.strip()[-300:]})")
     same, why = same_values(datasets(ref), datasets(out))
     check(same, f"killed and resumed: the same datasets as uninterrupted ({why})")
@@ -512,19 +613,27 @@ def case_standalone(args):
     open(os.path.join(d, "plain_subset.toml"), "w").write(re.sub(r"^\[sweep\][^\[]*", "", text, flags=re.M))
     open(os.path.join(d, "plain_monte_carlo.toml"), "w").write(re.sub(r"^\[(sweep|failure)\][^\[]*", "", text,
                                                                             flags=re.M))
-    for inner, sets in (("subset", []), ("monte_carlo", ["ensemble.method=design", "ensemble.subset=false",
-                                                          "ensemble.n_runs=3000"])):
+    # Monte Carlo with a target 3,000 runs can bound (1.5e-3; p = 1e-3 .. 3e-6 over the values), so that
+    # its allowable is found and refined.
+    mc_sweep = ["sweep.from=0.0031", "sweep.to=0.0045", "sweep.target_probability=1.5e-3"]
+    for inner, sets, sweep_sets in (("subset", [], []),
+                                    ("monte_carlo", ["ensemble.method=design", "ensemble.subset=false",
+                                                     "ensemble.n_runs=3000"], mc_sweep)):
         plain = os.path.join(d, f"plain_{inner}.toml")
         sweep = os.path.join(d, f"sweep_{inner}.h5")
-        p = run(args, sweep, sets=sets)
+        p = run(args, sweep, sets=sets + sweep_sets + ["sweep.refine=2"])
         check(p.returncode == 0, f"{inner}: the sweep: exit 0 ({p.stderr.strip()[-300:]})")
         s = read_sweep(sweep)
+        placed = [int(r) for r in np.flatnonzero(s["refinement"])]
+        check(len(placed) == 2, f"{inner}: 2 values placed by the refinement")
         with h5py.File(sweep, "r") as f:
             v, m, runs = f["runs/sweep_value"][:], f["runs/inputs/drive.stall_torque_Nm"][:], f["runs/run_index"][:]
             inner_groups = {k: {n: f[f"sweep/inner/{k}/{n}"][()] for n in f[f"sweep/inner/{k}"]}
                             for k in f["sweep/inner"]}
-        for k in (0, 2):
-            x, seed = s["values"][k], int(s["master_seed"][k])
+        # The first and the last listed value and a placed one: each the campaign alone at its value and seed.
+        listed = [int(r) for r in np.flatnonzero(s["refinement"] == 0)]
+        for k in (listed[0], listed[-1], placed[0]):
+            x, seed = float(s["values"][k]), int(s["master_seed"][k])
             alone = os.path.join(d, f"alone_{inner}_{k}.h5")
             p = run(args, alone, campaign=plain,
                     sets=sets + [f"drive.stall_torque_Nm={x!r}", f"ensemble.master_seed={seed}"])
@@ -537,7 +646,7 @@ def case_standalone(args):
                       f"{inner}, value {k}: its {mine.size} points in run order are the standalone campaign's {rows.size}")
                 if inner == "subset":
                     g = f["subset"]
-                    got = inner_groups[str(k)]
+                    got = inner_groups[str(s["index"][k])]
                     check(g["p"][()] == s["p"][k] == got["p"] and g["cov_lineage"][()] == got["cov_lineage"]
                           and g["cov"][()] == got["cov"]
                           and g["levels/threshold"][:].tobytes() == got["level_threshold"].tobytes(),
@@ -590,7 +699,8 @@ def case_bad_input(args):
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--case", required=True,
-                    choices=["reference", "motor_reference", "stop", "ranks", "resume", "standalone", "bad_input"])
+                    choices=["reference", "motor_reference", "stop", "refine", "ranks", "resume", "standalone",
+                             "bad_input"])
     ap.add_argument("--driver", required=True)
     ap.add_argument("--repo", required=True)
     ap.add_argument("--scratch", required=True)

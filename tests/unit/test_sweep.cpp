@@ -1,8 +1,8 @@
 // test_sweep.cpp — a design sweep's campaign side (campaign/sweep.hpp): a run's design coordinate
 // (k + 0.5) / n applies value k, to the base scene (a nominal sweep) or to the dispersion's spread,
 // and the run's last input is that value; value k's standalone campaign and its seed; the resolved
-// TOML reads back to the same sweep; the design and stop methods read [failure] only with a [sweep],
-// and a sweep's run cap is its method's per value. Expected values by hand: an offset normal draw
+// TOML reads back to the same sweep; the refinement's candidates (values by hand); the design and
+// stop methods read [failure] only with a [sweep], and a sweep's run cap is its method's per value. Expected values by hand: an offset normal draw
 // at u = Phi(1) is nominal + std (the normal quantile, exact to ~1e-16 relative).
 #include <catch2/catch.hpp>
 
@@ -158,4 +158,48 @@ std = 0.001
   const std::string no_failure = mc.substr(0, mc.find("[failure]")) + mc.substr(mc.find("[[dispersion]]"));
   CHECK(error_of(no_failure + sweep).find("failure: a sweep estimates the probability of a [failure] event") !=
         std::string::npos);
+}
+
+TEST_CASE("refinement candidates: evenly inside each bracket, keyed after the listed values", "[sweep]") {
+  // Values 0.01, 0.02, 0.04 with refine = 3: candidates at quarters of each bracket, by hand.
+  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02, 0.04]\n"
+                                  "target_probability = 1e-6\nrefine = 3\n");
+  REQUIRE(c.sweep.refine == 3);
+  REQUIRE(c.sweep.n_values() == 3);
+  REQUIRE(c.sweep.n_design_values() == 3 + 2 * 3);
+  const double want[] = {0.01, 0.02, 0.04, 0.0125, 0.015, 0.0175, 0.025, 0.03, 0.035};
+  for (std::size_t k = 0; k < 9; ++k) CHECK(c.sweep.find_value(k) == Approx(want[k]).epsilon(1e-15));
+  CHECK(c.sweep.find_candidate_index(1, 2) == 8);
+  // The most runs: the listed values and one bracket's candidates, each with subset simulation's
+  // cap N + (max_levels - 1)(N - N p0) = 100 + 19 x 90 = 1810 (the defaults max_levels 20, p0 0.1).
+  CHECK(calc_max_runs(c) == 1810 * (3 + 3));
+  // A candidate's run applies its value; its standalone campaign has it and the seed of its index.
+  const DimensionLayout L = calc_layout(c);
+  std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);
+  u[0] = kPhi1;
+  u[static_cast<std::size_t>(L.design)] = (7 + 0.5) / 9.0;
+  const RunInputs in = calc_run_inputs(c, L, u.data());
+  CHECK(in.values.back() == std::vector<double>{c.sweep.find_value(7)});
+  CHECK(in.scene.drive.stall_torque_Nm == Approx(0.03 + 0.001).epsilon(1e-12));
+  const CampaignOptions at = calc_campaign_at(c, 7);
+  CHECK(at.base.drive.stall_torque_Nm == c.sweep.find_value(7));
+  CHECK(at.ensemble.master_seed == calc_sweep_seed(5, 7));
+  CHECK_THROWS(calc_campaign_at(c, 9));
+  // The resolved TOML keeps it.
+  const CampaignOptions back = truss::methods::parse_campaign_text(resolved_campaign_toml(c), "resolved", ".");
+  CHECK(back.sweep.refine == 3);
+  CHECK(resolved_campaign_toml(back) == resolved_campaign_toml(c));
+
+  auto error_of = [](const std::string& sweep) {
+    try {
+      parse(sweep);
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string head = "[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02]\ntarget_probability = 1e-6\n";
+  CHECK_THAT(error_of(head + "refine = 21\n"), Catch::Contains("sweep.refine: must lie in [0, 20], got 21"));
+  CHECK_THAT(error_of(head + "refine = -1\n"), Catch::Contains("sweep.refine: must lie in [0, 20], got -1"));
+  CHECK_THAT(error_of(head + "refine = 1.5\n"), Catch::Contains("sweep.refine"));
 }
