@@ -266,7 +266,8 @@ void parse_sweep_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
   if (const toml::node* conf = t.get("confidence")) s.confidence = get_number(c, *conf, "sweep.confidence");
   if (const toml::node* refine = t.get("refine")) {
     const std::int64_t m = get_integer(c, *refine, "sweep.refine");
-    if (m < 0 || m > kMaxRefine) c.fail(refine, fmt::format("sweep.refine: must lie in [0, {}], got {}", kMaxRefine, m));
+    if (m < 0 || m > kMaxRefine)
+      c.fail(refine, fmt::format("sweep.refine: must lie in [0, {}], got {}", kMaxRefine, m));
     s.refine = static_cast<int>(m);
   }
 }

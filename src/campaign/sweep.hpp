@@ -73,7 +73,9 @@ double calc_sweep_own_value(const CampaignOptions& c);
 
 // The most design values a sweep runs: the listed ones and one bracket's candidates (what memory
 // and disk are checked for).
-inline std::size_t calc_max_design_values(const SweepOptions& s) { return s.n_values() + static_cast<std::size_t>(s.refine); }
+inline std::size_t calc_max_design_values(const SweepOptions& s) {
+  return s.n_values() + static_cast<std::size_t>(s.refine);
+}
 
 // The master seed of value k's runs: SplitMix64 of (master seed, k), 63 bits (a campaign file's
 // integer).

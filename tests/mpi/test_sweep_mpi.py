@@ -667,6 +667,8 @@ BAD = {
                   "sweep.values: a sweep needs at least 2 values, got 1"),
     "target_outside": (("target_probability = 1e-6", "target_probability = 1.5"), 27,
                        "sweep.target_probability: must lie in (0, 1), got 1.5"),
+    "refine_too_many": (("target_probability = 1e-6", "target_probability = 1e-6\nrefine = 30"), 28,
+                        "sweep.refine: must lie in [0, 20], got 30"),
     "no_probability": (("method = \"subset\"\n\n[ensemble.subset]\nn_per_level = 500\np0 = 0.1\nmax_levels = 10\n",
                         "method = \"design\"\nn_runs = 100\nsampling = \"latin_hypercube\"\n"),
                        14, "ensemble.sampling: \"latin_hypercube\" gives no binomial interval of a probability"),
