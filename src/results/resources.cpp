@@ -44,8 +44,9 @@ ResourceEstimate estimate_resources(const campaign::CampaignContext& ctx) {
   ResourceEstimate e;
   // Results stream to the file in chunks (result_store.hpp): rank 0 keeps per run only a done
   // byte, and at the end one column read back for the statistics with its sorted copy and the ok
-  // mask (8 + 8 + 1 bytes); per-bay columns are read in bounded groups. The chunks in flight are
-  // a constant, not a per-run cost.
+  // mask (8 + 8 + 1 bytes); per-bay columns are read in groups of at most 64 MiB (one column when
+  // that is larger: results/summary_h5.cpp). The chunks in flight and that group are a constant,
+  // not a per-run cost.
   e.bytes_per_run = 1.0 + 17.0;
   e.memory_bytes = n * e.bytes_per_run;
   e.output_bytes = n * row;                                                   // /runs and /timing, uncompressed

@@ -3,6 +3,8 @@
 // attributes.
 #include "results/summary_h5.hpp"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 
 #include "io/h5_util.hpp"
@@ -15,6 +17,9 @@ using namespace campaign;
 using statistics::Stats;
 
 namespace {
+
+// The most bytes of per-bay columns read back at once for the statistics (at least one column).
+constexpr std::int64_t kReadBackBytes = std::int64_t{64} << 20;
 
 void write_stats_group(hid_t loc, const Field& f, const std::vector<Stats>& s) {
   Handle g = create_group(loc, f.name);
@@ -87,10 +92,18 @@ std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats s
       write_stats_group(stats.get(), f, {streamed.f64[k++]});
       continue;
     }
-    for (int b = 0; b < f.width; ++b)
-      if (!streamed.bays_resolved[j][static_cast<std::size_t>(b)])
-        resolve(streamed.bays[j][static_cast<std::size_t>(b)],
-                read_f64_columns(file, path, n, f.width, b, 1, chunk_rows).front());
+    // The bays' columns in groups of at most kReadBackBytes: each group is one pass over the
+    // dataset's chunks (each decompressed once per group, not once per bay).
+    const std::vector<std::uint8_t>& resolved = streamed.bays_resolved[j];
+    const std::int64_t group = std::max<std::int64_t>(1, kReadBackBytes / (8 * std::max<std::int64_t>(n, 1)));
+    for (std::int64_t b0 = 0; b0 < f.width; b0 += group) {
+      const std::int64_t cols = std::min<std::int64_t>(group, f.width - b0);
+      if (std::all_of(resolved.begin() + b0, resolved.begin() + b0 + cols, [](std::uint8_t r) { return r != 0; })) continue;
+      const std::vector<std::vector<double>> columns = read_f64_columns(file, path, n, f.width, b0, cols, chunk_rows);
+      for (std::int64_t i = 0; i < cols; ++i)
+        if (!resolved[static_cast<std::size_t>(b0 + i)])
+          resolve(streamed.bays[j][static_cast<std::size_t>(b0 + i)], columns[static_cast<std::size_t>(i)]);
+    }
     write_stats_group(bays.get(), f, streamed.bays[j++]);
   }
   return read_back;
