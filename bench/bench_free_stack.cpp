@@ -86,9 +86,10 @@ void run_cost_tables(bool quick) {
     s.drive.mode = model::DriveMode::torque;
     const auto mast = build_mast(s);
     stages::PhaseContext ctx{&mast, stages::PhaseKind::open, n, 0.0, 1.1, 0.36, s.drive, 1.0, 0.0, 1.0};
-    const stages::FreePhaseA a(ctx, 1, 0.0);
+    const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+    const stages::FreePhaseA a(ctx, 1, 0.0, table);
     ctx.kind = stages::PhaseKind::on_rail;
-    const stages::FreePhaseB b(ctx, 1, 0.0, 10.0);
+    const stages::FreePhaseB b(ctx, 1, 0.0, 10.0, table);
     const int evals = std::max(200, 200000 / n);
     const double ta = time_rhs(a, n, evals), tb = time_rhs(b, n, evals);
     std::printf("| %d | %.3f | %.1f | %.3f | %.1f |\n", n, 1e6 * ta, 1e9 * ta / n, 1e6 * tb, 1e9 * tb / n);

@@ -39,11 +39,8 @@ namespace truss::stages {
 class FreePhaseA final : public PhaseModel {
  public:
   // ctx.bay = m; frames lo..m move; frames below lo are held at height held_height_m. bays: the
-  // mast's bay constants (model::calc_bay_table), kept by the caller for the phase's life; nullptr:
-  // the phase computes its own.
-  FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m, const model::BayConstants* bays = nullptr);
-  FreePhaseA(const FreePhaseA&) = delete;  // active_ may point into own_bays_
-  FreePhaseA& operator=(const FreePhaseA&) = delete;
+  // mast's bay constants (model::calc_bay_table(*ctx.mast)), kept by the caller for the phase's life.
+  FreePhaseA(const PhaseContext& ctx, int lo, double held_height_m, const std::vector<model::BayConstants>& bays);
   int dof() const override { return layout_.clusters(); }
   const PhaseContext& context() const override { return ctx_; }
   // Stack contacts: clusters of frames lo..m (the driven frame m alone in the last one).
@@ -112,7 +109,6 @@ class FreePhaseA final : public PhaseModel {
 
  private:
   PhaseContext ctx_;
-  std::vector<model::BayConstants> own_bays_;  // when the caller gave none
   model::ActiveFrames active_;
   int lo_;
   double held_height_m_;

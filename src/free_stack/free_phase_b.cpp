@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 #include "model/bay.hpp"
@@ -15,10 +16,12 @@ namespace truss::stages {
 
 using namespace truss::model;
 
-FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s, const BayConstants* bays)
+FreePhaseB::FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s,
+                       const std::vector<BayConstants>& bays)
     : ctx_(ctx), lo_(lo), held_height_m_(held_height_m), alpha_(alpha_per_s), rail_(calc_rail_constants(ctx.mast->rail)) {
-  if (!bays) own_bays_ = calc_bay_table(*ctx.mast);
-  active_.bays = bays ? bays : own_bays_.data();
+  if (bays.size() != static_cast<std::size_t>(ctx.mast->n_bays() + 1))
+    throw std::invalid_argument("FreePhaseB: the bay table is not the mast's (calc_bay_table)");
+  active_.bays = bays.data();
   active_.lo = lo;
   active_.m = ctx.bay;
   active_.bay_m_in_hinge_coordinate = true;

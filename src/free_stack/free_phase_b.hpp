@@ -34,12 +34,9 @@ class FreePhaseB final : public PhaseModel {
  public:
   // ctx.bay = m; frames lo..m-1 and x move; frames below lo are held at held_height_m.
   // alpha: Baumgarte rate (1/s) of the rail and drive-speed constraints. bays: the mast's bay
-  // constants (model::calc_bay_table), kept by the caller for the phase's life; nullptr: the phase
-  // computes its own.
+  // constants (model::calc_bay_table(*ctx.mast)), kept by the caller for the phase's life.
   FreePhaseB(const PhaseContext& ctx, int lo, double held_height_m, double alpha_per_s,
-             const model::BayConstants* bays = nullptr);
-  FreePhaseB(const FreePhaseB&) = delete;  // active_ may point into own_bays_
-  FreePhaseB& operator=(const FreePhaseB&) = delete;
+             const std::vector<model::BayConstants>& bays);
   int dof() const override { return layout_.clusters() + 1; }
   // Stack contacts: clusters of frames lo..m-1.
   void set_contacts(ContactLayout layout) {
@@ -84,7 +81,6 @@ class FreePhaseB final : public PhaseModel {
   bool assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs,
                 PhaseDaeTerms& t) const;
   PhaseContext ctx_;
-  std::vector<model::BayConstants> own_bays_;  // when the caller gave none
   model::ActiveFrames active_;
   int lo_;
   double held_height_m_, alpha_;

@@ -48,12 +48,12 @@ std::unique_ptr<PhaseModel> FreeStack::make_phase(const PhaseContext& ctx, bool 
   last_lo_ = lo;
   const double held = y_[0];  // frame 0 and the resting block are the only held frames (height 0)
   if (ctx.kind == PhaseKind::open) {
-    auto a = std::make_unique<FreePhaseA>(ctx, lo, held, bays_.data());
+    auto a = std::make_unique<FreePhaseA>(ctx, lo, held, bays_);
     a->set_watch_rail_top(watch_rail_top);
     if (contacts_) a->set_contacts(make_layout(ctx.kind, ctx.bay, lo));
     return a;
   }
-  auto b = std::make_unique<FreePhaseB>(ctx, lo, held, kBaumgarteRate_per_s, bays_.data());
+  auto b = std::make_unique<FreePhaseB>(ctx, lo, held, kBaumgarteRate_per_s, bays_);
   if (contacts_) b->set_contacts(make_layout(ctx.kind, ctx.bay, lo));
   return b;
 }
@@ -167,11 +167,11 @@ ContactWatch FreeStack::watch_at(const PhaseContext& ctx) const {
   get_start(ctx, q, qd);
   const int lo = calc_lowest_frame(ctx.kind, ctx.bay);
   if (ctx.kind == PhaseKind::open) {
-    FreePhaseA a(ctx, lo, y_[0], bays_.data());
+    FreePhaseA a(ctx, lo, y_[0], bays_);
     a.set_contacts(make_layout(ctx.kind, ctx.bay, lo));
     return a.calc_contact_watch(q.data(), qd.data());
   }
-  FreePhaseB b(ctx, lo, y_[0], kBaumgarteRate_per_s, bays_.data());
+  FreePhaseB b(ctx, lo, y_[0], kBaumgarteRate_per_s, bays_);
   b.set_contacts(make_layout(ctx.kind, ctx.bay, lo));
   return b.calc_contact_watch(q.data(), qd.data());
 }
@@ -240,11 +240,11 @@ FreeContactEvent FreeStack::land(const PhaseContext& ctx, int bay, bool drive_ho
   if (c == static_cast<int>(L.starts.size())) { e.ok = false; return e; }  // not an open contact
   Eigen::VectorXd diag, sub;
   if (open) {
-    FreePhaseA a(ctx, lo, y_[0], bays_.data());
+    FreePhaseA a(ctx, lo, y_[0], bays_);
     a.set_contacts(L);
     a.calc_mass(q.data(), qd.data(), diag, sub);
   } else {
-    FreePhaseB b(ctx, lo, y_[0], kBaumgarteRate_per_s, bays_.data());
+    FreePhaseB b(ctx, lo, y_[0], kBaumgarteRate_per_s, bays_);
     b.set_contacts(L);
     b.calc_mass(q.data(), qd.data(), diag, sub);
   }
@@ -301,7 +301,7 @@ FreeContactEvent FreeStack::apply_unlock(const PhaseContext& ctx, double u, bool
   v_[static_cast<std::size_t>(m)] = v_[static_cast<std::size_t>(m - 1)];
   x_ = xi_ = 0.0;
   const int lo = calc_lowest_frame(PhaseKind::on_rail, m);
-  FreePhaseB phase(ctx, lo, y_[0], kBaumgarteRate_per_s, bays_.data());
+  FreePhaseB phase(ctx, lo, y_[0], kBaumgarteRate_per_s, bays_);
   if (contacts_) phase.set_contacts(make_layout(PhaseKind::on_rail, m, lo));
   std::vector<double> q, qd;
   get_start(ctx, q, qd);

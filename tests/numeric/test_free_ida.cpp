@@ -72,7 +72,8 @@ TEST_CASE("free phases: the residual form vanishes at the direct solution", "[nu
     stages::PhaseDaeTerms t;
     {  // phase A, frames 1..6 free
       const stages::PhaseContext ctx{&mast, stages::PhaseKind::open, 6, 0.0, 1.3, 0.36, drive, 1.0, 0.0, 1.0};
-      const stages::FreePhaseA a(ctx, 1, 0.0);
+      const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+      const stages::FreePhaseA a(ctx, 1, 0.0, table);
       const double q[6] = {0.02, 0.07, 0.15, 0.24, 0.33, 0.52}, qd[6] = {0.01, -0.02, 0.03, 0.05, 0.02, 0.1};
       Eigen::VectorXd acc(6);
       const stages::PhasePoint p = a.calc_point(q, qd, acc.data(), scratch);
@@ -88,7 +89,8 @@ TEST_CASE("free phases: the residual form vanishes at the direct solution", "[nu
     }
     {  // phase B of bay 6 on the rail: (y_1..y_5, x), slightly off the rail (Baumgarte active)
       const stages::PhaseContext ctx{&mast, stages::PhaseKind::on_rail, 6, 0.0, 1.3, 0.36, drive, 1.0, 0.0, -1.0};
-      const stages::FreePhaseB b(ctx, 1, 0.0, 10.0);
+      const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+      const stages::FreePhaseB b(ctx, 1, 0.0, 10.0, table);
       const double q[6] = {0.02, 0.07, 0.15, 0.24, 0.21, 0.06}, qd[6] = {0.01, -0.02, 0.03, 0.05, 0.07, -0.2};
       Eigen::VectorXd acc(6);
       const stages::PhasePoint p = b.calc_point(q, qd, acc.data(), scratch);
@@ -126,8 +128,9 @@ TEST_CASE("free phases: IDA's band holds the whole Jacobian of the residual form
         drive.mode = mode_of(mode);
         const bool open = kind == stages::PhaseKind::open;
         const stages::PhaseContext ctx{&mast, kind, 8, 0.0, 1.3, 0.36, drive, 1.0, 0.0, open ? 1.0 : -1.0};
-        stages::FreePhaseA a(ctx, 1, 0.0);
-        stages::FreePhaseB b(ctx, 1, 0.0, 10.0);
+        const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+        stages::FreePhaseA a(ctx, 1, 0.0, table);
+        stages::FreePhaseB b(ctx, 1, 0.0, 10.0, table);
         // Frames 1..8 (A) or 1..7 (B); clusters {1,2}, {3}, {4,5}, {6,7}, {8} (A) / {6,7} last (B).
         if (contacts) {
           a.set_contacts(stages::ContactLayout{true, {0, 2, 3, 5, 7}, 8, false, false});

@@ -166,7 +166,8 @@ TEST_CASE("free stack stopping rules: the event functions of docs/model.md §2",
   s.mast.n_bays = 4;
   const model::MastParams mast = sim::build_mast(s);
   stages::PhaseContext ctx{&mast, stages::PhaseKind::open, 4, 0.0, 1.1, 0.36, s.drive, 1.0, 0.0, 1.0};
-  stages::FreePhaseA a(ctx, 1, 0.0);
+  const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+  stages::FreePhaseA a(ctx, 1, 0.0, table);
   a.set_watch_rail_top(true);
   REQUIRE(a.num_stop_events() == 4);
   const double l = 0.18, yr = mast.rail.axis_height_m(), eps = 1e-4 * l;

@@ -66,7 +66,8 @@ TEST_CASE("free phase A: energy balance of the n-DOF system under a torque and a
     ctx.locked_mass_kg = mast.tip_mass_kg;
     ctx.drive.mode = mode;
     ctx.drive.torque_Nm = 0.01;
-    const stages::FreePhaseA phase(ctx, 1, 0.0);
+    const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+    const stages::FreePhaseA phase(ctx, 1, 0.0, table);
     REQUIRE(phase.dof() == 6);
     FreeOde ode(phase);
     // Start: frames slightly open (diagonals of bays 4-6 taut from D = 0.27 m) and moving.
@@ -96,7 +97,8 @@ TEST_CASE("free phase A in velocity mode: the driven frame keeps its speed, the 
   ctx.bay = 6;
   ctx.locked_mass_kg = mast.tip_mass_kg;
   ctx.drive.mode = model::DriveMode::velocity;
-  const stages::FreePhaseA phase(ctx, 1, 0.0);
+  const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+  const stages::FreePhaseA phase(ctx, 1, 0.0, table);
   FreeOde ode(phase);
   std::vector<double> y = {0.01, 0.03, 0.06, 0.33, 0.62, 0.91, 0.0, 0.01, -0.02, 0.05, 0.0, 0.1, 0.0};
   const stages::PhasePoint p0 = ode.point(y.data());
@@ -133,7 +135,8 @@ TEST_CASE("free phase B with the frames below held equals the held stack's rail 
     ctx.drive.mode = mode;
     ctx.drive.torque_Nm = 0.01;
     const stages::HeldPhase held(ctx);
-    const stages::FreePhaseB free(ctx, 3, 0.02, 10.0);
+    const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+    const stages::FreePhaseB free(ctx, 3, 0.02, 10.0, table);
     const double l = mast.bay(4).strut_length_m;
     for (double x : {0.07, 0.03, 0.004, 1e-7, 0.0}) {
       const auto k = model::calc_on_rail(mast.rail, l, x);
@@ -164,7 +167,8 @@ TEST_CASE("free phase B: energy balance and rail residual of the n-DOF DAE under
   ctx.locked_mass_kg = mast.tip_mass_kg;
   ctx.drive.mode = model::DriveMode::torque;
   ctx.drive.torque_Nm = 0.01;
-  const stages::FreePhaseB phase(ctx, 1, 0.0, 10.0);
+  const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+  const stages::FreePhaseB phase(ctx, 1, 0.0, 10.0, table);
   REQUIRE(phase.dof() == 6);
   FreeOde ode(phase);
   const double l = mast.bay(6).strut_length_m, x0 = 0.06, c = mast.rail.cot_beta();
@@ -206,8 +210,9 @@ TEST_CASE("free phases answer a state asked again with the bits of a fresh phase
     ctx.locked_mass_kg = mast.tip_mass_kg;
     ctx.drive.mode = model::DriveMode::velocity;
     const bool a = kind == stages::PhaseKind::open;
-    const stages::FreePhaseA pa(ctx, 1, 0.0), fresh_a(ctx, 1, 0.0);
-    const stages::FreePhaseB pb(ctx, 1, 0.0, 10.0), fresh_b(ctx, 1, 0.0, 10.0);
+    const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+    const stages::FreePhaseA pa(ctx, 1, 0.0, table), fresh_a(ctx, 1, 0.0, table);
+    const stages::FreePhaseB pb(ctx, 1, 0.0, 10.0, table), fresh_b(ctx, 1, 0.0, 10.0, table);
     const stages::PhaseModel& used = a ? static_cast<const stages::PhaseModel&>(pa) : pb;
     const stages::PhaseModel& fresh = a ? static_cast<const stages::PhaseModel&>(fresh_a) : fresh_b;
     const int n = used.dof();
@@ -251,8 +256,9 @@ TEST_CASE("free phases: the quantities declared constant for the peaks do not ch
       ctx.locked_mass_kg = mast.tip_mass_kg;
       ctx.drive.mode = mode;
       ctx.drive.torque_Nm = 0.01;
-      const stages::FreePhaseA a(ctx, 1, 0.0);
-      const stages::FreePhaseB b(ctx, 1, 0.0, 10.0);
+      const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+      const stages::FreePhaseA a(ctx, 1, 0.0, table);
+      const stages::FreePhaseB b(ctx, 1, 0.0, 10.0, table);
       const stages::PhaseModel& phase = kind == stages::PhaseKind::open ? static_cast<const stages::PhaseModel&>(a) : b;
       const int n = phase.dof();
       std::vector<std::vector<double>> values(stages::kQuantityCount);

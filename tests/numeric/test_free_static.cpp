@@ -109,7 +109,8 @@ TEST_CASE("free stack static drive force: central differences of the potential's
   Eigen::VectorXd acc(m);
 
   SECTION("off the rail: F = dV*/dy_m, V* the energy with frames 1..m-1 at rest") {
-    const stages::FreePhaseA a(context(mast, stages::PhaseKind::open, m), 1, 0.0);
+    const std::vector<model::BayConstants> table = model::calc_bay_table(mast);
+    const stages::FreePhaseA a(context(mast, stages::PhaseKind::open, m), 1, 0.0, table);
     for (LD y_top : {0.45L, 0.55L, 0.65L}) {
       const LD fd = (chain_energy(B, equilibrium(B, m, y_top + h)) - chain_energy(B, equilibrium(B, m, y_top - h))) / (2 * h);
       const std::vector<LD> y = equilibrium(B, m, y_top);
@@ -126,7 +127,8 @@ TEST_CASE("free stack static drive force: central differences of the potential's
     }
   }
   SECTION("on the rail: F = dV*/dY along the rail, frames 1..m-2 at rest below frame m-1 at Z(x)") {
-    const stages::FreePhaseB b(context(mast, stages::PhaseKind::on_rail, m), 1, 0.0, 10.0);
+    const std::vector<model::BayConstants> table = model::calc_bay_table(mast);
+    const stages::FreePhaseB b(context(mast, stages::PhaseKind::on_rail, m), 1, 0.0, 10.0, table);
     const Rail r{1 / std::tan(LD(mast.rail.beta_rad)), mast.rail.y_m + mast.rail.x_m / std::tan(LD(mast.rail.beta_rad)),
                  mast.bay(m).strut_length_m};
     auto V = [&](LD x) { return B[m].U(r.Y(x) - r.Z(x)) + chain_energy(B, equilibrium(B, m - 1, r.Z(x))); };
@@ -152,7 +154,8 @@ TEST_CASE("free stack static drive force: central differences of the potential's
   SECTION("on the rail with a chain that can be slack: only the deploying bay resists") {
     model::MastParams t1 = testing::make_uneven_mast(5);  // Table 1's l_0 ~ 0.45 m: taut from D ~ 0.27 m
     const std::vector<Bay> B1 = bays_of(t1);
-    const stages::FreePhaseB b(context(t1, stages::PhaseKind::on_rail, m), 1, 0.0, 10.0);
+    const std::vector<model::BayConstants> table = model::calc_bay_table(t1);
+    const stages::FreePhaseB b(context(t1, stages::PhaseKind::on_rail, m), 1, 0.0, 10.0, table);
     const Rail r{1 / std::tan(LD(t1.rail.beta_rad)), t1.rail.y_m + t1.rail.x_m / std::tan(LD(t1.rail.beta_rad)),
                  t1.bay(m).strut_length_m};
     LD slack = 0;
@@ -178,7 +181,8 @@ TEST_CASE("free stack static drive force with one bay below the deploying one is
   for (auto& b : mast.bays) b.diagonal_free_length_m *= 0.37 / 0.45;  // bay 1 taut on the rail too
   stages::PhaseContext ctx = context(mast, stages::PhaseKind::on_rail, 2);
   const stages::HeldPhase held(ctx);
-  const stages::FreePhaseB fr(ctx, 1, 0.0, 10.0);
+  const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
+  const stages::FreePhaseB fr(ctx, 1, 0.0, 10.0, table);
   const model::RailConstants rc = model::calc_rail_constants(mast.rail);
   Eigen::VectorXd acc(2);
   int n_lower = 0;
