@@ -98,7 +98,8 @@ std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats s
     const std::int64_t group = std::max<std::int64_t>(1, kReadBackBytes / (8 * std::max<std::int64_t>(n, 1)));
     for (std::int64_t b0 = 0; b0 < f.width; b0 += group) {
       const std::int64_t cols = std::min<std::int64_t>(group, f.width - b0);
-      if (std::all_of(resolved.begin() + b0, resolved.begin() + b0 + cols, [](std::uint8_t r) { return r != 0; })) continue;
+      const auto first = resolved.begin() + b0;
+      if (std::all_of(first, first + cols, [](std::uint8_t r) { return r != 0; })) continue;
       const std::vector<std::vector<double>> columns = read_f64_columns(file, path, n, f.width, b0, cols, chunk_rows);
       for (std::int64_t i = 0; i < cols; ++i)
         if (!resolved[static_cast<std::size_t>(b0 + i)])
