@@ -55,17 +55,25 @@ model::MastParams make_mast() {
   return m;
 }
 
+// The free phases' context of bay 6 of make_mast(): the tip locked to frame 6, a drive of that mode
+// (a torque drive's 10 mN m; the velocity drive does not read it).
+stages::PhaseContext bay6_context(const model::MastParams& mast, stages::PhaseKind kind, model::DriveMode mode) {
+  stages::PhaseContext ctx;
+  ctx.mast = &mast;
+  ctx.bay = 6;
+  ctx.kind = kind;
+  ctx.locked_mass_kg = mast.tip_mass_kg;
+  ctx.drive.mode = mode;
+  ctx.drive.torque_Nm = 0.01;
+  return ctx;
+}
+
 }  // namespace
 
 TEST_CASE("free phase A: energy balance of the n-DOF system under a torque and a motor drive", "[numeric][free]") {
   const model::MastParams mast = make_mast();
   for (auto mode : {model::DriveMode::torque, model::DriveMode::motor}) {
-    stages::PhaseContext ctx;
-    ctx.mast = &mast;
-    ctx.bay = 6;
-    ctx.locked_mass_kg = mast.tip_mass_kg;
-    ctx.drive.mode = mode;
-    ctx.drive.torque_Nm = 0.01;
+    const stages::PhaseContext ctx = bay6_context(mast, stages::PhaseKind::open, mode);
     const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
     const stages::FreePhaseA phase(ctx, 1, 0.0, table);
     REQUIRE(phase.dof() == 6);
@@ -92,11 +100,7 @@ TEST_CASE("free phase A: energy balance of the n-DOF system under a torque and a
 TEST_CASE("free phase A in velocity mode: the driven frame keeps its speed, the drive force is the inverse dynamics",
           "[numeric][free]") {
   const model::MastParams mast = make_mast();
-  stages::PhaseContext ctx;
-  ctx.mast = &mast;
-  ctx.bay = 6;
-  ctx.locked_mass_kg = mast.tip_mass_kg;
-  ctx.drive.mode = model::DriveMode::velocity;
+  const stages::PhaseContext ctx = bay6_context(mast, stages::PhaseKind::open, model::DriveMode::velocity);
   const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
   const stages::FreePhaseA phase(ctx, 1, 0.0, table);
   FreeOde ode(phase);
@@ -161,12 +165,7 @@ TEST_CASE("free phase B with the frames below held equals the held stack's rail 
 
 TEST_CASE("free phase B: energy balance and rail residual of the n-DOF DAE under a torque drive", "[numeric][free]") {
   const model::MastParams mast = make_mast();
-  stages::PhaseContext ctx;
-  ctx.mast = &mast;
-  ctx.bay = 6;
-  ctx.locked_mass_kg = mast.tip_mass_kg;
-  ctx.drive.mode = model::DriveMode::torque;
-  ctx.drive.torque_Nm = 0.01;
+  const stages::PhaseContext ctx = bay6_context(mast, stages::PhaseKind::open, model::DriveMode::torque);
   const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
   const stages::FreePhaseB phase(ctx, 1, 0.0, 10.0, table);
   REQUIRE(phase.dof() == 6);
@@ -203,12 +202,7 @@ TEST_CASE("free phases answer a state asked again with the bits of a fresh phase
   // point (loads, energies, mass terms) and the accelerations; a state in between must not leak.
   const model::MastParams mast = make_mast();
   for (auto kind : {stages::PhaseKind::open, stages::PhaseKind::on_rail}) {
-    stages::PhaseContext ctx;
-    ctx.mast = &mast;
-    ctx.bay = 6;
-    ctx.kind = kind;
-    ctx.locked_mass_kg = mast.tip_mass_kg;
-    ctx.drive.mode = model::DriveMode::velocity;
+    const stages::PhaseContext ctx = bay6_context(mast, kind, model::DriveMode::velocity);
     const bool a = kind == stages::PhaseKind::open;
     const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
     const stages::FreePhaseA pa(ctx, 1, 0.0, table), fresh_a(ctx, 1, 0.0, table);
@@ -249,13 +243,7 @@ TEST_CASE("free phases: the quantities declared constant for the peaks do not ch
   const model::MastParams mast = make_mast();
   for (auto mode : {model::DriveMode::torque, model::DriveMode::velocity}) {
     for (auto kind : {stages::PhaseKind::open, stages::PhaseKind::on_rail}) {
-      stages::PhaseContext ctx;
-      ctx.mast = &mast;
-      ctx.bay = 6;
-      ctx.kind = kind;
-      ctx.locked_mass_kg = mast.tip_mass_kg;
-      ctx.drive.mode = mode;
-      ctx.drive.torque_Nm = 0.01;
+      const stages::PhaseContext ctx = bay6_context(mast, kind, mode);
       const std::vector<model::BayConstants> table = model::calc_bay_table(*ctx.mast);
       const stages::FreePhaseA a(ctx, 1, 0.0, table);
       const stages::FreePhaseB b(ctx, 1, 0.0, 10.0, table);
@@ -284,4 +272,18 @@ TEST_CASE("free phases: the quantities declared constant for the peaks do not ch
       CHECK(!values[stages::kForce].empty());
     }
   }
+}
+
+// The phases take the run's bay table (model::calc_bay_table of the mast they evaluate); a table of
+// another mast would index past its end or read another mast's constants, so it is refused.
+TEST_CASE("free phases refuse a bay table that is not their mast's", "[numeric][free]") {
+  const model::MastParams mast = make_mast();
+  sim::SceneOptions s;
+  s.mast.n_bays = 4;
+  const std::vector<model::BayConstants> other = model::calc_bay_table(sim::build_mast(s));
+  const stages::PhaseContext ctx = bay6_context(mast, stages::PhaseKind::open, model::DriveMode::torque);
+  CHECK_THROWS_AS(stages::FreePhaseA(ctx, 1, 0.0, other), std::invalid_argument);
+  CHECK_THROWS_AS(stages::FreePhaseB(ctx, 1, 0.0, 10.0, other), std::invalid_argument);
+  const std::vector<model::BayConstants> own = model::calc_bay_table(mast);
+  CHECK_NOTHROW(stages::FreePhaseA(ctx, 1, 0.0, own));
 }
