@@ -529,11 +529,17 @@ def check_allowable_and_report(args, path, d):
     want = f"drive.stall_torque_Nm ≥ {a['value'] * 1e3:.5g} mN m (95 % upper bound"
     check("VERDICT: PASS" in p.stdout and want in p.stdout, f"the verdict says PASS and '{want}'")
     check(os.path.exists(os.path.join(out, "sweep.png")), "the sweep figure is drawn")
+    # The values the refinement placed: marked in the table, the bracket said in a sentence.
+    placed = int(s["refinement"].sum())
+    check(html.count("<td>refinement</td>") == placed and html.count("<td>listed</td>") == len(x) - placed
+          and (placed == 0 or f"Refinement (<code>sweep.refine = {int(s['refine'])}</code>)" in html),
+          f"the report marks the {placed} placed values and says what the refinement did")
     sys.path.insert(0, os.path.join(args.repo, "postproc"))
     import truss_report
     df = truss_report.read_campaign(path)
     sw = df.attrs["sweep"]
     check(list(sw["value"]) == list(x) and list(sw["p"]) == list(s["p"]) and sw.attrs["allowable"]["value"] == a["value"]
+          and list(sw["refinement"]) == list(s["refinement"] == 1) and list(sw["index"]) == list(s["index"])
           and sw.attrs["units"]["value"] == "Nm" and (df["sweep_value"].value_counts().sort_index().to_numpy()
                                                       == s["runs"]).all(),
           "read_campaign: the sweep's table in df.attrs['sweep'], the runs' sweep_value column")
