@@ -1,4 +1,4 @@
-"""truss_report.design: the design-load table (nominal, mean, percentiles, one-sided
+"""truss_report.judging.design: the design-load table (nominal, mean, percentiles, one-sided
 distribution-free upper confidence bounds, ratio to nominal) of the loads, impulses included,
 each with its definition; readable units.
 
@@ -7,12 +7,20 @@ x_(k) with k the smallest rank such that P(x_(k) >= xi_p) >= confidence. x_(k) >
 exactly when at most k - 1 runs fall below xi_p, and that count is Binomial(n, p), so
 P(x_(k) >= xi_p) = sum_{i=0}^{k-1} C(n, i) p^i (1 - p)^(n - i) = F_Binom(k - 1; n, p).
 No such k <= n exists when 1 - p^n < confidence (n below ln(1 - confidence) / ln p)."""
+from __future__ import annotations
+
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from .constants import RETRACT_LABELS
+from ..reading.campaign import Campaign
+from ..reading.extras import Extras
+from ..reading.h5file import Array
 from .stats import percentile, quantile_ci
+
+# The same datasets name other events in a retraction.
+RETRACT_LABELS = {"deploy_time_s": "retraction time", "peak_latch_energy_J": "peak unlock energy"}
 
 # (key, label, source, definition when deploying, definition when retracting). source: "runs" =
 # a /runs column; "bays_max" = the largest over the bays of a /runs/bays field (per run). A load
@@ -57,7 +65,8 @@ RETRACT_DEFINITIONS = {"deploy_time_s": "time at which frame n lands on the stac
                                         "the retraction (the file's deploy_time_s)"}
 
 
-def load_text(key, label, deploy_def, retract_def, direction):
+def load_text(key: str, label: str, deploy_def: str | None, retract_def: str | None,
+              direction: str) -> tuple[str, str | None]:
     """(label, definition) of a load for this direction; None for a load it does not have."""
     if direction == "retract":
         definition = RETRACT_DEFINITIONS.get(key, retract_def or deploy_def)
@@ -68,63 +77,16 @@ def load_text(key, label, deploy_def, retract_def, direction):
 IMPULSE_KEYS = {"start_drive_impulse_Ns", "entry_impulse_Ns", "entry_drive_impulse_Ns",
                 "landing_impulse_Ns", "unlock_impulse_Ns", "drive_work_impulses_J"}
 
-# Readable units: base unit -> [(label, factor)] in increasing order of size.
-PREFIXES = {"N": [("mN", 1e-3), ("N", 1.0)], "Nm": [("µN m", 1e-6), ("mN m", 1e-3), ("N m", 1.0)],
-            "J": [("µJ", 1e-6), ("mJ", 1e-3), ("J", 1.0)],
-            "Ns": [("mN s", 1e-3), ("N s", 1.0)], "s": [("s", 1.0)],
-            "m": [("mm", 1e-3), ("m", 1.0)], "kg": [("g", 1e-3), ("kg", 1.0)]}
-
-
-def readable_unit(unit, magnitude):
-    """(label, factor): value / factor is shown in `label`, chosen so that |magnitude| / factor
-    is at least 1 when a prefix allows (the largest prefix not above the magnitude)."""
-    opts = PREFIXES.get(unit)
-    if not opts:
-        return unit, 1.0
-    best = opts[0]
-    for lab, f in opts:
-        if np.isfinite(magnitude) and abs(magnitude) >= f:
-            best = (lab, f)
-    return best
-
-
-class DisplayUnits:
-    """One display unit per quantity for the whole report: the design table, section 2, the
-    margins, the plots and the terminal summary show a load in the same unit (chosen once, from
-    its largest typical value). Related quantities share their load's unit: the per-bay fields,
-    and every torque of the margins (the drive torque's)."""
-    ALIASES = {"latch_energy_J": "peak_latch_energy_J",
-               "peak_static_drive_torque_Nm": "peak_drive_torque_Nm",
-               "peak_inertial_drive_torque_Nm": "peak_drive_torque_Nm",
-               "motor_torque_at_speed_Nm": "peak_drive_torque_Nm",
-               "drive.stall_torque_Nm": "peak_drive_torque_Nm", "torque": "peak_drive_torque_Nm"}
-
-    def __init__(self):
-        self.chosen = {}
-
-    def choose(self, key, unit, magnitude):
-        self.chosen.setdefault(key, readable_unit(unit, magnitude))
-
-    def get(self, key, unit, values=None):
-        """(label, factor) of `key`; a key not chosen yet gets one from `values` (and keeps it)."""
-        key = self.ALIASES.get(key, key)
-        if key not in self.chosen:
-            v = np.asarray(values if values is not None else [], dtype=float)
-            v = v[np.isfinite(v)]
-            self.choose(key, unit, float(np.max(np.abs(v))) if len(v) else float("nan"))
-        return self.chosen[key]
-
-
 @dataclass
 class LevelValue:
     level: float          # percent
     estimate: float       # type-7 percentile
     bound: float          # one-sided upper confidence bound (NaN if the sample is too small)
-    rank: int             # its rank k (None if none)
-    n_needed: int         # runs a bound needs (when rank is None)
+    rank: int | None      # its rank k (None if none)
+    n_needed: int | None  # runs a bound needs (when rank is None)
 
     @property
-    def too_few(self):
+    def too_few(self) -> bool:
         return self.rank is None
 
 
@@ -140,27 +102,28 @@ class DesignLoad:
     mean: float
     min: float
     max: float
-    levels: list          # LevelValue per requested level
+    levels: list[LevelValue]   # per requested level
 
     @property
-    def nominal_below_runs(self):
+    def nominal_below_runs(self) -> bool:
         """The nominal lies below every dispersed run (a peak over dispersed bays, see
         design_table_html)."""
-        return np.isfinite(self.nominal) and self.nominal < self.min
+        return bool(np.isfinite(self.nominal) and self.nominal < self.min)
 
     @property
-    def ratio(self):
+    def ratio(self) -> float:
         """Highest-level percentile / nominal."""
         top = self.levels[-1].estimate
         return top / self.nominal if self.nominal not in (0.0,) and np.isfinite(self.nominal) \
             else float("nan")
 
 
-def load_values(c, e, key, source):
+def load_values(c: Campaign, e: Extras, key: str,
+                source: str) -> tuple[Array | None, float, str | None]:
     """Per-run values of a load (None if the file does not have it) and its nominal value."""
     if source == "runs":
         x = c.outputs.get(key, e.runs.get(key))
-        nom = e.nominal.get(key, np.nan) if e.nominal else np.nan
+        nom = e.nominal_value(key)
         unit = c.units.get(key, e.units.get(key))
     else:
         if key not in e.bays:
@@ -169,22 +132,21 @@ def load_values(c, e, key, source):
             b = e.bays[key]
             x = np.where(np.all(np.isnan(b), axis=1), np.nan,
                          np.nanmax(np.where(np.isnan(b), -np.inf, b), axis=1))
-        nb = e.nominal["bays"].get(key) if e.nominal else None
+        nb = e.nominal_bays.get(key) if e.nominal is not None else None
         nom = float(np.max(nb[np.isfinite(nb)])) if nb is not None and np.any(np.isfinite(nb)) \
             else np.nan
         unit = e.units[key]
     return x, nom, unit
 
 
-def design_loads(c, e, levels, confidence, units=None):
+def design_loads(c: Campaign, e: Extras, levels: Sequence[float], confidence: float) -> list[DesignLoad]:
     """The DesignLoad of every load the file has with a finite nonzero value in some ok run, with
-    its label and definition for the campaign's direction; `units` (DisplayUnits) gets each
-    load's display unit."""
+    its label and definition for the campaign's direction."""
     res = []
     for key, label, source, deploy_def, retract_def in LOADS:
-        label, definition = load_text(key, label, deploy_def, retract_def, c.attrs["direction"])
+        label, definition = load_text(key, label, deploy_def, retract_def, c.direction)
         x, nom, unit = load_values(c, e, key, source)
-        if x is None or definition is None:
+        if x is None or definition is None or unit is None:
             continue
         v = np.sort(x[c.ok & np.isfinite(x)])
         if len(v) == 0 or not np.any(v != 0):
@@ -193,10 +155,6 @@ def design_loads(c, e, levels, confidence, units=None):
         for q in levels:
             ci = quantile_ci(v, q / 100.0, confidence)
             lv.append(LevelValue(q, percentile(v, q), ci.hi, ci.s, ci.n_needed_hi))
-        d = DesignLoad(key, label, definition, unit, key in IMPULSE_KEYS, len(v), nom,
-                       float(np.mean(v)), float(v[0]), float(v[-1]), lv)
-        if units is not None:
-            units.choose(key, unit, max(abs(nom) if np.isfinite(nom) else 0.0,
-                                        abs(lv[-1].estimate) if lv else abs(d.max)))
-        res.append(d)
+        res.append(DesignLoad(key, label, definition, unit, key in IMPULSE_KEYS, len(v), nom,
+                              float(np.mean(v)), float(v[0]), float(v[-1]), lv))
     return res

@@ -1,4 +1,4 @@
-"""truss_report.sections_sweep: the report of a design sweep ([sweep] of a campaign, the file's
+"""truss_report.page.sections_sweep: the report of a design sweep ([sweep] of a campaign, the file's
 /sweep, docs/hdf5-schema.md): the failure probability at each design value with its interval, on
 a log axis, the target, and the allowable (the extreme design value whose one-sided upper
 confidence bound on p stays at or below the target) with its interval; the verdict compares the
@@ -7,64 +7,18 @@ ASSESSED when the swept range holds no allowable (exit codes as every report: 0,
 value's runs are the runs of one standalone campaign (its seed in /sweep/master_seed), so the runs
 as a whole are not draws of one population: no design loads.
 
-read_sweep(path or h5py.File) gives the per-value table as a pandas DataFrame, the sweep's
-settings and the allowable in df.attrs."""
+The table is truss_report.read_sweep's DataFrame: one row per design value, the sweep's settings
+and the allowable in df.attrs."""
 import math
 
 import numpy as np
 
-from .page import esc, fmt, html_page, num, table, unit_text
-from .sections_subset import count_plateau_levels, plateau_warning
-from .top import FAIL, NOT_ASSESSED, PASS, VERDICT_WORDS, model_limits_html, signoff_html
-
-COLUMNS = ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "failures", "master_seed", "index",
-           "refinement")
-
-
-def _text(v):
-    return v.decode() if isinstance(v, bytes) else str(v)
-
-
-def read_sweep(source):
-    """/sweep as a DataFrame, one row per design value: value (the design value), p, cov,
-    upper_bound (one-sided, at the confidence), lower and upper (two-sided interval), runs,
-    failures (Monte Carlo's count; -1 for subset simulation), master_seed (of the value's
-    standalone campaign), index (the design value's index k: /sweep/inner/<k>), refinement (True
-    for a value the refinement placed inside the bracket of the listed values' allowable), status,
-    message, plateau_levels (subset simulation's levels on a plateau
-    of the margin, sections_subset.count_plateau_levels; 0 for the other methods). df.attrs: the /sweep attributes (variable, units,
-    target_probability, confidence, inner_method, failure event; the design variable's unit as
-    design_units), "units" per column, and
-    "allowable" (a dict: status, value, estimate, lower, upper, own_value, safe_side, verdict,
-    message, method). None when the file has no /sweep."""
-    import h5py
-    import pandas as pd
-    if not isinstance(source, h5py.File):
-        with h5py.File(source, "r") as f:
-            return read_sweep(f)
-    if "sweep" not in source:
-        return None
-    g = source["sweep"]
-    cols = {("value" if k == "values" else k): g[k][()] for k in COLUMNS}
-    cols["refinement"] = cols["refinement"].astype(bool)
-    cols["status"] = [_text(v) for v in g["status"][()]]
-    cols["message"] = [_text(v) for v in g["message"][()]]
-    # Levels on a plateau of the margin, per value (subset simulation; 0 otherwise).
-    inner = g["inner"] if "inner" in g else {}
-    cols["plateau_levels"] = [count_plateau_levels(inner[str(k)]["level_threshold"][()])
-                              if str(k) in inner and "level_threshold" in inner[str(k)] else 0
-                              for k in cols["index"]]
-    df = pd.DataFrame(cols)
-    df.attrs.update({k: (_text(v) if isinstance(v, (bytes, str)) else v) for k, v in g.attrs.items()})
-    df.attrs["design_units"] = df.attrs.pop("units")  # the design variable's unit
-    df.attrs["units"] = {("value" if k == "values" else k): _text(g[k].attrs["units"]) for k in COLUMNS}
-    df.attrs["units"]["plateau_levels"] = "1"
-    a = g["allowable"]
-    allow = {k: _text(v) for k, v in a.attrs.items()}
-    for k in ("value", "estimate", "lower", "upper", "own_value"):
-        allow[k] = float(a[k][()])
-    df.attrs["allowable"] = allow
-    return df
+from ..judging.sweep import flat_values, sweep_verdict
+from ..judging.verdict import NOT_ASSESSED, PASS, VERDICT_WORDS
+from .html import esc, fmt, html_page, num, table, unit_text
+from .render import Report
+from .sections_subset import plateau_warning
+from .top import campaign_doc, model_limits_html, signoff_html
 
 
 def _design_unit(units):
@@ -94,22 +48,6 @@ def failure_text(at, html=True):
     if at["failure_kind"] == "margin":
         return f"{col} ≤ 0 {unit}".strip()
     return f"{col} {'≥' if at['failure_kind'] == 'above' else '≤'} {fmt(at['failure_threshold'])} {unit}".strip()
-
-
-def flat_values(s):
-    """Indices of the values whose subset estimate crossed a plateau of the margin (may be biased low)."""
-    return [k for k, n in enumerate(s["plateau_levels"]) if plateau_warning(int(n))]
-
-
-def sweep_verdict(s):
-    """PASS, FAIL or NOT_ASSESSED (top.py) of /sweep/allowable's verdict: the design's own value on
-    the safe or the unsafe side of the allowable, or no allowable in the swept range. A PASS with a
-    value whose estimate may be biased low (a plateau of the margin) is NOT_ASSESSED: an estimate
-    below the true p moves the allowable to the unsafe side; a FAIL stays a FAIL."""
-    v = s.attrs["allowable"].get("verdict", "")
-    if v == "PASS" and flat_values(s):
-        return NOT_ASSESSED
-    return PASS if v == "PASS" else FAIL if v == "FAIL" else NOT_ASSESSED
 
 
 def verdict_lines(c, s):
@@ -229,18 +167,18 @@ def section_allowable(s):
             + table(["quantity", "value"], rows, "narrow") + "</section>")
 
 
-def sweep_report(page, c, s, opts, nominal_html):
-    """The report of a design sweep; page.summary gets its lines for the terminal."""
-    page.summary = verdict_lines(c, s)
-    page.verdict = sweep_verdict(s)
-    verdict = (f"<div class='verdict {page.verdict}' data-key='verdict' data-value='{page.verdict}'>"
-               + "<br>".join(esc(x) for x in page.summary) + "</div>")
+def sweep_report(page, c, s, revision, nominal_html):
+    """The report of a design sweep (s: its table, judging.sweep.sweep_frame), with its lines for
+    the terminal and its verdict."""
+    summary = verdict_lines(c, s)
+    v = sweep_verdict(s)
+    verdict = (f"<div class='verdict {v}' data-key='verdict' data-value='{v}'>"
+               + "<br>".join(esc(x) for x in summary) + "</div>")
     toc = ("<nav><a href='#sweep'>Probability against the design variable</a> · <a href='#allowable'>Allowable</a> · "
            "<a href='#nominal'>Nominal run</a> · <a href='#limits'>Model limits</a> · "
            "<a href='#signoff'>Sign-off</a></nav>")
     body = [verdict, section_sweep(page, s), section_allowable(s), nominal_html]
     title = f"Design-sweep report: campaign “{c.attrs['campaign_name']}”"
-    from .sections_design import campaign_doc
-    doc = campaign_doc(c, f"<b>{VERDICT_WORDS[page.verdict]}</b>: {esc(allowable_sentence(s))}")
-    return html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
-                     + signoff_html(opts.revision, c.path, c.sha256), doc)
+    doc = campaign_doc(c, f"<b>{VERDICT_WORDS[v]}</b>: {esc(allowable_sentence(s))}")
+    return Report(html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
+                            + signoff_html(revision, c.path, c.sha256), doc), summary, v)

@@ -1,55 +1,56 @@
-"""truss_report.sections_margins: see the package docstring (postproc/truss_report/__init__.py)."""
-from dataclasses import dataclass
-
+"""truss_report.page.sections_margins: the margins of the drive against its motor, what drives the
+loads (rank correlations, tornado charts, Sobol' indices), the runs' histories and the
+consistency checks of the file."""
 import numpy as np
 
-import run_figures as rf
-from .constants import (AGREE_RTOL, MAX_HISTORY_FIGURES, OUTPUTS, TORNADO_TOP, TORQUE_RTOL,
-                        output_label)
-from .figures import fig_motor, fig_sobol, fig_tornado
-from .design import readable_unit
-from .page import esc, fmt, num, table
-from .stats import clopper_pearson, spearman_table
+from ..judging.correlations import (correlated_factors, outside_unit_interval, proportional_to,
+                                    ranked_inputs)
+from ..judging.runs import TORQUE_RTOL, motor_exceedance, velocity_exceedance
+from ..judging.stats import AGREE_RTOL
+from ..reading.schema import OUTPUTS
+from .figures import fig_motor, fig_sobol, fig_tornado, fig_velocity_margin
+from .figures_run import fig5
+from .html import esc, fmt, num, table
+from .sections_campaign import output_label
+
+TORNADO_TOP = 15
+MAX_HISTORY_FIGURES = 12
 
 
-def section_margins(page, c):
+def section_margins(page, c, units):
     head = '<section id="margins"><h2>4. Margins: drive torque against the motor stall torque</h2>'
     if c.attrs["drive_mode"] == "velocity":
-        return section_margins_velocity(page, c, head)
+        return section_margins_velocity(page, c, units, head)
     if c.attrs["drive_mode"] != "motor":
         return (head + f"<p>The drive mode is <b>{esc(c.attrs['drive_mode'])}</b>: the drive "
                 "applies a prescribed torque, there is no motor to compare with.</p></section>")
-    stall_code = [k for k, v in c.status_name.items() if v == "stall"]
-    stalled = np.isin(c.status, stall_code)
     torque = c.outputs["peak_drive_torque_Nm"]
-    u, f = c.display_units.get("torque", c.units["peak_drive_torque_Nm"], torque)
-    stall_t, source = c.stall_torque, c.stall_torque_source
-    ok_t = c.ok & np.isfinite(torque) & np.isfinite(stall_t)
-    ok_exceed = ok_t & (torque > stall_t * (1.0 + TORQUE_RTOL))
-    n_cons = int(ok_t.sum() + stalled.sum())
-    k = int(ok_exceed.sum() + stalled.sum())
-    if n_cons == 0:
+    u, f = units.get("torque", c.units["peak_drive_torque_Nm"], torque)
+    stall_t = c.stall_torque
+    source = ("dispersed: per run from <code>/runs/inputs/drive.stall_torque_Nm</code>"
+              if c.stall_torque_dispersed else
+              "not dispersed: <code>drive.stall_torque_Nm</code> of the base scene")
+    x = motor_exceedance(c)
+    if x is None:
         return head + "<p>No ok or stalled run: nothing to compare.</p></section>"
+    ok_t, stalled, n_cons, k, lo, hi = x.ok_t, x.stalled, x.n_considered, x.k, x.lo, x.hi
     p = k / n_cons
-    lo, hi = clopper_pearson(k, n_cons)
-    util = torque[ok_t] / stall_t[ok_t]
-    nominal = float((c.base_scene.get("drive") or {}).get("stall_torque_Nm", float("nan")))
+    nominal = float(c.drive.get("stall_torque_Nm", float("nan")))
     fig = fig_motor(page.plt, torque / f, stall_t / f, ok_t, stalled, nominal / f, u)
     rows = [
         ["stall torque of the base scene", num("motor.stall_torque_nominal", nominal, u, factor=f)],
         ["runs considered (ok with a finite peak torque, + stalled)", num("motor.n_considered",
                                                                          n_cons)],
         ["stalled runs (status stall)", num("motor.n_stall", int(stalled.sum()))],
-        ["ok runs with peak torque > stall torque", num("motor.n_ok_exceed", int(ok_exceed.sum()))],
+        ["ok runs with peak torque > stall torque", num("motor.n_ok_exceed", x.n_ok_exceed)],
         ["exceedances", num("motor.n_exceed", k)],
         ["probability of exceeding the stall torque", num("motor.p_exceed", p, digits=4)],
         ["95 % Clopper-Pearson interval, low", num("motor.p_exceed.ci_lo", lo, digits=4)],
         ["95 % Clopper-Pearson interval, high", num("motor.p_exceed.ci_hi", hi, digits=4)],
         ["largest peak torque / stall torque of an ok run",
-         num("motor.utilisation_max", float(np.max(util)) if len(util) else float("nan"),
-             digits=10)],
+         num("motor.utilisation_max", x.utilisation_max, digits=10)],
     ]
-    excluded = int(np.sum(~c.ok & ~stalled))
+    excluded = x.n_other_failures
     return (head + f"<p>Stall torque: {source}. A run exceeds the stall torque when it stalled "
             "(status <code>stall</code>: the motor could not drive the mast, so the torque the "
             "mast needed exceeded what the motor gives; <b>stalled runs count as exceedances</b>) "
@@ -65,35 +66,18 @@ def section_margins(page, c):
             + table(["", "value"], rows, "narrow") + "</section>")
 
 
-def section_margins_velocity(page, c, head):
+def section_margins_velocity(page, c, units, head):
     torque = c.outputs["peak_drive_torque_Nm"]
-    u, f = c.display_units.get("torque", c.units["peak_drive_torque_Nm"], torque)
+    u, f = units.get("torque", c.units["peak_drive_torque_Nm"], torque)
     if c.motor_torque_at_speed is None:
         return (head + "<p>This file has no <code>/runs/motor_torque_at_speed_Nm</code> (it was "
                 "written before the simulator stored the motor's torque at the prescribed speed): "
                 "the available torque is not in the file, so this margin is not computed.</p></section>")
-    avail = c.motor_torque_at_speed  # the simulator's motor law, never written again here
-    considered = c.ok & np.isfinite(torque) & np.isfinite(avail)
-    n_cons = int(considered.sum())
-    if n_cons == 0:
+    x = velocity_exceedance(c)
+    if x is None:
         return head + "<p>No ok run with a finite peak torque: nothing to compare.</p></section>"
-    exceed = considered & (torque > avail)
-    k = int(exceed.sum())
-    lo, hi = clopper_pearson(k, n_cons)
-    drive = c.base_scene.get("drive") or {}
-    omega = 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
-    ratio = avail[considered] / torque[considered]
-    fig, ax = page.plt.subplots(figsize=(10.0, 4.2))
-    ax.hist(torque[considered] / f, bins=60, color="C0", label=f"peak drive torque, {n_cons} ok runs")
-    a_min, a_max = float(np.min(avail[considered])), float(np.max(avail[considered]))
-    ax.axvline(a_min / f, color="C3", ls="--", lw=1.2,
-               label=f"available at the prescribed speed: {fmt(a_min / f, 4)} {u}"
-               + (f" (smallest; largest {fmt(a_max / f, 4)} {u})" if a_max > a_min else ""))
-    ax.set_xlabel(f"drive torque, the three screws together ({u})")
-    ax.set_ylabel("runs")
-    ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.18), ncol=2, frameon=False)
-    ax.grid(True, alpha=0.3)
-    fig.set_layout_engine("tight")   # applied when drawn
+    n_cons, k, lo, hi, omega, drive = x.n_considered, x.k, x.lo, x.hi, x.omega, c.drive
+    fig = fig_velocity_margin(page.plt, torque[x.considered] / f, x.avail_min / f, x.avail_max / f, u)
     rows = [
         ["motor stall torque of the scene", num("velmargin.stall_torque", float(drive["stall_torque_Nm"]), u, factor=f)],
         ["motor no-load speed of the scene", num("velmargin.no_load_speed", float(drive["no_load_speed_rad_per_s"]), "rad/s")],
@@ -103,8 +87,8 @@ def section_margins_velocity(page, c, head):
         ["probability of exceeding", num("velmargin.p_exceed", k / n_cons, digits=4)],
         ["95 % Clopper-Pearson interval, low", num("velmargin.p_exceed.ci_lo", lo, digits=4)],
         ["95 % Clopper-Pearson interval, high", num("velmargin.p_exceed.ci_hi", hi, digits=4)],
-        ["smallest available / peak torque", num("velmargin.ratio_min", float(np.min(ratio)), digits=6)],
-        ["median available / peak torque", num("velmargin.ratio_p50", float(np.percentile(ratio, 50)), digits=6)],
+        ["smallest available / peak torque", num("velmargin.ratio_min", x.ratio_min, digits=6)],
+        ["median available / peak torque", num("velmargin.ratio_p50", x.ratio_p50, digits=6)],
     ]
     return (head + "<p>Velocity drive: the driven frame follows the prescribed speed whatever torque that "
             "takes, so the campaign gives the <b>torque a motor must deliver</b> (at the screws, the "
@@ -123,78 +107,11 @@ def section_margins_velocity(page, c, head):
             + table(["", "value"], rows, "narrow") + "</section>")
 
 
-@dataclass
-class InputColumn:
-    label: str
-    values: np.ndarray
-    aggregate: bool       # the per-dispersion aggregate (or a per-run dispersion itself)
-    units: str = "1"      # of the values; an aggregate (per-bay/frame mean) is a relative deviation
-    relative: bool = False  # values are (value - nominal) / nominal
-
-
-def input_columns(c):
-    """Every sampled input column and one aggregate per dispersion (see aggregate_input)."""
-    cols = []
-    for d in c.dispersions:
-        if d.per == "run":
-            cols.append(InputColumn(d.key, d.values, True, d.units))
-            continue
-        start = 1 if d.per == "bay" else 0
-        for j in range(d.values.shape[1]):
-            cols.append(InputColumn(f"{d.key}[{d.per} {j + start}]", d.values[:, j], False,
-                                    d.units))
-        cols.append(InputColumn(aggregate_label(d), aggregate_input(d), True,
-                                "1" if d.nominal != 0 else d.units, d.nominal != 0))
-    return cols
-
-
-def input_axis(col):
-    """(axis label, values) of an input column for a plot: a relative deviation in %, a length
-    in mm, a mass in g (when the values are that small), else the file's unit."""
-    if col.relative:
-        key, per = col.label[:-1].split(" (mean over ")
-        return f"{key}: mean relative\ndeviation over {per} (%)", 100.0 * col.values
-    finite = col.values[np.isfinite(col.values)]
-    lab, f = readable_unit(col.units, float(np.max(np.abs(finite))) if len(finite) else np.nan)
-    return (col.label + (f" ({lab})" if lab != "1" else ""), col.values / f)
-
-
-def aggregate_label(d):
-    return f"{d.key} (mean over {d.per}s)"
-
-
-def aggregate_input(d):
-    """Per run: the mean over the run's bays (frames) of (value - nominal) / nominal
-    ((value - nominal) when the nominal is 0)."""
-    dev = d.values - d.nominal
-    if d.nominal != 0:
-        dev = dev / d.nominal
-    finite = np.isfinite(dev)
-    count = finite.sum(axis=1)
-    total = np.where(finite, dev, 0.0).sum(axis=1)
-    return np.where(count > 0, total / np.maximum(count, 1), np.nan)
-
-
-def rank_correlations(c):
-    """{output: {input label: (Spearman rho, pairs)}} over the ok runs, computed once per report
-    (the tornado charts and the scatter plots of the top inputs read the same table)."""
-    if getattr(c, "rank_correlations", None) is None:
-        cols = input_columns(c)
-        c.rank_correlations, ranks = {}, {}
-        for key in OUTPUTS:
-            y = np.where(c.ok, c.outputs[key], np.nan)
-            c.rank_correlations[key] = dict(zip((col.label for col in cols),
-                                                spearman_table([col.values for col in cols], y,
-                                                               ranks)))
-    return c.rank_correlations
-
-
-def section_sensitivity(page, c):
+def section_sensitivity(page, c, j):
     out = ['<section id="sensitivity"><h2>5. What drives the loads</h2>']
     if not c.dispersions:
         return out[0] + "<p>No dispersed input.</p></section>"
-    cols = input_columns(c)
-    rho = rank_correlations(c)
+    cols, rho = j.columns, j.correlations
     out.append("<p>Spearman rank correlation ρ (<code>scipy.stats.spearmanr</code>) of each "
                "sampled input with each output, over the ok runs where both are finite. A per-bay "
                "(per-frame) dispersion contributes one input per bay (frame), "
@@ -219,14 +136,13 @@ def section_sensitivity(page, c):
                         f"<code>{proportional[key]}</code> in every ok run (same ranks): its "
                         "tornado is that one.</p></div>")
             continue
-        ranked = sorted(((lab, r, n) for lab, (r, n) in rho[key].items() if np.isfinite(r)),
-                        key=lambda t: -abs(t[1]))[:TORNADO_TOP]
+        ranked = ranked_inputs(rho, key, TORNADO_TOP)
         if not ranked:
             figs.append(f"<div class='cell'><p class='note'><code>{key}</code>: no input "
                         "correlation defined (no finite ok value, or a constant output).</p></div>")
             continue
         n_y = int(np.sum(c.ok & np.isfinite(c.outputs[key])))
-        fig = fig_tornado(page.plt, ranked, aggregate, f"{output_label(key, c.attrs['direction'])} (n = {n_y})",
+        fig = fig_tornado(page.plt, ranked, aggregate, f"{output_label(key, c.direction)} (n = {n_y})",
                           1.96 / np.sqrt(max(n_y - 1, 1)))
         detail = table(["input", "ρ", "runs"],
                        [[f"<code>{esc(lab)}</code>", num(f"spearman.{key}.{lab}", r, digits=3),
@@ -243,32 +159,15 @@ def section_sensitivity(page, c):
     return "\n".join(out)
 
 
-def proportional_to(c):
-    """{output: earlier output} for outputs whose ok values are a constant multiple of an earlier
-    one's (drive torque = force x lead / 2 pi): one tornado serves both."""
-    res = {}
-    keys = list(OUTPUTS)
-    for i, k in enumerate(keys):
-        for j in keys[:i]:
-            a, b = c.outputs[j][c.ok], c.outputs[k][c.ok]
-            m = np.isfinite(a) & np.isfinite(b) & (a != 0)
-            if m.sum() >= 3 and j not in res:
-                r = b[m] / a[m]
-                if np.ptp(r) <= 1e-9 * abs(np.mean(r)):
-                    res[k] = j
-                    break
-    return res
-
-
 def subsection_sobol(page, c):
     s = c.sensitivity
-    factors = s["factor"]
-    outs = s["outputs"]
+    factors = s.factor
+    outs = s.outputs
     meth = outs[next(iter(outs))]
     parts = ["<h3>Sobol' indices (Saltelli sampling)</h3>",
              "<p>From <code>/sensitivity</code>, as the campaign computed them: method "
-             f"“{esc(meth['method'])}”, {fmt(meth['confidence'], 3)} confidence intervals from "
-             f"{meth['n_resamples']} bootstrap resamples. A factor is a whole dispersion "
+             f"“{esc(meth.method)}”, {fmt(meth.confidence, 3)} confidence intervals from "
+             f"{meth.n_resamples} bootstrap resamples. A factor is a whole dispersion "
              "(a per-bay "
              "dispersion moves all its bays together). Indices are dimensionless.</p>",
              out_of_range_note(outs),
@@ -278,53 +177,22 @@ def subsection_sobol(page, c):
     cells = []
     for key, o in outs.items():
         rows = [[f"<code>{esc(fac)}</code>"]
-                + [num(f"sobol.{key}.{fac}.{k}", float(o[k][g]), digits=3)
+                + [num(f"sobol.{key}.{fac}.{k}", float(o.indices[k][g]), digits=3)
                    for k in ("first_order", "first_order_lo", "first_order_hi",
                              "total", "total_lo", "total_hi")] for g, fac in enumerate(factors)]
         cells.append(f"<div class='cell'><h4><code>{key}</code></h4><p>blocks used "
-                     f"{num(f'sobol.{key}.n_blocks', o['n_blocks'], tag='span')}, dropped "
-                     f"{num(f'sobol.{key}.n_blocks_dropped', o['n_blocks_dropped'], tag='span')}"
+                     f"{num(f'sobol.{key}.n_blocks', o.n_blocks, tag='span')}, dropped "
+                     f"{num(f'sobol.{key}.n_blocks_dropped', o.n_blocks_dropped, tag='span')}"
                      "</p>" + table(["factor", "S1", "S1 low", "S1 high", "ST", "ST low",
                                      "ST high"], rows, "narrow") + "</div>")
     parts.append("<div class='grid'>" + "".join(cells) + "</div>")
     return "\n".join(parts)
 
 
-def calc_design_correlations(c, n_factors):
-    """Largest |rank correlation| between the A and B rows of each dispersion's columns (one per
-    bay or frame for per-bay/per-frame keys). Saltelli's design (block of G + 2 runs: A, B, AB_1
-    .. AB_G) assumes A and B independent; a correlated pair biases that factor's indices. Campaign
-    files of schema_version 1 drew A and B from one Sobol' point, some of whose pairs of dimensions
-    correlate strongly at small N (docs/campaigns.md). Returns {key: (rho, N)}."""
-    block = n_factors + 2
-    n_blocks = len(c.status) // block
-    res = {}
-    if n_blocks < 3:
-        return res, n_blocks
-    for d in c.dispersions:
-        v = np.asarray(d.values, dtype=float)
-        v = v[: n_blocks * block].reshape(n_blocks * block, -1)
-        worst = 0.0
-        for j in range(v.shape[1]):
-            a, b = v[0::block, j], v[1::block, j]
-            if np.ptp(a) == 0 or np.ptp(b) == 0:
-                continue
-            ra, rb = np.argsort(np.argsort(a)), np.argsort(np.argsort(b))
-            r = float(np.corrcoef(ra, rb)[0, 1])
-            if abs(r) > abs(worst):
-                worst = r
-        res[d.key] = worst
-    return res, n_blocks
-
-
 def design_correlation_note(c, n_factors):
     """A warning naming the factors whose A and B columns correlate by more than 4 / sqrt(N)
     (four standard deviations of the correlation of N independent pairs)."""
-    rho, n_blocks = calc_design_correlations(c, n_factors)
-    if not rho:
-        return ""
-    limit = 4.0 / np.sqrt(n_blocks)
-    bad = {k: r for k, r in rho.items() if abs(r) > limit}
+    bad, limit, n_blocks = correlated_factors(c, n_factors)
     if not bad:
         return ""
     return ("<p class='warn'>Design check: the A and B samples of "
@@ -338,9 +206,7 @@ def design_correlation_note(c, n_factors):
 def out_of_range_note(outs):
     """A warning when point estimates fall outside [0, 1]: the estimators are unbiased, not
     bounded, and such values mean too few blocks for that output."""
-    bad = [key for key, o in outs.items()
-           if np.any((o["first_order"] < 0) | (o["first_order"] > 1)
-                     | (o["total"] < 0) | (o["total"] > 1))]
+    bad = outside_unit_interval(outs)
     if not bad:
         return ""
     return ("<p class='warn'>Some estimates lie outside [0, 1] ("
@@ -361,16 +227,33 @@ def section_histories(page, c):
     if len(c.histories) > len(shown):
         parts.append(f"<p>(the first {len(shown)} of {len(c.histories)} histories)</p>")
     for i in shown:
-        parts.append(page.figure(rf.fig5(page.plt, c.histories[i]), f"history_run_{i}.png",
+        parts.append(page.figure(fig5(page.plt, c.histories[i]), f"history_run_{i}.png",
                                  f"run {i}: drive force and rail pin force against time"))
     parts.append("</section>")
     return "\n".join(parts)
 
 
-def section_checks(page, number):
-    rows = [[esc(what), ("<span class='okc'>pass</span>" if passed
-                         else "<span class='bad'>FAIL</span>"), detail]
-            for what, passed, detail in page.checks]
+def check_detail(c, ch):
+    """The detail cell of a consistency check."""
+    if ch.part == "status":
+        return "agree" if ch.passed else "DIFFER: see the status table"
+    if ch.part == "attrs":
+        return ("agree" if ch.passed else f"DIFFER: file says n_ok = {c.stats_attrs['n_ok']}, n_failed = "
+                f"{c.stats_attrs['n_failed']}")
+    cmp, key = ch.comparison, ch.source
+    if ch.part == "counts":
+        return num(f"check.{key}.count_mismatches", cmp.count_mismatches, tag="span") + " counts differ"
+    if ch.part == "order":
+        return ("largest difference / largest |value| "
+                + num(f"check.{key}.order_max_diff", cmp.order, tag="span"))
+    return ("largest difference / largest |value| " + num(f"check.{key}.moments_max_diff", cmp.moments, tag="span")
+            + " (sums in another order round differently)")
+
+
+def section_checks(c, checks, number):
+    rows = [[esc(ch.what), ("<span class='okc'>pass</span>" if ch.passed
+                            else "<span class='bad'>FAIL</span>"), check_detail(c, ch)]
+            for ch in checks]
     return (f'<section id="checks"><h2>{number}. Consistency of the file</h2>'
             "<p>The report recomputes from <code>/runs</code> what the file also stores in "
             "<code>/stats</code>, and compares: counts exactly, other statistics to "

@@ -1,4 +1,4 @@
-"""truss_report.mechanism: mechanism margins in the form of the ECSS mechanisms standard.
+"""truss_report.judging.mechanism: mechanism margins in the form of the ECSS mechanisms standard.
 
 Source: ECSS-E-ST-33-01C (6 March 2009), "Space engineering - Mechanisms", clause 4.7.5.3.1
 "Motorization factors" and its Table 4-2 (uncertainty factors of the resistance contributors);
@@ -38,10 +38,16 @@ bound the torque at every instant from above: the report's T_min is conservative
   resistance at all) are not counted.
 MF (2), k_S (1.2) and k_D (1.25) are report options (--motorisation-factor, --uncertainty-factor,
 --inertia-factor)."""
+from __future__ import annotations
+
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from ..reading.campaign import Campaign
+from ..reading.extras import Extras
+from ..reading.h5file import Array
 from .stats import clopper_pearson
 
 ECSS_CLAUSE = ("ECSS-E-ST-33-01C (6 March 2009), Space engineering – Mechanisms, clause 4.7.5.3.1 "
@@ -65,12 +71,12 @@ class Margins:
     k_uncertainty: float          # k_S, on the spring resistance
     k_inertia: float = DEFAULT_INERTIA
     n: int = 0                    # runs considered
-    mf: np.ndarray = None         # achieved MF per considered run
+    mf: Array | None = None       # achieved MF per considered run
     mf_min: float = float("nan")
     tm_min: float = float("nan")  # smallest torque margin T_available / T_min - 1
     mf_nominal: float = float("nan")
     n_below: int = 0
-    p_below_ci: tuple = (float("nan"), float("nan"))
+    p_below_ci: tuple[float, float] = (float("nan"), float("nan"))
     s_design: float = float("nan")       # largest spring resistance S over the runs, Nm
     d_design: float = float("nan")       # largest inertial resistance T_D, Nm
     t_min_design: float = float("nan")   # largest T_min, Nm
@@ -83,11 +89,11 @@ class Margins:
     missing: bool = False         # the file holds no resistance to judge (not assessed)
 
     @property
-    def fails(self):
+    def fails(self) -> bool:
         return self.n > 0 and self.n_below > 0
 
 
-def screw_speed(drive):
+def screw_speed(drive: dict[str, Any]) -> float:
     """Screw speed omega = 2 pi v / h (rad/s) of a velocity drive (NaN without v or h)."""
     try:
         return 2.0 * np.pi * float(drive["speed_m_per_s"]) / float(drive["screw_lead_m"])
@@ -95,7 +101,7 @@ def screw_speed(drive):
         return float("nan")
 
 
-def available_at_speed(c, drive):
+def available_at_speed(c: Campaign, drive: dict[str, Any]) -> float:
     """Smallest torque the scene's motor gives at the prescribed screw speed: the file's
     /runs/motor_torque_at_speed_Nm over the runs where finite, else the motor's line
     T_s (1 - omega / omega_0) of the base scene."""
@@ -109,24 +115,26 @@ def available_at_speed(c, drive):
         return float("nan")
 
 
-def _required(m, s, d):
+def _required(m: Margins, s: Array, d: Array) -> Array:
     """T_min per run from the spring and inertial resistances (T_D = 0 in motor mode)."""
     return m.mf_required * m.k_uncertainty * s + m.k_inertia * d
 
 
-def _resistances(c, e, m):
+def _resistances(e: Extras, m: Margins) -> tuple[Array, Array] | None:
     s, d = e.runs.get(STATIC), e.runs.get(INERTIAL)
     if s is None or d is None:
         m.note, m.missing = f"the file has no /runs/{STATIC}", True
-        return None, None
+        return None
     d = np.maximum(d, 0.0) if m.mode == "velocity" else np.zeros_like(d)
     return s, d
 
 
-def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAINTY,
-                    k_inertia=DEFAULT_INERTIA):
-    m = Margins(c.attrs["drive_mode"], mf_required, k_uncertainty, k_inertia)
-    drive = c.base_scene.get("drive") or {}
+def compute_margins(c: Campaign, e: Extras, mf_required: float = DEFAULT_MF,
+                    k_uncertainty: float = DEFAULT_UNCERTAINTY,
+                    k_inertia: float = DEFAULT_INERTIA) -> Margins:
+    m = Margins(c.drive_mode, mf_required, k_uncertainty, k_inertia)
+    drive = c.drive
+    avail: Array | None
     m.stall_scene = float(drive.get("stall_torque_Nm", np.nan))
     m.no_load_speed = float(drive.get("no_load_speed_rad_per_s", np.nan))
     if m.mode == "velocity":
@@ -140,16 +148,17 @@ def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAI
     else:
         m.note = "torque drive: no motor"
         return m
-    s, d = _resistances(c, e, m)
-    if s is None:
+    resistances = _resistances(e, m)
+    if resistances is None or avail is None:   # a motor drive always has its stall torque
         return m
+    s, d = resistances
     sel = c.ok & np.isfinite(s) & np.isfinite(d) & np.isfinite(avail)
     if not np.any(sel):
         m.note = ("no ok run has a finite static resistance and available torque "
                   f"(/runs/{STATIC} holds none for this campaign)")
         m.missing = True
         return m
-    s, d, avail = np.maximum(s[sel], 0.0), d[sel], avail[sel]   # S <= 0: the springs help
+    s, d, t_av = np.maximum(s[sel], 0.0), d[sel], avail[sel]   # S <= 0: the springs help
     t_min = _required(m, s, d)
     m.n = int(np.sum(t_min > 0))
     if m.n == 0:
@@ -157,18 +166,18 @@ def compute_margins(c, e, mf_required=DEFAULT_MF, k_uncertainty=DEFAULT_UNCERTAI
                   "drive only brakes it (as in retraction); its braking torque is the peak drive "
                   "torque of the design loads")
         return m
-    s, d, avail, t_min = s[t_min > 0], d[t_min > 0], avail[t_min > 0], t_min[t_min > 0]
+    s, d, t_av, t_min = s[t_min > 0], d[t_min > 0], t_av[t_min > 0], t_min[t_min > 0]
     with np.errstate(divide="ignore"):
-        m.mf = np.where(s > 0, (avail - k_inertia * d) / (k_uncertainty * s),
-                        np.where(avail >= k_inertia * d, np.inf, -np.inf))
+        m.mf = np.where(s > 0, (t_av - k_inertia * d) / (k_uncertainty * s),
+                        np.where(t_av >= k_inertia * d, np.inf, -np.inf))
     m.mf_min = float(np.min(m.mf))
-    m.tm_min = float(np.min(avail / t_min - 1.0))
-    m.n_below = int(np.sum(avail < t_min))
+    m.tm_min = float(np.min(t_av / t_min - 1.0))
+    m.n_below = int(np.sum(t_av < t_min))
     m.p_below_ci = clopper_pearson(m.n_below, m.n)
     m.s_design, m.d_design = float(np.max(s)), float(np.max(d))
     m.t_min_design = float(np.max(t_min))
-    m.t_avail_min = float(np.min(avail))
-    if e.nominal and e.nominal.get(STATIC, 0) > 0 and m.mode in ("velocity", "motor"):
+    m.t_avail_min = float(np.min(t_av))
+    if e.nominal is not None and e.nominal.get(STATIC, 0) > 0 and m.mode in ("velocity", "motor"):
         nd = max(e.nominal[INERTIAL], 0.0) if m.mode == "velocity" else 0.0
         na = e.nominal["motor_torque_at_speed_Nm"] if m.mode == "velocity" else m.stall_scene
         m.mf_nominal = (na - k_inertia * nd) / (k_uncertainty * e.nominal[STATIC])

@@ -1,13 +1,29 @@
-"""truss_report.stats: see the package docstring (postproc/truss_report/__init__.py)."""
+"""truss_report.judging.stats: percentiles (type 7, as /stats), distribution-free order-statistic
+bounds, Clopper-Pearson intervals, Spearman rank correlations, the /stats fields of a column,
+the comparison of recomputed statistics with /stats, and the lock order and intervals."""
+from __future__ import annotations
+
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+from scipy.stats import beta as beta_dist
+from scipy.stats import binom, rankdata, spearmanr
 
-from .constants import AGREE_RTOL, CONFIDENCE, STATS_PERCENTILES
-from .page import num
+from ..reading.h5file import Array
+from ..reading.schema import STATS_PERCENTILES
+
+CONFIDENCE = 0.95
+
+# A statistic in /stats and its recomputation here agree when they differ by at most this much,
+# relative to the largest |value| of the column: the same formula on the same float64 data, where
+# only the order of the roundings may differ (sums: about n ulps of the largest value). Counts
+# must agree exactly.
+AGREE_RTOL = 1e-9
 
 
-def percentile(x, q):
+def percentile(x: Array, q: float) -> float:
     """Hyndman-Fan type 7 (numpy.percentile's default, linear), as /stats defines it."""
     return float(np.percentile(x, q))
 
@@ -18,19 +34,19 @@ class QuantileCI:
     confidence (1-based ranks; None: the sample is too small for that bound)."""
     lo: float
     hi: float
-    r: int
-    s: int
+    r: int | None
+    s: int | None
     coverage: float       # P(x_(r) <= true quantile < x_(s)), missing bounds taken as -+inf
-    n_needed_lo: int      # smallest n giving a lower bound (reported when r is None)
-    n_needed_hi: int
+    n_needed_lo: int | None  # smallest n giving a lower bound (reported when r is None)
+    n_needed_hi: int | None
 
-    def scaled(self, factor):
+    def scaled(self, factor: float) -> QuantileCI:
         """The same bounds in a display unit (value / factor)."""
         return QuantileCI(self.lo / factor, self.hi / factor, self.r, self.s, self.coverage,
                           self.n_needed_lo, self.n_needed_hi)
 
 
-def quantile_ci(x_sorted, p, confidence=CONFIDENCE):
+def quantile_ci(x_sorted: Array, p: float, confidence: float = CONFIDENCE) -> QuantileCI:
     """One-sided distribution-free bounds of the p-quantile (0 < p < 1) of sorted data, each at
     `confidence`; together they are a two-sided interval of coverage >= 2 confidence - 1.
 
@@ -41,7 +57,6 @@ def quantile_ci(x_sorted, p, confidence=CONFIDENCE):
     > 1 - a. r = 0 or s = n + 1 means the sample is too small for that bound: the upper one needs
     p^n <= a (2218 runs for P99.865 at 95 %).
     """
-    from scipy.stats import binom
     n = len(x_sorted)
     a = 1.0 - confidence
     r = int(binom.ppf(a, n, p))
@@ -55,7 +70,7 @@ def quantile_ci(x_sorted, p, confidence=CONFIDENCE):
                       n_needed_hi=None if has_hi else min_runs_for_bound(p, a, "hi"))
 
 
-def min_runs_for_bound(p, a, side):
+def min_runs_for_bound(p: float, a: float, side: str) -> int:
     """Smallest n for which quantile_ci has that bound: (1-p)^n < a (lower), p^n <= a (upper)."""
     base = 1.0 - p if side == "lo" else p
     n = max(1, int(np.floor(np.log(a) / np.log(base))))
@@ -66,18 +81,16 @@ def min_runs_for_bound(p, a, side):
     return n
 
 
-def clopper_pearson(k, n, confidence=CONFIDENCE):
+def clopper_pearson(k: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float]:
     """Exact (Clopper-Pearson) interval of a binomial proportion k/n."""
-    from scipy.stats import beta
     a = (1.0 - confidence) / 2.0
-    lo = 0.0 if k == 0 else float(beta.ppf(a, k, n - k + 1))
-    hi = 1.0 if k == n else float(beta.ppf(1.0 - a, k + 1, n - k))
+    lo = 0.0 if k == 0 else float(beta_dist.ppf(a, k, n - k + 1))
+    hi = 1.0 if k == n else float(beta_dist.ppf(1.0 - a, k + 1, n - k))
     return lo, hi
 
 
-def spearman(x, y):
+def spearman(x: Array, y: Array) -> tuple[float, int]:
     """Spearman's rho over the pairs where both are finite; (rho, n), rho NaN if undefined."""
-    from scipy.stats import spearmanr
     m = np.isfinite(x) & np.isfinite(y)
     n = int(m.sum())
     if n < 3 or np.ptp(x[m]) == 0 or np.ptp(y[m]) == 0:
@@ -85,14 +98,14 @@ def spearman(x, y):
     return float(spearmanr(x[m], y[m])[0]), n
 
 
-def spearman_table(columns, y, ranks_cache=None):
+def spearman_table(columns: Sequence[Array], y: Array,
+                   ranks_cache: dict[bytes, Any] | None = None) -> list[tuple[float, int]]:
     """[(rho, n)] of each input column with y, equal to [spearman(x, y) for x in columns] up to
     rounding: y is ranked once, and the columns that are finite wherever y is are ranked together
     and correlated with it in one matrix product (Pearson's r of the ranks); the others (NaN
     inside y's runs: bays beyond a run's bay count) go through spearman() one by one.
     ranks_cache (a dict): the columns' centred ranks, kept per set of runs, for the next output
     finite in the same runs (usually every output: the ok runs)."""
-    from scipy.stats import rankdata
     m = np.isfinite(y)
     n = int(m.sum())
     res = [(float("nan"), n)] * len(columns)
@@ -121,14 +134,14 @@ def spearman_table(columns, y, ranks_cache=None):
     return res
 
 
-def scaled_diff(a, b, scale):
+def scaled_diff(a: float, b: float, scale: float) -> float:
     """|a - b| / scale (scale: the largest |value| of the column); 0 when both are NaN or equal,
     inf when only one is NaN."""
     if np.isnan(a) and np.isnan(b) or a == b:
         return 0.0
     if np.isnan(a) or np.isnan(b):
         return float("inf")
-    return abs(a - b) / max(scale, np.finfo(float).tiny)
+    return abs(a - b) / max(scale, float(np.finfo(float).tiny))
 
 
 @dataclass
@@ -138,9 +151,10 @@ class StatsComparison:
     None when none was compared)."""
     count_mismatches: int = 0
     order: float = 0.0
-    moments: float = None
+    moments: float | None = None
 
-    def add(self, mine, stored, scale, fields):
+    def add(self, mine: dict[str, float], stored: dict[str, float], scale: float,
+            fields: Sequence[str]) -> None:
         for f in fields:
             if f == "count":
                 self.count_mismatches += int(mine[f] != stored[f])
@@ -149,21 +163,8 @@ class StatsComparison:
             else:
                 self.order = max(self.order, scaled_diff(mine[f], stored[f], scale))
 
-    def report(self, page, what, key):
-        page.check(f"{what}: counts", self.count_mismatches == 0,
-                   num(f"check.{key}.count_mismatches", self.count_mismatches, tag="span")
-                   + " counts differ")
-        page.check(f"{what}: order statistics", self.order <= AGREE_RTOL,
-                   "largest difference / largest |value| "
-                   + num(f"check.{key}.order_max_diff", self.order, tag="span"))
-        if self.moments is not None:
-            page.check(f"{what}: mean and std", self.moments <= AGREE_RTOL,
-                       "largest difference / largest |value| "
-                       + num(f"check.{key}.moments_max_diff", self.moments, tag="span")
-                       + " (sums in another order round differently)")
 
-
-def column_stats(x):
+def column_stats(x: Array) -> dict[str, float]:
     """The /stats fields of one column of finite values (NaN where undefined)."""
     nan = float("nan")
     res = {"count": len(x), "mean": float(np.mean(x)) if len(x) else nan,
@@ -174,7 +175,7 @@ def column_stats(x):
     return res
 
 
-def lock_order(lock_ok):
+def lock_order(lock_ok: Array) -> str:
     """'descending' when every run locks bay j+1 before bay j (the top bay first),
     'ascending' for the reverse, 'mixed' otherwise (from the finite consecutive differences)."""
     d = np.diff(lock_ok, axis=1)
@@ -186,7 +187,7 @@ def lock_order(lock_ok):
     return "mixed"
 
 
-def lock_intervals(lock, order):
+def lock_intervals(lock: Array, order: str) -> tuple[Array, str]:
     """Per run, per bay k (1-based): the time from the previous lock to the lock of bay k
     (descending: lock(k) - lock(k+1); ascending: lock(k) - lock(k-1); mixed: lock(k+1) - lock(k),
     signed). Returns (n x n_bays_max array, NaN where undefined, and a description)."""
@@ -203,9 +204,9 @@ def lock_intervals(lock, order):
                 "monotonic order)")
 
 
-def band_stats(cols):
+def band_stats(cols: Array) -> dict[str, Array]:
     """count, P5, P50, P95 of each column's finite values (NaN where no value)."""
-    res = {"count": [], "p5": [], "p50": [], "p95": []}
+    res: dict[str, list[float]] = {"count": [], "p5": [], "p50": [], "p95": []}
     for col in cols.T:
         v = col[np.isfinite(col)]
         res["count"].append(len(v))

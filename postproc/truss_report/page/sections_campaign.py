@@ -1,18 +1,26 @@
-"""truss_report.sections_campaign: see the package docstring (postproc/truss_report/__init__.py)."""
+"""truss_report.page.sections_campaign: the campaign (its runs' outcome, failed runs,
+dispersions, base scene), the peak loads and the lock timing sections of the load report."""
 import os
-import re
 
 import numpy as np
 
-from .constants import CONFIDENCE, LEVELS, MAX_FAILED_LISTED, OUTPUTS, STATS_FIELDS, output_label
+from ..judging.design import RETRACT_LABELS
+from ..judging.runs import failure_groups
+from ..reading.schema import LEVELS, OUTPUTS
 from .figures import fig_distribution, fig_lock_timing
-from .page import esc, fmt, num, table, unit_label
-from .sections_subset import subsection_stop
-from .stats import (StatsComparison, band_stats, column_stats, lock_intervals, lock_order,
-                    percentile, quantile_ci)
+from .html import esc, fmt, num, table, unit_label
+
+MAX_FAILED_LISTED = 2000
 
 
-def section_campaign(page, c):
+def output_label(key, direction):
+    """Readable name of an output for the campaign's direction (deploy or retract)."""
+    if direction == "retract" and key in RETRACT_LABELS:
+        return RETRACT_LABELS[key]
+    return OUTPUTS.get(key, key)
+
+
+def section_campaign(c, j):
     a = c.attrs
     out = ['<section id="campaign"><h2>1. Campaign</h2>']
     rows = [
@@ -35,18 +43,17 @@ def section_campaign(page, c):
         ("SHA-256 of the file", f"<code>{c.sha256}</code>"),
     ]
     out.append(table(["", ""], [[f"<th>{k}</th>", v] for k, v in rows], "kv"))
-    out.append(subsection_status(page, c))
+    out.append(subsection_status(c, j.counted))
     out.append(subsection_failures(c))
-    out.append(subsection_stop(getattr(c, "stop", None)))
+    out.append(subsection_stop(c.stop))
     out.append(subsection_dispersions(c))
     out.append(subsection_base_scene(c))
     out.append("</section>")
     return "\n".join(out)
 
 
-def subsection_status(page, c):
+def subsection_status(c, counted):
     codes = sorted(c.status_name)
-    counted = {k: int(np.sum(c.status == k)) for k in codes}
     rows = []
     for k in codes:
         name = c.status_name[k]
@@ -57,18 +64,6 @@ def subsection_status(page, c):
     n_ok = counted[0]
     rows.append(["<b>all runs</b>", num("runs.n_total", c.n), num("runs.n_total.stats",
                                                                  c.stats_attrs["n_runs"])])
-    names_agree = all(k < len(c.stats_status_names) and c.stats_status_names[k] == c.status_name[k]
-                      for k in codes)
-    counts_agree = (names_agree and len(c.stats_status_counts) == len(codes)
-                    and all(int(c.stats_status_counts[k]) == counted[k] for k in codes))
-    page.check("status counts: /runs/status recounted vs /stats/status_counts and status_names",
-               counts_agree, "agree" if counts_agree else "DIFFER: see the status table")
-    attrs_agree = (c.stats_attrs["n_ok"] == n_ok and c.stats_attrs["n_failed"] == c.n - n_ok
-                   and c.stats_attrs["n_runs"] == c.n)
-    page.check("/stats attributes n_runs, n_ok, n_failed vs /runs/status", attrs_agree,
-               "agree" if attrs_agree else
-               f"DIFFER: file says n_ok = {c.stats_attrs['n_ok']}, n_failed = "
-               f"{c.stats_attrs['n_failed']}")
     return ("<h3>Outcome of the runs</h3>"
             f"<p>{num('runs.n_ok', n_ok, tag='span')} runs ok, "
             f"{num('runs.n_failed', c.n - n_ok, tag='span')} failed, of "
@@ -78,22 +73,12 @@ def subsection_status(page, c):
                     rows, "narrow"))
 
 
-def message_template(msg):
-    """A failure message with its numbers replaced by #, to group messages that differ only
-    in the numbers (times, heights, bay indices)."""
-    return re.sub(r"[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?", "#", msg)
-
-
 def subsection_failures(c):
     failed = np.nonzero(~c.ok)[0]
     if len(failed) == 0:
         return "<h3>Failed runs</h3><p>No run failed.</p>"
-    groups = {}
-    for i in failed:
-        groups.setdefault((c.status_name[int(c.status[i])], message_template(c.messages[i])),
-                          []).append(int(i))
     rows, attrs = [], []
-    for g, ((status, tmpl), runs) in enumerate(sorted(groups.items(), key=lambda kv: -len(kv[1]))):
+    for g, (status, tmpl, runs) in enumerate(failure_groups(c)):
         shown = ", ".join(map(str, runs[:30])) + (f", … (+{len(runs) - 30} more)"
                                                   if len(runs) > 30 else "")
         rows.append([esc(status), num(f"failure_group.{g}.count", len(runs)),
@@ -194,7 +179,7 @@ def ci_note(sampling, confidence):
                    "guaranteed.")
 
 
-def section_loads(page, c, confidence=CONFIDENCE):
+def section_loads(page, c, e, j, units, confidence):
     out = ['<section id="loads"><h2>2. Peak loads and deployment time</h2>',
            "<p>Statistics over the ok runs with a finite value only (the runs that "
            "<code>/stats/&lt;output&gt;/count</code> counts). Percentiles are linear "
@@ -203,24 +188,17 @@ def section_loads(page, c, confidence=CONFIDENCE):
            "each is shown next to the value stored in <code>/stats</code>. Standard deviations "
            "use ddof = 1. Each load is shown in the unit of the design-load table.</p>",
            f"<p>{ci_note(c.attrs['sampling'], confidence)}</p>"]
-    comparison = StatsComparison()
     for key in OUTPUTS:
-        out.append(output_block(page, c, key, output_label(key, c.attrs["direction"]),
-                                comparison, confidence))
-    comparison.report(page, "the six outputs recomputed vs /stats/<output>", "stats")
+        out.append(output_block(page, c, j.outputs[key], output_label(key, c.direction),
+                                e.nominal_value(key), units, confidence))
     out.append("</section>")
     return "\n".join(out)
 
 
-def output_block(page, c, key, word, comparison, confidence):
-    """Histogram, exceedance probability and tables of one output (its /stats compared into
-    `comparison`)."""
-    x = np.sort(c.outputs[key][c.ok & np.isfinite(c.outputs[key])])
-    mine = column_stats(x)
-    stored = c.stats[key]
-    comparison.add(mine, stored, float(np.max(np.abs(x))) if len(x) else 0.0, STATS_FIELDS)
-    u, f = c.display_units.get(key, c.units[key], x) if hasattr(c, "display_units") \
-        else (c.units[key], 1.0)
+def output_block(page, c, o, word, nominal, units, confidence):
+    """Histogram, exceedance probability and tables of one output (o: its OutputStats)."""
+    key, x, mine, stored = o.key, o.x, o.mine, c.stats[o.key]
+    u, f = units.get(key, c.units[key], x)
     head = (f'<h3 id="{key}">{esc(word[0].upper() + word[1:])}{unit_label(u)} '
             f"<small><code>{key}</code></small></h3>")
     n_ok = int(c.ok.sum())
@@ -228,10 +206,7 @@ def output_block(page, c, key, word, comparison, confidence):
         return (head + f"<p class='note'>No ok run has a finite value of <code>{key}</code> "
                 f"({num(f'{key}.count', 0, tag='span')} values from {n_ok} ok runs): nothing to "
                 f"show (the {esc(c.attrs['drive_mode'])} drive mode may not define it).</p>")
-    cis = {name: quantile_ci(x, q / 100.0, confidence) for q, name, _ in LEVELS}
-    est = {name: percentile(x, q) for q, name, _ in LEVELS}
-    e = getattr(c, "extras", None)
-    nominal = e.nominal.get(key, float("nan")) if e is not None and e.nominal else float("nan")
+    cis, est = o.cis, o.est
     fig = fig_distribution(page.plt, x / f, word, u, {k: v / f for k, v in est.items()},
                            {k: v.scaled(f) for k, v in cis.items()}, nominal / f, confidence)
     parts = [head,
@@ -272,21 +247,11 @@ def ci_cell(key, v, n_needed, unit, factor=1.0):
             f'(needs n ≥ {num(key + ".n_needed", n_needed, tag="span")})</td>')
 
 
-def section_lock_timing(page, c):
-    words = ("unlock", "unlocks") if c.attrs["direction"] == "retract" else ("lock", "locks")
-    lock_ok = c.lock[c.ok]
+def section_lock_timing(page, c, lock):
+    words = ("unlock", "unlocks") if c.direction == "retract" else ("lock", "locks")
     u = c.units["lock_time_s"]
-    order = lock_order(lock_ok)
-    dt, dt_text = lock_intervals(lock_ok, order)
-    lt, it = band_stats(lock_ok), band_stats(dt)
+    order, dt_text, lt, it = lock.order, lock.interval_text, lock.times, lock.intervals
     nb = c.lock.shape[1]
-    comparison = StatsComparison()
-    for j in range(nb):
-        col = lock_ok[:, j][np.isfinite(lock_ok[:, j])]
-        comparison.add({s: lt[s][j] for s in lt}, {s: c.stats_lock[s][j] for s in lt},
-                       float(np.max(np.abs(col))) if len(col) else 0.0, list(lt))
-    comparison.report(page, "per-bay lock times recomputed vs /stats/bays/lock_time_s "
-                      "(count, P5, P50, P95)", "lock")
     bays = np.arange(1, nb + 1)
     fig = fig_lock_timing(page.plt, bays, lt, it, u, words, dt_text)
     rows = []
@@ -310,3 +275,23 @@ def section_lock_timing(page, c):
                      "interval P5", "P50", "P95"], rows, "narrow",
                     [f'data-order="{order}"'] * len(rows))
             + "</details></section>")
+
+
+def subsection_stop(s):
+    """The rounds of a sequentially stopped campaign and why it stopped (empty without /stop)."""
+    if s is None:
+        return ""
+    u = s.unit
+    rows = [[str(k), num(f"stop.round{k}.runs", int(s.runs[k])), num(f"stop.round{k}.used", int(s.used[k])),
+             num(f"stop.round{k}.estimate", float(s.estimate[k]), u), num(f"stop.round{k}.upper", float(s.upper[k]), u),
+             num(f"stop.round{k}.width", float(s.achieved_width[k]), digits=3), esc(s.rounds_state[k])]
+            for k in range(len(s.runs))]
+    what = (f"the one-sided {fmt(100 * s.attrs['confidence'])} % bound of the {fmt(s.attrs['level'])} quantile of "
+            f"<code>{esc(s.attrs['output'])}</code> within {fmt(s.attrs['width'])} of it (relative)"
+            if s.attrs["target"] == "percentile_bound" else
+            f"the {esc(s.attrs['target'].replace('_', ' '))} of the share of runs that are not ok at most {fmt(s.attrs['width'])}")
+    return ("<h3>Sequential stopping</h3><p>The campaign ran in rounds until " + what + f", at most "
+            f"{s.attrs['max_runs']} runs (<code>/stop</code>). It stopped: <b>{esc(s.attrs['state'])}</b>, "
+            f"{esc(s.attrs['reason'])}.</p>"
+            + table(["after round", "runs", "values used", "estimate", "upper bound", "achieved width", "state"],
+                    rows, "narrow"))

@@ -1,8 +1,10 @@
-"""truss_report.figures: see the package docstring (postproc/truss_report/__init__.py)."""
+"""truss_report.page.figures: the campaign report's figures of the outputs' distributions, the lock
+timing, the motor margins, the tornado charts and the Sobol' indices (matplotlib)."""
 import numpy as np
+from matplotlib.ticker import MaxNLocator
 
-from .constants import LEVELS
-from .page import fmt
+from ..reading.schema import LEVELS
+from .html import fmt
 
 
 def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidence=0.95):
@@ -53,7 +55,6 @@ def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidenc
 
 
 def fig_lock_timing(plt, bays, lt, it, u, words, dt_text):
-    from matplotlib.ticker import MaxNLocator
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(15.0, 4.5))
     for ax, s, what in ((a1, lt, f"{words[0]} time"),
                         (a2, it, f"time between successive {words[1]}")):
@@ -127,7 +128,8 @@ def fig_sobol(plt, factors, outs):
     fig, axes = plt.subplots(nrow, ncol, figsize=(15.0, 3.2 + 0.25 * G + 3.0 * (nrow - 1)),
                              squeeze=False)
     y = np.arange(G)
-    for ax, (key, o) in zip(axes.ravel(), outs.items()):
+    for ax, (key, so) in zip(axes.ravel(), outs.items()):
+        o = so.indices
         for k, dy, color, label in (("first_order", 0.2, "C0", "first order S1"),
                                     ("total", -0.2, "C1", "total ST")):
             ok = np.isfinite(o[k])            # NaN: undefined (e.g. an output that never varies)
@@ -144,5 +146,21 @@ def fig_sobol(plt, factors, outs):
     axes.ravel()[0].legend()
     for ax in axes.ravel()[len(outs):]:
         ax.set_visible(False)
+    fig.set_layout_engine("tight")   # applied when drawn
+    return fig
+
+
+def fig_velocity_margin(plt, torque, a_min, a_max, u):
+    """Histogram of the ok runs' peak drive torque (display unit u) against the smallest torque
+    the scene's motor gives at the prescribed speed (a_min; a_max the largest)."""
+    fig, ax = plt.subplots(figsize=(10.0, 4.2))
+    ax.hist(torque, bins=60, color="C0", label=f"peak drive torque, {len(torque)} ok runs")
+    ax.axvline(a_min, color="C3", ls="--", lw=1.2,
+               label=f"available at the prescribed speed: {fmt(a_min, 4)} {u}"
+               + (f" (smallest; largest {fmt(a_max, 4)} {u})" if a_max > a_min else ""))
+    ax.set_xlabel(f"drive torque, the three screws together ({u})")
+    ax.set_ylabel("runs")
+    ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.18), ncol=2, frameon=False)
+    ax.grid(True, alpha=0.3)
     fig.set_layout_engine("tight")   # applied when drawn
     return fig

@@ -1,4 +1,4 @@
-"""truss_report.dataframe: a campaign file as a pandas DataFrame, and the run table as CSV.
+"""truss_report.reading.frame: a campaign file as a pandas DataFrame, and the run table as CSV.
 
     from truss_report import read_campaign
     df = read_campaign("out/table1_dispersed/table1_dispersed.h5")
@@ -11,49 +11,51 @@ of /runs/status, as a pandas Categorical in enum order: nothing is hard-coded), 
 `input:<key>[frame k]`, and every /runs/bays field as `<field>[bay j]` (j = 1 .. n_bays_max).
 df.attrs: `units` (column -> units from the datasets' `units` attributes), `nominal` (the
 /nominal values, when the file has them) and the root attributes of the file."""
+from __future__ import annotations
+
+import h5py
 import numpy as np
+import pandas as pd
 
-import run_figures as rf
+from .h5file import text
 
 
-def read_campaign(path):
-    import h5py
-    import pandas as pd
+def read_campaign(path: str) -> pd.DataFrame:
     cols, units = {}, {}
     with h5py.File(path, "r") as f:
-        if rf._text(f.attrs.get("kind", "")) != "campaign":
+        if text(f.attrs.get("kind", "")) != "campaign":
             raise ValueError(f"{path}: not a truss-campaign file (kind is not 'campaign')")
         runs = f["runs"]
         enum = h5py.check_enum_dtype(runs["status"].dtype)
-        names = [k for k, _ in sorted(enum.items(), key=lambda kv: kv[1])]
+        names = [k for k, _ in sorted(enum.items(), key=lambda kv: int(kv[1]))]
         by_value = {v: k for k, v in enum.items()}
         codes = runs["status"][()]
         cols["status"] = pd.Categorical([by_value[int(v)] for v in codes], categories=names)
         units["status"] = "1"
-        cols["message"] = [rf._text(v) for v in runs["message"][()]]
+        cols["message"] = [text(v) for v in runs["message"][()]]
         units["message"] = "1"
         for k, ds in runs.items():
             if isinstance(ds, h5py.Dataset) and ds.ndim == 1 and k not in ("status", "message",
                                                                          "run_index"):
                 cols[k] = ds[()]
-                units[k] = rf._text(ds.attrs["units"])
+                units[k] = text(ds.attrs["units"])
         for key, ds in (runs["inputs"].items() if "inputs" in runs else []):
-            per = rf._text(ds.attrs["per"])
+            per = text(ds.attrs["per"])
             v = ds[()]
             if v.ndim == 1:
                 name = f"input:{key}"
-                cols[name], units[name] = v, rf._text(ds.attrs["units"])
+                cols[name], units[name] = v, text(ds.attrs["units"])
             else:
                 start = 1 if per == "bay" else 0
                 for j in range(v.shape[1]):
                     name = f"input:{key}[{per} {j + start}]"
-                    cols[name], units[name] = v[:, j], rf._text(ds.attrs["units"])
+                    cols[name], units[name] = v[:, j], text(ds.attrs["units"])
         for key, ds in runs["bays"].items():
             v = ds[()]
             for j in range(v.shape[1]):
                 name = f"{key}[bay {j + 1}]"
-                cols[name], units[name] = v[:, j], rf._text(ds.attrs["units"])
-        attrs = {k: (rf._text(v) if isinstance(v, (bytes, str)) else
+                cols[name], units[name] = v[:, j], text(ds.attrs["units"])
+        attrs = {k: (text(v) if isinstance(v, (bytes, str)) else
                      (v.item() if isinstance(v, np.generic) else v)) for k, v in f.attrs.items()}
         nominal = {}
         if "nominal" in f:
@@ -67,24 +69,3 @@ def read_campaign(path):
     df.attrs["nominal"] = nominal
     df.attrs["path"] = path
     return df
-
-
-def write_run_table(df, path):
-    """The run table as CSV, one row per run: `run_index` (the 0-based row of /runs), `status`
-    (its name), the inputs (`input:<key>`, `input:<key>[bay j]`), the per-run outputs, the per-bay
-    outputs (`<field>[bay j]`) and last `message` (quoted). Units are in the column names (`_N`,
-    `_s`, ...), as in the file; NaN is written as `nan`; numbers with 17 significant digits, so
-    that they read back to the file's float64 values exactly."""
-    inputs = [c for c in df.columns if c.startswith("input:")]
-    per_bay = [c for c in df.columns if "[bay " in c and not c.startswith("input:")]
-    responses = [c for c in df.columns if c not in inputs and c not in per_bay
-                 and c not in ("status", "message")]
-    order = inputs + responses + per_bay
-    values = df[order].to_numpy(dtype=np.float64)
-    # One %-format per row: about four times faster than DataFrame.to_csv on 10,000 x 600 values.
-    row_format = "%d,%s," + ",".join(["%.17g"] * len(order)) + ',"%s"\n'
-    status = df["status"].astype(str).tolist()
-    with open(path, "w", encoding="utf-8", newline="") as fh:
-        fh.write(",".join(["run_index", "status", *order, "message"]) + "\n")
-        for i, (run, row) in enumerate(zip(df.index.tolist(), values.tolist())):
-            fh.write(row_format % (run, status[i], *row, df["message"].iat[i].replace('"', '""')))

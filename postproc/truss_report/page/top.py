@@ -1,82 +1,47 @@
-"""truss_report.top: the top of the campaign report: verdict banner, design-load table, mechanism
-margins (ECSS), model limits and the sign-off block; the verdict's lines for the terminal."""
+"""truss_report.page.top: the top of the campaign report: verdict banner, design-load table,
+mechanism margins (ECSS), model limits and the sign-off block; the verdict's lines for the
+terminal."""
 import html
 import os
 import re
 
 import numpy as np
 
-from .mechanism import ECSS_CLAUSE, ECSS_SHORT, ECSS_CONFIRM, available_at_speed, screw_speed
-from .page import digits_for, esc, fmt, num, table, unit_html
+from ..judging.mechanism import (ECSS_CLAUSE, ECSS_CONFIRM, ECSS_SHORT, Margins, available_at_speed,
+                                 screw_speed)
+from ..judging.verdict import FAIL, NOT_ASSESSED, PASS, VERDICT_WORDS, VerdictItem, verdict_of
+from .html import digits_for, esc, fmt, num, table, unit_html
 
 
-def too_few_items(loads):
-    """[(level, smallest n, runs needed)] of the levels some load has no upper bound for."""
-    res = []
-    for i, q in enumerate([lv.level for lv in loads[0].levels] if loads else []):
-        short = [d for d in loads if d.levels[i].too_few]
-        if short:
-            res.append((q, min(d.n for d in short), short[0].levels[i].n_needed))
-    return res
-
-
-# Run statuses that are evidence about the mechanism (it stalled, missed the rail, locked up): a
-# run with one of them violates a requirement. The others (caps, solver and accuracy flags, bad
-# input) say the run gave no evidence: the verdict cannot count it either way.
-PHYSICAL_STATUSES = ("rail miss", "stall", "singular configuration")
-FAIL, NOT_ASSESSED, PASS = "fail", "not_assessed", "pass"
-VERDICT_WORDS = {PASS: "PASS", FAIL: "FAIL", NOT_ASSESSED: "NOT ASSESSED"}
-
-
-def verdict_of(items):
-    """PASS when no item; FAIL when the evidence violates a requirement (any FAIL item);
-    NOT ASSESSED when nothing fails but some requirement cannot be decided from the runs."""
-    kinds = {kind for _, _, kind in items}
-    return FAIL if FAIL in kinds else NOT_ASSESSED if kinds else PASS
-
-
-def verdict_items(c, m, failed_checks, nominal_status, loads=()):
-    """[(key, text, kind)] of every requirement that fails (kind FAIL: a margin below the required
-    factor, a run whose status is physical (PHYSICAL_STATUSES), a nominal run that is not ok, a
-    failed consistency check of the file) or cannot be decided (kind NOT_ASSESSED: runs without a
-    result (caps, solver or accuracy flags), design loads without a bound (too few runs, with the
-    number needed), mechanism margins the file has no resistance for)."""
-    items = []
-    if m.fails:
-        items.append(("margin", f"motorisation factor below the required {fmt(m.mf_required)} in "
-                      + num("verdict.mf_n_below", m.n_below, tag="span") + f" of {m.n} ok runs "
-                      "(smallest " + num("verdict.mf_min", m.mf_min, digits=4, tag="span") + ")",
-                      FAIL))
-    elif getattr(m, "missing", False):
-        items.append(("margin.missing", f"mechanism margins not computed: {esc(m.note)}",
-                      NOT_ASSESSED))
-    for code in sorted(c.status_name):
-        name = c.status_name[code]
-        k = int(np.sum(c.status == code))
-        if name != "ok" and k:
-            physical = name in PHYSICAL_STATUSES
-            items.append((f"status.{name}", num(f"verdict.status.{name}", k, tag="span")
-                          + f" of {c.n} runs <b>{esc(name)}</b> ("
-                          + num(f"verdict.status.{name}.fraction", k / c.n, digits=4, tag="span")
-                          + ")" + ("" if physical else ": these runs gave no result"),
-                          FAIL if physical else NOT_ASSESSED))
-    if nominal_status and nominal_status != "ok":
-        items.append(("nominal", f"the nominal run is <b>{esc(nominal_status)}</b>",
-                      FAIL if nominal_status in PHYSICAL_STATUSES else NOT_ASSESSED))
-    for q, n, need in too_few_items(list(loads)):
-        items.append((f"too_few.p{fmt(q)}", "too few runs for the design loads: P" + fmt(q)
-                      + " has no upper confidence bound from " + num(f"verdict.too_few.p{fmt(q)}.n",
-                                                                     n, tag="span")
-                      + " ok runs; it needs ≥ " + num(f"verdict.too_few.p{fmt(q)}", need, tag="span")
-                      + " ok runs", NOT_ASSESSED))
-    for what in failed_checks:
-        items.append(("check", f"consistency check failed: {esc(what)}", FAIL))
-    return items
+def item_html(item: VerdictItem, m: Margins):
+    """(data-item key, HTML) of a verdict item."""
+    if item.what == "margin":
+        return "margin", (f"motorisation factor below the required {fmt(m.mf_required)} in "
+                          + num("verdict.mf_n_below", item.count, tag="span") + f" of {item.of} ok runs "
+                          "(smallest " + num("verdict.mf_min", item.value, digits=4, tag="span") + ")")
+    if item.what == "margin_missing":
+        return "margin.missing", f"mechanism margins not computed: {esc(item.name)}"
+    if item.what == "status":
+        name, k = item.name, item.count
+        return f"status.{name}", (num(f"verdict.status.{name}", k, tag="span")
+                                  + f" of {item.of} runs <b>{esc(name)}</b> ("
+                                  + num(f"verdict.status.{name}.fraction", k / item.of, digits=4, tag="span")
+                                  + ")" + ("" if item.kind == FAIL else ": these runs gave no result"))
+    if item.what == "nominal":
+        return "nominal", f"the nominal run is <b>{esc(item.name)}</b>"
+    if item.what == "too_few":
+        p = f"p{fmt(item.level)}"
+        return f"too_few.{p}", ("too few runs for the design loads: P" + fmt(item.level)
+                                + " has no upper confidence bound from "
+                                + num(f"verdict.too_few.{p}.n", item.count, tag="span")
+                                + " ok runs; it needs ≥ " + num(f"verdict.too_few.{p}", item.needed, tag="span")
+                                + " ok runs")
+    return "check", f"consistency check failed: {esc(item.name)}"
 
 
 def drive_text(c, m, units):
     """What the campaign is judged against: the drive and its motor, in words (HTML-free)."""
-    drive = c.base_scene.get("drive") or {}
+    drive = c.drive
     lab, f = units.get("torque", "Nm")
     if m.mode == "velocity":
         omega = m.omega if np.isfinite(m.omega) else screw_speed(drive)
@@ -93,8 +58,7 @@ def drive_text(c, m, units):
     return f"{m.mode} drive: no motor to judge"
 
 
-def verdict_html(c, m, failed_checks, nominal_status, n_checks, loads=(), units=None):
-    items = verdict_items(c, m, failed_checks, nominal_status, loads)
+def verdict_html(c, m, items, n_checks, units=None):
     verdict = verdict_of(items)
     checked = (f"checked: motorisation factor ≥ {fmt(m.mf_required)} ({esc(ECSS_SHORT)}; "
                f"spring factor {fmt(m.k_uncertainty)}"
@@ -108,7 +72,7 @@ def verdict_html(c, m, failed_checks, nominal_status, n_checks, loads=(), units=
             NOT_ASSESSED: "nothing fails, but the evidence cannot decide every requirement."}
     lists = ""
     for kind, title in ((FAIL, "fails"), (NOT_ASSESSED, "not assessed")):
-        mine = [(k, t) for k, t, kk in items if kk == kind]
+        mine = [item_html(it, m) for it in items if it.kind == kind]
         if mine:
             lists += (f"<div class='small'><b>{title}:</b></div><ul>"
                       + "".join(f"<li data-item='{esc(k)}' data-kind='{kind}'>{t}</li>"
@@ -269,12 +233,12 @@ def terminal_summary(c, m, loads, items, units, confidence):
     """The verdict and its key figures as plain text lines, for the terminal."""
     tags = re.compile(r"<[^>]+>")
     verdict = verdict_of(items)
-    counts = ", ".join(f"{sum(1 for *_, k in items if k == kind)} {VERDICT_WORDS[kind].lower()}"
-                       for kind in (FAIL, NOT_ASSESSED) if any(k == kind for *_, k in items))
+    counts = ", ".join(f"{sum(1 for it in items if it.kind == kind)} {VERDICT_WORDS[kind].lower()}"
+                       for kind in (FAIL, NOT_ASSESSED) if any(it.kind == kind for it in items))
     lines = [f"VERDICT: {VERDICT_WORDS[verdict]}" + (f" — {counts}" if counts else " — nothing fails")
              + f" ({c.attrs['campaign_name']}, {c.n} runs, {c.attrs['direction']})"]
-    lines += [("  FAIL: " if kind == FAIL else "  NOT ASSESSED: ")
-              + html.unescape(tags.sub("", t)) for _, t, kind in items]
+    lines += [("  FAIL: " if it.kind == FAIL else "  NOT ASSESSED: ")
+              + html.unescape(tags.sub("", item_html(it, m)[1])) for it in items]
     lines.append("  judged against: " + drive_text(c, m, units))
     if m.n > 0:
         lab, f = units.get("torque", "Nm")
@@ -328,3 +292,15 @@ def signoff_html(revision, path="", sha256=""):
     return ("<h2 id='signoff'>Sign-off</h2><p>Revision <b data-key='revision'>"
             f"{esc(revision)}</b>{covers}</p>"
             + table(["", "name", "date", "signature"], rows, "signoff"))
+
+
+def campaign_doc(c, verdict_html_text):
+    """The campaign's rows of the document block."""
+    a = c.attrs
+    return [("campaign", f"{esc(a['campaign_name'])} ({c.n} runs, {esc(a['direction'])}, "
+                         f"{esc(a['drive_mode'])} drive)"),
+            ("tool", f"truss {esc(a['software_version'])}, git revision "
+                     f"<code>{esc(a['git_revision'])}</code> (wrote the file; "
+                     "<code>postproc/report.py</code> of the same repository wrote the report)"),
+            ("campaign run (UTC)", f"{esc(a['start_utc'])} to {esc(a['end_utc'])}"),
+            ("verdict", verdict_html_text)]

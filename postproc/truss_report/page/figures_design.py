@@ -1,8 +1,21 @@
-"""truss_report.figures_design: per-bay envelopes, where the peaks occur, top inputs against each
+"""truss_report.page.figures_design: per-bay envelopes, where the peaks occur, top inputs against each
 load, and the convergence of the percentile estimates and Sobol' indices with the run count."""
 import numpy as np
 
-from .stats import min_runs_for_bound, percentile, quantile_ci
+from ..judging.sobol import sobol_estimates, usable_blocks
+from ..judging.stats import min_runs_for_bound, percentile, quantile_ci
+from .units import readable_unit
+
+
+def input_axis(col):
+    """(axis label, values) of an input column for a plot: a relative deviation in %, a length
+    in mm, a mass in g (when the values are that small), else the file's unit."""
+    if col.relative:
+        key, per = col.label[:-1].split(" (mean over ")
+        return f"{key}: mean relative\ndeviation over {per} (%)", 100.0 * col.values
+    finite = col.values[np.isfinite(col.values)]
+    lab, f = readable_unit(col.units, float(np.max(np.abs(finite))) if len(finite) else np.nan)
+    return (col.label + (f" ({lab})" if lab != "1" else ""), col.values / f)
 
 
 def panel_grid(plt, n, width=5.0, height=3.8, ncol_max=3):
@@ -139,23 +152,6 @@ def fig_convergence(plt, series, levels, confidence):
     return fig
 
 
-def sobol_blocks(y, G, n_blocks):
-    """Per block (rows A, B, AB_1..AB_G of a Saltelli campaign): arrays fA, fB, fAB (b x G)."""
-    Y = y[:n_blocks * (G + 2)].reshape(n_blocks, G + 2)
-    return Y[:, 0], Y[:, 1], Y[:, 2:]
-
-
-def sobol_estimates(fA, fB, fAB):
-    """Saltelli 2010 first order and Jansen 1999 total indices (per factor), on outputs centred
-    by the mean of f(A) and f(B), V their population variance (as the campaign computes them)."""
-    mu = np.mean(np.concatenate([fA, fB]))
-    fA, fB, fAB = fA - mu, fB - mu, fAB - mu
-    V = np.var(np.concatenate([fA, fB]))
-    s1 = np.mean(fB[:, None] * (fAB - fA[:, None]), axis=0) / V
-    st = 0.5 * np.mean((fA[:, None] - fAB) ** 2, axis=0) / V
-    return s1, st
-
-
 def fig_sobol_convergence(plt, series, G, factors, confidence, n_boot=200):
     """series: [(label, y over all runs, ok mask)]: S1 and ST against the number of blocks, with
     a percentile bootstrap interval over blocks (seeded: the figure is reproducible)."""
@@ -163,10 +159,7 @@ def fig_sobol_convergence(plt, series, G, factors, confidence, n_boot=200):
     fig, axes = plt.subplots(1, len(series), figsize=(4.8 * len(series), 3.8), squeeze=False)
     a = (1.0 - confidence) / 2.0
     for ax, (label, y, ok) in zip(axes[0], series):
-        nb = len(y) // (G + 2)
-        good = np.all((ok & np.isfinite(y))[:nb * (G + 2)].reshape(nb, G + 2), axis=1)
-        fA, fB, fAB = sobol_blocks(y, G, nb)
-        fA, fB, fAB = fA[good], fB[good], fAB[good]
+        fA, fB, fAB = usable_blocks(y, ok, G)
         ms = convergence_points(len(fA)) if len(fA) >= 20 else np.array([len(fA)])
         for g in range(G):
             est, lo, hi = [], [], []

@@ -1,0 +1,74 @@
+"""truss_report.page.render: the report being rendered: its figures, drawn in forked children while
+the sections go on, saved as PNG into the staging directory."""
+import gc
+import os
+import sys
+from dataclasses import dataclass
+
+from .html import esc
+
+
+@dataclass
+class Report:
+    """A rendered report: the page's HTML, the lines for the terminal, and the verdict ("pass",
+    "fail", "not_assessed"; None for a report without one)."""
+    html: str
+    summary: list[str]
+    verdict: str | None
+
+
+class Page:
+    """The report being built: its figures, saved into the staging directory."""
+
+    def __init__(self, outdir, plt, progress=None):
+        self.dir, self.plt = outdir, plt
+        self.files = []
+        self.progress = progress or (lambda what: None)
+        self.children = []        # (pid, figure name) of the figures being drawn
+        self.max_children = 2
+        # Fonts and text layout are cached per process: draw once here, so that every forked
+        # child starts with them loaded instead of loading them again.
+        warm, ax = plt.subplots(figsize=(2, 1))
+        ax.set_title("µ−0.5 (mN m)")
+        ax.set_xlabel("x")
+        warm.savefig(os.devnull, format="png", dpi=150)
+        plt.close(warm)
+
+    def figure(self, fig, name, caption, cls="wide"):
+        """Saves `fig` as DIR/name and returns its HTML. The layout, drawing and PNG encoding
+        (two thirds of a figure's cost; the figures lay themselves out at draw time) happen in a
+        forked child while this process goes on with the next section: the report's figures
+        then use both cores. finish() waits for them."""
+        if len(self.files) % 5 == 0:
+            self.progress(f"figure {len(self.files) + 1}: {name}")
+        while len(self.children) >= self.max_children:
+            self._reap(self.children.pop(0))
+        sys.stdout.flush()
+        sys.stderr.flush()
+        gc.freeze()        # the child's collector leaves the parent's objects (and pages) alone
+        pid = os.fork()
+        if pid == 0:       # child: draw, encode, leave without Python's exit handlers
+            code = 0
+            try:
+                fig.savefig(os.path.join(self.dir, name), format="png", dpi=150,   # sharp on paper
+                            pil_kwargs={"compress_level": 3})
+            except BaseException as e:   # noqa: BLE001 - reported through the exit status
+                sys.stderr.write(f"error: figure {name}: {e}\n")
+                code = 1
+            os._exit(code)
+        self.children.append((pid, name))
+        self.plt.close(fig)
+        self.files.append(name)
+        return (f'<figure class="{cls}"><img src="{esc(name)}" alt="{esc(caption)}">'
+                f"<figcaption>{esc(caption)}</figcaption></figure>")
+
+    def _reap(self, child):
+        pid, name = child
+        _, status = os.waitpid(pid, 0)
+        if os.waitstatus_to_exitcode(status) != 0:
+            raise RuntimeError(f"drawing the figure {name} failed")
+
+    def finish(self):
+        """Waits for every figure (RuntimeError if one failed)."""
+        while self.children:
+            self._reap(self.children.pop(0))
