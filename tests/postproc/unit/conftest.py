@@ -32,3 +32,24 @@ def motor_file(tmp_path_factory):
 @pytest.fixture(scope="session")
 def run_file(tmp_path_factory):
     return make_file("make_fake_run.py", tmp_path_factory.mktemp("r") / "run.h5")
+
+
+def make_campaign(outputs, status=None, drive_mode="velocity", direction="deploy", drive=None,
+                  dispersions=(), lock=None, **extra):
+    """A Campaign built in memory (no file): `outputs` {key: values}, the other outputs NaN."""
+    import numpy as np
+    from truss_report.reading.campaign import Campaign
+    from truss_report.reading.schema import OUTPUTS
+    n = len(next(iter(outputs.values())))
+    out = {k: np.asarray(outputs.get(k, np.full(n, np.nan)), dtype=float) for k in OUTPUTS}
+    status = np.zeros(n, dtype=np.int64) if status is None else np.asarray(status, dtype=np.int64)
+    scene = {"drive": drive if drive is not None else {"mode": drive_mode}}
+    return Campaign(path="x.h5", sha256="", attrs={"campaign_name": "t", "direction": direction,
+                                                   "drive_mode": drive_mode, "sampling": "monte_carlo",
+                                                   "n_bays_max": 3},
+                    wall_time_s=1.0, base_scene=scene, status=status,
+                    status_name={0: "ok", 1: "rail miss", 2: "stall", 4: "step limit"},
+                    messages=[""] * n, outputs=out, units={k: "N" for k in OUTPUTS},
+                    lock=np.full((n, 3), np.nan) if lock is None else lock, dispersions=list(dispersions),
+                    stats_attrs={}, stats={}, stats_lock={}, stats_status_names=[],
+                    stats_status_counts=np.zeros(0, dtype=np.int64), **extra)
