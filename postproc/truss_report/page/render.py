@@ -62,6 +62,12 @@ class Page:
         return (f'<figure class="{cls}"><img src="{esc(name)}" alt="{esc(caption)}">'
                 f"<figcaption>{esc(caption)}</figcaption></figure>")
 
+    def text_file(self, name, text):
+        """Writes DIR/name (a file the report links to)."""
+        with open(os.path.join(self.dir, name), "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+        self.files.append(name)
+
     def _reap(self, child):
         pid, name = child
         _, status = os.waitpid(pid, 0)

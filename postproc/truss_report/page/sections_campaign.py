@@ -10,7 +10,7 @@ from ..reading.schema import LEVELS, OUTPUTS
 from .figures import fig_distribution, fig_lock_timing
 from .html import esc, fmt, num, table, unit_label
 
-MAX_FAILED_LISTED = 2000
+FAILED_RUNS_CSV = "failed_runs.csv"
 
 
 def output_label(key, direction):
@@ -20,7 +20,7 @@ def output_label(key, direction):
     return OUTPUTS.get(key, key)
 
 
-def section_campaign(c, j):
+def section_campaign(page, c, j):
     a = c.attrs
     out = ['<section id="campaign"><h2>1. Campaign</h2>']
     rows = [
@@ -44,7 +44,7 @@ def section_campaign(c, j):
     ]
     out.append(table(["", ""], [[f"<th>{k}</th>", v] for k, v in rows], "kv"))
     out.append(subsection_status(c, j.counted))
-    out.append(subsection_failures(c))
+    out.append(subsection_failures(page, c))
     out.append(subsection_stop(c.stop))
     out.append(subsection_dispersions(c))
     out.append(subsection_base_scene(c))
@@ -73,7 +73,9 @@ def subsection_status(c, counted):
                     rows, "narrow"))
 
 
-def subsection_failures(c):
+def subsection_failures(page, c):
+    """The failed runs grouped by status and message; every failed run with its full message goes
+    to FAILED_RUNS_CSV beside the report (a list of thousands of rows is no page to sign)."""
     failed = np.nonzero(~c.ok)[0]
     if len(failed) == 0:
         return "<h3>Failed runs</h3><p>No run failed.</p>"
@@ -85,19 +87,21 @@ def subsection_failures(c):
                      f"<code>{esc(tmpl)}</code>", shown,
                      f"<small>run {runs[0]}: {esc(c.messages[runs[0]])}</small>"])
         attrs.append(f'data-status="{esc(status)}" data-runs="{" ".join(map(str, runs))}"')
-    listed = failed[:MAX_FAILED_LISTED]
-    full = table(["run", "status", "message"],
-                 [[str(i), esc(c.status_name[int(c.status[i])]), esc(c.messages[i])]
-                  for i in listed], "narrow")
-    more = (f"<p>(first {MAX_FAILED_LISTED} of {len(failed)} failed runs listed)</p>"
-            if len(failed) > MAX_FAILED_LISTED else "")
+    page.text_file(FAILED_RUNS_CSV, failed_runs_csv(c, failed))
     return ("<h3>Failed runs</h3><p>Failure reasons from <code>/runs/message</code>, grouped by "
             "status and by the message with its numbers replaced by <code>#</code>; run indices "
             "are 0-based rows of <code>/runs</code>.</p>"
             + table(["status", "runs", "reason (numbers as #)", "run indices", "example"],
                     rows, "", attrs)
-            + f"<details><summary>every failed run and its message ({len(failed)})</summary>"
-            + full + more + "</details>")
+            + f"<p>Every failed run ({len(failed)}) with its full message: <a href='{FAILED_RUNS_CSV}'>"
+            f"<code>{FAILED_RUNS_CSV}</code></a> beside this report (run_index, status, message).</p>")
+
+
+def failed_runs_csv(c, failed):
+    """run_index, status, message of each failed run (messages quoted, quotes doubled)."""
+    rows = "".join(f'{i},{c.status_name[int(c.status[i])]},"{c.messages[i].replace(chr(34), chr(34) * 2)}"\n'
+                   for i in failed)
+    return "run_index,status,message\n" + rows
 
 
 def param_units(d):

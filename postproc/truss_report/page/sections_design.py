@@ -113,7 +113,7 @@ def campaign_report(page, c, e, j, opts):
     """The campaign report (j: its CampaignJudgement), with the verdict's lines for the terminal."""
     du = DisplayUnits()    # one unit per quantity, chosen from the design loads
     choose_load_units(du, j.loads)
-    body = [section_campaign(c, j), section_rail_miss(c), section_loads(page, c, e, j, du, opts.confidence),
+    body = [section_campaign(page, c, j), section_rail_miss(c), section_loads(page, c, e, j, du, opts.confidence),
             section_lock_timing(page, c, j.lock), section_margins(page, c, du), section_sensitivity(page, c, j),
             section_histories(page, c)]
     n_checks = 7 if c.histories else 6

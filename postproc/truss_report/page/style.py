@@ -38,6 +38,14 @@ table.signoff td { min-width: 180px; height: 36px; }
   figure img { max-width: 100%; border: none; } a { color: inherit; text-decoration: none; }
   .grid { display: block; } table { font-size: 8pt; } table.design td, table.design th { font-size: 7pt; }
   td.num { white-space: normal; } pre { white-space: pre-wrap; font-size: 7pt; }
+  /* Every table fits the page: fixed layout at the text width, long words and numbers wrap. */
+  table { width: 100%; table-layout: fixed; } th, td { overflow-wrap: anywhere; }
+  table.kv th, table.document th { width: 42%; } table.signoff th { width: 16%; }
+  .flex { display: block; } .flex > table { width: 70%; }
+  table { page-break-inside: auto; } tr { page-break-inside: avoid; }
+  h2, h3, h4 { break-after: avoid; page-break-after: avoid; }
+  figure img { max-height: 215mm; width: auto; }   /* a figure, its heading and caption: one page */
+  #sweep figure img { max-width: 78%; }
 }
 @page { size: A4; margin: 15mm 12mm 18mm 12mm;
         @bottom-left { content: string(doctitle); font-size: 8pt; color: #555; }
