@@ -10,6 +10,8 @@ cli (the command line: reading -> judging -> page, the PDF) and argparser sit on
 
     from truss_report import read_campaign, read_sweep
 """
+from collections.abc import Sequence
+
 import pandas as pd
 
 from .judging.sweep import sweep_frame
@@ -19,10 +21,11 @@ from .reading.methods import read_sweep_table
 __all__ = ["read_campaign", "read_sweep"]
 
 
-def read_campaign(path: str) -> pd.DataFrame:
-    """A campaign file as a pandas DataFrame (truss_report.reading.frame.read_campaign); a design
-    sweep's per-value table (read_sweep) in df.attrs["sweep"]."""
-    df = _read_campaign(path)
+def read_campaign(path: str, columns: str | Sequence[str] | None = None) -> pd.DataFrame:
+    """A campaign file as a pandas DataFrame, one row per run: the per-run columns, and the per-bay
+    ones named in `columns` (or all with columns="all"; truss_report.reading.frame.read_campaign);
+    a design sweep's per-value table (read_sweep) in df.attrs["sweep"]."""
+    df = _read_campaign(path, columns)
     sweep = read_sweep(path)
     if sweep is not None:
         df.attrs["sweep"] = sweep

@@ -74,7 +74,7 @@ class Progress:
 def _write_csv(path, out):
     """Child process: the run table as CSV (exit 1 on any error, said on stderr)."""
     try:
-        write_run_table(read_campaign(path), out)
+        write_run_table(read_campaign(path, columns="all"), out)
     except Exception as e:       # noqa: BLE001 - reported by the parent as a failed CSV
         sys.stderr.write(f"error: {out}: {e}\n")
         os._exit(1)

@@ -58,7 +58,7 @@ def test_stop_and_sweep_groups(tmp_path):
 
 
 def test_frame_columns_are_the_file_datasets(motor_file):
-    df = read_campaign(motor_file)
+    df = read_campaign(motor_file, columns="all")
     with h5py.File(motor_file, "r") as f:
         assert len(df) == f.attrs["n_runs"]
         assert np.array_equal(df["peak_pin_force_N"].to_numpy(), f["runs/peak_pin_force_N"][()], equal_nan=True)
@@ -66,3 +66,19 @@ def test_frame_columns_are_the_file_datasets(motor_file):
         assert np.array_equal(df["lock_time_s[bay 2]"].to_numpy(), lock[:, 1], equal_nan=True)
         assert df.attrs["units"]["peak_pin_force_N"] == f["runs/peak_pin_force_N"].attrs["units"]
     assert set(df["status"].cat.categories) >= {"ok", "stall"}
+
+
+def test_frame_reads_per_bay_columns_on_demand(motor_file):
+    default = read_campaign(motor_file)
+    assert not [c for c in default.columns if "[bay " in c or "[frame " in c]
+    assert "lock_time_s[bay]" in default.attrs["bay_columns"]
+    some = read_campaign(motor_file, columns=["lock_time_s", "peak_drive_force_N", "entry_time_s[bay 2]"])
+    with h5py.File(motor_file, "r") as f:
+        nb = f.attrs["n_bays_max"]
+        assert list(some.columns)[:2] == ["status", "peak_drive_force_N"]     # in the file's order
+        assert set(some.columns[2:]) == {f"lock_time_s[bay {j}]" for j in range(1, nb + 1)} | {"entry_time_s[bay 2]"}
+        assert np.array_equal(some["entry_time_s[bay 2]"].to_numpy(), f["runs/bays/entry_time_s"][:, 1], equal_nan=True)
+    full = read_campaign(motor_file, columns="all")
+    assert set(default.columns) | {f"lock_time_s[bay {j}]" for j in range(1, nb + 1)} <= set(full.columns)
+    with pytest.raises(ValueError, match="no column 'nope'"):
+        read_campaign(motor_file, columns=["nope"])
