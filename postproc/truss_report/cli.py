@@ -51,8 +51,8 @@ def check_outdir(outdir, force):
             raise InputError(f"{outdir}: directory is not empty; use --force to write into it")
 
 
-# Text in the figures: 10 pt (9 pt ticks and keys). A figure row is at most 15 inches at 150 dpi
-# and shows at about 0.6 of that on the page, so that 9 pt is still about 11 px on screen.
+# Text in the figures: 10 pt (9 pt ticks and keys). A figure row is at most 15 inches at 110 dpi
+# (1650 px) and shows at about 0.85 of that on a 1400-pixel page: 9 pt is still about 11 px.
 FIGURE_STYLE = {"font.size": 10, "axes.titlesize": 10, "axes.labelsize": 10, "legend.fontsize": 9,
                 "xtick.labelsize": 9, "ytick.labelsize": 9, "figure.titlesize": 11,
                 "axes.formatter.useoffset": False}   # ticks show the values, never "1e-6+145.06"

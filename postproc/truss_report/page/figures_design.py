@@ -19,8 +19,8 @@ def input_axis(col):
 
 
 def panel_grid(plt, n, width=5.0, height=3.8, ncol_max=3):
-    """A figure of n panels, at most ncol_max a row (a 15-inch row at 150 dpi is shown at about
-    0.6 of its size on the page, so that 9-10 pt text stays readable), extra axes hidden."""
+    """A figure of n panels, at most ncol_max a row (a 15-inch row at 110 dpi is shown at about
+    0.85 of its size on the page, so that 9-10 pt text stays readable), extra axes hidden."""
     ncol = min(n, ncol_max)
     nrow = -(-n // ncol)
     fig, axes = plt.subplots(nrow, ncol, figsize=(width * ncol, height * nrow), squeeze=False)
