@@ -11,6 +11,7 @@
 #include "model/drive.hpp"
 #include "model/motorisation.hpp"
 #include "sim/simulate.hpp"
+#include "stages/phase_dynamic.hpp"
 
 using namespace truss;
 using Catch::Detail::Approx;
@@ -95,6 +96,14 @@ TEST_CASE("drive train: the motor's force driving and backdriven, both direction
   d.torque_Nm = 0.0012;  // below the losses: the train brakes along the run direction
   CHECK(d.calc_force_N(0.01, -1.0) == Approx(static_cast<double>(-hand_force_along(d, 0.0012L - losses))).epsilon(1e-14));
   CHECK(d.calc_force_N(0.01, -1.0) > 0.0);  // retracting, the braking force points up
+}
+
+TEST_CASE("drive train: a motor behind a gear creeps relative to the screws' no-load speed", "[unit][drive]") {
+  // The creep rule (docs/model-notes.md "Stall"): 1e-6 of the no-load screw speed, the motor's
+  // omega_0 / N turned into the driven frame's speed omega h / (2 pi).
+  model::DriveParams d = make_train();
+  CHECK(stages::DynamicPhaseSolver::calc_creep_speed_m_per_s(d) ==
+        Approx(1e-6 * (75.0 / 4.0) * 0.01 / (2.0 * M_PI)).epsilon(1e-15));
 }
 
 TEST_CASE("drive train: the 12-bay held stack's required torque and ECSS margin, derived by hand", "[unit][drive]") {
@@ -186,6 +195,17 @@ TEST_CASE("motorisation margin: defined in motor and torque modes, negative for 
   CHECK(t.motorisation_available_torque_Nm == s.drive.torque_Nm);
   CHECK(t.motorisation_margin == Approx(s.drive.torque_Nm / (2.0 * (1.2 * t.peak_static_drive_torque_Nm + 3.0 * 2.0e-4)) - 1.0)
                                      .epsilon(1e-15));
+  // The torque the motor must give is the actuator's own, both ways: the largest force along the
+  // run direction (the peak deploying, minus the minimum retracting) through the train's inverse.
+  s.drive.gear_ratio = 2.0;
+  s.drive.screw_efficiency = 0.5;
+  for (const auto dir : {model::Direction::deploy, model::Direction::retract}) {
+    s.run.direction = dir;
+    const sim::RunResult a = sim::simulate(s);
+    REQUIRE(a.status == sim::RunStatus::ok);
+    CHECK(a.peak_motor_torque_Nm == Approx(s.drive.torque_Nm).epsilon(1e-14));
+  }
+  s.run.direction = model::Direction::deploy;
   // An ideal retraction: the springs help and nothing resists, no factor to meet.
   sim::SceneOptions back;
   back.mast.n_bays = 3;
