@@ -235,6 +235,15 @@ TEST_CASE("the repository's Table 1 scene is the defaults with histories on", "[
   CHECK(s.run.direction == Direction::deploy);
 }
 
+TEST_CASE("the drive train refuses what it cannot model, naming the key and line", "[scene][errors]") {
+  const std::string locked = parse_error("[drive]\nscrew_efficiency = 0.3\nscrew_back_efficiency = -0.1\n");
+  CHECK_THAT(locked, StartsWith("error: scene.toml:3: drive.screw_back_efficiency"));
+  CHECK_THAT(locked, Contains("self-locking"));
+  CHECK_THAT(parse_error("[drive]\ngear_efficiency = 1.05\n"), Contains("drive.gear_efficiency: must lie in (0, 1]"));
+  CHECK_THAT(parse_error("[drive]\nharness_torque_Nm = -0.001\n"), Contains("drive.harness_torque_Nm: must lie in [0, "));
+  CHECK_THAT(parse_error("[motorisation]\nfactor = 0\n"), Contains("motorisation.factor: must lie in (0, "));
+}
+
 TEST_CASE("unknown keys and tables are named with their line and a suggestion", "[scene][errors]") {
   SECTION("unknown key in a known table") {
     const std::string text = "[mast]\nn_bays = 3\nn_bay = 4\n";
