@@ -52,6 +52,7 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_F64(motorisation_required_torque_Nm, "Nm"),
       TRUSS_RUN_F64(motorisation_available_torque_Nm, "Nm"),
       TRUSS_RUN_F64(motorisation_margin, "1"),
+      TRUSS_RUN_F64(motorisation_stall_torque_Nm, "Nm"),
       TRUSS_RUN_F64(peak_pin_force_N, "N"),
       TRUSS_RUN_F64(peak_pin_force_time_s, "s"),
       TRUSS_RUN_I64(peak_pin_force_bay),

@@ -64,6 +64,18 @@ inline double calc_available_torque_Nm(const DriveParams& d) {
   return std::numeric_limits<double>::quiet_NaN();
 }
 
+// The motor's stall torque (N m, its declared value, before derating) with which it meets the
+// factors exactly: T_min over the torque judged per N m of stall torque, k_d (1 - N omega / omega_0)
+// in velocity mode, k_d in motor mode. +inf when the prescribed speed is at or above the motor's
+// no-load speed (no stall torque gives it); NaN in torque mode (no motor line) and when nothing
+// resists.
+inline double calc_needed_stall_torque_Nm(const DriveParams& d, double required_Nm) {
+  if (d.mode == DriveMode::torque || !(required_Nm > 0.0)) return std::numeric_limits<double>::quiet_NaN();
+  const double per_stall = calc_available_torque_Nm(d) / d.stall_torque_Nm;
+  if (!(per_stall > 0.0)) return std::numeric_limits<double>::infinity();
+  return required_Nm / per_stall;
+}
+
 // T_available / T_min - 1 (1): > 0 when the actuator meets the factors; NaN when nothing resists
 // (T_min <= 0: an ideal train whose springs help, no factor to meet) or a term is not known.
 inline double calc_motorisation_margin(double available_Nm, double required_Nm) {

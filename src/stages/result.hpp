@@ -94,11 +94,13 @@ struct RunResult {
   // The motorisation check of ECSS-E-ST-33-01C 4.7.5.3.1 (model/motorisation.hpp; docs/model-notes.md
   // "Motorisation check"), every drive mode: T_min from the peaks above referred to the motor and the
   // train's losses, each with its factor (N m at the motor shaft); the actuator's torque it is
-  // judged by (N m); and the margin T_available / T_min - 1 (1, > 0 when the factors are met; NaN
-  // when nothing resists).
+  // judged by (N m); the margin T_available / T_min - 1 (1, > 0 when the factors are met; NaN
+  // when nothing resists); and the motor's stall torque that meets them exactly (N m, before
+  // derating; velocity and motor modes).
   double motorisation_required_torque_Nm = NAN_INIT();
   double motorisation_available_torque_Nm = NAN_INIT();
   double motorisation_margin = NAN_INIT();
+  double motorisation_stall_torque_Nm = NAN_INIT();
   double peak_pin_force_N = NAN_INIT();
   double peak_pin_force_time_s = NAN_INIT();
   int peak_pin_force_bay = 0;

@@ -312,6 +312,7 @@ void StageLoop::fill_motor_torques() {
   r_.motorisation_required_torque_Nm = model::calc_required_torque_Nm(res, opts_.motorisation);
   r_.motorisation_available_torque_Nm = model::calc_available_torque_Nm(d);
   r_.motorisation_margin = model::calc_motorisation_margin(r_.motorisation_available_torque_Nm, r_.motorisation_required_torque_Nm);
+  r_.motorisation_stall_torque_Nm = model::calc_needed_stall_torque_Nm(d, r_.motorisation_required_torque_Nm);
 }
 
 // An `ok` run promises finite numbers and an energy balance within its tolerance (energy.hpp).

@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 
 #include "model/drive.hpp"
 #include "model/motorisation.hpp"
@@ -156,6 +157,9 @@ TEST_CASE("drive train: the 12-bay held stack's required torque and ECSS margin,
   CHECK(r.motorisation_required_torque_Nm == Approx(static_cast<double>(t_min)).epsilon(1e-9));
   CHECK(r.motorisation_available_torque_Nm == Approx(static_cast<double>(available)).epsilon(1e-14));
   CHECK(r.motorisation_margin == Approx(static_cast<double>(available / t_min - 1)).epsilon(1e-9));
+  // The motor's declared stall torque that meets the factors exactly: the derating and the speed
+  // line's share at the prescribed speed give T_min.
+  CHECK(r.motorisation_stall_torque_Nm == Approx(static_cast<double>(t_min / (0.85L * (1 - N * 2 * kPi * v / h / 600)))).epsilon(1e-9));
   CHECK(r.motor_torque_margin_Nm == Approx(static_cast<double>(available - needed)).epsilon(1e-9));
   // The prescribed motion does not see the train: the loads are the ideal drive's, to the bit.
   sim::SceneOptions ideal = s;
@@ -181,6 +185,7 @@ TEST_CASE("motorisation margin: defined in motor and torque modes, negative for 
   CHECK(r.motorisation_required_torque_Nm == Approx(t_min).epsilon(1e-15));
   CHECK(r.motorisation_available_torque_Nm == 0.9 * 0.02);
   CHECK(r.motorisation_margin == Approx(0.9 * 0.02 / t_min - 1.0).epsilon(1e-15));
+  CHECK(r.motorisation_stall_torque_Nm == Approx(t_min / 0.9).epsilon(1e-15));
   CHECK(std::isnan(r.motor_torque_margin_Nm));  // the velocity mode's quasi-static stall margin
   // A motor that crept to rest against the springs stalled: it does not meet the factor.
   sim::SceneOptions weak = s;
@@ -193,6 +198,7 @@ TEST_CASE("motorisation margin: defined in motor and torque modes, negative for 
   const sim::RunResult t = sim::simulate(s);
   REQUIRE(t.status == sim::RunStatus::ok);
   CHECK(t.motorisation_available_torque_Nm == s.drive.torque_Nm);
+  CHECK(std::isnan(t.motorisation_stall_torque_Nm));  // a constant torque has no stall torque
   CHECK(t.motorisation_margin == Approx(s.drive.torque_Nm / (2.0 * (1.2 * t.peak_static_drive_torque_Nm + 3.0 * 2.0e-4)) - 1.0)
                                      .epsilon(1e-15));
   // The torque the motor must give is the actuator's own, both ways: the largest force along the
@@ -222,4 +228,9 @@ TEST_CASE("motorisation margin: defined in motor and torque modes, negative for 
   const sim::RunResult f = sim::simulate(back);
   CHECK(f.motorisation_required_torque_Nm == Approx(2.0 * 3.0 * 1e-3).epsilon(1e-15));
   CHECK(f.motorisation_margin == Approx(f.motor_torque_at_speed_Nm / 6e-3 - 1.0).epsilon(1e-14));
+  // At or above the motor's no-load speed no stall torque gives the prescribed speed.
+  back.drive.no_load_speed_rad_per_s = 0.9 * 2.0 * M_PI * back.drive.speed_m_per_s / back.drive.screw_lead_m;
+  const sim::RunResult fast = sim::simulate(back);
+  CHECK(fast.motorisation_stall_torque_Nm == std::numeric_limits<double>::infinity());
+  CHECK(fast.motorisation_margin <= -1.0);
 }
