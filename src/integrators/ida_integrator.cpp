@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <vector>
 
@@ -59,6 +60,8 @@ class IdaSolver final : public SundialsSolver {
  private:
   static int res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud);
   static int root_fn(realtype t, N_Vector yy, N_Vector, realtype* g, void* ud);
+  static int jac_fn(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J, void* ud,
+                    N_Vector rtemp, N_Vector ewt, N_Vector);
   bool create(int n_new, int n_ode_new, int lo, int up, double t0, IntegratorSummary& sum);
   void set_layout(const DaeForm& dae, int n_sys, int& lo, int& up);
   bool prepare(DaeForm& dae, double t0, double t_end, const double* y0, const IntegratorOptions& o,
@@ -75,6 +78,11 @@ class IdaSolver final : public SundialsSolver {
   int n_ = -1, n_ode_ = -1;     // size of IDA's vectors and of y; -1: none
   int lower_ = -1, upper_ = -1;  // half-bandwidths of the banded solver
   bool guessed_ = false;         // the last start used the system's guess of y' and z
+  // The Jacobian's increments at most this fraction of an unknown's smooth length (jac_fn): the
+  // difference quotient of a term ~ 1 / d^k (d the distance to the singularity, k = 1, 2) is then
+  // within k % of its derivative.
+  static constexpr double kSmoothFraction = 1e-2;
+  std::vector<double> dq_y_, dq_yp_, dq_inc_;  // jac_fn's perturbed unknowns: values, increments
 };
 
 int IdaSolver::res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* ud) {
@@ -103,6 +111,70 @@ int IdaSolver::res_fn(realtype t, N_Vector yy, N_Vector yp, N_Vector rr, void* u
 int IdaSolver::root_fn(realtype t, N_Vector yy, N_Vector, realtype* g, void* ud) {
   auto* s = static_cast<IdaSolver*>(ud);
   return call_events(*s->sys_, s->callbacks.error, t, s->layout_.gather(yy, s->layout_.w), g);
+}
+
+// The Newton matrix dF/dw + c_j dF/dw' by forward differences, banded: the columns j, j + width,
+// ... (width = lower + upper + 1) share one residual evaluation, each with IDA's increment
+// (idaLsBandDQJac: max(sqrt(eps) max(|w_j|, |h w'_j|), 1 / ewt_j), of the sign of h w'_j; this
+// reproduces IDA's own Jacobian to the bit) kept within kSmoothFraction of the unknown's smooth
+// length (DaeForm::calc_smooth_lengths). Near a bay that straightens, the residual's mass and
+// velocity terms vary like 1 / (distance to straight), a distance that falls to l_s 1e-8 (1.8e-9 m
+// for Table 1) at the model's singular-configuration stop, below IDA's increment of a frame height
+// (~5e-9 m): with it the difference quotients span the singularity (or cross it), the Jacobian is
+// wrong by O(1), and Newton's iteration fails to converge at any step size short of the stop.
+// Where the forward state is refused (a bay past straight) the group takes the backward difference.
+int IdaSolver::jac_fn(realtype t, realtype cj, N_Vector yy, N_Vector yp, N_Vector rr, SUNMatrix J, void* ud,
+                      N_Vector rtemp, N_Vector ewt, N_Vector len_v) {
+  auto* s = static_cast<IdaSolver*>(ud);
+  realtype h = 0.0;
+  if (IDAGetCurrentStep(s->mem, &h) < 0 || IDAGetErrWeights(s->mem, ewt) < 0) return -1;
+  const int N = s->n_, width = s->lower_ + s->upper_ + 1;
+  double* y = N_VGetArrayPointer(yy);
+  double* dy = N_VGetArrayPointer(yp);
+  const double* w = N_VGetArrayPointer(ewt);
+  const double* r0 = N_VGetArrayPointer(rr);
+  const double* r1 = N_VGetArrayPointer(rtemp);
+  // The smooth lengths, in IDA's order (IDA's scratch vector len_v).
+  double* len = N_VGetArrayPointer(len_v);
+  const Layout& L = s->layout_;
+  if (s->dae_->calc_smooth_lengths(L.gather(yy, L.w), L.r.data())) L.scatter(L.r.data(), len_v);
+  else std::fill_n(len, N, std::numeric_limits<double>::infinity());
+  const double srur = std::sqrt(std::numeric_limits<double>::epsilon());
+  auto increment = [&](int j) {
+    double inc = std::max(srur * std::max(std::abs(y[j]), std::abs(h * dy[j])), 1.0 / w[j]);
+    inc = std::min(inc, std::max(kSmoothFraction * len[j], 4.0 * std::numeric_limits<double>::epsilon() * std::abs(y[j])));
+    if (h * dy[j] < 0.0) inc = -inc;
+    return (y[j] + inc) - y[j];
+  };
+  for (int g = 0; g < std::min(width, N); ++g) {
+    for (int j = g; j < N; j += width) {
+      s->dq_y_[static_cast<std::size_t>(j)] = y[j];
+      s->dq_yp_[static_cast<std::size_t>(j)] = dy[j];
+    }
+    int flag = 1;
+    for (const double sign : {1.0, -1.0}) {
+      for (int j = g; j < N; j += width) {
+        const double inc = sign * increment(j);
+        y[j] += inc;
+        dy[j] += cj * inc;
+        s->dq_inc_[static_cast<std::size_t>(j)] = inc;
+      }
+      flag = res_fn(t, yy, yp, rtemp, ud);
+      for (int j = g; j < N; j += width) {  // back to the unperturbed values
+        y[j] = s->dq_y_[static_cast<std::size_t>(j)];
+        dy[j] = s->dq_yp_[static_cast<std::size_t>(j)];
+      }
+      if (flag != 0) continue;
+      for (int j = g; j < N; j += width) {
+        double* col = SUNBandMatrix_Column(J, j);
+        const double inv = 1.0 / s->dq_inc_[static_cast<std::size_t>(j)];
+        for (int i = std::max(0, j - s->upper_); i <= std::min(N - 1, j + s->lower_); ++i) col[i - j] = inv * (r1[i] - r0[i]);
+      }
+      break;
+    }
+    if (flag != 0) return flag;  // recoverable (1): IDA cuts the step; an exception or the deadline (-1): fatal
+  }
+  return 0;
 }
 
 void IdaSolver::free_problem() {
@@ -148,6 +220,9 @@ bool IdaSolver::create(int n_new, int n_ode_new, int lo, int up, double t0, Inte
   // singular); with 4 IDA cut the step to the resolution of t and failed (IDA_CONV_FAIL) short of
   // the model's singular-configuration stop that the ODE integrators reach.
   if (!check_flag(IDASetMaxNonlinIters(mem, 10), "IDASetMaxNonlinIters", sum)) return false;
+  if (!check_flag(IDASetJacFn(mem, jac_fn), "IDASetJacFn", sum)) return false;
+  dq_y_.assign(static_cast<std::size_t>(n_new), 0.0);
+  dq_yp_ = dq_inc_ = dq_y_;
   n_ = n_new;
   n_ode_ = n_ode_new;
   lower_ = lo;
