@@ -1,11 +1,12 @@
 // SUNDIALS IDA behind the same interface as the own RK pairs and CVODE: it integrates the
 // residual form of a system (OdeSystem::dae_form(): F(t, y, y', z) = 0, z algebraic), not
-// y' = f(t, y). Variable-order BDF (orders 1-5) with Newton iteration on IDA's difference-quotient
-// Jacobian and a banded direct linear solver (SUNBandMatrix, SUNLinSol_Band). IDA's vectors hold
-// the unknowns in the order the form gives (DaeForm::find_band_order; the free stack's phases, each
-// frame's q and q' side by side), in which the Jacobian is banded: per Jacobian, lower + upper + 1
-// residual evaluations (each O(n)) and an O(N lower (lower + upper)) LU, so every step is O(n) for
-// an n-frame phase. A form without an order keeps its own with a full band (a dense Jacobian).
+// y' = f(t, y). Variable-order BDF (orders 1-5) with Newton iteration on a banded difference-quotient
+// Jacobian (IDA's own increments, each kept within a fraction of its unknown's smooth length,
+// DaeForm::calc_smooth_lengths) and a banded direct linear solver (SUNBandMatrix, SUNLinSol_Band).
+// IDA's vectors hold the unknowns in the order the form gives (DaeForm::find_band_order; the free
+// stack's phases, each frame's q and q' side by side), in which the Jacobian is banded: per
+// Jacobian, lower + upper + 1 residual evaluations (each O(n)) and an O(N lower (lower + upper))
+// LU, so every step is O(n) for an n-frame phase. A form without an order keeps its own with a full band (a dense Jacobian).
 // The algebraic unknowns are excluded from the local error test (IDASetSuppressAlg): they are
 // fixed by the constraints at each step; consistent initial values of z and of y' for the given y
 // come from IDACalcIC (IDA_YA_YDP_INIT) at every start. IDA's root finding locates the events on
