@@ -49,10 +49,12 @@ def read_sweep(source):
     cols["refinement"] = cols["refinement"].astype(bool)
     cols["status"] = [_text(v) for v in g["status"][()]]
     cols["message"] = [_text(v) for v in g["message"][()]]
-    # Levels on a plateau of the margin, per value (subset simulation; 0 otherwise).
+    # Levels on a plateau of the margin, per value (subset simulation: its /subset under
+    # /sweep/inner/<k>; 0 otherwise).
     inner = g["inner"] if "inner" in g else {}
-    cols["plateau_levels"] = [count_plateau_levels(inner[str(k)]["level_threshold"][()])
-                              if str(k) in inner and "level_threshold" in inner[str(k)] else 0
+    levels = "subset/levels/threshold"
+    cols["plateau_levels"] = [count_plateau_levels(inner[str(k)][levels][()])
+                              if str(k) in inner and levels in inner[str(k)] else 0
                               for k in cols["index"]]
     df = pd.DataFrame(cols)
     df.attrs.update({k: (_text(v) if isinstance(v, (bytes, str)) else v) for k, v in g.attrs.items()})

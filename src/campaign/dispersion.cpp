@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "campaign/design_axis.hpp"
 #include "sim/scene_keys.hpp"
 
 namespace truss::campaign {
@@ -89,14 +90,20 @@ DimensionLayout calc_layout(const CampaignOptions& c) {
     const std::string e = L.distributions.back().validate();
     if (!e.empty()) throw std::invalid_argument("dispersion of " + d.key + ": " + e);
   }
-  if (c.sweep.active) {
+  if (const DesignAxis* axis = find_design_axis(c)) {
     L.design = L.total++;
+    L.n_design_values = axis->n_design_values();
     L.sweep_dispersion = find_sweep_dispersion(c);
-    if (L.sweep_dispersion < 0) L.sweep_key = sim::find_scene_key(c.sweep.key);
-    else
-      for (std::size_t k = 0; k < c.sweep.n_design_values(); ++k)
-        L.sweep_distributions.push_back(make_distribution(
-            calc_campaign_at(c, k).dispersions[static_cast<std::size_t>(L.sweep_dispersion)]));
+    if (L.sweep_dispersion < 0) {
+      L.sweep_key = sim::find_scene_key(axis->key);
+    } else {
+      CampaignOptions at = c;
+      for (std::size_t k = 0; k < axis->n_design_values(); ++k) {
+        apply_design_value(c, k, at);
+        const std::size_t d = static_cast<std::size_t>(L.sweep_dispersion);
+        L.sweep_distributions.push_back(make_distribution(at.dispersions[d]));
+      }
+    }
   }
   return L;
 }
@@ -162,8 +169,8 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
   // A sweep's value: into the base scene (the nominal the draws apply to) or the swept distribution.
   std::size_t sweep_k = 0;
   if (L.design >= 0) {
-    sweep_k = L.find_sweep_index(u[L.design], c.sweep.n_design_values());
-    const double value = c.sweep.find_value(sweep_k);
+    sweep_k = L.find_sweep_index(u[L.design], L.n_design_values);
+    const double value = find_design_axis(c)->find_value(sweep_k);
     if (L.sweep_key) L.sweep_key->set_real(in.scene, value);
     in.values.push_back({value});
   }

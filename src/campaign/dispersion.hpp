@@ -28,6 +28,7 @@ struct DimensionLayout {
   // design value k of n (-1: no sweep); a nominal sweep's scene key, or a spread sweep's dispersion
   // and its distribution at each design value.
   int design = -1;
+  std::size_t n_design_values = 0;
   const sim::SceneKey* sweep_key = nullptr;
   int sweep_dispersion = -1;
   std::vector<Distribution> sweep_distributions;
