@@ -7,6 +7,7 @@
 
 #include "campaign/campaign.hpp"
 #include "campaign/method_input.hpp"
+#include "io/json_summary.hpp"
 
 namespace truss::campaign {
 
@@ -86,7 +87,7 @@ void read_failure_event(const MethodInput& in, FailureOptions& f) {
   check_failure_keys(in.source, *t, f);
 }
 
-std::string validate_failure_event(const FailureOptions& f, const CampaignOptions&) {
+std::string validate_failure_event(const FailureOptions& f, const CampaignOptions& c) {
   if (f.kind == FailureKind::none) return {};
   const std::string field = f.kind == FailureKind::margin ? "failure.margin" : "failure.column";
   const std::string unit = find_run_column_unit(f.column);
@@ -96,6 +97,12 @@ std::string validate_failure_event(const FailureOptions& f, const CampaignOption
   if (f.kind != FailureKind::margin && f.unit != unit)
     return fmt::format("failure.unit: \"{}\", but {} is in \"{}\" (give the threshold in the column's unit)", f.unit,
                        f.column, unit);
+  for (const io::RunField& r : io::run_result_fields())
+    if (r.name == f.column && r.defined_when != nullptr)
+      if (const char* need = r.defined_when(c.base); need != nullptr)
+        return fmt::format("{}: \"{}\" is defined only with {}: NaN in every run of this campaign's scene, so no run "
+                           "would ever fail (margin or column one that the scene's modes compute)",
+                           field, f.column, need);
   return {};
 }
 

@@ -26,7 +26,8 @@ struct FailureOptions {
 const OptionTable<FailureOptions>& failure_table();
 
 // The event's rules over the campaign once a [failure] is given: "" or "failure.<field>: reason":
-// a float64 column of /runs, the threshold in its unit.
+// a float64 column of /runs, the threshold in its unit, and a column the campaign's scene defines
+// (a margin NaN in every run, as motor_torque_margin_Nm under drive.mode = "motor", never fails).
 std::string validate_failure_event(const FailureOptions& f, const CampaignOptions& c);
 // [failure] as resolved TOML ("" for none).
 std::string failure_toml(const FailureOptions& f);

@@ -725,6 +725,15 @@ def case_bad_input(args):
                                                  "ensemble.stop.output=\"peak_drive_force_N\""])
     check(p.returncode == 2 and "ensemble.stop.target" in p.stderr and "not a probability" in p.stderr,
           f"a percentile stop rule as the inner method: exit 2 ({p.stderr.strip()[:200]})")
+    # A failure margin the campaign's drive never computes (motor_torque_margin_Nm under a motor
+    # drive: NaN in every run, so no value would ever fail): refused by --dry-run, at its line.
+    camp = os.path.join(d, "nan_margin.toml")
+    open(camp, "w").write(text.replace("[sweep]", "[scene.drive]\nmode = \"motor\"\n\n[sweep]"))
+    p = subprocess.run(["mpirun", "--oversubscribe", "-np", "1", args.driver, camp, "--dry-run"], env=ENV,
+                       capture_output=True, text=True, timeout=600)
+    check(p.returncode == 2 and f"{camp}:20: failure.margin: \"motor_torque_margin_Nm\" is defined only with "
+          "drive.mode = \"velocity\"" in p.stderr and p.stdout == "",
+          f"a margin the motor drive never computes: --dry-run exits 2 ({p.stderr.strip()[:200]})")
     written = [f for f in os.listdir(d) if not f.endswith(".toml")]
     check(written == [], f"nothing written by any refused run ({written})")
 

@@ -68,6 +68,13 @@ TEST_CASE("subset campaign keys: bad input named by file, key and line; the run 
   design.replace(design.find("method = \"subset\""), 17, "method = \"design\"");
   design.replace(design.find("[ensemble.subset]\n" + ok_subset), 18 + ok_subset.size(), "");
   CHECK(error_of(design).empty());  // the design estimates the event's probability from its Monte Carlo runs
+  // A margin the scene never computes (NaN in every run, so nothing ever fails): refused at its line.
+  CHECK(error_of(rare_text("", ok_subset, "margin = \"rail_margin_m\"")).find(
+            "rare.toml:10: failure.margin: \"rail_margin_m\" is defined only with stack.mode = \"free\" and "
+            "run.direction = \"deploy\"") != std::string::npos);
+  CHECK(error_of(rare_text("", ok_subset, margin), {"drive.mode=motor"})
+            .find("rare.toml:10: failure.margin: \"motor_torque_margin_Nm\" is defined only with drive.mode = "
+                  "\"velocity\"") != std::string::npos);
   // A valid one: n_runs is the cap N + (max_levels - 1)(N - N_c); its resolved TOML reads back to it.
   const campaign::CampaignOptions o = methods::parse_campaign_text(rare_text("", ok_subset, margin), "rare.toml", ".");
   CHECK(o.ensemble.n_runs == 100 + 3 * 90);
