@@ -94,6 +94,34 @@ void read_dispersions(const TomlSource& c, const toml::node& v, CampaignOptions&
   }
 }
 
+void read_campaign(const TomlSource& c, const toml::table& t, CampaignOptions& o) {
+  read_options(c, t, campaign_table(), o, "campaign.");
+}
+void read_output(const TomlSource& c, const toml::table& t, CampaignOptions& o) {
+  read_options(c, t, output_table(), o, "output.");
+}
+template <void (*Read)(const TomlSource&, const toml::table&, CampaignOptions&)>
+void read_table(const TomlSource& c, const toml::node& v, CampaignOptions& o) {
+  Read(c, *v.as_table(), o);  // read_root has checked that it is one
+}
+
+// The campaign's own root tables, in the file's usual order: each one's reader, and whether --set
+// may name its keys (not [scene]: its keys are the scene's; not the array [[dispersion]]).
+struct RootTable {
+  std::string_view name;
+  bool settable;
+  bool array;  // [[name]]
+  void (*read)(const TomlSource&, const toml::node&, CampaignOptions&);
+};
+const std::vector<RootTable>& root_tables() {
+  static const std::vector<RootTable> t = {{"ensemble", true, false, &read_table<&read_ensemble>},
+                                           {"campaign", true, false, &read_table<&read_campaign>},
+                                           {"output", true, false, &read_table<&read_output>},
+                                           {"scene", false, false, &read_table<&read_scene>},
+                                           {"dispersion", false, true, &read_dispersions}};
+  return t;
+}
+
 // The rules of one dispersion (index i): "" or "dispersion[i + 1]...: reason".
 std::string validate_dispersion(const CampaignOptions& o, std::size_t i) {
   const DispersionOptions& d = o.dispersions[i];
@@ -215,7 +243,7 @@ const toml::node* node_of_field(const toml::table& root, const std::string& mess
 std::vector<std::string> settable_tables(const TomlSource& c) {
   std::vector<std::string> t;
   for (const RootTable& r : root_tables())
-    if (r.settable) t.push_back(r.name);
+    if (r.settable) t.emplace_back(r.name);
   for (const std::string& m : detail::method_root_tables(c)) t.push_back(m);
   return t;
 }
@@ -276,17 +304,20 @@ std::vector<io::SceneSetting> apply_sets(const std::vector<std::string>& overrid
 // The root's tables: the campaign's own, read here; the method catalog's, read by its rows.
 void read_root(const TomlSource& c, const toml::table& root, CampaignOptions& o) {
   for (const auto& [k, v] : root) {
-    if (k == "dispersion") {
-      read_dispersions(c, v, o);
-      continue;
-    }
     const auto own = std::find_if(root_tables().begin(), root_tables().end(),
-                                  [&](const RootTable& r) { return k == r.name; });
-    if (own == root_tables().end() && !detail::is_method_table(c, k.str())) {
+                                  [&](const RootTable& r) { return k.str() == r.name; });
+    if (own != root_tables().end()) {
+      if (!own->array && !v.as_table()) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
+      own->read(c, v, o);
+    } else if (detail::is_method_table(c, k.str())) {  // read by its method's row
+      if (!v.as_table()) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
+    } else {
       std::vector<std::string> known;
-      for (const RootTable& r : root_tables()) known.push_back(r.name);
+      for (const RootTable& r : root_tables())
+        if (!r.array) known.emplace_back(r.name);
       for (const std::string& t : detail::method_root_tables(c)) known.push_back(t);
-      known.push_back("[[dispersion]]");
+      for (const RootTable& r : root_tables())
+        if (r.array) known.push_back(fmt::format("[[{}]]", r.name));
       const std::vector<std::string_view> names(known.begin(), known.end());
       const auto best = io::suggest_value(k.str(), names);
       std::string list;
@@ -294,12 +325,6 @@ void read_root(const TomlSource& c, const toml::table& root, CampaignOptions& o)
       c.fail(&v, fmt::format("unknown table '{}'{} (known: {})", k.str(),
                              best ? fmt::format("; did you mean {}?", *best) : std::string(), list));
     }
-    const toml::table* t = v.as_table();
-    if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
-    if (k == "campaign") read_options(c, *t, campaign_table(), o, "campaign.");
-    else if (k == "ensemble") read_ensemble(c, *t, o);
-    else if (k == "output") read_options(c, *t, output_table(), o, "output.");
-    else if (k == "scene") read_scene(c, *t, o);
   }
 }
 

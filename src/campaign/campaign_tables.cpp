@@ -94,9 +94,4 @@ const OptionTable<D>& dispersion_table() {
   return t;
 }
 
-const std::vector<RootTable>& root_tables() {
-  static const std::vector<RootTable> t = {{"ensemble", true}, {"campaign", true}, {"output", true}, {"scene", false}};
-  return t;
-}
-
 }  // namespace truss::campaign

@@ -16,12 +16,4 @@ const OptionTable<CampaignOptions>& output_table();    // [output]
 const OptionTable<CampaignOptions>& scene_table();     // [scene], besides the inline [scene.<table>]
 const OptionTable<DispersionOptions>& dispersion_table();  // each [[dispersion]]
 
-// The campaign's own tables in the file's usual order, for the root's list of known tables and
-// --set: their names and whether --set may name their keys (not [scene]: its keys are the scene's).
-struct RootTable {
-  const char* name;
-  bool settable;
-};
-const std::vector<RootTable>& root_tables();
-
 }  // namespace truss::campaign
