@@ -142,6 +142,14 @@ TEST_CASE("a length moved past 20 % of its nominal is refused with the value it 
   CHECK(error_of("apply = \"relative\"\ndistribution = \"normal\"\nstd = 0.06\n").empty());
   CHECK_THAT(error_of("apply = \"relative\"\ndistribution = \"normal\"\nstd = 0.07\n"),
              Catch::Contains("its 0.135 % quantile (-3 sigma)") && Catch::Contains("a percentage typed as a fraction"));
+  // The key table's hard range, judged at a uniform's ends: a speed drawn uniformly in [500, 1000.5]
+  // m/s has 99.865 % of its draws below 1000 m/s (the limit) but its upper end past it: refused.
+  CHECK_THAT(truss::campaign::test::campaign_error("[ensemble]\nn_runs = 100\n[[dispersion]]\n"
+                                                   "key = \"drive.speed_m_per_s\"\napply = \"absolute\"\n"
+                                                   "distribution = \"uniform\"\nlower = 500\nupper = 1000.5\n",
+                                                   "c.toml"),
+             Catch::Contains("its upper end, a draw of 1000.5, gives drive.speed_m_per_s = 1000.5 m/s, which the "
+                             "model refuses (drive.speed_m_per_s: must lie in (0, 1000] m/s"));
   // Not a length: a rail foot offset (a position, of either sign) moves freely within the model's range.
   CHECK(truss::campaign::test::campaign_error("[ensemble]\nn_runs = 100\n[[dispersion]]\nkey = \"rail.x_m\"\n"
                                               "apply = \"offset\"\ndistribution = \"uniform\"\nlower = -0.02\n"
