@@ -39,6 +39,9 @@ namespace {
 const char* velocity_drive(const sim::SceneOptions& s) {
   return s.drive.mode == model::DriveMode::velocity ? nullptr : "drive.mode = \"velocity\"";
 }
+const char* motor_line(const sim::SceneOptions& s) {
+  return s.drive.mode != model::DriveMode::torque ? nullptr : "drive.mode = \"velocity\" or \"motor\"";
+}
 const char* free_stack(const sim::SceneOptions& s) {
   return s.stack.mode == sim::StackMode::free ? nullptr : "stack.mode = \"free\"";
 }
@@ -67,8 +70,13 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_F64(min_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64_IF(motor_torque_at_speed_Nm, "Nm", &velocity_drive),
       TRUSS_RUN_F64_IF(motor_torque_margin_Nm, "Nm", &velocity_drive),
+      TRUSS_RUN_F64(peak_motor_torque_Nm, "Nm"),
       TRUSS_RUN_F64(peak_static_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(peak_inertial_drive_torque_Nm, "Nm"),
+      TRUSS_RUN_F64(motorisation_required_torque_Nm, "Nm"),
+      TRUSS_RUN_F64(motorisation_available_torque_Nm, "Nm"),
+      TRUSS_RUN_F64(motorisation_margin, "1"),
+      TRUSS_RUN_F64_IF(motorisation_stall_torque_Nm, "Nm", &motor_line),
       TRUSS_RUN_F64(peak_pin_force_N, "N"),
       TRUSS_RUN_F64(peak_pin_force_time_s, "s"),
       TRUSS_RUN_I64(peak_pin_force_bay),

@@ -75,6 +75,14 @@ TEST_CASE("subset campaign keys: bad input named by file, key and line; the run 
   CHECK(error_of(rare_text("", ok_subset, margin), {"drive.mode=motor"})
             .find("rare.toml:10: failure.margin: \"motor_torque_margin_Nm\" is defined only with drive.mode = "
                   "\"velocity\"") != std::string::npos);
+  // The stall torque that meets the motorisation factors needs a motor line: none in torque mode;
+  // the motorisation margin itself is computed in every drive mode.
+  const std::string stall = "column = \"motorisation_stall_torque_Nm\"\nbelow = 0.03\nunit = \"Nm\"";
+  CHECK(error_of(rare_text("", ok_subset, stall)).empty());
+  CHECK(error_of(rare_text("", ok_subset, stall), {"drive.mode=torque"})
+            .find("rare.toml:10: failure.column: \"motorisation_stall_torque_Nm\" is defined only with drive.mode = "
+                  "\"velocity\" or \"motor\"") != std::string::npos);
+  CHECK(error_of(rare_text("", ok_subset, "margin = \"motorisation_margin\""), {"drive.mode=torque"}).empty());
   // A valid one: n_runs is the cap N + (max_levels - 1)(N - N_c); its resolved TOML reads back to it.
   const campaign::CampaignOptions o = methods::parse_campaign_text(rare_text("", ok_subset, margin), "rare.toml", ".");
   CHECK(o.ensemble.n_runs == 100 + 3 * 90);
