@@ -10,9 +10,13 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include "campaign/campaign_tables.hpp"
+#include "campaign/design_axis.hpp"
 #include "campaign/dispersion.hpp"
+#include "campaign/failure.hpp"
 #include "campaign/toml_read.hpp"
 #include "io/scene_toml.hpp"
+#include "io/suggest.hpp"
 #include "sim/scene_keys.hpp"
 
 namespace truss::campaign {
@@ -21,22 +25,6 @@ using io::InputError;
 
 namespace {
 
-const std::vector<std::string> kDistributions(std::begin(sampling::kDistributionNames),
-                                              std::end(sampling::kDistributionNames));
-const std::vector<std::string> kSampling(std::begin(sampling::kSamplingNames), std::end(sampling::kSamplingNames));
-
-// Index of a name already checked against `names`.
-int index_of(const std::vector<std::string>& names, const std::string& s) {
-  return static_cast<int>(std::find(names.begin(), names.end(), s) - names.begin());
-}
-
-using detail::Ctx;
-using detail::get_number;
-using detail::get_string;
-using detail::did_you_mean;
-using detail::join;
-using detail::unknown_key_text;
-
 // A campaign key that becomes a scene's [run] key in every run (ensemble.max_run_wall_time_s ->
 // run.max_wall_time_s, output.history_step_s -> run.output_step_s) takes that key's hard range from
 // the scene key table, so that no value the campaign accepts makes every run invalid input.
@@ -44,14 +32,6 @@ std::string check_run_key_range(std::string_view run_key, const std::string& key
   const sim::SceneKey* k = sim::find_scene_key("run", run_key);
   if (k == nullptr || k->hard.contains(v)) return {};
   return fmt::format("{}: must lie in {} {} (the range of run.{}), got {}", key, k->hard.text(), k->unit, run_key, v);
-}
-
-std::vector<double> get_numbers(const Ctx& c, const toml::node& n, const std::string& key) {
-  const toml::array* a = n.as_array();
-  if (!a) c.fail(&n, fmt::format("{}: expected an array of numbers", key));
-  std::vector<double> v;
-  for (const auto& e : *a) v.push_back(get_number(c, e, key));
-  return v;
 }
 
 // TOML text of a value given on the command line: numbers, booleans, quoted strings, arrays;
@@ -66,147 +46,80 @@ toml::table parse_override_value(const std::string& value) {
   }
 }
 
-void parse_campaign_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
-  for (const auto& [k, v] : t) {
-    const std::string key = "campaign." + std::string(k.str());
-    if (k == "name") o.name = get_string(c, v, key);
-    else if (k == "description") o.description = get_string(c, v, key);
-    else c.fail(&v, unknown_key_text(key, "campaign.name, campaign.description"));
-  }
-}
-
-void parse_ensemble_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
-  for (const auto& [k, v] : t) {
-    const std::string key = "ensemble." + std::string(k.str());
-    if (k == "n_runs") {
-      auto i = v.value_exact<std::int64_t>();
-      if (!i) c.fail(&v, key + ": expected an integer");
-      o.ensemble.n_runs = *i;
-    } else if (k == "master_seed") {
-      auto i = v.value_exact<std::int64_t>();
-      if (!i) c.fail(&v, key + ": expected an integer");
-      if (*i < 0) c.fail(&v, fmt::format("{}: must not be negative, got {}", key, *i));
-      o.ensemble.master_seed = static_cast<std::uint64_t>(*i);
-    } else if (k == "sampling") {
-      o.ensemble.sampling = static_cast<SamplingMethod>(index_of(kSampling, get_string(c, v, key, kSampling)));
-    } else if (k == "max_run_wall_time_s") {
-      o.ensemble.max_run_wall_time_s = get_number(c, v, key);
-    } else if (k == "method") {
-      get_string(c, v, key, detail::method_names(c));  // the row reads its tables (detail::parse_method)
-    } else if (c.methods->find(k.str()) != nullptr) {
-      detail::check_method_key(c, key, v);
-    } else {
-      std::string known = "ensemble.n_runs, ensemble.master_seed, ensemble.sampling, "
-                          "ensemble.max_run_wall_time_s, ensemble.method";
-      for (const std::string& m : detail::method_names(c))
-        if (m != kDefaultMethod) known += ", [ensemble." + m + "]";  // the design has no keys of its own
-      c.fail(&v, unknown_key_text(key, known));
-    }
-  }
-}
-
-std::string toml_value_text(const toml::node& v) {
-  std::ostringstream ss;
-  v.visit([&](const auto& x) { ss << toml::toml_formatter{x}; });
-  return ss.str();
-}
-
-std::string where_of(const Ctx& c, const toml::node& n) {
-  return n.source().begin.line > 0 ? fmt::format("{}:{}", c.file, n.source().begin.line) : c.file;
+// [ensemble]: its rows, and the tables of the method catalog's rows ([ensemble.stop]).
+void read_ensemble(const TomlSource& c, const toml::table& t, CampaignOptions& o) {
+  OtherKeys methods;
+  methods.take = [&](std::string_view k, const toml::node& v) {
+    const MethodSyntax* row = c.methods->find(k);
+    if (row == nullptr || row->selection == MethodSelection::wraps) return false;
+    detail::check_method_key(c, fmt::format("ensemble.{}", k), v);  // the row reads it (detail::parse_method)
+    return true;
+  };
+  for (const MethodSyntax* r : c.methods->list())
+    if (r->selection != MethodSelection::wraps && r->table_doc != nullptr)
+      methods.names.push_back(fmt::format("[{}]", r->own_table()));
+  read_options(c, t, ensemble_table(), o, "ensemble.", methods);
 }
 
 // [scene]: file, overrides, and the scene inline as [scene.<table>] tables. Inline keys and
-// overrides become settings that carry their file:line, so the scene parser's messages name them.
-void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
-  const auto tables = io::known_scene_keys();
-  auto is_scene_table = [&](std::string_view name) {
-    return std::any_of(tables.begin(), tables.end(),
-                       [&](const std::string& k) { return k.substr(0, k.find('.')) == name; });
+// overrides become settings that carry their file:line, so the scene parser's messages name them;
+// the inline tables come first, then the overrides.
+void read_scene(const TomlSource& c, const toml::table& t, CampaignOptions& o) {
+  std::vector<io::SceneSetting> inline_settings;
+  OtherKeys tables;
+  for (std::string_view name : sim::find_scene_tables()) tables.names.push_back(fmt::format("[scene.{}]", name));
+  const std::vector<std::string_view> scene_tables = sim::find_scene_tables();
+  tables.take = [&](std::string_view k, const toml::node& v) {
+    if (std::find(scene_tables.begin(), scene_tables.end(), k) == scene_tables.end()) return false;
+    const toml::table* st = v.as_table();
+    if (!st) c.fail(&v, fmt::format("scene.{}: expected a table ([scene.{}])", k, k));
+    OptionSpec any{"", OptionKind::settings};
+    for (io::SceneSetting& s : read_option_value(c, v, fmt::format("scene.{}", k), any).settings)
+      inline_settings.push_back({std::string(k) + "." + s.assignment, s.where});
+    return true;
   };
-  std::vector<io::SceneSetting> inline_settings, override_settings;
-  for (const auto& [k, v] : t) {
-    const std::string key = "scene." + std::string(k.str());
-    if (k == "file") {
-      o.scene_file = get_string(c, v, key);
-    } else if (k == "overrides") {
-      const toml::table* ov = v.as_table();
-      if (!ov) c.fail(&v, key + ": expected a table of \"table.key\" = value");
-      for (const auto& [ok, ovv] : *ov)
-        override_settings.push_back({std::string(ok.str()) + "=" + toml_value_text(ovv), where_of(c, ovv)});
-    } else if (is_scene_table(k.str())) {
-      const toml::table* st = v.as_table();
-      if (!st) c.fail(&v, fmt::format("{}: expected a table ([{}])", key, key));
-      for (const auto& [sk, sv] : *st)
-        inline_settings.push_back(
-            {std::string(k.str()) + "." + std::string(sk.str()) + "=" + toml_value_text(sv), where_of(c, sv)});
-    } else {
-      std::string known = "scene.file, scene.overrides, and scene tables";
-      std::string_view last;
-      for (const auto& k2 : tables)
-        if (std::string_view t2 = std::string_view(k2).substr(0, k2.find('.')); t2 != last) {
-          known += fmt::format("{} [scene.{}]", last.empty() ? "" : ",", t2);
-          last = t2;
-        }
-      c.fail(&v, unknown_key_text(key, known));
-    }
-  }
-  o.scene_settings = inline_settings;
-  o.scene_settings.insert(o.scene_settings.end(), override_settings.begin(), override_settings.end());
+  read_options(c, t, scene_table(), o, "scene.", tables);
+  o.scene_settings.insert(o.scene_settings.begin(), inline_settings.begin(), inline_settings.end());
 }
 
-void parse_output_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
-  for (const auto& [k, v] : t) {
-    const std::string key = "output." + std::string(k.str());
-    if (k == "history_runs") {
-      const toml::array* a = v.as_array();
-      if (!a) c.fail(&v, key + ": expected an array of run indices");
-      o.output.history_runs.clear();
-      for (const auto& e : *a) {
-        auto i = e.value_exact<std::int64_t>();
-        if (!i) c.fail(&e, key + ": run indices are integers");
-        o.output.history_runs.push_back(*i);
-      }
-    } else if (k == "history_step_s") {
-      o.output.history_step_s = get_number(c, v, key);
-    } else {
-      c.fail(&v, unknown_key_text(key, "output.history_runs, output.history_step_s"));
-    }
+void read_dispersions(const TomlSource& c, const toml::node& v, CampaignOptions& o) {
+  const toml::array* a = v.as_array();
+  if (!a || !a->is_array_of_tables()) c.fail(&v, "'dispersion' must be an array of tables: [[dispersion]]");
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const toml::table& t = *a->get(i)->as_table();
+    DispersionOptions d;
+    d.line = static_cast<int>(t.source().begin.line);
+    read_options(c, t, dispersion_table(), d, fmt::format("dispersion[{}].", i + 1));
+    o.dispersions.push_back(std::move(d));
   }
 }
 
-DispersionOptions parse_dispersion(const Ctx& c, const toml::table& t, std::size_t index) {
-  DispersionOptions d;
-  d.line = static_cast<int>(t.source().begin.line);
-  const std::string where = fmt::format("dispersion[{}]", index + 1);
-  bool has_key = false, has_dist = false;
-  for (const auto& [k, v] : t) {
-    const std::string key = where + "." + std::string(k.str());
-    if (k == "key") {
-      d.key = get_string(c, v, key);
-      has_key = true;
-    } else if (k == "per") {
-      const std::string p = get_string(c, v, key, {"run", "bay", "frame"});
-      d.per = p == "run" ? Per::run : p == "bay" ? Per::bay : Per::frame;
-    } else if (k == "apply") {
-      const std::string a = get_string(c, v, key, {"absolute", "relative", "offset"});
-      d.apply = a == "absolute" ? Apply::absolute : a == "relative" ? Apply::relative : Apply::offset;
-    } else if (k == "distribution") {
-      d.distribution = static_cast<DistributionKind>(index_of(kDistributions, get_string(c, v, key, kDistributions)));
-      has_dist = true;
-    } else if (k == "mean") d.mean = get_number(c, v, key);
-    else if (k == "std") d.std = get_number(c, v, key);
-    else if (k == "lower") d.lower = get_number(c, v, key);
-    else if (k == "upper") d.upper = get_number(c, v, key);
-    else if (k == "mu") d.mu = get_number(c, v, key);
-    else if (k == "sigma") d.sigma = get_number(c, v, key);
-    else if (k == "values") d.values = get_numbers(c, v, key);
-    else if (k == "weights") d.weights = get_numbers(c, v, key);
-    else c.fail(&v, unknown_key_text(key, "key, per, apply, distribution, mean, std, lower, upper, "
-                                "mu, sigma, values, weights"));
-  }
-  if (!has_key) c.fail(&t, where + ": missing 'key' (the scene key to disperse, e.g. \"mast.strut_mass_kg\")");
-  if (!has_dist) c.fail(&t, where + ": missing 'distribution' (one of " + join(kDistributions) + ")");
-  return d;
+void read_campaign(const TomlSource& c, const toml::table& t, CampaignOptions& o) {
+  read_options(c, t, campaign_table(), o, "campaign.");
+}
+void read_output(const TomlSource& c, const toml::table& t, CampaignOptions& o) {
+  read_options(c, t, output_table(), o, "output.");
+}
+template <void (*Read)(const TomlSource&, const toml::table&, CampaignOptions&)>
+void read_table(const TomlSource& c, const toml::node& v, CampaignOptions& o) {
+  Read(c, *v.as_table(), o);  // read_root has checked that it is one
+}
+
+// The campaign's own root tables, in the file's usual order: each one's reader, and whether --set
+// may name its keys (not [scene]: its keys are the scene's; not the array [[dispersion]]).
+struct RootTable {
+  std::string_view name;
+  bool settable;
+  bool array;  // [[name]]
+  void (*read)(const TomlSource&, const toml::node&, CampaignOptions&);
+};
+const std::vector<RootTable>& root_tables() {
+  static const std::vector<RootTable> t = {{"ensemble", true, false, &read_table<&read_ensemble>},
+                                           {"campaign", true, false, &read_table<&read_campaign>},
+                                           {"output", true, false, &read_table<&read_output>},
+                                           {"scene", false, false, &read_table<&read_scene>},
+                                           {"dispersion", false, true, &read_dispersions}};
+  return t;
 }
 
 // The rules of one dispersion (index i): "" or "dispersion[i + 1]...: reason".
@@ -259,14 +172,12 @@ std::string validate_sampling(const CampaignOptions& o) {
 }
 
 std::string CampaignOptions::validate() const {
-  if (ensemble.n_runs < 1)
-    return fmt::format("ensemble.n_runs: must be a positive number of runs, got {}", ensemble.n_runs);
+  if (std::string e = check_option_ranges(ensemble_table(), *this, "ensemble."); !e.empty()) return e;
   if (std::string e = check_run_key_range("max_wall_time_s", "ensemble.max_run_wall_time_s",
                                           ensemble.max_run_wall_time_s);
       !e.empty())
     return e;
-  if (!(output.history_step_s > 0.0))
-    return fmt::format("output.history_step_s: must be positive, got {}", output.history_step_s);
+  if (std::string e = check_option_ranges(output_table(), *this, "output."); !e.empty()) return e;
   if (std::string e = check_run_key_range("output_step_s", "output.history_step_s", output.history_step_s); !e.empty())
     return e;
   for (std::size_t i = 0; i < output.history_runs.size(); ++i) {
@@ -279,15 +190,18 @@ std::string CampaignOptions::validate() const {
   }
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = validate_dispersion(*this, i); !e.empty()) return e;
+  if (!ensemble.method) return "ensemble.method: none chosen";
   // A sweep's values, each checked with the dispersions at it, before the dispersions at the
   // campaign's own values.
-  if (std::string e = validate_sweep(*this); !e.empty()) return e;
+  if (std::string e = validate_design_axis(*this); !e.empty()) return e;
   // Implausible dispersions (most runs would be invalid input), once every dispersion is well formed.
   for (std::size_t i = 0; i < dispersions.size(); ++i)
     if (std::string e = check_dispersion_draws(*this, i); !e.empty())
       return fmt::format("dispersion[{}]: {}", i + 1, e);
-  if (!ensemble.method) return "ensemble.method: none chosen";
-  return ensemble.method.options().validate(*this);
+  const MethodOptions& method = ensemble.method.options();
+  if (std::string e = method.validate(*this); !e.empty()) return e;
+  const FailureOptions* f = method.failure_event();
+  return f != nullptr ? validate_failure_event(*f, *this) : std::string();
 }
 
 // Which keys may be dispersed, and how: the scene key table (sim/scene_keys.hpp).
@@ -324,86 +238,99 @@ const toml::node* node_of_field(const toml::table& root, const std::string& mess
   return nullptr;
 }
 
-CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string& base_dir,
-                                    const std::vector<std::string>& overrides) {
-  const std::string& path = c.file;
-  // --set overrides: campaign keys go into the TOML tree (so they are checked like file keys),
-  // scene keys ("scene.table.key=v") go to the scene parser.
+// The tables --set may name: the campaign's own (not [scene]: its keys are the scene's) and the
+// tables the method catalog's rows read ([failure], [sweep]).
+std::vector<std::string> settable_tables(const TomlSource& c) {
+  std::vector<std::string> t;
+  for (const RootTable& r : root_tables())
+    if (r.settable) t.emplace_back(r.name);
+  for (const std::string& m : detail::method_root_tables(c)) t.push_back(m);
+  return t;
+}
+
+// A --set of a campaign key into the tree (so that it is checked as a file's key would be), its node
+// then naming the --set in messages.
+void put_set(const std::string& arg, const std::string& key, const std::string& value, toml::table& root,
+             TomlSource& c) {
+  const auto dot = key.find('.');
+  const std::vector<std::string> tables = settable_tables(c);
+  const std::string tname = dot == std::string::npos ? key : key.substr(0, dot);
+  if (dot == std::string::npos || std::find(tables.begin(), tables.end(), tname) == tables.end()) {
+    std::string list;
+    for (const std::string& t : tables) list += t + ".*, ";
+    throw InputError(fmt::format("error: --set {}: only {}and base-scene keys (mast.n_bays=12 or scene.mast.n_bays=12) "
+                                 "can be set", arg, list));
+  }
+  toml::table v = parse_override_value(value);
+  std::string kname = key.substr(dot + 1);
+  toml::table* t = &root;
+  for (std::string tn = tname;;) {  // ensemble.subset.p0: the tables on the way, created if missing
+    if (!t->contains(tn)) t->insert(tn, toml::table{});
+    t = (*t)[tn].as_table();
+    if (!t) throw InputError(fmt::format("error: --set {}: '{}' is not a table in {}", arg, tn, c.file));
+    const auto d = kname.find('.');
+    if (d == std::string::npos) break;
+    tn = kname.substr(0, d);
+    kname = kname.substr(d + 1);
+  }
+  t->insert_or_assign(kname, *v.get("v"));
+  const toml::node* set_node = t->get(kname);
+  c.set_by[set_node] = arg;
+  if (const toml::array* a = set_node->as_array())
+    for (const auto& e : *a) c.set_by[&e] = arg;
+}
+
+// --set overrides: campaign keys go into the TOML tree, scene keys ("scene.table.key=v", or a scene
+// table's key as truss-sim takes it, "mast.n_bays=12") are returned for the scene parser.
+std::vector<io::SceneSetting> apply_sets(const std::vector<std::string>& overrides, toml::table& root,
+                                         TomlSource& c) {
   std::vector<io::SceneSetting> scene_sets;
+  const std::vector<std::string_view> scene_tables = sim::find_scene_tables();
   for (const std::string& arg : overrides) {
     const auto eq = arg.find('=');
     if (eq == std::string::npos || eq == 0)
       throw InputError(fmt::format("error: --set {}: expected table.key=value", arg));
     const std::string key = arg.substr(0, eq), value = arg.substr(eq + 1);
-    if (key.rfind("scene.", 0) == 0) { scene_sets.push_back({key.substr(6) + "=" + value, {}}); continue; }
     const auto dot = key.find('.');
-    const std::string tname = dot == std::string::npos ? key : key.substr(0, dot);
-    // A scene table (mast, drive, ...) names a base-scene key, as truss-sim's --set does.
-    const auto scene_keys = io::known_scene_keys();
-    if (dot != std::string::npos && std::any_of(scene_keys.begin(), scene_keys.end(), [&](const std::string& k) {
-          return k.compare(0, k.find('.'), tname) == 0 && k.find('.') == tname.size();
-        })) {
+    if (key.rfind("scene.", 0) == 0) scene_sets.push_back({key.substr(6) + "=" + value, {}});
+    else if (dot != std::string::npos &&
+             std::find(scene_tables.begin(), scene_tables.end(), key.substr(0, dot)) != scene_tables.end())
       scene_sets.push_back({arg, {}});
-      continue;
-    }
-    if (dot == std::string::npos ||
-        (tname != "ensemble" && tname != "campaign" && tname != "output" && tname != "sweep" &&
-         !detail::is_method_table(c, tname))) {
-      std::string tables;
-      for (const std::string& t : detail::method_root_tables(c)) tables += ", " + t + ".*";
-      throw InputError(fmt::format("error: --set {}: only ensemble.*, campaign.*, output.*, sweep.*{} and base-scene "
-                                   "keys (mast.n_bays=12 or scene.mast.n_bays=12) can be set", arg, tables));
-    }
-    toml::table v = parse_override_value(value);
-    std::string kname = key.substr(dot + 1);
-    toml::table* t = &root;
-    for (std::string tn = tname;;) {  // ensemble.subset.p0: the tables on the way, created if missing
-      if (!t->contains(tn)) t->insert(tn, toml::table{});
-      t = (*t)[tn].as_table();
-      if (!t) throw InputError(fmt::format("error: --set {}: '{}' is not a table in {}", arg, tn, path));
-      const auto d = kname.find('.');
-      if (d == std::string::npos) break;
-      tn = kname.substr(0, d);
-      kname = kname.substr(d + 1);
-    }
-    t->insert_or_assign(kname, *v.get("v"));
-    // Messages about this value (or an element of it) name the --set, not the campaign file.
-    const toml::node* set_node = t->get(kname);
-    c.set_by[set_node] = arg;
-    if (const toml::array* a = set_node->as_array())
-      for (const auto& e : *a) c.set_by[&e] = arg;
+    else put_set(arg, key, value, root, c);
   }
+  return scene_sets;
+}
 
-  CampaignOptions o;
+// The root's tables: the campaign's own, read here; the method catalog's, read by its rows.
+void read_root(const TomlSource& c, const toml::table& root, CampaignOptions& o) {
   for (const auto& [k, v] : root) {
-    if (k == "sweep") {
-      const toml::table* t = v.as_table();
-      if (!t) c.fail(&v, "'sweep' must be a table");
-      detail::parse_sweep_table(c, *t, o);
-    } else if (detail::is_method_table(c, k.str())) {
-      if (!v.as_table()) c.fail(&v, fmt::format("'{}' must be a table", k.str()));  // read by its method's row
-    } else if (k == "campaign" || k == "ensemble" || k == "scene" || k == "output") {
-      const toml::table* t = v.as_table();
-      if (!t) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
-      if (k == "campaign") parse_campaign_table(c, *t, o);
-      else if (k == "ensemble") parse_ensemble_table(c, *t, o);
-      else if (k == "output") parse_output_table(c, *t, o);
-      else parse_scene_table(c, *t, o);
-    } else if (k == "dispersion") {
-      const toml::array* a = v.as_array();
-      if (!a || !a->is_array_of_tables()) c.fail(&v, "'dispersion' must be an array of tables: [[dispersion]]");
-      for (std::size_t i = 0; i < a->size(); ++i)
-        o.dispersions.push_back(parse_dispersion(c, *a->get(i)->as_table(), i));
+    const auto own = std::find_if(root_tables().begin(), root_tables().end(),
+                                  [&](const RootTable& r) { return k.str() == r.name; });
+    if (own != root_tables().end()) {
+      if (!own->array && !v.as_table()) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
+      own->read(c, v, o);
+    } else if (detail::is_method_table(c, k.str())) {  // read by its method's row
+      if (!v.as_table()) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
     } else {
-      std::string known = "campaign, ensemble, output, scene, sweep";
-      for (const std::string& t : detail::method_root_tables(c)) known += ", " + t;
-      known += ", [[dispersion]]";
-      c.fail(&v, fmt::format("unknown table '{}'{} (known: {})", k.str(), did_you_mean(std::string(k.str()), known),
-                             known));
+      std::vector<std::string> known;
+      for (const RootTable& r : root_tables())
+        if (!r.array) known.emplace_back(r.name);
+      for (const std::string& t : detail::method_root_tables(c)) known.push_back(t);
+      for (const RootTable& r : root_tables())
+        if (r.array) known.push_back(fmt::format("[[{}]]", r.name));
+      const std::vector<std::string_view> names(known.begin(), known.end());
+      const auto best = io::suggest_value(k.str(), names);
+      std::string list;
+      for (const std::string& t : known) list += (list.empty() ? "" : ", ") + t;
+      c.fail(&v, fmt::format("unknown table '{}'{} (known: {})", k.str(),
+                             best ? fmt::format("; did you mean {}?", *best) : std::string(), list));
     }
   }
-  detail::parse_method(c, root, o);
-  // Base scene: file relative to the campaign file, then inline tables, overrides, --set scene.*.
+}
+
+// The base scene: the file relative to the campaign file, then inline tables, overrides, --set scene.*.
+void read_base_scene(const TomlSource& c, const toml::table& root, const std::string& base_dir,
+                     const std::vector<io::SceneSetting>& scene_sets, CampaignOptions& o) {
   std::vector<io::SceneSetting> sets = o.scene_settings;
   sets.insert(sets.end(), scene_sets.begin(), scene_sets.end());
   if (!o.scene_file.empty()) {
@@ -418,10 +345,19 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
     }
     o.base = io::parse_scene_text_with(text, p.string(), sets, &o.warnings);
   } else {
-    o.base = io::parse_scene_text_with("", path + " [scene]", sets, &o.warnings);
+    o.base = io::parse_scene_text_with("", c.file + " [scene]", sets, &o.warnings);
   }
   // Campaign runs never record histories (only [output] history_runs do): work nobody reads.
   o.base.run.output_step_s = 0.0;
+}
+
+CampaignOptions parse_campaign_root(toml::table root, TomlSource& c, const std::string& base_dir,
+                                    const std::vector<std::string>& overrides) {
+  const std::vector<io::SceneSetting> scene_sets = apply_sets(overrides, root, c);
+  CampaignOptions o;
+  read_root(c, root, o);
+  detail::parse_method(c, root, o);
+  read_base_scene(c, root, base_dir, scene_sets, o);
   // Every rule, once: a broken one is reported at the line (or --set) of the field it names.
   if (const std::string e = o.validate(); !e.empty()) c.fail(node_of_field(root, e), e);
   return o;
@@ -431,7 +367,7 @@ CampaignOptions parse_campaign_root(toml::table root, Ctx& c, const std::string&
 
 CampaignOptions parse_campaign_text(std::string_view text, const std::string& source_name, const std::string& base_dir,
                                     const MethodCatalog& methods, const std::vector<std::string>& overrides) {
-  Ctx c{source_name, {}, &methods};
+  TomlSource c{source_name, {}, &methods};
   toml::table root;
   try {
     root = toml::parse(text, source_name);
@@ -444,7 +380,7 @@ CampaignOptions parse_campaign_text(std::string_view text, const std::string& so
 
 CampaignOptions parse_campaign_file(const std::string& path, const MethodCatalog& methods,
                                     const std::vector<std::string>& overrides) {
-  Ctx c{path, {}, &methods};
+  TomlSource c{path, {}, &methods};
   toml::table root;
   const std::string text = io::read_input_file(path, "campaign file");  // bounded in size
   try {

@@ -1,32 +1,22 @@
 // Campaign files (TOML): a base scene, an ensemble (run count, master seed, sampling method) and
 // dispersions of scene keys, parsed once into plain option structs and validated before any MPI
-// work. Unknown tables and keys are errors (file:line), as in scene files.
+// work. Unknown tables and keys are errors (file:line), as in scene files. Each table's keys are
+// rows of its option table (campaign_tables.hpp; the reference in docs/campaigns.md is made from
+// them):
 //
-//   [campaign]   name, description
-//   [ensemble]   n_runs, master_seed, sampling ("monte_carlo" | "latin_hypercube" | "sobol" |
-//                "saltelli"), max_run_wall_time_s, method (a row of the method table,
-//                methods/method_table.hpp: "design", the sampling's fixed design (the default);
-//                "stop", sequential stopping; "subset", subset simulation of a failure probability)
-//   [ensemble.<method>] and the root tables a method claims ([failure]): the method's own options,
-//                read and checked by its row (method_options.hpp; docs/campaigns.md lists them)
-//   [sweep]      a design sweep (campaign/sweep.hpp): the [failure] event's probability at each value
-//                of a scene key's nominal value or of a dispersion's spread, and the allowable; the
-//                method (design: Monte Carlo, stop, subset) runs at each value and reads [failure]
-//   [output]     history_runs = [run indices], history_step_s (decimated histories stored)
-//   [scene]      file (path relative to the campaign file; default: Table 1 defaults),
-//                overrides = { "drive.mode" = "motor", ... }, and/or the scene inline as
-//                [scene.mast], [scene.drive], ... tables (applied after the file, before overrides)
-//   [[dispersion]] key, per ("run" | "bay" | "frame"), apply ("absolute" | "relative" | "offset"),
-//                distribution ("normal" | "truncated_normal" | "uniform" | "lognormal" | "discrete")
-//                and its parameters: mean, std, lower, upper, mu, sigma, values, weights.
-// apply: absolute = the drawn value; relative = nominal * (1 + drawn); offset = nominal + drawn.
+//   [campaign]   what the campaign is; [ensemble] the runs and the method (ensemble.method, a row of
+//                the method table, methods/method_table.hpp); [output] the stored histories;
+//   [scene]      a file, inline [scene.<table>] tables and overrides: the base scene;
+//   [[dispersion]] the dispersed keys (apply: absolute = the drawn value; relative = nominal *
+//                (1 + drawn); offset = nominal + drawn);
+//   [ensemble.<method>] and the root tables a method claims ([failure]; a composite's [sweep]): the
+//                method's own options, read and checked by its row (method_options.hpp).
 #pragma once
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "campaign/method_options.hpp"
-#include "campaign/sweep.hpp"
 #include "io/scene_toml.hpp"
 #include "sampling/sampling.hpp"
 #include "sim/scene.hpp"
@@ -75,7 +65,6 @@ struct CampaignOptions {
   std::vector<io::SceneSetting> scene_settings;  // inline tables, overrides and --set, in order
   sim::SceneOptions base;                     // the resolved base scene
   std::vector<DispersionOptions> dispersions;
-  SweepOptions sweep;                         // [sweep] (campaign/sweep.hpp): one campaign per design value
   std::vector<std::string> warnings;          // plausibility warnings of the base scene (not written back)
   // Every rule of a campaign, in one place: empty, or "field: reason" naming the first field that
   // breaks one ("ensemble.n_runs: ...", "output.history_runs: ...", "dispersion[2].per: ...").
@@ -104,12 +93,9 @@ CampaignOptions parse_campaign_text(std::string_view text, const std::string& so
 std::string resolved_campaign_toml(const CampaignOptions& c);
 
 // The most runs the campaign can make (its method's; ensemble.n_runs unless the method runs more,
-// as stop's max_runs; with a [sweep], that many at each value it can run): what memory and disk are
+// as stop's max_runs, or a sweep that many at each value it can run): what memory and disk are
 // checked for.
-inline std::int64_t calc_max_runs(const CampaignOptions& c) {
-  const std::int64_t per_value = c.ensemble.method.options().calc_max_runs(c);
-  return c.sweep.active ? per_value * static_cast<std::int64_t>(calc_max_design_values(c.sweep)) : per_value;
-}
+inline std::int64_t calc_max_runs(const CampaignOptions& c) { return c.ensemble.method.options().calc_max_runs(c); }
 
 // The rules of a fixed design over ensemble.n_runs and ensemble.sampling (a Saltelli design's
 // blocks, each plan's limits), for the methods whose points are the design's: "" or "field: reason".

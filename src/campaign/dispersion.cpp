@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "campaign/design_axis.hpp"
 #include "sim/scene_keys.hpp"
 
 namespace truss::campaign {
@@ -89,14 +90,20 @@ DimensionLayout calc_layout(const CampaignOptions& c) {
     const std::string e = L.distributions.back().validate();
     if (!e.empty()) throw std::invalid_argument("dispersion of " + d.key + ": " + e);
   }
-  if (c.sweep.active) {
+  if (const DesignAxis* axis = find_design_axis(c)) {
     L.design = L.total++;
+    L.n_design_values = axis->n_design_values();
     L.sweep_dispersion = find_sweep_dispersion(c);
-    if (L.sweep_dispersion < 0) L.sweep_key = sim::find_scene_key(c.sweep.key);
-    else
-      for (std::size_t k = 0; k < c.sweep.n_design_values(); ++k)
-        L.sweep_distributions.push_back(make_distribution(
-            calc_campaign_at(c, k).dispersions[static_cast<std::size_t>(L.sweep_dispersion)]));
+    if (L.sweep_dispersion < 0) {
+      L.sweep_key = sim::find_scene_key(axis->key);
+    } else {
+      CampaignOptions at = c;
+      for (std::size_t k = 0; k < axis->n_design_values(); ++k) {
+        apply_design_value(c, k, at);
+        const std::size_t d = static_cast<std::size_t>(L.sweep_dispersion);
+        L.sweep_distributions.push_back(make_distribution(at.dispersions[d]));
+      }
+    }
   }
   return L;
 }
@@ -105,49 +112,84 @@ namespace {
 // The 3-sigma quantiles: tolerances are stated at 3 sigma, and a campaign of a few thousand runs
 // draws about that far into each tail.
 constexpr double kPlausibleLow = 0.00135, kPlausibleHigh = 0.99865;
+// A length's relative or offset draws move it at most this share of its nominal value: real
+// tolerances are a few per cent (+-0.5 mm on 0.18 m struts is 0.3 %, the shipped diagonal cut
+// lengths 3 % at 3 sigma); past it the draw is a unit slip (millimetres typed as metres).
+constexpr double kMaxLengthShare = 0.2;
 
-// Uniforms that make distribution `dist` draw each value of interest: the two 3-sigma quantiles,
-// or the middle of each value's probability for a discrete table.
-std::vector<double> plausibility_levels(const Distribution& dist) {
-  if (dist.kind != DistributionKind::discrete) return {kPlausibleLow, kPlausibleHigh};
-  double total = 0.0, below = 0.0;
-  for (double w : dist.weights) total += w;
-  std::vector<double> u;
-  for (double w : dist.weights) {
-    u.push_back((below + 0.5 * w) / total);
-    below += w;
+// A draw the plausibility check makes: its uniform and how the message names it.
+struct PlausibleDraw {
+  double u;
+  std::string where;
+};
+
+// The draws of interest: a uniform's two ends (every draw lies between them), the two 3-sigma
+// quantiles of an unbounded or truncated distribution, every value of a discrete table (its
+// uniform the middle of its probability).
+std::vector<PlausibleDraw> plausible_draws(const Distribution& dist) {
+  std::vector<PlausibleDraw> out;
+  if (dist.kind == DistributionKind::uniform) {
+    out.push_back({0.0, fmt::format("its lower end, a draw of {:.6g},", dist.calc_quantile(0.0))});
+    out.push_back({1.0, fmt::format("its upper end, a draw of {:.6g},", dist.calc_quantile(1.0))});
+  } else if (dist.kind != DistributionKind::discrete) {
+    for (double level : {kPlausibleLow, kPlausibleHigh})
+      out.push_back({level, fmt::format("its {} % quantile ({}3 sigma), a draw of {:.6g},", 100.0 * level,
+                                        level < 0.5 ? "-" : "+", dist.calc_quantile(level))});
+  } else {
+    double total = 0.0, below = 0.0;
+    for (double w : dist.weights) total += w;
+    for (std::size_t k = 0; k < dist.weights.size(); ++k) {
+      out.push_back({(below + 0.5 * dist.weights[k]) / total, fmt::format("its value {}", dist.values[k])});
+      below += dist.weights[k];
+    }
   }
-  return u;
+  return out;
 }
+
+// A length (a key in m that must be positive) moved by a relative or offset draw past
+// kMaxLengthShare of its nominal value: why, else "".
+std::string check_length_share(const DispersionOptions& d, double draw, double v) {
+  const sim::SceneKey* key = sim::find_scene_key(d.key);
+  const bool length = key && key->unit == "m" && key->hard.lo == 0.0 && key->hard.lo_open;
+  if (!length || d.apply == Apply::absolute) return {};
+  const double nominal = d.apply == Apply::relative ? v / (1.0 + draw) : v - draw;
+  const double share = d.apply == Apply::relative ? std::abs(draw) : std::abs(draw / nominal);
+  if (!(share > kMaxLengthShare)) return {};
+  const std::string slip = d.apply == Apply::offset
+                               ? fmt::format(": millimetres typed as metres? {:.6g} mm is {:.6g} m", draw, draw * 1e-3)
+                               : ": a percentage typed as a fraction? std = 0.05 is 5 %";
+  return fmt::format("a length moved {:.3g} % from its nominal {:.6g} m (a length's draws are refused past {:g} % of "
+                     "it{})", 100.0 * share, nominal, 100.0 * kMaxLengthShare, slip);
+}
+
 }  // namespace
 
 std::string check_dispersion_draws(const CampaignOptions& c, std::size_t i) {
   const DispersionOptions& d = c.dispersions[i];
   const DimensionLayout L = calc_layout(c);
   const Distribution& dist = L.distributions[i];
-  for (double level : plausibility_levels(dist)) {
+  for (const PlausibleDraw& p : plausible_draws(dist)) {
     std::vector<double> u(static_cast<std::size_t>(std::max(1, L.total)), 0.5);  // a sweep: its middle value
-    for (int k = 0; k < L.count[i]; ++k) u[static_cast<std::size_t>(L.offset[i] + k)] = level;
-    const double draw = dist.calc_quantile(level);
-    std::string why, value;
+    for (int k = 0; k < L.count[i]; ++k) u[static_cast<std::size_t>(L.offset[i] + k)] = p.u;
+    std::string why, value, refusal = "which the model refuses", outcome = "most runs would end as invalid input";
     try {
       const RunInputs in = calc_run_inputs(c, L, u.data());
       const double v = in.values[i].front();
       value = fmt::format("{:.6g} {}", v, find_key_units(d.key));
-      why = in.scene.validate();
+      why = check_length_share(d, dist.calc_quantile(p.u), v);
+      if (!why.empty()) {
+        refusal = "which no tolerance gives";
+        outcome = "the runs would study a mast no drawing describes";
+      }
+      if (why.empty()) why = in.scene.validate();
       if (why.empty()) why = sim::validate_mast(in.mast, in.scene);
     } catch (const std::exception& e) {
       why = e.what();
     }
     if (why.empty()) continue;
-    const std::string where = dist.kind == DistributionKind::discrete
-                                  ? fmt::format("its value {}", draw)
-                                  : fmt::format("its {} % quantile ({}3 sigma), a draw of {:.6g},", 100.0 * level,
-                                                level < 0.5 ? "-" : "+", draw);
-    return fmt::format("{} ({} {}) is implausible: {} gives {} = {}, which the model refuses ({}); most runs would "
-                       "end as invalid input{}",
-                       d.key, to_string(d.apply),
-                       to_string(d.distribution), where, d.key, value.empty() ? "no value" : value, why,
+    return fmt::format("{} ({} {}) is implausible: {} gives {} = {}, {} ({}); {}{}", d.key, to_string(d.apply),
+                       to_string(d.distribution), p.where, d.key, value.empty() ? "no value" : value, refusal, why,
+                       outcome,
                        d.apply == Apply::relative ? " (apply = \"relative\" takes a fraction of the nominal value: "
                                                     "std = 0.05 is 5 %)"
                                                   : "");
@@ -162,8 +204,8 @@ RunInputs calc_run_inputs(const CampaignOptions& c, const DimensionLayout& L, co
   // A sweep's value: into the base scene (the nominal the draws apply to) or the swept distribution.
   std::size_t sweep_k = 0;
   if (L.design >= 0) {
-    sweep_k = L.find_sweep_index(u[L.design], c.sweep.n_design_values());
-    const double value = c.sweep.find_value(sweep_k);
+    sweep_k = L.find_sweep_index(u[L.design], L.n_design_values);
+    const double value = find_design_axis(c)->find_value(sweep_k);
     if (L.sweep_key) L.sweep_key->set_real(in.scene, value);
     in.values.push_back({value});
   }

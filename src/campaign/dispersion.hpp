@@ -24,10 +24,11 @@ struct DimensionLayout {
   std::vector<const sim::SceneKey*> keys;   // each dispersion's scene key, looked up once
   // Each bay's J_c follows its (dispersed) strut mass and length: J_c neither set nor dispersed.
   bool strut_inertia_follows = true;
-  // A sweep (campaign/sweep.hpp): the design coordinate is the last dimension, u = (k + 0.5) / n for
+  // A sweep (campaign/design_axis.hpp): the design coordinate is the last dimension, u = (k + 0.5) / n for
   // design value k of n (-1: no sweep); a nominal sweep's scene key, or a spread sweep's dispersion
   // and its distribution at each design value.
   int design = -1;
+  std::size_t n_design_values = 0;
   const sim::SceneKey* sweep_key = nullptr;
   int sweep_dispersion = -1;
   std::vector<Distribution> sweep_distributions;

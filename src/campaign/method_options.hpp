@@ -8,7 +8,9 @@
 // Which method: ensemble.method = "<name>"; absent, "design". A row that is selected by its table
 // (stop) is also chosen by [ensemble.<name>] under "design", and its resolved TOML is written so.
 // A table of a row that is not the campaign's method is refused; `ensemble.<name> = false` (e.g.
-// --set ensemble.stop=false) stands for no table.
+// --set ensemble.stop=false) stands for no table. A composite row (a design sweep) is chosen by its
+// root table ([sweep]) and runs the method ensemble.method names, at each value of its design axis:
+// its options hold that method's (inner_method()) and the axis (design_axis()).
 #pragma once
 #include <cstdint>
 #include <functional>
@@ -22,8 +24,11 @@
 namespace truss::campaign {
 
 struct CampaignOptions;
+struct DesignAxis;      // design_axis.hpp
 struct FailureOptions;  // failure.hpp
-struct MethodInput;  // what a row's parser reads (toml_read.hpp)
+struct MethodInput;     // what a row's parser reads (method_input.hpp)
+struct TableDoc;        // option_table.hpp
+class MethodChoice;
 
 inline constexpr const char* kDefaultMethod = "design";
 
@@ -51,6 +56,10 @@ class MethodOptions {
   // The failure event ([failure], failure.hpp) whose probability the method estimates, or null
   // when it reads none (a design sweep needs one at each of its values).
   virtual const FailureOptions* failure_event() const { return nullptr; }
+  // A composite's: the method it runs at each design value (as that value's campaign holds it),
+  // and its design axis; null for a method of its own.
+  virtual const MethodChoice* inner_method() const { return nullptr; }
+  virtual const DesignAxis* design_axis() const { return nullptr; }
 };
 
 // Copies a MethodOptions subclass T with the campaign (clone()).
@@ -95,12 +104,19 @@ class MethodChoice {
   std::unique_ptr<MethodOptions> options_;
 };
 
+// How a row is chosen: by ensemble.method = "<name>"; also by its table [ensemble.<name>] under
+// "design" (stop); or, a composite, by its root table [<name>], around the method chosen so (sweep).
+enum class MethodSelection { by_name, by_own_table, wraps };
+
 // A row as the campaign parser sees it.
 struct MethodSyntax {
   std::string name;                      // ensemble.method = "<name>"; its table [ensemble.<name>]
   std::vector<std::string> root_tables;  // root tables it reads besides its own ([failure])
-  bool selected_by_table = false;        // [ensemble.<name>] under "design" selects it
+  MethodSelection selection = MethodSelection::by_name;
   std::function<std::unique_ptr<MethodOptions>(const MethodInput&)> parse;  // throws io::InputError
+  TableDoc (*table_doc)() = nullptr;     // its own table for the reference in docs (null: none)
+  // Its own table's path: "ensemble.<name>", a composite's "<name>".
+  std::string own_table() const { return selection == MethodSelection::wraps ? name : "ensemble." + name; }
 };
 
 // The rows the parser knows (methods::MethodTable). A composite method's parser reads its inner

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include "campaign/design_axis.hpp"
 #include "util/bytes.hpp"
 
 namespace truss::campaign {
@@ -58,7 +59,7 @@ RecordLayout::RecordLayout(const CampaignOptions& c, const DimensionLayout& dims
     in.dispersion = static_cast<int>(k);
     add(std::move(in));
   }
-  if (c.sweep.active) {  // a sweep's design value (the run's last input, calc_run_inputs)
+  if (find_design_axis(c) != nullptr) {  // a sweep's design value (the run's last input, calc_run_inputs)
     Field in{"sweep_value", Group::runs, ValueType::f64, 1, Scale::none, sweep_variable_units(c)};
     in.dispersion = static_cast<int>(c.dispersions.size());
     add(std::move(in));

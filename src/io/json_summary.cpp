@@ -28,6 +28,30 @@ using sim::TimeHistory;
         nullptr                                                                        \
   }
 
+// The scenes that compute a field (RunField::defined_when; sim/result.hpp says which are NaN where).
+#define TRUSS_RUN_F64_IF(NAME, UNITS, WHEN)                                                                \
+  RunField {                                                                                               \
+    #NAME, UNITS, [](const RunResult& r) -> FieldValue { return double{r.NAME}; }, &RunResult::NAME, nullptr, \
+        WHEN                                                                                               \
+  }
+
+namespace {
+const char* velocity_drive(const sim::SceneOptions& s) {
+  return s.drive.mode == model::DriveMode::velocity ? nullptr : "drive.mode = \"velocity\"";
+}
+const char* motor_line(const sim::SceneOptions& s) {
+  return s.drive.mode != model::DriveMode::torque ? nullptr : "drive.mode = \"velocity\" or \"motor\"";
+}
+const char* free_stack(const sim::SceneOptions& s) {
+  return s.stack.mode == sim::StackMode::free ? nullptr : "stack.mode = \"free\"";
+}
+const char* free_stack_deploy(const sim::SceneOptions& s) {
+  return s.stack.mode == sim::StackMode::free && s.run.direction == model::Direction::deploy
+             ? nullptr
+             : "stack.mode = \"free\" and run.direction = \"deploy\"";
+}
+}  // namespace
+
 const std::vector<RunField>& run_result_fields() {
   static const std::vector<RunField> f = {
       TRUSS_RUN_STR(direction),
@@ -44,15 +68,15 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_I64(min_drive_force_bay),
       TRUSS_RUN_F64(peak_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(min_drive_torque_Nm, "Nm"),
-      TRUSS_RUN_F64(motor_torque_at_speed_Nm, "Nm"),
-      TRUSS_RUN_F64(motor_torque_margin_Nm, "Nm"),
+      TRUSS_RUN_F64_IF(motor_torque_at_speed_Nm, "Nm", &velocity_drive),
+      TRUSS_RUN_F64_IF(motor_torque_margin_Nm, "Nm", &velocity_drive),
       TRUSS_RUN_F64(peak_motor_torque_Nm, "Nm"),
       TRUSS_RUN_F64(peak_static_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(peak_inertial_drive_torque_Nm, "Nm"),
       TRUSS_RUN_F64(motorisation_required_torque_Nm, "Nm"),
       TRUSS_RUN_F64(motorisation_available_torque_Nm, "Nm"),
       TRUSS_RUN_F64(motorisation_margin, "1"),
-      TRUSS_RUN_F64(motorisation_stall_torque_Nm, "Nm"),
+      TRUSS_RUN_F64_IF(motorisation_stall_torque_Nm, "Nm", &motor_line),
       TRUSS_RUN_F64(peak_pin_force_N, "N"),
       TRUSS_RUN_F64(peak_pin_force_time_s, "s"),
       TRUSS_RUN_I64(peak_pin_force_bay),
@@ -72,10 +96,10 @@ const std::vector<RunField>& run_result_fields() {
       TRUSS_RUN_F64(max_rail_residual_m, "m"),
       TRUSS_RUN_I64(rail_miss_bay),
       TRUSS_RUN_F64(rail_miss_closest_approach_m, "m"),
-      TRUSS_RUN_F64(rail_margin_m, "m"),
+      TRUSS_RUN_F64_IF(rail_margin_m, "m", &free_stack_deploy),
       TRUSS_RUN_F64(rail_miss_closest_approach_time_s, "s"),
       TRUSS_RUN_F64(rail_miss_above_rail_top_time_s, "s"),
-      TRUSS_RUN_F64(min_bay_opening_m, "m"),
+      TRUSS_RUN_F64_IF(min_bay_opening_m, "m", &free_stack),
       TRUSS_RUN_F64(min_bay_opening_time_s, "s"),
       TRUSS_RUN_I64(min_bay_opening_bay),
       TRUSS_RUN_I64(contact_landings),

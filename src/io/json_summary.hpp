@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "sim/result.hpp"
+#include "sim/scene.hpp"
 
 namespace truss::io {
 
@@ -25,12 +26,15 @@ using FieldValue = std::variant<double, std::int64_t, std::string>;
 // Besides the variant `get`, each field has a typed accessor for writers that copy many values a
 // run (the campaign record): a float64 field its member (f64), an integer field its value as int64
 // (get_i64); the other is null. Both come from the same line of the table.
+// A field that only some scenes compute (NaN in every run of the others) says which: defined_when
+// returns null for a scene that computes it, else the condition ("drive.mode = \"velocity\"").
 struct RunField {
   const char* name;
   const char* units;
   FieldValue (*get)(const sim::RunResult&);
   double sim::RunResult::*f64 = nullptr;
   std::int64_t (*get_i64)(const sim::RunResult&) = nullptr;
+  const char* (*defined_when)(const sim::SceneOptions&) = nullptr;
 };
 struct BayField {
   const char* name;

@@ -424,6 +424,8 @@ sim::SceneOptions parse_scene_file_with(const std::string& path, const std::vect
   return parse_scene(read_input_file(path, "scene file"), path, overrides, true, warnings);
 }
 
+std::string toml_string(std::string_view s) { return quote(s); }
+
 std::string toml_double(double v) {
   if (std::isnan(v)) return "nan";
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";

@@ -76,6 +76,8 @@ std::string resolved_scene_toml(const sim::SceneOptions& scene);
 
 // A TOML float that reads back to exactly v ("12.0", "1e-05", "nan", "-inf").
 std::string toml_double(double v);
+// A TOML basic string (double quotes, escaped) that reads back to exactly s.
+std::string toml_string(std::string_view s);
 
 // All known keys, "table.key", in the order resolved_scene_toml writes them.
 std::vector<std::string> known_scene_keys();

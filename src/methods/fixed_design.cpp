@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "campaign/toml_read.hpp"
+#include "campaign/method_input.hpp"
 #include "io/h5_util.hpp"
 #include "results/result_store.hpp"
 
@@ -28,13 +28,22 @@ constexpr std::uint64_t kBootstrapTag = 0x53454e53495449ULL;  // "SENSITI": boot
 }  // namespace
 
 std::unique_ptr<campaign::MethodOptions> DesignOptions::parse(const campaign::MethodInput& in) {
-  if (in.table != nullptr)
-    for (const auto& [k, v] : *in.table)
-      in.ctx.fail(&v, fmt::format("unknown key '{}{}' (the design's keys are ensemble.n_runs and ensemble.sampling)",
-                                  in.prefix, k.str()));
+  if (in.table != nullptr && !in.table->empty())  // [ensemble.design] has no keys
+    in.source.fail(&in.table->cbegin()->second,
+                   fmt::format("unknown key '{}{}' (the design's keys are ensemble.n_runs and ensemble.sampling)",
+                               in.prefix, in.table->cbegin()->first.str()));
   auto o = std::make_unique<DesignOptions>();
-  campaign::detail::parse_sweep_failure(in.ctx, in.root, o->failure);
+  campaign::read_failure_event(in, o->failure);
   return o;
+}
+
+std::string DesignOptions::validate(const campaign::CampaignOptions& c) const {
+  if (failure.kind != campaign::FailureKind::none && c.ensemble.sampling != sampling::SamplingMethod::monte_carlo)
+    return fmt::format("ensemble.sampling: \"{}\" gives no binomial interval of a probability: the [failure] "
+                       "event's probability is the share of failing Monte Carlo runs (ensemble.sampling = "
+                       "\"monte_carlo\"), or use subset simulation (ensemble.method = \"subset\")",
+                       sampling::to_string(c.ensemble.sampling));
+  return campaign::validate_sampling(c);
 }
 
 std::unique_ptr<Method> make_fixed_design(const campaign::CampaignContext& ctx, const MethodTable&) {
@@ -42,15 +51,51 @@ std::unique_ptr<Method> make_fixed_design(const campaign::CampaignContext& ctx, 
   return std::make_unique<FixedDesign>(ctx);
 }
 
-FixedDesign::FixedDesign(const campaign::CampaignContext& ctx) : ctx_(ctx), plan_(make_plan(ctx)) {}
+FixedDesign::FixedDesign(const campaign::CampaignContext& ctx) : ctx_(ctx), plan_(make_plan(ctx)) {
+  const campaign::FailureOptions& f = ctx.options.ensemble.method.as<DesignOptions>().failure;
+  if (f.kind != campaign::FailureKind::none) failures_.emplace(f);
+}
 
-Proposal FixedDesign::propose(std::int64_t round, const RoundRecords&) {
+std::vector<std::string> FixedDesign::observed_outputs() const {
+  if (!failures_) return {};
+  return {ctx_.options.ensemble.method.as<DesignOptions>().failure.column};
+}
+
+Proposal FixedDesign::propose(std::int64_t round, const RoundRecords& previous) {
+  if (round == 1 && failures_) failures_->add(previous);
   if (round > 0) return {};
   return {ctx_.options.ensemble.n_runs, {}};
 }
 
 void FixedDesign::calc_uniforms(const RoundPlan&, std::int64_t run, double* u) const {
   if (ctx_.dims.total > 0) plan_.calc_uniforms(run, u);
+}
+
+std::optional<FailureEstimate> FixedDesign::calc_failure_estimate(double confidence) const {
+  if (!failures_) return std::nullopt;
+  return failures_->calc_binomial_estimate(confidence);
+}
+
+void FixedDesign::write_results(const ResultsPlace& place) const {
+  if (!failures_) return;
+  using namespace io::h5;
+  const campaign::FailureOptions& f = ctx_.options.ensemble.method.as<DesignOptions>().failure;
+  const std::string unit = campaign::find_run_column_unit(f.column);
+  Handle g = create_group(place.group, "failure");
+  write_failure_attributes(g.get(), f, "failure_units");
+  write_scalar(g.get(), "runs", "1", failures_->runs());
+  write_scalar(g.get(), "failures", "1", failures_->failures());
+  write_scalar(g.get(), "p", "1", failures_->calc_binomial_estimate(0.95).bounds.p);
+  write_scalar(g.get(), "nearest_margin", unit.c_str(), failures_->nearest_margin());
+}
+
+std::string FixedDesign::calc_result_text() const {
+  if (!failures_) return {};
+  const campaign::FailureOptions& f = ctx_.options.ensemble.method.as<DesignOptions>().failure;
+  const FailureEstimate e = failures_->calc_binomial_estimate(0.95);
+  return fmt::format("[truss-campaign] P({} fails) by Monte Carlo: {} failures in {} runs, p = {:.4g} (95 % "
+                     "Clopper-Pearson [{:.4g}, {:.4g}])\n", f.column, e.failures, e.runs, e.bounds.p, e.bounds.lower,
+                     e.bounds.upper);
 }
 
 const std::vector<std::string>& Saltelli::outputs() {
@@ -94,10 +139,12 @@ OutputSensitivity Saltelli::calc_sensitivity(const std::string& output, const st
   return s;
 }
 
-void Saltelli::write_results(hid_t file, std::int64_t n_runs) const {
+void Saltelli::write_results(const ResultsPlace& place) const {
   using namespace io::h5;
+  const hid_t file = place.file;
+  const std::int64_t n_runs = place.n_runs;
   const std::vector<std::int8_t> status = results::read_status(file, n_runs);
-  Handle g = create_group(file, "sensitivity");
+  Handle g = create_group(place.group, "sensitivity");
   std::vector<std::string> factors;
   for (const auto& d : ctx_.options.dispersions) factors.push_back(d.key);
   write_strings(g.get(), "factor", factors);

@@ -25,6 +25,8 @@ RoundPlan RoundPlan::from_bytes(std::string_view bytes) {
   return p;
 }
 
-void Method::write_results(hid_t, std::int64_t) const {}
+void Method::write_results(const ResultsPlace&) const {}
+
+std::optional<FailureEstimate> Method::calc_failure_estimate(double) const { return std::nullopt; }
 
 }  // namespace truss::methods

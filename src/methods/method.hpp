@@ -14,12 +14,15 @@
 #include <hdf5.h>
 
 #include <cstdint>
+#include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "campaign/evaluate.hpp"
+#include "sampling/allowable.hpp"
 
 namespace truss::methods {
 
@@ -53,6 +56,29 @@ struct Proposal {
   std::string state;
 };
 
+// Where a method writes its results (write_results): its group under `group` (the file's root, or
+// the group a composite gives it), its runs rows of the file's /runs: rows[i] is its run i's row
+// (empty: run i is row i).
+struct ResultsPlace {
+  hid_t file = -1;
+  hid_t group = -1;
+  std::int64_t n_runs = 0;         // the rows of /runs
+  std::vector<std::int64_t> rows;  // an inner method's runs' rows
+  std::int64_t find_row(std::int64_t run) const { return rows.empty() ? run : rows.at(static_cast<std::size_t>(run)); }
+};
+
+// What a method that estimates the probability of its failure event (its options' failure_event())
+// has found after its last propose(): p with its interval and one-sided upper bound at the
+// confidence asked, the coefficient of variation the bounds use, the runs and how it ended.
+struct FailureEstimate {
+  sampling::ProbabilityBounds bounds;
+  double cov = std::numeric_limits<double>::quiet_NaN();
+  std::int64_t runs = 0;
+  std::int64_t failures = -1;  // failing runs counted (-1: p is not a count, subset simulation)
+  std::string status, message;
+  double nearest_margin = std::numeric_limits<double>::quiet_NaN();  // the smallest finite margin of its runs
+};
+
 class Method {
  public:
   virtual ~Method() = default;
@@ -68,9 +94,12 @@ class Method {
   virtual Proposal propose(std::int64_t round, const RoundRecords& previous) = 0;
   // Any rank: the point of run `run` of round `plan`, as the campaign's uniforms u[0 .. dims).
   virtual void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const = 0;
-  // Rank 0, once every run is in the results file: the method's own results (Saltelli: the Sobol'
-  // indices, /sensitivity). `n_runs`: the runs of all rounds.
-  virtual void write_results(hid_t file, std::int64_t n_runs) const;
+  // Rank 0, once every run is in the results file: the method's own results, its group under
+  // place.group (Saltelli: the Sobol' indices, /sensitivity).
+  virtual void write_results(const ResultsPlace& place) const;
+  // A method whose options have a failure event: the estimate of its probability (after the last
+  // propose()); nothing from the others. A composite (a design sweep) reads its inner methods' so.
+  virtual std::optional<FailureEstimate> calc_failure_estimate(double confidence) const;
   // False when the runs are not draws of the dispersions (subset simulation's Markov chains): the
   // command then prints no design values (percentiles) of them.
   virtual bool runs_are_draws() const { return true; }

@@ -29,8 +29,6 @@ std::vector<const campaign::MethodSyntax*> MethodTable::list() const {
 }
 
 std::unique_ptr<Method> MethodTable::make(const campaign::CampaignContext& ctx) const {
-  // A [sweep] runs the method of ensemble.method at each of its values (sweep_method.hpp).
-  if (ctx.options.sweep.active) return std::make_unique<SweepMethod>(ctx);
   for (const MethodRow& r : rows_)
     if (r.syntax.name == ctx.options.ensemble.method.name()) return r.make(ctx, *this);
   throw std::logic_error("ensemble.method \"" + ctx.options.ensemble.method.name() + "\" is not in the method table");
@@ -42,12 +40,22 @@ MethodTable MethodTable::with(MethodRow row) const {
   return MethodTable(std::move(rows));
 }
 
+namespace {
+constexpr auto by_name = campaign::MethodSelection::by_name, by_own_table = campaign::MethodSelection::by_own_table,
+               wraps = campaign::MethodSelection::wraps;
+std::unique_ptr<Method> make_sweep_method(const campaign::CampaignContext& ctx, const MethodTable& table) {
+  return std::make_unique<SweepMethod>(ctx, table);
+}
+}  // namespace
+
 const MethodTable& builtin_methods() {
   static const MethodTable table({
-      // design and stop read [failure] only as a [sweep]'s event (campaign/failure.hpp).
-      {{campaign::kDefaultMethod, {"failure"}, false, &DesignOptions::parse}, &make_fixed_design},
-      {{"stop", {"failure"}, true, &StopOptions::parse}, &make_method_of<StopMethod>},
-      {{"subset", {"failure"}, false, &SubsetMethodOptions::parse}, &make_method_of<SubsetMethod>},
+      {{campaign::kDefaultMethod, {"failure"}, by_name, &DesignOptions::parse}, &make_fixed_design},
+      {{"stop", {"failure"}, by_own_table, &StopOptions::parse, &StopOptions::table_doc}, &make_method_of<StopMethod>},
+      {{"subset", {"failure"}, by_name, &SubsetMethodOptions::parse, &SubsetMethodOptions::table_doc},
+       &make_method_of<SubsetMethod>},
+      // A composite: chosen by [sweep], it runs the method ensemble.method names at each value.
+      {{"sweep", {}, wraps, &SweepOptions::parse, &SweepOptions::table_doc}, &make_sweep_method},
   });
   return table;
 }

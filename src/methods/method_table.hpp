@@ -29,8 +29,8 @@ class MethodTable final : public campaign::MethodCatalog {
   explicit MethodTable(std::vector<MethodRow> rows);
   const campaign::MethodSyntax* find(std::string_view name) const override;
   std::vector<const campaign::MethodSyntax*> list() const override;
-  // The method of ctx.options.ensemble.method; with a [sweep], the SweepMethod that runs it at each
-  // of the sweep's values.
+  // The method of ctx.options.ensemble.method (with a [sweep], the composite that makes the method
+  // ensemble.method names at each of its values from this table).
   std::unique_ptr<Method> make(const campaign::CampaignContext& ctx) const;
   // This table and one row more (a test's method).
   MethodTable with(MethodRow row) const;
@@ -45,7 +45,7 @@ std::unique_ptr<Method> make_method_of(const campaign::CampaignContext& ctx, con
   return std::make_unique<M>(ctx);
 }
 
-// design (Monte Carlo, Latin hypercube, Sobol', Saltelli), stop, subset.
+// design (Monte Carlo, Latin hypercube, Sobol', Saltelli), stop, subset; sweep, the composite.
 const MethodTable& builtin_methods();
 
 // builtin_methods().make(ctx).

@@ -5,31 +5,33 @@
 
 #include <fmt/format.h>
 
-#include "campaign/toml_read.hpp"
+#include "campaign/method_input.hpp"
 #include "io/h5_util.hpp"
 
 namespace truss::methods {
 
+const campaign::OptionTable<StopOptions>& StopOptions::table() {
+  using campaign::kAnyNumber;
+  using S = StopOptions;
+  static const campaign::OptionTable<S> t{
+      "ensemble.stop", "sequential stopping: Monte Carlo rounds from n_runs until the target holds, or max_runs", {
+          TRUSS_OPTION_CHOICE(S, "target", rule.target, "what must hold",
+                              campaign::choice_names(sampling::kStopTargetNames)),
+          campaign::written_if(TRUSS_OPTION_TEXT(S, "output", output, "percentile_bound: a float64 column of /runs"),
+                               +[](const S& o) { return !o.output.empty(); }),
+          TRUSS_OPTION_REAL(S, "level", rule.level, "1", kAnyNumber, "percentile_bound: the quantile, in (0, 1)"),
+          TRUSS_OPTION_REAL(S, "width", rule.width, "1", kAnyNumber,
+                            "(bound - estimate) / estimate; the probability targets' half-width (absolute, or over p)"),
+          TRUSS_OPTION_REAL(S, "confidence", rule.confidence, "1", kAnyNumber, "of the bound or interval, in (0, 1)"),
+          TRUSS_OPTION_INT(S, "max_runs", rule.max_runs, "1", kAnyNumber, "cap on the runs of all rounds"),
+      }};
+  return t;
+}
+
 std::unique_ptr<campaign::MethodOptions> StopOptions::parse(const campaign::MethodInput& in) {
   auto o = std::make_unique<StopOptions>();
-  campaign::detail::parse_sweep_failure(in.ctx, in.root, o->failure);
-  if (in.table == nullptr) return o;
-  const campaign::detail::Ctx& c = in.ctx;
-  sampling::StopRule& r = o->rule;
-  const std::vector<std::string> targets(std::begin(sampling::kStopTargetNames), std::end(sampling::kStopTargetNames));
-  for (const auto& [k, v] : *in.table) {
-    const std::string key = in.prefix + std::string(k.str());
-    if (k == "target") {
-      const std::string s = campaign::detail::get_string(c, v, key, targets);
-      r.target = static_cast<sampling::StopTarget>(std::find(targets.begin(), targets.end(), s) - targets.begin());
-    } else if (k == "output") o->output = campaign::detail::get_string(c, v, key);
-    else if (k == "level") r.level = campaign::detail::get_number(c, v, key);
-    else if (k == "width") r.width = campaign::detail::get_number(c, v, key);
-    else if (k == "confidence") r.confidence = campaign::detail::get_number(c, v, key);
-    else if (k == "max_runs") r.max_runs = campaign::detail::get_integer(c, v, key);
-    else c.fail(&v, campaign::detail::unknown_key_text(key, in.prefix + "target, output, level, width, confidence, "
-                                                           "max_runs"));
-  }
+  campaign::read_method_table(in, table(), *o);
+  campaign::read_failure_event(in, o->failure);
   return o;
 }
 
@@ -45,10 +47,9 @@ std::string StopOptions::validate(const campaign::CampaignOptions& c) const {
   if (is_percentile() && campaign::find_run_column_unit(output).empty())
     return fmt::format("ensemble.stop.output: \"{}\" is not a float64 column of /runs (e.g. peak_drive_torque_Nm)",
                        output);
-  if (c.sweep.active && is_percentile())
-    return "ensemble.stop.target: \"percentile_bound\" estimates a percentile, not a probability: a sweep's inner "
-           "method is subset simulation (ensemble.method = \"subset\"), Monte Carlo, or [ensemble.stop] with a "
-           "probability target";
+  if (failure.kind != campaign::FailureKind::none && is_percentile())
+    return "ensemble.stop.target: \"percentile_bound\" estimates a percentile, not a probability: a [failure] event "
+           "goes with a probability target (probability_half_width, probability_relative_half_width)";
   if (!is_percentile() && !output.empty())
     return "ensemble.stop.output: the probability targets count the runs that are not ok; output goes with "
            "target = \"percentile_bound\"";
@@ -56,20 +57,20 @@ std::string StopOptions::validate(const campaign::CampaignOptions& c) const {
 }
 
 std::string StopOptions::to_toml() const {
-  std::string t = fmt::format("[ensemble.stop]\ntarget = \"{}\"\n", sampling::to_string(rule.target));
-  if (!output.empty()) t += fmt::format("output = \"{}\"\n", output);
-  return t + fmt::format("level = {}\nwidth = {}\nconfidence = {}\nmax_runs = {}\n\n", rule.level, rule.width,
-                         rule.confidence, rule.max_runs) + campaign::failure_toml(failure);
+  return "[ensemble.stop]\n" + campaign::write_options(table(), *this) + "\n" + campaign::failure_toml(failure);
 }
 
 StopMethod::StopMethod(const campaign::CampaignContext& ctx)
     : ctx_(ctx),
       opt_(ctx.options.ensemble.method.as<StopOptions>()),
       plan_(sampling::SamplingMethod::monte_carlo, opt_.rule.max_runs, std::max(1, ctx.dims.total),
-            ctx.options.ensemble.master_seed) {}
+            ctx.options.ensemble.master_seed) {
+  if (opt_.failure.kind != campaign::FailureKind::none) event_.emplace(opt_.failure);
+}
 
 std::vector<std::string> StopMethod::observed_outputs() const {
   if (opt_.is_percentile()) return {opt_.output};
+  if (event_) return {opt_.failure.column};
   return {};
 }
 
@@ -83,6 +84,10 @@ Proposal StopMethod::propose(std::int64_t round, const RoundRecords& previous) {
     if (opt_.is_percentile()) values_.push_back(is_ok ? previous.outputs.at(0)[i] : std::nan(""));
   }
   runs_ += static_cast<std::int64_t>(previous.status.size());
+  if (event_) {  // the runs that fail the event, not those that are not ok
+    event_->add(previous);
+    failures_ = event_->failures();
+  }
   decisions_.push_back(opt_.is_percentile() ? sampling::decide_percentile_stop(opt_.rule, values_)
                                              : sampling::decide_probability_stop(opt_.rule, failures_, runs_));
   const sampling::StopDecision& d = decisions_.back();
@@ -94,10 +99,20 @@ void StopMethod::calc_uniforms(const RoundPlan&, std::int64_t run, double* u) co
   if (ctx_.dims.total > 0) plan_.calc_uniforms(run, u);
 }
 
-void StopMethod::write_results(hid_t file, std::int64_t) const {
+std::optional<FailureEstimate> StopMethod::calc_failure_estimate(double confidence) const {
+  if (!event_) return std::nullopt;
+  FailureEstimate e = event_->calc_binomial_estimate(confidence);
+  if (!decisions_.empty()) {
+    e.status = sampling::to_string(decisions_.back().state);
+    e.message = decisions_.back().reason;
+  }
+  return e;
+}
+
+void StopMethod::write_results(const ResultsPlace& place) const {
   using namespace io::h5;
   const sampling::StopRule& r = opt_.rule;
-  Handle g = create_group(file, "stop");
+  Handle g = create_group(place.group, "stop");
   write_string_attribute(g.get(), "target", sampling::to_string(r.target));
   write_string_attribute(g.get(), "output", opt_.output);
   write_double_attribute(g.get(), "level", r.level);

@@ -6,7 +6,7 @@
 #include <fmt/format.h>
 
 #include "campaign/dispersion.hpp"
-#include "campaign/toml_read.hpp"
+#include "campaign/method_input.hpp"
 #include "io/h5_util.hpp"
 #include "results/result_store.hpp"
 #include "sim/scene_keys.hpp"
@@ -16,22 +16,10 @@ namespace truss::methods {
 SubsetMethod::SubsetMethod(const campaign::CampaignContext& ctx)
     : ctx_(ctx),
       opt_(ctx.options.ensemble.method.as<SubsetMethodOptions>()),
-      sim_opt_(opt_.calc_sim_options(ctx.options)) {
+      sim_opt_(opt_.calc_sim_options(ctx.options)),
+      margins_(opt_.failure) {
   if (ctx_.record.find_output(opt_.failure.column) < 0)
     throw std::logic_error(fmt::format("subset: {} is not a float64 output of the record", opt_.failure.column));
-}
-
-std::vector<double> SubsetMethod::calc_margins(const FailureOptions& f, const RoundRecords& r) {
-  const std::vector<double>& y = r.outputs.at(0);
-  std::vector<double> m(y.size());
-  for (std::size_t i = 0; i < y.size(); ++i) {
-    const double v = f.kind == FailureKind::above   ? f.threshold - y[i]
-                     : f.kind == FailureKind::below ? y[i] - f.threshold
-                                                    : y[i];
-    const bool says = r.status[i] == static_cast<std::int8_t>(sim::RunStatus::ok) || v <= 0.0;
-    m[i] = says ? v : std::numeric_limits<double>::quiet_NaN();
-  }
-  return m;
 }
 
 Proposal SubsetMethod::propose(std::int64_t round, const RoundRecords& previous) {
@@ -39,7 +27,7 @@ Proposal SubsetMethod::propose(std::int64_t round, const RoundRecords& previous)
     sim_.emplace(sim_opt_);
   } else {
     if (!sim_ || sim_->done()) return {};
-    sim_->add_margins(calc_margins(opt_.failure, previous));
+    sim_->add_margins(margins_.add(previous));
     if (sim_->done()) return {};
   }
   const sampling::SubsetRound& r = sim_->round();
@@ -84,34 +72,26 @@ std::string SubsetMethodOptions::describe_max_runs(const campaign::CampaignOptio
                      subset.max_levels, c.ensemble.n_runs);
 }
 
-namespace {
-
-using campaign::detail::Ctx;
-using campaign::detail::get_integer;
-using campaign::detail::get_number;
-
-void parse_subset_table(const Ctx& c, const toml::table& t, const std::string& prefix, SubsetSettings& s) {
-  for (const auto& [k, v] : t) {
-    const std::string key = prefix + std::string(k.str());
-    if (k == "n_per_level") s.n_per_level = get_integer(c, v, key);
-    else if (k == "p0") s.p0 = get_number(c, v, key);
-    else if (k == "max_levels") {
-      const std::int64_t m = get_integer(c, v, key);
-      if (m < 1 || m > 1000) c.fail(&v, fmt::format("{}: {} (must lie in [1, 1000])", key, m));
-      s.max_levels = static_cast<int>(m);
-    } else if (k == "proposal_half_width") s.proposal_half_width = get_number(c, v, key);
-    else c.fail(&v, campaign::detail::unknown_key_text(key, fmt::format("{0}n_per_level, {0}p0, {0}max_levels, "
-                                                                        "{0}proposal_half_width", prefix)));
-  }
+const campaign::OptionTable<SubsetMethodOptions>& SubsetMethodOptions::table() {
+  using S = SubsetMethodOptions;
+  static const campaign::OptionTable<S> t{
+      "ensemble.subset", "subset simulation of the [failure] event's probability: it chooses its runs", {
+          TRUSS_OPTION_INT(S, "n_per_level", subset.n_per_level, "1", campaign::kAnyNumber,
+                           "N: samples per level (N p0 a whole number of chains)"),
+          TRUSS_OPTION_REAL(S, "p0", subset.p0, "1", campaign::kAnyNumber,
+                            "the share of a level kept as the next one's seeds, in (0, 0.5]"),
+          TRUSS_OPTION_INT(S, "max_levels", subset.max_levels, "1", campaign::closed_range(1, 1000),
+                           "levels at most: the run cap N + (max_levels - 1) N (1 - p0)"),
+          TRUSS_OPTION_REAL(S, "proposal_half_width", subset.proposal_half_width, "1", campaign::kAnyNumber,
+                            "Markov step: uniform on +- this many standard deviations, in [0.001, 10]"),
+      }};
+  return t;
 }
-
-}  // namespace
 
 std::unique_ptr<campaign::MethodOptions> SubsetMethodOptions::parse(const campaign::MethodInput& in) {
   auto o = std::make_unique<SubsetMethodOptions>();
-  if (in.table != nullptr) parse_subset_table(in.ctx, *in.table, in.prefix, o->subset);
-  if (const toml::table* f = in.root["failure"].as_table())
-    campaign::detail::parse_failure_table(in.ctx, *f, o->failure);
+  campaign::read_method_table(in, table(), *o);
+  campaign::read_failure_event(in, o->failure);
   return o;
 }
 
@@ -125,15 +105,25 @@ std::string SubsetMethodOptions::validate(const campaign::CampaignOptions& o) co
   if (f.kind == FailureKind::none)
     return "failure: method = \"subset\" needs a [failure] table: margin = \"rail_margin_m\", or column = "
            "\"peak_drive_force_N\", above = 3.5, unit = \"N\"";
-  return campaign::validate_failure_column(f);
+  return campaign::check_option_ranges(table(), *this, "ensemble.subset.");
 }
 
 std::string SubsetMethodOptions::to_toml() const {
-  const SubsetSettings& s = subset;
-  std::string t = fmt::format("[ensemble.subset]\nn_per_level = {}\np0 = {}\nmax_levels = {}\n"
-                              "proposal_half_width = {}\n\n",
-                              s.n_per_level, s.p0, s.max_levels, s.proposal_half_width);
-  return t + campaign::failure_toml(failure);
+  return "[ensemble.subset]\n" + campaign::write_options(table(), *this) + "\n" + campaign::failure_toml(failure);
+}
+
+std::optional<FailureEstimate> SubsetMethod::calc_failure_estimate(double confidence) const {
+  if (!sim_) return FailureEstimate{};
+  const sampling::SubsetSummary s = sim_->calc_summary();
+  FailureEstimate e;
+  e.cov = s.cov_bound;
+  e.bounds = sampling::calc_lognormal_bounds(s.p, s.cov_bound, confidence);
+  e.bounds.p = s.p;
+  e.runs = margins_.runs();
+  e.status = sampling::to_string(s.status);
+  e.message = s.message;
+  e.nearest_margin = margins_.nearest_margin();
+  return e;
 }
 
 namespace {
@@ -168,20 +158,15 @@ void write_levels(hid_t g, const sampling::SubsetSummary& s, const char* unit) {
 
 }  // namespace
 
-void SubsetMethod::write_results(hid_t file, std::int64_t n_runs) const {
+void SubsetMethod::write_results(const ResultsPlace& place) const {
   if (!sim_) return;
   const sampling::SubsetSummary s = sim_->calc_summary();
   const FailureOptions& f = opt_.failure;
   const std::string unit = campaign::find_run_column_unit(f.column);
-  Handle g = create_group(file, "subset");
+  Handle g = create_group(place.group, "subset");
   write_string_attribute(g.get(), "status", sampling::to_string(s.status));
   write_string_attribute(g.get(), "message", s.message);
-  write_string_attribute(g.get(), "failure_column", f.column);
-  write_string_attribute(g.get(), "failure_kind", f.kind == FailureKind::margin  ? "margin"
-                                                  : f.kind == FailureKind::above ? "above"
-                                                                                           : "below");
-  write_double_attribute(g.get(), "failure_threshold", f.kind == FailureKind::margin ? 0.0 : f.threshold);
-  write_string_attribute(g.get(), "margin_units", unit);
+  write_failure_attributes(g.get(), f, "margin_units");
   write_int_attribute(g.get(), "n_per_level", sim_opt_.n_per_level);
   write_double_attribute(g.get(), "p0", sim_opt_.p0);
   write_int_attribute(g.get(), "max_levels", sim_opt_.max_levels);
@@ -195,7 +180,7 @@ void SubsetMethod::write_results(hid_t file, std::int64_t n_runs) const {
   // Crude Monte Carlo runs for an interval as narrow as the estimate's (cov_bound): (1 - p) / (p cov^2).
   write_scalar(g.get(), "crude_mc_runs", "1", (1.0 - s.p) / (s.p * s.cov_bound * s.cov_bound));
   write_levels(g.get(), s, unit.c_str());
-  write_failure_samples(g.get(), file, n_runs, unit);
+  write_failure_samples(g.get(), place, unit);
 }
 
 std::string SubsetMethod::calc_result_failure() const {
@@ -244,14 +229,41 @@ std::string SubsetMethod::progress_stage() const {
 
 // The failing points of the last level with their inputs as /runs/inputs has them (rows x width),
 // each with the base scene's value as its attribute `nominal` (the design-point table).
-void SubsetMethod::write_failure_samples(hid_t group, hid_t file, std::int64_t n_runs, const std::string& unit) const {
+namespace {
+
+// The rows `rows` of a /runs dataset of `width` values a row (1-D when width is 1), rows x width in
+// the rows' order: only the chunks that hold them are read.
+std::vector<double> read_rows(hid_t file, const std::string& path, const std::vector<std::int64_t>& rows,
+                              std::size_t width) {
+  std::vector<double> out(rows.size() * width);
+  if (rows.empty()) return out;
+  Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
+  Handle fspace(H5Dget_space(ds.get()), H5Sclose, "space of " + path);
+  const bool two_d = H5Sget_simple_extent_ndims(fspace.get()) == 2;
+  std::vector<hsize_t> coords;
+  for (std::int64_t r : rows)
+    for (std::size_t j = 0; j < width; ++j) {
+      coords.push_back(static_cast<hsize_t>(r));
+      if (two_d) coords.push_back(j);
+    }
+  check(H5Sselect_elements(fspace.get(), H5S_SELECT_SET, out.size(), coords.data()), "select rows of " + path);
+  const hsize_t count[1] = {out.size()};
+  Handle mspace(H5Screate_simple(1, count, nullptr), H5Sclose, "memory space of " + path);
+  check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, out.data()), "read " + path);
+  return out;
+}
+
+}  // namespace
+
+void SubsetMethod::write_failure_samples(hid_t group, const ResultsPlace& place, const std::string& unit) const {
+  const hid_t file = place.file;
   const std::vector<sampling::SubsetSample> fs = sim_->calc_failure_samples();
   const std::size_t n = fs.size(), d = static_cast<std::size_t>(sim_opt_.dims);
   Handle h = create_group(group, "failure_samples");
   std::vector<std::int64_t> run(n);
   std::vector<double> margin(n), z(n * d);
   for (std::size_t i = 0; i < n; ++i) {
-    run[i] = fs[i].evaluation;
+    run[i] = place.find_row(fs[i].evaluation);
     margin[i] = fs[i].margin;
     std::copy(fs[i].z.begin(), fs[i].z.end(), z.begin() + static_cast<std::ptrdiff_t>(i * d));
   }
@@ -263,12 +275,7 @@ void SubsetMethod::write_failure_samples(hid_t group, hid_t file, std::int64_t n
     if (f.group != campaign::Group::inputs) continue;
     const auto w = static_cast<std::size_t>(f.width);
     const std::string path = std::string(campaign::group_path(f.group)) + "/" + f.name;
-    std::vector<std::vector<double>> cols;
-    if (f.scale == campaign::Scale::none) cols.push_back(results::read_f64_column(file, path, n_runs));
-    else cols = results::read_f64_columns(file, path, n_runs, f.width, 0, f.width, 4096);
-    std::vector<double> rows(n * w);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t j = 0; j < w; ++j) rows[i * w + j] = cols[j][static_cast<std::size_t>(run[i])];
+    const std::vector<double> rows = read_rows(file, path, run, w);
     write_array(in.get(), f.name, f.units.c_str(), rows.data(), n, f.scale == campaign::Scale::none ? 0 : w);
     const sim::SceneKey* key = sim::find_scene_key(f.name);
     Handle ds(H5Dopen2(in.get(), f.name.c_str(), H5P_DEFAULT), H5Dclose, "open " + f.name);

@@ -11,12 +11,15 @@
 // A round's state is SubsetRound::encode() (the level, step, threshold and candidate points), so
 // any rank computes any point from the plan alone; the run index is the evaluation ordinal. The
 // results: /subset (docs/hdf5-schema.md): p, its CoVs, beta, the levels, the failure samples.
+// [ensemble.subset]: SubsetMethodOptions::table().
 #pragma once
 #include <memory>
 #include <mutex>
 #include <optional>
 
 #include "campaign/failure.hpp"
+#include "campaign/option_table.hpp"
+#include "methods/failure_count.hpp"
 #include "methods/method.hpp"
 #include "sampling/subset_simulation.hpp"
 
@@ -52,6 +55,8 @@ struct SubsetMethodOptions : campaign::MethodOptionsOf<SubsetMethodOptions> {
   // place the run counts come from (SubsetOptions::max_evaluations).
   sampling::SubsetOptions calc_sim_options(const campaign::CampaignOptions& c) const;
   static std::unique_ptr<campaign::MethodOptions> parse(const campaign::MethodInput& in);
+  static const campaign::OptionTable<SubsetMethodOptions>& table();
+  static campaign::TableDoc table_doc() { return campaign::describe_options(table()); }
 };
 
 class SubsetMethod : public Method {
@@ -60,25 +65,26 @@ class SubsetMethod : public Method {
   std::vector<std::string> observed_outputs() const override { return {opt_.failure.column}; }
   Proposal propose(std::int64_t round, const RoundRecords& previous) override;
   void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const override;
-  void write_results(hid_t file, std::int64_t n_runs) const override;
+  void write_results(const ResultsPlace& place) const override;
+  // p with its lognormal bounds from cov_bound (docs/campaigns.md "Which CoV to read").
+  std::optional<FailureEstimate> calc_failure_estimate(double confidence) const override;
   bool runs_are_draws() const override { return false; }
   std::string calc_result_text() const override;  // p, its CoVs, beta, the levels' thresholds
   std::string progress_stage() const override;    // the level, its margin threshold, the Markov step
   std::int64_t run_cap() const override { return ctx_.options.ensemble.n_runs; }  // N + (max_levels - 1)(N - N_c)
   std::string calc_result_failure() const override;  // chains that never moved: no estimate
 
-  // The margins of a round's records (see above).
-  static std::vector<double> calc_margins(const FailureOptions& f, const RoundRecords& r);
   // The state machine (after the last propose(): done, with its summary).
   const sampling::SubsetSimulation& simulation() const { return *sim_; }
 
  private:
   // /subset/failure_samples: run index, margin, z and the inputs of the last level's failing points.
-  void write_failure_samples(hid_t group, hid_t file, std::int64_t n_runs, const std::string& unit) const;
+  void write_failure_samples(hid_t group, const ResultsPlace& place, const std::string& unit) const;
   const campaign::CampaignContext& ctx_;
   const SubsetMethodOptions& opt_;
   sampling::SubsetOptions sim_opt_;
   std::optional<sampling::SubsetSimulation> sim_;
+  FailureCount margins_;  // the runs' margins as they come
   // The round whose points were asked last, decoded once (every run of a round needs it).
   mutable std::mutex mutex_;
   mutable std::shared_ptr<const sampling::SubsetRound> decoded_;

@@ -1,121 +1,112 @@
-// A design sweep as a method of the engine ([sweep], campaign/sweep.hpp): at each design value an
-// inner method estimates the probability of the campaign's [failure] event, and the allowable
-// (sampling/allowable.hpp) is read from the estimates.
+// A design sweep as a method of the engine: a composite ([sweep], sweep_options.hpp). At each design
+// value k it holds the method of value k's standalone campaign (campaign::calc_campaign_at), made by
+// the method table, which estimates the probability of the campaign's [failure] event there
+// (Method::calc_failure_estimate); the allowable (sampling/allowable.hpp) is read from the estimates.
+// The sweep holds the real inner methods: their proposals, points, records and results are theirs.
 //
-// Inner method, as the rest of the campaign file says:
-//   ensemble.method = "subset"  subset simulation ([ensemble.subset], SubsetMethodOptions), p and its
-//                               lineage CoV.
-//   [ensemble.stop]             Monte Carlo in rounds until the stop rule's probability target
-//                               (StopOptions) holds for the share of failing runs, or max_runs.
-//   "design"                    Monte Carlo, n_runs runs (one round).
-// The method's options (ensemble.method) hold the [failure] event (MethodOptions::failure_event()).
-// The method table makes a SweepMethod for every campaign with a [sweep] (method_table.cpp).
-// A run fails when its margin ([failure], SubsetMethod::calc_margins) is <= 0; a run that cannot
-// say (NaN margin) counts as safe, as in subset simulation. The smallest margin of each value's runs
-// (its nearest approach to failure) tells the allowable the safe side where the estimates cannot
-// (p = 0 at both ends: sampling/allowable.hpp).
-//
-// Scheduling: round r of the sweep is the union of the next round of every running value's inner
-// method that is not done, value by value in order of k; the state is, per value, (design value
-// index k, its first local run, its runs, its inner state bytes). Value k's inner method is the one
-// of the standalone campaign calc_campaign_at(c, k) (its own seed): its run ordinals (local runs)
-// and its points are that campaign's, so its estimate is the same bytes in the sweep, alone, on any
-// rank count and after --resume. The point's last uniform is the design coordinate
-// (k + 0.5) / n_design_values.
+// Scheduling: round r of the sweep is the union of the next round of every running value's method,
+// value by value in order of k. Its state is, per value, k and the inner method's own round plan
+// (its round, its first local run, its runs, its state bytes). A value's method sees its own runs
+// (local run indices from 0) and rounds, as in the standalone campaign, so its estimate is the
+// same bytes in the sweep, alone, on any rank count and after --resume. A run's point is its value's
+// method's point and, as the last uniform, the design coordinate (k + 0.5) / n_design_values.
 //
 // Refinement (sweep.refine = m > 0): the listed values run first. When all are done and their
 // allowable is found, the m candidates of the bracket of listed values that holds it
-// (campaign/sweep.hpp) start, in the next round; the allowable is then read from every value that
-// ran, in order of value. Which bracket is a function of the listed values' records alone, so a
-// resumed or re-ranked sweep refines the same one. Without an allowable (the target outside the
+// (campaign/design_axis.hpp) start, in the next round; the allowable is then read from every value
+// that ran, in order of value. Which bracket is a function of the listed values' records alone, so
+// a resumed or re-ranked sweep refines the same one. Without an allowable (the target outside the
 // listed values, no safe side) nothing is refined and the file says why.
 //
-// The results: /sweep (docs/hdf5-schema.md): per value p, CoV, bounds, runs, status; the
-// allowable with its interval; each value's inner results under /sweep/inner/<k>.
+// The results: /sweep (docs/hdf5-schema.md): per value p, CoV, bounds, runs, status; the allowable
+// with its interval and the verdict; under /sweep/inner/<k> each value's method writes its own
+// results as its standalone campaign writes them at the file's root.
 #pragma once
 #include <memory>
 #include <mutex>
 #include <optional>
 
-#include "campaign/failure.hpp"
 #include "methods/method.hpp"
+#include "methods/sweep_options.hpp"
 #include "sampling/allowable.hpp"
-#include "sampling/sampling.hpp"
-#include "sampling/stopping.hpp"
-#include "sampling/subset_simulation.hpp"
 
 namespace truss::methods {
 
+class MethodTable;
+
 class SweepMethod : public Method {
  public:
-  enum class Inner { subset, monte_carlo, stop };
-  explicit SweepMethod(const campaign::CampaignContext& ctx);
-  std::vector<std::string> observed_outputs() const override { return {failure_.column}; }
+  SweepMethod(const campaign::CampaignContext& ctx, const MethodTable& methods);
+  std::vector<std::string> observed_outputs() const override { return observed_; }
+  bool reads_records() const override { return true; }  // it hands each value's method its records
   Proposal propose(std::int64_t round, const RoundRecords& previous) override;
   void calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const override;
-  void write_results(hid_t file, std::int64_t n_runs) const override;
+  void write_results(const ResultsPlace& place) const override;
   bool runs_are_draws() const override { return false; }
   std::string calc_result_text() const override;
 
   // One value's result (after the last propose()).
   struct ValueResult {
-    std::size_t index = 0;    // its design value index k (campaign::SweepOptions::find_value)
+    std::size_t index = 0;    // its design value index k (campaign::DesignAxis::find_value)
     bool refinement = false;  // a refinement candidate (k >= n_values)
     double value = 0.0;
     std::uint64_t seed = 0;
-    sampling::ProbabilityBounds bounds;
-    double cov = std::numeric_limits<double>::quiet_NaN();
-    std::int64_t runs = 0, failures = -1;  // failures: Monte Carlo's count (-1 for subset)
-    std::string status, message;
+    FailureEstimate estimate;  // its method's
   };
   // The values that ran, in ascending order of value.
   std::vector<ValueResult> calc_value_results() const;
-  sampling::Allowable calc_allowable() const;
-  Inner inner() const { return inner_; }
 
  private:
   struct Value {
-    std::uint64_t seed = 0;
-    sampling::SubsetOptions subset;
-    std::optional<sampling::SubsetSimulation> sim;
-    std::optional<sampling::SamplePlan> plan;  // Monte Carlo, over the most runs the value can make
-    std::int64_t runs = 0, failures = 0;
-    double nearest_margin = std::numeric_limits<double>::quiet_NaN();  // the smallest finite margin of its runs
-    std::vector<sampling::StopDecision> decisions;
-    bool queued = false;   // it runs (every listed value; one bracket's candidates)
-    bool started = false;  // its inner method has proposed its first round
+    std::unique_ptr<campaign::CampaignContext> ctx;  // the value's standalone campaign
+    std::unique_ptr<Method> method;                  // its method, made by the table
+    std::vector<std::size_t> columns;                // its observed outputs among the sweep's
+    std::int64_t round = -1;                         // the last round it proposed
+    std::int64_t runs = 0;                           // its runs proposed so far (its local run indices)
+    std::vector<std::int64_t> rows;                  // the /runs row of each of its runs
+    Proposal next;                                   // its proposal for the round being planned
+    bool queued = false;  // it runs (every listed value; one bracket's candidates)
     bool done = false;
   };
-  // One value's part of a round, as its state holds it.
+  // One value's part of a round: its method's round plan, and its first run in the round.
   struct Slice {
     std::uint32_t value = 0;
-    std::int64_t local_first = 0, n_runs = 0, offset = 0;  // offset: its first run in the round
-    std::string state;
-    std::shared_ptr<const sampling::SubsetRound> round;  // subset: the decoded state
+    RoundPlan plan;
+    std::int64_t offset = 0;
   };
   struct Decoded {
     std::int64_t round = -1;
     std::vector<Slice> slices;
   };
-  Proposal propose_value(std::size_t k, Slice& slice);
-  Proposal propose_queued();
+  void hand_records(const RoundRecords& previous);  // round r - 1's records to the values that ran
+  void start_queued();                              // the queued values' first proposals
+  Proposal gather();                                // this round's slices, in order of k
   void queue_refinement();
   std::vector<std::size_t> find_run_order() const;  // the queued values' k, ascending in value
-  void take_records(std::size_t k, const RoundRecords& r);
   std::shared_ptr<const Decoded> decode(const RoundPlan& plan) const;
-  void write_inner(hid_t group, std::size_t k) const;
 
   const campaign::CampaignContext& ctx_;
-  Inner inner_;
-  const campaign::FailureOptions& failure_;  // the method options' [failure]
+  const SweepOptions& opt_;
   int dims_ = 0;  // the dispersions' dimensions (the design coordinate is u[dims_])
+  std::vector<std::string> observed_;
   std::vector<Value> values_;
-  std::vector<Slice> last_;  // the slices of the round proposed last
-  bool refined_ = false;     // the refinement's candidates are queued (or it was decided against)
+  std::vector<Slice> last_;     // the slices of the round proposed last
+  bool refined_ = false;        // the refinement's candidates are queued (or it was decided against)
   std::string refine_message_;  // what the refinement did, or why it did not run
   double refine_low_ = std::numeric_limits<double>::quiet_NaN(), refine_high_ = refine_low_;  // its bracket
   mutable std::mutex mutex_;
   mutable std::shared_ptr<const Decoded> decoded_;
 };
+
+// The allowable of a sweep's values and the verdict on the campaign's own value, decided together:
+// PASS when the own value is on the allowable's safe side, FAIL when not, NOT ASSESSED without an
+// allowable. The file's /sweep/allowable and the terminal say what this says.
+struct SweepVerdict {
+  sampling::Allowable allowable;
+  double own_value = 0.0;  // the design variable in the campaign as written
+  std::string verdict;
+};
+SweepVerdict calc_sweep_verdict(const campaign::CampaignOptions& c, const SweepOptions& opt,
+                                const std::vector<SweepMethod::ValueResult>& values);
 
 }  // namespace truss::methods

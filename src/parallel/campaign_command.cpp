@@ -228,7 +228,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     const std::size_t peak_chunks = store.peak_chunks_in_memory();
     const results::StatusCounts counts = store.status_counts();
     r0.file->write_summary(histories, nominal, info);  // the store is gone after this
-    method.write_results(r0.file->handle(), n_runs);
+    method.write_results({r0.file->handle(), r0.file->handle(), n_runs, {}});
     r0.file->commit(o.force);
     r0.journal->close_and_remove();
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n",

@@ -29,11 +29,7 @@ std::string human(double bytes) {
 // The keys the user wrote that set calc_max_runs, with their values ("ensemble.stop.max_runs =
 // 1000000", "ensemble.subset.n_per_level = 2000 (max_levels = 20: at most 36200 runs)").
 std::string describe_max_runs(const campaign::CampaignOptions& c) {
-  const std::string d = c.ensemble.method.options().describe_max_runs(c);
-  if (!c.sweep.active) return d;
-  return c.sweep.refine == 0 ? fmt::format("{} at each of the {} sweep.values", d, c.sweep.n_values())
-                             : fmt::format("{} at each of the {} sweep.values and sweep.refine = {}", d,
-                                           c.sweep.n_values(), c.sweep.refine);
+  return c.ensemble.method.options().describe_max_runs(c);
 }
 }  // namespace
 

@@ -21,7 +21,7 @@
 
 #include <fmt/format.h>
 
-#include "campaign/toml_read.hpp"
+#include "campaign/method_input.hpp"
 #include "methods/method_table.hpp"
 #include "sampling/sampling.hpp"
 #include "util/bytes.hpp"
@@ -40,21 +40,23 @@ struct TwoRoundOptions : campaign::MethodOptionsOf<TwoRoundOptions> {
     return {};
   }
   std::string to_toml() const override {
-    return fmt::format("[ensemble.two_round]\noutput = \"{}\"\nrel_half_width = {}\n\n", output, rel_half_width);
+    return "[ensemble.two_round]\n" + campaign::write_options(table(), *this) + "\n";
   }
   // Round 0's n0 runs and at most 3 n0 in round 1.
   std::int64_t calc_max_runs(const campaign::CampaignOptions& c) const override { return 4 * c.ensemble.n_runs; }
 
+  static const campaign::OptionTable<TwoRoundOptions>& table() {
+    static const campaign::OptionTable<TwoRoundOptions> t{
+        "ensemble.two_round", "a toy method of two rounds", {
+            TRUSS_OPTION_TEXT(TwoRoundOptions, "output", output, "a float64 column of /runs"),
+            TRUSS_OPTION_REAL(TwoRoundOptions, "rel_half_width", rel_half_width, "1", campaign::kAnyNumber,
+                              "the target: the mean's 95 % half-width over |mean|"),
+        }};
+    return t;
+  }
   static std::unique_ptr<campaign::MethodOptions> parse(const campaign::MethodInput& in) {
     auto o = std::make_unique<TwoRoundOptions>();
-    if (in.table == nullptr) return o;
-    for (const auto& [k, v] : *in.table) {
-      const std::string key = in.prefix + std::string(k.str());
-      if (k == "output") o->output = campaign::detail::get_string(in.ctx, v, key);
-      else if (k == "rel_half_width") o->rel_half_width = campaign::detail::get_number(in.ctx, v, key);
-      else
-        in.ctx.fail(&v, fmt::format("unknown key '{}' (known: {}output, {}rel_half_width)", key, in.prefix, in.prefix));
-    }
+    campaign::read_method_table(in, table(), *o);
     return o;
   }
 };
@@ -108,7 +110,7 @@ class TwoRound : public methods::Method {
 
 // The method's row: its name, its table and how it is made.
 inline methods::MethodRow two_round_row() {
-  return {{"two_round", {}, false, &TwoRoundOptions::parse},
+  return {{"two_round", {}, campaign::MethodSelection::by_name, &TwoRoundOptions::parse},
           [](const campaign::CampaignContext& ctx, const methods::MethodTable&) -> std::unique_ptr<methods::Method> {
             const auto& o = ctx.options.ensemble.method.as<TwoRoundOptions>();
             return std::make_unique<TwoRound>(ctx, o.output, o.rel_half_width);

@@ -450,6 +450,16 @@ BAD = {
     "millimetres_as_metres": ("[ensemble]\nn_runs = 300\n[[dispersion]]\nkey = \"mast.frame_side_m\"\nper = \"frame\"\n"
                               "apply = \"offset\"\ndistribution = \"uniform\"\nlower = -0.5\nupper = 0.5\n", ":3:",
                               "mast.frame_side_m (offset uniform) is implausible"),
+    # Millimetres typed as metres on a diagonal's free length: every draw a scene the model takes,
+    # but the length moved by up to 64 % of its nominal; the message gives the value it would be.
+    "mm_as_m_free_length": ("[ensemble]\nn_runs = 300\n[[dispersion]]\nkey = \"mast.diagonal_free_length_m\"\n"
+                            "apply = \"offset\"\ndistribution = \"uniform\"\nlower = -0.3\nupper = 0.3\n", ":3:",
+                            "its lower end, a draw of -0.3, gives mast.diagonal_free_length_m = "),
+    # A failure margin the drive mode never computes: NaN in every run, nothing would ever fail.
+    "margin_never_computed": ("[ensemble]\nmethod = \"subset\"\n[failure]\nmargin = \"motor_torque_margin_Nm\"\n"
+                              "[scene]\noverrides = { \"drive.mode\" = \"motor\" }\n[[dispersion]]\n"
+                              "key = \"drive.stall_torque_Nm\"\ndistribution = \"normal\"\nstd = 0.05\n", ":4:",
+                              "failure.margin: \"motor_torque_margin_Nm\" is defined only with drive.mode = \"velocity\""),
 }
 
 
@@ -466,6 +476,10 @@ def case_bad_input(args):
         check(p.returncode == 2 and f"{camp}{line}" in msg and words in msg and msg.count("error:") == 1
               and not os.path.exists(out) and not os.path.exists(out + ".journal"),
               f"{name}: exit 2, '{msg.splitlines()[0][:150]}', nothing written")
+    for name in ("mm_as_m_free_length", "margin_never_computed"):  # refused by --dry-run as by the run
+        p = mpirun(args, 1, [os.path.join(d, f"{name}.toml"), "--dry-run"])
+        check(p.returncode == 2 and BAD[name][2] in p.stderr and p.stdout == "",
+              f"{name}: --dry-run exits 2 with the same message, prints nothing")
     p = mpirun(args, 2, [os.path.join(args.repo, TABLE1), "-o", os.path.join(d, "x.h5"), "--set", "ensemble.n_runz=3"])
     check(p.returncode == 2 and "n_runz" in p.stderr, "unknown --set key: exit 2")
     p = mpirun(args, 2, [os.path.join(d, "missing.toml"), "-o", os.path.join(d, "x.h5")])

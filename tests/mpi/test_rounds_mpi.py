@@ -14,6 +14,12 @@ resume: kill -9 of the whole job in the middle of round 1, then --resume on 3 ra
   datasets as the uninterrupted campaign; a journal whose round 1 the method (run with another
   target, TRUSS_TWO_ROUND_TARGET: the same campaign) does not propose again is refused with exit 2
   and left as it was.
+toy_sweep: the toy method with a [failure] event of tests/methods/toy_failure.hpp (its file and one
+  row, added by the same driver) run by a [sweep] at each stall torque: the synthetic runs' failure
+  column is the run's dispersed stall torque x + N(0, 1 mN m), failing at or below 3.5 mN m; each
+  value's p is its failing share of its rows and its bounds Clopper-Pearson (scipy), its own
+  results (/sweep/inner/<k>/toy) its runs and failures; the refinement places its values; the same
+  datasets on 1 and 3 ranks.
 Synthetic runs (--synthetic-run-cost-s: they sleep; their outputs are pseudo-random in [0, 1),
 their inputs the dispersions' values at each run's point) keep it quick.
 """
@@ -173,9 +179,71 @@ def case_resume(args):
           f"({p.stderr.strip()[:200]})")
 
 
+TOY_SWEEP = """
+[campaign]
+name = "toy-sweep"
+[ensemble]
+method = "toy"
+n_runs = 2000
+master_seed = 5
+[ensemble.toy]
+first_share = 0.25
+[failure]
+column = "motor_torque_margin_Nm"
+below = 0.0035
+unit = "Nm"
+[sweep]
+key = "drive.stall_torque_Nm"
+values = [0.004, 0.0045, 0.005, 0.0055]
+target_probability = 0.05
+refine = 2
+[[dispersion]]
+key = "drive.stall_torque_Nm"
+apply = "offset"
+distribution = "normal"
+std = 0.001
+"""
+
+
+def case_toy_sweep(args):
+    from scipy.stats import beta as beta_dist
+    d = fresh(args, "toy_sweep")
+    camp = os.path.join(d, "toy.toml")
+    open(camp, "w").write(TOY_SWEEP)
+    outs = {}
+    for ranks in (1, 3):
+        outs[ranks] = os.path.join(d, f"toy{ranks}.h5")
+        cmd = ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, camp, "-o", outs[ranks], "--progress",
+               "none", "--synthetic-run-cost-s", "0"]
+        p = subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=300)
+        check(p.returncode == 0, f"toy sweep, {ranks} rank(s): exit 0 ({p.stderr.strip()[-300:]})")
+    with h5py.File(outs[3], "r") as f:
+        g = f["sweep"]
+        v, y = f["runs/sweep_value"][:], f["runs/motor_torque_margin_Nm"][:]
+        check(g.attrs["inner_method"] == "toy", "/sweep's inner method is the toy")
+        placed = int(np.sum(g["refinement"][:]))
+        check(placed == 2, f"the refinement placed {placed} values (2)")
+        for k, x in enumerate(g["values"][:]):
+            rows = y[v == x]
+            n, kf = rows.size, int(np.sum(rows <= 0.0035))
+            lo = beta_dist.ppf(0.025, kf, n - kf + 1) if kf > 0 else 0.0
+            hi = beta_dist.ppf(0.975, kf + 1, n - kf) if kf < n else 1.0
+            ub = beta_dist.ppf(0.95, kf + 1, n - kf)
+            own = f[f"sweep/inner/{g['index'][k]}/toy"]
+            check(n == 2000 and g["runs"][k] == n and g["failures"][k] == kf and g["p"][k] == kf / n
+                  and math.isclose(g["lower"][k], lo, rel_tol=1e-9) and math.isclose(g["upper"][k], hi, rel_tol=1e-9)
+                  and math.isclose(g["upper_bound"][k], ub, rel_tol=1e-9)
+                  and own["runs"][()] == n and own["failures"][()] == kf,
+                  f"toy value {x:.6g}: p = {kf}/{n} with its Clopper-Pearson bounds, from its rows and its own group")
+        check(g["allowable"].attrs["status"] == "found" and g["allowable"].attrs["safe_side"] == "above",
+              f"the allowable is found, p falling as the stall torque grows ({g['allowable'].attrs['message']})")
+    same, why = same_values(datasets(outs[1]), datasets(outs[3]))
+    check(same, f"toy sweep: 1 and 3 ranks give the same datasets {why}")
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--case", required=True, choices=["rounds", "resume"])
+    ap.add_argument("--case", required=True, choices=["rounds", "resume", "toy_sweep"])
     ap.add_argument("--driver", required=True)
     ap.add_argument("--repo", required=True)
     ap.add_argument("--scratch", required=True)

@@ -41,9 +41,10 @@ p(sigma) = Phi(-x / sigma), 1e-6 at sigma* = x / 4.7534.
 - ranks: the same file (every dataset but the timing) on 1 and 3 ranks, with a refinement.
 - resume: kill -9 of the whole job during the refinement, --resume: the same file.
 - standalone: value k of the sweep against the campaign without [sweep] at that value
-  (--set drive.stall_torque_Nm=x_k, ensemble.master_seed = /sweep/master_seed[k]): the same p, CoVs
-  and levels, and the value's rows (by run index) the standalone campaign's rows, for two listed
-  values and one the refinement placed; also with Monte Carlo as the inner method.
+  (--set drive.stall_torque_Nm=x_k, ensemble.master_seed = /sweep/master_seed[k]): /sweep/inner/<k>
+  holds the standalone campaign's method group (/subset: p, CoVs, levels, failure samples; Monte
+  Carlo: /failure), dataset for dataset, and the value's rows (by run index) are the standalone
+  campaign's rows, for two listed values and one the refinement placed.
 - bad_input: each refusal exits 2 with file:line and the key, writing nothing.
 """
 import argparse
@@ -103,7 +104,7 @@ n_per_level = 500
 p0 = 0.1
 max_levels = 12
 [failure]
-margin = "rail_margin_m"
+margin = "motor_torque_margin_Nm"
 [scene.drive]
 stall_torque_Nm = 0.005
 [sweep]
@@ -158,7 +159,7 @@ def case_reference(args):
     check(p.returncode == 0, f"Monte Carlo inner: exit 0 ({p.stderr.strip()[-300:]})")
     s = read_sweep(out)
     with h5py.File(out, "r") as f:
-        v, m = f["runs/sweep_value"][:], f["runs/rail_margin_m"][:]
+        v, m = f["runs/sweep_value"][:], f["runs/motor_torque_margin_Nm"][:]
     for k, x in enumerate(s["values"]):
         rows = m[v == x]
         n, kf = rows.size, int(np.sum(rows <= 0))
@@ -176,7 +177,7 @@ def check_no_failure(args, d):
     """Monte Carlo far on the safe side (8-10 sigma: no failure at any value, every bound the same):
     the safe side comes from the runs' smallest margins (p falls as the stall torque grows: extend
     below the smallest value); the message names each end's smallest margin, recomputed from the
-    rows (the synthetic margin is the column rail_margin_m, in m). For a spread sweep of the same
+    rows (the synthetic margin is the column motor_torque_margin_Nm, in N m). For a spread sweep of the same
     margin the smallest margins fall as the spread grows."""
     for name, camp, sets, side, extend in (
             ("nominal", None, ["sweep.from=0.008", "sweep.to=0.010"], "above", "extend it below 0.008 Nm"),
@@ -189,14 +190,14 @@ def check_no_failure(args, d):
         s = read_sweep(out)
         a = s["allowable"]
         with h5py.File(out, "r") as f:
-            v, m = f["runs/sweep_value"][:], f["runs/rail_margin_m"][:]
+            v, m = f["runs/sweep_value"][:], f["runs/motor_torque_margin_Nm"][:]
             msg = f["sweep/allowable"].attrs["message"]
         lo_min, hi_min = np.min(m[v == s["values"][0]]), np.min(m[v == s["values"][-1]])
         near, far = (lo_min, hi_min) if side == "above" else (hi_min, lo_min)
         check(np.all(s["p"] == 0) and a["status"] == "beyond_unsafe_end" and a["safe_side"] == side
-              and extend in msg and f"smallest margin {near:.4g} m against {far:.4g} m" in msg,
+              and extend in msg and f"smallest margin {near:.4g} Nm against {far:.4g} Nm" in msg,
               f"{name}, no failure at any value: safe side {a['safe_side']} from the smallest margins "
-              f"({near:.4g} against {far:.4g} m): '{msg}'")
+              f"({near:.4g} against {far:.4g} N m): '{msg}'")
 
 
 
@@ -372,22 +373,24 @@ def case_stop(args):
         order = np.argsort(f["runs/run_index"][:])
         v, m = f["runs/sweep_value"][:][order], f["runs/rail_margin_m"][:][order]
         status, inputs = f["runs/status"][:][order], f["runs/inputs/mast.diagonal_free_length_m"][:][order]
-        inner = {k: {n: f[f"sweep/inner/{k}/{n}"][()] for n in f[f"sweep/inner/{k}"]} for k in f["sweep/inner"]}
+        # Each value's method writes its own results under /sweep/inner/<k>: its /stop.
+        inner = {k: {n: f[f"sweep/inner/{k}/stop/{n}"][()] for n in f[f"sweep/inner/{k}/stop"]}
+                 for k in f["sweep/inner"]}
         check(f["sweep"].attrs["inner_method"] == "stop", "/sweep's inner method is stop")
     for k, x in enumerate(s["values"]):
         rows, g = m[v == x], inner[str(k)]
         check(np.array_equal(rows <= 0, status[v == x] != 0),
               f"value {k}: a run fails its margin exactly when its status is not ok ({int(np.sum(rows <= 0))} misses)")
-        states = [t.decode() if isinstance(t, bytes) else t for t in g["stop_state"]]
-        for r, n in enumerate(g["stop_runs"]):
+        states = [t.decode() if isinstance(t, bytes) else t for t in g["state"]]
+        for r, n in enumerate(g["runs"]):
             kf = int(np.sum(rows[:n] <= 0))
             lo, hi, _ = clopper_pearson(kf, n, rule_conf)
             met = kf > 0 and (hi - lo) / 2 / (kf / n) <= width
-            check(g["stop_estimate"][r] == kf / n and math.isclose(g["stop_lower"][r], lo, rel_tol=1e-9, abs_tol=1e-300)
-                  and math.isclose(g["stop_upper"][r], hi, rel_tol=1e-9) and states[r] == ("met" if met else "more"),
+            check(g["estimate"][r] == kf / n and math.isclose(g["lower"][r], lo, rel_tol=1e-9, abs_tol=1e-300)
+                  and math.isclose(g["upper"][r], hi, rel_tol=1e-9) and states[r] == ("met" if met else "more"),
                   f"value {k}, round {r}: {kf} failures in {n} runs, {rule_conf:g} interval [{lo:.4g}, {hi:.4g}], "
                   f"{states[r]}")
-        check(states[-1] == "met" and g["stop_runs"][-1] == rows.size == s["runs"][k],
+        check(states[-1] == "met" and g["runs"][-1] == rows.size == s["runs"][k],
               f"value {k}: met after {rows.size} runs")
         kf, n = int(np.sum(rows <= 0)), rows.size
         lo, hi, ub = clopper_pearson(kf, n, conf)
@@ -411,10 +414,10 @@ def case_stop(args):
             a_in = f["runs/inputs/mast.diagonal_free_length_m"][:][np.argsort(f["runs/run_index"][:])]
             check(a_in.tobytes() == inputs[v == x].tobytes(),
                   f"value {k}: its {a_in.size} points in run order are the standalone campaign's")
-            check(np.array_equal(st["runs"][:], g["stop_runs"]) and st["estimate"][:].tobytes() == g["stop_estimate"].tobytes()
-                  and st["lower"][:].tobytes() == g["stop_lower"].tobytes()
-                  and st["upper"][:].tobytes() == g["stop_upper"].tobytes() and st["estimate"][-1] == s["p"][k],
-                  f"value {k}: rounds {list(g['stop_runs'])}, estimates and intervals as the standalone /stop")
+            check(all(st[n][:].tobytes() == g[n].tobytes() for n in ("runs", "used", "estimate", "lower", "upper",
+                                                                     "achieved_width"))
+                  and st["estimate"][-1] == s["p"][k],
+                  f"value {k}: rounds {list(g['runs'])}, estimates and intervals as the standalone /stop")
 
 def listed_crossing(s, col, target):
     """The crossing of column col over the listed values only (refinement == 0), p falling with x."""
@@ -568,13 +571,13 @@ def check_other_verdicts(args, d):
 def plan_values(payload):
     """The design value indices of a journaled sweep round (methods/method.hpp RoundPlan: i64 round,
     i64 first_run, i64 n_runs, u32 state length, state; the sweep's state: per value u32 index,
-    i64 first local run, i64 runs, u32 length, inner state)."""
+    u32 length, that value's method's own round plan)."""
     (n,) = struct.unpack_from("<I", payload, 24)
     state, at, out = payload[28:28 + n], 0, []
     while at < len(state):
-        k, _, _, size = struct.unpack_from("<IqqI", state, at)
+        k, size = struct.unpack_from("<II", state, at)
         out.append(k)
-        at += 24 + size
+        at += 8 + size
     return out
 
 
@@ -616,14 +619,29 @@ def case_resume(args):
     check(same, f"killed and resumed: the same datasets as uninterrupted ({why})")
 
 
+def datasets_of(group):
+    """Every dataset's bytes and every attribute under an HDF5 group, by path (the failure samples'
+    run indices left out: rows of the file they are in)."""
+    out = {f"@{a}": v.tobytes() if isinstance(v, np.ndarray) else v for a, v in group.attrs.items()}
+
+    def visit(name, obj):
+        if name.endswith("failure_samples/run_index"):
+            return
+        if isinstance(obj, h5py.Dataset):
+            out[name] = obj[()].tobytes() if obj.dtype.kind != "O" else list(obj[()])
+        for a, v in obj.attrs.items():
+            out[f"{name}@{a}"] = v.tobytes() if isinstance(v, np.ndarray) else v
+    group.visititems(visit)
+    return out
+
+
 def case_standalone(args):
     d = fresh(args, "sweep_standalone")
     camp = campaign_path(args)
     text = open(camp).read()
-    # The campaign without [sweep] (and for Monte Carlo without [failure], which only subset reads).
-    open(os.path.join(d, "plain_subset.toml"), "w").write(re.sub(r"^\[sweep\][^\[]*", "", text, flags=re.M))
-    open(os.path.join(d, "plain_monte_carlo.toml"), "w").write(re.sub(r"^\[(sweep|failure)\][^\[]*", "", text,
-                                                                            flags=re.M))
+    # The campaign without [sweep]: its method estimates the same [failure] event's probability alone.
+    for inner in ("subset", "monte_carlo"):
+        open(os.path.join(d, f"plain_{inner}.toml"), "w").write(re.sub(r"^\[sweep\][^\[]*", "", text, flags=re.M))
     # Monte Carlo with a target 3,000 runs can bound (1.5e-3; p = 1e-3 .. 3e-6 over the values), so that
     # its allowable is found and refined.
     mc_sweep = ["sweep.from=0.0031", "sweep.to=0.0045", "sweep.target_probability=1.5e-3"]
@@ -639,8 +657,11 @@ def case_standalone(args):
         check(len(placed) == 2, f"{inner}: 2 values placed by the refinement")
         with h5py.File(sweep, "r") as f:
             v, m, runs = f["runs/sweep_value"][:], f["runs/inputs/drive.stall_torque_Nm"][:], f["runs/run_index"][:]
-            inner_groups = {k: {n: f[f"sweep/inner/{k}/{n}"][()] for n in f[f"sweep/inner/{k}"]}
-                            for k in f["sweep/inner"]}
+            # Each value's method's own results (/sweep/inner/<k>/subset, /sweep/inner/<k>/failure): every
+            # dataset but the failure samples' run indices, which are rows of the sweep's /runs.
+            group = "subset" if inner == "subset" else "failure"
+            inner_groups = {k: datasets_of(f[f"sweep/inner/{k}/{group}"]) for k in f["sweep/inner"]
+                            if list(f[f"sweep/inner/{k}"]) == [group]}
         # The first and the last listed value and a placed one: each the campaign alone at its value and seed.
         listed = [int(r) for r in np.flatnonzero(s["refinement"] == 0)]
         for k in (listed[0], listed[-1], placed[0]):
@@ -655,14 +676,13 @@ def case_standalone(args):
                 mine = m[np.argsort(runs)][v[np.argsort(runs)] == x]
                 check(mine.tobytes() == rows.tobytes(),
                       f"{inner}, value {k}: its {mine.size} points in run order are the standalone campaign's {rows.size}")
-                if inner == "subset":
-                    g = f["subset"]
-                    got = inner_groups[str(s["index"][k])]
-                    check(g["p"][()] == s["p"][k] == got["p"] and g["cov_lineage"][()] == got["cov_lineage"]
-                          and g["cov"][()] == got["cov"]
-                          and g["levels/threshold"][:].tobytes() == got["level_threshold"].tobytes(),
-                          f"subset, value {k}: p = {s['p'][k]:.6g}, its CoVs and levels as the standalone /subset")
-                else:
+                alone_groups = datasets_of(f[group])
+                got = inner_groups[str(s["index"][k])]
+                check(sorted(alone_groups) == sorted(got) and all(alone_groups[n] == got[n] for n in got)
+                      and np.frombuffer(got["p"])[0] == s["p"][k],
+                      f"{inner}, value {k}: p = {s['p'][k]:.6g}; /sweep/inner/{s['index'][k]} holds the standalone "
+                      f"campaign's /{group}, {len(got)} datasets and attributes alike")
+                if inner == "monte_carlo":
                     kf = int(np.sum(rows <= 0))
                     check(s["p"][k] == kf / rows.size, f"monte_carlo, value {k}: p = {kf}/{rows.size} as alone")
 
@@ -705,6 +725,15 @@ def case_bad_input(args):
                                                  "ensemble.stop.output=\"peak_drive_force_N\""])
     check(p.returncode == 2 and "ensemble.stop.target" in p.stderr and "not a probability" in p.stderr,
           f"a percentile stop rule as the inner method: exit 2 ({p.stderr.strip()[:200]})")
+    # A failure margin the campaign's drive never computes (motor_torque_margin_Nm under a motor
+    # drive: NaN in every run, so no value would ever fail): refused by --dry-run, at its line.
+    camp = os.path.join(d, "nan_margin.toml")
+    open(camp, "w").write(text.replace("[sweep]", "[scene.drive]\nmode = \"motor\"\n\n[sweep]"))
+    p = subprocess.run(["mpirun", "--oversubscribe", "-np", "1", args.driver, camp, "--dry-run"], env=ENV,
+                       capture_output=True, text=True, timeout=600)
+    check(p.returncode == 2 and f"{camp}:20: failure.margin: \"motor_torque_margin_Nm\" is defined only with "
+          "drive.mode = \"velocity\"" in p.stderr and p.stdout == "",
+          f"a margin the motor drive never computes: --dry-run exits 2 ({p.stderr.strip()[:200]})")
     written = [f for f in os.listdir(d) if not f.endswith(".toml")]
     check(written == [], f"nothing written by any refused run ({written})")
 

@@ -1,5 +1,6 @@
-// A test driver: truss-campaign with the toy two-round method of tests/methods/two_round.hpp added
-// to the built-in method table (ensemble.method = "two_round", its options in [ensemble.two_round]);
+// A test driver: truss-campaign with the toy two-round method of tests/methods/two_round.hpp and the
+// toy method with a [failure] event of tests/methods/toy_failure.hpp added to the built-in method
+// table (ensemble.method = "two_round", its options in [ensemble.two_round]; "toy", [ensemble.toy]);
 // the engine, the journal and the results file as they are. TRUSS_TWO_ROUND_TARGET, when set,
 // replaces the campaign's rel_half_width in the method alone (the campaign text unchanged): a
 // method that plans otherwise than the one that wrote a journal.
@@ -8,6 +9,7 @@
 #include <cstdlib>
 #include <memory>
 
+#include "methods/toy_failure.hpp"
 #include "methods/two_round.hpp"
 #include "parallel/campaign_command.hpp"
 
@@ -21,7 +23,8 @@ int main(int argc, char** argv) {
       const auto& o = ctx.options.ensemble.method.as<test::TwoRoundOptions>();
       return std::make_unique<test::TwoRound>(ctx, o.output, rel);
     };
-  const int status = parallel::run_campaign_command(argc, argv, MPI_COMM_WORLD, methods::builtin_methods().with(row));
+  const int status = parallel::run_campaign_command(argc, argv, MPI_COMM_WORLD,
+                                                    methods::builtin_methods().with(row).with(test::toy_row()));
   MPI_Finalize();
   return status;
 }

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "campaign/dispersion.hpp"
+#include "campaign_fixtures.hpp"
 #include "methods/method_table.hpp"
 #include "sampling/sampling.hpp"
 #include "sim/simulate.hpp"
@@ -117,4 +118,41 @@ TEST_CASE("implausible dispersions are named before any run; plausible ones pass
   c.dispersions[0].values = {-1.5, 0.0, 0.01};
   c.dispersions[0].weights = {0.001, 1.0, 1.0};
   CHECK_THAT(check_dispersion_draws(c, 0), Catch::Contains("its value -1.5"));
+}
+
+TEST_CASE("a length moved past 20 % of its nominal is refused with the value it would give", "[dispersion][plausible]") {
+  // Millimetres typed as metres on the diagonals' free length (Table 1: 0.45 m): an offset uniform
+  // of +-0.3 m reaches 0.45 - 0.3 = 0.15 m at its lower end (every draw lies inside [lower, upper]),
+  // 66.7 % of the nominal: refused at the dispersion's line, naming the value and the slip.
+  const std::string head = "[ensemble]\nn_runs = 100\n[[dispersion]]\nkey = \"mast.diagonal_free_length_m\"\n";
+  auto error_of = [&](const std::string& rest) { return truss::campaign::test::campaign_error(head + rest, "c.toml"); };
+  const std::string e = error_of("apply = \"offset\"\ndistribution = \"uniform\"\nlower = -0.3\nupper = 0.3\n");
+  CHECK_THAT(e, Catch::Contains("c.toml:3: dispersion[1]: mast.diagonal_free_length_m (offset uniform) is "
+                                "implausible: its lower end, a draw of -0.3, gives mast.diagonal_free_length_m = "
+                                "0.15 m") &&
+                    Catch::Contains("a length moved 66.7 % from its nominal 0.45 m") &&
+                    Catch::Contains("millimetres typed as metres? -0.3 mm is -0.0003 m"));
+  // The edge, relative: +-19 % at the uniform's ends runs, +-21 % is refused (a relative draw is the
+  // share itself); the same in millimetres (+-0.5 mm, the shipped tolerance) runs.
+  CHECK(error_of("apply = \"relative\"\ndistribution = \"uniform\"\nlower = -0.19\nupper = 0.19\n").empty());
+  CHECK_THAT(error_of("apply = \"relative\"\ndistribution = \"uniform\"\nlower = -0.21\nupper = 0.21\n"),
+             Catch::Contains("a length moved 21 % from its nominal 0.45 m"));
+  CHECK(error_of("apply = \"offset\"\ndistribution = \"uniform\"\nlower = -0.0005\nupper = 0.0005\n").empty());
+  // A normal draw is judged at 3 sigma: std = 6 % (18 % at 3 sigma) runs, 7 % (21 %) is refused.
+  CHECK(error_of("apply = \"relative\"\ndistribution = \"normal\"\nstd = 0.06\n").empty());
+  CHECK_THAT(error_of("apply = \"relative\"\ndistribution = \"normal\"\nstd = 0.07\n"),
+             Catch::Contains("its 0.135 % quantile (-3 sigma)") && Catch::Contains("a percentage typed as a fraction"));
+  // The key table's hard range, judged at a uniform's ends: a speed drawn uniformly in [500, 1000.5]
+  // m/s has 99.865 % of its draws below 1000 m/s (the limit) but its upper end past it: refused.
+  CHECK_THAT(truss::campaign::test::campaign_error("[ensemble]\nn_runs = 100\n[[dispersion]]\n"
+                                                   "key = \"drive.speed_m_per_s\"\napply = \"absolute\"\n"
+                                                   "distribution = \"uniform\"\nlower = 500\nupper = 1000.5\n",
+                                                   "c.toml"),
+             Catch::Contains("its upper end, a draw of 1000.5, gives drive.speed_m_per_s = 1000.5 m/s, which the "
+                             "model refuses (drive.speed_m_per_s: must lie in (0, 1000] m/s"));
+  // Not a length: a rail foot offset (a position, of either sign) moves freely within the model's range.
+  CHECK(truss::campaign::test::campaign_error("[ensemble]\nn_runs = 100\n[[dispersion]]\nkey = \"rail.x_m\"\n"
+                                              "apply = \"offset\"\ndistribution = \"uniform\"\nlower = -0.02\n"
+                                              "upper = 0.02\n", "c.toml")
+            .empty());
 }

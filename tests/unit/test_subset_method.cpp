@@ -42,7 +42,7 @@ std::string error_of(const std::string& text, const std::vector<std::string>& se
 }  // namespace
 
 TEST_CASE("subset campaign keys: bad input named by file, key and line; the run cap as n_runs", "[methods][subset]") {
-  const std::string ok_subset = "n_per_level = 100\np0 = 0.1\nmax_levels = 4", margin = "margin = \"rail_margin_m\"";
+  const std::string ok_subset = "n_per_level = 100\np0 = 0.1\nmax_levels = 4", margin = "margin = \"motor_torque_margin_Nm\"";
   // Lines: 1 [ensemble], 2 method, 3 master_seed, 4 extra, 5 [ensemble.subset], 6.. its keys.
   CHECK(error_of(rare_text("", "n_per_level = 100\np0 = 0.6", margin)).find("rare.toml:7: ensemble.subset.p0: 0.6") != std::string::npos);
   CHECK(error_of(rare_text("", "n_per_level = 100\np0 = 0.0", margin)).find("ensemble.subset.p0") != std::string::npos);
@@ -67,7 +67,22 @@ TEST_CASE("subset campaign keys: bad input named by file, key and line; the run 
   std::string design = rare_text("", ok_subset, margin);
   design.replace(design.find("method = \"subset\""), 17, "method = \"design\"");
   design.replace(design.find("[ensemble.subset]\n" + ok_subset), 18 + ok_subset.size(), "");
-  CHECK(error_of(design).find("failure: only ensemble.method = \"subset\" reads [failure]") != std::string::npos);
+  CHECK(error_of(design).empty());  // the design estimates the event's probability from its Monte Carlo runs
+  // A margin the scene never computes (NaN in every run, so nothing ever fails): refused at its line.
+  CHECK(error_of(rare_text("", ok_subset, "margin = \"rail_margin_m\"")).find(
+            "rare.toml:10: failure.margin: \"rail_margin_m\" is defined only with stack.mode = \"free\" and "
+            "run.direction = \"deploy\"") != std::string::npos);
+  CHECK(error_of(rare_text("", ok_subset, margin), {"drive.mode=motor"})
+            .find("rare.toml:10: failure.margin: \"motor_torque_margin_Nm\" is defined only with drive.mode = "
+                  "\"velocity\"") != std::string::npos);
+  // The stall torque that meets the motorisation factors needs a motor line: none in torque mode;
+  // the motorisation margin itself is computed in every drive mode.
+  const std::string stall = "column = \"motorisation_stall_torque_Nm\"\nbelow = 0.03\nunit = \"Nm\"";
+  CHECK(error_of(rare_text("", ok_subset, stall)).empty());
+  CHECK(error_of(rare_text("", ok_subset, stall), {"drive.mode=torque"})
+            .find("rare.toml:10: failure.column: \"motorisation_stall_torque_Nm\" is defined only with drive.mode = "
+                  "\"velocity\" or \"motor\"") != std::string::npos);
+  CHECK(error_of(rare_text("", ok_subset, "margin = \"motorisation_margin\""), {"drive.mode=torque"}).empty());
   // A valid one: n_runs is the cap N + (max_levels - 1)(N - N_c); its resolved TOML reads back to it.
   const campaign::CampaignOptions o = methods::parse_campaign_text(rare_text("", ok_subset, margin), "rare.toml", ".");
   CHECK(o.ensemble.n_runs == 100 + 3 * 90);
@@ -77,11 +92,11 @@ TEST_CASE("subset campaign keys: bad input named by file, key and line; the run 
   CHECK(back.ensemble.n_runs == o.ensemble.n_runs);
   CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().subset.p0 == 0.1);
   CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().failure.kind == methods::FailureKind::margin);
-  CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().failure.column == "rail_margin_m");
+  CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().failure.column == "motor_torque_margin_Nm");
 }
 
 TEST_CASE("subset campaign keys: a run cap past 64-bit counts is refused naming n_per_level", "[methods][subset]") {
-  const std::string margin = "margin = \"rail_margin_m\"";
+  const std::string margin = "margin = \"motor_torque_margin_Nm\"";
   const std::string base = rare_text("", "n_per_level = 100\np0 = 0.1\nmax_levels = 3", margin);
   // N + (max_levels - 1)(N - N_c) at N = 2^63 - 1, p0 = 0.1: 2.9 N, past 2^63 (it wrapped to a
   // negative n_runs); at N = 2^62: 2.8 N, likewise; at N = 10^17 it fits 64 bits but not 2^53.
@@ -106,7 +121,7 @@ TEST_CASE("subset method: margins from records; a failed run counts only when it
   r.outputs = {{0.5, -0.2, 0.3, -0.1, std::nan("")}};
   methods::FailureOptions f;
   f.kind = methods::FailureKind::margin;
-  std::vector<double> m = methods::SubsetMethod::calc_margins(f, r);
+  std::vector<double> m = methods::FailureCount::calc_margins(f, r);
   CHECK(m[0] == 0.5);
   CHECK(m[1] == -0.2);
   CHECK(std::isnan(m[2]));  // a stall with a positive margin so far cannot say
@@ -114,12 +129,12 @@ TEST_CASE("subset method: margins from records; a failed run counts only when it
   CHECK(std::isnan(m[4]));
   f.kind = methods::FailureKind::above;
   f.threshold = 0.4;
-  m = methods::SubsetMethod::calc_margins(f, r);
+  m = methods::FailureCount::calc_margins(f, r);
   CHECK(m[0] == Approx(-0.1));
   CHECK(std::isnan(m[1]));  // a rail miss whose column stays below the allowable: cannot say
   CHECK(std::isnan(m[2]));
   f.kind = methods::FailureKind::below;
-  m = methods::SubsetMethod::calc_margins(f, r);
+  m = methods::FailureCount::calc_margins(f, r);
   CHECK(m[0] == Approx(0.1));
   CHECK(m[1] == Approx(-0.6));  // below the bound before the run stopped: a failure it shows
 }
@@ -130,7 +145,7 @@ TEST_CASE("subset method: rounds of contiguous runs whose points give the exact 
           "[methods][subset]") {
   const double beta = 3.5;  // p = 2.326e-4
   const campaign::CampaignContext ctx(methods::parse_campaign_text(
-      rare_text("", "n_per_level = 1000\np0 = 0.1", "margin = \"rail_margin_m\""), "rare.toml", "."));
+      rare_text("", "n_per_level = 1000\np0 = 0.1", "margin = \"motor_torque_margin_Nm\""), "rare.toml", "."));
   REQUIRE(ctx.dims.total == 2);
   methods::SubsetMethod m(ctx);
   auto margin_at = [&](const methods::RoundPlan& plan, std::int64_t run) {

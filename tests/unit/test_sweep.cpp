@@ -1,8 +1,9 @@
-// test_sweep.cpp — a design sweep's campaign side (campaign/sweep.hpp): a run's design coordinate
+// test_sweep.cpp — a design sweep's campaign side (campaign/design_axis.hpp): a run's design coordinate
 // (k + 0.5) / n applies value k, to the base scene (a nominal sweep) or to the dispersion's spread,
 // and the run's last input is that value; value k's standalone campaign and its seed; the resolved
 // TOML reads back to the same sweep; the refinement's candidates (values by hand); the design and
-// stop methods read [failure] only with a [sweep], and a sweep's run cap is its method's per value. Expected values by hand: an offset normal draw
+// stop methods read [failure] (the event whose probability they estimate), and a sweep's run cap is
+// its method's per value. Expected values by hand: an offset normal draw
 // at u = Phi(1) is nominal + std (the normal quantile, exact to ~1e-16 relative).
 #include <catch2/catch.hpp>
 
@@ -10,10 +11,12 @@
 #include <string>
 
 #include "campaign/campaign.hpp"
+#include "campaign/design_axis.hpp"
 #include "campaign/dispersion.hpp"
 #include "campaign/failure.hpp"
 #include "campaign/record.hpp"
 #include "methods/method_table.hpp"
+#include "methods/sweep_options.hpp"
 #include "sampling/sampling.hpp"
 
 using namespace truss::campaign;
@@ -43,6 +46,11 @@ distribution = "normal"
 std = 0.01
 )";
 
+const DesignAxis& axis(const CampaignOptions& c) { return *find_design_axis(c); }
+const truss::methods::SweepOptions& sweep_of(const CampaignOptions& c) {
+  return c.ensemble.method.as<truss::methods::SweepOptions>();
+}
+
 CampaignOptions parse(const std::string& sweep) {
   return truss::methods::parse_campaign_text(std::string(kBase) + sweep, "t", ".");
 }
@@ -62,10 +70,10 @@ TEST_CASE("a nominal sweep sets the key before the draws; the run records its va
   for (std::size_t k = 0; k < 3; ++k) {
     u[static_cast<std::size_t>(L.design)] = (static_cast<double>(k) + 0.5) / 3.0;
     const RunInputs in = calc_run_inputs(c, L, u.data());
-    const double want = c.sweep.values[k] + 0.001;  // the swept nominal plus one std
+    const double want = axis(c).values[k] + 0.001;  // the swept nominal plus one std
     CHECK(in.scene.drive.stall_torque_Nm == Approx(want).epsilon(1e-12));
     CHECK(in.values[0][0] == Approx(want).epsilon(1e-12));
-    CHECK(in.values.back() == std::vector<double>{c.sweep.values[k]});
+    CHECK(in.values.back() == std::vector<double>{axis(c).values[k]});
   }
   const RecordLayout R(c, L);
   CHECK(R.fields().back().name == "sweep_value");
@@ -76,7 +84,7 @@ TEST_CASE("a nominal sweep sets the key before the draws; the run records its va
 TEST_CASE("a spread sweep sets the dispersion's std at each value", "[sweep]") {
   const CampaignOptions c = parse("[sweep]\nspread = \"drive.stall_torque_Nm\"\nfrom = 0.001\nto = 0.003\n"
                                   "count = 3\ntarget_probability = 1e-6\n");
-  CHECK(c.sweep.values == std::vector<double>{0.001, 0.002, 0.003});
+  CHECK(axis(c).values == std::vector<double>{0.001, 0.002, 0.003});
   CHECK(sweep_variable_name(c) == "drive.stall_torque_Nm std");
   const DimensionLayout L = calc_layout(c);
   std::vector<double> u(static_cast<std::size_t>(L.total), 0.5);
@@ -85,7 +93,7 @@ TEST_CASE("a spread sweep sets the dispersion's std at each value", "[sweep]") {
   CHECK(calc_run_inputs(c, L, u.data()).values[0][0] == Approx(0.03 + 0.003).epsilon(1e-12));
   // Value 1's standalone campaign: no sweep, std 0.002, its own seed; the base scene untouched.
   const CampaignOptions at = calc_campaign_at(c, 1);
-  CHECK_FALSE(at.sweep.active);
+  CHECK(find_design_axis(at) == nullptr);
   CHECK(at.dispersions[0].std == 0.002);
   CHECK(at.base.drive.stall_torque_Nm == 0.03);
   CHECK(at.ensemble.master_seed == calc_sweep_seed(5, 1));
@@ -97,10 +105,10 @@ TEST_CASE("the resolved campaign reads back to the same sweep", "[sweep]") {
   const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nfrom = 0.01\nto = 0.02\ncount = 4\n"
                                   "target_probability = 2e-5\nconfidence = 0.9\n");
   const CampaignOptions back = truss::methods::parse_campaign_text(resolved_campaign_toml(c), "resolved", ".");
-  CHECK(back.sweep.values == c.sweep.values);
-  CHECK(back.sweep.key == c.sweep.key);
-  CHECK(back.sweep.target_probability == 2e-5);
-  CHECK(back.sweep.confidence == 0.9);
+  CHECK(axis(back).values == axis(c).values);
+  CHECK(axis(back).key == axis(c).key);
+  CHECK(sweep_of(back).target_probability == 2e-5);
+  CHECK(sweep_of(back).confidence == 0.9);
   CHECK(resolved_campaign_toml(back) == resolved_campaign_toml(c));
 }
 
@@ -133,23 +141,29 @@ std = 0.001
 
   const std::string stop = "[ensemble.stop]\ntarget = \"probability_half_width\"\nwidth = 0.05\nmax_runs = 2000\n";
   const CampaignOptions s = truss::methods::parse_campaign_text(mc + stop + sweep, "stop.toml", ".");
-  CHECK(s.ensemble.method.name() == "stop");
+  CHECK(s.ensemble.method.name() == "sweep");  // the composite, around the stop rule
+  CHECK(s.ensemble.method.options().inner_method()->name() == "stop");
   CHECK(s.ensemble.method.options().failure_event()->kind == FailureKind::above);
   CHECK(calc_max_runs(s) == 3 * 2000);
 
-  auto error_of = [](const std::string& text) {
+  auto error_of = [](const std::string& text, const std::vector<std::string>& sets = {}) {
     try {
-      truss::methods::parse_campaign_text(text, "bad.toml", ".");
+      truss::methods::parse_campaign_text(text, "bad.toml", ".", sets);
     } catch (const std::exception& e) {
       return std::string(e.what());
     }
     return std::string();
   };
-  // Without a sweep, only subset simulation reads [failure] (line 5).
-  CHECK(error_of(mc).find("bad.toml:5: failure: only ensemble.method = \"subset\" reads [failure]") !=
-        std::string::npos);
-  CHECK(error_of(mc + "[ensemble.stop]\ntarget = \"probability_half_width\"\nwidth = 0.05\n")
-            .find("failure: only ensemble.method = \"subset\" reads [failure]") != std::string::npos);
+  // Without a sweep the design and the stop rule estimate the event's probability too (what a sweep's
+  // value is, alone): the same [failure], read by the same rows.
+  CHECK(error_of(mc).empty());
+  const CampaignOptions alone = truss::methods::parse_campaign_text(mc, "mc.toml", ".");
+  CHECK(alone.ensemble.method.options().failure_event()->kind == FailureKind::above);
+  CHECK(error_of(mc + "[ensemble.stop]\ntarget = \"probability_half_width\"\nwidth = 0.05\n").empty());
+  // A Monte Carlo estimate needs Monte Carlo points.
+  CHECK(error_of(mc + "[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02]\ntarget_probability = 0.1\n",
+                 {"ensemble.sampling=sobol"})
+            .find("ensemble.sampling: \"sobol\" gives no binomial interval of a probability") != std::string::npos);
   // A percentile stop rule estimates no probability.
   CHECK(error_of(mc + "[ensemble.stop]\ntarget = \"percentile_bound\"\noutput = \"peak_drive_force_N\"\n" + sweep)
             .find("ensemble.stop.target: \"percentile_bound\" estimates a percentile, not a probability") !=
@@ -164,12 +178,12 @@ TEST_CASE("refinement candidates: evenly inside each bracket, keyed after the li
   // Values 0.01, 0.02, 0.04 with refine = 3: candidates at quarters of each bracket, by hand.
   const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02, 0.04]\n"
                                   "target_probability = 1e-6\nrefine = 3\n");
-  REQUIRE(c.sweep.refine == 3);
-  REQUIRE(c.sweep.n_values() == 3);
-  REQUIRE(c.sweep.n_design_values() == 3 + 2 * 3);
+  REQUIRE(axis(c).refine == 3);
+  REQUIRE(axis(c).n_values() == 3);
+  REQUIRE(axis(c).n_design_values() == 3 + 2 * 3);
   const double want[] = {0.01, 0.02, 0.04, 0.0125, 0.015, 0.0175, 0.025, 0.03, 0.035};
-  for (std::size_t k = 0; k < 9; ++k) CHECK(c.sweep.find_value(k) == Approx(want[k]).epsilon(1e-15));
-  CHECK(c.sweep.find_candidate_index(1, 2) == 8);
+  for (std::size_t k = 0; k < 9; ++k) CHECK(axis(c).find_value(k) == Approx(want[k]).epsilon(1e-15));
+  CHECK(axis(c).find_candidate_index(1, 2) == 8);
   // The most runs: the listed values and one bracket's candidates, each with subset simulation's
   // cap N + (max_levels - 1)(N - N p0) = 100 + 19 x 90 = 1810 (the defaults max_levels 20, p0 0.1).
   CHECK(calc_max_runs(c) == 1810 * (3 + 3));
@@ -179,15 +193,15 @@ TEST_CASE("refinement candidates: evenly inside each bracket, keyed after the li
   u[0] = kPhi1;
   u[static_cast<std::size_t>(L.design)] = (7 + 0.5) / 9.0;
   const RunInputs in = calc_run_inputs(c, L, u.data());
-  CHECK(in.values.back() == std::vector<double>{c.sweep.find_value(7)});
+  CHECK(in.values.back() == std::vector<double>{axis(c).find_value(7)});
   CHECK(in.scene.drive.stall_torque_Nm == Approx(0.03 + 0.001).epsilon(1e-12));
   const CampaignOptions at = calc_campaign_at(c, 7);
-  CHECK(at.base.drive.stall_torque_Nm == c.sweep.find_value(7));
+  CHECK(at.base.drive.stall_torque_Nm == axis(c).find_value(7));
   CHECK(at.ensemble.master_seed == calc_sweep_seed(5, 7));
   CHECK_THROWS(calc_campaign_at(c, 9));
   // The resolved TOML keeps it.
   const CampaignOptions back = truss::methods::parse_campaign_text(resolved_campaign_toml(c), "resolved", ".");
-  CHECK(back.sweep.refine == 3);
+  CHECK(axis(back).refine == 3);
   CHECK(resolved_campaign_toml(back) == resolved_campaign_toml(c));
 
   auto error_of = [](const std::string& sweep) {

@@ -113,9 +113,12 @@ def read_sweep_table(source: str | h5py.File) -> SweepTable | None:
     cols["refinement"] = cols["refinement"].astype(bool)
     cols["status"] = [text(v) for v in g["status"][()]]
     cols["message"] = [text(v) for v in g["message"][()]]
+    # Each value's method writes its own results under /sweep/inner/<k> (subset simulation: its
+    # /subset there, as the standalone campaign's at the root).
     inner = g["inner"] if "inner" in g else {}
-    thresholds = [inner[str(k)]["level_threshold"][()]
-                  if str(k) in inner and "level_threshold" in inner[str(k)] else None
+    levels = "subset/levels/threshold"
+    thresholds = [inner[str(k)][levels][()]
+                  if str(k) in inner and levels in inner[str(k)] else None
                   for k in cols["index"]]
     df = pd.DataFrame(cols)
     df.attrs.update({k: (text(v) if isinstance(v, (bytes, str)) else v) for k, v in g.attrs.items()})

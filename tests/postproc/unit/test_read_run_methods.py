@@ -47,7 +47,7 @@ def test_stop_and_sweep_groups(tmp_path):
         a.attrs.update({"status": "found", "verdict": "PASS"})
         for k in ("value", "estimate", "lower", "upper", "own_value"):
             a[k] = 1.5
-        s["inner/1/level_threshold"] = np.array([0.3, 0.0])
+        s["inner/1/subset/levels/threshold"] = np.array([0.3, 0.0])
     with h5py.File(p, "r") as f:
         stop = read_stop(f)
         assert stop.rounds_state == ["more", "more", "met"] and stop.attrs["state"] == "met"
