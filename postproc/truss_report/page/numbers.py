@@ -22,6 +22,7 @@ figures' keys and in its terminal lines.
 """
 import html
 import math
+import re
 
 import numpy as np
 
@@ -71,6 +72,22 @@ def fmt(v, digits=MOST):
     return _drop_minus_zero(f"{v:.{digits}g}")
 
 
+# A number with a fraction in a text the simulator wrote (a run's message, a method's status).
+_DECIMAL = re.compile(r"(?<![\w.:])-?\d+\.\d+(?:e[-+]?\d+)?(?![\w.:]*\d)")
+
+
+# A unit glued to its prefix in such a text ("0.027 Nm").
+_GLUED_UNIT = re.compile(r"(?<![\w/])([µmk]?N)([ms])(?![\w])")
+
+
+def message_text(text):
+    """A message from the file shown by the rule: its numbers to at most MOST significant digits
+    ("t = 2.92057111 s" is "t = 2.9206 s"), its units spelled as the report does ("0.027 N m");
+    the file and failed_runs.csv keep it whole."""
+    text = _DECIMAL.sub(lambda m: fmt(float(m.group(0)), MOST), str(text))
+    return _GLUED_UNIT.sub(r"\1 \2", text)
+
+
 def decade(x):
     """floor(log10(|x|)) of a nonzero finite x."""
     return int(math.floor(math.log10(abs(x))))
@@ -110,6 +127,8 @@ def fmt_at(v, e):
     v = float(v)
     if not math.isfinite(v):
         return fmt(v)
+    if v != 0:
+        e = max(e, decade(v) - (MOST - 1))      # never more than MOST significant digits
     if e > 0:
         v = round(v / 10 ** e) * 10 ** e
     return _drop_minus_zero(f"{v:.{max(0, -e)}f}")

@@ -9,7 +9,7 @@ from ..judging.runs import failure_groups
 from ..reading.schema import LEVELS, OUTPUTS
 from .figures import fig_distribution, fig_lock_timing
 from .html import esc, num, table, unit_label
-from .numbers import fmt, resolution
+from .numbers import fmt, message_text, resolution
 
 FAILED_RUNS_CSV = "failed_runs.csv"
 
@@ -86,7 +86,7 @@ def subsection_failures(page, c):
                                                   if len(runs) > 30 else "")
         rows.append([esc(status), num(f"failure_group.{g}.count", len(runs)),
                      f"<code>{esc(tmpl)}</code>", shown,
-                     f"<small>run {runs[0]}: {esc(c.messages[runs[0]])}</small>"])
+                     f"<small>run {runs[0]}: {esc(message_text(c.messages[runs[0]]))}</small>"])
         attrs.append(f'data-status="{esc(status)}" data-runs="{" ".join(map(str, runs))}"')
     page.text_file(FAILED_RUNS_CSV, failed_runs_csv(c, failed))
     return ("<h3>Failed runs</h3><p>Failure reasons from <code>/runs/message</code>, grouped by "

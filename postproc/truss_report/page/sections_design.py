@@ -14,7 +14,7 @@ from .sections_campaign import section_campaign, section_loads, section_lock_tim
 from .sections_free import section_rail_miss
 from .sections_margins import (section_checks, section_histories, section_margins,
                                section_sensitivity)
-from .numbers import MOST, DisplayUnits, choose_load_units, fmt
+from .numbers import MOST, DisplayUnits, choose_load_units, fmt, message_text
 from .top import (campaign_doc, design_table_html, model_limits_html, signoff_html, terminal_summary,
                   verdict_html)
 from .top_mechanism import mechanism_html
@@ -26,7 +26,7 @@ def section_nominal(page, e):
         return out[0] + ("<p class='warn'>This file has no <code>/nominal</code> (written before "
                          "truss-campaign stored the nominal run).</p></section>")
     out.append(f"<p>The base scene without dispersions, computed once: status <b>"
-               f"{esc(e.nominal_status)}</b>{(': ' + esc(e.nominal_message)) if e.nominal_message else ''}."
+               f"{esc(e.nominal_status)}</b>{(': ' + esc(message_text(e.nominal_message))) if e.nominal_message else ''}."
                " Its values are the nominal column of the design-load table and the black lines "
                "of the histograms.</p>")
     if e.nominal_run is not None:

@@ -9,7 +9,7 @@ import numpy as np
 from ..judging.subset import (PLATEAU_SHARE, biased_low, count_plateau_levels, design_point, inputs_at_failure,
                               interval)
 from .html import esc, html_page, num, table
-from .numbers import LEAST, MOST, fmt, p_digits, readable_unit, resolution, unit_text
+from .numbers import LEAST, MOST, fmt, message_text, p_digits, readable_unit, resolution, unit_text
 from .render import Report
 from .top import campaign_doc, model_limits_html, signoff_html
 
@@ -52,7 +52,7 @@ def section_probability(s):
     plateau = plateau_warning(count_plateau_levels(s.levels["threshold"]))
     if s.status != "converged":
         warn = (f"<p class='warn'>The estimate did not converge: <b>{esc(s.status)}</b> "
-                f"({esc(s.attrs['message'])}). With <code>level_cap</code> the failure was not reached "
+                f"({esc(message_text(s.attrs['message']))}). With <code>level_cap</code> the failure was not reached "
                 "within max_levels: p is at most the last level's threshold share times p0^levels; "
                 "raise max_levels.</p>")
     elif plateau:
@@ -69,7 +69,7 @@ def section_probability(s):
     return ("<section id='probability'><h2>Failure probability</h2>"
             f"<p>Failure event: {event_text(s)}, estimated by subset simulation (Au &amp; Beck "
             f"2001) with {s.attrs['n_per_level']} samples a level and p0 = {fmt(s.attrs['p0'])}. Status "
-            f"<b>{esc(s.status)}</b>: {esc(s.attrs['message'])}.</p>" + warn
+            f"<b>{esc(s.status)}</b>: {esc(message_text(s.attrs['message']))}.</p>" + warn
             + table(["quantity", "value"], rows, "narrow") + "</section>")
 
 

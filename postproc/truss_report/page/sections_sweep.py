@@ -17,7 +17,7 @@ import numpy as np
 from ..judging.sweep import NO_RESULT_SHARE, flat_values, judge_sweep
 from ..judging.verdict import NOT_ASSESSED, PASS, VERDICT_WORDS
 from .html import esc, html_page, num, table
-from .numbers import DASH, P_LEAST, fmt, fmt_at, fmt_p, p_digits, readable_unit, resolution, unit_text
+from .numbers import DASH, P_LEAST, fmt, fmt_at, fmt_p, message_text, p_digits, readable_unit, resolution, unit_text
 from .render import Report
 from .sections_subset import plateau_warning
 from .top import campaign_doc, model_limits_html, signoff_html
@@ -48,20 +48,25 @@ def allowable_sentence(s):
     a, at = s.attrs["allowable"], s.attrs
     unit, f = design_unit(s)
     if a["status"] != "found":
-        return f"no allowable in the swept range: {a['message']}"
+        return f"no allowable in the swept range: {message_text(a['message'])}"
     if not math.isfinite(a["value"]):
         return "no allowable: the file's allowable is not a number"
     rel = "≥" if a["safe_side"] == "above" else "≤"
     return (f"{at['variable']} {rel} {fmt_at(a['value'] / f, allowable_at(s))} {unit} ({fmt(100 * at['confidence'])} % "
-            f"upper bound on P({failure_text(at, html=False)}) ≤ {fmt(at['target_probability'])})")
+            f"upper bound on P({failure_text(s, html=False)}) ≤ {fmt(at['target_probability'])})")
 
 
-def failure_text(at, html=True):
+def failure_text(s, html=True):
+    """The failure event, its threshold in the design variable's unit when the two share one (a
+    torque margin of a stall-torque sweep: one prefix per quantity)."""
+    at = s.attrs
     col = f"<code>{esc(at['failure_column'])}</code>" if html else at["failure_column"]
-    unit = unit_text(at.get("failure_units", ""))
+    unit, f = unit_text(at.get("failure_units", "")), 1.0
+    if at.get("failure_units", "") == at["design_units"]:
+        unit, f = design_unit(s)
     if at["failure_kind"] == "margin":
         return f"{col} ≤ 0 {unit}".strip()
-    return f"{col} {'≥' if at['failure_kind'] == 'above' else '≤'} {fmt(at['failure_threshold'])} {unit}".strip()
+    return f"{col} {'≥' if at['failure_kind'] == 'above' else '≤'} {fmt(at['failure_threshold'] / f)} {unit}".strip()
 
 
 def reason_text(s, what, rows):
@@ -90,7 +95,7 @@ def verdict_lines(c, s):
         head = (f"VERDICT: {VERDICT_WORDS[j.verdict]} — "
                 + "; ".join(reason_text(s, what, rows) for what, rows in j.reasons) + f" ({name}, sweep)")
     elif j.verdict == NOT_ASSESSED:
-        head = f"VERDICT: {VERDICT_WORDS[j.verdict]} — {a['message']} ({name}, sweep)"
+        head = f"VERDICT: {VERDICT_WORDS[j.verdict]} — {message_text(a['message'])} ({name}, sweep)"
     else:
         side = "on the safe side of" if j.verdict == PASS else "on the unsafe side of"
         head = (f"VERDICT: {VERDICT_WORDS[j.verdict]} — the design's {design_text(s, a['own_value'])} is {side} the "
@@ -170,7 +175,7 @@ def section_sweep(page, s):
         warn = (f"<p class='warn'>Biased low? At {', '.join(design_text(s, float(s['value'].iloc[k])) for k in flat)}, "
                 f"{esc(plateau_warning(int(s['plateau_levels'].iloc[flat[0]])))}.</p>")
     return ("<section id='sweep'><h2>Failure probability against the design variable</h2>"
-            f"<p>Failure event: {failure_text(at)}. At each value of <code>{esc(at['variable'])}</code> "
+            f"<p>Failure event: {failure_text(s)}. At each value of <code>{esc(at['variable'])}</code> "
             f"the campaign ran as a campaign of its own ({esc(at['inner_method'])}; its seed in "
             f"<code>/sweep/master_seed</code>). The band is each estimate's two-sided {conf} % interval, "
             f"the dashed line its one-sided {conf} % upper bound, which the allowable keeps at or below "
@@ -191,7 +196,7 @@ def refine_html(at):
     if int(at.get("refine", 0)) == 0:
         return ""
     return (f"<p>Refinement (<code>sweep.refine = {int(at['refine'])}</code>): "
-            f"{esc(at['refine_message'])}. The allowable is read from all values, listed and placed.</p>")
+            f"{esc(message_text(at['refine_message']))}. The allowable is read from all values, listed and placed.</p>")
 
 
 def section_allowable(s):
@@ -204,7 +209,7 @@ def section_allowable(s):
             ["interval of the crossing, high", num("sweep.allowable.upper", a["upper"], unit, factor=f, at=e)],
             ["the design's own value", num("sweep.own_value", a["own_value"], unit, factor=f)]]
     return ("<section id='allowable'><h2>Allowable</h2>"
-            f"<p>{esc(allowable_sentence(s))}. Status <b>{esc(a['status'])}</b>: {esc(a['message'])}. "
+            f"<p>{esc(allowable_sentence(s))}. Status <b>{esc(a['status'])}</b>: {esc(message_text(a['message']))}. "
             f"How: {esc(a['method'])}. An interval end outside the swept values is shown as —.</p>"
             + table(["quantity", "value"], rows, "narrow") + "</section>")
 

@@ -6,7 +6,7 @@ import numpy as np
 
 from .figures_run import fig4, fig5, fig5_zoom, fig_frame_heights
 from .html import esc, html_page, num, table, unit_label
-from .numbers import MOST, unit_text
+from .numbers import MOST, message_text, unit_text
 from .render import Report
 
 
@@ -22,7 +22,7 @@ def single_run_report(page, run):
     meta = [("software", f"truss {esc(run.software_version)}, git revision "
                          f"<code>{esc(run.git_revision)}</code>"),
             ("written (UTC)", esc(run.created_utc)),
-            ("status", f"<b>{esc(status)}</b>" + (f": {esc(message)}" if message else ""))]
+            ("status", f"<b>{esc(status)}</b>" + (f": {esc(message_text(message))}" if message else ""))]
     parts = [table(["", ""], [[f"<th>{k}</th>", v] for k, v in meta], "kv"),
              f"<details><summary>scene_toml</summary><pre>{esc(run.scene_toml)}</pre>"
              "</details>",

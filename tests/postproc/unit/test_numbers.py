@@ -75,8 +75,15 @@ def test_one_unit_and_resolution_per_quantity():
     assert u.text("lock_time_s", "s", 3.25, values=[3.2, 109.8]) == "3 s"   # spread 106.6 s: 3 digits of 110
 
 
-@pytest.mark.parametrize("v", [1.0, 12.5, 0.001, 123456.0])
+@pytest.mark.parametrize("v", [1.0, 12.5, 0.001, 0.0123])
 def test_fmt_at_has_the_decimals_of_the_resolution(v):
     for e in (-3, -1, 0):
         text = fmt_at(v, e)
         assert len(text.split(".")[1]) == -e if e < 0 else "." not in text
+
+
+def test_fmt_at_never_shows_more_than_most_digits():
+    # a value larger than the quantity's typical one (a T_min above every drive torque) keeps
+    # MOST significant digits: 11.3952 mN m at 10^-4 is 11.395; 123456 at 10^-3 is 123460
+    assert fmt_at(11.3952, -4) == "11.395" and fmt_at(123456.0, -3) == "123460"
+    assert fmt_at(0.0, -3) == "0.000" and fmt_at(-0.00004, -3) == "0.000"
