@@ -1,7 +1,8 @@
 """The report's number rule (postproc/truss_report/page/numbers.py) as a reader checks it on a page's
 text, written here from the rule's statement, not from the code that applies it:
   - "N m", "N s" with a space: a unit token "Nm", "Ns", "mNm", "µNs", ... is a violation (an
-    identifier such as peak_drive_torque_Nm is not a unit token: it is glued to a word);
+    identifier such as peak_drive_torque_Nm is not a unit token: it is glued to a word, or in the
+    PDF's text wrapped after its underscore);
   - never "-0" (or "-0.00"): a value that rounds to zero has no sign;
   - never "nan", "inf" (Python's spellings) where a number belongs;
   - at most MOST significant digits in a number with a fraction ("179.99996" has 8): digits past
@@ -11,7 +12,8 @@ Used by test_pdf_layout.py on the HTML's visible text and the PDF's text (pdftot
 import re
 
 MOST = 5
-UNIT_GLUED = re.compile(r"(?<![\w/])[µmk]?N[ms](?![\w])")
+# (?<!_\s): an identifier the PDF wrapped after its underscore ("entry_impulse_" / "Ns") is no unit.
+UNIT_GLUED = re.compile(r"(?<![\w/])(?<!_\s)[µmk]?N[ms](?![\w])")
 MINUS_ZERO = re.compile(r"(?<![\w.])[-−]0(?:\.0*)?(?![\d.]*[1-9])(?![\w])")
 NAN_INF = re.compile(r"(?<![\w.])[-−]?(?:nan|inf)(?![\w])")
 DECIMAL = re.compile(r"(?<![\w.:])[-−]?(\d+\.\d+)(?:e[-+]?\d+)?(?![\w.:]*\d)")
