@@ -3,9 +3,10 @@
 another revision's, side by side in one run (alternating, medians of the repeats).
 
 Usage:
-    bench/bench_report.py RESULTS.h5 [--base REV] [--repeats 5] [--no-pdf] [--scratch DIR]
+    bench/bench_report.py RESULTS.h5 [--base REV] [--repeats 5] [--no-pdf] [--csv] [--scratch DIR]
 
-REV (default HEAD) is checked out with `git archive` into the scratch directory. Each repeat
+The main job's report (scripts/run_main.sh): the default campaign's file, `--csv`, with its PDF.
+REV (default HEAD; `main` for the main branch) is checked out with `git archive` into the scratch directory. Each repeat
 runs both reports once, in alternating order; the wall time and the CPU time (user + system of
 the report and the children it waits for: the figures, the CSV) are read around each run. Prints
 the medians and the ratio this tree / REV. On a shared machine the wall time moves with the
@@ -52,17 +53,20 @@ def main():
     ap.add_argument("--base", default="HEAD")
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--no-pdf", action="store_true")
+    ap.add_argument("--csv", action="store_true", help="also write runs.csv, as the main job does")
     ap.add_argument("--scratch", default=None)
     a = ap.parse_args()
     scratch = a.scratch or tempfile.mkdtemp(prefix="bench_report.")
     scripts = {"this tree": os.path.join(REPO, "postproc", "report.py"), a.base: checkout(a.base, scratch)}
-    extra = ["--no-pdf"] if a.no_pdf else []
+    extra = (["--no-pdf"] if a.no_pdf else []) + (["--csv"] if a.csv else [])
     times = {k: [] for k in scripts}
     for i in range(a.repeats):
         order = list(scripts) if i % 2 == 0 else list(scripts)[::-1]
         for k in order:
             times[k].append(run(scripts[k], a.h5, os.path.join(scratch, "out"), extra))
-    print(f"{os.path.basename(a.h5)}, {'HTML' if a.no_pdf else 'HTML + PDF'}, {a.repeats} repeats (medians):")
+    what = ("HTML" if a.no_pdf else "HTML + PDF") + (" + runs.csv" if a.csv else "")
+    print(f"{os.path.basename(a.h5)}, {what}, {a.repeats} repeats (medians), load average "
+          f"{os.getloadavg()[0]:.1f}:")
     med = {k: (statistics.median(w for w, _ in v), statistics.median(c for _, c in v)) for k, v in times.items()}
     for k, (w, c) in med.items():
         print(f"  {k:>12}: wall {w:6.2f} s, CPU {c:6.2f} s")

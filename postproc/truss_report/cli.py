@@ -29,7 +29,7 @@ from .reading.campaign import load_campaign  # noqa: E402
 from .reading.extras import load_extras  # noqa: E402
 from .reading.frame import read_campaign  # noqa: E402
 from .reading.h5file import EXIT_INPUT_ERROR, H5, InputError, file_sha256, open_h5, read_kind  # noqa: E402
-from .reading.methods import read_subset, read_sweep_table  # noqa: E402
+from .reading.methods import read_method_groups  # noqa: E402
 from .reading.run import load_single_run  # noqa: E402
 
 REPORT_NAME = "report.html"
@@ -113,7 +113,7 @@ def read_file(path, kind, sha256):
             if kind != "campaign":
                 return load_single_run(h5, sha256), None, None, None
             c = load_campaign(h5, sha256)
-            return c, read_subset(h5), read_sweep_table(f), load_extras(h5, c)
+            return (c, *read_method_groups(h5), load_extras(h5, c))
         except (OSError, RuntimeError) as e:
             raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
 

@@ -13,7 +13,9 @@ DIR with report.html and report.pdf). For each:
    NFKC form, so that a cell wrapped over lines still matches): a table clipped at the page's
    edge loses its last column's digits and units ("125 rad/s" printed as "12").
 2. No page holds only a heading: each page has more than one line of text besides its footer.
-3. No ink outside the page's margins (A4, margins 15 mm top, 12 mm left and right; the footer's
+3. The number rule (number_format.py) on the HTML's visible text and on the PDF's text: units "N m"
+   not "Nm", no "-0", "nan" or "inf", at most five significant digits, torques in one prefix.
+4. No ink outside the page's margins (A4, margins 15 mm top, 12 mm left and right; the footer's
    bottom margin is left out): each page rendered at 50 dpi in grey (pdftoppm), a strip 1 mm
    inside each margin's edge must be white (every pixel >= 250 of 255). A box wider than the
    text width prints into the right margin or off the page.
@@ -21,14 +23,19 @@ Prints one line per check; exit 0 when all pass, 1 otherwise.
 """
 import argparse
 import glob
+import html
 import html.parser
 import os
+import re
 import subprocess
 import sys
 import tempfile
 import unicodedata
 
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from number_format import violations  # noqa: E402
 
 PY = "/usr/bin/python3"
 FAILS = []
@@ -119,6 +126,28 @@ def check_values(name, out):
           + (f"; {len(missing)} missing, e.g. {missing[:4]}" if missing else ""))
 
 
+def visible_text(path):
+    """(the HTML's text as a reader sees it: without the style sheet, the tags and the attributes;
+    the text of its <pre> blocks). A <pre> block is a file shown verbatim (the campaign's TOML, the
+    signed record of its inputs), whose numbers are as the user typed them: the rule is not for it."""
+    with open(path, encoding="utf-8") as fh:
+        page = re.sub(r"<(style|script)\b.*?</\1>", " ", fh.read(), flags=re.S)
+    pre = html.unescape(" ".join(re.findall(r"<pre\b[^>]*>(.*?)</pre>", page, flags=re.S)))
+    page = re.sub(r"<pre\b.*?</pre>", " ", page, flags=re.S)
+    return html.unescape(re.sub(r"<[^>]+>", " ", page)), pre
+
+
+def check_numbers(name, out):
+    text, pre = visible_text(os.path.join(out, "report.html"))
+    verbatim = squash(pre)
+    printed = "\n".join(ln for ln in pdf_text(os.path.join(out, "report.pdf")).splitlines()
+                         if not (squash(ln) and squash(ln) in verbatim))
+    for what, text in (("HTML", text), ("PDF", printed)):
+        bad = violations(text)
+        check(not bad, f"{name}: the {what} keeps the number rule" + (f" ({len(bad)} places, e.g. {bad[:4]})"
+                                                                      if bad else ""))
+
+
 def ink_outside(png):
     """The margins (top, left, right) whose strip 1 mm inside the page's edge holds ink."""
     import matplotlib.image as mi
@@ -180,6 +209,7 @@ def main():
             todo.append((name, out))
     for name, out in todo:
         check_values(name, out)
+        check_numbers(name, out)
         check_margins(name, out)
     print(f"{len(FAILS)} failed" if FAILS else "all passed")
     return 1 if FAILS else 0

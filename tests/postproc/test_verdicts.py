@@ -190,9 +190,14 @@ def check_plateau(a):
                                            f"(got {count_plateau_levels(flat)})")
     check(count_plateau_levels([0.10584856, 0.10547424, 0.01141385, 0.00216291, 0.0]) == 1,
           "1 plateau level in the rare-failure campaign's thresholds")
+    # A sweep of two values on the allowable's safe side (below 0.0041 m), each bound below the target,
+    # so that the file's verdict is supported by its numbers and only the plateaus can change it.
     for verdict, plateaus, want in (("PASS", [0, 7], NOT_ASSESSED), ("PASS", [1, 2], PASS), ("FAIL", [7, 0], FAIL)):
-        s = pd.DataFrame({"value": [0.0037, 0.004], "plateau_levels": plateaus})
-        s.attrs["allowable"] = {"verdict": verdict}
+        s = pd.DataFrame({"value": [0.0037, 0.004], "p": [1e-5, 5e-5], "upper_bound": [2e-5, 9e-5],
+                          "runs": [100, 100], "no_result": [0, 0], "plateau_levels": plateaus})
+        own = 0.0039 if verdict == "PASS" else 0.0042
+        s.attrs.update(target_probability=1e-4, allowable={"status": "found", "verdict": verdict, "value": 0.0041,
+                                                           "own_value": own, "safe_side": "below"})
         check(sweep_verdict(s) == want, f"a {verdict} with plateau levels {plateaus}: {want}")
 
 

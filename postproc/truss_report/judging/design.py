@@ -98,6 +98,7 @@ class DesignLoad:
     unit: str
     impulse: bool
     n: int                # ok runs with a finite value
+    n_missing: int        # ok runs without one (no evidence: the load is not assessed)
     nominal: float
     mean: float
     min: float
@@ -141,7 +142,8 @@ def load_values(c: Campaign, e: Extras, key: str,
 
 def design_loads(c: Campaign, e: Extras, levels: Sequence[float], confidence: float) -> list[DesignLoad]:
     """The DesignLoad of every load the file has with a finite nonzero value in some ok run, with
-    its label and definition for the campaign's direction."""
+    its label and definition for the campaign's direction (a load no ok run has a value of is not
+    defined in this drive mode or direction, and is left out)."""
     res = []
     for key, label, source, deploy_def, retract_def in LOADS:
         label, definition = load_text(key, label, deploy_def, retract_def, c.direction)
@@ -151,10 +153,11 @@ def design_loads(c: Campaign, e: Extras, levels: Sequence[float], confidence: fl
         v = np.sort(x[c.ok & np.isfinite(x)])
         if len(v) == 0 or not np.any(v != 0):
             continue
+        n_missing = int(np.sum(c.ok)) - len(v)
         lv = []
         for q in levels:
             ci = quantile_ci(v, q / 100.0, confidence)
             lv.append(LevelValue(q, percentile(v, q), ci.hi, ci.s, ci.n_needed_hi))
-        res.append(DesignLoad(key, label, definition, unit, key in IMPULSE_KEYS, len(v), nom,
+        res.append(DesignLoad(key, label, definition, unit, key in IMPULSE_KEYS, len(v), n_missing, nom,
                               float(np.mean(v)), float(v[0]), float(v[-1]), lv))
     return res

@@ -87,6 +87,8 @@ class Margins:
     omega: float = float("nan")
     note: str = ""
     missing: bool = False         # the file holds no resistance to judge (not assessed)
+    undeclared: bool = False      # the campaign declares no motor: nothing available to judge
+    n_unjudged: int = 0           # ok runs without a finite resistance or available torque
 
     @property
     def fails(self) -> bool:
@@ -132,33 +134,30 @@ def _resistances(e: Extras, m: Margins) -> tuple[Array, Array] | None:
 def compute_margins(c: Campaign, e: Extras, mf_required: float = DEFAULT_MF,
                     k_uncertainty: float = DEFAULT_UNCERTAINTY,
                     k_inertia: float = DEFAULT_INERTIA) -> Margins:
+    """The margins of the campaign's runs. Without a declared motor (c.motor_declared_by == "") the
+    required side (S, T_D, T_min) is computed and the available side left NaN (m.undeclared)."""
     m = Margins(c.drive_mode, mf_required, k_uncertainty, k_inertia)
     drive = c.drive
-    avail: Array | None
     m.stall_scene = float(drive.get("stall_torque_Nm", np.nan))
     m.no_load_speed = float(drive.get("no_load_speed_rad_per_s", np.nan))
-    if m.mode == "velocity":
-        if c.motor_torque_at_speed is None:
-            m.note = "the file has no /runs/motor_torque_at_speed_Nm"
-            return m
-        avail = c.motor_torque_at_speed
-        m.omega = screw_speed(drive)   # also when no margin can be computed
-    elif m.mode == "motor":
-        avail = c.stall_torque
-    else:
+    if m.mode not in ("velocity", "motor"):
         m.note = "torque drive: no motor"
         return m
+    if m.mode == "velocity":
+        m.omega = screw_speed(drive)   # also when no margin can be computed
+    avail = available_per_run(c, m)
     resistances = _resistances(e, m)
-    if resistances is None or avail is None:   # a motor drive always has its stall torque
+    if resistances is None or (avail is None and not m.undeclared):
         return m
     s, d = resistances
-    sel = c.ok & np.isfinite(s) & np.isfinite(d) & np.isfinite(avail)
+    sel = c.ok & np.isfinite(s) & np.isfinite(d) & (np.isfinite(avail) if avail is not None else True)
+    m.n_unjudged = int(np.sum(c.ok) - np.sum(sel))
     if not np.any(sel):
         m.note = ("no ok run has a finite static resistance and available torque "
                   f"(/runs/{STATIC} holds none for this campaign)")
         m.missing = True
         return m
-    s, d, t_av = np.maximum(s[sel], 0.0), d[sel], avail[sel]   # S <= 0: the springs help
+    s, d = np.maximum(s[sel], 0.0), d[sel]   # S <= 0: the springs help
     t_min = _required(m, s, d)
     m.n = int(np.sum(t_min > 0))
     if m.n == 0:
@@ -166,7 +165,37 @@ def compute_margins(c: Campaign, e: Extras, mf_required: float = DEFAULT_MF,
                   "drive only brakes it (as in retraction); its braking torque is the peak drive "
                   "torque of the design loads")
         return m
-    s, d, t_av, t_min = s[t_min > 0], d[t_min > 0], t_av[t_min > 0], t_min[t_min > 0]
+    keep = t_min > 0
+    s, d, t_min = s[keep], d[keep], t_min[keep]
+    m.s_design, m.d_design = float(np.max(s)), float(np.max(d))
+    m.t_min_design = float(np.max(t_min))
+    if avail is not None:
+        _available_side(m, e, s, d, avail[sel][keep], t_min)
+    return m
+
+
+UNDECLARED = ("the campaign declares no motor: the velocity drive prescribes the motion, and the scene's "
+              "[drive] stall_torque_Nm and no_load_speed_rad_per_s are defaults the campaign does not set; "
+              "declare the motor in the campaign's [scene.drive] to judge it")
+
+
+def available_per_run(c: Campaign, m: Margins) -> Array | None:
+    """The torque available in each run (velocity: the scene's motor at the prescribed speed;
+    motor: the stall torque); None when the file has none (m.note says why, m.missing) or when the
+    campaign declares no motor (m.undeclared)."""
+    if c.motor_declared_by == "":
+        m.note, m.undeclared = UNDECLARED, True
+        return None
+    if m.mode == "motor":
+        return c.stall_torque      # a motor drive always has its stall torque
+    if c.motor_torque_at_speed is None:
+        m.note, m.missing = "the file has no /runs/motor_torque_at_speed_Nm", True
+    return c.motor_torque_at_speed
+
+
+def _available_side(m: Margins, e: Extras, s: Array, d: Array, t_av: Array, t_min: Array) -> None:
+    """The achieved factors, the margin, the runs below and the stall torque needed."""
+    k_inertia, k_uncertainty = m.k_inertia, m.k_uncertainty
     with np.errstate(divide="ignore"):
         m.mf = np.where(s > 0, (t_av - k_inertia * d) / (k_uncertainty * s),
                         np.where(t_av >= k_inertia * d, np.inf, -np.inf))
@@ -174,10 +203,8 @@ def compute_margins(c: Campaign, e: Extras, mf_required: float = DEFAULT_MF,
     m.tm_min = float(np.min(t_av / t_min - 1.0))
     m.n_below = int(np.sum(t_av < t_min))
     m.p_below_ci = clopper_pearson(m.n_below, m.n)
-    m.s_design, m.d_design = float(np.max(s)), float(np.max(d))
-    m.t_min_design = float(np.max(t_min))
     m.t_avail_min = float(np.min(t_av))
-    if e.nominal is not None and e.nominal.get(STATIC, 0) > 0 and m.mode in ("velocity", "motor"):
+    if e.nominal is not None and e.nominal.get(STATIC, 0) > 0:
         nd = max(e.nominal[INERTIAL], 0.0) if m.mode == "velocity" else 0.0
         na = e.nominal["motor_torque_at_speed_Nm"] if m.mode == "velocity" else m.stall_scene
         m.mf_nominal = (na - k_inertia * nd) / (k_uncertainty * e.nominal[STATIC])
@@ -186,4 +213,3 @@ def compute_margins(c: Campaign, e: Extras, mf_required: float = DEFAULT_MF,
         m.stall_needed = m.t_min_design / frac if frac > 0 else float("inf")
     else:
         m.stall_needed = m.t_min_design
-    return m

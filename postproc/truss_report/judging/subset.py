@@ -23,11 +23,12 @@ PLATEAU_LEVELS = 3
 
 
 def interval(p: float, cov: float) -> tuple[float, float]:
-    """Lognormal 95 % interval of the estimate p with coefficient of variation cov."""
+    """Lognormal 95 % interval of the estimate p with coefficient of variation cov, its top
+    clipped to 1 (a probability)."""
     if not (p > 0 and math.isfinite(cov)):
         return float("nan"), float("nan")
     sd = math.sqrt(math.log1p(cov * cov))
-    return p * math.exp(-Z95 * sd), p * math.exp(Z95 * sd)
+    return p * math.exp(-Z95 * sd), min(p * math.exp(Z95 * sd), 1.0)
 
 
 def count_plateau_levels(thresholds: Sequence[float]) -> int:

@@ -16,6 +16,11 @@ from .mechanism import Margins
 # run with one of them violates a requirement. The others (caps, solver and accuracy flags, bad
 # input) say the run gave no evidence: the verdict cannot count it either way.
 PHYSICAL_STATUSES = ("rail miss", "stall", "singular configuration")
+# What a retraction's drive must do that neither the model nor the file holds: brake the mast (the
+# diagonals drive it inwards and the drive's work is negative), hold it at rest anywhere along the
+# way, and not be back-driven by it when unpowered (the screw's backward efficiency, a brake or
+# detent torque).
+RETRACT_NOT_ASSESSED = ("braking", "holding", "back-drive")
 FAIL, NOT_ASSESSED, PASS = "fail", "not_assessed", "pass"
 VERDICT_WORDS = {PASS: "PASS", FAIL: "FAIL", NOT_ASSESSED: "NOT ASSESSED"}
 
@@ -24,9 +29,14 @@ VERDICT_WORDS = {PASS: "PASS", FAIL: "FAIL", NOT_ASSESSED: "NOT ASSESSED"}
 class VerdictItem:
     """One reason of the verdict. `what` says which: "margin" (runs below the required
     motorisation factor: count of `of` runs, `value` the smallest factor), "margin_missing" (no
-    resistance in the file: `name` the note), "status" (count of `of` runs with status `name`),
-    "nominal" (the nominal run's status `name`), "too_few" (no upper bound at `level` percent from
-    `count` ok runs; it needs `needed`), "check" (the consistency check `name` failed)."""
+    resistance or available torque in the file: `name` the note), "margin_undeclared" (the
+    campaign declares no motor: `name` the note), "margin_unjudged" (`count` of `of` ok runs
+    without a finite resistance or available torque), "status" (count of `of` runs with status
+    `name`), "nominal" (the nominal run's status `name`), "too_few" (no upper bound at `level`
+    percent from `count` ok runs; it needs `needed`), "load_missing" (`count` of `of` ok runs
+    without a finite value of the load `name`), "no_loads" (no load has a finite value in an ok
+    run), "retract" (what a retraction's drive must do that the file cannot show: `name` one of
+    RETRACT_NOT_ASSESSED), "check" (the consistency check `name` failed)."""
     what: str
     kind: str             # FAIL or NOT_ASSESSED
     name: str = ""
@@ -54,18 +64,39 @@ def too_few_items(loads: Sequence[DesignLoad]) -> list[tuple[float, int, int]]:
     return res
 
 
+def margin_items(m: Margins) -> list[VerdictItem]:
+    """The mechanism margins' items: below the factor (FAIL), or not assessed and why."""
+    if m.fails:
+        return [VerdictItem("margin", FAIL, count=m.n_below, of=m.n, value=m.mf_min)]
+    if m.undeclared:
+        return [VerdictItem("margin_undeclared", NOT_ASSESSED, name=m.note)]
+    if m.missing:
+        return [VerdictItem("margin_missing", NOT_ASSESSED, name=m.note)]
+    if m.n_unjudged:
+        return [VerdictItem("margin_unjudged", NOT_ASSESSED, count=m.n_unjudged, of=m.n + m.n_unjudged)]
+    return []
+
+
+def load_items(loads: Sequence[DesignLoad], n_ok: int) -> list[VerdictItem]:
+    """No load with a value (when some run is ok), ok runs without a value of a load, and the
+    levels some load has no upper bound for."""
+    if not loads:
+        return [VerdictItem("no_loads", NOT_ASSESSED)] if n_ok else []
+    items = [VerdictItem("load_missing", NOT_ASSESSED, name=d.label, count=d.n_missing, of=d.n + d.n_missing)
+             for d in loads if d.n_missing]
+    return items + [VerdictItem("too_few", NOT_ASSESSED, count=n, needed=need, level=q)
+                    for q, n, need in too_few_items(loads)]
+
+
 def verdict_items(c: Campaign, m: Margins, failed_checks: Sequence[str], nominal_status: str,
                   loads: Sequence[DesignLoad] = ()) -> list[VerdictItem]:
     """Every requirement that fails (FAIL: a margin below the required factor, a run whose status
     is physical (PHYSICAL_STATUSES), a nominal run that is not ok, a failed consistency check of
     the file) or cannot be decided (NOT_ASSESSED: runs without a result (caps, solver or accuracy
-    flags), design loads without a bound (too few runs, with the number needed), mechanism margins
-    the file has no resistance for)."""
-    items = []
-    if m.fails:
-        items.append(VerdictItem("margin", FAIL, count=m.n_below, of=m.n, value=m.mf_min))
-    elif m.missing:
-        items.append(VerdictItem("margin_missing", NOT_ASSESSED, name=m.note))
+    flags), ok runs without a value, design loads without a bound (too few runs, with the number
+    needed), mechanism margins the file has no resistance or motor for, and in a retraction the
+    drive's braking, holding and back-drive)."""
+    items = margin_items(m)
     for code in sorted(c.status_name):
         name = c.status_name[code]
         k = int(np.sum(c.status == code))
@@ -75,8 +106,9 @@ def verdict_items(c: Campaign, m: Margins, failed_checks: Sequence[str], nominal
     if nominal_status and nominal_status != "ok":
         items.append(VerdictItem("nominal", FAIL if nominal_status in PHYSICAL_STATUSES else NOT_ASSESSED,
                                  name=nominal_status))
-    for q, n, need in too_few_items(loads):
-        items.append(VerdictItem("too_few", NOT_ASSESSED, count=n, needed=need, level=q))
+    items += load_items(loads, int(np.sum(c.ok)))
+    if c.direction == "retract":
+        items += [VerdictItem("retract", NOT_ASSESSED, name=what) for what in RETRACT_NOT_ASSESSED]
     for what in failed_checks:
         items.append(VerdictItem("check", FAIL, name=what))
     return items

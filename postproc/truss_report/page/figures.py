@@ -4,11 +4,11 @@ import numpy as np
 from matplotlib.ticker import MaxNLocator
 
 from ..reading.schema import LEVELS
-from .html import fmt
+from .numbers import fmt, fmt_at
 
 
-def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidence=0.95):
-    """x sorted, in the display unit u (est, cis and nominal too)."""
+def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidence=0.95, at=None):
+    """x sorted, in the display unit u (est, cis and nominal too), values in the key to 10^at."""
     n = len(x)
     unit = f" ({u})" if u != "1" else ""
     # Histogram and exceedance probability (1 - ECDF, log scale: the tail that the design
@@ -27,7 +27,7 @@ def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidenc
     colors = {"p50": "C2", "p95": "C1", "p99": "C3", "p99_865": "C4"}
     for q, name, lab in LEVELS:
         style = dict(color=colors[name], lw=1.1, ls="--")
-        a1.axvline(est[name], label=f"{lab} = {fmt(est[name])}{' ' + u if u != '1' else ''}",
+        a1.axvline(est[name], label=f"{lab} = {fmt_at(est[name], at)}{' ' + u if u != '1' else ''}",
                    **style)
         # The bounds as a segment (it need not contain the estimate for very small n); a bound
         # the sample cannot give is drawn to the sample's extreme.
@@ -41,7 +41,7 @@ def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidenc
     if np.isfinite(nominal):
         for ax in (a1, a3):
             ax.axvline(nominal, color="k", lw=1.4, ls="-",
-                       label=f"nominal = {fmt(nominal)}{' ' + u if u != '1' else ''}"
+                       label=f"nominal = {fmt_at(nominal, at)}{' ' + u if u != '1' else ''}"
                        if ax is a1 else None)
     for ax in (a1, a3):
         ax.set_xlabel(title + unit)
@@ -150,14 +150,14 @@ def fig_sobol(plt, factors, outs):
     return fig
 
 
-def fig_velocity_margin(plt, torque, a_min, a_max, u):
-    """Histogram of the ok runs' peak drive torque (display unit u) against the smallest torque
-    the scene's motor gives at the prescribed speed (a_min; a_max the largest)."""
+def fig_velocity_margin(plt, torque, a_min, a_max, u, at=None):
+    """Histogram of the ok runs' peak drive torque (display unit u, resolution 10^at) against the
+    smallest torque the scene's motor gives at the prescribed speed (a_min; a_max the largest)."""
     fig, ax = plt.subplots(figsize=(10.0, 4.2))
     ax.hist(torque, bins=60, color="C0", label=f"peak drive torque, {len(torque)} ok runs")
     ax.axvline(a_min, color="C3", ls="--", lw=1.2,
-               label=f"available at the prescribed speed: {fmt(a_min, 4)} {u}"
-               + (f" (smallest; largest {fmt(a_max, 4)} {u})" if a_max > a_min else ""))
+               label=f"available at the prescribed speed: {fmt_at(a_min, at)} {u}"
+               + (f" (smallest; largest {fmt_at(a_max, at)} {u})" if a_max > a_min else ""))
     ax.set_xlabel(f"drive torque, the three screws together ({u})")
     ax.set_ylabel("runs")
     ax.legend(loc="upper left", bbox_to_anchor=(0.0, -0.18), ncol=2, frameon=False)

@@ -4,7 +4,7 @@ import numpy as np
 
 from ..judging.sobol import sobol_estimates, usable_blocks
 from ..judging.stats import min_runs_for_bound, percentile, quantile_ci
-from .units import readable_unit
+from .numbers import readable_unit
 
 
 def input_axis(col):

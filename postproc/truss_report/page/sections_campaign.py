@@ -8,7 +8,8 @@ from ..judging.design import RETRACT_LABELS
 from ..judging.runs import failure_groups
 from ..reading.schema import LEVELS, OUTPUTS
 from .figures import fig_distribution, fig_lock_timing
-from .html import esc, fmt, num, table, unit_label
+from .html import esc, num, table, unit_label
+from .numbers import fmt, message_text, resolution
 
 FAILED_RUNS_CSV = "failed_runs.csv"
 
@@ -20,7 +21,7 @@ def output_label(key, direction):
     return OUTPUTS.get(key, key)
 
 
-def section_campaign(page, c, j):
+def section_campaign(page, c, j, units):
     a = c.attrs
     out = ['<section id="campaign"><h2>1. Campaign</h2>']
     rows = [
@@ -32,7 +33,7 @@ def section_campaign(page, c, j):
         ("MPI ranks", num("campaign.n_ranks", a["n_ranks"], tag="span")
          + " (invocation that finished the file); sessions: "
          + num("campaign.n_sessions", a["n_sessions"], tag="span")),
-        ("wall time", num("campaign.wall_time_s", c.wall_time_s, "s", tag="span")
+        ("wall time", num("campaign.wall_time_s", c.wall_time_s, "s", tag="span", at=resolution([c.wall_time_s]))
          + " (summed over the sessions)"),
         ("sampling", esc(a["sampling"])),
         ("runs", num("campaign.n_runs", a["n_runs"], tag="span")),
@@ -45,8 +46,8 @@ def section_campaign(page, c, j):
     out.append(table(["", ""], [[f"<th>{k}</th>", v] for k, v in rows], "kv"))
     out.append(subsection_status(c, j.counted))
     out.append(subsection_failures(page, c))
-    out.append(subsection_stop(c.stop))
-    out.append(subsection_dispersions(c))
+    out.append(subsection_stop(c.stop, units))
+    out.append(subsection_dispersions(c, units))
     out.append(subsection_base_scene(c))
     out.append("</section>")
     return "\n".join(out)
@@ -85,7 +86,7 @@ def subsection_failures(page, c):
                                                   if len(runs) > 30 else "")
         rows.append([esc(status), num(f"failure_group.{g}.count", len(runs)),
                      f"<code>{esc(tmpl)}</code>", shown,
-                     f"<small>run {runs[0]}: {esc(c.messages[runs[0]])}</small>"])
+                     f"<small>run {runs[0]}: {esc(message_text(c.messages[runs[0]]))}</small>"])
         attrs.append(f'data-status="{esc(status)}" data-runs="{" ".join(map(str, runs))}"')
     page.text_file(FAILED_RUNS_CSV, failed_runs_csv(c, failed))
     return ("<h3>Failed runs</h3><p>Failure reasons from <code>/runs/message</code>, grouped by "
@@ -111,12 +112,14 @@ def param_units(d):
     return "1 (relative)" if d.apply == "relative" else d.units
 
 
-def subsection_dispersions(c):
+def subsection_dispersions(c, units):
     if not c.dispersions:
         return "<h3>Dispersions</h3><p>The campaign disperses no key.</p>"
     rows = []
     for d in c.dispersions:
         pu = param_units(d)
+        lab, f = units.get(d.key, d.units, [d.nominal]) if d.units not in ("", "1") else (d.units, 1.0)
+        shown = lab if pu == d.units else pu          # parameters in the key's display unit when absolute
         parts = []
         for p, v in d.params.items():
             if d.distribution == "discrete":
@@ -124,11 +127,12 @@ def subsection_dispersions(c):
                                  for i, x in enumerate(np.atleast_1d(v)))
                 parts.append(f"{p} = [{vals}]")
             else:
-                parts.append(f"{p} = " + num(f"dispersion.{d.key}.{p}", v,
-                                             "" if pu.startswith("1") else pu, tag="span"))
+                pf = f if pu == d.units else 1.0
+                parts.append(f"{p} = " + num(f"dispersion.{d.key}.{p}", v, "" if shown.startswith("1") else shown,
+                                             tag="span", factor=pf))
         rows.append([f"<code>{esc(d.key)}</code>", num(f"dispersion.{d.key}.factor", d.factor),
-                     esc(d.distribution), "<br>".join(parts), esc(pu), esc(d.per), esc(d.apply),
-                     num(f"dispersion.{d.key}.nominal", d.nominal, d.units)])
+                     esc(d.distribution), "<br>".join(parts), esc(shown), esc(d.per), esc(d.apply),
+                     num(f"dispersion.{d.key}.nominal", d.nominal, lab, factor=f)])
     return ("<h3>Dispersions</h3><p>From the attributes of <code>/runs/inputs/&lt;key&gt;</code>. "
             "A draw x is applied as: absolute = x, relative = nominal (1 + x), "
             "offset = nominal + x; "
@@ -203,6 +207,7 @@ def output_block(page, c, o, word, nominal, units, confidence):
     """Histogram, exceedance probability and tables of one output (o: its OutputStats)."""
     key, x, mine, stored = o.key, o.x, o.mine, c.stats[o.key]
     u, f = units.get(key, c.units[key], x)
+    at = units.at(key)
     head = (f'<h3 id="{key}">{esc(word[0].upper() + word[1:])}{unit_label(u)} '
             f"<small><code>{key}</code></small></h3>")
     n_ok = int(c.ok.sum())
@@ -212,7 +217,7 @@ def output_block(page, c, o, word, nominal, units, confidence):
                 f"show (the {esc(c.attrs['drive_mode'])} drive mode may not define it).</p>")
     cis, est = o.cis, o.est
     fig = fig_distribution(page.plt, x / f, word, u, {k: v / f for k, v in est.items()},
-                           {k: v.scaled(f) for k, v in cis.items()}, nominal / f, confidence)
+                           {k: v.scaled(f) for k, v in cis.items()}, nominal / f, confidence, at)
     parts = [head,
              f"<p>{num(f'{key}.count', len(x), tag='span')} ok runs with a finite value "
              f"(of {n_ok} ok runs and {c.n} runs).</p>",
@@ -220,8 +225,8 @@ def output_block(page, c, o, word, nominal, units, confidence):
                          f"{word}: histogram and exceedance probability "
                          f"(1 − ECDF, log scale) with P50, P95, P99, P99.865 and their one-sided "
                          f"{confidence * 100:g} % bounds")]
-    summary = [[num(f"{key}.{s}", mine[s], u, factor=f) for s in ("mean", "std", "min", "max")],
-               [num(f"{key}.{s}.stats", stored[s], u, factor=f)
+    summary = [[num(f"{key}.{s}", mine[s], u, factor=f, at=at) for s in ("mean", "std", "min", "max")],
+               [num(f"{key}.{s}.stats", stored[s], u, factor=f, at=at)
                 for s in ("mean", "std", "min", "max")]]
     summary[0].insert(0, "recomputed")
     summary[1].insert(0, "<code>/stats</code>")
@@ -230,10 +235,10 @@ def output_block(page, c, o, word, nominal, units, confidence):
     for q, name, lab in LEVELS:
         ci = cis[name]
         rows.append([
-            lab, num(f"{key}.{name}", est[name], u, factor=f),
-            num(f"{key}.{name}.stats", stored[name], u, factor=f),
-            ci_cell(f"{key}.{name}.ci_lo", ci.lo, ci.n_needed_lo, u, f),
-            ci_cell(f"{key}.{name}.ci_hi", ci.hi, ci.n_needed_hi, u, f),
+            lab, num(f"{key}.{name}", est[name], u, factor=f, at=at),
+            num(f"{key}.{name}.stats", stored[name], u, factor=f, at=at),
+            ci_cell(f"{key}.{name}.ci_lo", ci.lo, ci.n_needed_lo, u, f, at),
+            ci_cell(f"{key}.{name}.ci_hi", ci.hi, ci.n_needed_hi, u, f, at),
             (num(f"{key}.{name}.ci_r", ci.r) if ci.r is not None else "<td>—</td>"),
             (num(f"{key}.{name}.ci_s", ci.s) if ci.s is not None else "<td>—</td>"),
             num(f"{key}.{name}.ci_coverage", ci.coverage, digits=4)])
@@ -244,9 +249,9 @@ def output_block(page, c, o, word, nominal, units, confidence):
     return "\n".join(parts)
 
 
-def ci_cell(key, v, n_needed, unit, factor=1.0):
+def ci_cell(key, v, n_needed, unit, factor=1.0, at=None):
     if n_needed is None:
-        return num(key, v, unit, factor=factor)
+        return num(key, v, unit, factor=factor, at=at)
     return (f'<td class="num toosmall" data-key="{esc(key)}" data-value="nan">n too small '
             f'(needs n ≥ {num(key + ".n_needed", n_needed, tag="span")})</td>')
 
@@ -258,13 +263,14 @@ def section_lock_timing(page, c, lock):
     nb = c.lock.shape[1]
     bays = np.arange(1, nb + 1)
     fig = fig_lock_timing(page.plt, bays, lt, it, u, words, dt_text)
+    at = {name: band_resolution(band) for name, band in (("lock", lt), ("interval", it))}
     rows = []
     for j in range(nb):
         b = j + 1
         rows.append([str(b), num(f"lock_time_s.bay{b}.count", int(lt["count"][j]))]
-                    + [num(f"lock_time_s.bay{b}.{s}", lt[s][j], u) for s in ("p5", "p50", "p95")]
+                    + [num(f"lock_time_s.bay{b}.{s}", lt[s][j], u, at=at["lock"]) for s in ("p5", "p50", "p95")]
                     + [num(f"lock_interval_s.bay{b}.count", int(it["count"][j]))]
-                    + [num(f"lock_interval_s.bay{b}.{s}", it[s][j], u)
+                    + [num(f"lock_interval_s.bay{b}.{s}", it[s][j], u, at=at["interval"])
                        for s in ("p5", "p50", "p95")])
     return (f'<section id="locks"><h2>3. {words[0].capitalize()} timing</h2>'
             f"<p>Per bay, over the ok runs that have that bay with a finite {words[0]} time "
@@ -281,13 +287,23 @@ def section_lock_timing(page, c, lock):
             + "</details></section>")
 
 
-def subsection_stop(s):
+def band_resolution(band):
+    """The resolution of per-bay percentiles (count, p5, p50, p95 per bay): from the median width
+    of their 5-95 % bands, the spread of the runs at a bay."""
+    width = band["p95"] - band["p5"]
+    width = width[np.isfinite(width)]
+    return resolution(np.concatenate([band["p5"], band["p95"]]), float(np.median(width)) if len(width) else np.nan)
+
+
+def subsection_stop(s, units):
     """The rounds of a sequentially stopped campaign and why it stopped (empty without /stop)."""
     if s is None:
         return ""
-    u = s.unit
+    u, f = units.get(str(s.attrs["output"]), s.unit, s.estimate)
+    at = resolution(s.estimate / f, float(np.nanmedian(s.upper - s.estimate)) / f)
     rows = [[str(k), num(f"stop.round{k}.runs", int(s.runs[k])), num(f"stop.round{k}.used", int(s.used[k])),
-             num(f"stop.round{k}.estimate", float(s.estimate[k]), u), num(f"stop.round{k}.upper", float(s.upper[k]), u),
+             num(f"stop.round{k}.estimate", float(s.estimate[k]), u, factor=f, at=at),
+             num(f"stop.round{k}.upper", float(s.upper[k]), u, factor=f, at=at),
              num(f"stop.round{k}.width", float(s.achieved_width[k]), digits=3), esc(s.rounds_state[k])]
             for k in range(len(s.runs))]
     what = (f"the one-sided {fmt(100 * s.attrs['confidence'])} % bound of the {fmt(s.attrs['level'])} quantile of "

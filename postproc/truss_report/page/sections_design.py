@@ -14,9 +14,10 @@ from .sections_campaign import section_campaign, section_loads, section_lock_tim
 from .sections_free import section_rail_miss
 from .sections_margins import (section_checks, section_histories, section_margins,
                                section_sensitivity)
-from .top import (campaign_doc, design_table_html, mechanism_html, model_limits_html, signoff_html,
-                  terminal_summary, verdict_html)
-from .units import DisplayUnits, choose_load_units
+from .numbers import MOST, DisplayUnits, choose_load_units, fmt, message_text
+from .top import (campaign_doc, design_table_html, model_limits_html, signoff_html, terminal_summary,
+                  verdict_html)
+from .top_mechanism import mechanism_html
 
 
 def section_nominal(page, e):
@@ -25,7 +26,7 @@ def section_nominal(page, e):
         return out[0] + ("<p class='warn'>This file has no <code>/nominal</code> (written before "
                          "truss-campaign stored the nominal run).</p></section>")
     out.append(f"<p>The base scene without dispersions, computed once: status <b>"
-               f"{esc(e.nominal_status)}</b>{(': ' + esc(e.nominal_message)) if e.nominal_message else ''}."
+               f"{esc(e.nominal_status)}</b>{(': ' + esc(message_text(e.nominal_message))) if e.nominal_message else ''}."
                " Its values are the nominal column of the design-load table and the black lines "
                "of the histograms.</p>")
     if e.nominal_run is not None:
@@ -34,7 +35,7 @@ def section_nominal(page, e):
                                "times dashed"))
     lock = e.nominal_bays["lock_time_s"]
     n = int(np.sum(np.isfinite(lock)))
-    rows = [[str(j + 1), num(f"nominal.lock_time_s.bay{j + 1}", float(lock[j]), "s")]
+    rows = [[str(j + 1), num(f"nominal.lock_time_s.bay{j + 1}", float(lock[j]), "s", digits=MOST)]
             for j in range(n)]
     out.append("<details><summary>lock times of the nominal run</summary>"
                + table(["bay", "lock time"], rows, "narrow") + "</details></section>")
@@ -84,7 +85,7 @@ def section_plots(page, c, e, j, du, opts):
             "sobol_convergence.png", "total Sobol' index of each factor against the blocks "
             "used, recomputed here (Jansen), with a percentile-bootstrap interval over blocks"))
         out.append("<p class='small'>Recomputed from all usable blocks, the indices differ from "
-                   f"<code>/sensitivity</code> by at most {sobol_agreement(c.sensitivity, ss):.3g} (same "
+                   f"<code>/sensitivity</code> by at most {fmt(sobol_agreement(c.sensitivity, ss), 2)} (same "
                    "estimators; only the order of the roundings differs).</p>")
     out.append("</section>")
     return "\n".join(out)
@@ -113,7 +114,7 @@ def campaign_report(page, c, e, j, opts):
     """The campaign report (j: its CampaignJudgement), with the verdict's lines for the terminal."""
     du = DisplayUnits()    # one unit per quantity, chosen from the design loads
     choose_load_units(du, j.loads)
-    body = [section_campaign(page, c, j), section_rail_miss(c), section_loads(page, c, e, j, du, opts.confidence),
+    body = [section_campaign(page, c, j, du), section_rail_miss(c), section_loads(page, c, e, j, du, opts.confidence),
             section_lock_timing(page, c, j.lock), section_margins(page, c, du), section_sensitivity(page, c, j),
             section_histories(page, c)]
     n_checks = 7 if c.histories else 6

@@ -3,6 +3,7 @@
 95 % interval, and the distribution of the missing hinge's closest approach to the rail."""
 from ..judging.runs import rail_miss
 from .html import num, table
+from .numbers import p_digits, readable_unit, resolution
 
 
 def section_rail_miss(c):
@@ -11,15 +12,18 @@ def section_rail_miss(c):
     if r is None:
         return ""
     n, k, lo, hi = r.n, r.k, r.lo, r.hi
-    u = c.rail_approach_unit
+    values = list(r.approach.values())
+    u, f = readable_unit(c.rail_approach_unit, max(map(abs, values)) if values else float("nan"))
+    at = resolution([v / f for v in values])
+    d = p_digits(k / n, lo, hi)
     rows = [["runs", num("railmiss.n_runs", n)],
             ["runs ending in rail miss", num("railmiss.n_miss", k)],
-            ["probability of a rail miss", num("railmiss.p", k / n, digits=4)],
-            ["95 % Clopper-Pearson interval, low", num("railmiss.p.ci_lo", lo, digits=4)],
-            ["95 % Clopper-Pearson interval, high", num("railmiss.p.ci_hi", hi, digits=4)]]
+            ["probability of a rail miss", num("railmiss.p", k / n, digits=d)],
+            ["95 % Clopper-Pearson interval, low", num("railmiss.p.ci_lo", lo, digits=d)],
+            ["95 % Clopper-Pearson interval, high", num("railmiss.p.ci_hi", hi, digits=d)]]
     for name, v in r.approach.items():
         rows.append([f"closest approach of the hinge to the rail, {name}",
-                     num(f"railmiss.approach.{name}", v, u)])
+                     num(f"railmiss.approach.{name}", v, u, factor=f, at=at)])
     return ('<section id="railmiss"><h3>Rail miss (free stack)</h3><p>A run misses the rail '
             "when the pin of its deploying bay never reaches it (docs/model.md §2). The probability is "
             "rail-miss runs / all runs, with an exact (Clopper-Pearson) 95 % interval. The closest "

@@ -10,11 +10,30 @@ from ..judging.stats import AGREE_RTOL
 from ..reading.schema import OUTPUTS
 from .figures import fig_motor, fig_sobol, fig_tornado, fig_velocity_margin
 from .figures_run import fig5
-from .html import esc, fmt, num, table
+from .html import esc, num, table
+from .numbers import fmt, fmt_at, p_digits, resolution, uncertainty_resolution
 from .sections_campaign import output_label
 
 TORNADO_TOP = 15
 MAX_HISTORY_FIGURES = 12
+
+
+def probability_rows(key, label, p, lo, hi):
+    """A probability and its 95 % Clopper-Pearson interval, each a row (page.numbers, rule 3)."""
+    d = p_digits(p, lo, hi)
+    return [[label, num(key, p, digits=d)], ["95 % Clopper-Pearson interval, low", num(f"{key}.ci_lo", lo, digits=d)],
+            ["95 % Clopper-Pearson interval, high", num(f"{key}.ci_hi", hi, digits=d)]]
+
+
+def rho_at(n):
+    """The resolution of a rank correlation over n pairs: two digits of its standard error 1/sqrt(n - 1)."""
+    return uncertainty_resolution(1.0 / np.sqrt(max(n - 1, 1)))
+
+
+def sobol_at(o, g):
+    """The resolution of factor g's Sobol' indices: two digits of the half width of its total
+    index's interval."""
+    return uncertainty_resolution((o.indices["total_hi"][g] - o.indices["total_lo"][g]) / 2.0)
 
 
 def section_margins(page, c, units):
@@ -44,17 +63,15 @@ def section_margins(page, c, units):
         ["stalled runs (status stall)", num("motor.n_stall", int(stalled.sum()))],
         ["ok runs with peak torque > stall torque", num("motor.n_ok_exceed", x.n_ok_exceed)],
         ["exceedances", num("motor.n_exceed", k)],
-        ["probability of exceeding the stall torque", num("motor.p_exceed", p, digits=4)],
-        ["95 % Clopper-Pearson interval, low", num("motor.p_exceed.ci_lo", lo, digits=4)],
-        ["95 % Clopper-Pearson interval, high", num("motor.p_exceed.ci_hi", hi, digits=4)],
+        *probability_rows("motor.p_exceed", "probability of exceeding the stall torque", p, lo, hi),
         ["largest peak torque / stall torque of an ok run",
-         num("motor.utilisation_max", x.utilisation_max, digits=10)],
+         num("motor.utilisation_max", x.utilisation_max, at=resolution([x.utilisation_max, 1.0]))],
     ]
     excluded = x.n_other_failures
     return (head + f"<p>Stall torque: {source}. A run exceeds the stall torque when it stalled "
             "(status <code>stall</code>: the motor could not drive the mast, so the torque the "
             "mast needed exceeded what the motor gives; <b>stalled runs count as exceedances</b>) "
-            f"or when its peak torque is above its stall torque × (1 + {TORQUE_RTOL:g}). "
+            f"or when its peak torque is above its stall torque × (1 + {fmt(TORQUE_RTOL)}). "
             "The motor gives its stall torque at zero speed, at the start, so in an ok run the "
             "peak torque equals the stall torque up to rounding. The probability is exceedances / "
             "runs considered, with an exact (Clopper-Pearson) 95 % interval; the "
@@ -69,6 +86,12 @@ def section_margins(page, c, units):
 def section_margins_velocity(page, c, units, head):
     torque = c.outputs["peak_drive_torque_Nm"]
     u, f = units.get("torque", c.units["peak_drive_torque_Nm"], torque)
+    if c.motor_declared_by == "":
+        return (head + "<p>The campaign declares no motor: the velocity drive prescribes the motion, and the "
+                "scene's <code>drive.stall_torque_Nm</code> and <code>drive.no_load_speed_rad_per_s</code> are "
+                "defaults the campaign does not set, so no motor is compared with the torque the runs need (their "
+                "peak drive torque is in the design loads). Declare the motor in the campaign's "
+                "<code>[scene.drive]</code> to compare it.</p></section>")
     if c.motor_torque_at_speed is None:
         return (head + "<p>This file has no <code>/runs/motor_torque_at_speed_Nm</code> (it was "
                 "written before the simulator stored the motor's torque at the prescribed speed): "
@@ -77,18 +100,18 @@ def section_margins_velocity(page, c, units, head):
     if x is None:
         return head + "<p>No ok run with a finite peak torque: nothing to compare.</p></section>"
     n_cons, k, lo, hi, omega, drive = x.n_considered, x.k, x.lo, x.hi, x.omega, c.drive
-    fig = fig_velocity_margin(page.plt, torque[x.considered] / f, x.avail_min / f, x.avail_max / f, u)
+    fig = fig_velocity_margin(page.plt, torque[x.considered] / f, x.avail_min / f, x.avail_max / f, u,
+                              units.at("torque"))
+    ratio_at = resolution([x.ratio_min, x.ratio_p50])
     rows = [
         ["motor stall torque of the scene", num("velmargin.stall_torque", float(drive["stall_torque_Nm"]), u, factor=f)],
         ["motor no-load speed of the scene", num("velmargin.no_load_speed", float(drive["no_load_speed_rad_per_s"]), "rad/s")],
         ["screw speed the prescribed drive speed needs", num("velmargin.required_speed", omega, "rad/s")],
         ["runs considered (ok, finite peak torque)", num("velmargin.n_considered", n_cons)],
         ["runs whose peak torque exceeds the available torque", num("velmargin.n_exceed", k)],
-        ["probability of exceeding", num("velmargin.p_exceed", k / n_cons, digits=4)],
-        ["95 % Clopper-Pearson interval, low", num("velmargin.p_exceed.ci_lo", lo, digits=4)],
-        ["95 % Clopper-Pearson interval, high", num("velmargin.p_exceed.ci_hi", hi, digits=4)],
-        ["smallest available / peak torque", num("velmargin.ratio_min", x.ratio_min, digits=6)],
-        ["median available / peak torque", num("velmargin.ratio_p50", x.ratio_p50, digits=6)],
+        *probability_rows("velmargin.p_exceed", "probability of exceeding", k / n_cons, lo, hi),
+        ["smallest available / peak torque", num("velmargin.ratio_min", x.ratio_min, at=ratio_at)],
+        ["median available / peak torque", num("velmargin.ratio_p50", x.ratio_p50, at=ratio_at)],
     ]
     return (head + "<p>Velocity drive: the driven frame follows the prescribed speed whatever torque that "
             "takes, so the campaign gives the <b>torque a motor must deliver</b> (at the screws, the "
@@ -123,7 +146,7 @@ def section_sensitivity(page, c, j):
                "independent inputs give 95 % of the time, for one input taken alone. ρ is "
                "dimensionless.</p>")
     agg_labels = [col.label for col in cols if col.aggregate]
-    rows = [[f"<code>{esc(lab)}</code>"] + [num(f"spearman.{k}.{lab}", rho[k][lab][0], digits=3)
+    rows = [[f"<code>{esc(lab)}</code>"] + [num(f"spearman.{k}.{lab}", rho[k][lab][0], at=rho_at(rho[k][lab][1]))
                                             for k in OUTPUTS] for lab in agg_labels]
     out.append("<h3>Rank correlation of every dispersion (aggregates)</h3>"
                + table(["input"] + [f"<code>{k}</code>" for k in OUTPUTS], rows, "corr"))
@@ -145,7 +168,7 @@ def section_sensitivity(page, c, j):
         fig = fig_tornado(page.plt, ranked, aggregate, f"{output_label(key, c.direction)} (n = {n_y})",
                           1.96 / np.sqrt(max(n_y - 1, 1)))
         detail = table(["input", "ρ", "runs"],
-                       [[f"<code>{esc(lab)}</code>", num(f"spearman.{key}.{lab}", r, digits=3),
+                       [[f"<code>{esc(lab)}</code>", num(f"spearman.{key}.{lab}", r, at=rho_at(n)),
                          num(f"spearman.{key}.{lab}.n", n)] for lab, r, n in ranked], "narrow")
         figs.append("<div class='cell'>" + page.figure(fig, f"tornado_{key}.png",
                                                          f"Spearman ρ with {key}", "half")
@@ -177,7 +200,7 @@ def subsection_sobol(page, c):
     cells = []
     for key, o in outs.items():
         rows = [[f"<code>{esc(fac)}</code>"]
-                + [num(f"sobol.{key}.{fac}.{k}", float(o.indices[k][g]), digits=3)
+                + [num(f"sobol.{key}.{fac}.{k}", float(o.indices[k][g]), at=sobol_at(o, g))
                    for k in ("first_order", "first_order_lo", "first_order_hi",
                              "total", "total_lo", "total_hi")] for g, fac in enumerate(factors)]
         cells.append(f"<div class='cell'><h4><code>{key}</code></h4><p>blocks used "
@@ -196,8 +219,9 @@ def design_correlation_note(c, n_factors):
     if not bad:
         return ""
     return ("<p class='warn'>Design check: the A and B samples of "
-            + ", ".join(f"<code>{esc(k)}</code> (rank correlation {r:.2f})" for k, r in sorted(bad.items()))
-            + f" are correlated beyond 4/&radic;N = {limit:.2f} (N = {n_blocks} blocks). Saltelli's "
+            + ", ".join(f"<code>{esc(k)}</code> (rank correlation {fmt_at(r, rho_at(n_blocks))})"
+                        for k, r in sorted(bad.items()))
+            + f" are correlated beyond 4/&radic;N = {fmt(limit, 2)} (N = {n_blocks} blocks). Saltelli's "
               "estimators assume them independent: these factors' indices may be biased at this N "
               "(files of schema_version 1 drew A and B from one Sobol' point, whose high dimensions "
               "do this; docs/campaigns.md). Run more blocks before relying on them.</p>")
@@ -257,5 +281,5 @@ def section_checks(c, checks, number):
     return (f'<section id="checks"><h2>{number}. Consistency of the file</h2>'
             "<p>The report recomputes from <code>/runs</code> what the file also stores in "
             "<code>/stats</code>, and compares: counts exactly, other statistics to "
-            f"{AGREE_RTOL:g} of the largest |value| of the column.</p>"
+            f"{fmt(AGREE_RTOL)} of the largest |value| of the column.</p>"
             + table(["check", "result", "detail"], rows) + "</section>")

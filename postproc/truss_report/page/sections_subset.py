@@ -8,7 +8,8 @@ import numpy as np
 
 from ..judging.subset import (PLATEAU_SHARE, biased_low, count_plateau_levels, design_point, inputs_at_failure,
                               interval)
-from .html import esc, fmt, html_page, num, table
+from .html import esc, html_page, num, table
+from .numbers import LEAST, MOST, fmt, message_text, p_digits, readable_unit, resolution, unit_text
 from .render import Report
 from .top import campaign_doc, model_limits_html, signoff_html
 
@@ -25,22 +26,23 @@ def plateau_warning(n):
 
 def event_text(s):
     col, kind = esc(s.attrs["failure_column"]), s.attrs["failure_kind"]
-    unit = s.attrs["margin_units"]
+    unit = unit_text(s.attrs["margin_units"])
     if kind == "margin":
         return f"<code>{col}</code> ≤ 0 {esc(unit)}"
-    return f"<code>{col}</code> {'≥' if kind == 'above' else '≤'} {fmt(s.attrs['failure_threshold'])} {esc(unit)}"
+    return f"<code>{col}</code> {'≥' if kind == 'above' else '≤'} {esc(margin_text(s.attrs['failure_threshold'], s))}"
 
 
 def section_probability(s):
     lo, hi = interval(s.p, s.cov_interval)
-    rows = [["failure probability p", num("subset.p", s.p, digits=4)],
-            [f"95 % interval, low (lognormal, {s.cov_interval_name} CoV)", num("subset.p.ci_lo", lo, digits=4)],
-            ["95 % interval, high", num("subset.p.ci_hi", hi, digits=4)],
-            ["reliability index β = −Φ⁻¹(p)", num("subset.beta", s.beta, digits=4)],
+    d = p_digits(s.p, lo, hi)
+    rows = [["failure probability p", num("subset.p", s.p, digits=d)],
+            [f"95 % interval, low (lognormal, {s.cov_interval_name} CoV)", num("subset.p.ci_lo", lo, digits=d)],
+            ["95 % interval, high", num("subset.p.ci_hi", hi, digits=d)],
+            ["reliability index β = −Φ⁻¹(p)", num("subset.beta", s.beta, digits=LEAST)],
             ["coefficient of variation of the interval (the larger of Au & Beck's bound for correlated "
-             "levels and the lineage estimator)", num("subset.cov_bound", s.cov_interval, digits=3)],
-            ["coefficient of variation (lineage estimator)", num("subset.cov_lineage", s.cov_lineage, digits=3)],
-            ["coefficient of variation (Au & Beck)", num("subset.cov", s.cov, digits=3)],
+             "levels and the lineage estimator)", num("subset.cov_bound", s.cov_interval, digits=2)],
+            ["coefficient of variation (lineage estimator)", num("subset.cov_lineage", s.cov_lineage, digits=2)],
+            ["coefficient of variation (Au & Beck)", num("subset.cov", s.cov, digits=2)],
             ["runs used", num("subset.runs", s.runs)],
             ["levels", num("subset.levels", len(s.levels["threshold"]))],
             ["crude Monte Carlo runs for an interval as narrow", num("subset.crude_mc_runs", s.crude_mc_runs,
@@ -50,11 +52,15 @@ def section_probability(s):
     plateau = plateau_warning(count_plateau_levels(s.levels["threshold"]))
     if s.status != "converged":
         warn = (f"<p class='warn'>The estimate did not converge: <b>{esc(s.status)}</b> "
-                f"({esc(s.attrs['message'])}). With <code>level_cap</code> the failure was not reached "
+                f"({esc(message_text(s.attrs['message']))}). With <code>level_cap</code> the failure was not reached "
                 "within max_levels: p is at most the last level's threshold share times p0^levels; "
                 "raise max_levels.</p>")
     elif plateau:
         warn = f"<p class='warn'>Biased low? {esc(plateau)}.</p>"
+    elif np.sum(s.levels.get("unusable", 0)) > 0:
+        warn = (f"<p class='warn'>{int(np.sum(s.levels['unusable']))} runs gave no margin (a cap or a failure "
+                "before the event) and the estimate counts them as safe: p may lie below the failure "
+                "probability.</p>")
     elif s.lineages < 20:
         warn = (f"<p class='warn'>Only {s.lineages} level-0 ancestors survive to the last level: "
                 "the lineage and Au &amp; Beck CoVs then understate the spread (the interval uses the "
@@ -63,7 +69,7 @@ def section_probability(s):
     return ("<section id='probability'><h2>Failure probability</h2>"
             f"<p>Failure event: {event_text(s)}, estimated by subset simulation (Au &amp; Beck "
             f"2001) with {s.attrs['n_per_level']} samples a level and p0 = {fmt(s.attrs['p0'])}. Status "
-            f"<b>{esc(s.status)}</b>: {esc(s.attrs['message'])}.</p>" + warn
+            f"<b>{esc(s.status)}</b>: {esc(message_text(s.attrs['message']))}.</p>" + warn
             + table(["quantity", "value"], rows, "narrow") + "</section>")
 
 
@@ -78,7 +84,7 @@ def fig_levels(plt, s):
     a1.set_xticks(k)
     a1.legend()
     a2.semilogy(k, np.cumprod(pr), "o-", color="C1", label="P(margin ≤ threshold)")
-    a2.axhline(s.p, color="C3", lw=1, ls="--", label=f"p = {fmt(s.p, 3)}")
+    a2.axhline(s.p, color="C3", lw=1, ls="--", label=f"p = {fmt(s.p, p_digits(s.p, *interval(s.p, s.cov_interval)))}")
     a2.set_xlabel("level")
     a2.set_ylabel("probability")
     a2.set_xticks(k)
@@ -89,10 +95,11 @@ def fig_levels(plt, s):
 
 def section_levels(page, s):
     L = s.levels
-    u = s.level_units
-    rows = [[str(i), num(f"subset.level{i}.threshold", float(L["threshold"][i]), u, digits=4),
-             num(f"subset.level{i}.probability", float(L["probability"][i]), digits=4),
-             num(f"subset.level{i}.acceptance", float(L["acceptance"][i]), digits=3),
+    u, f = readable_unit(s.level_units, float(np.max(np.abs(L["threshold"]))) if len(L["threshold"]) else np.nan)
+    at = resolution(L["threshold"] / f)
+    rows = [[str(i), num(f"subset.level{i}.threshold", float(L["threshold"][i]), u, factor=f, at=at),
+             num(f"subset.level{i}.probability", float(L["probability"][i]), digits=LEAST),
+             num(f"subset.level{i}.acceptance", float(L["acceptance"][i]), digits=2),
              num(f"subset.level{i}.runs", int(L["runs"][i])),
              num(f"subset.level{i}.unusable", int(L["unusable"][i]))] for i in range(len(L["threshold"]))]
     return ("<section id='levels'><h2>Levels</h2><p>Each level keeps the samples whose margin is at "
@@ -125,15 +132,15 @@ def design_point_html(dp, s):
         per = "" if r.width == 1 else f" (mean over {r.width} {r.per}s)"
         k = r.key
         rows.append([f"<code>{esc(k)}</code>{per}", num(f"subset.mpp.{k}.nominal", r.nominal, r.unit),
-                     num(f"subset.mpp.{k}.value", r.value, r.unit, digits=6),
+                     num(f"subset.mpp.{k}.value", r.value, r.unit, digits=MOST),
                      num(f"subset.mpp.{k}.z", r.z, digits=3),
                      num(f"subset.mpp.{k}.alpha", r.alpha, digits=3),
                      num(f"subset.mpp.{k}.share", r.share, digits=3)])
     return ("<h3>Design point (most probable failure point)</h3>"
             f"<p>Of the failure samples, the one of highest standard-normal density (smallest "
-            f"|z|): run {dp.run}, margin {fmt(dp.margin, 4)} {esc(s.attrs['margin_units'])}, "
-            "|z*| = " + num("subset.mpp.beta", dp.beta, digits=4, tag="span")
-            + f" (the FORM index it gives, against β = {fmt(s.beta, 4)} from p). Its inputs "
+            f"|z|): run {dp.run}, margin {margin_text(dp.margin, s)}, "
+            "|z*| = " + num("subset.mpp.beta", dp.beta, digits=LEAST, tag="span")
+            + f" (the FORM index it gives, against β = {fmt(s.beta, LEAST)} from p). Its inputs "
             "in physical units, and each input's importance: the direction cosines α<sub>i</sub> "
             "= −z*<sub>i</sub> / |z*| of the design point (α &lt; 0: the input must rise for the "
             "failure), and α<sup>2</sup>, the input's share of |z*|<sup>2</sup> (the shares sum "
@@ -161,25 +168,35 @@ def section_design_point(s, c):
                      "mean z (σ)"], design_point_rows(s, c)) + "</section>")
 
 
+def margin_text(v, s):
+    """A margin of the failure event in its display unit ("-0.12 mm"), as declared values are."""
+    u, f = readable_unit(s.attrs["margin_units"], abs(v))
+    return f"{fmt(v / f)} {u}"
+
+
 def terminal_lines(c, s):
     lo, hi = interval(s.p, s.cov_interval)
-    return [f"SUBSET SIMULATION ({c.attrs['campaign_name']}, {s.runs} runs, {s.status}): "
-            f"P({s.attrs['failure_column']} {'>=' if s.attrs['failure_kind'] == 'above' else '<='} "
-            f"{fmt(s.attrs['failure_threshold'])} {s.attrs['margin_units']}) = {fmt(s.p, 4)}",
-            f"  95 % interval [{fmt(lo, 3)}, {fmt(hi, 3)}], beta = {fmt(s.beta, 4)}, CoV "
-            f"{fmt(s.cov_interval, 3)} ({s.cov_interval_name}; lineage {fmt(s.cov_lineage, 3)}, Au & Beck "
-            f"{fmt(s.cov, 3)}); crude Monte Carlo "
-            f"would need {fmt(s.crude_mc_runs, 3)} runs"] + design_point_lines(c, s)
+    d = p_digits(s.p, lo, hi)
+    kind = s.attrs["failure_kind"]
+    event = (f"{s.attrs['failure_column']} <= 0 {unit_text(s.attrs['margin_units'])}" if kind == "margin" else
+             f"{s.attrs['failure_column']} {'>=' if kind == 'above' else '<='} {margin_text(s.attrs['failure_threshold'], s)}")
+    return [f"SUBSET SIMULATION ({c.attrs['campaign_name']}, {s.runs} runs, {s.status}): P({event}) = {fmt(s.p, d)}",
+            f"  95 % interval [{fmt(lo, d)}, {fmt(hi, d)}], beta = {fmt(s.beta, LEAST)}, CoV "
+            f"{fmt(s.cov_interval, 2)} ({s.cov_interval_name}; lineage {fmt(s.cov_lineage, 2)}, Au & Beck "
+            f"{fmt(s.cov, 2)}); crude Monte Carlo "
+            f"would need {fmt(s.crude_mc_runs, 2)} runs"] + design_point_lines(c, s)
 
 
 def design_point_lines(c, s):
     dp = design_point(s, c)
     if dp is None:
         return []
-    top = ", ".join(f"{r.key} {fmt(r.value, 6)} {r.unit} (alpha^2 {fmt(r.share, 2)})"
-                    for r in dp.rows[:3])
+    top = []
+    for r in dp.rows[:3]:
+        u, f = readable_unit(r.unit, abs(r.value))
+        top.append(f"{r.key} {fmt(r.value / f)} {u} (alpha^2 {fmt(r.share, 2)})")
     return [f"  design point (failure sample of smallest |z|, run {dp.run}): |z*| = "
-            f"{fmt(dp.beta, 4)}; {top}"]
+            f"{fmt(dp.beta, LEAST)}; {', '.join(top)}"]
 
 
 def subset_report(page, c, s, revision, nominal_html):
@@ -189,7 +206,7 @@ def subset_report(page, c, s, revision, nominal_html):
            "<a href='#limits'>Model limits</a> · <a href='#signoff'>Sign-off</a></nav>")
     body = [section_probability(s), section_levels(page, s), section_design_point(s, c), nominal_html]
     title = f"Failure-probability report: campaign “{c.attrs['campaign_name']}”"
-    verdict = (f"none: a failure-probability estimate, p = {esc(fmt(s.p, 4))} "
+    verdict = (f"none: a failure-probability estimate, p = {esc(fmt(s.p, p_digits(s.p, *interval(s.p, s.cov_interval))))} "
                f"({esc(s.status)})")
     return Report(html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
                             + signoff_html(revision, c.path, c.sha256), campaign_doc(c, verdict)),

@@ -3,9 +3,10 @@
 a log axis, the target, and the allowable (the extreme design value whose one-sided upper
 confidence bound on p stays at or below the target) with its interval; the verdict compares the
 allowable with the design's own value: PASS on its safe side, FAIL on its unsafe side, NOT
-ASSESSED when the swept range holds no allowable (exit codes as every report: 0, 3, 4). Each
-value's runs are the runs of one standalone campaign (its seed in /sweep/master_seed), so the runs
-as a whole are not draws of one population: no design loads.
+ASSESSED when the swept range holds no allowable or the file's numbers do not support its verdict
+(judging.sweep: exit codes as every report: 0, 3, 4). Each value's runs are the runs of one
+standalone campaign (its seed in /sweep/master_seed), so the runs as a whole are not draws of one
+population: no design loads.
 
 The table is truss_report.read_sweep's DataFrame: one row per design value, the sweep's settings
 and the allowable in df.attrs."""
@@ -13,81 +14,114 @@ import math
 
 import numpy as np
 
-from ..judging.sweep import flat_values, sweep_verdict
+from ..judging.sweep import NO_RESULT_SHARE, flat_values, judge_sweep
 from ..judging.verdict import NOT_ASSESSED, PASS, VERDICT_WORDS
-from .html import esc, fmt, html_page, num, table, unit_text
+from .html import esc, html_page, num, table
+from .numbers import DASH, P_LEAST, fmt, fmt_at, fmt_p, message_text, p_digits, readable_unit, resolution, unit_text
 from .render import Report
 from .sections_subset import plateau_warning
 from .top import campaign_doc, model_limits_html, signoff_html
 
 
-def _design_unit(units):
-    """Display unit and factor of the design variable: N m shown in mN m, m in mm."""
-    if units in ("Nm", "N m"):
-        return "mN m", 1e-3
-    if units == "m":
-        return "mm", 1e-3
-    return units, 1.0
+def design_unit(s):
+    """(label, factor) of the design variable: one prefix for the whole sweep (page.numbers)."""
+    return readable_unit(s.attrs["design_units"], float(np.nanmax(np.abs(s["value"].to_numpy(dtype=float)))))
+
+
+def allowable_at(s):
+    """The resolution of the allowable, its estimate and interval (display unit): two digits of the
+    interval's half width (of the allowable's distance to its estimate when the interval is open)."""
+    a = s.attrs["allowable"]
+    f = design_unit(s)[1]
+    half = (a["upper"] - a["lower"]) / 2.0 if math.isfinite(a["upper"] - a["lower"]) else abs(a["value"] - a["estimate"])
+    return resolution([a["value"] / f], half / f)
+
+
+def design_text(s, v):
+    """A design value in the sweep's unit: declared values as given, the allowable's to its resolution."""
+    unit, f = design_unit(s)
+    return f"{fmt(v / f)} {unit}" if math.isfinite(v) else DASH
 
 
 def allowable_sentence(s):
-    """'drive.stall_torque_Nm >= 4.8848 mN m (95 % upper bound on P(...) <= 1e-06)', or why none."""
+    """'drive.stall_torque_Nm ≥ 14.08 mN m (95 % upper bound on P(...) ≤ 1e-06)', or why none."""
     a, at = s.attrs["allowable"], s.attrs
-    unit, factor = _design_unit(at["design_units"])
-    event = failure_text(at, html=False)
+    unit, f = design_unit(s)
     if a["status"] != "found":
-        return f"no allowable in the swept range: {a['message']}"
+        return f"no allowable in the swept range: {message_text(a['message'])}"
+    if not math.isfinite(a["value"]):
+        return "no allowable: the file's allowable is not a number"
     rel = "≥" if a["safe_side"] == "above" else "≤"
-    return (f"{at['variable']} {rel} {fmt(a['value'] / factor, 5)} {unit} ({fmt(100 * at['confidence'])} % upper bound "
-            f"on P({event}) ≤ {fmt(at['target_probability'])})")
+    return (f"{at['variable']} {rel} {fmt_at(a['value'] / f, allowable_at(s))} {unit} ({fmt(100 * at['confidence'])} % "
+            f"upper bound on P({failure_text(s, html=False)}) ≤ {fmt(at['target_probability'])})")
 
 
-def failure_text(at, html=True):
+def failure_text(s, html=True):
+    """The failure event, its threshold in the design variable's unit when the two share one (a
+    torque margin of a stall-torque sweep: one prefix per quantity)."""
+    at = s.attrs
     col = f"<code>{esc(at['failure_column'])}</code>" if html else at["failure_column"]
-    unit = unit_text(at.get("failure_units", ""))
+    unit, f = unit_text(at.get("failure_units", "")), 1.0
+    if at.get("failure_units", "") == at["design_units"]:
+        unit, f = design_unit(s)
     if at["failure_kind"] == "margin":
         return f"{col} ≤ 0 {unit}".strip()
-    return f"{col} {'≥' if at['failure_kind'] == 'above' else '≤'} {fmt(at['failure_threshold'])} {unit}".strip()
+    return f"{col} {'≥' if at['failure_kind'] == 'above' else '≤'} {fmt(at['failure_threshold'] / f)} {unit}".strip()
+
+
+def reason_text(s, what, rows):
+    """Why the report does not show the file's verdict, in words (judging.sweep.SweepJudgement)."""
+    a, values = s.attrs["allowable"], ", ".join(design_text(s, float(s["value"].iloc[k])) for k in rows)
+    return {"not_found": f"the file's verdict {a['verdict']} has no allowable (status {a['status']})",
+            "no_estimate": "no design value has an estimate of p",
+            "allowable_nan": f"the file's allowable is not a number (status {a['status']}, verdict {a['verdict']})",
+            "own_nan": "the design's own value is not a number",
+            "wrong_side": (f"the file's verdict {a['verdict']} names the other side of the allowable than the "
+                           f"design's own value {design_text(s, a['own_value'])} lies on"),
+            "safe_side_above_target": (f"at {values}, on the allowable's safe side, the upper bound on p exceeds "
+                                       "the target"),
+            "no_result": (f"at {values}, more than {fmt(100 * NO_RESULT_SHARE)} % of the runs gave no result (capped, "
+                          "failed to solve, or no margin): they would count as safe"),
+            "plateau": (f"the estimates at {values} may be biased low (a plateau of the margin), so the allowable may "
+                        "lie on the unsafe side")}[what]
 
 
 def verdict_lines(c, s):
     """The verdict and the sweep's headline for the terminal and the top of the page."""
     a, at = s.attrs["allowable"], s.attrs
-    unit, factor = _design_unit(at["design_units"])
-    own = f"{fmt(a['own_value'] / factor, 5)} {unit}"
-    verdict = sweep_verdict(s)
-    flat = flat_values(s)
-    if verdict == NOT_ASSESSED and a.get("verdict", "") == "PASS":
-        head = (f"VERDICT: {VERDICT_WORDS[verdict]} — the estimates at "
-                f"{', '.join(fmt(float(s['value'].iloc[k]) / factor, 4) for k in flat)} {unit} may be biased low "
-                f"(a plateau of the margin), so the allowable may lie on the unsafe side "
-                f"({c.attrs['campaign_name']}, sweep)")
-    elif verdict == NOT_ASSESSED:
-        head = (f"VERDICT: {VERDICT_WORDS[verdict]} — {a['message']} ({c.attrs['campaign_name']}, sweep)")
+    j = judge_sweep(s)
+    name = c.attrs["campaign_name"]
+    if j.reasons:
+        head = (f"VERDICT: {VERDICT_WORDS[j.verdict]} — "
+                + "; ".join(reason_text(s, what, rows) for what, rows in j.reasons) + f" ({name}, sweep)")
+    elif j.verdict == NOT_ASSESSED:
+        head = f"VERDICT: {VERDICT_WORDS[j.verdict]} — {message_text(a['message'])} ({name}, sweep)"
     else:
-        side = "on the safe side of" if verdict == PASS else "on the unsafe side of"
-        head = (f"VERDICT: {VERDICT_WORDS[verdict]} — the design's {own} is {side} the allowable "
-                f"({c.attrs['campaign_name']}, sweep)")
+        side = "on the safe side of" if j.verdict == PASS else "on the unsafe side of"
+        head = (f"VERDICT: {VERDICT_WORDS[j.verdict]} — the design's {design_text(s, a['own_value'])} is {side} the "
+                f"allowable ({name}, sweep)")
     lines = [head, f"  allowable: {allowable_sentence(s)}"]
     if a["status"] == "found":
-        lo, hi = a["lower"], a["upper"]
-        est = a["estimate"]
-        lines.append(f"  estimate (p = target): {fmt(est / factor, 5)}{' ' + unit if math.isfinite(est) else ''}; "
-                     f"{fmt(100 * at['confidence'])} % interval of the crossing "
-                     f"[{fmt(lo / factor, 5)}, {fmt(hi / factor, 5)}] {unit} (—: beyond the swept range)")
+        unit, f = design_unit(s)
+        e = allowable_at(s)
+        lines.append(f"  estimate (p = target): {fmt_at(a['estimate'] / f, e)}"
+                     f"{' ' + unit if math.isfinite(a['estimate']) else ''}; {fmt(100 * at['confidence'])} % interval "
+                     f"of the crossing [{fmt_at(a['lower'] / f, e)}, {fmt_at(a['upper'] / f, e)}] {unit} (—: beyond "
+                     "the swept range)")
     refined = int(s["refinement"].sum())
     lines.append(f"  {len(s)} values of {at['variable']}"
                  f"{f' ({refined} placed by the refinement)' if refined else ''}, {at['inner_method']} at each, "
                  f"{int(s['runs'].sum())} runs")
+    flat = flat_values(s)
     if flat:
-        lines.append(f"  warning: at {fmt(float(s['value'].iloc[flat[0]]) / factor, 4)} {unit} "
+        lines.append(f"  warning: at {design_text(s, float(s['value'].iloc[flat[0]]))} "
                      f"{plateau_warning(int(s['plateau_levels'].iloc[flat[0]]))}")
-    return lines
+    return lines, j.verdict
 
 
 def fig_sweep(plt, s):
     a, at = s.attrs["allowable"], s.attrs
-    unit, factor = _design_unit(at["design_units"])
+    unit, factor = design_unit(s)
     x = s["value"].to_numpy() / factor
     fig, ax = plt.subplots(figsize=(8.0, 4.6))
     ok = s["p"].to_numpy() > 0
@@ -100,8 +134,9 @@ def fig_sweep(plt, s):
         ax.plot(x[fine], s["p"][fine], "s", color="C0", mfc="white", label="estimate p, refinement values")
     ax.plot(x, s["upper_bound"], "v--", color="C1", label=f"one-sided {fmt(100 * at['confidence'])} % upper bound")
     ax.axhline(at["target_probability"], color="C3", lw=1.2, label=f"target {fmt(at['target_probability'])}")
-    if a["status"] == "found":
-        ax.axvline(a["value"] / factor, color="k", lw=1.2, label=f"allowable {fmt(a['value'] / factor, 4)} {unit}")
+    if a["status"] == "found" and math.isfinite(a["value"]):
+        ax.axvline(a["value"] / factor, color="k", lw=1.2,
+                   label=f"allowable {fmt_at(a['value'] / factor, allowable_at(s))} {unit}")
         if math.isfinite(a["lower"]) and math.isfinite(a["upper"]):
             ax.axvspan(a["lower"] / factor, a["upper"] / factor, color="k", alpha=0.08,
                        label="interval of the crossing")
@@ -115,33 +150,44 @@ def fig_sweep(plt, s):
     return fig
 
 
+def sweep_row(s, k, r, unit, f):
+    """One design value's cells: p shown to its interval (as its upper bound when no run failed),
+    its CoV ("—" when p = 0: undefined), the runs without a result."""
+    d = p_digits(r.p, r.lower, r.upper)
+    prob = [num(f"sweep.{col}{k}", float(getattr(r, col)), digits=d) for col in ("lower", "upper", "upper_bound")]
+    return [num(f"sweep.value{k}", float(r.value), unit, factor=f),
+            num(f"sweep.p{k}", float(r.p), text=fmt_p(r.p, r.lower, r.upper, r.upper_bound)),
+            num(f"sweep.cov{k}", float(r.cov), digits=P_LEAST) if r.p > 0 else f"<td>{DASH}</td>",
+            *prob, num(f"sweep.runs{k}", int(r.runs)),
+            num(f"sweep.no_result{k}", int(r.no_result)) if r.no_result >= 0 else f"<td>{DASH}</td>",
+            esc(r.status), num(f"sweep.plateau{k}", int(r.plateau_levels)),
+            "refinement" if r.refinement else "listed"]
+
+
 def section_sweep(page, s):
     at = s.attrs
-    unit, factor = _design_unit(at["design_units"])
+    unit, f = design_unit(s)
     conf = fmt(100 * at["confidence"])
-    rows = [[num(f"sweep.value{k}", float(r.value), unit, factor=factor), num(f"sweep.p{k}", float(r.p), digits=4),
-             num(f"sweep.cov{k}", float(r.cov), digits=3), num(f"sweep.lower{k}", float(r.lower), digits=3),
-             num(f"sweep.upper{k}", float(r.upper), digits=3),
-             num(f"sweep.upper_bound{k}", float(r.upper_bound), digits=3), num(f"sweep.runs{k}", int(r.runs)),
-             esc(r.status), num(f"sweep.plateau{k}", int(r.plateau_levels)),
-             "refinement" if r.refinement else "listed"] for k, r in enumerate(s.itertuples())]
+    rows = [sweep_row(s, k, r, unit, f) for k, r in enumerate(s.itertuples())]
     flat = flat_values(s)
     warn = ""
     if flat:
-        at_values = ", ".join(fmt(float(s["value"].iloc[k]) / factor, 4) for k in flat)
-        warn = (f"<p class='warn'>Biased low? At {at_values} {esc(unit)}, "
+        warn = (f"<p class='warn'>Biased low? At {', '.join(design_text(s, float(s['value'].iloc[k])) for k in flat)}, "
                 f"{esc(plateau_warning(int(s['plateau_levels'].iloc[flat[0]])))}.</p>")
     return ("<section id='sweep'><h2>Failure probability against the design variable</h2>"
-            f"<p>Failure event: {failure_text(at)}. At each value of <code>{esc(at['variable'])}</code> "
+            f"<p>Failure event: {failure_text(s)}. At each value of <code>{esc(at['variable'])}</code> "
             f"the campaign ran as a campaign of its own ({esc(at['inner_method'])}; its seed in "
             f"<code>/sweep/master_seed</code>). The band is each estimate's two-sided {conf} % interval, "
             f"the dashed line its one-sided {conf} % upper bound, which the allowable keeps at or below "
-            f"the target {fmt(at['target_probability'])}.</p>"
+            f"the target {fmt(at['target_probability'])}; probabilities are shown within [0, 1], an estimate "
+            "of 0 as its upper bound. Runs without a result (capped, failed to solve, or without a margin) "
+            f"count as safe in an estimate: past {fmt(100 * NO_RESULT_SHARE)} % of a value's runs its estimate "
+            "does not support a PASS.</p>"
             + page.figure(fig_sweep(page.plt, s), "sweep.png",
                           "failure probability against the design value (log axis), target and allowable")
             + refine_html(at) + warn
             + table(["value", "p", "CoV", f"{conf} % low", f"{conf} % high", f"{conf} % upper bound", "runs",
-                     "status", "plateau levels", "placed"], rows, "narrow") + "</section>")
+                     "runs without a result", "status", "plateau levels", "placed"], rows, "narrow") + "</section>")
 
 
 def refine_html(at):
@@ -150,19 +196,20 @@ def refine_html(at):
     if int(at.get("refine", 0)) == 0:
         return ""
     return (f"<p>Refinement (<code>sweep.refine = {int(at['refine'])}</code>): "
-            f"{esc(at['refine_message'])}. The allowable is read from all values, listed and placed.</p>")
+            f"{esc(message_text(at['refine_message']))}. The allowable is read from all values, listed and placed.</p>")
 
 
 def section_allowable(s):
-    a, at = s.attrs["allowable"], s.attrs
-    unit, factor = _design_unit(at["design_units"])
-    rows = [["allowable (upper bound = target)", num("sweep.allowable", a["value"], unit, factor=factor)],
-            ["estimate (p = target)", num("sweep.allowable.estimate", a["estimate"], unit, factor=factor)],
-            ["interval of the crossing, low", num("sweep.allowable.lower", a["lower"], unit, factor=factor)],
-            ["interval of the crossing, high", num("sweep.allowable.upper", a["upper"], unit, factor=factor)],
-            ["the design's own value", num("sweep.own_value", a["own_value"], unit, factor=factor)]]
+    a = s.attrs["allowable"]
+    unit, f = design_unit(s)
+    e = allowable_at(s)
+    rows = [["allowable (upper bound = target)", num("sweep.allowable", a["value"], unit, factor=f, at=e)],
+            ["estimate (p = target)", num("sweep.allowable.estimate", a["estimate"], unit, factor=f, at=e)],
+            ["interval of the crossing, low", num("sweep.allowable.lower", a["lower"], unit, factor=f, at=e)],
+            ["interval of the crossing, high", num("sweep.allowable.upper", a["upper"], unit, factor=f, at=e)],
+            ["the design's own value", num("sweep.own_value", a["own_value"], unit, factor=f)]]
     return ("<section id='allowable'><h2>Allowable</h2>"
-            f"<p>{esc(allowable_sentence(s))}. Status <b>{esc(a['status'])}</b>: {esc(a['message'])}. "
+            f"<p>{esc(allowable_sentence(s))}. Status <b>{esc(a['status'])}</b>: {esc(message_text(a['message']))}. "
             f"How: {esc(a['method'])}. An interval end outside the swept values is shown as —.</p>"
             + table(["quantity", "value"], rows, "narrow") + "</section>")
 
@@ -170,8 +217,7 @@ def section_allowable(s):
 def sweep_report(page, c, s, revision, nominal_html):
     """The report of a design sweep (s: its table, judging.sweep.sweep_frame), with its lines for
     the terminal and its verdict."""
-    summary = verdict_lines(c, s)
-    v = sweep_verdict(s)
+    summary, v = verdict_lines(c, s)
     verdict = (f"<div class='verdict {v}' data-key='verdict' data-value='{v}'>"
                + "<br>".join(esc(x) for x in summary) + "</div>")
     toc = ("<nav><a href='#sweep'>Probability against the design variable</a> · <a href='#allowable'>Allowable</a> · "

@@ -6,6 +6,7 @@ import numpy as np
 
 from .figures_run import fig4, fig5, fig5_zoom, fig_frame_heights
 from .html import esc, html_page, num, table, unit_label
+from .numbers import MOST, message_text, unit_text
 from .render import Report
 
 
@@ -16,12 +17,12 @@ def single_run_report(page, run):
         if isinstance(v, str):
             rows.append([f"<code>{name}</code>", esc(v), ""])
         else:
-            rows.append([f"<code>{name}</code>", num(f"summary.{name}", v, digits=9), esc(u)])
+            rows.append([f"<code>{name}</code>", num(f"summary.{name}", v, digits=MOST), esc(unit_text(u))])
     status, message = run.status, run.message
     meta = [("software", f"truss {esc(run.software_version)}, git revision "
                          f"<code>{esc(run.git_revision)}</code>"),
             ("written (UTC)", esc(run.created_utc)),
-            ("status", f"<b>{esc(status)}</b>" + (f": {esc(message)}" if message else ""))]
+            ("status", f"<b>{esc(status)}</b>" + (f": {esc(message_text(message))}" if message else ""))]
     parts = [table(["", ""], [[f"<th>{k}</th>", v] for k, v in meta], "kv"),
              f"<details><summary>scene_toml</summary><pre>{esc(run.scene_toml)}</pre>"
              "</details>",
@@ -41,7 +42,7 @@ def single_run_bays(run):
     if not b:
         return ""
     fields = [k for k in b if k != "bay"]
-    rows = [[str(bay)] + [num(f"bays.{k}.bay{bay}", float(b[k][i]), digits=7) for k in fields]
+    rows = [[str(bay)] + [num(f"bays.{k}.bay{bay}", float(b[k][i]), digits=MOST) for k in fields]
             for i, bay in enumerate(b["bay"])]
     return ("<section id='bays'><h2>Per bay</h2><details><summary>per-bay table "
             f"({len(b['bay'])} bays)</summary>"

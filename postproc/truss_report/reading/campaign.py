@@ -83,6 +83,10 @@ class Campaign:
     sensitivity: Sensitivity | None = None
     histories: dict[int, RunHistory] = field(default_factory=dict)
     stop: Stop | None = None      # sequential stopping (/stop)
+    # Where the campaign declares the motor it is judged against (root attribute motor_declared_by:
+    # the campaign's own line, a --set, a dispersion, or "drive.mode = motor"); "" when it declares
+    # none (the scene's default motor); None in a file without the attribute.
+    motor_declared_by: str | None = None
 
     @property
     def n(self) -> int:
@@ -155,6 +159,7 @@ def load_campaign(h5: H5, sha256: str) -> Campaign:
                  status=status, status_name=names, messages=messages, outputs=outputs, units=units,
                  lock=lock, dispersions=dispersions, **read_stats(h5, nb))
     read_optional(h5, c)
+    c.motor_declared_by = h5.attr_str(f, "motor_declared_by") if "motor_declared_by" in f.attrs else None
     return c
 
 

@@ -141,11 +141,28 @@ class H5:
             raise self.error(f"/{name} has shape {ds.shape}, expected {tuple(shape)}")
         return ds
 
-    def array(self, name: str, shape: tuple[int, ...] | None = None) -> Array:
+    def group(self, name: str) -> h5py.Group:
+        """The group /name; checks it exists and is a group."""
+        if name not in self.f or not isinstance(self.f[name], h5py.Group):
+            raise self.error(f"missing required group /{name}")
+        return self.f[name]
+
+    def numbers(self, name: str, shape: tuple[int, ...] | None = None) -> AnyArray:
+        """The numeric dataset /name as stored (integers stay integers: a seed of 2^63 - 1 is exact)."""
         ds = self.dataset(name, shape)
         if ds.dtype.kind not in "fiu":
             raise self.error(f"/{name} is not numeric (dtype {ds.dtype})")
-        return np.asarray(ds[()], dtype=np.float64)
+        return np.asarray(ds[()])
+
+    def array(self, name: str, shape: tuple[int, ...] | None = None) -> Array:
+        return np.asarray(self.numbers(name, shape), dtype=np.float64)
+
+    def length(self, name: str) -> int:
+        """The length of the 1-D dataset /name."""
+        ds = self.dataset(name)
+        if ds.ndim != 1:
+            raise self.error(f"/{name} has shape {ds.shape}, expected 1-D")
+        return int(ds.shape[0])
 
     def scalar(self, name: str) -> float:
         return float(self.array(name, ()))

@@ -42,3 +42,21 @@ def test_missing_resistance_and_retraction():
     assert compute_margins(c, Extras()).missing
     m = compute_margins(c, extras([-0.001], [0.0]))
     assert m.n == 0 and not m.missing and "brakes" in m.note
+    old = make_campaign({"peak_drive_force_N": [1.0]}, drive=DRIVE)     # no /runs/motor_torque_at_speed_Nm
+    assert compute_margins(old, extras([0.004], [0.0])).missing
+
+
+def test_undeclared_motor_gives_the_required_torque_only():
+    c = make_campaign({"peak_drive_force_N": [1.0, 1.0]}, drive=DRIVE, motor_torque_at_speed=np.array([0.015, 0.001]),
+                      motor_declared_by="")
+    m = compute_margins(c, extras([0.004, 0.005], [0.001, 0.0]), 2.0, 1.2, 1.25)
+    assert m.undeclared and not m.fails and m.n == 2 and m.n_below == 0
+    assert m.t_min_design == pytest.approx(2 * 1.2 * 0.005) and np.isnan(m.t_avail_min) and np.isnan(m.mf_min)
+    assert "declares no motor" in m.note
+
+
+def test_ok_runs_without_a_resistance_are_counted():
+    c = make_campaign({"peak_drive_force_N": [1.0, 1.0, 1.0]}, drive=DRIVE,
+                      motor_torque_at_speed=np.array([0.015, 0.015, np.nan]))
+    m = compute_margins(c, extras([0.004, np.nan, 0.004], [0.0, 0.0, 0.0]))
+    assert m.n == 1 and m.n_unjudged == 2

@@ -26,28 +26,40 @@ def test_load_run_refuses_a_file_without_history(tmp_path, run_file):
         load_run(p)
 
 
-def test_stop_and_sweep_groups(tmp_path):
-    p = str(tmp_path / "m.h5")
+def write_method_groups(p, n_values=2):
+    """A /stop and a /sweep group as truss-campaign writes them (docs/hdf5-schema.md), with
+    n_values design values and the /runs columns of 4 runs."""
     with h5py.File(p, "w") as f:
         g = f.create_group("stop")
-        g.attrs.update({"target": "failure_share", "state": "met"})
+        g.attrs.update({"target": "failure_share", "state": "met", "output": "", "level": 0.5, "width": 0.01,
+                        "confidence": 0.95, "max_runs": 100, "reason": "met"})
         for k in ("runs", "used", "estimate", "upper", "achieved_width"):
             g[k] = np.arange(3.0)
         g["estimate"].attrs["units"] = "1"
         g["state"] = np.array([b"more", b"more", b"met"])
         s = f.create_group("sweep")
-        s.attrs.update({"variable": "drive.stall_torque_Nm", "units": "Nm", "confidence": 0.95})
+        s.attrs.update({"variable": "drive.stall_torque_Nm", "units": "Nm", "confidence": 0.95,
+                        "target_probability": 1e-6, "inner_method": "subset",
+                        "failure_column": "motor_torque_margin_Nm", "failure_kind": "margin"})
         for k in ("values", "p", "cov", "upper_bound", "lower", "upper", "runs", "failures", "master_seed",
                   "index", "refinement"):
-            s[k] = np.array([0, 1]) if k in ("index", "refinement") else np.array([1.0, 2.0])
+            s[k] = np.arange(n_values) if k in ("index", "refinement") else np.arange(1.0, n_values + 1)
             s[k].attrs["units"] = "Nm" if k == "values" else "1"
         s["status"] = np.array([b"converged", b"level_cap"])
         s["message"] = np.array([b"a", b"b"])
         a = s.create_group("allowable")
-        a.attrs.update({"status": "found", "verdict": "PASS"})
+        a.attrs.update({"status": "found", "verdict": "PASS", "message": "m", "method": "m", "safe_side": "above"})
         for k in ("value", "estimate", "lower", "upper", "own_value"):
             a[k] = 1.5
         s["inner/1/subset/levels/threshold"] = np.array([0.3, 0.0])
+        status = h5py.enum_dtype({"ok": 0, "stall": 2, "wall-time limit": 6}, basetype="i1")
+        f.create_dataset("runs/status", data=np.array([0, 6, 0, 2], dtype="i1"), dtype=status)
+        f["runs/sweep_value"] = np.array([1.0, 1.0, 2.0, 2.0])
+
+
+def test_stop_and_sweep_groups(tmp_path):
+    p = str(tmp_path / "m.h5")
+    write_method_groups(p)
     with h5py.File(p, "r") as f:
         stop = read_stop(f)
         assert stop.rounds_state == ["more", "more", "met"] and stop.attrs["state"] == "met"
@@ -55,6 +67,43 @@ def test_stop_and_sweep_groups(tmp_path):
     assert t.table["value"].tolist() == [1.0, 2.0] and t.table["refinement"].tolist() == [False, True]
     assert t.table.attrs["design_units"] == "Nm" and t.table.attrs["allowable"]["value"] == 1.5
     assert t.level_thresholds[0] is None and t.level_thresholds[1].tolist() == [0.3, 0.0]
+    assert t.runs.value.tolist() == [1.0, 1.0, 2.0, 2.0] and t.runs.status_name[6] == "wall-time limit"
+    assert t.runs.margin is None                        # the file has no motor_torque_margin_Nm
+
+
+def shorten(f, name):
+    """Replaces the dataset /name by its first row (its attributes kept)."""
+    attrs, data = dict(f[name].attrs), f[name][:1]
+    del f[name]
+    f[name] = data
+    f[name].attrs.update(attrs)
+
+
+@pytest.mark.parametrize("damage,message", [
+    (lambda f: shorten(f, "sweep/values"),
+     r"/sweep/p has shape \(2,\), expected \(1,\)"),                  # a value list shorter than its columns
+    (lambda f: f.__delitem__("sweep/allowable/value"), "missing required dataset /sweep/allowable/value"),
+    (lambda f: f["sweep/allowable"].attrs.__setitem__("verdict", "OK"), "verdict 'OK'"),
+    (lambda f: f["sweep"].attrs.__delitem__("target_probability"), "/sweep lacks the attribute target_probability"),
+    (lambda f: f.__delitem__("sweep/status"), "missing required dataset /sweep/status"),
+])
+def test_a_malformed_sweep_is_refused_naming_the_file_and_member(tmp_path, damage, message):
+    p = str(tmp_path / "m.h5")
+    write_method_groups(p)
+    with h5py.File(p, "a") as f:
+        damage(f)
+    with pytest.raises(InputError, match=f"m.h5: .*{message}"):
+        read_sweep_table(p)
+
+
+def test_a_malformed_stop_is_refused(tmp_path):
+    p = str(tmp_path / "m.h5")
+    write_method_groups(p)
+    with h5py.File(p, "a") as f:
+        del f["stop/used"]
+        f["stop/used"] = np.arange(2.0)
+    with h5py.File(p, "r") as f, pytest.raises(InputError, match=r"/stop/used has shape \(2,\), expected \(3,\)"):
+        read_stop(f)
 
 
 def test_frame_columns_are_the_file_datasets(motor_file):

@@ -8,7 +8,7 @@ from truss_report.reading.extras import Extras
 
 
 def load(key, bound):
-    return DesignLoad(key, key, "d", "N", False, 3000, 1.0, 1.0, 0.5, 2.0,
+    return DesignLoad(key, key, "d", "N", False, 3000, 0, 1.0, 1.0, 0.5, 2.0,
                       [LevelValue(99.865, 0.9 * bound, bound, 2990 if np.isfinite(bound) else None, None)])
 
 

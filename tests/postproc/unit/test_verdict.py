@@ -7,8 +7,8 @@ from truss_report.judging.mechanism import Margins
 from truss_report.judging.verdict import FAIL, NOT_ASSESSED, PASS, verdict_items, verdict_of
 
 
-def load(rank):
-    return DesignLoad("peak_drive_force_N", "f", "d", "N", False, 900, 1.0, 1.0, 0.5, 2.0,
+def load(rank, n_missing=0):
+    return DesignLoad("peak_drive_force_N", "peak drive force", "d", "N", False, 900, n_missing, 1.0, 1.0, 0.5, 2.0,
                       [LevelValue(99.865, 2.0, float("nan"), rank, None if rank else 2218)])
 
 
@@ -32,5 +32,29 @@ def test_each_reason():
 
 def test_missing_margins_are_not_assessed():
     c = make_campaign({"peak_drive_force_N": [1.0]})
-    items = verdict_items(c, Margins("velocity", 2.0, 1.2, note="no S", missing=True), [], "ok")
+    items = verdict_items(c, Margins("velocity", 2.0, 1.2, note="no S", missing=True), [], "ok", [load(5)])
     assert [(it.what, it.kind, it.name) for it in items] == [("margin_missing", NOT_ASSESSED, "no S")]
+
+
+def test_an_undeclared_motor_is_not_assessed_not_failed():
+    c = make_campaign({"peak_drive_force_N": [1.0]})
+    m = Margins("velocity", 2.0, 1.2, n=1, note="no motor", undeclared=True)
+    items = verdict_items(c, m, [], "ok", [load(5)])
+    assert [(it.what, it.kind, it.name) for it in items] == [("margin_undeclared", NOT_ASSESSED, "no motor")]
+    assert verdict_of(items) == NOT_ASSESSED
+
+
+def test_no_result_is_never_safe():
+    c = make_campaign({"peak_drive_force_N": [1.0, 2.0, 3.0]})
+    items = verdict_items(c, Margins("velocity", 2.0, 1.2, n=2, n_unjudged=1), [], "ok", [load(5, n_missing=4)])
+    got = [(it.what, it.kind, it.count, it.of) for it in items]
+    assert got == [("margin_unjudged", NOT_ASSESSED, 1, 3), ("load_missing", NOT_ASSESSED, 4, 904)]
+    assert [it.what for it in verdict_items(c, Margins("velocity", 2.0, 1.2, n=3), [], "ok", [])] == ["no_loads"]
+
+
+def test_a_retraction_lists_what_it_does_not_assess():
+    c = make_campaign({"peak_drive_force_N": [1.0]}, direction="retract")
+    items = verdict_items(c, Margins("velocity", 2.0, 1.2, note="brakes"), [], "ok", [load(5)])
+    assert [(it.what, it.kind, it.name) for it in items] == [("retract", NOT_ASSESSED, "braking"),
+                                                             ("retract", NOT_ASSESSED, "holding"),
+                                                             ("retract", NOT_ASSESSED, "back-drive")]
