@@ -11,6 +11,7 @@ add_test(NAME truss_tests_sampling COMMAND truss_tests_sampling)
 # against their exact probabilities, its byte formats and resume, and the stopping rules against
 # scipy's binomial and beta laws. About 3 s.
 add_executable(truss_tests_rare ${CMAKE_SOURCE_DIR}/tests/unit/test_subset_simulation.cpp
+               ${CMAKE_SOURCE_DIR}/tests/unit/test_subset_adaptive.cpp
                ${CMAKE_SOURCE_DIR}/tests/numeric/test_subset_estimates.cpp ${CMAKE_SOURCE_DIR}/tests/unit/test_stopping.cpp
                ${CMAKE_SOURCE_DIR}/tests/unit/test_allowable.cpp)
 target_link_libraries(truss_tests_rare PRIVATE truss_sampling catch_main)
