@@ -434,6 +434,32 @@ SubsetSummary SubsetSimulation::calc_summary() const {
   return s;
 }
 
+int SubsetSummary::calc_plateau_levels() const {
+  int n = 0;
+  for (std::size_t k = 0; k + 1 < levels.size(); ++k) {
+    const double b = levels[k].threshold, next = levels[k + 1].threshold;
+    n += b > 0.0 && b - next < kPlateauShare * b ? 1 : 0;
+  }
+  return n;
+}
+
+std::string find_untrusted_reason(const SubsetSummary& s) {
+  switch (s.status) {
+    case SubsetStatus::running: return "not finished";
+    case SubsetStatus::chains_stuck: return "no estimate (the Markov chains never moved)";
+    case SubsetStatus::level_cap:
+      return "the level cap ended it short of the failure (the last level's share, an estimate from above)";
+    case SubsetStatus::no_progress: return "the thresholds stopped decreasing (a flat or mostly unusable margin)";
+    case SubsetStatus::converged: break;
+  }
+  const int plateau = s.calc_plateau_levels();
+  if (plateau >= SubsetSummary::kPlateauLevels)
+    return fmt::format("the margin is nearly flat over {} levels (each threshold within {:g} % of the previous "
+                       "one): the estimate can lie far below p, beyond its interval", plateau,
+                       100.0 * SubsetSummary::kPlateauShare);
+  return "";
+}
+
 std::vector<SubsetSample> SubsetSimulation::calc_failure_samples() const {
   std::vector<SubsetSample> out;
   if (!done()) return out;

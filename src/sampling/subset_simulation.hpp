@@ -202,7 +202,19 @@ struct SubsetSummary {
   std::vector<SubsetLevel> levels;
   // Crude Monte Carlo runs for the same CoV: (1 - p) / (p cov^2).
   double calc_crude_runs() const { return (1.0 - p) / (p * cov * cov); }
+  // Levels "on a plateau" of the margin: thresholds b_k > 0 with b_k - b_{k+1} < kPlateauShare b_k.
+  // On a plateau the margin hardly depends on the inputs that lead to the failure: the levels select
+  // on others, each still multiplies p by about p0, and the estimate can lie far below p, beyond what
+  // any CoV says (docs/sweep-tolerance-allocation.md: 1.5e-13 where p is about 6e-8).
+  int calc_plateau_levels() const;
+  static constexpr double kPlateauShare = 0.01;
+  static constexpr int kPlateauLevels = 3;  // from this many on, the estimate is not trusted
 };
+
+// Why an estimate must not feed an allowable ("" when it may): no estimate (chains_stuck), the
+// level cap or no progress (the last level's share, not the failure's), kPlateauLevels or more
+// plateau levels.
+std::string find_untrusted_reason(const SubsetSummary& s);
 
 // A failing sample of the last level: its evaluation ordinal (the run ordinal: rounds number
 // their points consecutively), its margin, and z.

@@ -13,7 +13,7 @@ add_test(NAME truss_tests_sampling COMMAND truss_tests_sampling)
 add_executable(truss_tests_rare ${CMAKE_SOURCE_DIR}/tests/unit/test_subset_simulation.cpp
                ${CMAKE_SOURCE_DIR}/tests/unit/test_subset_adaptive.cpp
                ${CMAKE_SOURCE_DIR}/tests/numeric/test_subset_estimates.cpp ${CMAKE_SOURCE_DIR}/tests/unit/test_stopping.cpp
-               ${CMAKE_SOURCE_DIR}/tests/unit/test_allowable.cpp)
+               ${CMAKE_SOURCE_DIR}/tests/unit/test_allowable.cpp ${CMAKE_SOURCE_DIR}/tests/unit/test_monotone_fit.cpp)
 target_link_libraries(truss_tests_rare PRIVATE truss_sampling catch_main)
 target_include_directories(truss_tests_rare PRIVATE ${CMAKE_SOURCE_DIR}/tests)
 add_test(NAME rare_failures COMMAND truss_tests_rare)

@@ -166,3 +166,28 @@ TEST_CASE("Adaptive conditional sampling: resume anywhere, acceptance near its t
   other[8] = static_cast<char>(7);  // the proposal's int32 after the tag and dims
   CHECK_THROWS_AS(SubsetSimulation::load(other), std::runtime_error);
 }
+
+// The trust rule (find_untrusted_reason): the statuses that end short of the failure, and plateau
+// levels (b_k > 0 moving by less than 1 % of b_k to b_{k+1}) from three on; the thresholds by hand.
+TEST_CASE("Subset estimates that must not feed an allowable, and why", "[subset][trust]") {
+  SubsetSummary s;
+  s.status = SubsetStatus::converged;
+  for (double b : {0.2, 0.1059, 0.1055, 0.1052, 0.1050, 0.05, 0.0}) {
+    SubsetLevel l;
+    l.threshold = b;
+    s.levels.push_back(l);
+  }
+  // 0.1059 -> 0.1055 (0.38 %), 0.1055 -> 0.1052, 0.1052 -> 0.1050: three plateau levels; 0.2 -> 0.1059
+  // and 0.1050 -> 0.05 are not, nor is the last (b = 0).
+  CHECK(s.calc_plateau_levels() == 3);
+  CHECK_THAT(find_untrusted_reason(s), Catch::Matchers::Contains("nearly flat over 3 levels"));
+  s.levels[4].threshold = 0.1040;  // 0.1052 -> 0.1040 is 1.14 %: two plateau levels
+  CHECK(s.calc_plateau_levels() == 2);
+  CHECK(find_untrusted_reason(s).empty());
+  s.status = SubsetStatus::level_cap;
+  CHECK_THAT(find_untrusted_reason(s), Catch::Matchers::Contains("level cap"));
+  s.status = SubsetStatus::no_progress;
+  CHECK_THAT(find_untrusted_reason(s), Catch::Matchers::Contains("stopped decreasing"));
+  s.status = SubsetStatus::chains_stuck;
+  CHECK_THAT(find_untrusted_reason(s), Catch::Matchers::Contains("no estimate"));
+}
