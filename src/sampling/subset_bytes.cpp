@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "sampling/byte_image.hpp"
 #include "sampling/subset_simulation.hpp"
 
 namespace truss::sampling {
@@ -17,54 +18,15 @@ namespace {
 constexpr std::uint32_t kRoundTag = 0x31525353;  // "SSR1"
 constexpr std::uint32_t kStateTag = 0x32535353;  // "SSS2"
 
-struct Writer {
-  std::string out;
-  template <class T>
-  void put(T v) {
-    out.append(reinterpret_cast<const char*>(&v), sizeof v);
-  }
-  template <class T>
-  void put_all(const std::vector<T>& v) {
-    put(static_cast<std::uint64_t>(v.size()));
-    out.append(reinterpret_cast<const char*>(v.data()), sizeof(T) * v.size());
-  }
-};
+using ByteWriter = detail::ByteWriter;
+using ByteReader = detail::ByteReader;
 
-struct Reader {
-  std::string_view in;
-  const char* what;
-  template <class T>
-  T get() {
-    if (in.size() < sizeof(T)) throw std::runtime_error(fmt::format("{}: cut short ({} bytes left)", what, in.size()));
-    T v;
-    std::memcpy(&v, in.data(), sizeof v);
-    in.remove_prefix(sizeof v);
-    return v;
-  }
-  // A count of items of `size` bytes each that the rest of the buffer can hold.
-  std::size_t get_count(std::size_t size) {
-    const auto n = get<std::uint64_t>();
-    if (n > in.size() / size) throw std::runtime_error(fmt::format("{}: {} items in {} bytes", what, n, in.size()));
-    return static_cast<std::size_t>(n);
-  }
-  template <class T>
-  std::vector<T> get_all() {
-    std::vector<T> v(get_count(sizeof(T)));
-    if (!v.empty()) std::memcpy(v.data(), in.data(), sizeof(T) * v.size());
-    in.remove_prefix(sizeof(T) * v.size());
-    return v;
-  }
-  void expect_end() {
-    if (!in.empty()) throw std::runtime_error(fmt::format("{}: {} bytes past the end", what, in.size()));
-  }
-};
-
-void put_level(Writer& w, const SubsetLevel& l) {
+void put_level(ByteWriter& w, const SubsetLevel& l) {
   for (double v : {l.threshold, l.probability, l.gamma, l.cov, l.scale}) w.put(v);
   for (std::int64_t v : {l.runs, l.steps, l.moved, l.unusable, l.ties}) w.put(v);
 }
 
-SubsetLevel get_level(Reader& r) {
+SubsetLevel get_level(ByteReader& r) {
   SubsetLevel l;
   for (double* v : {&l.threshold, &l.probability, &l.gamma, &l.cov, &l.scale}) *v = r.get<double>();
   for (std::int64_t* v : {&l.runs, &l.steps, &l.moved, &l.unusable, &l.ties}) *v = r.get<std::int64_t>();
@@ -74,7 +36,7 @@ SubsetLevel get_level(Reader& r) {
 }  // namespace
 
 std::string SubsetRound::encode() const {
-  Writer w;
+  ByteWriter w;
   w.put(kRoundTag);
   w.put(index);
   w.put(first_evaluation);
@@ -90,7 +52,7 @@ std::string SubsetRound::encode() const {
 }
 
 SubsetRound SubsetRound::decode(std::string_view bytes, int dims) {
-  Reader r{bytes, "subset round"};
+  ByteReader r{bytes, "subset round"};
   if (r.get<std::uint32_t>() != kRoundTag) throw std::runtime_error("subset round: not an encoded round (tag)");
   SubsetRound s;
   s.index = r.get<std::int64_t>();
@@ -115,7 +77,7 @@ SubsetRound SubsetRound::decode(std::string_view bytes, int dims) {
 }
 
 std::string SubsetSimulation::save() const {
-  Writer w;
+  ByteWriter w;
   w.put(kStateTag);
   w.put(static_cast<std::int32_t>(opt_.dims));
   w.put(static_cast<std::int32_t>(opt_.proposal));
@@ -151,7 +113,7 @@ std::string SubsetSimulation::save() const {
 }
 
 SubsetSimulation SubsetSimulation::load(std::string_view bytes) {
-  Reader r{bytes, "subset state"};
+  ByteReader r{bytes, "subset state"};
   if (r.get<std::uint32_t>() != kStateTag) throw std::runtime_error("subset state: not a saved state (tag)");
   SubsetSimulation s;
   s.opt_.dims = r.get<std::int32_t>();
