@@ -76,6 +76,25 @@ def summarise(runs):
     return out
 
 
+def print_markdown(jobs):
+    """Today's rule (modified Metropolis, cov_bound) beside the new one (aCS, cov_interval), a row per case."""
+    done = {c: summarise([r for f in futs for r in f.result()]) for c, futs in jobs}
+    print("\n| case | d | N | p | runs | sd(ln p^): MM / aCS | cov_bound (MM): two-sided, upper, hi/lo "
+          "| cov_interval (aCS): two-sided, upper, hi/lo |")
+    print("|---|---:|---:|---:|---:|---|---|---|")
+    for c in done:
+        if c[4] != "modified_metropolis":
+            continue
+        a = done.get((c[0], c[1], c[2], c[3], "adaptive_conditional"))
+        m = done[c]
+        if a is None:
+            continue
+        b, i = m["rules"]["cov_bound"], a["rules"]["cov_interval"]
+        print(f"| {c[0]} | {c[2]} | {c[3]} | {m['exact']:.1e} | {a['runs']:,.0f} | {m['spread']:.2f} / "
+              f"{a['spread']:.2f} | {100 * b[0]:.1f} %, {100 * b[1]:.1f} %, {b[2]:.1f} | {100 * i[0]:.1f} %, "
+              f"{100 * i[1]:.1f} %, {i[2]:.1f} |")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tool", required=True)
@@ -88,6 +107,9 @@ def main():
     ap.add_argument("--proposals", nargs="+", default=["modified_metropolis", "adaptive_conditional"])
     ap.add_argument("--sphere", action="store_true", help="also the outside of a sphere (d = 10, p ~ 1e-4)")
     ap.add_argument("--cache", default="")
+    ap.add_argument("--markdown", action="store_true",
+                    help="one table: modified Metropolis with cov_bound beside adaptive conditional sampling with "
+                         "cov_interval (needs both proposals)")
     args = ap.parse_args()
     if args.cache:
         os.makedirs(args.cache, exist_ok=True)
@@ -105,6 +127,9 @@ def main():
             jobs.append((c, [pool.submit(run_case, args.tool, *c, k, s, args.cache) for s, k in parts]))
         floor = 0.95 - 2.33 * math.sqrt(0.0475 / args.seeds)
         print(f"{args.seeds} seeds per case; binomial floor of the two-sided coverage: {100 * floor:.1f} %")
+        if args.markdown:
+            print_markdown(jobs)
+            return
         for c, futs in jobs:
             runs = [r for f in futs for r in f.result()]
             s = summarise(runs)
