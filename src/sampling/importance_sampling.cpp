@@ -190,6 +190,10 @@ int CrossEntropySampler::update_mean(const std::vector<std::size_t>& elite, std:
     w[i] = calc_point(opt_, round_, k, z.data() + i * d) + (log_ratio.empty() ? 0.0 : log_ratio[elite[i]]);
   }
   const double top = *std::max_element(w.begin(), w.end());
+  if (!std::isfinite(top)) {  // every elite has weight 0 under the law (or a ratio that is not a number)
+    ess = 0.0;
+    return 0;
+  }
   double sw = 0.0, sw2 = 0.0;
   for (double& x : w) {
     x = std::exp(x - top);

@@ -114,8 +114,8 @@ class CrossEntropySampler {
   explicit CrossEntropySampler(const ImportanceOptions& o);  // throws std::invalid_argument
   bool done() const { return done_; }
   const ImportanceRound& round() const { return round_; }
-  // The margins of round()'s points, in its order; log_ratio (empty, or one per point): ln f / phi of
-  // the law the density adapts to (see "update"). Throws std::logic_error when done,
+  // The margins of round()'s points, in its order; log_ratio (empty, or one per point, finite or
+  // -inf): ln f / phi of the law the density adapts to (see "update"). Throws std::logic_error when done,
   // std::invalid_argument for wrong counts.
   void add_margins(std::span<const double> margins, std::span<const double> log_ratio = {});
 

@@ -114,6 +114,11 @@ WeightedEstimate calc_weighted_estimate(std::span<const double> margins, std::sp
     e.refused = fmt::format("no failing run among {}", e.runs);
     return e;
   }
+  if (!std::isfinite(top)) {
+    e.p = top == -kInf ? 0.0 : std::numeric_limits<double>::quiet_NaN();
+    e.refused = fmt::format("the {} failing runs have no finite weight under this law", e.failures);
+    return e;
+  }
   double s1 = 0.0, s2 = 0.0;  // sum w / W, sum (w / W)^2 over failing runs, W = exp(top)
   for (std::size_t i = 0; i < margins.size(); ++i) {
     if (!(margins[i] <= 0.0)) continue;

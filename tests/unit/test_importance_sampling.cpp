@@ -192,3 +192,10 @@ TEST_CASE("reweighted importance sampling covers every law of a sweep; the diffu
   }
   CHECK(density_refused >= 18);
 }
+
+TEST_CASE("failing runs without weight under a law are said, not divided by", "[importance]") {
+  const std::vector<double> m{-1.0, -2.0, 1.0}, w{-INFINITY, -INFINITY, 0.0};
+  const WeightedEstimate e = calc_weighted_estimate(m, w, 0.95);
+  CHECK(e.p == 0.0);
+  CHECK_THAT(e.refused, Contains("2 failing runs have no finite weight"));
+}
