@@ -194,9 +194,13 @@ def disk_full_resume(args, d):
                 pass
         err = proc.communicate(timeout=300)[1]
         left = sorted(os.listdir(disk))
-        check(proc.returncode != 0 and "No space left on device" in err and left == [".r.h5.lock", "filler", "r.h5.journal"],
+        # Which write meets the full disk first decides how the session ends: the journal's (rank 0
+        # ends in order and lets go of its lock) or the results file's (the job is aborted and the
+        # lock file stays, held by no one). Either way the journal stays and no temporary file does.
+        check(proc.returncode != 0 and "No space left on device" in err
+              and left in (["filler", "r.h5.journal"], [".r.h5.lock", "filler", "r.h5.journal"]),
               f"disk full mid-run: exit {proc.returncode}, '{err.strip().splitlines()[0][:120]}', left {left} (the "
-              f"journal, the lock file of the aborted session: no temporary file)")
+              f"journal, perhaps the lock file of the aborted session: no temporary file)")
         os.remove(os.path.join(disk, "filler"))
         stale = os.path.join(disk, ".r.h5.tmp.999999")
         open(stale, "wb").write(b"\0" * 2**20)
