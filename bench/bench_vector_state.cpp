@@ -4,7 +4,7 @@
 //   plain:       no ISA-L call before the run;
 //   dirty:       crc32_gzip_refl called directly (its vector kernel leaves the upper halves of the
 //                vector registers dirty);
-//   cleared:     util::calc_crc32, which clears them after the kernel (util/vector_state.hpp).
+//   cleared:     util::calc_crc32, which clears them after the kernel (util/isal.hpp).
 // Usage: bench_vector_state SCENE.toml [REPEATS]
 #include <isa-l/crc.h>
 
@@ -16,7 +16,7 @@
 
 #include "io/scene_toml.hpp"
 #include "sim/simulate.hpp"
-#include "util/crc32.hpp"
+#include "util/isal.hpp"
 
 using namespace truss;
 

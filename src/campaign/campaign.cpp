@@ -140,9 +140,14 @@ void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
         inline_settings.push_back(
             {std::string(k.str()) + "." + std::string(sk.str()) + "=" + toml_value_text(sv), where_of(c, sv)});
     } else {
-      c.fail(&v, unknown_key_text(key, "scene.file, scene.overrides, and scene tables [scene.mast], "
-                             "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run], "
-                             "[scene.motorisation]"));
+      std::string known = "scene.file, scene.overrides, and scene tables";
+      std::string_view last;
+      for (const auto& k2 : tables)
+        if (std::string_view t2 = std::string_view(k2).substr(0, k2.find('.')); t2 != last) {
+          known += fmt::format("{} [scene.{}]", last.empty() ? "" : ",", t2);
+          last = t2;
+        }
+      c.fail(&v, unknown_key_text(key, known));
     }
   }
   o.scene_settings = inline_settings;

@@ -106,6 +106,34 @@ void FreePhaseA::calc_bay_touches(const MastParams& mast, int first_bay, int las
   }
 }
 
+bool FreePhaseA::are_short_of_straight(const MastParams& mast, int first_bay, int last_bay, const double* ys, int first) {
+  for (int i = first_bay; i <= last_bay; ++i)
+    if (!(std::abs(ys[i - first] - ys[i - 1 - first]) < 2.0 * mast.bay(i).strut_length_m)) return false;
+  return true;
+}
+
+void FreePhaseA::calc_straight_distances(const MastParams& mast, const ContactLayout& layout, int lo, int last_bay,
+                                         const double* ys, int first, double* len) {
+  auto distance = [&](int i) {  // bay i, if it is a moving bay
+    if (i < std::max(lo, 1) || i > last_bay) return std::numeric_limits<double>::infinity();
+    return 2.0 * mast.bay(i).strut_length_m - std::abs(ys[i - first] - ys[i - 1 - first]);
+  };
+  const int clusters = layout.clusters();
+  for (int c = 0; c < clusters; ++c) {
+    const int bottom = layout.enabled ? layout.starts[static_cast<std::size_t>(c)] : c;
+    const int top = layout.enabled ? (c + 1 < clusters ? layout.starts[static_cast<std::size_t>(c + 1)] : layout.frames) - 1 : c;
+    len[c] = std::min(distance(lo + bottom), distance(lo + top + 1));
+  }
+}
+
+bool FreePhaseA::calc_smooth_lengths(const double* q, double* len) const {
+  std::vector<double>&ys = work_.ys, &vs = work_.vs, &zero = work_.zero;
+  zero.assign(static_cast<std::size_t>(dof()), 0.0);
+  expand_frames(q, zero.data(), ys, vs);
+  calc_straight_distances(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), std::max(lo_ - 1, 0), len);
+  return true;
+}
+
 void FreePhaseA::calc_touches(const double* q, const double* qdot, double* h, double* rate) const {
   const int n = dof(), m = ctx_.bay;
   std::vector<double>&ys = work_.ys, &vs = work_.vs;
@@ -123,6 +151,7 @@ bool FreePhaseA::calc_dae_terms(const double* q, const double* qdot, PhaseScratc
   work_.memo.valid = false;  // point_ys is rewritten
   std::vector<double>&ys = work_.point_ys, &vs = work_.point_vs;
   expand_frames(q, qdot, ys, vs);
+  if (!are_short_of_straight(*ctx_.mast, std::max(lo_, 1), ctx_.bay, ys.data(), std::max(lo_ - 1, 0))) return false;
   calc_frame_system(*ctx_.mast, active_, ys.data(), vs.data(), std::max(lo_ - 1, 0), sys);
   const int n = dof();
   t.rhs = sys.velocity_terms + sys.spring_forces;

@@ -76,6 +76,7 @@ class FreePhaseA final : public PhaseModel {
   static constexpr double kStraightFraction = 1e-4;
   void set_watch_rail_top(bool watch) { watch_rail_top_ = watch; }
   int num_stop_events() const override { return layout_.enabled ? 6 : 4; }
+  bool is_singular_stop(int k) const override { return k == deploying_straight || k == singular_bay; }
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;
   int num_touches() const override { return rail_touch() + ctx_.bay - std::max(lo_, 1) + 1; }
   void calc_touches(const double* q, const double* qdot, double* h, double* rate) const override;
@@ -86,6 +87,10 @@ class FreePhaseA final : public PhaseModel {
   // heights and velocities ys, vs of frames first.. (phases A and B).
   static void calc_bay_touches(const model::MastParams& mast, int first_bay, int last_bay, const double* ys,
                                const double* vs, int first, double* h, double* rate);
+  // Whether bays first_bay..last_bay are all short of straight, |D_i| < 2 l_i, from the frame heights
+  // ys of frames first.. (phases A and B): where the equations hold (G(D) > 0, a positive definite
+  // mass matrix); the residual form refuses other states.
+  static bool are_short_of_straight(const model::MastParams& mast, int first_bay, int last_bay, const double* ys, int first);
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
   // At a rail entry: its margin (model/rail.hpp, calc_rail_entry_margin_m), from the dip of the
@@ -98,6 +103,13 @@ class FreePhaseA final : public PhaseModel {
   int num_multipliers() const override { return ctx_.drive.mode == model::DriveMode::velocity ? 1 : 0; }
   bool calc_dae_terms(const double* q, const double* qdot, PhaseScratch& scratch, PhaseDaeTerms& out) const override;
   bool calc_frame_heights(const double* q, double* y) const override;
+  // Per coordinate (a cluster of frames lo..m), the smallest distance to straight, 2 l_i - |D_i|, of
+  // the bays it opens (the one below its lowest frame and the one above its highest).
+  bool calc_smooth_lengths(const double* q, double* len) const override;
+  // The same for the clusters of frames lo..lo + layout.frames - 1, over the bays up to last_bay,
+  // from the frame heights ys of frames first.. (phases A and B).
+  static void calc_straight_distances(const model::MastParams& mast, const ContactLayout& layout, int lo, int last_bay,
+                                      const double* ys, int first, double* len);
   // Frames above the driven frame m are locked, rigid with it: y_k = y_{k-1} + 2 l_k, k = m+1..n.
   static void fill_locked_heights(const model::MastParams& mast, int m, double* y);
   // The point's kinetic energy (from the phase's mass matrix diag, sub), and the potential energy,

@@ -151,7 +151,8 @@ bool FreePhaseB::assemble(const double* q, const double* qdot, PhaseScratch& sys
 
 bool FreePhaseB::calc_dae_terms(const double* q, const double* qdot, PhaseScratch& sys, PhaseDaeTerms& t) const {
   work_.memo.valid = false;  // point_ys is rewritten
-  return assemble(q, qdot, sys, work_.point_ys, work_.point_vs, t);
+  return assemble(q, qdot, sys, work_.point_ys, work_.point_vs, t) &&
+         FreePhaseA::are_short_of_straight(*ctx_.mast, std::max(lo_, 1), ctx_.bay - 1, work_.point_ys.data(), std::max(lo_ - 1, 0));
 }
 
 bool FreePhaseB::calc_frame_heights(const double* q, double* y) const {
@@ -162,6 +163,15 @@ bool FreePhaseB::calc_frame_heights(const double* q, double* y) const {
   for (int k = 0; k < first; ++k) y[k] = held_height_m_;
   for (int k = first; k <= m; ++k) y[k] = ys[static_cast<std::size_t>(k - first)];
   FreePhaseA::fill_locked_heights(*ctx_.mast, m, y);
+  return true;
+}
+
+bool FreePhaseB::calc_smooth_lengths(const double* q, double* len) const {
+  std::vector<double>&ys = work_.ys, &vs = work_.vs, &zero = work_.zero;
+  zero.assign(static_cast<std::size_t>(dof()), 0.0);
+  expand_frames(q, zero.data(), ys, vs);
+  FreePhaseA::calc_straight_distances(*ctx_.mast, layout_, lo_, ctx_.bay - 1, ys.data(), std::max(lo_ - 1, 0), len);
+  len[dof() - 1] = std::numeric_limits<double>::infinity();
   return true;
 }
 

@@ -64,6 +64,7 @@ class FreePhaseB final : public PhaseModel {
   // Stop event 0 (docs/model.md §2, singular configuration): a moving bay below m comes within
   // FreePhaseA::kStraightFraction l_s of straight (largest kStraightFraction l_i - x_i).
   int num_stop_events() const override { return layout_.enabled ? 3 : 1; }
+  bool is_singular_stop(int k) const override { return k == 0; }
   void calc_stop_events(const double* q, const double* qdot, double* g) const override;
   // Touches (phase.hpp): each moving bay below m straightening (stop event 0), as FreePhaseA's.
   int num_touches() const override { return ctx_.bay - std::max(lo_, 1); }
@@ -76,6 +77,9 @@ class FreePhaseB final : public PhaseModel {
   int num_multipliers() const override { return ctx_.drive.mode == model::DriveMode::velocity ? 2 : 1; }
   bool calc_dae_terms(const double* q, const double* qdot, PhaseScratch& scratch, PhaseDaeTerms& out) const override;
   bool calc_frame_heights(const double* q, double* y) const override;
+  // Per cluster of frames lo..m-1, the smallest distance to straight of the bays below m it opens
+  // (FreePhaseA::calc_straight_distances); x is regular up to the lock: unlimited.
+  bool calc_smooth_lengths(const double* q, double* len) const override;
 
  private:
   bool assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs,

@@ -1,41 +1,32 @@
-// SUNDIALS IDA behind the same interface as the own RK pair and CVODE: it integrates the
+// SUNDIALS IDA behind the same interface as the own RK pairs and CVODE: it integrates the
 // residual form of a system (OdeSystem::dae_form(): F(t, y, y', z) = 0, z algebraic), not
-// y' = f(t, y). Variable-order BDF (orders 1-5) with Newton iteration on IDA's difference-quotient
-// Jacobian and a banded direct linear solver (SUNBandMatrix, SUNLinSol_Band). IDA's vectors hold
-// the unknowns in the order the form gives (DaeForm::find_band_order; the free stack's phases, each
-// frame's q and q' side by side), in which the Jacobian is banded: per Jacobian, lower + upper + 1
-// residual evaluations (each O(n)) and an O(N lower (lower + upper)) LU, so every step is O(n) for
-// an n-frame phase. A form without an order keeps its own with a full band (a dense Jacobian).
+// y' = f(t, y). Variable-order BDF (orders 1-5) with Newton iteration on a banded difference-quotient
+// Jacobian (IDA's own increments, each kept within a fraction of its unknown's smooth length,
+// DaeForm::calc_smooth_lengths) and a banded direct linear solver (SUNBandMatrix, SUNLinSol_Band).
+// IDA's vectors hold the unknowns in the order the form gives (DaeForm::find_band_order; the free
+// stack's phases, each frame's q and q' side by side), in which the Jacobian is banded: per
+// Jacobian, lower + upper + 1 residual evaluations (each O(n)) and an O(N lower (lower + upper))
+// LU, so every step is O(n) for an n-frame phase. A form without an order keeps its own with a full band (a dense Jacobian).
 // The algebraic unknowns are excluded from the local error test (IDASetSuppressAlg): they are
 // fixed by the constraints at each step; consistent initial values of z and of y' for the given y
 // come from IDACalcIC (IDA_YA_YDP_INIT) at every start. IDA's root finding locates the events on
-// y (the first size() entries), IDAGetDky gives the dense output of y. One object serves a run:
-// context and memory are created on first use and restarted with IDAReInit; recreated when the
-// size changes or after IDA failed. Every SUNDIALS return flag is checked (as check_retval in the
-// SUNDIALS examples, e.g. idaRoberts_dns): a failure ends the call with IntegratorStatus::failure
-// naming the function and the flag.
+// y (the first size() entries), IDAGetDky gives the dense output of y; the step loop is
+// SundialsIntegrator's (sundials_integrator.hpp). One object serves a run: context and memory are
+// created on first use and restarted with IDAReInit; recreated when the size changes or after IDA
+// failed.
 #pragma once
 #include <memory>
 
-#include "integrators/ode.hpp"
+#include "integrators/sundials_integrator.hpp"
 
 namespace truss::integrators {
 
-class IdaIntegrator : public Integrator {
- public:
-  explicit IdaIntegrator(const IntegratorOptions& opts);
-  ~IdaIntegrator() override;
-  IdaIntegrator(const IdaIntegrator&) = delete;             // owns SUNDIALS memory
-  IdaIntegrator& operator=(const IdaIntegrator&) = delete;
-  // sys must have a DaeForm; steps, rejected steps and residual evaluations count this call only.
-  IntegratorSummary integrate(OdeSystem& sys, double t0, double t_end, double* y,
-                              StepObserver* observer) override;
-  void set_options(const IntegratorOptions& opts) override { opts_ = opts; }
+// IDA as the solver of a SundialsIntegrator; it integrates systems that have a DaeForm.
+std::unique_ptr<SundialsSolver> make_ida_solver();
 
- private:
-  struct Solver;  // the SUNDIALS objects (ida_integrator.cpp)
-  IntegratorOptions opts_;
-  std::unique_ptr<Solver> solver_;
+class IdaIntegrator final : public SundialsIntegrator {
+ public:
+  explicit IdaIntegrator(const IntegratorOptions& opts) : SundialsIntegrator(opts, make_ida_solver()) {}
 };
 
 }  // namespace truss::integrators

@@ -40,6 +40,10 @@ class DaeForm {
   // dF/dw + c dF/dw' is banded: order[p] is the index in w of the unknown (and the row) at
   // position p, lower and upper the half-bandwidths. false: no band (the full matrix).
   virtual bool find_band_order(std::vector<int>& /*order*/, int& /*lower*/, int& /*upper*/) const { return false; }
+  // For each unknown of w = (y, z) at y, the distance it can move with the residual smooth in it:
+  // the scale of the residual's nonlinearity, which a difference-quotient Jacobian must resolve
+  // (+inf where nothing limits it). false: none anywhere.
+  virtual bool calc_smooth_lengths(const double* /*y*/, double* /*len*/) const { return false; }
 };
 
 class OdeSystem {

@@ -1,16 +1,15 @@
 // The chunk codec: the filters' definitions are in chunk_codec.hpp.
 #include "results/chunk_codec.hpp"
 
-#include <isa-l/igzip_lib.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
-#include "util/vector_state.hpp"
+#include "util/isal.hpp"
 
 namespace truss::results {
 
@@ -54,30 +53,13 @@ int find_igzip_level(int level) { return std::min(level, 3); }
 // `in` as one raw DEFLATE stream (its last block final) at the end of `out`, in at most `cap`
 // bytes in all; false if it does not fit.
 bool ChunkCodec::put_deflated(const unsigned char* in, std::size_t n, int level, std::size_t cap, std::string& out) {
-  if (n > UINT32_MAX) throw std::length_error(fmt::format("chunk of {} bytes: ISA-L takes under 4 GiB", n));
-  const int igzip = find_igzip_level(level);
-  const std::size_t need = igzip == 2 ? ISAL_DEF_LVL2_DEFAULT : igzip == 3 ? ISAL_DEF_LVL3_DEFAULT : 0;
-  if (level_buf_.size() < need) level_buf_.resize(need);  // level 1 needs none (ISA-L's stateless)
   const std::size_t at = out.size();
   if (at >= cap) return false;
   out.resize(cap);
-  isal_zstream s;
-  isal_deflate_stateless_init(&s);
-  s.level = static_cast<std::uint32_t>(igzip);
-  s.level_buf = need > 0 ? level_buf_.data() : nullptr;
-  s.level_buf_size = static_cast<std::uint32_t>(need);
-  s.gzip_flag = IGZIP_DEFLATE;
-  s.end_of_stream = 1;
-  s.flush = NO_FLUSH;
-  s.next_in = const_cast<unsigned char*>(in);  // not written: ISA-L's struct is not const-correct
-  s.avail_in = static_cast<std::uint32_t>(n);
-  s.next_out = reinterpret_cast<unsigned char*>(out.data() + at);
-  s.avail_out = static_cast<std::uint32_t>(cap - at);
-  const int r = isal_deflate_stateless(&s);
-  util::clear_upper_vector_state();  // ISA-L's kernels leave the vector state dirty (util/vector_state.hpp)
-  if (r == STATELESS_OVERFLOW) return false;
-  if (r != COMP_OK) throw std::runtime_error(fmt::format("ISA-L deflate (level {}): error {}", igzip, r));
-  out.resize(at + s.total_out);
+  const std::optional<std::size_t> written =
+      deflater_.deflate(in, n, find_igzip_level(level), reinterpret_cast<unsigned char*>(out.data() + at), cap - at);
+  if (!written) return false;
+  out.resize(at + *written);
   return true;
 }
 
@@ -98,8 +80,7 @@ std::uint32_t ChunkCodec::encode_filtered(std::string_view raw, std::size_t elem
     out.assign(shuffled_);
     return kDeflateSkipped;
   }
-  const std::uint32_t adler = isal_adler32(1, sh, raw.size());
-  util::clear_upper_vector_state();
+  const std::uint32_t adler = util::calc_adler32(sh, raw.size());
   for (const int shift : {24, 16, 8, 0}) out.push_back(static_cast<char>((adler >> shift) & 0xff));
   return 0;
 }

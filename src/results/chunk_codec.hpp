@@ -14,6 +14,8 @@
 #include <string_view>
 #include <vector>
 
+#include "util/isal.hpp"
+
 namespace truss::results {
 
 // Filter mask bits of H5Dwrite_chunk / H5Dread_chunk: bit i set = filter i of the pipeline skipped.
@@ -43,7 +45,7 @@ class ChunkCodec {
     std::uint32_t mask;
   };
   std::string shuffled_;                   // the chunk after the shuffle filter
-  std::vector<unsigned char> level_buf_;   // ISA-L's work space at its levels 2 and 3
+  util::Deflater deflater_;                // ISA-L's igzip with its work space
   std::vector<Constant> constants_;        // at most kMaxConstants, the few constant columns
   static constexpr std::size_t kMaxConstants = 64;
 };

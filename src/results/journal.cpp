@@ -9,7 +9,7 @@
 #include <fmt/format.h>
 
 #include "util/bytes.hpp"
-#include "util/crc32.hpp"
+#include "util/isal.hpp"
 
 namespace truss::results {
 

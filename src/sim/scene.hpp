@@ -59,6 +59,21 @@ using DriveOptions = model::DriveParams;
 // The motorisation check's factors (model/motorisation.hpp, ECSS-E-ST-33-01C 4.7.5.3.1).
 using MotorisationOptions = model::MotorisationFactors;
 
+// Structural allowables and factors of safety (docs/model-notes.md "Structural margins"): the
+// report's margin of safety MoS = allowable / (FoS x design load) - 1 of each load, yield against
+// FOSY and ultimate against FOSU. An unset allowable is not declared: that load is not assessed.
+// Defaults of the factors: ECSS-E-ST-32-10C Rev.1 Table 4-1, unmanned spacecraft, metallic parts,
+// structure verified by test (confirm against the issue of the standard the contract names).
+struct StructureOptions {
+  double yield_factor = 1.1;                        // FOSY
+  double ultimate_factor = 1.25;                    // FOSU
+  std::optional<double> pin_force_yield_allowable_N, pin_force_ultimate_allowable_N;    // one rail pin
+  std::optional<double> diagonal_tension_yield_allowable_N, diagonal_tension_ultimate_allowable_N;  // one diagonal
+  std::optional<double> latch_energy_yield_allowable_J, latch_energy_ultimate_allowable_J;  // one latch
+  std::optional<double> screw_force_yield_allowable_N, screw_force_ultimate_allowable_N;  // one of the three screws
+  std::optional<double> drive_force_yield_allowable_N, drive_force_ultimate_allowable_N;  // the three screws together
+};
+
 struct StackOptions {
   StackMode mode = StackMode::held;  // docs/model.md §2: the canister holds stowed frames
   StackContacts contacts = StackContacts::off;  // docs/model.md §2 "free": contacts optional; off = the paper's literal model
@@ -90,6 +105,7 @@ struct SceneOptions {
   PanelOptions panels;
   RunOptions run;
   MotorisationOptions motorisation;
+  StructureOptions structure;
 
   // Returns an empty string when valid, else "key: reason" naming the first bad key
   // (e.g. "rail.beta_deg: must lie in (0, 90) degrees, got 95").

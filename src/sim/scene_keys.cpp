@@ -57,11 +57,52 @@ SceneKey R(SceneKey k, KeyRange hard, KeyRange typical) {
 constexpr KeyRange P(double hi) { return {0.0, hi, true, false}; }
 constexpr KeyRange C(double lo, double hi) { return {lo, hi, false, false}; }
 
+// [structure]: the allowables and factors of the structural margins (sim/scene.hpp StructureOptions,
+// ECSS-E-ST-32-10C).
+std::vector<SceneKey> make_structure_rows() {
+  return {
+      R(TRUSS_REAL(structure, yield_factor, "1", "1, FOSY, factor of safety on the design load against a yield allowable (ECSS-E-ST-32-10C)", kFixed),
+        C(1, 100), C(1, 5)),
+      R(TRUSS_REAL(structure, ultimate_factor, "1", "1, FOSU, factor of safety on the design load against an ultimate allowable (ECSS-E-ST-32-10C)", kFixed),
+        C(1, 100), C(1, 5)),
+      R(TRUSS_OPT_REAL(structure, pin_force_yield_allowable_N, "N", "N, yield allowable of the rail pin force of one pin; unset = not assessed", kFixed,
+                       s.structure.pin_force_yield_allowable_N.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, pin_force_ultimate_allowable_N, "N", "N, ultimate allowable of the rail pin force of one pin; unset = not assessed", kFixed,
+                       s.structure.pin_force_ultimate_allowable_N.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, diagonal_tension_yield_allowable_N, "N", "N, yield allowable of the tension of one diagonal; unset = not assessed", kFixed,
+                       s.structure.diagonal_tension_yield_allowable_N.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, diagonal_tension_ultimate_allowable_N, "N", "N, ultimate allowable of the tension of one diagonal; unset = not assessed", kFixed,
+                       s.structure.diagonal_tension_ultimate_allowable_N.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, latch_energy_yield_allowable_J, "J", "J, yield allowable of the energy one latch absorbs; unset = not assessed", kFixed,
+                       s.structure.latch_energy_yield_allowable_J.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, latch_energy_ultimate_allowable_J, "J", "J, ultimate allowable of the energy one latch absorbs; unset = not assessed", kFixed,
+                       s.structure.latch_energy_ultimate_allowable_J.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, screw_force_yield_allowable_N, "N", "N, yield allowable of the axial force of one of the three screws; unset = not assessed", kFixed,
+                       s.structure.screw_force_yield_allowable_N.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, screw_force_ultimate_allowable_N, "N", "N, ultimate allowable of the axial force of one of the three screws; unset = not assessed", kFixed,
+                       s.structure.screw_force_ultimate_allowable_N.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, drive_force_yield_allowable_N, "N", "N, yield allowable of the drive force, the three screws together; unset = not assessed", kFixed,
+                       s.structure.drive_force_yield_allowable_N.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+      R(TRUSS_OPT_REAL(structure, drive_force_ultimate_allowable_N, "N", "N, ultimate allowable of the drive force, the three screws together; unset = not assessed", kFixed,
+                       s.structure.drive_force_ultimate_allowable_N.value_or(std::numeric_limits<double>::quiet_NaN())),
+        P(1e12), P(1e7)),
+  };
+}
+
 std::vector<SceneKey> make_table() {
   // Enumeration values are listed in the order of the enumerators (sim/scene.hpp, model/drive.hpp,
   // integrators/ode.hpp). Typical ranges: Table 1 and the small masts of the literature (struts of
   // 2 cm to 2 m, frames of 10 g to 50 kg, drives of 0.1 mm/s to 1 m/s and 0.1 mN m to 1 N m).
-  return {
+  std::vector<SceneKey> table = {
       R(TRUSS_INT(mast, n_bays, "1", "number of bays", kRun), C(1, 100000), C(1, 1000)),
       R(TRUSS_BAY(TRUSS_REAL(mast, strut_length_m, "m", "m, l_s, length of each of the two struts of a longeron", kBay), strut_length_m),
         P(1e3), C(0.02, 2)),
@@ -147,6 +188,8 @@ std::vector<SceneKey> make_table() {
       R(TRUSS_REAL(motorisation, harness_factor, "1", "1, uncertainty factor of the harness H_A (Table 4-2; measured: 1.5)", kFixed),
         P(1e3), C(1, 10)),
   };
+  for (auto& row : make_structure_rows()) table.push_back(std::move(row));
+  return table;
 }
 
 #undef TRUSS_REAL

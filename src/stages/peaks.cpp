@@ -29,6 +29,7 @@ void PhasePeaks::reset(double direction) {
     b.fell = false;
   }
   count_ = 0;
+  last_t_ = singular_end_t_ = kNaN;
   direction_ = direction;
   max_rail_residual = 0.0;
 }
@@ -42,6 +43,7 @@ void PhasePeaks::feed(double t, const PhasePoint& p, const double* state, int n)
         for (std::size_t w = 0; w < 3; ++w)
           if (h->sample[w] == i - kRing) { h->own[w] = slot; h->sample[w] = -1; }
   slot.assign(t, p, state, n);
+  last_t_ = t;
   for (int q = 0; q < kQuantityCount; ++q) {
     Bracket& b = b_[static_cast<std::size_t>(q)];
     const double v = calc_peak_quantity(q, p, direction_);

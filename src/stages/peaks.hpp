@@ -120,6 +120,11 @@ class PhasePeaks {
   // the same at every instant of the phase, its best sample is its peak (no evaluation).
   template <class Eval>
   void refine(int q, bool first, Eval&& eval, double xtol, double& value, double& time, bool search = true) const;
+  // The phase ended where a term of the loads grows without bound (a bay within 1e-4 l_s of
+  // straight: G'(D) D'^2 ~ 1 / x^2), at the last sample fed, the event's own state: no span that
+  // ends there is searched, since an interpolant of the state cannot resolve a load that steep
+  // (a state error of 1e-15 m in D moves it by 1e-6 of itself); the stop's sample is taken as it is.
+  void end_at_singularity() { singular_end_t_ = last_t_; }
   double best(int q) const { return b_[static_cast<std::size_t>(q)].top.value; }
   // Whether the earliest of equal maxima is another than the highest sample's.
   bool has_earlier_tie(int q) const {
@@ -150,6 +155,7 @@ class PhasePeaks {
   std::array<Bracket, kQuantityCount> b_;
   std::array<Sample, kRing> ring_;
   long count_ = 0;  // samples fed this phase
+  double last_t_ = kNaN, singular_end_t_ = kNaN;  // the last sample's time; a singular end's (end_at_singularity)
   double direction_ = 1.0;
   double tie_tol_ = 0.0;
 };
@@ -215,7 +221,7 @@ void PhasePeaks::refine(int q, bool first, Eval&& eval, double xtol, double& val
   if (!std::isfinite(b.value) || !search) return;
   for (const HermiteSpan span : {HermiteSpan{&prev, &best}, HermiteSpan{&best, &next}}) {
     const double len = span.b->t - span.a->t;
-    if (!(len > 0.0)) continue;
+    if (!(len > 0.0) || span.b->t == singular_end_t_) continue;
     // A best sample at a kink or at the phase end is often the maximum itself: if the quantity
     // falls just inside the span, the span holds nothing higher (it is bracketed by the grid).
     const bool best_is_a = span.a == &best;

@@ -118,6 +118,9 @@ class PhaseModel {
   // crossings): each rises through zero when it fires. The held phases have none.
   virtual int num_stop_events() const { return 0; }
   virtual void calc_stop_events(const double* /*q*/, const double* /*qdot*/, double* /*g*/) const {}
+  // Whether stop event k ends the phase where the loads hold a term that grows without bound (a bay
+  // within 1e-4 l_s of straight): its peaks are then taken at the stop's own state (PhasePeaks).
+  virtual bool is_singular_stop(int /*k*/) const { return false; }
   // Grazing touches: conditions h_k(q) >= 0 that end the phase (its end event or a stop event) and
   // that a step can pass in and out of between its two ends, unseen by the events' sign test there
   // (a pin that dips into the rail and out, a bay that straightens and folds back). At (q, q') the
@@ -131,6 +134,11 @@ class PhaseModel {
   // Residual form (PhaseDaeTerms) at (q, q'): the number of multipliers, -1 when the model has
   // none (the held phases); calc_dae_terms returns false where the terms are not defined.
   virtual int num_multipliers() const { return -1; }
+  // For each coordinate q_k, the distance it can move from q with the equations smooth (len, dof
+  // values): the free stack's mass matrix holds G(D) ~ 1 / (2 l - D) of every bay that q_k opens, so
+  // the distance of those bays to straight (IDA's difference-quotient Jacobian resolves it). false:
+  // nothing limits any coordinate (the held phases).
+  virtual bool calc_smooth_lengths(const double* /*q*/, double* /*len*/) const { return false; }
   // Heights of all frames 0..n (m) at q, for the per-frame history; false: not tracked (held
   // stack, whose frames below the deploying bay are at their stowed or lock heights).
   virtual bool calc_frame_heights(const double* /*q*/, double* /*y*/) const { return false; }

@@ -69,6 +69,12 @@ class PhaseOde final : public integrators::OdeSystem, public integrators::DaeFor
     upper = k > 0 ? 3 + k : 2;
     return true;
   }
+  // The coordinates' smooth lengths from the model; velocities, work and multipliers: unlimited.
+  bool calc_smooth_lengths(const double* y, double* len) const override {
+    const int total = 2 * n_ + 1 + std::max(m_.num_multipliers(), 0);
+    std::fill_n(len, total, std::numeric_limits<double>::infinity());
+    return m_.calc_smooth_lengths(y, len);
+  }
   void calc_rhs(double, const double* y, double* dy) override {
     const double power = m_.calc_motion(y, y + n_, dy + n_, scratch_);
     std::copy(y + n_, y + 2 * n_, dy);
@@ -263,7 +269,9 @@ PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sink
   }
   out.end_state.assign(y.begin(), y.begin() + 2 * n);
   // Peaks of the phase: best step-end samples refined on the Hermite interpolant (the quantities
-  // that do not change in the phase, not searched).
+  // that do not change in the phase, not searched), but for the last span of a singular stop.
+  const int stop = sum.status == integrators::IntegratorStatus::event ? sum.event_index - ode.num_base_events() : -1;
+  if (stop >= 0 && model_.is_singular_stop(stop)) sinks.phase_peaks.end_at_singularity();
   std::vector<double> q(static_cast<std::size_t>(n)), qd(static_cast<std::size_t>(n));
   const unsigned constant = find_constant_quantities(model_.context().kind);
   sinks.peaks.absorb(sinks.phase_peaks, [&](double tt, const HermiteSpan& span) {

@@ -88,7 +88,9 @@ struct RunResult {
   // direction, peaks over the smooth motion; impulses apart): static = the torque that holds the
   // mast at rest in each configuration (the diagonals' springs, the model's only resistance; the
   // free stack: with the deploying bay in its configuration, the frames below it in static
-  // equilibrium), and inertial = drive torque - static (what accelerates the mast).
+  // equilibrium), and inertial = drive torque - static (what accelerates the mast; the free stack on
+  // the rail with two or more bays below: also the pull of bay m-1 beyond the chain's equilibrium
+  // tension, docs/model-notes.md "Resistive torque of the free stack").
   double peak_static_drive_torque_Nm = NAN_INIT();
   double peak_inertial_drive_torque_Nm = NAN_INIT();
   // The motorisation check of ECSS-E-ST-33-01C 4.7.5.3.1 (model/motorisation.hpp; docs/model-notes.md

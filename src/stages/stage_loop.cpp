@@ -159,7 +159,9 @@ void StageLoop::fail_stop(const SegmentEnd& e, int m) {
     r_.rail_miss_closest_approach_m = -a.value;
     r_.rail_miss_closest_approach_time_s = a.t;
     r_.rail_miss_above_rail_top_time_s = e.above_rail_top_time_s;
-    r_.rail_margin_m = a.value;  // minus the closest approach
+    // Minus the closest approach's magnitude: negative on every miss, a hinge that started its
+    // stage past the rail line (so never crossed it falling) included.
+    r_.rail_margin_m = -std::abs(a.value);
   }
   fail(e.status, e.message);
 }

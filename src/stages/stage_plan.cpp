@@ -80,17 +80,43 @@ std::string explain_start_past_entry(const MastParams& mast, int m, double y_sta
 
 }  // namespace
 
+std::string find_rail_entries(const MastParams& mast, std::vector<HeldRailEntry>& entries) {
+  const int n = mast.n_bays();
+  entries.assign(static_cast<std::size_t>(n + 1), HeldRailEntry{});
+  const double y_r = mast.rail.axis_height_m();
+  HeldRailEntry e;
+  for (int m = n; m >= 1; --m) {
+    const BayParams& b = mast.bay(m);
+    // The entry depends on the strut length alone (the rail is the mast's): computed again only
+    // where the length changes (a dispersed mast), with its check.
+    if (m == n || b.strut_length_m != mast.bay(m + 1).strut_length_m) {
+      e = calc_held_rail_entry(mast.rail, b.strut_length_m, 0.0);
+      if (std::string bad = check_held_entry(mast, m, e); !bad.empty()) return bad;
+    }
+    const double y_start = (m == n) ? 0.0 : y_r - mast.bay(m + 1).strut_length_m;  // calc_lock_lower_height_m
+    if (!(y_start < e.upper_height_m)) return explain_start_past_entry(mast, m, y_start, e.upper_height_m);
+    entries[static_cast<std::size_t>(m)] = e;
+  }
+  return {};
+}
+
 std::string plan_free_stages(const MastParams& mast, double direction, bool contacts, bool start_kick,
                              std::vector<StageSpec>& out) {
   out.clear();
   if (direction < 0) {
     // Retraction: the held stack's stages (unlock, on the rail until the pin leaves it where a
     // lower frame at the stowed height meets it, then down to the deployment's start height),
-    // with the frames below moving (free_stack/free_stack.hpp). The same geometry must hold.
+    // with the frames below moving (free_stack/free_stack.hpp).
     if (std::string bad = plan_held_stages(mast, direction, out); !bad.empty()) return bad;
     for (StageSpec& s : out) { s.free_stack = true; s.contacts = contacts; }
     return {};
   }
+  // The held stack's rail geometry: frame 0 is held on the floor until bay 1's rail takes it, as
+  // in the held stack, and the stack starts stowed, so a geometry that the held stack refuses
+  // fails the free stack as well (bay 1 would start past its rail entry, bay n's stowed pin would
+  // not be clear of the rail, ...): refused with the same message.
+  std::vector<HeldRailEntry> entries;
+  if (std::string bad = find_rail_entries(mast, entries); !bad.empty()) return bad;
   const int n = mast.n_bays();
   std::vector<double> locked, span;
   calc_rigid_above(mast, locked, span);
@@ -117,18 +143,12 @@ std::string plan_held_stages(const MastParams& mast, double direction, std::vect
   std::vector<double> locked, span;
   calc_rigid_above(mast, locked, span);
   std::vector<StageSpec> deploy(n);
+  std::vector<HeldRailEntry> entries;
+  if (std::string bad = find_rail_entries(mast, entries); !bad.empty()) return bad;
   const double y_r = mast.rail.axis_height_m();
-  HeldRailEntry e;
   for (int m = n; m >= 1; --m) {
-    const BayParams& b = mast.bay(m);
-    // The entry depends on the strut length alone (the rail is the mast's): computed again only
-    // where the length changes (a dispersed mast), with its check.
-    if (m == n || b.strut_length_m != mast.bay(m + 1).strut_length_m) {
-      e = calc_held_rail_entry(mast.rail, b.strut_length_m, 0.0);
-      if (std::string bad = check_held_entry(mast, m, e); !bad.empty()) return bad;
-    }
+    const HeldRailEntry& e = entries[static_cast<std::size_t>(m)];
     const double y_start = (m == n) ? 0.0 : y_r - mast.bay(m + 1).strut_length_m;  // calc_lock_lower_height_m
-    if (!(y_start < e.upper_height_m)) return explain_start_past_entry(mast, m, y_start, e.upper_height_m);
     StageSpec s;
     s.bay = m;
     s.direction = 1.0;

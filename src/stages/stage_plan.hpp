@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "model/params.hpp"
+#include "model/rail.hpp"
 #include "stages/phase.hpp"
 
 namespace truss::stages {
@@ -44,13 +45,21 @@ struct StageSpec {
                                     // take the kick (else they stay at rest; sim::StackStart)
 };
 
+// The rail's geometry, checked once for both stack modes (docs/model-notes.md, "Rail geometry"):
+// the entry of each bay m's pin with its lower frame at the stowed height 0 (entries[m], 1..n),
+// well posed (away from the straight and the closed bay) and above where the lock of bay m+1
+// leaves frame m. Returns an empty string, or "rail geometry: ..." naming the keys, the reason
+// and the valid range of rail.x_m.
+std::string find_rail_entries(const model::MastParams& mast, std::vector<model::HeldRailEntry>& entries);
+
 // Builds the stages of a held-stack run. Returns an empty string, or "key: reason" if the
 // geometry makes the held stack impossible (rail never met, next bay already past the rail).
 std::string plan_held_stages(const model::MastParams& mast, double direction, std::vector<StageSpec>& out);
 
 // Builds the stages of a free-stack run: deployment, bays n..1, each phase A until rail entry and
-// phase B until the lock; retraction, the held stack's retraction stages (whose rail geometry
-// must hold) run with free frames. Returns "key: reason" for what the free stack cannot run.
+// phase B until the lock; retraction, the held stack's retraction stages run with free frames.
+// The rail geometry must be one the held stack runs (find_rail_entries): returns its message
+// otherwise.
 std::string plan_free_stages(const model::MastParams& mast, double direction, bool contacts, bool start_kick,
                              std::vector<StageSpec>& out);
 

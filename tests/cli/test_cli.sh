@@ -74,6 +74,14 @@ run beta95_set 2 "$TABLE1" --set rail.beta_deg=95 -o beta95_set.h5
 expect_in beta95_set.err "rail.beta_deg" "beta95_set: message names the key"
 nothing_written beta95_set
 
+# free stack: a rail geometry the held stack refuses is refused with the same message (bay 1 would
+# start past its rail entry)
+run rail_free 2 "$TABLE1" --set stack.mode=free --set mast.n_bays=2 --set rail.y_m=0.24 -o rail_free.h5 --json
+run rail_held 2 "$TABLE1" --set mast.n_bays=2 --set rail.y_m=0.24 -o rail_held.h5 --json
+expect_in rail_free.err "rail geometry: bay 1 starts already past its rail entry" "rail_free: the held stack's reason"
+if cmp -s rail_free.err rail_held.err; then ok "rail_free: the held stack's message"; else bad "rail_free: messages differ"; fi
+nothing_written rail_free
+
 # free stack: retraction runs (issue 9), here with stack contacts
 scene free_retract.toml '[mast]\nn_bays = 3\n[stack]\nmode = "free"\ncontacts = true\n[run]\ndirection = "retract"\n'
 run free_retract 0 free_retract.toml --json

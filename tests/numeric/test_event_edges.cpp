@@ -135,10 +135,11 @@ TEST_CASE("near a singular end every integrator stops as dopri54 does", "[numeri
 }
 
 TEST_CASE("free_singular.toml: CVODE finds the singular configuration of the motor run", "[numeric][free][events]") {
-  // The shipped scene (3 bays, a high rail): in motor mode bay 1 straightens at 7.73 s; CVODE's
-  // steps passed over it and the run went on to 9.17 s. At the scene's tolerance (rtol 1e-8) the
-  // event time agrees with dopri54's to 1e-5 s (measured 7e-6 s: the approach to straight is steep
-  // in D, so the time carries the state error over the rate of closing, about 1e3 rtol).
+  // The shipped scene (2 bays, bay 1 straightens in the stage of bay 2): a bay that straightens
+  // within one step was passed over by CVODE's steps (the run went on). At the scene's tolerance
+  // (rtol 1e-8) the event time agrees with dopri54's to 1e-5 s (measured 3e-6 s: the approach to
+  // straight is steep in D, so the time carries the state error over the rate of closing, about
+  // 1e3 rtol).
   sim::SceneOptions s = io::parse_scene_file(std::string(TRUSS_SOURCE_DIR) + "/campaigns/scenes/free_singular.toml",
                                              {"drive.mode=motor", "run.output_step_s=0"});
   s.run.integrator = sim::IntegratorKind::dopri54;

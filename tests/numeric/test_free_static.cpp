@@ -198,3 +198,53 @@ TEST_CASE("free stack static drive force with one bay below the deploying one is
   }
   CHECK(n_lower >= 2);  // bay 1 pulls: the lower bay's term is compared
 }
+
+TEST_CASE("free stack on the rail with a taut two-bay chain below: what the inertial part holds",
+          "[numeric][free][margins]") {
+  // docs/model-notes.md ("Resistive torque of the free stack"): the inertial part, F - F_static, is
+  // (F - F_rest) + (U'_{m-1}(D_{m-1}) - P) Z'(x) / Y'(x): F_rest the drive force that holds the
+  // present configuration at rest with every frame where it is (the spring terms: dV/dY along the
+  // rail with the frames below m-1 fixed, V the potential written again here), so F - F_rest is the
+  // inertia and velocity terms; the second term is the pull of bay m-1 beyond the chain's
+  // equilibrium tension P (found here by minimising the chain's energy). Stage of bay 3: bays 1 and 2
+  // below it, taut. Tolerances as above (central differences, 1e-9).
+  model::MastParams mast = testing::make_uneven_mast(5);
+  for (auto& b : mast.bays) b.diagonal_free_length_m *= 0.37 / 0.45;  // taut from D ~ 0.085 m
+  mast.rail.y_m += 0.4;
+  const std::vector<Bay> B = bays_of(mast);
+  const int m = 3;
+  const LD h = 1e-7L;
+  const std::vector<model::BayConstants> table = model::calc_bay_table(mast);
+  const stages::FreePhaseB b(context(mast, stages::PhaseKind::on_rail, m), 1, 0.0, 10.0, table);
+  const Rail r{1 / std::tan(LD(mast.rail.beta_rad)), mast.rail.y_m + mast.rail.x_m / std::tan(LD(mast.rail.beta_rad)),
+               mast.bay(m).strut_length_m};
+  Eigen::VectorXd acc(3);
+  int n_spring = 0;
+  for (const LD x : {0.08L, 0.03L}) {
+    const std::vector<LD> eq = equilibrium(B, m - 1, r.Z(x));
+    const LD P = B[1].dU(eq[1] - eq[0]), Zp = -r.c + x / r.s(x), Yp = -r.c - x / r.s(x);
+    REQUIRE(P > 0.1);  // the chain is taut
+    for (const LD d : {0.0L, 0.01L, -0.015L}) {
+      for (const double speed : {0.0, 0.02}) {
+        const LD y1 = eq[1] + d;
+        auto V_rest = [&](LD xx) { return B[m].U(r.Y(xx) - r.Z(xx)) + B[2].U(r.Z(xx) - y1) + B[1].U(y1); };
+        const LD F_rest = (V_rest(x + h) - V_rest(x - h)) / (r.Y(x + h) - r.Y(x - h));
+        const LD spring = (B[2].dU(r.Z(x) - y1) - P) * Zp / Yp;
+        const double q[3] = {double(y1), double(r.Z(x)), double(x)}, qd[3] = {speed, -0.5 * speed, speed};
+        stages::PhaseScratch sys;
+        const stages::PhasePoint p = b.calc_point(q, qd, acc.data(), sys);
+        const double inertial = p.drive_force_N - p.static_drive_force_N;
+        INFO("x " << double(x) << " d " << double(d) << " speed " << speed << " inertial " << inertial << " spring "
+                  << double(spring) << " F - F_rest " << p.drive_force_N - double(F_rest));
+        CHECK(inertial == Approx(p.drive_force_N - double(F_rest) + double(spring)).margin(1e-9));
+        if (d == 0.0L) {
+          CHECK(std::fabs(spring) < 1e-12L);  // the chain in equilibrium: no spring term
+          if (speed == 0.0) CHECK(std::fabs(inertial) < 1e-10);  // and at rest nothing accelerates
+        } else {
+          n_spring += std::fabs(spring) > 0.1L;
+        }
+      }
+    }
+  }
+  CHECK(n_spring >= 6);  // out of equilibrium the spring term is there and large
+}

@@ -97,44 +97,110 @@ TEST_CASE("free stack: a grazing approach that dips into the rail within a step 
   if (r.status == sim::RunStatus::rail_miss) CHECK(r.rail_miss_closest_approach_m > 0.0);
 }
 
-TEST_CASE("free_singular.toml: a high rail straightens the bay below the deploying one (singular configuration)",
+TEST_CASE("free_singular.toml: bay 1 straightens below the deploying bay 2 (singular configuration)",
           "[regression][free]") {
-  // Independent of the code: y_r = y_l + x_l cot(beta) = 0.5486 m, and at the lock of bay m its
-  // rail must hold frame m-1 at y_r - l_s = 0.3686 m > 2 l_s. In the stage of bay 2, frame 0 rests
-  // on the floor, so bay 1 (frames 0, 1) must straighten first: the run has to stop there, after
-  // the lock of bay 3 and before the driven frame 2 could reach its own lock.
-  const double beta = 15.0 * M_PI / 180.0, yr = 0.25 + 0.08 / std::tan(beta), l = 0.18, v = 0.1;
-  REQUIRE(yr - l > 2 * l);
-  for (const char* integ : {"dopri54", "ida"}) {
-    INFO(integ);
-    const sim::RunResult r = sim::simulate(load("free_singular.toml", {std::string("run.integrator=\"") + integ + "\""}));
-    REQUIRE(r.status == sim::RunStatus::singular_configuration);
-    CHECK(r.message.find("bay 1 (not deploying)") != std::string::npos);
-    CHECK(r.message.find("in the stage of bay 2") != std::string::npos);
-    CHECK(r.bays_completed == 1);
-    // Velocity drive: y_driven = v t, so bay 3 locks at (y_r + l) / v and bay 2 would lock at
-    // (y_r + 3 l) / v; the stop lies between (bounded time). On the rail the driven speed is a
-    // constraint integrated with the state (Baumgarte), so the lock time carries the integration
-    // error of the stage's two phases: 20 rtol per phase (stages/energy.hpp), rtol = 1e-8 here
-    // (measured: dopri54 1e-10, ida 3e-9 relative).
-    CHECK(r.bays[2].lock_time_s == Approx((yr + l) / v).epsilon(40 * 1e-8));
-    CHECK(r.end_time_s > (yr + l) / v);
-    CHECK(r.end_time_s < (yr + 3 * l) / v);
-    // The history's last row is the stop: bay 1's opening D = y_1 - y_0 is within 1e-4 l_s of
-    // straight in the hinge offset, x = sqrt(l^2 - D^2 / 4) < 1e-4 l (+ the event tolerance).
-    const auto& h = r.history;
-    REQUIRE(h.n_frames == 4);
-    const double* last = h.frame_height_m.data() + (h.size() - 1) * 4;
-    const double D1 = last[1] - last[0];
-    CHECK(std::sqrt(std::max(0.0, l * l - 0.25 * D1 * D1)) < 1.01e-4 * l);
-    CHECK(std::sqrt(std::max(0.0, l * l - 0.25 * D1 * D1)) > 0.9e-4 * l);  // not past it either
-    CHECK(last[0] == 0.0);  // frame 0 still on the floor
+  // Frame 0 rests on the floor and bay 1 (frames 0, 1) is not deploying; the run must stop where
+  // its hinge offset x_1 = sqrt(l^2 - D_1^2 / 4), computed here from the history's last row, is
+  // 1e-4 l_s, inside the stage of bay 2 and before its pin meets the rail (bay 2 never entered).
+  const double l = 0.18;
+  for (const char* mode : {"velocity", "motor"}) {
+    for (const char* integ : {"dopri54", "ida"}) {
+      INFO(mode << ", " << integ);
+      const sim::RunResult r = sim::simulate(load("free_singular.toml", {std::string("drive.mode=\"") + mode + "\"",
+                                                                          std::string("run.integrator=\"") + integ + "\""}));
+      REQUIRE(r.status == sim::RunStatus::singular_configuration);
+      CHECK(r.message.find("bay 1 (not deploying)") != std::string::npos);
+      CHECK(r.message.find("in the stage of bay 2") != std::string::npos);
+      CHECK(r.bays_completed == 0);
+      CHECK(std::isnan(r.bays[1].entry_time_s));
+      const auto& h = r.history;
+      REQUIRE(h.n_frames == 3);
+      CHECK(h.t_s.back() == r.end_time_s);
+      const double* last = h.frame_height_m.data() + (h.size() - 1) * 3;
+      const double D1 = last[1] - last[0];
+      CHECK(std::sqrt(std::max(0.0, l * l - 0.25 * D1 * D1)) < 1.01e-4 * l);
+      CHECK(std::sqrt(std::max(0.0, l * l - 0.25 * D1 * D1)) > 0.9e-4 * l);  // not past it either
+      CHECK(last[0] == 0.0);  // frame 0 still on the floor
+    }
   }
-  for (const char* mode : {"torque", "motor"}) {  // every drive mode ends the same way, in bounded time
-    INFO(mode);
-    const sim::RunResult r = sim::simulate(load("free_singular.toml", {std::string("drive.mode=\"") + mode + "\""}));
-    CHECK(r.status == sim::RunStatus::singular_configuration);
-    CHECK(r.end_time_s < 60.0);
+}
+
+TEST_CASE("one rail geometry for both stack modes: the free stack refuses what the held stack refuses",
+          "[regression][free][rail]") {
+  // The free stack holds frame 0 on the floor until bay 1's rail takes it and starts stowed, as the
+  // held stack does, so a geometry the held stack refuses (docs/model-notes.md, "Rail geometry")
+  // cannot deploy with free frames either. Reference: the held stack's refusal of the same scene.
+  struct Case { const char* what; int n; double x_m, y_m, beta_deg, l0; };
+  const std::vector<Case> cases = {
+      {"2 bays, rail.y_m 0.24", 2, 0.08, 0.24, 20.85, 0.45},
+      {"2 bays, rail.y_m 0.25", 2, 0.08, 0.25, 20.85, 0.45},
+      {"2 bays, rail.y_m 0.24, l_0 0.42", 2, 0.08, 0.24, 20.85, 0.42},
+      {"3 bays, a high rail at 15 deg", 3, 0.08, 0.25, 15.0, 0.49},
+      {"the straight-bay limit", 1, 0.0114, 0.15, 20.85, 0.45},
+      {"the stowed pin not clear", 1, 0.13, 0.15, 20.85, 0.45},
+      {"rail.beta_deg 50", 1, 0.08, 0.15, 50.0, 0.45},
+  };
+  for (const Case& c : cases) {
+    for (const auto dir : {model::Direction::deploy, model::Direction::retract}) {
+      INFO(c.what << (dir == model::Direction::deploy ? ", deploy" : ", retract"));
+      sim::SceneOptions s = load("table1.toml", {"run.output_step_s=0"});
+      s.mast.n_bays = c.n;
+      s.rail.x_m = c.x_m;
+      s.rail.y_m = c.y_m;
+      s.rail.beta_deg = c.beta_deg;
+      s.mast.diagonal_free_length_m = c.l0;
+      s.run.direction = dir;
+      const sim::RunResult held = sim::simulate(s);
+      REQUIRE(held.status == sim::RunStatus::invalid_input);
+      CHECK(held.message.rfind("rail geometry: ", 0) == 0);
+      s.stack.mode = sim::StackMode::free;
+      for (const auto contacts : {sim::StackContacts::on, sim::StackContacts::off}) {
+        s.stack.contacts = contacts;
+        const sim::RunResult fr = sim::simulate(s);
+        CHECK(fr.status == sim::RunStatus::invalid_input);
+        CHECK(fr.message == held.message);
+      }
+    }
+  }
+  // The first case in closed form (independent of model/rail.hpp): the lock of bay 2 leaves frame 1
+  // at y_r - l, and with frame 0 on the floor bay 1's pin, on the arc (l cos th, l sin th), meets
+  // the rail y = y_r - c x where l (sin th + c cos th) = y_r, i.e. with the driven frame at
+  // 2 l sin th_e, th_e = pi - atan(c) - asin(y_r / (l sqrt(1 + c^2))): below y_r - l here.
+  const double l = 0.18, c = 1.0 / std::tan(20.85 * M_PI / 180.0), y_r = 0.24 + 0.08 * c;
+  const double th = M_PI - std::atan(c) - std::asin(y_r / (l * std::sqrt(1.0 + c * c)));
+  CHECK(2.0 * l * std::sin(th) < y_r - l);
+}
+
+TEST_CASE("a rail miss never reports a positive rail margin", "[regression][free][rail]") {
+  // Without stack contacts the frames below can pass through each other and the floor: with a
+  // higher rail (rail.y_m 0.22 m, a geometry the held stack runs) and l_0 = 0.5 m, bay 2's hinge is
+  // already past the rail line when bay 3 locks, so it never crosses the line falling (no entry)
+  // and its closest approach is negative. The margin is minus the approach's magnitude
+  // (docs/model-notes.md, "Rail margin"): negative on every miss, as on an ordinary one (rail.y_m
+  // 0.20 m, 4 bays, l_0 0.44 m). The hinge's side of the rail line at the stage start is computed
+  // here from the history's frame heights (f = y_h - y_l + c (x_h - x_l)).
+  const double l = 0.18, c = 1.0 / std::tan(20.85 * M_PI / 180.0);
+  struct Case { double y_m; int n; double l0; };
+  for (const Case k : {Case{0.20, 4, 0.44}, Case{0.22, 3, 0.5}}) {
+    INFO("rail.y_m = " << k.y_m << ", " << k.n << " bays, l_0 = " << k.l0);
+    sim::SceneOptions s = load("table1.toml", {"stack.mode=\"free\"", "run.output_step_s=0.001"});
+    s.rail.y_m = k.y_m;
+    s.mast.n_bays = k.n;
+    s.mast.diagonal_free_length_m = k.l0;
+    const sim::RunResult r = sim::simulate(s);
+    REQUIRE(r.status == sim::RunStatus::rail_miss);
+    CHECK(r.rail_margin_m < 0.0);
+    CHECK(r.rail_margin_m == -std::abs(r.rail_miss_closest_approach_m));
+    if (k.n != 3) continue;
+    REQUIRE(r.rail_miss_bay == 2);
+    CHECK(r.rail_miss_closest_approach_m < 0.0);
+    const auto& h = r.history;
+    std::size_t row = 0;
+    while (row < h.size() && h.t_s[row] <= r.bays[2].lock_time_s) ++row;
+    REQUIRE(row < h.size());
+    const double* y = h.frame_height_m.data() + row * 4;
+    const double D = y[2] - y[1], x = std::sqrt(l * l - 0.25 * D * D);
+    CHECK(0.5 * (y[2] + y[1]) - k.y_m + c * (x - 0.08) < 0.0);
   }
 }
 

@@ -5,7 +5,8 @@ No file of src/ holds machine-specific code: no intrinsics header (<immintrin.h>
 ...), no test of the target architecture (__x86_64__, __SSE2__, __AVX2__, ...), no per-function
 target or clones attribute, no run-time CPU dispatch (__builtin_cpu_supports). SIMD_FILES lists
 the files that may: sampling/simd_clones.hpp (the optional clones, CMake option TRUSS_SIMD_CLONES)
-and util/vector_state.cpp (VZEROUPPER after ISA-L's vector kernels, where the CPU has AVX).
+and util/isal.cpp (VZEROUPPER after ISA-L's vector kernels, where the CPU has AVX). ISA-L's headers
+are included by util/isal.cpp alone, the wrapper that clears that vector state after every kernel.
 Usage: check_layers.py SRC_DIR; exit 1 on a violation."""
 import pathlib
 import re
@@ -35,7 +36,9 @@ ALLOWED = {
 EXTERNAL_OK = {"numerics": ("",), "model": ("Eigen/",), "sampling": ("fmt/", "boost/math/"), "statistics": ("fmt/",),
                "util": ("fmt/", "isa-l/")}
 # Machine-specific code, forbidden in src/ outside SIMD_FILES (paths relative to src/).
-SIMD_FILES = {"sampling/simd_clones.hpp", "util/vector_state.cpp"}
+SIMD_FILES = {"sampling/simd_clones.hpp", "util/isal.cpp"}
+# The one file that includes ISA-L (util/isal.hpp: every call is followed by clearing the vector state).
+ISAL_FILE = "util/isal.cpp"
 MACHINE_SPECIFIC = re.compile(r"#\s*include\s*<\w*intrin\.h>|__x86_64__|__i386__|__aarch64__|__SSE\d?\w*__|__AVX\w*__"
                               r"|__ARM_NEON|__attribute__\s*\(\(\s*target|target_clones|__builtin_cpu_supports")
 
@@ -57,6 +60,9 @@ def main():
                 print(f"{p}:{n}: {folder}/ may not include {m.group(1)}/: {line.strip()}")
                 bad += 1
             m = re.match(r"\s*#include\s+<([^>]+)>", line)
+            if m and m.group(1).startswith("isa-l/") and str(p.relative_to(src)) != ISAL_FILE:
+                print(f"{p}:{n}: ISA-L is called through {ISAL_FILE} only (util/isal.hpp): {line.strip()}")
+                bad += 1
             if m and folder in EXTERNAL_OK and "/" in m.group(1) or (m and folder in EXTERNAL_OK and "." in m.group(1)):
                 if not any(m.group(1).startswith(pre) and pre for pre in EXTERNAL_OK[folder]):
                     print(f"{p}:{n}: {folder}/ includes only {EXTERNAL_OK[folder]} and the standard library: "

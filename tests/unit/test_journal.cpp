@@ -16,7 +16,7 @@
 #include "results/journal.hpp"
 #include "results/lock_file.hpp"
 #include "util/bytes.hpp"
-#include "util/crc32.hpp"
+#include "util/isal.hpp"
 
 using namespace truss::results;
 namespace fs = std::filesystem;

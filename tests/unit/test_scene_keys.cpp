@@ -3,6 +3,7 @@
 // BayParams / FrameParams field, scopes and units are the ones the campaign layer relied on.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstring>
 
 #include "sim/scene_keys.hpp"
@@ -32,13 +33,21 @@ std::vector<unsigned char> bytes_of(const sim::SceneOptions& s) {
   const auto& f = s.motorisation;
   put(f.factor); put(f.spring_factor); put(f.inertia_factor); put(f.friction_factor); put(f.detent_factor);
   put(f.hysteresis_factor); put(f.harness_factor);
+  const auto& g = s.structure;
+  put(g.yield_factor); put(g.ultimate_factor);
+  for (const auto* a : {&g.pin_force_yield_allowable_N, &g.pin_force_ultimate_allowable_N,
+                        &g.diagonal_tension_yield_allowable_N, &g.diagonal_tension_ultimate_allowable_N,
+                        &g.latch_energy_yield_allowable_J, &g.latch_energy_ultimate_allowable_J,
+                        &g.screw_force_yield_allowable_N, &g.screw_force_ultimate_allowable_N,
+                        &g.drive_force_yield_allowable_N, &g.drive_force_ultimate_allowable_N})
+    put(a->value_or(-1));
   return b;
 }
 }  // namespace
 
 TEST_CASE("scene key table: each accessor writes its own field, by name", "[unit][keys]") {
   const auto& keys = sim::scene_keys();
-  REQUIRE(keys.size() == 50);  // every field of SceneOptions above has one row
+  REQUIRE(keys.size() == 62);  // every field of SceneOptions above has one row
   const sim::SceneOptions base;
   for (const auto& k : keys) {
     sim::SceneOptions s;
@@ -70,6 +79,11 @@ TEST_CASE("scene key table: each accessor writes its own field, by name", "[unit
   CHECK(s.mast.n_bays == 12);
   sim::find_scene_key("stack.contacts")->set_enum(s, 1);
   CHECK(s.stack.contacts == sim::StackContacts::on);
+  sim::find_scene_key("structure.latch_energy_ultimate_allowable_J")->set_real(s, 0.5);
+  CHECK(s.structure.latch_energy_ultimate_allowable_J == 0.5);
+  CHECK_FALSE(s.structure.latch_energy_yield_allowable_J.has_value());  // unset: that load is not assessed
+  CHECK(std::isnan(sim::find_scene_key("structure.pin_force_yield_allowable_N")->get_real(s)));
+  CHECK(sim::find_scene_key("structure.ultimate_factor")->get_real(s) == 1.25);  // ECSS-E-ST-32-10C Table 4-1
   sim::find_scene_key("stack.start")->set_enum(s, 1);
   CHECK(s.stack.start == sim::StackStart::rest);
   sim::find_scene_key("drive.screw_back_efficiency")->set_real(s, 0.3);
@@ -129,7 +143,7 @@ TEST_CASE("scene key table: dispersion scopes, mast fields and units", "[unit][k
   for (const char* name : run_keys) CHECK(sim::find_scene_key(name)->scope == sim::KeyScope::run);
   int n_fixed = 0;
   for (const auto& k : sim::scene_keys()) n_fixed += !k.is_dispersible();
-  CHECK(n_fixed == 50 - 22 - 5 - 2);  // the [motorisation] factors are fixed
+  CHECK(n_fixed == 62 - 22 - 5 - 2);  // the [motorisation] and [structure] keys are fixed
   for (const char* name : {"panels.count", "run.rtol", "drive.mode", "stack.mode", "run.max_steps", "motorisation.factor"})
     CHECK_FALSE(sim::find_scene_key(name)->is_dispersible());
   CHECK(sim::find_scene_key("mast.strut_inertia_kg_m2")->unit == "kg m^2");

@@ -7,7 +7,7 @@
 #include <string>
 
 #include "util/bytes.hpp"
-#include "util/crc32.hpp"
+#include "util/isal.hpp"
 
 using namespace truss::util;
 
