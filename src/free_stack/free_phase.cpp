@@ -61,11 +61,15 @@ double FreePhaseA::calc_rail_function_m(const double* q) const {
 }
 
 double FreePhaseA::calc_rail_entry_margin_m(const double* q, const double* qdot, const double* qddot) const {
-  const int n = dof();
-  const bool lower_moves = n >= 2;  // else frame m - 1 is held
-  return model::calc_rail_entry_margin_m(ctx_.mast->rail, ctx_.mast->bay(ctx_.bay).strut_length_m, q[n - 1],
-                                         lower_moves ? q[n - 2] : held_height_m_, qdot[n - 1],
-                                         lower_moves ? qdot[n - 2] : 0.0, qddot[n - 1], lower_moves ? qddot[n - 2] : 0.0);
+  const int n = dof(), m = ctx_.bay;
+  if (m == 1) return std::numeric_limits<double>::quiet_NaN();  // frame 0 held: the held stack's stage, no miss
+  const bool lower_moves = n >= 2;  // else frame m - 1 rests on the stack (stack contacts)
+  const double y_lo = lower_moves ? q[n - 2] : held_height_m_;
+  const BayParams& b = ctx_.mast->bay(m);
+  const double dip = calc_rail_entry_dip_m(ctx_.mast->rail, b.strut_length_m, q[n - 1], y_lo, qdot[n - 1],
+                                           lower_moves ? qdot[n - 2] : 0.0, qddot[n - 1], lower_moves ? qddot[n - 2] : 0.0);
+  const double b2 = calc_diagonal_offset_sq_m2(ctx_.mast->frame(m - 1), ctx_.mast->frame(m));
+  return model::calc_rail_entry_margin_m(dip, b.diagonal_free_length_m - calc_diagonal_length_m(b2, q[n - 1] - y_lo));
 }
 
 void FreePhaseA::calc_stop_events(const double* q, const double* qdot, double* g) const {

@@ -93,8 +93,10 @@ class FreePhaseA final : public PhaseModel {
   static bool are_short_of_straight(const model::MastParams& mast, int first_bay, int last_bay, const double* ys, int first);
   // Rail function of the hinge of bay m (m); > 0 before the pin reaches the rail.
   double calc_rail_function_m(const double* q) const;
-  // At a rail entry: how deep the uncaptured pin would dip below the rail line (model/rail.hpp,
-  // calc_rail_entry_margin_m), from the state and its accelerations qddot (calc_point).
+  // At a rail entry: its margin (model/rail.hpp, calc_rail_entry_margin_m), from the dip of the
+  // uncaptured pin below the rail line and the slack of bay m's diagonals, given the state and its
+  // accelerations qddot (calc_point). NaN in the stage of bay 1: frame 0 is held, as in the held
+  // stack, and the pin always meets the rail (docs/model-notes.md "Rail margin").
   double calc_rail_entry_margin_m(const double* q, const double* qdot, const double* qddot) const;
   int get_lowest_frame() const { return lo_; }
   // Residual form (phase.hpp): velocity mode one multiplier (the drive force, y_m'' = 0), else none.

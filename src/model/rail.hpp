@@ -9,7 +9,7 @@
 // In coordinates (y_m, x) the rail function is f = y_m - s(x) - y_r + c x, with gradient
 //   (1, c + x/s): regular at the lock, unlike df/dy in frame heights (docs/model.md §3.1 (4)).
 // Rail normal force on one of the three pins: |lambda| / (3 sin beta).
-// Rail margin of an entry (free stack, docs/model-notes.md "Rail margin"): with the hinge at
+// Rail margin of an entry (free stack, docs/model-notes.md "Rail margin"). The dip: with the hinge at
 //   y_h = (y_m + y_lo)/2, x_h = sqrt(l^2 - D^2/4), D = y_m - y_lo,
 //   f' = (u + w)/2 + c x',   x' = -D D' / (4 x),
 //   f'' = (a_u + a_w)/2 + c x'',   x'' = -(D'^2 + D D'') / (4 x) - x'^2 / x,
@@ -18,6 +18,9 @@
 // frame one strut length): the uncaptured pin would dip to
 //   d = max over tau in [0, T] of -(f' tau + f'' tau^2 / 2)
 // below the rail (f'^2 / (2 f'') when the minimum falls within T), d sin(beta) from the rail line.
+// The margin adds the slack s = l_0 - L(D) the deploying bay's diagonals still have at the entry,
+// in series with the dip (s+ = max(s, 0)):
+//   margin = d + d s+ / (d + s+)
 #pragma once
 #include <algorithm>
 #include <cmath>
@@ -156,11 +159,11 @@ inline HeldEntryRange calc_held_entry_range(const RailParams& r, double strut_le
   return {l * (c * d + std::sqrt(1.0 - d * d)), c * l};
 }
 
-// The margin of a rail entry (m, >= 0; see the head of this file): how deep the uncaptured pin would
+// The dip of a rail entry (m, >= 0; see the head of this file): how deep the uncaptured pin would
 // dip below the rail line. Frame heights y_m (driven), y_lo (lower), their velocities u, w and
 // accelerations a_u, a_w at the entry; 0 for a grazing entry (f' = 0, f'' > 0). Continuous in all.
-inline double calc_rail_entry_margin_m(const RailParams& r, double strut_length_m, double y_m, double y_lo, double u,
-                                       double w, double a_u, double a_w) {
+inline double calc_rail_entry_dip_m(const RailParams& r, double strut_length_m, double y_m, double y_lo, double u,
+                                    double w, double a_u, double a_w) {
   const double c = r.cot_beta(), l = strut_length_m;
   const double D = y_m - y_lo, Dd = u - w, Ddd = a_u - a_w;
   const double x = std::sqrt(std::max(l * l - 0.25 * D * D, 1e-8 * l * l));  // x >= 1e-4 l (straight bay)
@@ -170,6 +173,16 @@ inline double calc_rail_entry_margin_m(const RailParams& r, double strut_length_
   const double horizon = l / std::max(std::abs(u), std::abs(fd));
   const double tau = fdd > 0.0 ? std::min(horizon, -fd / fdd) : horizon;  // the continued path's lowest point
   return std::max(0.0, -(fd * tau + 0.5 * fdd * tau * tau)) * std::sin(r.beta_rad);
+}
+
+// The margin of a rail entry (m; see the head of this file) from its dip d >= 0 and the slack s of
+// the deploying bay's diagonals at the entry (m, l_0 - L; negative when taut): d while they are
+// taut, 0 when d = 0 whatever s (a grazing entry), strictly increasing in s+ while d > 0 (slope
+// d^2 / (d + s+)^2: 1 at s+ = 0), below 2 d. Continuous in (d, s), at d = s+ = 0 too
+// (0 <= d s+ / (d + s+) <= min(d, s+)).
+inline double calc_rail_entry_margin_m(double dip_m, double slack_m) {
+  const double s = std::max(slack_m, 0.0);
+  return s > 0.0 ? dip_m + dip_m * s / (dip_m + s) : dip_m;
 }
 
 // Lock: x = 0, upper frame at y_r + l, lower frame lifted to y_r - l.

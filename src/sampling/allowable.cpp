@@ -114,15 +114,44 @@ std::string direction_unknown_text(const std::vector<double>& ub, const std::vec
   return fmt::format("{}, but the direction in which p falls is unknown: {}; sweep a wider range", where, why);
 }
 
+std::vector<int> find_usable(const std::vector<ProbabilityBounds>& b) {
+  std::vector<int> usable;
+  for (std::size_t i = 0; i < b.size(); ++i)
+    if (b[i].usable()) usable.push_back(static_cast<int>(i));
+  return usable;
+}
+
 }  // namespace
 
 Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target,
                          const std::string& units, const NearestMargins& nearest) {
   if (x.size() != b.size()) throw std::invalid_argument("find_allowable: one bounds per value");
   Allowable r;
-  std::vector<int> usable;
-  for (std::size_t i = 0; i < x.size(); ++i)
-    if (b[i].usable()) usable.push_back(static_cast<int>(i));
+  const std::vector<int> usable = find_usable(b);
+  if (usable.size() < 2) {
+    r.message = fmt::format("{} of {} values have an estimate with bounds: no allowable", usable.size(), x.size());
+    return r;
+  }
+  const auto first = static_cast<std::size_t>(usable.front()), last = static_cast<std::size_t>(usable.back());
+  const std::string unit = units.empty() ? std::string() : " " + units;
+  const SafeSide side = find_safe_side(x, b, first, last, nearest, unit);
+  if (side.side == 0) {
+    std::vector<double> ub;
+    for (const ProbabilityBounds& v : b) ub.push_back(v.upper_bound);
+    r.status = AllowableStatus::direction_unknown;
+    r.message = direction_unknown_text(ub, usable, target, side.why);
+    return r;
+  }
+  return find_allowable_on_side(x, b, side.side, target, units, side.why);
+}
+
+Allowable find_allowable_on_side(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b,
+                                 int safe_side, double target, const std::string& units, const std::string& note) {
+  if (x.size() != b.size()) throw std::invalid_argument("find_allowable_on_side: one bounds per value");
+  if (safe_side != 1 && safe_side != -1) throw std::invalid_argument("find_allowable_on_side: safe side +1 or -1");
+  Allowable r;
+  const std::vector<int> usable = find_usable(b);
+  r.safe_side = safe_side;
   if (usable.size() < 2) {
     r.message = fmt::format("{} of {} values have an estimate with bounds: no allowable", usable.size(), x.size());
     return r;
@@ -134,15 +163,7 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
     lo[i] = b[i].lower;
     hi[i] = b[i].upper;
   }
-  const auto first = static_cast<std::size_t>(usable.front()), last = static_cast<std::size_t>(usable.back());
   const std::string unit = units.empty() ? std::string() : " " + units;
-  const SafeSide side = find_safe_side(x, b, first, last, nearest, unit);
-  r.safe_side = side.side;
-  if (r.safe_side == 0) {
-    r.status = AllowableStatus::direction_unknown;
-    r.message = direction_unknown_text(ub, usable, target, side.why);
-    return r;
-  }
   std::vector<int> from_safe(usable.begin(), usable.end());
   if (r.safe_side > 0) std::reverse(from_safe.begin(), from_safe.end());
   // The ends named by their values: the safe and unsafe ends of the values that have an estimate.
@@ -151,7 +172,7 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
   const char* extend_safe = r.safe_side > 0 ? "above" : "below";
   const char* extend_unsafe = r.safe_side > 0 ? "below" : "above";
   const std::string notes =
-      side.why + (usable.size() < x.size()
+      note + (usable.size() < x.size()
                       ? fmt::format(" ({} of {} values have no estimate)", x.size() - usable.size(), x.size())
                       : std::string());
   const Crossing u = cross(x, ub, from_safe, target);
@@ -181,7 +202,7 @@ Allowable find_allowable(const std::vector<double>& x, const std::vector<Probabi
   r.bracket_safe = u.a;
   r.bracket_unsafe = u.b;
   r.message = fmt::format("the upper bound on p crosses the target between values {} and {}{}{}",
-                          x[static_cast<std::size_t>(u.a)], x[static_cast<std::size_t>(u.b)], unit, side.why);
+                          x[static_cast<std::size_t>(u.a)], x[static_cast<std::size_t>(u.b)], unit, note);
   return r;
 }
 

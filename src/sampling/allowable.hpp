@@ -58,9 +58,11 @@ ProbabilityBounds calc_lognormal_bounds(double p, double cov, double confidence)
 // k failures in n runs.
 ProbabilityBounds calc_binomial_bounds(std::int64_t k, std::int64_t n, double confidence);
 
-enum class AllowableStatus { found, beyond_safe_end, beyond_unsafe_end, unusable, direction_unknown };
+// contradicts_safe_side: the estimates rise towards the declared safe side (monotone_fit.hpp).
+enum class AllowableStatus { found, beyond_safe_end, beyond_unsafe_end, unusable, direction_unknown,
+                             contradicts_safe_side };
 inline constexpr const char* kAllowableStatusNames[] = {"found", "beyond_safe_end", "beyond_unsafe_end", "unusable",
-                                                        "direction_unknown"};
+                                                        "direction_unknown", "contradicts_safe_side"};
 inline const char* to_string(AllowableStatus s) { return kAllowableStatusNames[static_cast<int>(s)]; }
 
 struct Allowable {
@@ -86,5 +88,10 @@ struct NearestMargins {
 // x ascending, one bounds per value; target in (0, 1); units: x's unit, for the message.
 Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target,
                          const std::string& units = "", const NearestMargins& nearest = {});
+// The same with the safe side given (+1 or -1, never guessed): the walk from the safe end, the
+// crossings and the messages above; `note` ends the message.
+Allowable find_allowable_on_side(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b,
+                                 int safe_side, double target, const std::string& units = "",
+                                 const std::string& note = "");
 
 }  // namespace truss::sampling

@@ -295,6 +295,32 @@ double Distribution::calc_quantile(double u) const {
   return kNaN;
 }
 
+double Distribution::calc_log_density(double x) const {
+  constexpr double kHalfLog2Pi = 0.91893853320467274178;  // ln sqrt(2 pi)
+  switch (kind) {
+    case DistributionKind::normal: {
+      const double t = (x - mean) / std;
+      return -0.5 * t * t - std::log(std) - kHalfLog2Pi;
+    }
+    case DistributionKind::truncated_normal: {
+      if (!(x >= lower && x <= upper)) return -kInf;
+      const double t = (x - mean) / std;
+      return -0.5 * t * t - std::log(std) - kHalfLog2Pi -
+             std::log(truncated_mass((lower - mean) / std, (upper - mean) / std));
+    }
+    case DistributionKind::uniform:
+      return x >= lower && x <= upper ? -std::log(upper - lower) : -kInf;
+    case DistributionKind::lognormal: {
+      if (!(x > 0.0)) return -kInf;
+      const double t = (std::log(x) - mu) / sigma;
+      return -0.5 * t * t - std::log(sigma) - std::log(x) - kHalfLog2Pi;
+    }
+    case DistributionKind::discrete:
+      return kNaN;
+  }
+  return kNaN;
+}
+
 void Distribution::calc_quantiles(const double* u, double* x, std::size_t count) const {
   switch (kind) {
     case DistributionKind::normal:

@@ -170,6 +170,8 @@ struct Distribution {
   // "" when usable, else "field: reason".
   std::string validate() const;
 
+  // ln f(x), the log density (-inf outside the support); NaN for discrete (no density).
+  double calc_log_density(double x) const;
   // Inverse CDF: the value x with F(x) = u, for u in (0, 1). For discrete,
   // the smallest value whose cumulative (normalised) weight is >= u.
   double calc_quantile(double u) const;

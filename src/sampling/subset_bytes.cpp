@@ -2,11 +2,13 @@
 // rank reads) and the whole state (SubsetSimulation::save/load). Native little-endian integers and
 // IEEE-754 doubles (x86-64, AArch64), each format opened by a 4-byte tag with its version; a
 // reader refuses a cut, an overlong or an inconsistent buffer before allocating for it.
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
+#include "sampling/byte_image.hpp"
 #include "sampling/subset_simulation.hpp"
 
 namespace truss::sampling {
@@ -14,58 +16,19 @@ namespace truss::sampling {
 namespace {
 
 constexpr std::uint32_t kRoundTag = 0x31525353;  // "SSR1"
-constexpr std::uint32_t kStateTag = 0x31535353;  // "SSS1"
+constexpr std::uint32_t kStateTag = 0x32535353;  // "SSS2"
 
-struct Writer {
-  std::string out;
-  template <class T>
-  void put(T v) {
-    out.append(reinterpret_cast<const char*>(&v), sizeof v);
-  }
-  template <class T>
-  void put_all(const std::vector<T>& v) {
-    put(static_cast<std::uint64_t>(v.size()));
-    out.append(reinterpret_cast<const char*>(v.data()), sizeof(T) * v.size());
-  }
-};
+using ByteWriter = detail::ByteWriter;
+using ByteReader = detail::ByteReader;
 
-struct Reader {
-  std::string_view in;
-  const char* what;
-  template <class T>
-  T get() {
-    if (in.size() < sizeof(T)) throw std::runtime_error(fmt::format("{}: cut short ({} bytes left)", what, in.size()));
-    T v;
-    std::memcpy(&v, in.data(), sizeof v);
-    in.remove_prefix(sizeof v);
-    return v;
-  }
-  // A count of items of `size` bytes each that the rest of the buffer can hold.
-  std::size_t get_count(std::size_t size) {
-    const auto n = get<std::uint64_t>();
-    if (n > in.size() / size) throw std::runtime_error(fmt::format("{}: {} items in {} bytes", what, n, in.size()));
-    return static_cast<std::size_t>(n);
-  }
-  template <class T>
-  std::vector<T> get_all() {
-    std::vector<T> v(get_count(sizeof(T)));
-    if (!v.empty()) std::memcpy(v.data(), in.data(), sizeof(T) * v.size());
-    in.remove_prefix(sizeof(T) * v.size());
-    return v;
-  }
-  void expect_end() {
-    if (!in.empty()) throw std::runtime_error(fmt::format("{}: {} bytes past the end", what, in.size()));
-  }
-};
-
-void put_level(Writer& w, const SubsetLevel& l) {
-  for (double v : {l.threshold, l.probability, l.gamma, l.cov}) w.put(v);
+void put_level(ByteWriter& w, const SubsetLevel& l) {
+  for (double v : {l.threshold, l.probability, l.gamma, l.cov, l.scale}) w.put(v);
   for (std::int64_t v : {l.runs, l.steps, l.moved, l.unusable, l.ties}) w.put(v);
 }
 
-SubsetLevel get_level(Reader& r) {
+SubsetLevel get_level(ByteReader& r) {
   SubsetLevel l;
-  for (double* v : {&l.threshold, &l.probability, &l.gamma, &l.cov}) *v = r.get<double>();
+  for (double* v : {&l.threshold, &l.probability, &l.gamma, &l.cov, &l.scale}) *v = r.get<double>();
   for (std::int64_t* v : {&l.runs, &l.steps, &l.moved, &l.unusable, &l.ties}) *v = r.get<std::int64_t>();
   return l;
 }
@@ -73,7 +36,7 @@ SubsetLevel get_level(Reader& r) {
 }  // namespace
 
 std::string SubsetRound::encode() const {
-  Writer w;
+  ByteWriter w;
   w.put(kRoundTag);
   w.put(index);
   w.put(first_evaluation);
@@ -89,7 +52,7 @@ std::string SubsetRound::encode() const {
 }
 
 SubsetRound SubsetRound::decode(std::string_view bytes, int dims) {
-  Reader r{bytes, "subset round"};
+  ByteReader r{bytes, "subset round"};
   if (r.get<std::uint32_t>() != kRoundTag) throw std::runtime_error("subset round: not an encoded round (tag)");
   SubsetRound s;
   s.index = r.get<std::int64_t>();
@@ -114,9 +77,10 @@ SubsetRound SubsetRound::decode(std::string_view bytes, int dims) {
 }
 
 std::string SubsetSimulation::save() const {
-  Writer w;
+  ByteWriter w;
   w.put(kStateTag);
   w.put(static_cast<std::int32_t>(opt_.dims));
+  w.put(static_cast<std::int32_t>(opt_.proposal));
   w.put(opt_.n_per_level);
   w.put(opt_.p0);
   w.put(static_cast<std::int32_t>(opt_.max_levels));
@@ -139,14 +103,24 @@ std::string SubsetSimulation::save() const {
   w.put(static_cast<std::uint64_t>(levels_.size()));
   for (const SubsetLevel& l : levels_) put_level(w, l);
   w.put_all(lineage_);
+  w.put(scale_);
+  w.put_all(spread0_);
+  w.put(static_cast<std::uint64_t>(unit_terms_.size()));
+  for (const auto& v : unit_terms_) w.put_all(v);
+  w.put(static_cast<std::uint64_t>(parents_.size()));
+  for (const auto& v : parents_) w.put_all(v);
   return std::move(w.out);
 }
 
 SubsetSimulation SubsetSimulation::load(std::string_view bytes) {
-  Reader r{bytes, "subset state"};
+  ByteReader r{bytes, "subset state"};
   if (r.get<std::uint32_t>() != kStateTag) throw std::runtime_error("subset state: not a saved state (tag)");
   SubsetSimulation s;
   s.opt_.dims = r.get<std::int32_t>();
+  const auto proposal = r.get<std::int32_t>();
+  if (proposal < 0 || proposal > static_cast<int>(SubsetProposal::adaptive_conditional))
+    throw std::runtime_error(fmt::format("subset state: proposal {}", proposal));
+  s.opt_.proposal = static_cast<SubsetProposal>(proposal);
   s.opt_.n_per_level = r.get<std::int64_t>();
   s.opt_.p0 = r.get<double>();
   s.opt_.max_levels = r.get<std::int32_t>();
@@ -171,9 +145,15 @@ SubsetSimulation SubsetSimulation::load(std::string_view bytes) {
   }
   s.z_ = r.get_all<double>();
   s.head_ = r.get_all<std::int64_t>();
-  s.levels_.resize(r.get_count(72));
+  s.levels_.resize(r.get_count(80));
   for (SubsetLevel& l : s.levels_) l = get_level(r);
   s.lineage_ = r.get_all<double>();
+  s.scale_ = r.get<double>();
+  s.spread0_ = r.get_all<double>();
+  s.unit_terms_.resize(r.get_count(8));
+  for (auto& v : s.unit_terms_) v = r.get_all<double>();
+  s.parents_.resize(r.get_count(8));
+  for (auto& v : s.parents_) v = r.get_all<std::int64_t>();
   r.expect_end();
   const auto n = static_cast<std::int64_t>(s.samples_.size());
   bool ok = s.z_.size() == s.samples_.size() * static_cast<std::size_t>(s.opt_.dims) && !s.levels_.empty() &&
@@ -184,6 +164,17 @@ SubsetSimulation SubsetSimulation::load(std::string_view bytes) {
   for (std::int64_t h : s.head_) ok = ok && h >= 0 && h < n;
   for (const Sample& x : s.samples_) ok = ok && x.root >= 0 && x.root < s.opt_.n_per_level;
   ok = ok && (s.lineage_.empty() || static_cast<std::int64_t>(s.lineage_.size()) == s.opt_.n_per_level);
+  const bool spread = s.opt_.proposal != SubsetProposal::adaptive_conditional || s.levels_.size() == 1;
+  ok = ok && s.scale_ > 0.0 && std::isfinite(s.scale_) &&
+       (spread ? s.spread0_.empty() : static_cast<int>(s.spread0_.size()) == s.opt_.dims);
+  ok = ok && s.parents_.size() == s.levels_.size() && s.unit_terms_.size() <= s.levels_.size();
+  const auto units = [&](std::size_t k) { return k == 0 ? s.opt_.n_per_level : s.opt_.n_chains(); };
+  for (std::size_t k = 0; ok && k < s.parents_.size(); ++k) {
+    ok = k == 0 ? s.parents_[k].empty() : static_cast<std::int64_t>(s.parents_[k].size()) == s.opt_.n_chains();
+    for (std::int64_t a : s.parents_[k]) ok = ok && a >= 0 && a < units(k - 1);
+  }
+  for (std::size_t k = 0; ok && k < s.unit_terms_.size(); ++k)
+    ok = static_cast<std::int64_t>(s.unit_terms_[k].size()) == units(k);
   if (!ok) throw std::runtime_error(fmt::format("subset state: inconsistent ({} samples, {} coordinates, {} chains)",
                                                 n, s.z_.size(), s.head_.size()));
   return s;

@@ -21,6 +21,15 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A NaN margin is safe at every level.
 double order_key(double margin) { return std::isnan(margin) ? kInf : margin; }
 
+// The interval CoV (header, "interval CoV"): the lag-1 and bound variances of ln p^ weighted by G
+// lineages against two.
+double calc_interval_cov(double cov_lag1, double cov_bound, double lineages) {
+  if (!std::isfinite(cov_lag1) || !std::isfinite(cov_bound)) return kInf;
+  constexpr double kBoundWeight = 2.0;
+  const double s1 = std::log1p(cov_lag1 * cov_lag1), sb = std::log1p(cov_bound * cov_bound);
+  return std::sqrt(std::expm1((lineages * s1 + kBoundWeight * sb) / (lineages + kBoundWeight)));
+}
+
 // Modified Metropolis (Au & Beck 2001, sec. 3.1) for chain c at (level, step) from state z: per
 // dimension a uniform proposal of half-width a, kept with probability min(1, phi(e) / phi(z)).
 // Returns whether xi differs from z.
@@ -34,6 +43,21 @@ bool calc_candidate(const SubsetOptions& o, int level, int step, std::int64_t ch
     const double e = z[j] + o.proposal_half_width * (2.0 * u1 - 1.0);
     const double ratio = std::exp(0.5 * (z[j] * z[j] - e * e));  // phi(e) / phi(z)
     xi[j] = u2 < ratio ? e : z[j];
+    moved = moved || xi[j] != z[j];
+  }
+  return moved;
+}
+
+// Conditional sampling (Papaioannou et al. 2015, sec. 5) for chain c at (level, step) from z: the
+// whole candidate v_j = rho_j z_j + sigma_j n_j, with sigma the step's proposal spread.
+bool calc_conditional_candidate(const SubsetOptions& o, int level, int step, std::int64_t chain, const double* z,
+                                const std::vector<double>& sigma, double* xi) {
+  const std::uint64_t propose = counter_run_state(o.seed, chain, subset_stream(level, step, kStreamPropose));
+  bool moved = false;
+  for (int j = 0; j < o.dims; ++j) {
+    const double n = normal_quantile(to_open_unit(splitmix_at(propose, static_cast<std::uint64_t>(j))));
+    const double s = sigma[static_cast<std::size_t>(j)];
+    xi[j] = std::sqrt(1.0 - s * s) * z[j] + s * n;
     moved = moved || xi[j] != z[j];
   }
   return moved;
@@ -99,6 +123,7 @@ void calc_round_uniforms(const SubsetOptions& o, const SubsetRound& r, std::int6
 SubsetSimulation::SubsetSimulation(const SubsetOptions& o) : opt_(o) {
   if (const std::string why = o.validate(); !why.empty()) throw std::invalid_argument(why);
   levels_.emplace_back();
+  parents_.emplace_back();  // level 0's samples have no parent
   round_.n_points = o.n_per_level;
   samples_.reserve(static_cast<std::size_t>(o.n_per_level));
   z_.reserve(static_cast<std::size_t>(o.n_per_level * o.dims));
@@ -145,6 +170,7 @@ void SubsetSimulation::take_step(std::span<const double> margins) {
   const int step = round_.step;
   std::size_t p = 0;  // next point of the round (round_.chains ascending)
   std::vector<double> z(static_cast<std::size_t>(opt_.dims));
+  const std::int64_t runs_before = level.runs, moved_before = level.moved;
   for (std::int64_t c = 0; c < opt_.n_chains(); ++c) {
     if (chain_length(c) <= step) continue;
     const auto head = static_cast<std::size_t>(head_[static_cast<std::size_t>(c)]);
@@ -165,6 +191,29 @@ void SubsetSimulation::take_step(std::span<const double> margins) {
     ++level.steps;
     head_[static_cast<std::size_t>(c)] = static_cast<std::int64_t>(samples_.size());
     push_sample(s, z.data());
+  }
+  adapt_scale(step, level.runs - runs_before, level.moved - moved_before);
+}
+
+// Adaptive conditional sampling: lambda after step `step` from that step's counts (see the header).
+void SubsetSimulation::adapt_scale(int step, std::int64_t evaluated, std::int64_t kept) {
+  if (opt_.proposal != SubsetProposal::adaptive_conditional || evaluated == 0) return;
+  const double rate = static_cast<double>(kept) / static_cast<double>(evaluated);
+  scale_ = std::exp(std::log(scale_) + (rate - SubsetOptions::kTargetAcceptance) / std::sqrt(step));
+}
+
+// sigma0_j: the sample standard deviation of the level's seeds (its first N_c samples), in the
+// seeds' order; 1 with a single seed.
+void SubsetSimulation::calc_seed_spread() {
+  const auto nc = static_cast<std::size_t>(opt_.n_chains()), d = static_cast<std::size_t>(opt_.dims);
+  spread0_.assign(d, 1.0);
+  if (nc < 2) return;
+  for (std::size_t j = 0; j < d; ++j) {
+    double mean = 0.0, ss = 0.0;
+    for (std::size_t c = 0; c < nc; ++c) mean += z_[c * d + j];
+    mean /= static_cast<double>(nc);
+    for (std::size_t c = 0; c < nc; ++c) ss += (z_[c * d + j] - mean) * (z_[c * d + j] - mean);
+    spread0_[j] = std::sqrt(ss / static_cast<double>(nc - 1));
   }
 }
 
@@ -187,11 +236,16 @@ void SubsetSimulation::plan_step(int step) {
   r.level = static_cast<int>(levels_.size()) - 1;
   r.step = step;
   r.threshold = domain_;
-  std::vector<double> xi(static_cast<std::size_t>(opt_.dims));
+  std::vector<double> xi(static_cast<std::size_t>(opt_.dims)), sigma;
+  const bool adaptive = opt_.proposal == SubsetProposal::adaptive_conditional;
+  if (adaptive)
+    for (double s0 : spread0_) sigma.push_back(std::min(1.0, scale_ * s0));
   for (std::int64_t c = 0; c < opt_.n_chains(); ++c) {
     if (chain_length(c) <= step) continue;
     const double* z = z_.data() + head_[static_cast<std::size_t>(c)] * opt_.dims;
-    if (!calc_candidate(opt_, r.level, step, c, z, xi.data())) continue;
+    const bool moved = adaptive ? calc_conditional_candidate(opt_, r.level, step, c, z, sigma, xi.data())
+                                : calc_candidate(opt_, r.level, step, c, z, xi.data());
+    if (!moved) continue;
     r.chains.push_back(c);
     r.z.insert(r.z.end(), xi.begin(), xi.end());
   }
@@ -218,9 +272,12 @@ void SubsetSimulation::finish_level() {
   if (levels_.size() > 1 && level.moved == 0) {  // the chains stood still: the level repeats its seeds
     level.threshold = level.probability = level.cov = kNaN;
     status_ = SubsetStatus::chains_stuck;
-    message_ = fmt::format("level {}: no Markov chain moved in its {} steps (acceptance 0, proposal_half_width = "
-                           "{:.17g}): the level only repeats its seeds, so there is no estimate",
-                           levels_.size() - 1, level.steps, opt_.proposal_half_width);
+    const std::string proposal =
+        opt_.proposal == SubsetProposal::adaptive_conditional
+            ? fmt::format("adaptive conditional sampling, lambda = {:.4g}", scale_)
+            : fmt::format("proposal_half_width = {:.17g}", opt_.proposal_half_width);
+    message_ = fmt::format("level {}: no Markov chain moved in its {} steps (acceptance 0, {}): the level only "
+                           "repeats its seeds, so there is no estimate", levels_.size() - 1, level.steps, proposal);
     round_ = SubsetRound{};
     round_.index = rounds_;
     round_.first_evaluation = evaluations_;
@@ -236,6 +293,7 @@ void SubsetSimulation::finish_level() {
   const double P = static_cast<double>(count) / static_cast<double>(n);
   level.threshold = threshold;
   level.probability = P;
+  if (opt_.proposal == SubsetProposal::adaptive_conditional && levels_.size() > 1) level.scale = scale_;
   level.ties = last ? 0 : count - nc;
   level.gamma = levels_.size() == 1 ? 0.0 : calc_gamma(threshold, P);
   level.cov = P > 0.0 ? std::sqrt((1.0 - P) / (static_cast<double>(n) * P) * (1.0 + level.gamma)) : kInf;
@@ -270,9 +328,12 @@ void SubsetSimulation::start_level(double threshold, const std::vector<std::int6
     z.insert(z.end(), zs, zs + opt_.dims);
     head_[c] = static_cast<std::int64_t>(c);
   }
+  std::vector<std::int64_t>& parent = parents_.emplace_back(seeds.size());
+  for (std::size_t c = 0; c < seeds.size(); ++c) parent[c] = samples_[static_cast<std::size_t>(seeds[c])].chain;
   samples_ = std::move(samples);
   z_ = std::move(z);
   domain_ = threshold;
+  if (opt_.proposal == SubsetProposal::adaptive_conditional) calc_seed_spread();
   levels_.emplace_back();
   advance(0);
 }
@@ -297,10 +358,41 @@ double SubsetSimulation::calc_gamma(double threshold, double p) const {
 
 void SubsetSimulation::add_lineage(double threshold, double p) {
   if (lineage_.empty()) lineage_.assign(samples_.size(), 0.0);  // level 0: one root per sample
+  std::vector<double>& unit = unit_terms_.emplace_back(levels_.size() == 1 ? samples_.size() : head_.size(), 0.0);
   if (!(p > 0.0)) return;  // the estimate is 0: no first-order term (cov is infinite)
   const double scale = 1.0 / (static_cast<double>(samples_.size()) * p);
-  for (const Sample& s : samples_)
-    lineage_[static_cast<std::size_t>(s.root)] += ((s.margin <= threshold ? 1.0 : 0.0) - p) * scale;
+  for (const Sample& s : samples_) {
+    const double term = ((s.margin <= threshold ? 1.0 : 0.0) - p) * scale;
+    lineage_[static_cast<std::size_t>(s.root)] += term;
+    unit[static_cast<std::size_t>(s.chain)] += term;
+  }
+}
+
+// Level k's unit terms summed over their ancestors at level g <= k (a unit: a chain; at level 0 a sample).
+std::vector<double> SubsetSimulation::calc_terms_at(std::size_t k, std::size_t g) const {
+  std::vector<double> out(unit_terms_[g].size(), 0.0);
+  for (std::size_t u = 0; u < unit_terms_[k].size(); ++u) {
+    std::size_t a = u;
+    for (std::size_t l = k; l > g; --l) a = static_cast<std::size_t>(parents_[l][a]);
+    out[a] += unit_terms_[k][u];
+  }
+  return out;
+}
+
+double SubsetSimulation::calc_lag_cov(int lag) const {
+  double v = 0.0;
+  const std::size_t m = unit_terms_.size();
+  for (std::size_t k = 0; k < m; ++k) {
+    const std::size_t g = lag < 0 || k < static_cast<std::size_t>(lag) ? 0 : k - static_cast<std::size_t>(lag);
+    const std::vector<double> a = calc_terms_at(k, g);
+    for (std::size_t j = k; j < m; ++j) {
+      const std::vector<double> b = j == k ? a : calc_terms_at(j, g);
+      double c = 0.0;
+      for (std::size_t u = 0; u < a.size(); ++u) c += a[u] * b[u];
+      v += (j == k ? 1.0 : 2.0) * c;
+    }
+  }
+  return std::sqrt(std::max(v, 0.0));
 }
 
 SubsetSummary SubsetSimulation::calc_summary() const {
@@ -322,17 +414,50 @@ SubsetSummary SubsetSimulation::calc_summary() const {
   }
   s.p = p;
   s.cov = std::sqrt(cov2);
-  double lineage2 = 0.0;
-  for (double x : lineage_) lineage2 += x * x;
+  double lineage2 = 0.0, lineage4 = 0.0;
+  for (double x : lineage_) {
+    lineage2 += x * x;
+    lineage4 += x * x * x * x;
+  }
+  s.lineage_groups = lineage4 > 0.0 ? lineage2 * lineage2 / lineage4 : 0.0;
   s.cov_lineage = p > 0.0 ? std::sqrt(lineage2) : kInf;
   s.cov_bound = p > 0.0 ? std::max(cov_sum, s.cov_lineage) : kInf;
+  s.cov_lag1 = p > 0.0 ? calc_lag_cov(1) : kInf;
+  s.cov_interval = calc_interval_cov(s.cov_lag1, s.cov_bound, s.lineage_groups);
   std::vector<std::int64_t> roots;
   for (const Sample& x : samples_) roots.push_back(x.root);
   std::sort(roots.begin(), roots.end());
   s.lineages = std::unique(roots.begin(), roots.end()) - roots.begin();
   s.beta = -normal_quantile(p);
-  if (status_ == SubsetStatus::chains_stuck) s.p = s.beta = s.cov = s.cov_lineage = s.cov_bound = kNaN;
+  if (status_ == SubsetStatus::chains_stuck)
+    s.p = s.beta = s.cov = s.cov_lineage = s.cov_bound = s.cov_lag1 = s.cov_interval = kNaN;
   return s;
+}
+
+int SubsetSummary::calc_plateau_levels() const {
+  int n = 0;
+  for (std::size_t k = 0; k + 1 < levels.size(); ++k) {
+    const double b = levels[k].threshold, next = levels[k + 1].threshold;
+    n += b > 0.0 && b - next < kPlateauShare * b ? 1 : 0;
+  }
+  return n;
+}
+
+std::string find_untrusted_reason(const SubsetSummary& s) {
+  switch (s.status) {
+    case SubsetStatus::running: return "not finished";
+    case SubsetStatus::chains_stuck: return "no estimate (the Markov chains never moved)";
+    case SubsetStatus::level_cap:
+      return "the level cap ended it short of the failure (the last level's share, an estimate from above)";
+    case SubsetStatus::no_progress: return "the thresholds stopped decreasing (a flat or mostly unusable margin)";
+    case SubsetStatus::converged: break;
+  }
+  const int plateau = s.calc_plateau_levels();
+  if (plateau >= SubsetSummary::kPlateauLevels)
+    return fmt::format("the margin is nearly flat over {} levels (each threshold within {:g} % of the previous "
+                       "one): the estimate can lie far below p, beyond its interval", plateau,
+                       100.0 * SubsetSummary::kPlateauShare);
+  return "";
 }
 
 std::vector<SubsetSample> SubsetSimulation::calc_failure_samples() const {

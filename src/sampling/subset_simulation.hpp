@@ -25,6 +25,24 @@
 //                evaluation is needed (the chain repeats its state); otherwise xi is evaluated
 //                and becomes the next state when its margin <= b_{k+1}, else the chain repeats.
 //                One round = one step of every chain that still has states to make.
+//   adaptive     adaptive conditional sampling (I. Papaioannou, W. Betz, K. Zwirglmaier, D. Straub,
+//   step         "MCMC algorithms for subset simulation", Probabilistic Engineering Mechanics 41
+//                (2015) 83-103, sec. 5, the aCS algorithm): the candidate is drawn as a whole,
+//                v_j = rho_j z_j + sigma_j n_j, n_j standard normal, rho_j = sqrt(1 - sigma_j^2),
+//                a proposal reversible with respect to the standard normal itself, so v is kept
+//                exactly when its margin <= b_{k+1} (no per-dimension acceptance; every step is
+//                evaluated). sigma_j = min(1, lambda sigma0_j), sigma0_j the sample standard
+//                deviation of the level's seeds in dimension j (n - 1 in the denominator; 1 with
+//                a single seed). The scale lambda starts at 0.6 (level 1) and is adapted towards
+//                the acceptance rate a* = 0.44: after step i of a level (its round), with a_i the
+//                share of that step's candidates kept, ln lambda += (a_i - a*) / sqrt(i); a level
+//                starts with the previous level's last lambda. Papaioannou et al. adapt after each
+//                group of chains run through; here a group is one step of every chain, so the
+//                chains of a round run side by side and the adaptation is a function of the
+//                round's counts (integers: never of the order results arrive in). Each step's
+//                kernel leaves the conditional law invariant; that its lambda depends on the
+//                previous steps of all N_c chains is an O(1/N_c) effect, like the estimator's
+//                own bias.
 //   estimate     p = prod_k P_k = p0^(m-1) P_m without ties (m levels).
 //   CoV          delta_k^2 = (1 - P_k) / (N P_k) (1 + gamma_k) (Au & Beck eq. 29), gamma_0 = 0,
 //                gamma_k = 2 sum_{l>=1} (n_l / N) rho_l (eq. 27), n_l the pairs of states l
@@ -52,6 +70,25 @@
 //                from few roots (a limit state governed by one or two inputs: its variance is then
 //                estimated from a handful of independent groups and is too often too small).
 //                Measured coverage: docs/campaigns.md "Which CoV to read".
+//   lag CoV      the lineage estimate with a shorter memory (the fixed-lag idea of J. Olsson,
+//                R. Douc, "Numerically stable online estimation of variance in particle filters",
+//                Bernoulli 25 (2019) 1504-1535): a unit is a chain (at level 0 a sample); every
+//                unit of level k >= 1 has a parent, the unit of level k - 1 its seed belongs to.
+//                With T_k(u) the sum of (I - P_k) / (N P_k) over unit u's samples, the covariance
+//                of levels k <= j is estimated by grouping both levels' units by their ancestor at
+//                level g = max(0, k - lag): C_kj = sum_a T_k(a) T_j(a), and
+//                cov_lag^2 = sum_k C_kk + 2 sum_{k<j} C_kj. lag = 0 counts the correlation along
+//                each chain (Au & Beck's gamma, per chain); lag 1 also that of chains sharing a
+//                parent and of each level with the levels that descend from it; unbounded lag is
+//                cov_lineage. Lags of 1 and more agree in the mean (measured on the analytic cases:
+//                root mean squares within 2 % of cov_lineage's), lag 1 from many more groups.
+//   interval CoV the CoV of the intervals (cov_interval), in s = sqrt(ln(1 + cov^2)) of ln p^:
+//                s^2 = (G s_1^2 + 2 s_b^2) / (G + 2), s_1 from the lag-1 CoV, s_b from cov_bound,
+//                G = lineage_groups. With many independent lineages (G large) the lag-1 estimate
+//                is close to the spread over seeds; with few it is biased low (to 0.5 of the
+//                spread at N = 500, p = 1e-7, where G is about 2), and the interval leans on the
+//                conservative bound, weighted as two lineages' worth. Measured coverage and width
+//                against cov_bound's: bench/subset_coverage.py, docs/benchmarks.md.
 //   beta         -Phi^-1(p).
 // Random numbers are keyed by (master seed, level, chain, step, dimension, stream) with the
 // counter-based generator of sampling.hpp: never by rank or arrival order. Level 0's point k is
@@ -73,8 +110,14 @@
 
 namespace truss::sampling {
 
+// How a Markov step proposes its candidate ("step" and "adaptive step" above).
+enum class SubsetProposal { modified_metropolis, adaptive_conditional };
+inline constexpr const char* kSubsetProposalNames[] = {"modified_metropolis", "adaptive_conditional"};
+inline const char* to_string(SubsetProposal p) { return kSubsetProposalNames[static_cast<int>(p)]; }
+
 struct SubsetOptions {
   int dims = 0;                      // standard normal dimensions of a point (the campaign's d)
+  SubsetProposal proposal = SubsetProposal::modified_metropolis;
   std::int64_t n_per_level = 2000;   // N: samples per level
   double p0 = 0.1;                   // conditional probability per level, in (0, 0.5]
   int max_levels = 20;               // levels including level 0; the estimate stops there
@@ -83,6 +126,9 @@ struct SubsetOptions {
   // The range of a (standard deviations): below it steps are lost in the rounding of z, above it
   // nearly every candidate lies where phi is negligible; outside it the chains stand still.
   static constexpr double kMinProposalHalfWidth = 1e-3, kMaxProposalHalfWidth = 10.0;
+  // Adaptive conditional sampling: the first lambda and the acceptance rate it is adapted to
+  // (Papaioannou et al. 2015, sec. 5: 0.44, the optimum of a one-dimensional random walk).
+  static constexpr double kInitialScale = 0.6, kTargetAcceptance = 0.44;
   std::uint64_t seed = 0;            // master seed of the campaign
 
   // "" when usable, else "field: reason". N p0 must be a whole number of chains N_c >= 1.
@@ -123,6 +169,7 @@ struct SubsetLevel {
   std::int64_t moved = 0;      // steps whose new state differs from the old
   std::int64_t unusable = 0;   // of those runs, the ones whose margin was NaN
   std::int64_t ties = 0;       // samples at the threshold beyond the N_c-th (repeated states, plateaus)
+  double scale = std::numeric_limits<double>::quiet_NaN();  // adaptive: lambda after the level's last step
   double acceptance() const {  // moved / steps (NaN at level 0)
     if (steps == 0) return std::numeric_limits<double>::quiet_NaN();
     return static_cast<double>(moved) / static_cast<double>(steps);
@@ -142,15 +189,32 @@ struct SubsetSummary {
   double p = std::numeric_limits<double>::quiet_NaN();     // failure probability estimate
   double cov = std::numeric_limits<double>::quiet_NaN();   // its coefficient of variation (Au & Beck)
   double cov_lineage = std::numeric_limits<double>::quiet_NaN();  // the ancestral estimate (see above)
-  double cov_bound = std::numeric_limits<double>::quiet_NaN();  // the CoV of the intervals (see above)
+  double cov_bound = std::numeric_limits<double>::quiet_NaN();  // the full-correlation bound (see above)
+  double cov_lag1 = std::numeric_limits<double>::quiet_NaN();   // the lag CoV at lag 1 (see above)
+  double cov_interval = std::numeric_limits<double>::quiet_NaN();  // the CoV of the intervals (see above)
   std::int64_t lineages = 0;  // distinct roots among the last level's samples
+  // The lineage estimate's effective number of independent groups, (sum_r x_r^2)^2 / sum_r x_r^4 over
+  // the roots' terms x_r (Kish): the degrees of freedom its variance rests on, plus one.
+  double lineage_groups = 0.0;
   double beta = std::numeric_limits<double>::quiet_NaN();  // -Phi^-1(p)
   std::int64_t runs = 0;     // evaluations
   std::int64_t rounds = 0;   // rounds completed
   std::vector<SubsetLevel> levels;
   // Crude Monte Carlo runs for the same CoV: (1 - p) / (p cov^2).
   double calc_crude_runs() const { return (1.0 - p) / (p * cov * cov); }
+  // Levels "on a plateau" of the margin: thresholds b_k > 0 with b_k - b_{k+1} < kPlateauShare b_k.
+  // On a plateau the margin hardly depends on the inputs that lead to the failure: the levels select
+  // on others, each still multiplies p by about p0, and the estimate can lie far below p, beyond what
+  // any CoV says (docs/sweep-tolerance-allocation.md: 1.5e-13 where p is about 6e-8).
+  int calc_plateau_levels() const;
+  static constexpr double kPlateauShare = 0.01;
+  static constexpr int kPlateauLevels = 3;  // from this many on, the estimate is not trusted
 };
+
+// Why an estimate must not feed an allowable ("" when it may): no estimate (chains_stuck), the
+// level cap or no progress (the last level's share, not the failure's), kPlateauLevels or more
+// plateau levels.
+std::string find_untrusted_reason(const SubsetSummary& s);
 
 // A failing sample of the last level: its evaluation ordinal (the run ordinal: rounds number
 // their points consecutively), its margin, and z.
@@ -176,6 +240,9 @@ class SubsetSimulation {
   // The distinct evaluated points of the last level with margin <= 0, by evaluation (when done).
   std::vector<SubsetSample> calc_failure_samples() const;
   const SubsetOptions& options() const { return opt_; }
+  // The CoV of ln p^ with the samples grouped by their ancestors `lag` levels up (see "lag CoV";
+  // lag < 0: by their roots, the lineage CoV).
+  double calc_lag_cov(int lag) const;
 
   // The whole state, bit for bit (a resume may load it instead of replaying the rounds).
   std::string save() const;
@@ -195,8 +262,11 @@ class SubsetSimulation {
   void finish_level();
   void start_level(double threshold, const std::vector<std::int64_t>& seeds);
   void plan_step(int step);
+  void adapt_scale(int step, std::int64_t evaluated, std::int64_t kept);
+  void calc_seed_spread();
   double calc_gamma(double threshold, double p) const;
   void add_lineage(double threshold, double p);
+  std::vector<double> calc_terms_at(std::size_t k, std::size_t g) const;
   std::int64_t chain_length(std::int64_t c) const;
 
   SubsetOptions opt_;
@@ -211,6 +281,10 @@ class SubsetSimulation {
   std::vector<std::int64_t> head_;    // per chain: its latest sample
   std::vector<SubsetLevel> levels_;   // finished levels, and the current one last
   std::vector<double> lineage_;       // per root: sum over its finished-level samples of (I - P_k) / (N P_k)
+  std::vector<std::vector<double>> unit_terms_;  // per finished level, per unit: the sum of its (I - P_k) / (N P_k)
+  std::vector<std::vector<std::int64_t>> parents_;  // per level >= 1, per chain: its seed's unit at the level before
+  double scale_ = SubsetOptions::kInitialScale;  // adaptive: lambda of the next step
+  std::vector<double> spread0_;       // adaptive: sigma0_j of the current level's seeds
 };
 
 }  // namespace truss::sampling

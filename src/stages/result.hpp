@@ -128,9 +128,9 @@ struct RunResult {
   double rail_miss_closest_approach_time_s = NAN_INIT();
   double rail_miss_above_rail_top_time_s = NAN_INIT();
   // The rail margin (free-stack deployment, docs/model-notes.md "Rail margin"; m, > 0 safe): on a
-  // rail miss minus the closest approach, else the smallest over the bays' entries of how deep the
-  // uncaptured pin would have dipped below the rail line (phase A continued over one strut length of
-  // drive travel); NaN for the held stack and retractions.
+  // rail miss minus the closest approach, else the smallest over the entries of bays 2..n of the dip
+  // d of the uncaptured pin below the rail line with the slack s of the bay's diagonals in series,
+  // d + d s+ / (d + s+); NaN for the held stack, a one-bay free mast and retractions.
   double rail_margin_m = NAN_INIT();
   // Free stack without contacts (the paper's literal model): the smallest opening D_i of any bay
   // over the run, its time and bay; negative when frames passed through each other or frame 1

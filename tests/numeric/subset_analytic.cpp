@@ -5,6 +5,7 @@
 //   subset_analytic --case linear|sphere --size BETA_OR_RADIUS [--dims D] [--n N] [--p0 P]
 //                   [--seed S] [--seeds K]
 #include <cstdio>
+#include <map>
 #include <string>
 
 #include <CLI/CLI.hpp>
@@ -16,17 +17,22 @@ namespace {
 
 template <class Case>
 void print_run(const truss::sampling::SubsetOptions& o, const Case& c) {
-  const auto s = truss::testing::run_subset(o, c);
+  truss::sampling::SubsetSimulation sim(o);
+  truss::testing::drive_subset(sim, c);
+  const auto s = sim.calc_summary();
+  std::string lags;
+  for (int lag : {0, 1, 2, 3, -1}) lags += fmt::format("{}{:.17g}", lags.empty() ? "" : ", ", sim.calc_lag_cov(lag));
   std::string levels;
   for (const auto& l : s.levels)
     levels += fmt::format("{}{{\"threshold\": {:.17g}, \"probability\": {:.17g}, \"gamma\": {:.17g}, \"cov\": {:.17g}, "
-                          "\"acceptance\": {:.17g}, \"runs\": {}}}", levels.empty() ? "" : ", ", l.threshold,
-                          l.probability, l.gamma, l.cov, std::isnan(l.acceptance()) ? -1.0 : l.acceptance(), l.runs);
+                          "\"acceptance\": {:.17g}, \"scale\": {:.17g}, \"runs\": {}}}", levels.empty() ? "" : ", ",
+                          l.threshold, l.probability, l.gamma, l.cov, std::isnan(l.acceptance()) ? -1.0 : l.acceptance(),
+                          std::isnan(l.scale) ? -1.0 : l.scale, l.runs);
   fmt::print("{{\"seed\": {}, \"status\": \"{}\", \"p\": {:.17g}, \"cov\": {:.17g}, \"cov_lineage\": {:.17g}, "
-             "\"cov_bound\": {:.17g}, \"lineages\": {}, \"beta\": {:.17g}, \"runs\": {}, \"rounds\": {}, \"exact_p\": {:.17g}, "
-             "\"levels\": [{}]}}\n",
-             o.seed, to_string(s.status), s.p, s.cov, s.cov_lineage, s.cov_bound, s.lineages, s.beta, s.runs, s.rounds,
-             c.calc_exact_p(o.dims), levels);
+             "\"cov_bound\": {:.17g}, \"lineages\": {}, \"lineage_groups\": {:.17g}, \"cov_interval\": {:.17g}, \"beta\": {:.17g}, \"runs\": {}, \"rounds\": {}, \"exact_p\": {:.17g}, "
+             "\"cov_lag\": [{}], \"levels\": [{}]}}\n",
+             o.seed, to_string(s.status), s.p, s.cov, s.cov_lineage, s.cov_bound, s.lineages, s.lineage_groups, s.cov_interval, s.beta, s.runs, s.rounds,
+             c.calc_exact_p(o.dims), lags, levels);
 }
 
 }  // namespace
@@ -45,6 +51,10 @@ int main(int argc, char** argv) {
   app.add_option("--n", o.n_per_level, "samples per level");
   app.add_option("--p0", o.p0, "conditional probability per level");
   app.add_option("--a", o.proposal_half_width, "half-width of the uniform proposal");
+  app.add_option("--proposal", o.proposal, "modified_metropolis or adaptive_conditional")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, truss::sampling::SubsetProposal>{
+          {"modified_metropolis", truss::sampling::SubsetProposal::modified_metropolis},
+          {"adaptive_conditional", truss::sampling::SubsetProposal::adaptive_conditional}}));
   app.add_option("--seed", o.seed, "first master seed");
   app.add_option("--seeds", seeds, "number of consecutive seeds");
   CLI11_PARSE(app, argc, argv);

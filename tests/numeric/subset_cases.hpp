@@ -46,8 +46,8 @@ struct SphereCase {
 };
 
 template <class Case>
-sampling::SubsetSummary run_subset(const sampling::SubsetOptions& o, const Case& c) {
-  sampling::SubsetSimulation sim(o);
+void drive_subset(sampling::SubsetSimulation& sim, const Case& c) {
+  const sampling::SubsetOptions& o = sim.options();
   std::vector<double> u(static_cast<std::size_t>(o.dims)), margins;
   while (!sim.done()) {
     const sampling::SubsetRound r = sampling::SubsetRound::decode(sim.round().encode(), o.dims);
@@ -59,6 +59,12 @@ sampling::SubsetSummary run_subset(const sampling::SubsetOptions& o, const Case&
     }
     sim.add_margins(margins);
   }
+}
+
+template <class Case>
+sampling::SubsetSummary run_subset(const sampling::SubsetOptions& o, const Case& c) {
+  sampling::SubsetSimulation sim(o);
+  drive_subset(sim, c);
   return sim.calc_summary();
 }
 

@@ -248,6 +248,136 @@ TEST_CASE("rail_margin_m: negative on a miss, positive on an entry, continuous t
   CHECK(re.rail_margin_m > 0.0);
   CHECK(-rm.rail_margin_m < 3 * (entry - miss));
   CHECK(re.rail_margin_m < 3 * (entry - miss));
-  // The held stack has no rail miss: no margin.
+  // The held stack has no rail miss: no margin; nor has the free stack's stage of bay 1, whose
+  // lower frame 0 is held (a one-bay free mast enters the rail and has no margin, two bays have one).
   CHECK(std::isnan(sim::simulate(load("table1.toml", {"run.output_step_s=0"})).rail_margin_m));
+  for (const int n : {1, 2}) {
+    const sim::RunResult r = sim::simulate(load("paper_free.toml", {"stack.contacts=false", "run.output_step_s=0",
+                                                                   "mast.diagonal_free_length_m=0.49",
+                                                                   fmt::format("mast.n_bays={}", n)}));
+    REQUIRE(r.status == sim::RunStatus::ok);
+    CHECK(std::isnan(r.rail_margin_m) == (n == 1));
+  }
+}
+
+namespace {
+sim::RunResult run_free_l0(double l0) {
+  return sim::simulate(load("paper_free.toml", {"stack.contacts=false", "run.output_step_s=0",
+                                                "mast.diagonal_free_length_m=" + fmt::format("{}", l0)}));
+}
+}  // namespace
+
+// No plateau (docs/model-notes.md "Rail margin"): from diagonals slack at every entry (l_0 >= 0.4781 m)
+// through taut ones to the miss (l_0 < 0.47043 m) the margin rises strictly with l_0, and it is
+// <= 0 exactly on the misses. Where the diagonals are slack at entry the motion does not depend on
+// l_0, so the margin moves only with the slack, at d^2 / (d + s)^2 <= 1 m per m of l_0.
+TEST_CASE("rail_margin_m rises strictly with the diagonal free length, slack diagonals included",
+          "[regression][free]") {
+  const std::vector<double> l0s = {0.466, 0.470, 0.4704, 0.4706, 0.472, 0.475, 0.477, 0.478,
+                                   0.4782, 0.479, 0.48, 0.485, 0.49, 0.50, 0.52};
+  std::vector<double> margin;
+  for (const double l0 : l0s) {
+    const sim::RunResult r = run_free_l0(l0);
+    INFO("l_0 " << l0 << " m: " << sim::to_string(r.status) << ", margin " << r.rail_margin_m << " m");
+    REQUIRE((r.status == sim::RunStatus::ok || r.status == sim::RunStatus::rail_miss));
+    CHECK((r.rail_margin_m <= 0.0) == (r.status == sim::RunStatus::rail_miss));
+    if (!margin.empty()) CHECK(r.rail_margin_m > margin.back());
+    if (l0 > 0.4782) CHECK(r.rail_margin_m - margin.back() <= l0 - l0s[margin.size() - 1]);  // slope <= 1
+    margin.push_back(r.rail_margin_m);
+  }
+}
+
+// Continuity where the diagonals go taut at the entry. In velocity mode the driven frame of stage m
+// is at y_m = y_s + v (t_entry - t_start) at its entry (y_s: 0 for bay n, else y_r - l where the
+// lock of bay m + 1 left it at t_start), and the pin on the rail line puts it at
+// Y(x) = y_r - c x + sqrt(l^2 - x^2): so x and the opening D = 2 sqrt(l^2 - x^2) at the entry follow
+// from the run's entry and lock times alone, and the diagonals are taut at the entry for
+// l_0 < L = sqrt(b^2 + D^2). With every diagonal slack (l_0 = 0.5 m) that L is the transition of
+// stage m; at the highest one (bay 2's, 0.47807 m) the run's margin has its kink: steep below
+// (the dip falls, about 33 m per m), 1 m per m above. With one-sided slopes s_b, s_a from the
+// differences at h and 2h, a continuous margin has m(L + h) - m(L - h) = h (s_b + s_a) + O(h^2),
+// and a jump J adds J. At h = 1e-6 m the O(h^2) term, the margin's integration noise (a few 1e-9 m
+// at rtol 1e-8) and the error of L (1e-10 m from the event times) leave about 1e-8 m, 3e-4 of
+// h (s_b + s_a): the test allows 1e-2 of it, so a jump above 3e-7 m fails it.
+TEST_CASE("rail_margin_m is continuous where the diagonals go taut at the entry", "[regression][free]") {
+  const sim::RunResult slack = run_free_l0(0.5);
+  REQUIRE(slack.status == sim::RunStatus::ok);
+  const double beta = 20.85 * M_PI / 180.0, c = 1.0 / std::tan(beta), yr = 0.15 + 0.08 * c, l = 0.18, v = 0.1;
+  const int n = slack.n_bays;
+  double taut_at = 0.0;
+  int taut_bay = 0;
+  for (int m = 2; m <= n; ++m) {
+    const double te = slack.bays[m - 1].entry_time_s;
+    const double ym = m == n ? v * te : yr - l + v * (te - slack.bays[m].lock_time_s);
+    double lo = 0.0, hi = l;  // Y(x) falls from y_r + l at x = 0
+    for (int i = 0; i < 200; ++i) {
+      const double x = 0.5 * (lo + hi);
+      (yr - c * x + std::sqrt(l * l - x * x) > ym ? lo : hi) = x;
+    }
+    const double x = 0.5 * (lo + hi), D = 2.0 * std::sqrt(l * l - x * x), L = std::sqrt(0.36 * 0.36 + D * D);
+    if (L > taut_at) taut_at = L, taut_bay = m;
+  }
+  INFO("the diagonals of bay " << taut_bay << " go taut at the entry below l_0 = " << fmt::format("{:.10f}", taut_at) << " m");
+  const double h = 1e-6;
+  double mh[5];  // margins at L - 2h, L - h, (unused), L + h, L + 2h
+  for (int k : {0, 1, 3, 4}) {
+    const sim::RunResult r = run_free_l0(taut_at + (k - 2) * h);
+    REQUIRE(r.status == sim::RunStatus::ok);
+    mh[k] = r.rail_margin_m;
+  }
+  const double sb = (mh[1] - mh[0]) / h, sa = (mh[4] - mh[3]) / h, jump = mh[3] - mh[1];
+  INFO("slopes " << sb << " below, " << sa << " above (m per m); m(L + h) - m(L - h) = " << jump << " m");
+  CHECK(sa > 0.0);
+  CHECK(sa <= 1.0 + 1e-2);  // the slack's slope (noise 1e-2 of it at h)
+  CHECK(sb > 2.0 * sa);     // the kink: the transition is where the entry times put it
+  CHECK(std::abs(jump - h * (sb + sa)) < 1e-2 * h * (sb + sa));
+}
+
+// The margin against the miss boundary in a geometric parameter that carries the diagonals from
+// slack at every entry to taut and on to a miss: the frame side b_f at l_0 = 0.49 m (a diagonal's
+// length is sqrt(b_f^2 + D^2)). While the diagonals are slack the entries do not depend on b_f
+// (no force does), so the largest entry opening, bay 2's D_e = 0.31457 m (the continuity test
+// above), puts the last slack entry at b_f = sqrt(0.49^2 - D_e^2) = 0.3757 m: the values below it
+// are on the slack side, where the margin falls only through the slack s = l_0 - sqrt(b_f^2 + D_e^2),
+// at d^2 / (d + s)^2 * b_f / L <= 1 m per m of b_f. Across the scan the margin falls strictly and is
+// <= 0 exactly on the misses; the boundary is then bisected on the run's status alone, to 2e-7 m,
+// and both sides' margins lie within 3 brackets of zero (the margin moves 0.6-0.9 m per m of b_f
+// next to the boundary, its integration noise is a few 1e-9 m): a margin that stayed finite at a
+// grazing entry, or a miss whose margin were not its closest approach, would fail it.
+TEST_CASE("rail_margin_m against the miss boundary bisected in the frame side", "[regression][free]") {
+  auto run = [](double b) {
+    return sim::simulate(load("paper_free.toml", {"stack.contacts=false", "run.output_step_s=0",
+                                                  "mast.diagonal_free_length_m=0.49",
+                                                  "mast.frame_side_m=" + fmt::format("{}", b)}));
+  };
+  const std::vector<double> bs = {0.30, 0.33, 0.35, 0.36, 0.37, 0.375, 0.378, 0.38, 0.385, 0.39, 0.40};
+  std::vector<double> margin;
+  double miss = 0.0, entry = 0.0;
+  for (const double b : bs) {
+    const sim::RunResult r = run(b);
+    INFO("b_f " << b << " m: " << sim::to_string(r.status) << ", margin " << r.rail_margin_m << " m");
+    REQUIRE((r.status == sim::RunStatus::ok || r.status == sim::RunStatus::rail_miss));
+    CHECK((r.rail_margin_m <= 0.0) == (r.status == sim::RunStatus::rail_miss));
+    if (!margin.empty()) CHECK(r.rail_margin_m < margin.back());
+    if (b <= 0.375 && !margin.empty()) CHECK(margin.back() - r.rail_margin_m <= b - bs[margin.size() - 1]);
+    if (r.status == sim::RunStatus::ok) entry = b;
+    if (r.status == sim::RunStatus::rail_miss && miss == 0.0) miss = b;
+    margin.push_back(r.rail_margin_m);
+  }
+  REQUIRE(entry > 0.375);  // the scan holds slack entries, taut ones and misses
+  REQUIRE(miss > entry);
+  sim::RunResult re = run(entry), rm = run(miss);
+  while (miss - entry > 2e-7) {
+    const double mid = 0.5 * (miss + entry);
+    sim::RunResult r = run(mid);
+    REQUIRE((r.status == sim::RunStatus::ok || r.status == sim::RunStatus::rail_miss));
+    (r.status == sim::RunStatus::ok ? entry : miss) = mid;
+    (r.status == sim::RunStatus::ok ? re : rm) = std::move(r);
+  }
+  INFO("b_f in [" << fmt::format("{:.8f}, {:.8f}", entry, miss) << "] m: margins " << re.rail_margin_m << ", "
+                  << rm.rail_margin_m << " m");
+  CHECK(re.rail_margin_m > 0.0);
+  CHECK(rm.rail_margin_m < 0.0);
+  CHECK(re.rail_margin_m < 3 * (miss - entry));
+  CHECK(-rm.rail_margin_m < 3 * (miss - entry));
 }

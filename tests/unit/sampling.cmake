@@ -11,8 +11,10 @@ add_test(NAME truss_tests_sampling COMMAND truss_tests_sampling)
 # against their exact probabilities, its byte formats and resume, and the stopping rules against
 # scipy's binomial and beta laws. About 3 s.
 add_executable(truss_tests_rare ${CMAKE_SOURCE_DIR}/tests/unit/test_subset_simulation.cpp
+               ${CMAKE_SOURCE_DIR}/tests/unit/test_subset_adaptive.cpp
                ${CMAKE_SOURCE_DIR}/tests/numeric/test_subset_estimates.cpp ${CMAKE_SOURCE_DIR}/tests/unit/test_stopping.cpp
-               ${CMAKE_SOURCE_DIR}/tests/unit/test_allowable.cpp)
+               ${CMAKE_SOURCE_DIR}/tests/unit/test_allowable.cpp ${CMAKE_SOURCE_DIR}/tests/unit/test_monotone_fit.cpp
+               ${CMAKE_SOURCE_DIR}/tests/unit/test_importance_sampling.cpp)
 target_link_libraries(truss_tests_rare PRIVATE truss_sampling catch_main)
 target_include_directories(truss_tests_rare PRIVATE ${CMAKE_SOURCE_DIR}/tests)
 add_test(NAME rare_failures COMMAND truss_tests_rare)
@@ -20,6 +22,10 @@ add_test(NAME rare_failures COMMAND truss_tests_rare)
 add_executable(truss_subset_analytic ${CMAKE_SOURCE_DIR}/tests/numeric/subset_analytic.cpp)
 target_link_libraries(truss_subset_analytic PRIVATE truss_sampling CLI11::CLI11)
 target_include_directories(truss_subset_analytic PRIVATE ${CMAKE_SOURCE_DIR}/tests)
+# Cross-entropy importance sampling on swept analytic cases, for bench/importance_coverage.py.
+add_executable(truss_importance_analytic ${CMAKE_SOURCE_DIR}/tests/numeric/importance_analytic.cpp)
+target_link_libraries(truss_importance_analytic PRIVATE truss_sampling CLI11::CLI11)
+target_include_directories(truss_importance_analytic PRIVATE ${CMAKE_SOURCE_DIR}/tests)
 # The same linear limit state through OpenTURNS' SubsetSampling: the 95 % intervals overlap (about 1 s).
 add_test(NAME subset_openturns COMMAND /usr/bin/python3 ${CMAKE_SOURCE_DIR}/tests/numeric/test_subset_openturns.py
          --tool $<TARGET_FILE:truss_subset_analytic>)

@@ -264,14 +264,14 @@ TEST_CASE("frame system: the same bits with and without the bay table", "[model]
   }
 }
 
-// The rail margin of an entry (model/rail.hpp): the dip below the rail line of phase A continued
-// through the entry, to second order. Checked against the hinge path itself: frames moving at
+// The dip of a rail entry (model/rail.hpp): how deep below the rail line phase A continued
+// through the entry goes, to second order. Checked against the hinge path itself: frames moving at
 // constant accelerations from a state on the rail (f = 0, falling), f sampled every 1e-7 s until
 // it rises again, its minimum times sin(beta) as the depth. The path's f is not a parabola (x_h
 // is a square root of the heights), so the estimate errs by the third-order term, O(tau f''' / f'')
 // relative, tau = -f'/f'' the time to the dip: about 1e-3 for these nearly grazing entries;
 // a wrong x' or x'' would be off by order one.
-TEST_CASE("rail entry margin: the dip of the continued hinge path, to second order", "[model][rail]") {
+TEST_CASE("rail entry dip: the dip of the continued hinge path, to second order", "[model][rail]") {
   const RailParams rail;
   const double l = 0.18, c = rail.cot_beta(), sb = std::sin(rail.beta_rad);
   auto f_of = [&](double ym, double ylo) {
@@ -292,13 +292,13 @@ TEST_CASE("rail entry margin: the dip of the continued hinge path, to second ord
       f = f_of(ym + k.u * t + 0.5 * k.au * t * t, ylo + k.w * t + 0.5 * k.aw * t * t);
       fmin = std::min(fmin, f);
     }
-    const double m = calc_rail_entry_margin_m(rail, l, ym, ylo, k.u, k.w, k.au, k.aw);
+    const double m = calc_rail_entry_dip_m(rail, l, ym, ylo, k.u, k.w, k.au, k.aw);
     INFO("D " << k.D << ": dip " << -fmin * sb << " m, estimate " << m << " m, c " << c);
     REQUIRE(fmin < 0.0);
     CHECK(m == Approx(-fmin * sb).epsilon(5e-3));
   }
   // A grazing entry (f' = 0, f'' > 0) has no dip.
-  CHECK(calc_rail_entry_margin_m(rail, l, 0.4, 0.1, 0.0, 0.0, 0.0, 0.3) == 0.0);
+  CHECK(calc_rail_entry_dip_m(rail, l, 0.4, 0.1, 0.0, 0.0, 0.0, 0.3) == 0.0);
   // A pin still accelerating into the rail (f'' < 0): the dip over the horizon T = l / max(|u|, |f'|),
   // with f' and f'' by central differences of f along the path (step 1e-4 s: truncation 1e-8
   // relative, rounding 1e-16 / 1e-8 = 1e-8 relative in f'').
@@ -308,6 +308,32 @@ TEST_CASE("rail entry margin: the dip of the continued hinge path, to second ord
   REQUIRE(fd < 0.0);
   REQUIRE(fdd < 0.0);
   const double T = l / std::max(u, -fd);
-  CHECK(calc_rail_entry_margin_m(rail, l, ym, ylo, u, 0.0, au, aw) ==
+  CHECK(calc_rail_entry_dip_m(rail, l, ym, ylo, u, 0.0, au, aw) ==
         Approx(-(fd * T + 0.5 * fdd * T * T) * sb).epsilon(1e-6));
+}
+
+// The margin of an entry from its dip d and the slack s of the deploying bay's diagonals
+// (docs/model-notes.md "Rail margin"), against what it must do: the dip alone while the diagonals
+// are taut (s <= 0), so the margin still vanishes where a taut entry grazes; zero for a grazing
+// entry whatever the slack (the margin is 0 exactly at the miss/entry boundary, and positive on
+// every other entry); within min(d, s) of d + 0 and so continuous at d = s = 0; strictly
+// increasing in the slack while d > 0, at the rate d^2 / (d + s)^2 (differentiated by hand),
+// checked by central differences (step h = 1e-7 m: truncation O(h^2 / (d + s)^2) <= 1e-8 relative,
+// rounding 4e-16 m / h absolute).
+TEST_CASE("rail entry margin: the dip while taut, the slack in series with it while slack", "[model][rail]") {
+  for (const double d : {0.0, 1e-9, 2e-3, 0.106}) {
+    for (const double s : {-0.05, -1e-6, 0.0}) CHECK(calc_rail_entry_margin_m(d, s) == d);
+    for (const double s : {1e-9, 3e-3, 0.012, 0.5}) {
+      const double m = calc_rail_entry_margin_m(d, s);
+      INFO("d " << d << " m, s " << s << " m: margin " << m << " m");
+      if (d == 0.0) CHECK(m == 0.0);
+      if (d == 0.0) continue;
+      CHECK(m > d);
+      CHECK(m - d <= std::min(d, s) * (1 + 1e-15));
+      const double h = 1e-7, slope = (calc_rail_entry_margin_m(d, s + h) - calc_rail_entry_margin_m(d, s - h)) / (2 * h);
+      CHECK(slope > 0.0);
+      if (s > h) CHECK(slope == Approx(d * d / ((d + s) * (d + s))).epsilon(1e-6).margin(4e-16 * m / h));
+    }
+  }
+  CHECK(calc_rail_entry_margin_m(1e-12, 1e-12) <= 2e-12);  // continuous at the corner d = s = 0
 }
