@@ -15,7 +15,6 @@ import matplotlib.pyplot as plt  # noqa: E402  (after the backend)
 
 from .argparser import ArgParser  # noqa: E402
 from .judging.campaign import JudgeOptions, judge_campaign  # noqa: E402
-from .judging.mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY  # noqa: E402
 from .judging.stats import CONFIDENCE  # noqa: E402
 from .judging.sweep import sweep_frame  # noqa: E402
 from .judging.verdict import FAIL, NOT_ASSESSED, PASS  # noqa: E402
@@ -191,15 +190,15 @@ def parse_args(argv=None):
     p.add_argument("--levels", default="99.865", metavar="P[,P...]",
                    help="percentile levels of the design-load table, in percent, 0 < P < 100 "
                         "(default 99.865: the one-sided 3-sigma level)")
-    p.add_argument("--motorisation-factor", type=float, default=DEFAULT_MF, metavar="MF",
-                   help="required motorisation factor (ECSS-E-ST-33-01C clause 4.7.5.3.1; "
-                        f"default {DEFAULT_MF})")
-    p.add_argument("--uncertainty-factor", type=float, default=DEFAULT_UNCERTAINTY, metavar="K",
-                   help="uncertainty factor on the simulated spring resistance (default "
-                        f"{DEFAULT_UNCERTAINTY}: Table 4-2 of the standard, spring)")
-    p.add_argument("--inertia-factor", type=float, default=DEFAULT_INERTIA, metavar="KD",
-                   help="factor on the inertial resistance torque T_D, velocity drive (default "
-                        f"{DEFAULT_INERTIA}: clause 4.7.5.3.1)")
+    p.add_argument("--motorisation-factor", type=float, default=None, metavar="MF",
+                   help="required motorisation factor (ECSS-E-ST-33-01C clause 4.7.5.3.1; default: the "
+                        "scene's motorisation.factor, with which the simulator computed the check)")
+    p.add_argument("--uncertainty-factor", type=float, default=None, metavar="K",
+                   help="uncertainty factor on the spring resistance (default: the scene's "
+                        "motorisation.spring_factor)")
+    p.add_argument("--inertia-factor", type=float, default=None, metavar="KD",
+                   help="factor on the inertial resistance torque T_D, velocity drive (default: the "
+                        "scene's motorisation.inertia_factor)")
     p.add_argument("--revision", default="draft", help="revision shown in the sign-off block")
     p.add_argument("--csv", action="store_true",
                    help=f"also write DIR/{CSV_NAME}: the run table, one row per run (campaigns)")
@@ -216,7 +215,7 @@ def parse_args(argv=None):
         p.error(f"--levels {a.levels}: not a comma-separated list of numbers")
     if not all(0.0 < v < 100.0 for v in a.levels):
         p.error(f"--levels: every level must be between 0 and 100 (exclusive), got {a.levels}")
-    if not (a.motorisation_factor > 0 and a.uncertainty_factor > 0 and a.inertia_factor > 0):
+    if any(v is not None and not v > 0 for v in (a.motorisation_factor, a.uncertainty_factor, a.inertia_factor)):
         p.error("--motorisation-factor, --uncertainty-factor and --inertia-factor must be positive")
     return a
 

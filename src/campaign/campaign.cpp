@@ -347,6 +347,7 @@ void read_base_scene(const TomlSource& c, const toml::table& root, const std::st
   } else {
     o.base = io::parse_scene_text_with("", c.file + " [scene]", sets, &o.warnings);
   }
+  o.scene_settings = sets;  // with the --set ones, in order (campaign.hpp)
   // Campaign runs never record histories (only [output] history_runs do): work nobody reads.
   o.base.run.output_step_s = 0.0;
 }

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "campaign/motor_declared.hpp"
 #include "io/h5_output.hpp"
 #include "io/h5_util.hpp"
 #include "io/scene_toml.hpp"
@@ -214,6 +215,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     results::CampaignFileInfo info;
     info.campaign_toml = campaign_text;
     info.base_scene_toml = io::resolved_scene_toml(c.base);
+    info.motor_declared_by = campaign::find_motor_declared_by(c);
     info.n_ranks = size;
     info.n_sessions = static_cast<int>(st.session) + 1;
     info.n_rounds = static_cast<std::int64_t>(done.plans.size());

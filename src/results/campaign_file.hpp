@@ -39,6 +39,7 @@ struct ScheduleSummary {
 struct CampaignFileInfo {
   std::string campaign_toml;    // resolved campaign
   std::string base_scene_toml;  // resolved base scene (single-run format)
+  std::string motor_declared_by;  // campaign/motor_declared.hpp: "" when the campaign declares no motor
   int n_ranks = 1;              // of the invocation that finishes the file
   int n_sessions = 1;           // 1 + resumes
   std::int64_t n_rounds = 1;    // rounds of runs the method ran

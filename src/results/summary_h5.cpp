@@ -136,6 +136,7 @@ void write_root_attributes(hid_t file, const CampaignContext& ctx, std::int64_t 
   write_int_attribute(file, "n_bays_max", ctx.dims.n_bays_max);
   write_string_attribute(file, "direction", sim::to_string(c.base.run.direction));
   write_string_attribute(file, "drive_mode", sim::to_string(c.base.drive.mode));
+  write_string_attribute(file, "motor_declared_by", info.motor_declared_by);
   write_string_attribute(file, "software_version", TRUSS_VERSION);
   write_string_attribute(file, "git_revision", TRUSS_GIT_REV);
   write_int_attribute(file, "n_ranks", info.n_ranks);

@@ -6,6 +6,7 @@
 
 #include "campaign/campaign.hpp"
 #include "campaign/evaluate.hpp"
+#include "campaign/motor_declared.hpp"
 #include "io/scene_toml.hpp"
 #include "methods/method_table.hpp"
 
@@ -133,4 +134,23 @@ TEST_CASE("CampaignOptions::validate names the field that breaks a rule, in code
   CHECK(error_of(write_tmp("rules.toml", file)).empty());  // 30 = 10 blocks of 3
   CHECK_THAT(error_of(write_tmp("rules.toml", file), {"ensemble.sampling=sobol", "ensemble.n_runs=5000000000"}),
              Catch::Contains("--set ensemble.n_runs=5000000000") && Catch::Contains("sobol supports at most 2^32 runs"));
+}
+
+TEST_CASE("a campaign declares its motor by its own lines, never by the scene file's defaults", "[campaign]") {
+  const std::string root = TRUSS_SOURCE_DIR;
+  auto declared = [&](const std::string& name, const std::vector<std::string>& sets = {}) {
+    return find_motor_declared_by(truss::methods::parse_campaign_file(root + "/campaigns/" + name, sets));
+  };
+  // table1_dispersed.toml line 29: [scene.drive] stall_torque_Nm = 0.030.
+  CHECK(declared("table1_dispersed.toml") == root + "/campaigns/table1_dispersed.toml:29");
+  // bay_count and free_rail_miss run the scene file's default motor: nothing declared.
+  CHECK(declared("bay_count.toml").empty());
+  CHECK(declared("free_rail_miss.toml").empty());
+  CHECK(declared("bay_count.toml", {"drive.no_load_speed_rad_per_s=90"}) == "--set drive.no_load_speed_rad_per_s=90");
+  CHECK(declared("bay_count.toml", {"scene.drive.stall_torque_Nm=0.04"}).find("stall_torque_Nm") != std::string::npos);
+  CHECK(declared("motor_torque.toml") == "drive.mode = \"motor\"");  // the motor drives the mast
+  const std::string text = "[ensemble]\nn_runs = 10\n[[dispersion]]\nkey = \"drive.stall_torque_Nm\"\n"
+                           "distribution = \"normal\"\nstd = 0.01\n";
+  CHECK(find_motor_declared_by(truss::methods::parse_campaign_text(text, "c.toml", root + "/campaigns")) ==
+        "[[dispersion]] drive.stall_torque_Nm (line 3)");
 }

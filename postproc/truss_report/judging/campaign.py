@@ -11,9 +11,11 @@ from ..reading.extras import Extras
 from .consistency import Check, consistency_checks
 from .correlations import Correlations, InputColumn, input_columns, rank_correlations
 from .design import DesignLoad, design_loads
-from .mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY, Margins, compute_margins
+from .mechanism import Margins, compute_margins
 from .runs import LockStats, OutputStats, lock_stats, output_stats, status_counts
+from ..reading.h5file import scene_table
 from .stats import CONFIDENCE
+from .structure import StructuralMargin, calc_bay_margins, calc_structural_margins, structure_items
 from .verdict import VerdictItem, verdict_items, verdict_of
 
 
@@ -22,9 +24,9 @@ class JudgeOptions:
     """The report's options that change a judgement (the command line's)."""
     levels: Sequence[float] = (99.865,)   # percent, ascending
     confidence: float = CONFIDENCE
-    motorisation_factor: float = DEFAULT_MF
-    uncertainty_factor: float = DEFAULT_UNCERTAINTY
-    inertia_factor: float = DEFAULT_INERTIA
+    motorisation_factor: float | None = None   # None: the scene's [motorisation] factors
+    uncertainty_factor: float | None = None
+    inertia_factor: float | None = None
 
 
 @dataclass
@@ -39,6 +41,8 @@ class CampaignJudgement:
     correlations: Correlations
     items: list[VerdictItem]
     verdict: str
+    structure: list[StructuralMargin]       # per load and limit
+    structure_bays: list[StructuralMargin]  # per bay, for the loads the file records per bay
 
     @property
     def failed_checks(self) -> list[str]:
@@ -47,7 +51,8 @@ class CampaignJudgement:
 
 def judge_campaign(c: Campaign, e: Extras, opts: JudgeOptions) -> CampaignJudgement:
     loads = design_loads(c, e, opts.levels, opts.confidence)
-    m = compute_margins(c, e, opts.motorisation_factor, opts.uncertainty_factor, opts.inertia_factor)
+    m = compute_margins(c, e, opts.motorisation_factor, opts.uncertainty_factor, opts.inertia_factor,
+                        opts.levels[-1], opts.confidence)
     counted = status_counts(c)
     outputs = output_stats(c, opts.confidence)
     lock = lock_stats(c)
@@ -55,5 +60,9 @@ def judge_campaign(c: Campaign, e: Extras, opts: JudgeOptions) -> CampaignJudgem
     columns = input_columns(c)
     correlations = rank_correlations(c, columns) if c.dispersions else {}
     items = verdict_items(c, m, [ch.what for ch in checks if not ch.passed], e.nominal_status, loads)
+    declared = scene_table(c.base_scene, "structure")
+    structure = calc_structural_margins(loads, declared)
+    bays = calc_bay_margins(e, c.ok, opts.levels[-1], opts.confidence, declared)
+    items += structure_items(structure)
     return CampaignJudgement(loads, m, counted, outputs, lock, checks, columns, correlations, items,
-                             verdict_of(items))
+                             verdict_of(items), structure, bays)

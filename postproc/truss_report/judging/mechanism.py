@@ -17,8 +17,8 @@ actuation torque T must be >= T_min over the full range of travel (4.7.5.3.2 b),
 energy of the moving parts must not be counted on to meet the motorisation factor (4.7.5.3.1 f).
 The factor 3 of the friction-like terms is that of Table 4-2.
 
-This rigid, frictionless model has two of these resistances (the others are zero in it, and the
-report says they must be added by the user):
+The model's dynamics give two of these resistances; the drive train's losses (F_R, H_M, H_Y, H_A)
+are the scene's [drive] torques:
   S   = /runs/peak_static_drive_torque_Nm: the torque at the screws that holds the mast at rest in
         each configuration of its path, (h / 2 pi) dU/dy_m, U the diagonals' strain energy (spring;
         the free stack: with the deploying bay in its configuration, the frames below at rest);
@@ -36,8 +36,17 @@ bound the torque at every instant from above: the report's T_min is conservative
   infinite when S <= 0, as in retraction, where the diagonals help), torque margin
   T_available / T_min - 1 (>= 0); a run fails when T_available < T_min. Runs with T_min = 0 (no
   resistance at all) are not counted.
-MF (2), k_S (1.2) and k_D (1.25) are report options (--motorisation-factor, --uncertainty-factor,
---inertia-factor)."""
+The simulator computes the check per run with the drive train's losses and the factors of the
+scene's [motorisation] table (/runs/motorisation_required_torque_Nm, _available_torque_Nm,
+_stall_torque_Nm; docs/model-notes.md "Motorisation check"):
+  T_min = MF (k_S S_m + L) + k_D T_D,m,  S_m = S / (N eta_g eta_s), T_D,m likewise (velocity drive),
+L the factored loss torques at the motor shaft. The report reads those columns; MF, k_S and k_D are
+the scene's unless the report's options (--motorisation-factor, --uncertainty-factor,
+--inertia-factor) replace them, in which case T_min is rebuilt from the same columns with L
+recovered from the file's T_min. The achieved factor is MF_ach = (T_available - k_D T_D,m) /
+(k_S S_m + L). The stall torque needed is a statistical statement, never a sample maximum: the
+one-sided upper confidence bound of the top design-load level's percentile of the per-run stall
+torque that meets the factors exactly (stall torque x T_min / T_available)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -47,21 +56,23 @@ import numpy as np
 
 from ..reading.campaign import Campaign
 from ..reading.extras import Extras
-from ..reading.h5file import Array
-from .stats import clopper_pearson
+from ..reading.h5file import Array, BoolArray
+from ..reading.h5file import scene_table
+from .stats import CONFIDENCE, clopper_pearson, quantile_ci
 
 ECSS_CLAUSE = ("ECSS-E-ST-33-01C (6 March 2009), Space engineering – Mechanisms, clause 4.7.5.3.1 "
                "“Motorization factors” and Table 4-2 (uncertainty factors)")
 ECSS_SHORT = "ECSS-E-ST-33-01C, clause 4.7.5.3.1 and Table 4-2"
 ECSS_CONFIRM = ("Confirm the factors and the clause against the issue of the standard your "
                 "contract applies (later issues: Rev.1 of 15 February 2017, Rev.2 of 1 March "
-                "2019); set them with --motorisation-factor, --uncertainty-factor and "
-                "--inertia-factor.")
+                "2019); set them in the scene's [motorisation] table.")
 DEFAULT_MF = 2.0
 DEFAULT_UNCERTAINTY = 1.2     # Table 4-2, spring (S), theoretical and measured
 DEFAULT_INERTIA = 1.25        # clause 4.7.5.3.1 equation, inertial resistance T_D
 STATIC = "peak_static_drive_torque_Nm"
 INERTIAL = "peak_inertial_drive_torque_Nm"
+REQUIRED = "motorisation_required_torque_Nm"
+AVAILABLE = "motorisation_available_torque_Nm"
 
 
 @dataclass
@@ -81,7 +92,11 @@ class Margins:
     d_design: float = float("nan")       # largest inertial resistance T_D, Nm
     t_min_design: float = float("nan")   # largest T_min, Nm
     t_avail_min: float = float("nan")
-    stall_needed: float = float("nan")
+    stall_needed: float = float("nan")   # upper bound of the needed stall torque's percentile
+    stall_level: float = 99.865           # percent, of that percentile
+    stall_confidence: float = CONFIDENCE
+    stall_n_needed: int = 0               # runs the bound needs when it has none
+    losses: Array | None = None           # L per considered run (factored losses at the motor), Nm
     stall_scene: float = float("nan")
     no_load_speed: float = float("nan")
     omega: float = float("nan")
@@ -117,9 +132,27 @@ def available_at_speed(c: Campaign, drive: dict[str, Any]) -> float:
         return float("nan")
 
 
-def _required(m: Margins, s: Array, d: Array) -> Array:
-    """T_min per run from the spring and inertial resistances (T_D = 0 in motor mode)."""
-    return m.mf_required * m.k_uncertainty * s + m.k_inertia * d
+def scene_factors(c: Campaign) -> tuple[float, float, float]:
+    """(MF, k_S, k_D) of the resolved scene's [motorisation] table (the defaults without one)."""
+    t = scene_table(c.base_scene, "motorisation")
+    return (float(t.get("factor", DEFAULT_MF)), float(t.get("spring_factor", DEFAULT_UNCERTAINTY)),
+            float(t.get("inertia_factor", DEFAULT_INERTIA)))
+
+
+def train_factor(c: Campaign) -> float:
+    """N eta_g eta_s of the scene's drive train: a screw torque over it is the motor's."""
+    d = c.drive
+    return (float(d.get("gear_ratio", 1.0)) * float(d.get("gear_efficiency", 1.0))
+            * float(d.get("screw_efficiency", 1.0)))
+
+
+def _required(m: Margins, s: Array, d: Array, t_file: Array | None, scene: tuple[float, float, float]) -> Array:
+    """T_min per run at the motor shaft (s, d: the resistances referred to the motor; T_D = 0 in
+    motor mode). From the file's T_min, L = (T_min - k_D0 d) / MF0 - k_S0 s (the factored losses,
+    0 without a drive train), rebuilt with the report's factors; without that column L = 0."""
+    mf0, ks0, kd0 = scene
+    m.losses = (t_file - kd0 * d) / mf0 - ks0 * s if t_file is not None else np.zeros_like(s)
+    return m.mf_required * (m.k_uncertainty * s + m.losses) + m.k_inertia * d
 
 
 def _resistances(e: Extras, m: Margins) -> tuple[Array, Array] | None:
@@ -131,12 +164,16 @@ def _resistances(e: Extras, m: Margins) -> tuple[Array, Array] | None:
     return s, d
 
 
-def compute_margins(c: Campaign, e: Extras, mf_required: float = DEFAULT_MF,
-                    k_uncertainty: float = DEFAULT_UNCERTAINTY,
-                    k_inertia: float = DEFAULT_INERTIA) -> Margins:
-    """The margins of the campaign's runs. Without a declared motor (c.motor_declared_by == "") the
-    required side (S, T_D, T_min) is computed and the available side left NaN (m.undeclared)."""
-    m = Margins(c.drive_mode, mf_required, k_uncertainty, k_inertia)
+def compute_margins(c: Campaign, e: Extras, mf_required: float | None = None,
+                    k_uncertainty: float | None = None, k_inertia: float | None = None,
+                    level: float = 99.865, confidence: float = CONFIDENCE) -> Margins:
+    """The margins of the campaign's runs (factors: the scene's, unless given). Without a declared
+    motor (c.motor_declared_by == "") the required side (S, T_D, T_min) and the stall torque needed
+    are computed and the available side left NaN (m.undeclared)."""
+    scene = scene_factors(c)
+    m = Margins(c.drive_mode, mf_required if mf_required is not None else scene[0],
+                k_uncertainty if k_uncertainty is not None else scene[1],
+                k_inertia if k_inertia is not None else scene[2], stall_level=level, stall_confidence=confidence)
     drive = c.drive
     m.stall_scene = float(drive.get("stall_torque_Nm", np.nan))
     m.no_load_speed = float(drive.get("no_load_speed_rad_per_s", np.nan))
@@ -145,20 +182,24 @@ def compute_margins(c: Campaign, e: Extras, mf_required: float = DEFAULT_MF,
         return m
     if m.mode == "velocity":
         m.omega = screw_speed(drive)   # also when no margin can be computed
-    avail = available_per_run(c, m)
+    avail = available_per_run(c, e, m)
     resistances = _resistances(e, m)
     if resistances is None or (avail is None and not m.undeclared):
         return m
     s, d = resistances
     sel = c.ok & np.isfinite(s) & np.isfinite(d) & (np.isfinite(avail) if avail is not None else True)
+    t_file = e.runs.get(REQUIRED)
+    if t_file is not None:
+        sel &= np.isfinite(t_file)
     m.n_unjudged = int(np.sum(c.ok) - np.sum(sel))
     if not np.any(sel):
         m.note = ("no ok run has a finite static resistance and available torque "
                   f"(/runs/{STATIC} holds none for this campaign)")
         m.missing = True
         return m
-    s, d = np.maximum(s[sel], 0.0), d[sel]   # S <= 0: the springs help
-    t_min = _required(m, s, d)
+    k = train_factor(c)
+    s, d = np.maximum(s[sel], 0.0) / k, d[sel] / k   # at the motor shaft; S <= 0: the springs help
+    t_min = _required(m, s, d, t_file[sel] if t_file is not None else None, scene)
     m.n = int(np.sum(t_min > 0))
     if m.n == 0:
         m.note = ("no ok run has a resistance to overcome: the diagonals drive the mast and the "
@@ -167,11 +208,33 @@ def compute_margins(c: Campaign, e: Extras, mf_required: float = DEFAULT_MF,
         return m
     keep = t_min > 0
     s, d, t_min = s[keep], d[keep], t_min[keep]
+    assert m.losses is not None
+    m.losses = m.losses[keep]
     m.s_design, m.d_design = float(np.max(s)), float(np.max(d))
     m.t_min_design = float(np.max(t_min))
+    _stall_needed(m, c, e, sel, keep, t_min)
     if avail is not None:
-        _available_side(m, e, s, d, avail[sel][keep], t_min)
+        _available_side(m, e, s, d, avail[sel][keep], t_min, k, scene)
     return m
+
+
+def _stall_needed(m: Margins, c: Campaign, e: Extras, sel: BoolArray, keep: BoolArray, t_min: Array) -> None:
+    """Per run the stall torque that meets the factors exactly, M_stall T_min / T_available (the
+    file's motorisation_stall_torque_Nm rebuilt with the report's factors), and the upper bound of
+    its m.stall_level percentile at m.stall_confidence."""
+    t_av, per_stall = e.runs.get(AVAILABLE), e.runs.get("motorisation_stall_torque_Nm")
+    if t_av is None or per_stall is None:
+        frac = 1.0 - m.omega / m.no_load_speed if m.mode == "velocity" else 1.0
+        m.stall_needed = m.t_min_design / frac if frac > 0 else float("inf")
+        return
+    stall = c.stall_torque[sel][keep] if c.stall_torque is not None and m.mode == "motor" \
+        else np.full(len(t_min), m.stall_scene)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        need = np.where(t_av[sel][keep] > 0, stall * t_min / t_av[sel][keep], np.inf)
+    need = np.sort(need[~np.isnan(need)])
+    ci = quantile_ci(need, m.stall_level / 100.0, m.stall_confidence) if len(need) else None
+    m.stall_needed = ci.hi if ci is not None else float("nan")
+    m.stall_n_needed = int(ci.n_needed_hi or 0) if ci is not None else 0
 
 
 UNDECLARED = ("the campaign declares no motor: the velocity drive prescribes the motion, and the scene's "
@@ -179,13 +242,16 @@ UNDECLARED = ("the campaign declares no motor: the velocity drive prescribes the
               "declare the motor in the campaign's [scene.drive] to judge it")
 
 
-def available_per_run(c: Campaign, m: Margins) -> Array | None:
-    """The torque available in each run (velocity: the scene's motor at the prescribed speed;
-    motor: the stall torque); None when the file has none (m.note says why, m.missing) or when the
-    campaign declares no motor (m.undeclared)."""
+def available_per_run(c: Campaign, e: Extras, m: Margins) -> Array | None:
+    """The torque available in each run at the motor shaft (the file's
+    motorisation_available_torque_Nm: velocity, the scene's derated motor at the prescribed speed;
+    motor, the derated stall torque); None when the file has none (m.note says why, m.missing) or
+    when the campaign declares no motor (m.undeclared)."""
     if c.motor_declared_by == "":
         m.note, m.undeclared = UNDECLARED, True
         return None
+    if AVAILABLE in e.runs:
+        return e.runs[AVAILABLE]
     if m.mode == "motor":
         return c.stall_torque      # a motor drive always has its stall torque
     if c.motor_torque_at_speed is None:
@@ -193,23 +259,25 @@ def available_per_run(c: Campaign, m: Margins) -> Array | None:
     return c.motor_torque_at_speed
 
 
-def _available_side(m: Margins, e: Extras, s: Array, d: Array, t_av: Array, t_min: Array) -> None:
-    """The achieved factors, the margin, the runs below and the stall torque needed."""
+def _available_side(m: Margins, e: Extras, s: Array, d: Array, t_av: Array, t_min: Array, k_train: float,
+                    scene: tuple[float, float, float]) -> None:
+    """The achieved factors MF_ach = (T_available - k_D T_D) / (k_S S + L), the margin and the runs
+    below."""
     k_inertia, k_uncertainty = m.k_inertia, m.k_uncertainty
+    assert m.losses is not None
+    r = k_uncertainty * s + m.losses
     with np.errstate(divide="ignore"):
-        m.mf = np.where(s > 0, (t_av - k_inertia * d) / (k_uncertainty * s),
-                        np.where(t_av >= k_inertia * d, np.inf, -np.inf))
+        m.mf = np.where(r > 0, (t_av - k_inertia * d) / r, np.where(t_av >= k_inertia * d, np.inf, -np.inf))
     m.mf_min = float(np.min(m.mf))
     m.tm_min = float(np.min(t_av / t_min - 1.0))
     m.n_below = int(np.sum(t_av < t_min))
     m.p_below_ci = clopper_pearson(m.n_below, m.n)
     m.t_avail_min = float(np.min(t_av))
     if e.nominal is not None and e.nominal.get(STATIC, 0) > 0:
-        nd = max(e.nominal[INERTIAL], 0.0) if m.mode == "velocity" else 0.0
-        na = e.nominal["motor_torque_at_speed_Nm"] if m.mode == "velocity" else m.stall_scene
-        m.mf_nominal = (na - k_inertia * nd) / (k_uncertainty * e.nominal[STATIC])
-    if m.mode == "velocity":
-        frac = 1.0 - m.omega / m.no_load_speed
-        m.stall_needed = m.t_min_design / frac if frac > 0 else float("inf")
-    else:
-        m.stall_needed = m.t_min_design
+        ns = e.nominal[STATIC] / k_train
+        nd = max(e.nominal[INERTIAL], 0.0) / k_train if m.mode == "velocity" else 0.0
+        na = e.nominal.get(AVAILABLE, e.nominal["motor_torque_at_speed_Nm"] if m.mode == "velocity" else m.stall_scene)
+        treq = e.nominal.get(REQUIRED, float("nan"))
+        mf0, ks0, kd0 = scene
+        nl = (treq - kd0 * nd) / mf0 - ks0 * ns if np.isfinite(treq) else 0.0
+        m.mf_nominal = (na - k_inertia * nd) / (k_uncertainty * ns + nl)

@@ -24,15 +24,19 @@ from typing import Any
 import numpy as np
 
 from ..reading.extras import Extras
-from ..reading.h5file import Array
+from ..reading.h5file import Array, BoolArray
 from .design import DesignLoad
 from .stats import quantile_ci
+from .verdict import VerdictItem
 
 STANDARD = "ECSS-E-ST-32-10C Rev.1 (6 March 2009), Table 4-1"
 CONFIRM = ("Confirm the factors against the issue of the standard the contract applies; a structure "
            "verified by analysis alone takes larger ones (FOSY 1.25, FOSU 2 in the same table).")
 PASS, FAIL, NOT_ASSESSED = "pass", "fail", "not_assessed"
 
+# The /runs/bays field of a design-load key, where the file records that load per bay.
+BAY_FIELDS = {"peak_pin_force_N": "peak_pin_force_N", "peak_drive_force_N": "peak_drive_force_N",
+              "peak_latch_energy_J": "latch_energy_J"}
 # (allowable stem in [structure], design-load key, share of that load one part carries, part, unit)
 LOADS = [
     ("pin_force", "peak_pin_force_N", 1.0, "one rail pin", "N"),
@@ -102,23 +106,24 @@ def calc_structural_margins(loads: Sequence[DesignLoad], structure: Mapping[str,
     return res
 
 
-def calc_bay_margins(e: Extras, ok: Array, level: float, confidence: float,
+def calc_bay_margins(e: Extras, ok: BoolArray, level: float, confidence: float,
                      structure: Mapping[str, Any]) -> list[StructuralMargin]:
     """Per bay, for each declared allowable whose load the file records per bay (/runs/bays): the
     design load is the upper bound of that bay's `level`-percentile over the ok runs."""
     fos = dict(zip(LIMITS, read_factors(structure)))
     res = []
     for stem, key, share, part, unit in LOADS:
-        if key not in e.bays:
+        field = BAY_FIELDS.get(key, "")
+        if field not in e.bays:
             continue
         for limit in LIMITS:
             a = structure.get(f"{stem}_{limit}_allowable_{unit}")
             if a is None:
                 continue
-            for j in range(e.bays[key].shape[1]):
-                v = e.bays[key][ok, j]
+            for j in range(e.bays[field].shape[1]):
+                v = e.bays[field][ok, j]
                 v = np.sort(v[np.isfinite(v)])
-                if len(v) == 0:
+                if len(v) == 0 or not np.any(v != 0):
                     continue
                 bound = quantile_ci(v, level / 100.0, confidence).hi * share
                 res.append(StructuralMargin(stem, part, limit, unit, float(a), fos[limit], bound, bay=j + 1))
@@ -137,3 +142,18 @@ def structural_verdict(margins: Sequence[StructuralMargin]) -> str:
     """FAIL if any load fails; NOT ASSESSED if any load is not assessed (or none is listed)."""
     s = {load_status(margins, stem) for stem in dict.fromkeys(m.stem for m in margins)}
     return FAIL if FAIL in s else NOT_ASSESSED if NOT_ASSESSED in s or not margins else PASS
+
+
+def structure_items(margins: Sequence[StructuralMargin]) -> list[VerdictItem]:
+    """The verdict's items of the structural margins: a load with a negative margin FAILs (value:
+    its smallest margin); the loads not assessed (no allowable declared, or no design load) make
+    one NOT ASSESSED item naming them."""
+    stems = list(dict.fromkeys(m.stem for m in margins))
+    status = {stem: load_status(margins, stem) for stem in stems}
+    items = [VerdictItem("structure", "fail", name=stem,
+                         value=min(m.margin for m in margins if m.stem == stem and np.isfinite(m.margin)))
+             for stem in stems if status[stem] == FAIL]
+    idle = [stem for stem in stems if status[stem] == NOT_ASSESSED]
+    if idle:
+        items.append(VerdictItem("structure_missing", "not_assessed", name=", ".join(idle), count=len(idle)))
+    return items

@@ -18,6 +18,7 @@ from .numbers import MOST, DisplayUnits, choose_load_units, fmt, message_text
 from .top import (campaign_doc, design_table_html, model_limits_html, signoff_html, terminal_summary,
                   verdict_html)
 from .top_mechanism import mechanism_html
+from .top_structure import structure_html
 
 
 def section_nominal(page, e):
@@ -122,7 +123,8 @@ def campaign_report(page, c, e, j, opts):
     m = j.margins
     top = [verdict_html(c, m, j.items, len(j.checks), du),
            design_table_html(j.loads, opts.confidence, c.sampling, du, c.attrs["n_bays_max"]),
-           mechanism_html(m, du)]
+           mechanism_html(m, du),
+           structure_html(j.structure, j.structure_bays, opts.levels[-1], opts.confidence, du)]
     summary = terminal_summary(c, m, j.loads, j.items, du, opts.confidence)
     rest = [section_nominal(page, e), section_plots(page, c, e, j, du, opts)]
     toc = ("<nav><a href='#design'>Design loads</a> · <a href='#mechanism'>Mechanism margins</a> · "

@@ -54,6 +54,13 @@ def item_html(item: VerdictItem, m):
                                              "its design load is not assessed")
     if item.what == "no_loads":
         return "no_loads", "no design load: no ok run has a value of any load"
+    if item.what == "structure":
+        return f"structure.{item.name}", (f"structural margin of the {esc(item.name.replace('_', ' '))} below zero "
+                                          "(smallest MoS " + num(f"verdict.structure.{item.name}", item.value,
+                                                                 digits=3, tag="span") + ")")
+    if item.what == "structure_missing":
+        return "structure.missing", (f"structural margins not assessed for {esc(item.name.replace('_', ' '))}: no "
+                                     "allowable declared in the scene's [structure] table, or no design load")
     if item.what == "retract":
         return f"retract.{item.name}", esc(RETRACT_TEXT[item.name])
     return "check", f"consistency check failed: {esc(item.name)}"

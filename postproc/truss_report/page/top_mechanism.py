@@ -45,20 +45,24 @@ def mechanism_rows(m, units):
     mf = m.mf[np.isfinite(m.mf)] if m.mf is not None else np.array([])
     at_mf = resolution(np.append(mf, m.mf_nominal))
     rows = [
-        ["required motorisation factor MF (option --motorisation-factor)", num("mech.mf_required", m.mf_required)],
-        ["uncertainty factor k<sub>S</sub> on the spring resistance S (--uncertainty-factor; "
+        ["required motorisation factor MF (scene motorisation.factor)", num("mech.mf_required", m.mf_required)],
+        ["uncertainty factor k<sub>S</sub> on the spring resistance S (spring_factor; "
          "Table 4-2: spring 1.2)", num("mech.k_uncertainty", m.k_uncertainty)],
-        ["factor k<sub>D</sub> on the inertial resistance T<sub>D</sub> (--inertia-factor; "
+        ["factor k<sub>D</sub> on the inertial resistance T<sub>D</sub> (inertia_factor; "
          "equation: 1.25)" + ("" if vel else ": T<sub>D</sub> = 0 in motor mode"), num("mech.k_inertia", m.k_inertia)],
         ["runs considered (ok, finite positive S)", num("mech.n", m.n)],
-        ["largest spring resistance S (peak static torque)", torque_cell("mech.s_design", m.s_design, units)],
-        ["largest inertial resistance T<sub>D</sub> (peak drive − static torque)",
+        ["largest spring resistance S (peak static torque, at the motor)", torque_cell("mech.s_design", m.s_design, units)],
+        ["largest inertial resistance T<sub>D</sub> (peak drive − static torque, at the motor)",
          torque_cell("mech.d_design", m.d_design, units)],
-        ["largest T<sub>min</sub> = MF k<sub>S</sub> S + k<sub>D</sub> T<sub>D</sub>",
+        ["largest factored losses L = k<sub>F</sub> F<sub>R</sub> + k<sub>M</sub> H<sub>M</sub> + "
+         "k<sub>Y</sub> H<sub>Y</sub> + k<sub>A</sub> H<sub>A</sub> (the scene's [drive] and [motorisation])",
+         torque_cell("mech.losses", float(np.max(m.losses)) if m.losses is not None and len(m.losses) else float("nan"),
+                     units)],
+        ["largest T<sub>min</sub> = MF (k<sub>S</sub> S + L) + k<sub>D</sub> T<sub>D</sub>",
          torque_cell("mech.t_min", m.t_min_design, units)],
         [f"smallest available torque ({avail})", torque_cell("mech.t_avail_min", m.t_avail_min, units)],
         ["smallest achieved MF = (T<sub>available</sub> − k<sub>D</sub> T<sub>D</sub>) / "
-         "(k<sub>S</sub> S)", num("mech.mf_min", m.mf_min, at=at_mf)],
+         "(k<sub>S</sub> S + L)", num("mech.mf_min", m.mf_min, at=at_mf)],
         ["smallest torque margin T<sub>available</sub> / T<sub>min</sub> − 1",
          percent_cell("mech.tm_min", m.tm_min, resolution([100 * m.tm_min]))],
         ["achieved MF of the nominal run", num("mech.mf_nominal", m.mf_nominal, at=at_mf)],
@@ -70,8 +74,10 @@ def mechanism_rows(m, units):
         rows += [["screw speed ω = 2π v / h", num("mech.omega", m.omega, "rad/s")],
                  ["no-load speed ω<sub>0</sub> of the scene's motor",
                   num("mech.omega0", m.no_load_speed if not m.undeclared else float("nan"), "rad/s")]]
-    rows += [["<b>stall torque needed</b>" + (" (with that ω<sub>0</sub>: T<sub>min</sub> / "
-                                               "(1 − ω/ω<sub>0</sub>))" if vel else ""),
+    rows += [[f"<b>stall torque needed</b>: upper {fmt(100 * m.stall_confidence)} % confidence bound of the "
+              f"P{fmt(m.stall_level)} of the runs' stall torque that meets the factors (stall torque × "
+              "T<sub>min</sub> / T<sub>available</sub>" + (", with that ω<sub>0</sub>" if vel else "") + ")"
+              + (f"; no bound: it needs ≥ {m.stall_n_needed} runs" if m.stall_n_needed else ""),
               torque_cell("mech.stall_needed", m.stall_needed, units)],
              ["stall torque of the scene's motor",
               f"<td class='num' data-key='mech.stall_scene' data-value='{repr(m.stall_scene)}'>"
@@ -86,16 +92,17 @@ def mechanism_text(m):
     return ("<p>T<sub>min</sub> = 2 (1.1 I + 1.2 S + 1.5 H<sub>M</sub> + 3 F<sub>R</sub> + "
             "3 H<sub>Y</sub> + 3 H<sub>A</sub> + 3 H<sub>D</sub>) + 1.25 T<sub>D</sub> + "
             "T<sub>L</sub> (clause 4.7.5.3.1; uncertainty factors of Table 4-2, theoretical "
-            "column). Torques are at the screws, the three together: the torque of one motor "
-            "that drives them 1:1 (one screw carries a third). This rigid, frictionless model has "
+            "column). Torques are at the motor shaft, through the scene's drive train (gear ratio and "
+            "efficiencies); with the ideal train, the screws' torque, the three together. The simulator "
+            "computes the check per run (/runs/motorisation_required_torque_Nm); this rigid, frictionless model has "
             "the spring resistance S (the diagonals: the torque that holds the mast at rest along "
             "its path)"
             + (" and, with the prescribed speed as the acceleration requirement, the inertial "
                "resistance T<sub>D</sub> (drive torque minus S). " if vel else
                "; the motor drive has no specified acceleration, so T<sub>D</sub> = 0 and the "
                "motor's stall torque is compared with the factored springs. ")
-            + "Each is its peak over the run, so T<sub>min</sub> is an upper bound. I, "
-            "H<sub>M</sub>, F<sub>R</sub>, H<sub>Y</sub>, H<sub>A</sub>, H<sub>D</sub> and "
-            "T<sub>L</sub> are zero in the model: friction, hysteresis, harness and adhesion "
-            "(factor 3) must be added by the user.</p><p class='small'>Source: "
+            + "Each is its peak over the run, so T<sub>min</sub> is an upper bound. The drive train's "
+            "losses F<sub>R</sub>, H<sub>M</sub>, H<sub>Y</sub>, H<sub>A</sub> are the scene's [drive] "
+            "torques with the [motorisation] factors; I, H<sub>D</sub> and T<sub>L</sub> have no "
+            "counterpart in the model.</p><p class='small'>Source: "
             f"{esc(ECSS_CLAUSE)}. {esc(ECSS_CONFIRM)}</p>")

@@ -32,4 +32,6 @@ ROOT_ATTRS_INT = ["n_runs", "master_seed", "n_bays_max", "n_ranks", "n_sessions"
 EXTRA_RUN_COLUMNS = ["start_drive_impulse_Ns", "drive_work_impulses_J", "peak_drive_force_time_s",
                      "peak_drive_force_bay", "peak_pin_force_time_s", "peak_pin_force_bay",
                      "motor_torque_at_speed_Nm", "n_bays", "energy_residual_J",
-                     "peak_static_drive_torque_Nm", "peak_inertial_drive_torque_Nm"]
+                     "peak_static_drive_torque_Nm", "peak_inertial_drive_torque_Nm",
+                     "motorisation_required_torque_Nm", "motorisation_available_torque_Nm",
+                     "motorisation_stall_torque_Nm"]

@@ -60,3 +60,38 @@ def test_ok_runs_without_a_resistance_are_counted():
                       motor_torque_at_speed=np.array([0.015, 0.015, np.nan]))
     m = compute_margins(c, extras([0.004, np.nan, 0.004], [0.0, 0.0, 0.0]))
     assert m.n == 1 and m.n_unjudged == 2
+
+
+def test_drive_train_losses_from_the_simulator_columns():
+    """A 2:1 gear at 80 %, a 90 % screw, 1 mN m friction with k_F 3: T_min at the motor written out
+    by hand, as the simulator's column holds it; the report's rebuild with MF 3 instead of the
+    scene's 2; the needed stall torque as the upper 95 % bound of P50 over four runs (= their largest,
+    the rank order statistic 4 of 4 for p = 0.5: 1 - 0.5^4 >= 0.95 is false, so no bound)."""
+    drive = dict(DRIVE, gear_ratio=2.0, gear_efficiency=0.8, screw_efficiency=0.9, friction_torque_Nm=0.001)
+    k = 2.0 * 0.8 * 0.9
+    s, d = np.array([0.004, 0.005, 0.003, 0.0045]), np.array([0.001, 0.0, 0.002, 0.001])
+    loss = 3.0 * 0.001
+    t_min = 2.0 * (1.2 * s / k + loss) + 1.25 * d / k
+    avail = np.array([0.012, 0.012, 0.012, 0.012])
+    c = make_campaign({"peak_drive_force_N": np.ones(4)}, drive=drive, motor_torque_at_speed=avail,
+                      motor_declared_by="c.toml:3")
+    c.base_scene["motorisation"] = {"factor": 2.0, "spring_factor": 1.2, "inertia_factor": 1.25}
+    e = extras(s, d)
+    e.runs.update({"motorisation_required_torque_Nm": t_min, "motorisation_available_torque_Nm": avail,
+                   "motorisation_stall_torque_Nm": 0.03 * t_min / avail})
+    m = compute_margins(c, e, level=50.0)
+    assert m.t_min_design == pytest.approx(max(t_min), rel=1e-14)
+    assert m.mf_min == pytest.approx(min((avail - 1.25 * d / k) / (1.2 * s / k + loss)), rel=1e-14)
+    assert m.n_below == int(np.sum(avail < t_min))
+    assert np.isnan(m.stall_needed) and m.stall_n_needed == 5      # 1 - 0.5^5 >= 0.95 needs 5 runs
+    m3 = compute_margins(c, e, mf_required=3.0, level=50.0)
+    assert m3.t_min_design == pytest.approx(max(3.0 * (1.2 * s / k + loss) + 1.25 * d / k), rel=1e-13)
+    e8 = extras(np.repeat(s, 2), np.repeat(d, 2))
+    e8.runs.update({k2: np.repeat(v, 2) for k2, v in e.runs.items() if k2.startswith("motorisation")})
+    c8 = make_campaign({"peak_drive_force_N": np.ones(8)}, drive=drive, motor_torque_at_speed=np.repeat(avail, 2),
+                       motor_declared_by="c.toml:3")
+    c8.base_scene["motorisation"] = c.base_scene["motorisation"]
+    m8 = compute_margins(c8, e8, level=50.0)
+    need = np.sort(np.repeat(0.03 * t_min / avail, 2))
+    # Upper 95 % bound of the median from 8 runs: rank s with F_Binom(s - 1; 8, 0.5) >= 0.95: s = 7.
+    assert m8.stall_needed == pytest.approx(need[6], rel=1e-14)

@@ -41,7 +41,7 @@ def test_per_bay_bound():
     rng = np.random.default_rng(3)
     x = rng.uniform(0.0, 1.0, (3000, 2))
     x[:, 1] *= 2.0
-    e = Extras(bays={"peak_pin_force_N": x})
+    e = Extras(bays={"peak_pin_force_N": x, "latch_energy_J": x})
     ms = calc_bay_margins(e, np.ones(3000, bool), 99.865, 0.95, {"pin_force_yield_allowable_N": 2.0})
     assert [m.bay for m in ms] == [1, 2]
     # The upper bound of the 0.99865 quantile: an order statistic at or above the 2996th of 3000.
