@@ -36,9 +36,14 @@ struct File {
 File* of(H5FD_t* f) { return reinterpret_cast<File*>(f); }
 const File* of(const H5FD_t* f) { return reinterpret_cast<const File*>(f); }
 
-// HDF5's error stack gets the driver's failures through its return codes; the message goes with
-// the error number (errno) that the caller's check reports.
-herr_t fail() { return -1; }
+// A failed system call onto HDF5's error stack, worded as HDF5's own drivers word it (the system's
+// message quoted: io/h5_util.cpp shows it), and the failure's return code.
+herr_t fail(const char* what, hid_t minor) {
+  const int err = errno;
+  H5Epush2(H5E_DEFAULT, __FILE__, what, __LINE__, H5E_ERR_CLS, H5E_IO, minor,
+           "%s failed: errno = %d, error message = '%s'", what, err, std::strerror(err));
+  return -1;
+}
 
 void* fapl_copy(const void* info) {
   auto* c = new (std::nothrow) DriverInfo;
@@ -86,7 +91,7 @@ herr_t close_file(H5FD_t* h) {
   File* f = of(h);
   const int r = ::close(f->fd);
   delete f;
-  return r == 0 ? 0 : fail();
+  return r == 0 ? 0 : fail("file close", H5E_CANTCLOSEFILE);
 }
 
 int compare(const H5FD_t* a, const H5FD_t* b) {
@@ -121,12 +126,12 @@ bool bad_region(haddr_t addr, size_t size) {
 }
 
 herr_t read(H5FD_t* h, H5FD_mem_t, hid_t, haddr_t addr, size_t size, void* buf) {
-  if (bad_region(addr, size)) return fail();
+  if (bad_region(addr, size)) return fail("file read (address overflow)", H5E_READERROR);
   auto* p = static_cast<unsigned char*>(buf);
   while (size > 0) {
     const ssize_t n = ::pread(of(h)->fd, p, size, static_cast<off_t>(addr));
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) return fail();
+    if (n < 0) return fail("file read", H5E_READERROR);
     if (n == 0) {  // past the end of the file, not of the allocation: zeros
       std::memset(p, 0, size);
       break;
@@ -140,7 +145,7 @@ herr_t read(H5FD_t* h, H5FD_mem_t, hid_t, haddr_t addr, size_t size, void* buf) 
 
 herr_t write(H5FD_t* h, H5FD_mem_t type, hid_t, haddr_t addr, size_t size, const void* buf) {
   File* f = of(h);
-  if (bad_region(addr, size)) return fail();
+  if (bad_region(addr, size)) return fail("file write (address overflow)", H5E_WRITEERROR);
   if (type == H5FD_MEM_DRAW && buf == Placement::kBytes && f->state->placing()) {
     f->state->record(addr, size);
     return 0;
@@ -149,7 +154,7 @@ herr_t write(H5FD_t* h, H5FD_mem_t type, hid_t, haddr_t addr, size_t size, const
   while (size > 0) {
     const ssize_t n = ::pwrite(f->fd, p, size, static_cast<off_t>(addr));
     if (n < 0 && errno == EINTR) continue;
-    if (n < 0) return fail();
+    if (n < 0) return fail("file write", H5E_WRITEERROR);
     size -= static_cast<size_t>(n);
     addr += static_cast<haddr_t>(n);
     p += n;
@@ -162,7 +167,7 @@ herr_t write(H5FD_t* h, H5FD_mem_t type, hid_t, haddr_t addr, size_t size, const
 herr_t truncate(H5FD_t* h, hid_t, hbool_t) {
   File* f = of(h);
   if (f->eoa == f->eof) return 0;
-  if (::ftruncate(f->fd, static_cast<off_t>(f->eoa)) != 0) return fail();
+  if (::ftruncate(f->fd, static_cast<off_t>(f->eoa)) != 0) return fail("file truncate", H5E_SEEKERROR);
   f->eof = f->eoa;
   return 0;
 }
