@@ -161,7 +161,9 @@ void Collector::Restore::scan_parts(const std::string& output) {
       f.session = static_cast<std::int64_t>(s);
       f.rank = r;
       std::error_code ec;
-      if (!fs::exists(fs::symlink_status(f.path, ec))) continue;
+      // None (a rank that built no chunk), or cut before its header was written out: no record.
+      if (!fs::exists(fs::symlink_status(f.path, ec)) || fs::file_size(f.path, ec) < results::kPartHeaderBytes)
+        continue;
       results::Journal j = results::Journal::open_part(f.path, crc, f.session, r);
       FrameKind kind{};
       std::string_view payload;

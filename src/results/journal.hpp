@@ -61,6 +61,10 @@ struct JournalRefused : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The size of a part journal's header: a shorter part journal was cut before its header was
+// written out (its rank killed at its first record), and holds no record.
+inline constexpr std::size_t kPartHeaderBytes = 8 + 4 + 4 + 8 + 4 + 4;
+
 // The part journal of `rank` in session `session` of the campaign writing `output`.
 std::string part_journal_path(const std::string& output, std::int64_t session, int rank);
 // Removes every part journal of `output` (OUTPUT.journal.S.R); returns their paths. Call while
