@@ -20,6 +20,7 @@
 #include "io/h5_util.hpp"
 #include "io/scene_toml.hpp"
 #include "parallel/campaign_output.hpp"
+#include "parallel/engine_detail.hpp"
 #include "parallel/interrupt.hpp"
 #include "parallel/owner.hpp"
 #include "parallel/progress.hpp"
@@ -262,6 +263,7 @@ int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& c
     engine.attach(*owner, nullptr);
   }
   engine.set_rank0_chunks(setup.rank0_chunks);
+  detail::set_abort_removes(setup.temporary);
   return kExitOk;
 }
 

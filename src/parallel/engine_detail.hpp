@@ -29,7 +29,10 @@ inline constexpr int kTagPlacement = 19;    // rank 0 -> owner: where a chunk go
 inline constexpr int kTagWindows = 20;      // rank 0 -> owner: the windows (a placement of no chunk)
 inline constexpr int kTagFinished = 21;     // owner -> rank 0: its chunks written and synced
 
+// A fatal error on any rank: the results file's temporary name removed (set_abort_removes; the
+// journals keep every finished run for --resume), the job aborted (exit 3).
 [[noreturn]] void abort_job(MPI_Comm comm, const char* where, const std::exception& e);
+void set_abort_removes(const std::string& temporary);
 
 // Sleeps between polls: 20 us at first, doubling up to max_us; reset() after progress.
 class Backoff {

@@ -3,8 +3,11 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
+#include <string>
 #include <utility>
 #include <vector>
+
+#include <unistd.h>
 
 #include "parallel/engine_detail.hpp"
 #include "parallel/interrupt.hpp"
@@ -15,7 +18,17 @@ namespace {
 using Clock = std::chrono::steady_clock;
 }
 
+namespace {
+std::string& abort_removes() {
+  static std::string path;  // the session's temporary results file, once every rank knows it
+  return path;
+}
+}  // namespace
+
+void set_abort_removes(const std::string& temporary) { abort_removes() = temporary; }
+
 void abort_job(MPI_Comm comm, const char* where, const std::exception& e) {
+  if (!abort_removes().empty()) ::unlink(abort_removes().c_str());
   int rank = 0;
   MPI_Comm_rank(comm, &rank);
   std::fprintf(stderr, "truss-campaign: fatal error on rank %d in %s: %s\n", rank, where, e.what());
