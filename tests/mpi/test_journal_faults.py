@@ -359,8 +359,9 @@ def case_faults(args):
             how = "results written without a resume (the job ended before the kill took effect, or ranks outlived mpirun)"
         else:
             p = run(args, args.ranks, campaign_args(args, out, cost) + ["--resume"])
+            errors = [ln for ln in p.stderr.splitlines() if "error" in ln]
             check(p.returncode == 0, f"trial {trial}: --resume after kill -9 of {target} at {delay:.2f} s "
-                                     f"({p.stderr.strip()[-200:]})")
+                                     f"({errors[:2] or p.stderr.strip()[-200:]})")
             how = "resumed"
             resumed[target] = resumed.get(target, 0) + 1
         same, why = same_values(expected, datasets(out))
