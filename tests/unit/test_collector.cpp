@@ -272,3 +272,42 @@ TEST_CASE("collector: a round that misses records ends the restored rounds", "[e
   for (std::int64_t r = 0; r < 1200; ++r) CHECK(session[static_cast<std::size_t>(r)] == (r < 550 ? 0 : 1));
   fs::remove_all(dir);
 }
+
+// A resume in the middle of a later round: round 0 complete, round 1 journaled with part of its
+// records. The rounds are planned again in order (round 0's plan first, then round 1's): the runs
+// restored in round 1 stay in and are not handed out again, and the session completes round 1 with
+// the others only.
+TEST_CASE("collector: a resume inside a later round keeps that round's restored runs", "[engine]") {
+  const fs::path dir = fs::temp_directory_path() / ("truss_collector_r1_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string out = (dir / "c.h5").string();
+  const campaign::CampaignContext ctx(campaign::test::small_campaign("monte_carlo", 600));
+  const campaign::RecordLayout& L = ctx.record;
+  FixedRounds rounds(2);
+  {
+    Session s(ctx, rounds, out, false);
+    s.collector->start_session(0.0, 2);  // the records say rank 1 computed them
+    s.plan(0, 0);
+    for (std::int64_t r = 0; r < 600; ++r) s.add(frame(L, r, 0));
+    REQUIRE(s.plan(1, 600).n_runs == 600);
+    for (std::int64_t r = 600; r < 900; ++r) s.add(frame(L, r, 1));
+    s.collector->tick(true);
+  }
+  {
+    Session s(ctx, rounds, out, true);
+    CHECK(s.restore().records == 900);
+    const methods::RoundPlan p0 = s.plan(0, 0);
+    CHECK(s.collector->round_complete(p0));
+    const methods::RoundPlan p1 = s.plan(1, 600);
+    std::int64_t in = 0;
+    for (std::int64_t r = 600; r < 1200; ++r) in += s.collector->has(r);
+    CHECK(in == 300);
+    for (std::int64_t r = 900; r < 1200; ++r) s.add(frame(L, r, 1));
+    CHECK(s.collector->round_complete(p1));
+    CHECK(s.plan(2, 1200).n_runs == 0);
+    s.finish();
+  }
+  const auto session = read_sessions(out, 1200);
+  for (std::int64_t r = 0; r < 1200; ++r) CHECK(session[static_cast<std::size_t>(r)] == (r < 900 ? 0 : 1));
+  fs::remove_all(dir);
+}
