@@ -311,10 +311,11 @@ std::string resume_command(int argc, char** argv, int size) {
 [[noreturn]] void leave_interrupted(int argc, char** argv, int size, Rank0& r0, ChunkOwner* owner) {
   const int sig = interrupt_signal();
   if (r0.collector) {
-    std::fprintf(stderr, "[truss-campaign] interrupted (%s): at least %lld of %lld runs are kept in the journal %s; "
-                 "resume with: %s\n", sig == SIGINT ? "SIGINT" : "SIGTERM",
-                 static_cast<long long>(r0.collector->n_done()), static_cast<long long>(r0.collector->store().n_runs()),
-                 r0.journal->path().c_str(), resume_command(argc, argv, size).c_str());
+    std::fprintf(stderr, "[truss-campaign] interrupted (%s) after %lld of %lld runs: their records are kept in the "
+                 "journal %s (one still on its way to its chunk's rank is computed again); resume with: %s\n",
+                 sig == SIGINT ? "SIGINT" : "SIGTERM", static_cast<long long>(r0.collector->n_computed()),
+                 static_cast<long long>(r0.collector->store().n_runs()), r0.journal->path().c_str(),
+                 resume_command(argc, argv, size).c_str());
     std::fflush(stderr);
   }
   if (owner) owner->write_out_journal();
