@@ -25,16 +25,14 @@ Every number in a table carries `data-key` (a stable name) and `data-value` (the
 Python repr) attributes; the visible text is rounded. docs/report.md describes the content and
 the statistical methods.
 
-The code is the package truss_report/ beside this file (reading, statistics, figures, HTML).
+The code is the package truss_report/ beside this file (reading -> judging -> page).
 
 Needs numpy, scipy, h5py, matplotlib and WeasyPrint (Debian: python3-numpy python3-scipy
 python3-h5py python3-matplotlib weasyprint) and Python >= 3.11.
 """
-import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from truss_report.cli import main  # noqa: E402  (the package beside this file)
+from truss_report.cli import main  # the package beside this file
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -11,6 +11,7 @@ PKGS=(build-essential cmake pkg-config
       python3-venv        # the truss-report package installed into a venv (test postproc_install)
       weasyprint          # the report's PDF for signature (postproc/report.py writes report.pdf)
       poppler-utils       # pdftotext: the tests read the PDF's document block (postproc_verdicts)
+      python3-mypy        # type check of the report's reading and judging layers (postproc_mypy)
       python3-xarray python3-h5netcdf  # xarray opens the campaign file with named dimensions (mpi_layout)
       help2man            # man pages from --help (cmake --install)
       python3-openturns   # independent cross-check of the Sobol' indices and sample marginals (tests); examples/openturns_form.py

@@ -1,41 +1,47 @@
 """truss_report: the statistical load report of a truss-campaign results file, and the report of
-a single run (postproc/report.py is its command line).
+a single run (postproc/report.py is its command line), in three layers, each importing only the
+ones before it:
 
-Modules:
-    constants          reported outputs, percentile levels, limits
-    h5read             reading and checking the HDF5 files (campaign and single run)
-    stats              percentiles, order-statistic intervals, Clopper-Pearson, Spearman, checks
-    page               HTML building: numbers with data-key, tables, the page, CSS
-    figures            matplotlib figures
-    sections_campaign  campaign, status, failures, dispersions, loads, lock timing sections
-    sections_margins   margins, sensitivity, histories, consistency checks; the campaign report
-    sections_sweep     a design sweep's report (/sweep): p against the design value, the allowable
-    single_run         the single-run report (paper Fig. 4 and 5)
-    cli                output directory handling, build(), main()
+    reading   typed readers of the HDF5 files (h5file, run, campaign, extras, methods, frame)
+    judging   statistics, design loads, mechanism margins, consistency checks, verdicts
+    page      sections, figures, units on the page, HTML, the run table as CSV
+
+cli (the command line: reading -> judging -> page, the PDF) and argparser sit on top.
+
+    from truss_report import read_campaign, read_sweep
 """
-import os
-import sys
+from collections.abc import Sequence
 
-# run_figures.py (paper figures, HDF5 text helpers) lives beside this package.
-_HERE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-if _HERE not in sys.path:
-    sys.path.insert(0, _HERE)
+import pandas as pd
+
+from .judging.sweep import sweep_frame
+from .reading.frame import read_campaign as _read_campaign
+from .reading.methods import read_sweep_table
+
+__all__ = ["read_campaign", "read_sweep"]
 
 
-def read_campaign(path):
-    """A campaign file as a pandas DataFrame (truss_report.dataframe.read_campaign); a design
-    sweep's per-value table (read_sweep) in df.attrs["sweep"]."""
-    from .dataframe import read_campaign as _read
-    from .sections_sweep import read_sweep as _sweep
-    df = _read(path)
-    sweep = _sweep(path)
+def read_campaign(path: str, columns: str | Sequence[str] | None = None) -> pd.DataFrame:
+    """A campaign file as a pandas DataFrame, one row per run: the per-run columns, and the per-bay
+    ones named in `columns` (or all with columns="all"; truss_report.reading.frame.read_campaign);
+    a design sweep's per-value table (read_sweep) in df.attrs["sweep"]."""
+    df = _read_campaign(path, columns)
+    sweep = read_sweep(path)
     if sweep is not None:
         df.attrs["sweep"] = sweep
     return df
 
 
-def read_sweep(path):
-    """A design sweep's /sweep as a pandas DataFrame, one row per design value, the allowable in
-    df.attrs["allowable"] (truss_report.sections_sweep.read_sweep); None without a sweep."""
-    from .sections_sweep import read_sweep as _read
-    return _read(path)
+def read_sweep(path: str) -> pd.DataFrame | None:
+    """A design sweep's /sweep as a pandas DataFrame, one row per design value: value (the design
+    value), p, cov, upper_bound (one-sided, at the confidence), lower and upper (two-sided
+    interval), runs, failures (Monte Carlo's count; -1 for subset simulation), master_seed (of the
+    value's standalone campaign), index (the design value's index k: /sweep/inner/<k>), refinement
+    (True for a value the refinement placed inside the bracket of the listed values' allowable),
+    status, message, plateau_levels (subset simulation's levels on a plateau of the margin; 0 for
+    the other methods). df.attrs: the /sweep attributes (variable, target_probability, confidence,
+    inner_method, failure event; the design variable's unit as design_units), "units" per column,
+    and "allowable" (a dict: status, value, estimate, lower, upper, own_value, safe_side, verdict,
+    message, method). None when the file has no /sweep."""
+    t = read_sweep_table(path)
+    return sweep_frame(t) if t is not None else None

@@ -1,21 +1,43 @@
-"""truss_report.cli: see the package docstring (postproc/truss_report/__init__.py)."""
+"""truss_report.cli: the report's command line (postproc/report.py, truss-report): the output
+directory, reading -> judging -> page, the staging directory, the PDF, the exit status."""
+import logging
+import multiprocessing
 import os
 import shutil
 import sys
 import tempfile
+import time
 import warnings
 
-import run_figures as rf
-from run_figures import InputError
-from .constants import CONFIDENCE, EXIT_INPUT_ERROR, EXIT_VERDICT, REPORT_NAME
-from .extras import load_extras
-from .h5read import H5, file_sha256, load_campaign, load_single_run, read_kind
-from .mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY
-from .page import Page
-from .sections_design import campaign_report, section_nominal
-from .sections_subset import read_stop, read_subset, subset_report
-from .sections_sweep import read_sweep, sweep_report
-from .single_run import single_run_report
+import matplotlib
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402  (after the backend)
+
+from .argparser import ArgParser  # noqa: E402
+from .judging.campaign import JudgeOptions, judge_campaign  # noqa: E402
+from .judging.mechanism import DEFAULT_INERTIA, DEFAULT_MF, DEFAULT_UNCERTAINTY  # noqa: E402
+from .judging.stats import CONFIDENCE  # noqa: E402
+from .judging.sweep import sweep_frame  # noqa: E402
+from .judging.verdict import FAIL, NOT_ASSESSED, PASS  # noqa: E402
+from .page.render import Page  # noqa: E402
+from .page.run_table import write_run_table  # noqa: E402
+from .page.sections_design import campaign_report, section_nominal  # noqa: E402
+from .page.sections_subset import subset_report  # noqa: E402
+from .page.sections_sweep import sweep_report  # noqa: E402
+from .page.single_run import single_run_report  # noqa: E402
+from .reading.campaign import load_campaign  # noqa: E402
+from .reading.extras import load_extras  # noqa: E402
+from .reading.frame import read_campaign  # noqa: E402
+from .reading.h5file import EXIT_INPUT_ERROR, H5, InputError, file_sha256, open_h5, read_kind  # noqa: E402
+from .reading.methods import read_subset, read_sweep_table  # noqa: E402
+from .reading.run import load_single_run  # noqa: E402
+
+REPORT_NAME = "report.html"
+# Exit status of a written campaign report, by its verdict (postproc/report.py's docstring):
+# 0 PASS (and every report without a verdict: a single run, a subset campaign), 3 FAIL (the
+# evidence violates a requirement), 4 NOT ASSESSED (nothing fails, but the runs cannot decide
+# every requirement). 1 is left to an unexpected error, 2 to bad input.
+EXIT_VERDICT = {PASS: 0, FAIL: 3, NOT_ASSESSED: 4}
 
 CSV_NAME = "runs.csv"
 PDF_NAME = "report.pdf"
@@ -29,8 +51,8 @@ def check_outdir(outdir, force):
             raise InputError(f"{outdir}: directory is not empty; use --force to write into it")
 
 
-# Text in the figures: 10 pt (9 pt ticks and keys). A figure row is at most 15 inches at 150 dpi
-# and shows at about 0.6 of that on the page, so that 9 pt is still about 11 px on screen.
+# Text in the figures: 10 pt (9 pt ticks and keys). A figure row is at most 15 inches at 110 dpi
+# (1650 px) and shows at about 0.85 of that on a 1400-pixel page: 9 pt is still about 11 px.
 FIGURE_STYLE = {"font.size": 10, "axes.titlesize": 10, "axes.labelsize": 10, "legend.fontsize": 9,
                 "xtick.labelsize": 9, "ytick.labelsize": 9, "figure.titlesize": 11,
                 "axes.formatter.useoffset": False}   # ticks show the values, never "1e-6+145.06"
@@ -41,7 +63,6 @@ class Progress:
     read and checked: a refused input gets its one error line only)."""
 
     def __init__(self, quiet=False):
-        import time
         self.t0, self.quiet, self.clock = time.monotonic(), quiet, time.monotonic
 
     def __call__(self, what):
@@ -53,8 +74,7 @@ class Progress:
 def _write_csv(path, out):
     """Child process: the run table as CSV (exit 1 on any error, said on stderr)."""
     try:
-        from .dataframe import read_campaign, write_run_table
-        write_run_table(read_campaign(path), out)
+        write_run_table(read_campaign(path, columns="all"), out)
     except Exception as e:       # noqa: BLE001 - reported by the parent as a failed CSV
         sys.stderr.write(f"error: {out}: {e}\n")
         os._exit(1)
@@ -65,7 +85,6 @@ def start_csv(path, staging):
     """Writes DIR/runs.csv in a child process while this one draws the report (formatting six
     million numbers is the report's largest single cost). Forked before this process opens the
     HDF5 file (the child opens its own)."""
-    import multiprocessing
     proc = multiprocessing.get_context("fork").Process(
         target=_write_csv, args=(path, os.path.join(staging, CSV_NAME)), daemon=True)
     proc.start()
@@ -74,17 +93,44 @@ def start_csv(path, staging):
 
 def write_pdf(staging, progress):
     """DIR/report.pdf from DIR/report.html (WeasyPrint: A4, page numbers in the footer)."""
-    import logging
     logging.getLogger("weasyprint").setLevel(logging.ERROR)
     logging.getLogger("fontTools").setLevel(logging.ERROR)
     try:
-        import weasyprint
+        import weasyprint   # optional: --no-pdf runs without it
     except ImportError:
         raise InputError("the PDF needs WeasyPrint (Debian: apt-get install weasyprint); "
                          "--no-pdf writes the HTML only") from None
     progress(f"writing {PDF_NAME}")
     weasyprint.HTML(filename=os.path.join(staging, REPORT_NAME)).write_pdf(
         os.path.join(staging, PDF_NAME))
+
+
+def read_file(path, kind, sha256):
+    """Everything the report shows, read and checked (InputError on a damaged file)."""
+    with open_h5(path) as f:
+        h5 = H5(f, path)
+        try:
+            if kind != "campaign":
+                return load_single_run(h5, sha256), None, None, None
+            c = load_campaign(h5, sha256)
+            return c, read_subset(h5), read_sweep_table(f), load_extras(h5, c)
+        except (OSError, RuntimeError) as e:
+            raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
+
+
+def render(page, kind, data, subset, sweep, extras, opts):
+    """The Report of what read_file gave: judged, then drawn."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        if kind != "campaign":
+            return single_run_report(page, data)
+        if sweep is not None:  # runs of one campaign per design value: no design loads
+            return sweep_report(page, data, sweep_frame(sweep), opts.revision, section_nominal(page, extras))
+        if subset is not None:  # the runs are not draws: no design loads
+            return subset_report(page, data, subset, opts.revision, section_nominal(page, extras))
+        j = judge_campaign(data, extras, JudgeOptions(opts.levels, opts.confidence, opts.motorisation_factor,
+                                                      opts.uncertainty_factor, opts.inertia_factor))
+        return campaign_report(page, data, extras, j, opts)
 
 
 def build(path, outdir, force, opts=None, progress=None):
@@ -95,41 +141,20 @@ def build(path, outdir, force, opts=None, progress=None):
     progress = progress or Progress(quiet=True)
     check_outdir(outdir, force)
     sha256 = file_sha256(path) if os.path.isfile(path) else ""
-    with rf.open_h5(path) as f:
+    with open_h5(path) as f:
         kind = read_kind(H5(f, path))
     parent = os.path.dirname(os.path.abspath(outdir))
     os.makedirs(parent, exist_ok=True)
     staging = tempfile.mkdtemp(prefix=f".{os.path.basename(outdir)}.", dir=parent)
     csv = start_csv(path, staging) if kind == "campaign" and opts.csv else None
     try:
-        with rf.open_h5(path) as f:
-            h5 = H5(f, path)
-            try:
-                data = load_campaign(h5, sha256) if kind == "campaign" else load_single_run(h5, sha256)
-                subset = read_subset(f) if kind == "campaign" else None
-                sweep = read_sweep(f) if kind == "campaign" else None
-                if kind == "campaign":
-                    data.stop = read_stop(f)
-                extras = load_extras(h5, data) if kind == "campaign" else None
-            except (OSError, RuntimeError) as e:
-                raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
-            progress(f"{path}: {kind.replace('_', ' ')}"
-                     + (f", {data.n} runs" if kind == "campaign" else "") + ", read and checked"
-                     + (f"; writing {CSV_NAME} beside" if csv else ""))
-            import matplotlib
-            matplotlib.use("Agg")
-            import matplotlib.pyplot as plt
-            plt.rcParams.update(FIGURE_STYLE)
-            page = Page(staging, plt, progress)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RuntimeWarning)
-                if sweep is not None:  # runs of one campaign per design value: no design loads
-                    text = sweep_report(page, data, sweep, opts, section_nominal(page, extras))
-                elif subset is not None:  # the runs are not draws: no design loads
-                    text = subset_report(page, data, subset, opts, section_nominal(page, extras))
-                else:
-                    text = (campaign_report(page, data, extras, opts) if kind == "campaign"
-                            else single_run_report(page, data))
+        data, subset, sweep, extras = read_file(path, kind, sha256)
+        progress(f"{path}: {kind.replace('_', ' ')}"
+                 + (f", {data.n} runs" if kind == "campaign" else "") + ", read and checked"
+                 + (f"; writing {CSV_NAME} beside" if csv else ""))
+        plt.rcParams.update(FIGURE_STYLE)
+        page = Page(staging, plt, progress)
+        report = render(page, kind, data, subset, sweep, extras, opts)
         page.finish()
         if csv is not None:
             csv.join()
@@ -137,7 +162,7 @@ def build(path, outdir, force, opts=None, progress=None):
                 raise RuntimeError(f"writing {CSV_NAME} failed (exit {csv.exitcode})")
             page.files.append(CSV_NAME)
         with open(os.path.join(staging, REPORT_NAME), "w", encoding="utf-8") as fh:
-            fh.write(text)
+            fh.write(report.html)
         if opts.pdf:
             write_pdf(staging, progress)
             page.files.append(PDF_NAME)
@@ -148,12 +173,11 @@ def build(path, outdir, force, opts=None, progress=None):
         if csv is not None and csv.is_alive():
             csv.terminate()
         shutil.rmtree(staging, ignore_errors=True)
-    return os.path.join(outdir, REPORT_NAME), getattr(page, "summary", []), \
-        getattr(page, "verdict", None)
+    return os.path.join(outdir, REPORT_NAME), report.summary, report.verdict
 
 
 def parse_args(argv=None):
-    p = rf._Parser(prog="truss-report",
+    p = ArgParser(prog="truss-report",
                    description="Load report (HTML + PNG) of a truss-campaign file, with the "
                                "verdict and the design loads on top, or the report of a "
                                "truss-sim single-run file.")

@@ -141,7 +141,8 @@ void parse_scene_table(const Ctx& c, const toml::table& t, CampaignOptions& o) {
             {std::string(k.str()) + "." + std::string(sk.str()) + "=" + toml_value_text(sv), where_of(c, sv)});
     } else {
       c.fail(&v, unknown_key_text(key, "scene.file, scene.overrides, and scene tables [scene.mast], "
-                             "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run]"));
+                             "[scene.rail], [scene.drive], [scene.stack], [scene.panels], [scene.run], "
+                             "[scene.motorisation]"));
     }
   }
   o.scene_settings = inline_settings;

@@ -53,6 +53,10 @@ std::string SceneOptions::validate() const {
   CHECK(positive("drive.torque_Nm", drive.torque_Nm));
   CHECK(positive("drive.stall_torque_Nm", drive.stall_torque_Nm));
   CHECK(positive("drive.no_load_speed_rad_per_s", drive.no_load_speed_rad_per_s));
+  if (!(drive.screw_back_efficiency > 0.0))
+    return fmt::format("drive.screw_back_efficiency: must lie in (0, 1], got {}: a self-locking lead screw "
+                       "(tan(lambda - phi) <= 0) cannot be backdriven, and the drive train's law needs it to be "
+                       "(docs/model-notes.md \"Drive train\")", drive.screw_back_efficiency);
   if (run.integrator == IntegratorKind::ida && stack.mode != StackMode::free)
     return "run.integrator: \"ida\" solves the free stack's phases only (stack.mode = \"free\"); the held stack "
            "has one coordinate per phase and no rail multiplier: use \"dopri54\", \"dop853\", \"cvode\", \"cvode_adams\" or \"auto\"";

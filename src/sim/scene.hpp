@@ -10,6 +10,7 @@
 
 #include "integrators/ode.hpp"
 #include "model/drive.hpp"
+#include "model/motorisation.hpp"
 #include "model/params.hpp"
 #include "stages/run_options.hpp"
 #include "stages/stage_plan.hpp"
@@ -55,6 +56,8 @@ struct RailOptions {
 
 // The drive options are the model's drive parameters (model/drive.hpp): one type, one default.
 using DriveOptions = model::DriveParams;
+// The motorisation check's factors (model/motorisation.hpp, ECSS-E-ST-33-01C 4.7.5.3.1).
+using MotorisationOptions = model::MotorisationFactors;
 
 struct StackOptions {
   StackMode mode = StackMode::held;  // docs/model.md §2: the canister holds stowed frames
@@ -86,6 +89,7 @@ struct SceneOptions {
   StackOptions stack;
   PanelOptions panels;
   RunOptions run;
+  MotorisationOptions motorisation;
 
   // Returns an empty string when valid, else "key: reason" naming the first bad key
   // (e.g. "rail.beta_deg: must lie in (0, 90) degrees, got 95").

@@ -45,7 +45,7 @@ RunResult simulate(const SceneOptions& scene, const model::MastParams& mast) {
   if (e.empty()) e = validate_panels(mast);
   if (!e.empty()) return invalid(e);
 
-  stages::RunnerOptions ro{scene.drive, scene.run};
+  stages::RunnerOptions ro{scene.drive, scene.run, scene.motorisation};
   ro.wall_start = t0;
   RunResult r = stages::run_stages(mast, plan, ro, make_stack_model(mast, plan, ro));
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

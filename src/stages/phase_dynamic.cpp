@@ -214,7 +214,7 @@ std::unique_ptr<integrators::OdeSystem> make_phase_ode(const PhaseModel& model, 
 }
 
 double DynamicPhaseSolver::calc_creep_speed_m_per_s(const model::DriveParams& d) {
-  return kCreepSpeedFraction * d.no_load_speed_rad_per_s * d.screw_lead_m / (2.0 * std::numbers::pi);
+  return kCreepSpeedFraction * d.calc_no_load_screw_speed_rad_per_s() * d.screw_lead_m / (2.0 * std::numbers::pi);
 }
 
 PhaseOutcome DynamicPhaseSolver::solve(const PhaseStart& start, PhaseSinks& sinks) {

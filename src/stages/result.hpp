@@ -80,6 +80,10 @@ struct RunResult {
   // N m, > 0 safe): motor_torque_at_speed_Nm - peak_drive_torque_Nm, negative when the drive needs
   // more torque at some instant than the motor gives at the prescribed speed. NaN in the other modes.
   double motor_torque_margin_Nm = NAN_INIT();
+  // The torque the motor must give (N m at the motor shaft, along the run direction, peak over the
+  // smooth motion): the peak drive force along the run direction through the drive train's
+  // inverse, with its losses (model/drive.hpp; the peak drive torque for an ideal train).
+  double peak_motor_torque_Nm = NAN_INIT();
   // The drive torque split into its resistances (the three screws together, along the run
   // direction, peaks over the smooth motion; impulses apart): static = the torque that holds the
   // mast at rest in each configuration (the diagonals' springs, the model's only resistance; the
@@ -87,6 +91,16 @@ struct RunResult {
   // equilibrium), and inertial = drive torque - static (what accelerates the mast).
   double peak_static_drive_torque_Nm = NAN_INIT();
   double peak_inertial_drive_torque_Nm = NAN_INIT();
+  // The motorisation check of ECSS-E-ST-33-01C 4.7.5.3.1 (model/motorisation.hpp; docs/model-notes.md
+  // "Motorisation check"), every drive mode: T_min from the peaks above referred to the motor and the
+  // train's losses, each with its factor (N m at the motor shaft); the actuator's torque it is
+  // judged by (N m); the margin T_available / T_min - 1 (1, > 0 when the factors are met; NaN
+  // when nothing resists); and the motor's stall torque that meets them exactly (N m, before
+  // derating; velocity and motor modes).
+  double motorisation_required_torque_Nm = NAN_INIT();
+  double motorisation_available_torque_Nm = NAN_INIT();
+  double motorisation_margin = NAN_INIT();
+  double motorisation_stall_torque_Nm = NAN_INIT();
   double peak_pin_force_N = NAN_INIT();
   double peak_pin_force_time_s = NAN_INIT();
   int peak_pin_force_bay = 0;

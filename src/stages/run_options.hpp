@@ -8,6 +8,7 @@
 
 #include "integrators/ode.hpp"
 #include "model/drive.hpp"
+#include "model/motorisation.hpp"
 
 namespace truss::stages {
 
@@ -32,6 +33,7 @@ struct RunOptions {
 struct RunnerOptions {
   model::DriveParams drive;                  // the scene's [drive] table
   RunOptions run;                            // the scene's [run] table
+  model::MotorisationFactors motorisation;   // the scene's [motorisation] table
   int peak_samples_per_piece = 4;            // velocity mode: samples a smooth piece, with their loads' rates (>= 3)
   // When the run started (its wall-time cap counts from here, the stage plan and the stack
   // model's set-up included); the epoch: when run_stages starts.

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "model/impacts.hpp"
+#include "model/motorisation.hpp"
 #include "model/rail.hpp"
 #include "stages/energy.hpp"
 #include "stages/phase_dynamic.hpp"
@@ -40,6 +41,7 @@ class StageLoop {
   void fail_stop(const SegmentEnd& e, int m);
   void close_stage(BayResult& br);
   void finish();
+  void fill_motor_torques();
   void check_accuracy();
   double calc_creep_speed_m_per_s() const {
     if (opts_.drive.mode == DriveMode::motor) return DynamicPhaseSolver::calc_creep_speed_m_per_s(opts_.drive);
@@ -264,9 +266,9 @@ void StageLoop::finish() {
   r_.min_drive_force_bay = run[kNegForce].bay;
   r_.peak_drive_torque_Nm = opts_.drive.calc_torque_Nm(r_.peak_drive_force_N);
   r_.min_drive_torque_Nm = opts_.drive.calc_torque_Nm(r_.min_drive_force_N);
-  r_.motor_torque_margin_Nm = r_.motor_torque_at_speed_Nm - r_.peak_drive_torque_Nm;  // NaN unless velocity mode
   r_.peak_static_drive_torque_Nm = opts_.drive.calc_torque_Nm(fin(run[kStaticForce].value)) + 0.0;  // + 0: no -0
   r_.peak_inertial_drive_torque_Nm = opts_.drive.calc_torque_Nm(fin(run[kInertialForce].value)) + 0.0;
+  fill_motor_torques();
   r_.peak_pin_force_N = fin(run[kPin].value);
   r_.peak_pin_force_time_s = run[kPin].t;
   r_.peak_pin_force_bay = run[kPin].bay;
@@ -294,6 +296,23 @@ void StageLoop::finish() {
   check_accuracy();
   r_.rhs_evals = evals_;
   r_.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count();
+}
+
+// The torque the motor must give and the motorisation check (model/drive.hpp, model/motorisation.hpp),
+// from the peaks: the largest force along the run direction is the peak force deploying and minus
+// the minimum retracting; the check's inertial resistance counts where a speed is prescribed. The
+// stall margin (velocity mode) drives the peak force along +y through the train: deploying, the
+// peak along the run; retracting, the largest holding force taken as one to drive (conservative).
+void StageLoop::fill_motor_torques() {
+  const model::DriveParams& d = opts_.drive;
+  r_.peak_motor_torque_Nm = d.calc_motor_torque_for_force_Nm(dir_ > 0 ? r_.peak_drive_force_N : -r_.min_drive_force_N);
+  r_.motor_torque_margin_Nm = r_.motor_torque_at_speed_Nm - d.calc_motor_torque_for_force_Nm(r_.peak_drive_force_N);
+  const double inertial = d.mode == DriveMode::velocity ? r_.peak_inertial_drive_torque_Nm : 0.0;
+  const model::MotorisationTorques res = model::calc_motorisation_torques(d, r_.peak_static_drive_torque_Nm, inertial);
+  r_.motorisation_required_torque_Nm = model::calc_required_torque_Nm(res, opts_.motorisation);
+  r_.motorisation_available_torque_Nm = model::calc_available_torque_Nm(d);
+  r_.motorisation_margin = model::calc_motorisation_margin(r_.motorisation_available_torque_Nm, r_.motorisation_required_torque_Nm);
+  r_.motorisation_stall_torque_Nm = model::calc_needed_stall_torque_Nm(d, r_.motorisation_required_torque_Nm);
 }
 
 // An `ok` run promises finite numbers and an energy balance within its tolerance (energy.hpp).

@@ -195,8 +195,12 @@ def disk_full_resume(args, d):
                 pass
         err = proc.communicate(timeout=300)[1]
         left = sorted(os.listdir(disk))
-        # The rank that ran out of space aborts the job; rank 0, stopped by mpirun's SIGTERM, lets its
-        # lock file go, or is killed first and leaves it (taken over by the next session).
+        # Which write meets the full disk first decides how the session ends: rank 0's (it ends in
+        # order and lets go of its lock) or a chunk owner's, journal or chunk bytes (that rank aborts
+        # the job; rank 0, stopped by mpirun's SIGTERM, lets its lock go, or is killed first and the
+        # lock file stays, held by no one, taken over by the next session). Either way the journals
+        # (rank 0's and the part journal of rank 1, which owns every chunk on 2 ranks) stay and no
+        # temporary file does.
         check(proc.returncode != 0 and "No space left on device" in err
               and [f for f in left if f != ".r.h5.lock"] == ["filler", "r.h5.journal", "r.h5.journal.0.1"],
               f"disk full mid-run: exit {proc.returncode}, '{err.strip().splitlines()[0][:120]}', left {left} (the "

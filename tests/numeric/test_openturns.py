@@ -283,8 +283,9 @@ def check_additive(path):
               f"(N = {n_blocks}): its Sobol' indices are biased at this N; not asserted below")
     # The report warns of the same factors (postproc: rank correlations over every bay/frame
     # column, so it may name more, never fewer, than this Pearson check on the first column's u).
-    from truss_report.h5read import H5, load_campaign
-    from truss_report.sections_margins import calc_design_correlations
+    from truss_report.reading.h5file import H5
+    from truss_report.reading.campaign import load_campaign
+    from truss_report.judging.correlations import calc_design_correlations
     with h5py.File(path, "r") as f:
         camp = load_campaign(H5(f, path), "")
     rep, rep_blocks = calc_design_correlations(camp, G)

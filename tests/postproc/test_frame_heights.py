@@ -8,7 +8,7 @@ Runs truss-sim on a 4-bay free stack (paper_free_slack) and a 2-bay held stack, 
    datasets y_driven_m / y_lower_m (written from the phase point, the frame heights from the state
    through another function); frames above the driven one sit 2 l_s apart (locked); frame 0 rests
    at 0 until bay 1's stage; a held-stack file has no such dataset;
-2. the figure: the lines of run_figures.fig_frame_heights are the file's columns, read here with
+2. the figure: the lines of truss_report.page.figures_run.fig_frame_heights are the file's columns, read here with
    h5py directly (top panel every frame, bottom panel each frame while below the driven frame);
 3. run_figures.py writes frame_heights.png for the free run and not for the held one, and the
    single-run report (report.py) shows it.
@@ -76,9 +76,10 @@ def main():
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    import run_figures as rf
-    run = rf.load_run(free)
-    fig = rf.fig_frame_heights(plt, run)
+    from truss_report.page.figures_run import fig_frame_heights
+    from truss_report.reading.run import load_run
+    run = load_run(free)
+    fig = fig_frame_heights(plt, run)
     top, bottom = fig.axes[0], fig.axes[1]
     check([ln.get_label() for ln in top.lines[:n + 1]] == [f"frame {k}" for k in range(n + 1)],
           "top panel: one line per frame, frames 0..n first (then the lock markers)")

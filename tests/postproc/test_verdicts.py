@@ -175,15 +175,15 @@ def check_no_offset_axes(a):
 
 
 def check_plateau(a):
-    """Levels on a plateau of the margin (sections_subset.count_plateau_levels) and their effect on a
+    """Levels on a plateau of the margin (judging.subset.count_plateau_levels) and their effect on a
     sweep's verdict. The thresholds are those of a free-stack tolerance sweep at a diagonal-length
     standard deviation of 3.7 mm (the first seven moves are 0.1-0.22 % of the threshold, by hand) and
     of the rare-failure campaign (one such move)."""
     sys.path.insert(0, os.path.join(a.repo, "postproc"))
     import pandas as pd
-    from truss_report.sections_subset import count_plateau_levels
-    from truss_report.sections_sweep import sweep_verdict
-    from truss_report.top import FAIL, NOT_ASSESSED, PASS
+    from truss_report.judging.subset import count_plateau_levels
+    from truss_report.judging.sweep import sweep_verdict
+    from truss_report.judging.verdict import FAIL, NOT_ASSESSED, PASS
     flat = [0.10587291, 0.10564159, 0.1054759, 0.10535398, 0.10523497, 0.10512915, 0.10503073, 0.10491016,
             0.06158238, 0.01592114, 0.0049516, 0.00155649, 0.0]
     check(count_plateau_levels(flat) == 7, f"7 plateau levels in the 3.7 mm sweep value's thresholds "

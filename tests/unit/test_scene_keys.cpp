@@ -26,13 +26,19 @@ std::vector<unsigned char> bytes_of(const sim::SceneOptions& s) {
   put(s.panels.length_m); put(s.panels.mass_kg); put(s.panels.tip_height_m.value_or(-1)); put(s.run.direction);
   put(s.run.output_step_s); put(s.run.rtol); put(s.run.atol); put(s.run.integrator); put(s.run.max_steps);
   put(s.run.max_wall_time_s); put(s.run.max_history_bytes);
+  put(s.drive.gear_ratio); put(s.drive.gear_efficiency); put(s.drive.screw_efficiency); put(s.drive.screw_back_efficiency);
+  put(s.drive.friction_torque_Nm); put(s.drive.detent_torque_Nm); put(s.drive.hysteresis_torque_Nm);
+  put(s.drive.harness_torque_Nm); put(s.drive.motor_derating);
+  const auto& f = s.motorisation;
+  put(f.factor); put(f.spring_factor); put(f.inertia_factor); put(f.friction_factor); put(f.detent_factor);
+  put(f.hysteresis_factor); put(f.harness_factor);
   return b;
 }
 }  // namespace
 
 TEST_CASE("scene key table: each accessor writes its own field, by name", "[unit][keys]") {
   const auto& keys = sim::scene_keys();
-  REQUIRE(keys.size() == 34);  // every field of SceneOptions above has one row
+  REQUIRE(keys.size() == 50);  // every field of SceneOptions above has one row
   const sim::SceneOptions base;
   for (const auto& k : keys) {
     sim::SceneOptions s;
@@ -66,6 +72,12 @@ TEST_CASE("scene key table: each accessor writes its own field, by name", "[unit
   CHECK(s.stack.contacts == sim::StackContacts::on);
   sim::find_scene_key("stack.start")->set_enum(s, 1);
   CHECK(s.stack.start == sim::StackStart::rest);
+  sim::find_scene_key("drive.screw_back_efficiency")->set_real(s, 0.3);
+  CHECK(s.drive.screw_back_efficiency == 0.3);
+  CHECK(s.drive.screw_efficiency == base.drive.screw_efficiency);
+  sim::find_scene_key("motorisation.harness_factor")->set_real(s, 1.5);
+  CHECK(s.motorisation.harness_factor == 1.5);
+  CHECK(s.motorisation.friction_factor == base.motorisation.friction_factor);
 }
 
 TEST_CASE("scene key table: resolved values of the optional keys are the derived defaults", "[unit][keys]") {
@@ -110,16 +122,22 @@ TEST_CASE("scene key table: dispersion scopes, mast fields and units", "[unit][k
   // The per-run dispersible keys and the fixed ones, listed by hand (the campaign layer's former sets).
   const char* run_keys[] = {"mast.n_bays", "mast.tip_mass_kg", "rail.x_m", "rail.y_m", "rail.beta_deg",
                             "drive.speed_m_per_s", "drive.screw_lead_m", "drive.torque_Nm", "drive.stall_torque_Nm",
-                            "drive.no_load_speed_rad_per_s", "panels.length_m", "panels.mass_kg", "panels.tip_height_m"};
+                            "drive.no_load_speed_rad_per_s", "panels.length_m", "panels.mass_kg", "panels.tip_height_m",
+                            "drive.gear_ratio", "drive.gear_efficiency", "drive.screw_efficiency", "drive.screw_back_efficiency",
+                            "drive.friction_torque_Nm", "drive.detent_torque_Nm", "drive.hysteresis_torque_Nm",
+                            "drive.harness_torque_Nm", "drive.motor_derating"};
   for (const char* name : run_keys) CHECK(sim::find_scene_key(name)->scope == sim::KeyScope::run);
   int n_fixed = 0;
   for (const auto& k : sim::scene_keys()) n_fixed += !k.is_dispersible();
-  CHECK(n_fixed == 34 - 13 - 5 - 2);
-  for (const char* name : {"panels.count", "run.rtol", "drive.mode", "stack.mode", "run.max_steps"})
+  CHECK(n_fixed == 50 - 22 - 5 - 2);  // the [motorisation] factors are fixed
+  for (const char* name : {"panels.count", "run.rtol", "drive.mode", "stack.mode", "run.max_steps", "motorisation.factor"})
     CHECK_FALSE(sim::find_scene_key(name)->is_dispersible());
   CHECK(sim::find_scene_key("mast.strut_inertia_kg_m2")->unit == "kg m^2");
   CHECK(sim::find_scene_key("mast.diagonal_stiffness_N_per_m")->unit == "N/m");
   CHECK(sim::find_scene_key("drive.no_load_speed_rad_per_s")->unit == "rad/s");
+  CHECK(sim::find_scene_key("drive.harness_torque_Nm")->unit == "Nm");
+  CHECK(sim::find_scene_key("drive.motor_derating")->unit == "1");
+  CHECK(sim::find_scene_key("motorisation.spring_factor")->unit == "1");
   CHECK(sim::find_scene_key("mast.wing_span_m") == nullptr);
   CHECK(sim::find_scene_key("mast") == nullptr);
 }

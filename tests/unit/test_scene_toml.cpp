@@ -96,6 +96,15 @@ screw_lead_m = 0.02
 torque_Nm = 0.03
 stall_torque_Nm = 0.04
 no_load_speed_rad_per_s = 80.0
+gear_ratio = 5
+gear_efficiency = 0.9
+screw_efficiency = 0.4
+screw_back_efficiency = 0.2
+friction_torque_Nm = 0.001
+detent_torque_Nm = 0.0002
+hysteresis_torque_Nm = 0.0001
+harness_torque_Nm = 0.0003
+motor_derating = 0.8
 
 [stack]
 mode = "free"
@@ -117,6 +126,15 @@ atol = 1e-9
 integrator = "cvode"
 max_steps = 5000000000
 max_wall_time_s = 30
+
+[motorisation]
+factor = 2.5
+spring_factor = 1.3
+inertia_factor = 1.4
+friction_factor = 1.5
+detent_factor = 1.2
+hysteresis_factor = 1.6
+harness_factor = 1.7
 )";
 
 }  // namespace
@@ -145,6 +163,22 @@ TEST_CASE("a full scene file sets every key", "[scene]") {
   CHECK(s.drive.torque_Nm == 0.03);
   CHECK(s.drive.stall_torque_Nm == 0.04);
   CHECK(s.drive.no_load_speed_rad_per_s == 80.0);
+  CHECK(s.drive.gear_ratio == 5.0);
+  CHECK(s.drive.gear_efficiency == 0.9);
+  CHECK(s.drive.screw_efficiency == 0.4);
+  CHECK(s.drive.screw_back_efficiency == 0.2);
+  CHECK(s.drive.friction_torque_Nm == 0.001);
+  CHECK(s.drive.detent_torque_Nm == 0.0002);
+  CHECK(s.drive.hysteresis_torque_Nm == 0.0001);
+  CHECK(s.drive.harness_torque_Nm == 0.0003);
+  CHECK(s.drive.motor_derating == 0.8);
+  CHECK(s.motorisation.factor == 2.5);
+  CHECK(s.motorisation.spring_factor == 1.3);
+  CHECK(s.motorisation.inertia_factor == 1.4);
+  CHECK(s.motorisation.friction_factor == 1.5);
+  CHECK(s.motorisation.detent_factor == 1.2);
+  CHECK(s.motorisation.hysteresis_factor == 1.6);
+  CHECK(s.motorisation.harness_factor == 1.7);
   CHECK(s.stack.mode == StackMode::free);
   CHECK(s.stack.contacts == truss::sim::StackContacts::on);
   CHECK(s.stack.contact_law == truss::sim::ContactLaw::plastic);
@@ -199,6 +233,15 @@ TEST_CASE("the repository's Table 1 scene is the defaults with histories on", "[
   CHECK(s.stack.mode == StackMode::held);
   CHECK(s.panels.count == 0);
   CHECK(s.run.direction == Direction::deploy);
+}
+
+TEST_CASE("the drive train refuses what it cannot model, naming the key and line", "[scene][errors]") {
+  const std::string locked = parse_error("[drive]\nscrew_efficiency = 0.3\nscrew_back_efficiency = -0.1\n");
+  CHECK_THAT(locked, StartsWith("error: scene.toml:3: drive.screw_back_efficiency"));
+  CHECK_THAT(locked, Contains("self-locking"));
+  CHECK_THAT(parse_error("[drive]\ngear_efficiency = 1.05\n"), Contains("drive.gear_efficiency: must lie in (0, 1]"));
+  CHECK_THAT(parse_error("[drive]\nharness_torque_Nm = -0.001\n"), Contains("drive.harness_torque_Nm: must lie in [0, "));
+  CHECK_THAT(parse_error("[motorisation]\nfactor = 0\n"), Contains("motorisation.factor: must lie in (0, "));
 }
 
 TEST_CASE("unknown keys and tables are named with their line and a suggestion", "[scene][errors]") {

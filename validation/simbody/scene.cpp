@@ -39,6 +39,16 @@ Setter number(double MastScene::*field, double lo, double hi) {
 Setter accepted() {  // truss-sim's own numerics or output: no meaning for this model
   return [](MastScene&, const toml::node&, const std::string&) {};
 }
+// A drive-train key: this model has the ideal train only (the paper's drive), so the key is
+// accepted at its ideal value and refused at any other.
+Setter ideal_only(double ideal) {
+  return [=](MastScene&, const toml::node& v, const std::string& where) {
+    if (as_number(v, where) == ideal) return;
+    std::ostringstream os;
+    os << "the Simbody check models the ideal drive train only (" << ideal << ")";
+    fail(where, os.str());
+  };
+}
 
 const std::map<std::string, Setter>& keys() {
   static const std::map<std::string, Setter> table = {
@@ -70,6 +80,23 @@ const std::map<std::string, Setter>& keys() {
       {"drive.torque_Nm", number(&MastScene::torque_Nm, 0, 1e6)},
       {"drive.stall_torque_Nm", number(&MastScene::stall_torque_Nm, 0, 1e6)},
       {"drive.no_load_speed_rad_per_s", number(&MastScene::no_load_speed_rad_per_s, 0, 1e6)},
+      {"drive.gear_ratio", ideal_only(1.0)},
+      {"drive.gear_efficiency", ideal_only(1.0)},
+      {"drive.screw_efficiency", ideal_only(1.0)},
+      {"drive.screw_back_efficiency", ideal_only(1.0)},
+      {"drive.friction_torque_Nm", ideal_only(0.0)},
+      {"drive.detent_torque_Nm", ideal_only(0.0)},
+      {"drive.hysteresis_torque_Nm", ideal_only(0.0)},
+      {"drive.harness_torque_Nm", ideal_only(0.0)},
+      {"drive.motor_derating", ideal_only(1.0)},
+      // The motorisation check is arithmetic on a run's outputs, not dynamics.
+      {"motorisation.factor", accepted()},
+      {"motorisation.spring_factor", accepted()},
+      {"motorisation.inertia_factor", accepted()},
+      {"motorisation.friction_factor", accepted()},
+      {"motorisation.detent_factor", accepted()},
+      {"motorisation.hysteresis_factor", accepted()},
+      {"motorisation.harness_factor", accepted()},
       {"stack.mode", [](MastScene& s, const toml::node& v, const std::string& w) {
          const std::string m = as_string(v, w);
          if (m != "held" && m != "free") fail(w, "expected \"held\" or \"free\"");

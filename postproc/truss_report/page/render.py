@@ -1,0 +1,94 @@
+"""truss_report.page.render: the report being rendered: its figures, drawn in forked children while
+the sections go on, saved as PNG into the staging directory."""
+import gc
+import os
+import sys
+from dataclasses import dataclass
+
+import numpy as np
+from PIL import Image
+
+from .html import esc
+
+
+FIGURE_DPI = 110    # a 15-inch figure row printed 186 mm wide is at 225 dpi; on a 1400-pixel page at 0.85
+
+
+def save_png(fig, path):
+    """The figure as an opaque RGB PNG (its background is white): the PDF writer re-encodes every
+    image, and an alpha channel would be a second image to encode."""
+    fig.set_dpi(FIGURE_DPI)
+    fig.canvas.draw()
+    rgb = np.asarray(fig.canvas.buffer_rgba())[..., :3]
+    Image.fromarray(rgb).save(path, format="PNG", compress_level=3)
+
+
+@dataclass
+class Report:
+    """A rendered report: the page's HTML, the lines for the terminal, and the verdict ("pass",
+    "fail", "not_assessed"; None for a report without one)."""
+    html: str
+    summary: list[str]
+    verdict: str | None
+
+
+class Page:
+    """The report being built: its figures, saved into the staging directory."""
+
+    def __init__(self, outdir, plt, progress=None):
+        self.dir, self.plt = outdir, plt
+        self.files = []
+        self.progress = progress or (lambda what: None)
+        self.children = []        # (pid, figure name) of the figures being drawn
+        self.max_children = 2
+        # Fonts and text layout are cached per process: draw once here, so that every forked
+        # child starts with them loaded instead of loading them again.
+        warm, ax = plt.subplots(figsize=(2, 1))
+        ax.set_title("µ−0.5 (mN m)")
+        ax.set_xlabel("x")
+        warm.savefig(os.devnull, format="png", dpi=FIGURE_DPI)
+        plt.close(warm)
+
+    def figure(self, fig, name, caption, cls="wide"):
+        """Saves `fig` as DIR/name and returns its HTML. The layout, drawing and PNG encoding
+        (two thirds of a figure's cost; the figures lay themselves out at draw time) happen in a
+        forked child while this process goes on with the next section: the report's figures
+        then use both cores. finish() waits for them."""
+        if len(self.files) % 5 == 0:
+            self.progress(f"figure {len(self.files) + 1}: {name}")
+        while len(self.children) >= self.max_children:
+            self._reap(self.children.pop(0))
+        sys.stdout.flush()
+        sys.stderr.flush()
+        gc.freeze()        # the child's collector leaves the parent's objects (and pages) alone
+        pid = os.fork()
+        if pid == 0:       # child: draw, encode, leave without Python's exit handlers
+            code = 0
+            try:
+                save_png(fig, os.path.join(self.dir, name))
+            except BaseException as e:   # noqa: BLE001 - reported through the exit status
+                sys.stderr.write(f"error: figure {name}: {e}\n")
+                code = 1
+            os._exit(code)
+        self.children.append((pid, name))
+        self.plt.close(fig)
+        self.files.append(name)
+        return (f'<figure class="{cls}"><img src="{esc(name)}" alt="{esc(caption)}">'
+                f"<figcaption>{esc(caption)}</figcaption></figure>")
+
+    def text_file(self, name, text):
+        """Writes DIR/name (a file the report links to)."""
+        with open(os.path.join(self.dir, name), "w", encoding="utf-8", newline="") as fh:
+            fh.write(text)
+        self.files.append(name)
+
+    def _reap(self, child):
+        pid, name = child
+        _, status = os.waitpid(pid, 0)
+        if os.waitstatus_to_exitcode(status) != 0:
+            raise RuntimeError(f"drawing the figure {name} failed")
+
+    def finish(self):
+        """Waits for every figure (RuntimeError if one failed)."""
+        while self.children:
+            self._reap(self.children.pop(0))
