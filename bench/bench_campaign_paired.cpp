@@ -3,9 +3,10 @@
 // cancels in the ratio (issue: the campaign's per-run cost within 1.2 x the bare run).
 //   alone:  sim::simulate of the run's dispersed scene, made just before, untimed;
 //   inside: what a campaign does for that run on one rank, minus MPI: the uniforms, the dispersed
-//           scene, the run, the record and its frame (CRC), rank 0's check of the frame (CRC), the
-//           journal, the row into its chunk, and the complete chunks written (shuffle, deflate,
-//           H5Dwrite_chunk, statistics), one dataset between two runs as the engine does;
+//           scene, the run, the record and its frame (CRC), the owner's check of the frame, the
+//           journal, the row into its chunk, and the complete chunks encoded (shuffle, deflate,
+//           chunk summaries), placed (H5Dwrite_chunk through the placement driver, statistics
+//           merged) and written, one dataset between two runs as the engine does;
 //   tail:   the last chunks, /stats, the file closed (once per campaign, reported apart).
 // Each run is timed on its own with the steady clock (~40 ns a read, the same for both); which of
 // the two goes first alternates run by run. Run on an idle machine; wall times.
@@ -22,8 +23,7 @@
 
 #include "methods/fixed_design.hpp"
 #include "methods/method_table.hpp"
-#include "results/campaign_file.hpp"
-#include "results/journal.hpp"
+#include "local_results.hpp"
 #include "sim/simulate.hpp"
 
 using namespace truss;
@@ -45,11 +45,7 @@ int main(int argc, char** argv) {
   const campaign::CampaignContext ctx(methods::parse_campaign_file(argv[1], {"ensemble.n_runs=" + std::to_string(n)}));
   const methods::FixedDesign design(ctx);
   const methods::RoundPlan plan{0, 0, n, {}};
-  std::filesystem::remove(out + ".journal");
-  results::Journal journal = results::Journal::create(out + ".journal", "bench");
-  results::CampaignFile file(out, ctx, results::StoreOptions{results::find_chunk_runs(n), level});
-  results::ResultStore& store = file.store();
-  store.extend(n);
+  bench::LocalResults local(out, ctx, n, level);
   std::vector<double> u(static_cast<std::size_t>(ctx.dims.total));
   std::string frame;
   double alone_s = 0, inside_s = 0;
@@ -68,11 +64,8 @@ int main(int argc, char** argv) {
     const std::size_t start = results::begin_frame(frame);
     campaign::append_run_record(ctx, u.data(), {i, 0, 0}, frame);
     results::seal_frame(frame, start, results::FrameKind::run);
-    const results::Frame f = results::read_frame(frame);  // rank 0's check (CRC), as the collector's
-    if (f.kind != results::FrameKind::run || !ctx.record.check(f.payload).empty()) std::abort();
-    journal.append_frame(frame);
-    store.add(campaign::RecordView(f.payload, ctx.record), 0);
-    if (store.write_pending()) store.write_next();
+    local.add(frame);
+    local.step();
     inside_s += now() - t0;
   };
   for (std::int64_t i = 0; i < n; ++i) {
@@ -85,12 +78,8 @@ int main(int argc, char** argv) {
     }
   }
   const double t0 = now();
-  journal.flush();
-  file.write_summary({}, sim::RunResult{}, results::CampaignFileInfo{});
-  file.commit(true);
+  local.finish();
   const double tail_s = now() - t0;
-  journal.close_and_remove();
-  std::filesystem::remove(out);
   if (sink < 0) return 1;
   std::printf("runs=%lld level=%d alone_us=%.2f inside_us=%.2f ratio=%.4f tail_s=%.3f tail_us_per_run=%.2f\n",
               static_cast<long long>(n), level, 1e6 * alone_s / static_cast<double>(n),

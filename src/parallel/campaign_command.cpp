@@ -11,37 +11,27 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
 #include <vector>
 
 #include "campaign/motor_declared.hpp"
 #include "io/h5_output.hpp"
 #include "io/h5_util.hpp"
 #include "io/scene_toml.hpp"
-#include "parallel/engine.hpp"
+#include "parallel/campaign_output.hpp"
+#include "parallel/engine_detail.hpp"
+#include "parallel/interrupt.hpp"
+#include "parallel/owner.hpp"
 #include "parallel/progress.hpp"
 #include "parallel/synthetic_run.hpp"
-#include "results/resources.hpp"
-#include "results/lock_file.hpp"
 
 namespace truss::parallel {
 
 namespace fs = std::filesystem;
 
 namespace {
-
-struct CommandOptions {
-  std::string campaign_path;
-  std::string output_path;
-  std::vector<std::string> sets;
-  bool resume = false;
-  bool force = false;
-  bool dry_run = false;
-  std::string progress = "auto";
-  double progress_interval_s = 2.0;    // a person watching a log sees it move
-  int compression = 1;                 // zlib level of the results file's datasets (0: none)
-  double synthetic_run_cost_s = -1.0;  // bench only (hidden): runs sleep this long and simulate nothing
-  EngineOptions engine;                // --max-batch, --flush-interval
-};
 
 // The error state of all ranks: true on every rank if any rank failed.
 bool any_rank(MPI_Comm comm, bool mine) {
@@ -56,86 +46,6 @@ double unix_now() {
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-// Rank 0's state between the checks and the end.
-struct Rank0 {
-  std::unique_ptr<results::LockFile> lock;         // the output's, for the whole session (first in, last out)
-  std::unique_ptr<results::CampaignFile> file;  // the results file being written (a temporary name)
-  std::unique_ptr<results::Journal> journal;
-  std::unique_ptr<Progress> progress;
-  std::unique_ptr<Collector> collector;
-  results::JournalScan scan;
-  // Nothing written: no results file (its temporary one removed), the journal as it was, the
-  // output's lock let go.
-  void drop() {
-    collector.reset();
-    journal.reset();
-    file.reset();
-    lock.reset();
-  }
-};
-
-// Rank 0: the output's lock, then with it held the temporary files of killed sessions removed
-// and the output, journal and resource checks. Throws io::InputError for anything the user must
-// decide (another live truss-campaign on the same output among them).
-void lock_and_check_output(const CommandOptions& o, const campaign::CampaignContext& ctx, Rank0& r0) {
-  if (o.resume && o.force) throw io::InputError("error: --resume and --force exclude each other");
-  auto check_path = [&] {
-    if (o.resume && fs::exists(o.output_path))
-      throw io::InputError(fmt::format("error: {} exists: the campaign is finished, nothing to resume", o.output_path));
-    io::check_output_path(o.output_path, o.force);
-  };
-  check_path();  // before a lock file is made next to it
-  const std::string lock = results::CampaignFile::lock_name(o.output_path);
-  try {
-    r0.lock = std::make_unique<results::LockFile>(lock);
-  } catch (const results::LockHeld& e) {
-    throw io::InputError(fmt::format("error: {} is in use by another truss-campaign ({}, lock file {}); wait for "
-                                     "it to end or stop it (ranks of a killed mpirun may still run)",
-                                     o.output_path, e.what(), lock));
-  }
-  check_path();  // again, under the lock: a session that held it until now may have finished the file
-  // No live session of this output exists (we hold its lock): temporary files are of killed ones.
-  for (const auto& stale : results::CampaignFile::remove_stale(o.output_path))
-    std::cerr << fmt::format("[truss-campaign] removed {}, left by an interrupted session\n", stale);
-  const std::string jpath = o.output_path + ".journal";
-  const bool has_journal = fs::exists(fs::symlink_status(jpath));
-  if (o.resume && !has_journal)
-    throw io::InputError(
-        fmt::format("error: --resume: no journal {} to resume from (run without --resume to start)", jpath));
-  if (!o.resume && has_journal && !o.force)
-    throw io::InputError(fmt::format("error: an unfinished campaign journal exists: {}; finish it with --resume "
-                                     "(same campaign and --set options) or start over with --force", jpath));
-  // Memory and disk for every run; the journal on disk is the campaign's already (kept on
-  // --resume, replaced on --force).
-  std::error_code ec;
-  const auto journal_bytes = has_journal ? fs::file_size(jpath, ec) : 0;
-  if (const std::string e = results::check_resources(ctx, o.output_path, ec ? 0.0 : static_cast<double>(journal_bytes));
-      !e.empty())
-    throw io::InputError(e);
-}
-
-// Rank 0: the output's checks (lock_and_check_output); creates the results file (a temporary name
-// until the end) and opens or creates the journal, restoring its rounds and runs into the file.
-void prepare_output(const CommandOptions& o, const std::string& campaign_text, const campaign::CampaignContext& ctx,
-                    methods::Method& method, Rank0& r0) {
-  lock_and_check_output(o, ctx, r0);
-  const std::string jpath = o.output_path + ".journal";
-  const results::StoreOptions store{results::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression};
-  r0.file = std::make_unique<results::CampaignFile>(o.output_path, ctx, store);
-  try {
-    if (o.force) fs::remove(jpath);
-    r0.journal = std::make_unique<results::Journal>(o.resume ? results::Journal::open_existing(jpath, campaign_text)
-                                                             : results::Journal::create(jpath, campaign_text));
-  } catch (const std::runtime_error& e) {  // JournalRefused included: another campaign's journal
-    throw io::InputError(std::string(o.resume ? "error: --resume: " : "error: ") + e.what());
-  }
-  r0.progress = std::make_unique<Progress>(ctx.options.ensemble.n_runs, 0, ProgressMode::none, 1.0);
-  EngineOptions engine = o.engine;
-  engine.max_runs = campaign::calc_max_runs(ctx.options);
-  r0.collector = std::make_unique<Collector>(ctx.record, method, *r0.journal, *r0.file, *r0.progress, engine);
-  if (o.resume) r0.scan = r0.collector->restore();
 }
 
 ProgressMode progress_mode(const std::string& s) {
@@ -197,7 +107,7 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
 // committed and the journal removed. Returns the exit status.
 int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx, const methods::Method& method,
                   const std::string& campaign_text, Rank0& r0, int size, std::chrono::steady_clock::time_point wall0,
-                  const EngineResult& done) {
+                  const EngineResult& done, std::int64_t peak_chunks) {
   const SessionState& st = r0.collector->session();
   const campaign::CampaignOptions& c = ctx.options;
   try {
@@ -223,16 +133,15 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.end_utc = io::h5::utc_now_iso8601();
     info.wall_time_s = st.previous_wall_s + seconds_since(wall0);
     info.schedule = done.schedule;
-    info.schedule.rank0_journal_s = r0.collector->journal_s();
     info.schedule.synthetic_run_cost_s = o.synthetic_run_cost_s;
     const results::ResultStore& store = r0.file->store();
     const std::int64_t n_runs = store.n_runs(), chunk_runs = store.chunk_runs();
-    const std::size_t peak_chunks = store.peak_chunks_in_memory();
-    const results::StatusCounts counts = store.status_counts();
+    const results::StatusCounts counts = r0.collector->status_counts();
     r0.file->write_summary(histories, nominal, info);  // the store is gone after this
     method.write_results({r0.file->handle(), r0.file->handle(), n_runs, {}});
     r0.file->commit(o.force);
     r0.journal->close_and_remove();
+    results::remove_part_journals(o.output_path);
     std::cerr << fmt::format("[truss-campaign] nominal run (base scene, no dispersion): {}{}\n",
                              sim::to_string(nominal.status), nominal.message.empty() ? "" : ": " + nominal.message);
     if (method.runs_are_draws())
@@ -242,10 +151,11 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     const double per = 1e6 / std::max(1.0, static_cast<double>(s.runs_by_rank0 + s.runs_by_workers));  // us a result
     std::cerr << fmt::format("[truss-campaign] wrote {}: {} runs in {} round{} ({}), {:.3g} s on {} rank{} "
                              "(statistics and file: {:.3g} s, {:.3g} s CPU; rank 0: {} runs computed, {:.3g} us per "
-                             "result handled ({:.3g} us CPU), at most {} chunks of {} runs in memory)\n",
+                             "result handled ({:.3g} us CPU); at most {} chunks of {} runs in a rank's memory)\n",
                              o.output_path, n_runs, info.n_rounds, info.n_rounds > 1 ? "s" : "",
                              format_status_counts(counts), info.wall_time_s, size, size > 1 ? "s" : "",
-                             seconds_since(t_finish), static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC,
+                             done.last_chunks_s + seconds_since(t_finish),
+                             static_cast<double>(std::clock() - cpu_finish) / CLOCKS_PER_SEC,
                              s.runs_by_rank0, per * (s.rank0_poll_s + s.rank0_write_s + s.rank0_tick_s),
                              per * s.rank0_handle_cpu_s, peak_chunks, chunk_runs);
     const std::string example = results::read_example_message(o.output_path, n_runs, sim::RunStatus::invalid_input);
@@ -307,13 +217,30 @@ std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions&
   return std::nullopt;
 }
 
-// Rank 0: the output and journal checks, agreed on by every rank.
-int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const std::string& campaign_text,
-                       const campaign::CampaignContext& ctx, methods::Method& method, Rank0& r0) {
+// Every rank's chunks and rank 0's output, agreed on by every rank: rank 0 prepares the results file
+// and the journal (restoring its chunks on --resume), then sends every rank the session's setup.
+int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& campaign_text,
+                    const campaign::CampaignContext& ctx, methods::Method& method, Rank0& r0, Engine& engine,
+                    std::unique_ptr<ChunkOwner>& owner) {
+  int rank = 0;
+  MPI_Comm_rank(comm, &rank);
+  const results::StoreOptions store{results::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression};
+  auto make_owner = [&](const SessionSetup& s, results::Journal* journal, const std::vector<std::size_t>& observed) {
+    owner = std::make_unique<ChunkOwner>(ctx.record, store, observed,
+                                         OwnerFiles{rank, s.session, s.output, s.temporary, s.campaign_crc, journal},
+                                         engine.sender(), o.engine.flush_interval_s);
+  };
   int status = kExitOk;
-  if (root) {
+  SessionSetup setup;
+  if (rank == 0) {
     try {
       prepare_output(o, campaign_text, ctx, method, r0);
+      setup.output = o.output_path;
+      setup.temporary = r0.file->temporary_path();
+      make_owner(setup, r0.journal.get(), r0.collector->observed_fields());
+      engine.attach(*owner, r0.collector.get());
+      setup = restore_output(o, campaign_text, r0, *owner, engine);
+      owner->set_session(setup.session);
     } catch (const io::InputError& e) {
       std::cerr << e.what() << '\n';
       status = kExitBadInput;
@@ -323,23 +250,86 @@ int prepare_output_all(MPI_Comm comm, bool root, const CommandOptions& o, const 
     }
     if (status != kExitOk) r0.drop();
   }
-  return broadcast_int_idle(comm, status);
+  if ((status = broadcast_int_idle(comm, status)) != kExitOk) return status;
+  std::string bytes = rank == 0 ? setup.to_bytes() : std::string();
+  auto len = static_cast<long long>(bytes.size());
+  MPI_Bcast(&len, 1, MPI_LONG_LONG, 0, comm);
+  bytes.resize(static_cast<std::size_t>(len));
+  MPI_Bcast(bytes.data(), static_cast<int>(len), MPI_BYTE, 0, comm);
+  if (rank != 0) {
+    setup = SessionSetup::from_bytes(bytes);
+    std::vector<std::size_t> observed;
+    for (const std::string& name : method.observed_outputs())
+      observed.push_back(static_cast<std::size_t>(ctx.record.find_output(name)));
+    make_owner(setup, nullptr, observed);
+    engine.attach(*owner, nullptr);
+  }
+  engine.set_rank0_chunks(setup.rank0_chunks);
+  detail::set_abort_removes(setup.temporary);
+  return kExitOk;
 }
 
 // Rank 0: the session's start in the journal, and the banner.
 void start_session(const CommandOptions& o, const campaign::CampaignContext& ctx, Rank0& r0, double t_start,
                    int size) {
-  const results::ResultStore& store = r0.file->store();
-  if (r0.collector->session().session > 0) {
-    std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}\n", store.n_done(),
-                             store.n_runs(), r0.journal->path());
-    if (const std::string d = r0.scan.describe(r0.journal->path()); !d.empty())
-      std::cerr << "[truss-campaign] " << d << '\n';
+  const Collector& c = *r0.collector;
+  const std::int64_t n_runs = c.store().n_runs();
+  if (c.session().session > 0) {
+    std::cerr << fmt::format("[truss-campaign] resuming: {} of {} runs restored from {}\n", c.n_done(), n_runs,
+                             r0.journal->path());
+    for (const std::string& note : r0.restored.notes) std::cerr << "[truss-campaign] " << note << '\n';
   }
   r0.collector->start_session(t_start, size);
-  *r0.progress = Progress(std::max(ctx.options.ensemble.n_runs, store.n_runs()), store.n_done(),
-                          progress_mode(o.progress), o.progress_interval_s);
+  *r0.progress = Progress(std::max(ctx.options.ensemble.n_runs, n_runs), c.n_done(), progress_mode(o.progress),
+                          o.progress_interval_s);
   r0.progress->banner(ctx.options.name, size, o.output_path);
+}
+
+// The command that resumes this campaign: this one's arguments, with --resume and without --force.
+std::string resume_command(int argc, char** argv, int size) {
+  auto quote = [](std::string a) {
+    if (!a.empty() && a.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-+=./,:@%")
+                          == std::string::npos)
+      return a;
+    std::string q = "'";
+    for (char ch : a) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+    return q + "'";
+  };
+  std::string cmd = size > 1 ? fmt::format("mpirun -np {}", size) : "mpirun -np 1";
+  bool resume = false;
+  for (int i = 0; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--force") continue;
+    resume |= a == "--resume";
+    cmd += " " + quote(a);
+  }
+  return resume ? cmd : cmd + " --resume";
+}
+
+// SIGINT or SIGTERM during the runs: what is journaled stays, the results file's temporary name and
+// the output's lock go, and rank 0 says in one line what was kept and how to resume, first (mpirun,
+// which sent the signal, forwards the ranks' output for well under a second). Every rank leaves
+// at once.
+[[noreturn]] void leave_interrupted(int argc, char** argv, int size, Rank0& r0, ChunkOwner* owner) {
+  const int sig = interrupt_signal();
+  if (r0.collector) {
+    std::fprintf(stderr, "[truss-campaign] interrupted (%s) after %lld of %lld runs: their records are kept in the "
+                 "journal %s (one still on its way to its chunk's rank is computed again); resume with: %s\n",
+                 sig == SIGINT ? "SIGINT" : "SIGTERM", static_cast<long long>(r0.collector->n_computed()),
+                 static_cast<long long>(r0.collector->store().n_runs()), r0.journal->path().c_str(),
+                 resume_command(argc, argv, size).c_str());
+    std::fflush(stderr);
+  }
+  if (owner) owner->write_out_journal();
+  if (r0.collector) {
+    try {
+      r0.journal->write_out();
+    } catch (const std::exception&) {
+    }
+    r0.file->remove_temporary();
+    r0.lock.reset();
+  }
+  std::_Exit(128 + sig);
 }
 
 }  // namespace
@@ -362,7 +352,12 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm, const methods::Me
   if (auto rc = load_campaign(comm, root, o, methods, ctx, campaign_text)) return *rc;
   const std::unique_ptr<methods::Method> method = methods.make(*ctx);
   Rank0 r0;
-  if (int rc = prepare_output_all(comm, root, o, campaign_text, *ctx, *method, r0); rc != kExitOk) return rc;
+  if (int rc = check_output_all(comm, o, *ctx, r0); rc != kExitOk) return rc;
+  install_interrupt_handlers();  // from here on Ctrl-C keeps what is done (leave_interrupted)
+  Engine engine(comm, results::find_chunk_runs(ctx->options.ensemble.n_runs),
+                ctx->record.fields()[campaign::RecordLayout::kStatus].offset, o.engine);
+  std::unique_ptr<ChunkOwner> owner;
+  if (int rc = prepare_session(comm, o, campaign_text, *ctx, *method, r0, engine, owner); rc != kExitOk) return rc;
   if (root) start_session(o, *ctx, r0, t_start, size);
 
   std::vector<double> u(static_cast<std::size_t>(ctx->dims.total));
@@ -374,13 +369,20 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm, const methods::Me
     else campaign::append_run_record(*ctx, u.data(), head, out);
     results::seal_frame(out, start, results::FrameKind::run);
   };
-  const EngineResult done = run_engine(comm, evaluate, r0.collector.get(), o.engine);
+  EngineResult done;
+  try {
+    done = engine.run(evaluate);
+  } catch (const Interrupted&) {
+    leave_interrupted(argc, argv, size, r0, owner.get());
+  }
+  long long peak = static_cast<long long>(owner->peak_chunks()), peak_all = 0;
+  MPI_Reduce(&peak, &peak_all, 1, MPI_LONG_LONG, MPI_MAX, 0, comm);
   int status = kExitOk;
   if (root) {
     try {
       r0.collector->tick(true);
-      r0.progress->finish(r0.file->store().n_done(), r0.file->store().status_counts());
-      status = write_results(o, *ctx, *method, campaign_text, r0, size, wall0, done);
+      r0.progress->finish(r0.collector->n_computed(), r0.collector->computed_counts());
+      status = write_results(o, *ctx, *method, campaign_text, r0, size, wall0, done, peak_all);
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
       status = kExitIoError;

@@ -1,5 +1,5 @@
-// The round loop on every rank, and rank 0's side of a round's schedule (the worker's is in
-// worker.cpp).
+// The round loop on every rank, rank 0's side of a round's schedule and of the chunks (the
+// worker's schedule is in worker.cpp, a rank's messaging in node.cpp).
 #include "parallel/engine.hpp"
 
 #include <algorithm>
@@ -12,6 +12,8 @@
 #include <fmt/format.h>
 
 #include "parallel/engine_detail.hpp"
+#include "parallel/interrupt.hpp"
+#include "parallel/owner.hpp"
 #include "util/bytes.hpp"
 
 namespace truss::parallel {
@@ -21,6 +23,8 @@ using namespace detail;
 namespace {
 
 using Clock = std::chrono::steady_clock;
+constexpr auto kPollInterval = std::chrono::microseconds(2000);
+constexpr std::int64_t kRunsPerPoll = 16;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Adds the wall time of its scope to a counter (steady clock).
@@ -49,78 +53,98 @@ double thread_cpu_s() {
   abort_job(comm, where, e);
 }
 
-// A worker's result message, received into memory of its own.
-struct Incoming {
-  std::string bytes;
-  MPI_Request req = MPI_REQUEST_NULL;
+class Rank0Round;
+
+// Rank 0's answers to the owners' messages (per round part and per chunk), and the batches done
+// handed to the round being scheduled.
+class Rank0Server {
+ public:
+  Rank0Server(Node& node, Collector& collector, results::ScheduleSummary& sum)
+      : node_(node), collector_(collector), sum_(sum) {}
+  void handle(int tag, int source, std::string& bytes);
+  Rank0Round* round = nullptr;
+  int finished = 0;  // owners that have written and synced every chunk they own
+
+ private:
+  void send_windows(int dest) { node_.send(dest, kTagWindows, results::to_bytes(collector_.windows())); }
+  Node& node_;
+  Collector& collector_;
+  results::ScheduleSummary& sum_;
+  std::vector<int> want_windows_;  // owners waiting for the first windows
+  bool asked_sample_ = false;
+  results::ChunkReport report_;    // its summaries' room used again
 };
 
 // Rank 0 in one round: hands out the round's runs in index order in guided batches, computes one
-// run at a time itself, and between its runs matches the workers' result messages (answering each
-// at once with the next batch), stores the results and writes the chunks they completed.
+// run at a time itself, and between its runs serves the messages (answering a batch done at once
+// with the next batch) and its own chunks, until every record of the round is in.
 class Rank0Round {
  public:
-  Rank0Round(MPI_Comm comm, const methods::RoundPlan& plan, Collector& collector, const Evaluate& evaluate,
-             const EngineOptions& opts, results::ScheduleSummary& sum);
+  Rank0Round(Node& node, const methods::RoundPlan& plan, Collector& collector, const Evaluate& evaluate,
+             const std::function<bool()>& serve, const EngineOptions& opts, results::ScheduleSummary& sum);
   void run();
+  void on_done(int worker) { send_batch(worker); }
   double compute_cpu_s() const { return compute_cpu_s_; }
 
  private:
   void send_batch(int w);
-  std::int64_t next_run();  // the next run of the round not in the results yet
-  bool poll();
-  bool match_new();
-  bool complete_receives();
-  void test_sends();
+  std::int64_t next_run();  // the next run of the round not in the journals yet
+  bool poll_due(Clock::time_point last_poll) const;
+  void compute_stretch(Clock::time_point last_poll);
   void compute_one();
   void maybe_tick();
 
-  MPI_Comm comm_;
+  Node& node_;
   const methods::RoundPlan& plan_;
   Collector& collector_;
-  const results::ResultStore& store_;
   const Evaluate& evaluate_;
+  const std::function<bool()>& serve_;
   const EngineOptions& opts_;
   results::ScheduleSummary& sum_;
-  int size_ = 1;
-  std::int64_t cursor_, to_do_ = 0, handed_ = 0, received_ = 0;
+  std::int64_t cursor_, to_do_ = 0, handed_ = 0, unsent_ = 0, runs_since_poll_ = 0;
   std::vector<std::uint8_t> waiting_;
-  std::vector<std::unique_ptr<Incoming>> incoming_;  // receives in flight (parallel to recv_reqs_)
-  std::vector<MPI_Request> recv_reqs_;
-  std::vector<std::unique_ptr<std::string>> sends_;  // work messages in flight (parallel to send_reqs_)
-  std::vector<MPI_Request> send_reqs_;
-  std::vector<int> done_idx_;
   std::string one_;
   Clock::time_point last_tick_ = Clock::now();
   double compute_cpu_s_ = 0.0;
 };
 
-// Drops the entries whose requests MPI_Testsome completed (set to MPI_REQUEST_NULL) from two
-// parallel vectors, keeping the order of the rest.
-template <class T>
-void drop_completed(std::vector<MPI_Request>& reqs, std::vector<T>& items) {
-  std::size_t w = 0;
-  for (std::size_t i = 0; i < reqs.size(); ++i) {
-    if (reqs[i] == MPI_REQUEST_NULL) continue;
-    reqs[w] = reqs[i];
-    items[w] = std::move(items[i]);
-    ++w;
+void Rank0Server::handle(int tag, int source, std::string& bytes) {
+  ScopeTimer t(sum_.rank0_result_s);
+  if (tag == kTagDone) {
+    if (!round) throw std::runtime_error(fmt::format("a batch done by rank {} outside a round", source));
+    collector_.add_computed(bytes);
+    round->on_done(source);
+  } else if (tag == kTagPart) {
+    collector_.add_part(results::read_round_part(bytes, collector_.n_observed()));
+  } else if (tag == kTagChunk) {
+    results::read_chunk_report(bytes, report_);
+    node_.send(source, kTagPlacement, results::to_bytes(collector_.place(report_)));
+  } else if (tag == kTagAskWindows) {
+    if (collector_.seeded()) return send_windows(source);
+    want_windows_.push_back(source);
+    if (!asked_sample_) node_.send(source, kTagAskSample, {});
+    asked_sample_ = true;
+  } else if (tag == kTagSeed) {
+    collector_.seed(results::read_seed_sample(bytes));
+    for (int w : want_windows_) send_windows(w);
+    want_windows_.clear();
+  } else if (tag == kTagFinished) {
+    ++finished;
+  } else {
+    throw std::runtime_error(fmt::format("rank 0 got a message of tag {} from rank {}", tag, source));
   }
-  reqs.resize(w);
-  items.resize(w);
 }
 
-Rank0Round::Rank0Round(MPI_Comm comm, const methods::RoundPlan& plan, Collector& collector, const Evaluate& evaluate,
-                       const EngineOptions& opts, results::ScheduleSummary& sum)
-    : comm_(comm), plan_(plan), collector_(collector), store_(collector.store()), evaluate_(evaluate), opts_(opts),
-      sum_(sum), cursor_(plan.first_run) {
-  MPI_Comm_size(comm, &size_);
-  waiting_.assign(static_cast<std::size_t>(size_), 0);
-  for (std::int64_t i = plan.first_run; i < plan.end_run(); ++i) to_do_ += !store_.has(i);  // --resume: some are in
+Rank0Round::Rank0Round(Node& node, const methods::RoundPlan& plan, Collector& collector, const Evaluate& evaluate,
+                       const std::function<bool()>& serve, const EngineOptions& opts, results::ScheduleSummary& sum)
+    : node_(node), plan_(plan), collector_(collector), evaluate_(evaluate), serve_(serve), opts_(opts), sum_(sum),
+      cursor_(plan.first_run) {
+  waiting_.assign(static_cast<std::size_t>(node.size()), 0);
+  for (std::int64_t i = plan.first_run; i < plan.end_run(); ++i) to_do_ += !collector.has(i);  // --resume: some are in
 }
 
 std::int64_t Rank0Round::next_run() {
-  while (store_.has(cursor_)) ++cursor_;
+  while (collector_.has(cursor_)) ++cursor_;
   ++handed_;
   return cursor_++;
 }
@@ -129,120 +153,56 @@ std::int64_t Rank0Round::next_run() {
 // that asks when no run is left waits for the end of the round.
 void Rank0Round::send_batch(int w) {
   const std::int64_t remaining = to_do_ - handed_;
-  std::int64_t k = remaining / (std::int64_t{opts_.batches_per_rank} * size_);
+  std::int64_t k = remaining / (std::int64_t{opts_.batches_per_rank} * node_.size());
   k = std::min(std::clamp<std::int64_t>(k, 1, opts_.max_batch), remaining);
   if (k == 0) {
     waiting_[static_cast<std::size_t>(w)] = 1;
     return;
   }
-  auto out = std::make_unique<std::string>();
-  for (std::int64_t i = 0; i < k; ++i) util::put(*out, next_run());
-  ScopeTimer t(sum_.rank0_mpi_s);
-  MPI_Request r;
-  MPI_Isend(out->data(), static_cast<int>(out->size()), MPI_BYTE, w, kTagWork, comm_, &r);
-  send_reqs_.push_back(r);
-  sends_.push_back(std::move(out));
+  std::string out;
+  for (std::int64_t i = 0; i < k; ++i) util::put(out, next_run());
+  node_.send(w, kTagWork, std::move(out));
 }
 
-bool Rank0Round::match_new() {
-  bool any = false;
-  for (;;) {
-    int flag = 0;
-    MPI_Message m;
-    MPI_Status st;
-    {
-      ScopeTimer t(sum_.rank0_mpi_s);
-      MPI_Improbe(MPI_ANY_SOURCE, kTagResult, comm_, &flag, &m, &st);
-    }
-    if (!flag) return any;
-    any = true;
-    int count = 0;
-    MPI_Get_count(&st, MPI_BYTE, &count);
-    auto in = std::make_unique<Incoming>();
-    in->bytes.resize(static_cast<std::size_t>(count));
-    {
-      ScopeTimer t(sum_.rank0_mpi_s);
-      MPI_Imrecv(in->bytes.data(), count, MPI_BYTE, &m, &in->req);
-    }
-    recv_reqs_.push_back(in->req);
-    incoming_.push_back(std::move(in));
-    // The worker has finished a batch and started the one it held: send its next one now, not
-    // when the data has arrived.
-    send_batch(st.MPI_SOURCE);
-  }
-}
-
-bool Rank0Round::complete_receives() {
-  if (recv_reqs_.empty()) return false;
-  int n_done = 0;
-  done_idx_.resize(recv_reqs_.size());
-  {
-    ScopeTimer t(sum_.rank0_mpi_s);
-    MPI_Testsome(static_cast<int>(recv_reqs_.size()), recv_reqs_.data(), &n_done, done_idx_.data(),
-                 MPI_STATUSES_IGNORE);
-  }
-  if (n_done <= 0) return false;
-  ScopeTimer t(sum_.rank0_result_s);
-  for (int k = 0; k < n_done; ++k) {
-    std::string_view msg = incoming_[static_cast<std::size_t>(done_idx_[static_cast<std::size_t>(k)])]->bytes;
-    try {
-      while (!msg.empty()) {
-        const std::string_view frame = results::read_frame(msg).bytes;
-        collector_.add_frame(frame, plan_);
-        msg.remove_prefix(frame.size());
-        ++received_;
-        ++sum_.runs_by_workers;
-      }
-    } catch (const std::exception& e) {
-      abort_rank0(comm_, collector_, "storing results", e);
-    }
-  }
-  drop_completed(recv_reqs_, incoming_);
-  return true;
-}
-
-void Rank0Round::test_sends() {
-  if (send_reqs_.empty()) return;
-  int n_done = 0;
-  done_idx_.resize(send_reqs_.size());
-  {
-    ScopeTimer t(sum_.rank0_mpi_s);
-    MPI_Testsome(static_cast<int>(send_reqs_.size()), send_reqs_.data(), &n_done, done_idx_.data(),
-                 MPI_STATUSES_IGNORE);
-  }
-  if (n_done > 0) drop_completed(send_reqs_, sends_);
-}
-
-bool Rank0Round::poll() {
-  ScopeTimer t(sum_.rank0_poll_s);
-  const bool matched = match_new();
-  const bool received = complete_receives();
-  test_sends();
-  return matched || received;
-}
-
-// Rank 0 takes single runs from the same pool, so it is never more than one run late in
-// answering a worker.
+// Rank 0 takes runs from the same pool one at a time, so it is never more than one run late in
+// answering a worker; its records go to their owners a batch at a time.
 void Rank0Round::compute_one() {
   const std::int64_t run = next_run();
   one_.clear();
-  const auto t0 = Clock::now();
-  const double c0 = thread_cpu_s();
   try {
     evaluate_(plan_, run, one_);
+    node_.route(one_, run);
+    collector_.add_computed({one_.data() + node_.status_at(), 1});
   } catch (const std::exception& e) {
-    abort_rank0(comm_, collector_, "a run", e);
+    abort_rank0(node_.comm(), collector_, "a run", e);
   }
+  ++sum_.runs_by_rank0;
+  if (++unsent_ >= opts_.max_batch || handed_ == to_do_) {
+    node_.flush_records();
+    unsent_ = 0;
+  }
+}
+
+// Between its runs rank 0 looks at its messages after every kRunsPerPoll of them or kPollInterval,
+// whichever comes first (a worker holds a second batch of runs, so it does not notice; each look
+// costs what a run's result costs in all), and after every run near the end of a round, where the
+// batches are short.
+bool Rank0Round::poll_due(Clock::time_point last_poll) const {
+  const std::int64_t near_end = std::int64_t{2} * node_.size() * opts_.max_batch;
+  return to_do_ - handed_ < near_end || runs_since_poll_ >= kRunsPerPoll || Clock::now() - last_poll >= kPollInterval;
+}
+
+// Runs back to back until a look at the messages is due: the thread's CPU clock (a system call,
+// about as dear as the look) is read once per stretch, not per run.
+void Rank0Round::compute_stretch(Clock::time_point last_poll) {
+  const auto t0 = Clock::now();
+  const double c0 = thread_cpu_s();
+  do {
+    compute_one();
+    ++runs_since_poll_;
+  } while (handed_ < to_do_ && !node_.flow_blocked() && !poll_due(last_poll));
   compute_cpu_s_ += thread_cpu_s() - c0;
   sum_.rank0_compute_s += seconds_since(t0);
-  ++sum_.runs_by_rank0;
-  ScopeTimer tp(sum_.rank0_poll_s), tr(sum_.rank0_result_s);
-  try {
-    collector_.add_frame(one_, plan_);
-  } catch (const std::exception& e) {
-    abort_rank0(comm_, collector_, "storing a result", e);
-  }
-  ++received_;
 }
 
 void Rank0Round::maybe_tick() {
@@ -252,60 +212,53 @@ void Rank0Round::maybe_tick() {
   try {
     collector_.tick(false);
   } catch (const std::exception& e) {
-    abort_rank0(comm_, collector_, "syncing the journal", e);
+    abort_rank0(node_.comm(), collector_, "syncing the journal", e);
   }
   sum_.rank0_tick_s += seconds_since(now);
 }
 
-// Until every result of the round is in: answer and store, write a complete chunk's next dataset
-// if one waits, else compute a run, else wait a little. Then every worker gets the end of the round.
+// Until every record of the round is in: serve the messages, then rank 0's chunks, else compute
+// a run, else wait a little. Then every worker gets the end of the round.
 void Rank0Round::run() {
-  {
-    ScopeTimer t(sum_.rank0_poll_s);  // answering: inside rank0_poll_s, as every send
-    for (int w = 1; w < size_; ++w) send_batch(w);
-    for (int w = 1; w < size_; ++w)
-      if (!waiting_[static_cast<std::size_t>(w)]) send_batch(w);
-  }
+  for (int w = 1; w < node_.size(); ++w) send_batch(w);
+  for (int w = 1; w < node_.size(); ++w)
+    if (!waiting_[static_cast<std::size_t>(w)]) send_batch(w);
   Backoff backoff(200);  // rank 0 idles only at the end of a round, where latency matters
-  while (received_ < to_do_) {
-    const bool progressed = poll();
-    if (collector_.write_pending()) {
-      ScopeTimer t(sum_.rank0_write_s);
-      try {
-        collector_.write_next();
-      } catch (const std::exception& e) {
-        abort_rank0(comm_, collector_, "writing the results file", e);
-      }
-    } else if (handed_ < to_do_) {
-      compute_one();
-    } else if (!progressed) {
+  Clock::time_point last_poll{};
+  while (!collector_.round_complete(plan_)) {
+    bool progressed = false;
+    if (handed_ == to_do_ || poll_due(last_poll)) {
+      last_poll = Clock::now();
+      runs_since_poll_ = 0;
+      progressed = node_.poll();
+    }
+    const bool served = serve_();
+    if (!served && handed_ < to_do_ && !node_.flow_blocked()) {
+      compute_stretch(last_poll);
+    } else if (!served && !progressed) {
       ScopeTimer t(sum_.rank0_idle_s);
+      if (node_.has_unsent_records()) node_.flush_records();
       backoff.sleep();
     } else {
       backoff.reset();
     }
     maybe_tick();
   }
-  ScopeTimer t(sum_.rank0_poll_s);
-  for (int w = 1; w < size_; ++w) {  // the end of the round: an empty work message
-    send_reqs_.emplace_back();
-    MPI_Isend(nullptr, 0, MPI_BYTE, w, kTagWork, comm_, &send_reqs_.back());
-  }
-  for (MPI_Request& r : send_reqs_) wait_idle(&r);
-  sends_.clear();
-  send_reqs_.clear();
+  for (int w = 1; w < node_.size(); ++w) node_.send(w, kTagWork, {});  // the end of the round: no runs
 }
 
-// Round r's plan from rank 0 to every rank: its size, then its bytes.
-methods::RoundPlan broadcast_plan(MPI_Comm comm, const methods::RoundPlan& plan, bool root) {
+// Round r's plan from rank 0 to every rank (its size, then its bytes), serving the rank's messages
+// and chunks while it travels.
+methods::RoundPlan broadcast_plan(Node& node, const methods::RoundPlan& plan, const std::function<bool()>& serve) {
+  const bool root = node.rank() == 0;
   std::string bytes = root ? plan.to_bytes() : std::string();
   long long n = static_cast<long long>(bytes.size());
   MPI_Request r;
-  MPI_Ibcast(&n, 1, MPI_LONG_LONG, 0, comm, &r);
-  wait_idle(&r);
+  MPI_Ibcast(&n, 1, MPI_LONG_LONG, 0, node.comm(), &r);
+  wait_serving(&r, node, serve);
   bytes.resize(static_cast<std::size_t>(n));
-  MPI_Ibcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, comm, &r);
-  wait_idle(&r);
+  MPI_Ibcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, node.comm(), &r);
+  wait_serving(&r, node, serve);
   return root ? plan : methods::RoundPlan::from_bytes(bytes);
 }
 
@@ -319,60 +272,143 @@ std::string EngineOptions::validate() const {
   return {};
 }
 
-EngineResult run_engine(MPI_Comm comm, const Evaluate& evaluate, Collector* collector, const EngineOptions& opts) {
+struct Engine::Impl {
+  Impl(MPI_Comm comm, std::int64_t chunk_runs, std::size_t status_offset, const EngineOptions& o)
+      : node(comm, chunk_runs, status_offset), opts(o) {}
+  void handle(int tag, int source, std::string& bytes);
+  bool serve();  // the rank's chunks: up to a millisecond of their work
+  void drain(bool root);
+  Node node;
+  EngineOptions opts;
+  ChunkOwner* owner = nullptr;
+  Collector* collector = nullptr;
+  std::unique_ptr<Rank0Server> server;
+  WorkQueue work;
+  results::ScheduleSummary schedule;
+};
+
+void Engine::Impl::handle(int tag, int source, std::string& bytes) {
+  if (tag == kTagWork) work.push(std::move(bytes));
+  else if (tag == kTagRecords) owner->add_records(bytes);
+  else if (tag == kTagPlacement) owner->on_placement(bytes);
+  else if (tag == kTagWindows) owner->on_windows(bytes);
+  else if (tag == kTagAskSample) owner->on_sample_ask();
+  else if (server) server->handle(tag, source, bytes);
+  else throw std::runtime_error(fmt::format("rank {} got a message of tag {} from rank {}", node.rank(), tag, source));
+}
+
+bool Engine::Impl::serve() {
+  const auto t0 = Clock::now();
+  bool any = false;
+  while (owner->step()) {
+    any = true;
+    if (seconds_since(t0) > 1e-3) break;
+  }
+  node.pause_records(owner->behind());
+  if (any) schedule.rank0_write_s += seconds_since(t0);  // rank 0's: its own chunks' work
+  return any;
+}
+
+// After the last round: every chunk built, placed and written; each owner says so once its bytes
+// are synced, and rank 0 waits for all of them.
+void Engine::Impl::drain(bool root) {
+  Backoff backoff(200);
+  bool finished = false;
+  while (!finished || (root && server->finished < node.size())) {
+    const bool worked = node.poll() | serve();
+    if (!finished && owner->done()) {
+      owner->finish();
+      node.send(0, kTagFinished, {});
+      finished = true;
+    }
+    if (worked) backoff.reset();
+    else backoff.sleep();
+    if (root) collector->tick(false);
+  }
+}
+
+Engine::Engine(MPI_Comm comm, std::int64_t chunk_runs, std::size_t status_offset, const EngineOptions& opts)
+    : impl_(std::make_unique<Impl>(comm, chunk_runs, status_offset, opts)) {
   if (const std::string e = opts.validate(); !e.empty()) throw std::invalid_argument("engine options: " + e);
-  int rank = 0;
-  MPI_Comm_rank(comm, &rank);
-  const bool root = rank == 0;
+}
+
+Engine::~Engine() = default;
+
+std::function<void(int, std::string)> Engine::sender() {
+  Node* node = &impl_->node;
+  return [node](int tag, std::string bytes) { node->send(0, tag, std::move(bytes)); };
+}
+
+void Engine::attach(ChunkOwner& owner, Collector* collector) {
+  Impl& m = *impl_;
+  if ((m.node.rank() == 0) != (collector != nullptr)) throw std::invalid_argument("engine: the collector is rank 0's");
+  m.owner = &owner;
+  m.collector = collector;
+  if (collector) m.server = std::make_unique<Rank0Server>(m.node, *collector, m.schedule);
+  m.node.set_handler([&m](int tag, int source, std::string& bytes) { m.handle(tag, source, bytes); });
+}
+
+void Engine::serve_local() {
+  Impl& m = *impl_;
+  while (m.node.poll_local() | m.serve()) {
+  }
+}
+
+void Engine::set_rank0_chunks(std::vector<std::int64_t> chunks) { impl_->node.set_rank0_chunks(std::move(chunks)); }
+
+EngineResult Engine::run(const Evaluate& evaluate) {
+  Impl& m = *impl_;
+  Node& node = m.node;
+  const bool root = node.rank() == 0;
+  m.schedule = {};
   EngineResult out;
+  const std::function<bool()> serve = [&m] { return m.serve(); };
   const auto t0 = Clock::now();
   const double cpu0 = thread_cpu_s();
   double compute_cpu = 0.0;
   std::int64_t first = 0;
-  for (std::int64_t r = 0;; ++r) {
-    methods::RoundPlan plan;
-    if (root) {
-      try {
-        plan = collector->plan_round(r, first);
-      } catch (const std::exception& e) {
-        abort_rank0(comm, *collector, "planning a round", e);
+  const std::int64_t restored = root ? m.collector->n_done() : 0;
+  double sched_wall = 0.0;
+  try {
+    for (std::int64_t r = 0;; ++r) {
+      methods::RoundPlan plan;
+      if (root) plan = m.collector->plan_round(r, first);
+      plan = broadcast_plan(node, plan, serve);
+      if (plan.n_runs == 0) break;
+      out.plans.push_back(plan);
+      m.owner->add_round(plan);
+      if (root) {
+        Rank0Round round(node, plan, *m.collector, evaluate, serve, m.opts, m.schedule);
+        m.server->round = &round;
+        round.run();
+        m.server->round = nullptr;
+        compute_cpu += round.compute_cpu_s();
+      } else {
+        run_worker_round(node, m.work, plan, evaluate, serve);
       }
+      first = plan.end_run();
     }
-    plan = broadcast_plan(comm, plan, root);
-    if (plan.n_runs == 0) break;
-    out.plans.push_back(plan);
-    if (root) {
-      Rank0Round round(comm, plan, *collector, evaluate, opts, out.schedule);
-      round.run();
-      compute_cpu += round.compute_cpu_s();
-    } else {
-      run_worker_round(comm, plan, evaluate);
-    }
-    first = plan.end_run();
+    sched_wall = seconds_since(t0);
+    const auto t_drain = Clock::now();
+    m.owner->end_rounds();
+    m.drain(root);
+    out.last_chunks_s = seconds_since(t_drain);
+  } catch (const Interrupted&) {
+    throw;
+  } catch (const std::exception& e) {
+    if (root) abort_rank0(node.comm(), *m.collector, "the campaign's engine", e);
+    abort_job(node.comm(), "the campaign's engine", e);
   }
   if (root) {
-    out.schedule.schedule_wall_s = seconds_since(t0);
+    out.schedule = m.schedule;
+    out.schedule.schedule_wall_s = sched_wall;
+    out.schedule.rank0_poll_s = node.poll_s();
+    out.schedule.rank0_mpi_s = node.mpi_s();
     out.schedule.rank0_compute_cpu_s = compute_cpu;
     out.schedule.rank0_handle_cpu_s = thread_cpu_s() - cpu0 - compute_cpu;
+    out.schedule.runs_by_workers = m.collector->n_done() - restored - out.schedule.runs_by_rank0;
   }
   return out;
-}
-
-void wait_idle(MPI_Request* req) {
-  Backoff backoff;
-  for (;;) {
-    int done = 0;
-    MPI_Test(req, &done, MPI_STATUS_IGNORE);
-    if (done) return;
-    backoff.sleep();
-  }
-}
-
-int broadcast_int_idle(MPI_Comm comm, int v) {
-  MPI_Request r;
-  MPI_Ibcast(&v, 1, MPI_INT, 0, comm, &r);
-  wait_idle(&r);
-  return v;
 }
 
 }  // namespace truss::parallel

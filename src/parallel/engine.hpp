@@ -3,27 +3,32 @@
 // rank 0 asks it for round r's plan given round r - 1's records, journals the plan and broadcasts
 // it; then the round's runs are scheduled dynamically over the ranks (a worker holds a second
 // batch, so it never waits for rank 0; rank 0 computes runs itself between answering) and each
-// rank computes a run's point from (plan, run index) alone. Rank 0's Collector journals and stores
-// every record as it arrives and hands the method the round's records in run-index order.
+// rank computes a run's point from (plan, run index) alone.
+//
+// No rank handles every result. A run's record goes from the rank that computed it to the owner of
+// its chunk of the results file (owner.hpp), which journals it, builds and encodes the chunk and
+// writes its bytes where rank 0 placed them. Rank 0 works per batch (the schedule) and per chunk
+// (round parts: the records a method reads; chunk reports: placement, statistics, messages).
 //
 // Progress without single-copy transports: no rank ever makes a blocking call for a message whose
-// sender may be computing. Rank 0 matches a worker's result message with MPI_Improbe, posts
-// MPI_Imrecv for it and tests it between its own runs; a worker tests its outstanding sends
-// between its runs. A rendezvous message therefore moves a few fragments per run on both sides,
-// over shared memory with or without CMA and over TCP alike. The next batch goes out as soon as
-// the result message is matched, before its data has arrived.
+// sender may be computing. Every rank matches its messages with MPI_Improbe, posts MPI_Imrecv for
+// them and tests them between its own runs, and tests its outstanding sends; a rank stops
+// computing while more than kMaxSendBytes of its records are in flight (the memory bound of a
+// rank whose owners are slow to answer). Every wait (a broadcast, the end of a round) keeps
+// serving the rank's chunks.
 //
-// Messages: a work message (rank 0 -> worker) is the batch's run indices (i64 each; none: the
-// round is over); a result message (worker -> rank 0) is the batch's records as sealed journal
-// frames (results/journal.hpp), which rank 0 journals as they came.
+// Messages (engine_detail.hpp): a batch of run indices (rank 0 -> worker; none: the round is
+// over), a batch done (worker -> rank 0), records (any rank -> owner: sealed journal frames,
+// results/journal.hpp), round parts, chunk reports, windows requests and seed samples (owner ->
+// rank 0), placements and windows (rank 0 -> owner), and an owner's end.
 #pragma once
 #include <mpi.h>
 
 #include <chrono>
 #include <cstdint>
 #include <functional>
-#include <map>
 #include <limits>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -31,13 +36,10 @@
 #include "methods/method.hpp"
 #include "parallel/progress.hpp"
 #include "results/campaign_file.hpp"
+#include "results/chunk_messages.hpp"
 #include "results/journal.hpp"
 
 namespace truss::parallel {
-
-namespace detail {
-struct FrameCheck;
-}
 
 struct EngineOptions {
   int max_batch = 32;             // upper bound on runs per batch: keeps the end of a round balanced
@@ -48,6 +50,9 @@ struct EngineOptions {
   std::int64_t max_runs = std::numeric_limits<std::int64_t>::max();
   std::string validate() const;
 };
+
+// Records a rank may have in flight to their owners before it waits for them to be received.
+inline constexpr std::size_t kMaxSendBytes = std::size_t{32} << 20;
 
 // Appends run `run`'s record, as a sealed journal frame (kind run), to `out`: the evaluation of one
 // point of round `plan`, on any rank. Failed runs are records too; an exception aborts the job.
@@ -61,47 +66,74 @@ struct SessionState {
   double session_wall = 0;     // while reading the journal: the last heartbeat of the session read
 };
 
-// Rank 0: the path of a result from its frame to the file, and the rounds' bookkeeping. A record
-// is checked against its round, appended to the journal, copied into its chunk of the results
-// file and, if the method reads its outputs, into its round's records.
+// What --resume found in the journals.
+struct RestoreSummary {
+  std::int64_t records = 0;        // runs restored
+  std::vector<std::string> notes;  // damage dropped, rounds cut (one line each)
+};
+
+// Rank 0's bookkeeping of the campaign: the round plans (journaled), which runs are in (from the
+// owners' round parts), the method's records, and the results file's chunks (placed as their
+// owners report them).
 class Collector {
  public:
   Collector(const campaign::RecordLayout& layout, methods::Method& method, results::Journal& journal,
             results::CampaignFile& file, Progress& progress, const EngineOptions& opts);
-  // --resume: every frame of the journal (Journal::open_existing) into the session state, the
-  // round plans and the results file. A frame that passed its CRC but makes no sense (a run out of
-  // its round, twice or from a rank the session did not have, a short payload, a NaN or negative
-  // time, a session on no ranks) was not written by a crash: io::InputError naming the journal
-  // and the frame's byte offset, and the journal stays as it was. Then the method proposes the
-  // journaled rounds again from the restored records: io::InputError if it does not propose the
-  // same plans (another program, or a method that depends on something else than its records).
-  results::JournalScan restore();
+  // --resume: every frame of the journal and of the part journals of its sessions (read twice: to
+  // check them and find the rounds complete, then to replay the kept records through `replay`,
+  // rank 0's owner). A frame that passed its CRC but makes no sense (a run out of its round, twice
+  // or from a rank the session did not have, a short payload, a NaN or negative time, a session
+  // on no ranks) was not written by a crash: io::InputError naming the journal and the frame's
+  // byte offset, and the journals stay as they were. A round that misses records (a host lost its
+  // part journal's tail) ends the restored rounds: later plans and their records are cut from the
+  // journals. Then the method proposes the journaled rounds again from the restored records:
+  // io::InputError if it does not propose the same plans.
+  struct RestoreSink {  // rank 0's chunks
+    std::function<void(const methods::RoundPlan&)> round;  // each restored round, before its records
+    std::function<void(std::string_view record, std::int64_t session)> record;
+    std::function<void()> drain;  // rank 0's own messages handled (parts, chunks): memory stays bounded
+  };
+  RestoreSummary restore(const std::string& campaign_text, const RestoreSink& sink);
   // Journals this session's start and syncs the journal.
   void start_session(double unix_start, int n_ranks);
   // Round r's plan: the method's proposal from round r - 1's records (or the journaled plan that
-  // restore() checked), journaled, and the results file extended to its runs.
+  // restore() checked), journaled and written out (it survives rank 0 before any rank computes a
+  // run of it), and the results file extended to its runs.
   methods::RoundPlan plan_round(std::int64_t round, std::int64_t first_run);
-  // A run's sealed frame from round `plan`. Throws std::runtime_error for a frame that is not a
-  // record of the round or a run stored before.
-  void add_frame(std::string_view frame, const methods::RoundPlan& plan);
+
+  // The owners' messages.
+  void add_part(const results::RoundPart& part);
+  results::ChunkPlacement place(const results::ChunkReport& report);
+  bool seeded() const { return file_.store().seeded(); }
+  void seed(const results::SeedSample& s) { file_.store().seed(s); }
+  results::ChunkPlacement windows() const;  // no chunk, the current windows
+  std::size_t n_observed() const { return observed_.size(); }
+  const std::vector<std::size_t>& observed_fields() const { return observed_; }
+
+  // Runs computed (their statuses, one byte each): what the progress counts, before their
+  // records reach their owners' journals.
+  void add_computed(std::string_view statuses);
+  std::int64_t n_computed() const { return n_computed_; }
+  const results::StatusCounts& computed_counts() const { return computed_counts_; }
+  bool has(std::int64_t run) const {
+    return run < static_cast<std::int64_t>(done_.size()) && done_[static_cast<std::size_t>(run)];
+  }
+  bool round_complete(const methods::RoundPlan& plan) const;
+  std::int64_t n_done() const { return n_done_; }  // runs in the journals (round parts, restored)
+  const results::StatusCounts& status_counts() const { return status_counts_; }
   const results::ResultStore& store() const { return file_.store(); }
-  bool write_pending() const { return file_.store().write_pending(); }
-  void write_next() { file_.store().write_next(); }
   // Every flush interval (or now, with `sync`): a heartbeat, the journal synced and the results
   // file's pages pushed to disk. Progress when due.
   void tick(bool sync);
   // Before the job is aborted (rank 0's fatal error): see CampaignFile::remove_temporary.
   void remove_temporary_file() noexcept { file_.remove_temporary(); }
   const SessionState& session() const { return st_; }
-  double journal_s() const { return journal_s_; }
   const std::vector<methods::RoundPlan>& plans() const { return plans_; }  // journaled or planned so far
 
  private:
-  void restore_frame(results::FrameKind kind, std::string_view payload, std::size_t offset);
-  void restore_plan(const detail::FrameCheck& check);
-  void restore_run(const detail::FrameCheck& check);
+  struct Restore;
   methods::RoundPlan propose(std::int64_t round, std::int64_t first_run);  // round - 1's records to the method
-  void observe(const campaign::RecordView& rec);
+  void count_in(std::int64_t run, std::size_t round, std::int8_t status);  // once per run
   const campaign::RecordLayout& L_;
   methods::Method& method_;
   results::Journal& journal_;
@@ -111,21 +143,46 @@ class Collector {
   SessionState st_;
   std::vector<methods::RoundPlan> plans_;  // every round's, from the journal (the first n_journaled_) and new
   std::size_t n_journaled_ = 0;
-  std::int32_t session_ranks_ = 0;  // while restoring: the rank count of the session being read
   std::vector<std::size_t> observed_;                      // the record fields of method_.observed_outputs()
   bool reads_records_ = false;                             // method_.reads_records(): keep records_
   std::map<std::int64_t, methods::RoundRecords> records_;  // by round, for the method
+  std::vector<bool> done_;                                 // by run: in a journal
+  std::vector<std::int64_t> round_done_;                   // by round: runs in
+  std::int64_t n_done_ = 0, n_computed_ = 0;
+  results::StatusCounts status_counts_{}, computed_counts_{};
   std::chrono::steady_clock::time_point wall0_ = std::chrono::steady_clock::now(), last_sync_ = wall0_;
-  double journal_s_ = 0.0;
 };
 
-// Collective over comm: the method's rounds, until it proposes none. `collector` is rank 0's (null
-// on the other ranks). Returns every round's plan (on every rank) and, on rank 0, the schedule.
+class ChunkOwner;
+
+// Collective over comm (run): the method's rounds, until it proposes none, then every chunk
+// written. Every rank makes one and attaches its chunks' owner (rank 0 also its collector) before
+// any message is handled; rank 0 may serve its own chunks alone before the session (--resume).
 struct EngineResult {
-  std::vector<methods::RoundPlan> plans;
-  results::ScheduleSummary schedule;
+  std::vector<methods::RoundPlan> plans;     // every round's (on every rank)
+  results::ScheduleSummary schedule;         // rank 0's (to the last record in)
+  double last_chunks_s = 0.0;                // then, every chunk written (wall; part of the campaign's tail)
 };
-EngineResult run_engine(MPI_Comm comm, const Evaluate& evaluate, Collector* collector, const EngineOptions& opts);
+class Engine {
+ public:
+  // `status_offset`: where a record holds its status (RecordLayout), read from each run's frame.
+  Engine(MPI_Comm comm, std::int64_t chunk_runs, std::size_t status_offset, const EngineOptions& opts);
+  ~Engine();
+  Engine(const Engine&) = delete;
+  Engine& operator=(const Engine&) = delete;
+  // What the rank's owner sends rank 0 goes through this.
+  std::function<void(int tag, std::string bytes)> sender();
+  void attach(ChunkOwner& owner, Collector* collector);
+  // Rank 0 alone: its own messages and chunks handled until none is left.
+  void serve_local();
+  // The chunks rank 0 owns whatever the rank count (those it restored), the same on every rank.
+  void set_rank0_chunks(std::vector<std::int64_t> chunks);
+  EngineResult run(const Evaluate& evaluate);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // Completes a request by testing it with sleeps in between (20 us doubling to 1 ms): a rank that
 // only waits leaves the core to the others (Open MPI's blocking calls spin, which starves

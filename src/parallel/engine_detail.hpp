@@ -1,17 +1,38 @@
-// Internals shared by the two sides of a round's schedule (engine.cpp: rank 0; worker.cpp).
+// Internals shared by the engine's parts: the message tags, a rank's messaging (Node) and the
+// sides of a round's schedule (engine.cpp: rank 0; worker.cpp).
 #pragma once
 #include <mpi.h>
 
+#include <cstdint>
+#include <deque>
 #include <exception>
+#include <functional>
+#include <list>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
 
 #include "parallel/engine.hpp"
 
 namespace truss::parallel::detail {
 
-inline constexpr int kTagWork = 11;    // rank 0 -> worker: i64 run indices; none: the round is over
-inline constexpr int kTagResult = 12;  // worker -> rank 0: the batch's records, sealed journal frames
+inline constexpr int kTagWork = 11;         // rank 0 -> worker: i64 run indices; none: the round is over
+inline constexpr int kTagRecords = 12;      // any -> owner: sealed journal frames of its chunks' runs
+inline constexpr int kTagDone = 13;         // worker -> rank 0: a batch is computed (i64 runs)
+inline constexpr int kTagPart = 14;         // owner -> rank 0: a round part (results/chunk_messages.hpp)
+inline constexpr int kTagChunk = 15;        // owner -> rank 0: a complete chunk's report
+inline constexpr int kTagAskWindows = 16;   // owner -> rank 0: the statistics windows, please
+inline constexpr int kTagSeed = 17;         // owner -> rank 0: a seed sample
+inline constexpr int kTagAskSample = 18;    // rank 0 -> owner: send a seed sample
+inline constexpr int kTagPlacement = 19;    // rank 0 -> owner: where a chunk goes, and the windows
+inline constexpr int kTagWindows = 20;      // rank 0 -> owner: the windows (a placement of no chunk)
+inline constexpr int kTagFinished = 21;     // owner -> rank 0: its chunks written and synced
 
+// A fatal error on any rank: the results file's temporary name removed (set_abort_removes; the
+// journals keep every finished run for --resume), the job aborted (exit 3).
 [[noreturn]] void abort_job(MPI_Comm comm, const char* where, const std::exception& e);
+void set_abort_removes(const std::string& temporary);
 
 // Sleeps between polls: 20 us at first, doubling up to max_us; reset() after progress.
 class Backoff {
@@ -24,7 +45,98 @@ class Backoff {
   long us_ = 20, max_us_;
 };
 
-// A worker's part of round `plan`: batches in, their records out, until the round is over.
-void run_worker_round(MPI_Comm comm, const methods::RoundPlan& plan, const Evaluate& evaluate);
+// A rank's messages: nonblocking sends it keeps until they complete (records counted against
+// kMaxSendBytes), receives matched with MPI_Improbe and handled in the order they were matched,
+// messages to itself through a queue (handled the same way), and the records of the runs it
+// computes gathered per owner until they are sent.
+class Node {
+ public:
+  using Handler = std::function<void(int tag, int source, std::string& bytes)>;
+  // `status_offset`: where a record holds its status (its frame's byte kFrameHeader + it).
+  Node(MPI_Comm comm, std::int64_t chunk_runs, std::size_t status_offset);
+  std::size_t status_at() const { return results::kFrameHeader + status_offset_; }  // in a run's frame
+  void set_rank0_chunks(std::vector<std::int64_t> chunks);
+  ~Node();
+  Node(const Node&) = delete;
+  Node& operator=(const Node&) = delete;
+
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  MPI_Comm comm() const { return comm_; }
+  void set_handler(Handler h) { handler_ = std::move(h); }
+  void send(int dest, int tag, std::string bytes);
+  // Tests the sends, matches and receives messages, handles those complete; true if any was.
+  bool poll();
+  bool poll_local();  // the messages to itself only (rank 0 alone, before the session)
+  bool flow_blocked() const { return record_bytes_ > kMaxSendBytes; }
+  // While the rank's owner is behind, it takes no more records: their senders' sends stay in
+  // flight, and those senders wait (flow_blocked).
+  void pause_records(bool pause) { records_paused_ = pause; }
+  double poll_s() const { return poll_s_; }  // wall time in poll()
+  double mpi_s() const { return mpi_s_; }    //   of which in MPI calls
+
+  // The owner of chunk k: rank 0 on one rank and for the chunks it restored, else 1 + k mod (P - 1).
+  int owner_of(std::int64_t chunk) const;
+  // A computed run's sealed frame, to its chunk's owner (sent by flush_records).
+  void route(std::string_view frame, std::int64_t run);
+  void flush_records();
+  bool has_unsent_records() const;
+
+ private:
+  struct Out {
+    std::string bytes;
+    MPI_Request req = MPI_REQUEST_NULL;
+    bool records = false;
+  };
+  struct In {
+    std::string bytes;
+    MPI_Request req = MPI_REQUEST_NULL;
+    int tag = 0, source = 0;
+  };
+  bool test_sends();
+  bool match();
+  bool match_one(int tag);
+  bool handle_received();
+
+  MPI_Comm comm_;
+  int rank_ = 0, size_ = 1;
+  std::int64_t chunk_runs_;
+  std::size_t status_offset_;
+  std::vector<std::int64_t> rank0_chunks_;  // sorted
+  Handler handler_;
+  std::list<Out> sends_;  // a list: the buffers must not move while a send is in flight
+  std::size_t record_bytes_ = 0;
+  std::list<In> received_;  // matched, in matching order (a list: the buffers stay put)
+  std::deque<std::pair<int, std::string>> local_;
+  std::map<int, std::string> unsent_;  // records per owner
+  bool records_paused_ = false;
+  double poll_s_ = 0.0, mpi_s_ = 0.0;
+  bool in_poll_ = false, in_handler_ = false;
+};
+
+// Waits for a request while serving the rank's messages and chunks (`serve`: one unit of work,
+// true if there was one).
+void wait_serving(MPI_Request* req, Node& node, const std::function<bool()>& serve);
+
+// A worker's part of round `plan`: batches in (node's work queue), their records to their owners,
+// until the round is over. `serve`: the rank's owner work between runs.
+class WorkQueue;
+void run_worker_round(Node& node, WorkQueue& work, const methods::RoundPlan& plan, const Evaluate& evaluate,
+                      const std::function<bool()>& serve);
+
+// The batches rank 0 sent a worker, in order; an empty one ends a round.
+class WorkQueue {
+ public:
+  void push(std::string&& batch) { batches_.push_back(std::move(batch)); }
+  bool empty() const { return batches_.empty(); }
+  std::string pop() {
+    std::string b = std::move(batches_.front());
+    batches_.pop_front();
+    return b;
+  }
+
+ private:
+  std::deque<std::string> batches_;
+};
 
 }  // namespace truss::parallel::detail

@@ -33,13 +33,14 @@ std::string CampaignFile::lock_name(const std::string& path) { return hidden_nam
 CampaignFile::CampaignFile(const std::string& path, const campaign::CampaignContext& ctx, const StoreOptions& opts)
     : path_(path), tmp_(temporary_name(path)), ctx_(ctx) {
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);  // errors are reported through exceptions
-  file_ = H5Fcreate(tmp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  const Handle fapl(make_placement_fapl(placement_), H5Pclose, "file access properties of " + tmp_);
+  file_ = H5Fcreate(tmp_.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get());
   if (file_ < 0) {
     tmp_.clear();
     throw_h5("create " + temporary_name(path));
   }
   try {
-    store_ = std::make_unique<ResultStore>(file_, ctx.record, opts);
+    store_ = std::make_unique<ResultStore>(file_, placement_, ctx.record, opts);
   } catch (...) {
     discard();
     throw;

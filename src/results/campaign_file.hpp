@@ -21,13 +21,12 @@ inline constexpr std::int64_t kCampaignSchemaVersion = 3;
 // How the last session's schedule went (rank 0's view, steady clock and thread CPU seconds), as
 // /timing's attributes hold it: not reproducible. The engine fills it; the file writes it as it is.
 struct ScheduleSummary {
-  double schedule_wall_s = 0;     // first batch handed out to last result in, every round
-  double rank0_compute_s = 0;     // rank 0 inside its own runs
-  double rank0_poll_s = 0;        // matching, receiving and storing results, answering workers
+  double schedule_wall_s = 0;     // first batch handed out to the last chunk written, every round
+  double rank0_compute_s = 0;     // rank 0 inside its own runs (their records sent to their owners included)
+  double rank0_poll_s = 0;        // looking at and answering messages (batches, the owners' round parts and chunks)
   double rank0_mpi_s = 0;         //   of which inside MPI calls
-  double rank0_result_s = 0;      //   of which storing results (checks, journal, copies into the chunks)
-  double rank0_journal_s = 0;     //     of which appending to the journal (and its write()s)
-  double rank0_write_s = 0;       // writing the complete chunks (filters, H5Dwrite_chunk) and their statistics
+  double rank0_result_s = 0;      //   of which handling the owners' messages (round parts, placements, statistics)
+  double rank0_write_s = 0;       // the chunks rank 0 owns (one rank, restored ones): built, encoded, written
   double rank0_tick_s = 0;        // journal syncs and progress
   double rank0_idle_s = 0;        // waiting with nothing to compute or write (ends of rounds)
   double rank0_handle_cpu_s = 0;  // rank 0's thread CPU time outside its own runs (all of the above)
@@ -49,7 +48,8 @@ struct CampaignFileInfo {
 };
 
 // The results file of a session, written as it runs: created at the start as .NAME.tmp.PID next to
-// NAME, the runs streamed into /runs and /timing in run-index chunks (store()); write_summary()
+// NAME (through the placement driver), the runs' chunks placed in /runs and /timing as the ranks
+// that built them report them (store()) and written there by those ranks; write_summary()
 // adds the statistics, the histories, /nominal and the attributes, a method may add its own groups
 // (handle()), and commit() flushes, closes, syncs and renames it onto NAME (never replacing a file
 // without force). HDF5 1.10 files are not crash-safe while open: the journal is what survives a
@@ -62,6 +62,9 @@ class CampaignFile {
   CampaignFile(const CampaignFile&) = delete;
   CampaignFile& operator=(const CampaignFile&) = delete;
   ResultStore& store() { return *store_; }
+  // The temporary file being written (.NAME.tmp.PID of rank 0): the ranks write the chunks they
+  // built into it at the addresses the store placed them at.
+  const std::string& temporary_path() const { return tmp_; }
   // Starts writing the file's dirty pages to disk without waiting (sync_file_range), so that the
   // final sync has little left to wait for (called at each journal flush).
   void start_writeback() const;
@@ -87,6 +90,7 @@ class CampaignFile {
   void discard() noexcept;
   std::string path_, tmp_;
   const campaign::CampaignContext& ctx_;
+  PlacementState placement_;  // before file_: the driver refers to it while the file is open
   hid_t file_ = -1;
   std::unique_ptr<ResultStore> store_;
 };

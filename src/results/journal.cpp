@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 
 #include <fmt/format.h>
 
@@ -13,11 +14,26 @@
 
 namespace truss::results {
 
+namespace fs = std::filesystem;
+
 namespace {
 
 constexpr char kMagic[8] = {'T', 'R', 'U', 'S', 'S', 'J', 'N', 'L'};
-// 2: round plans ('P' frames) and the record with its round (campaign/record.hpp).
-constexpr std::uint32_t kVersion = 2;
+constexpr char kPartMagic[8] = {'T', 'R', 'U', 'S', 'S', 'J', 'N', 'P'};
+// 3: records also in part journals (the ranks that build chunks); 2: round plans ('P' frames) and
+// the record with its round (campaign/record.hpp).
+constexpr std::uint32_t kVersion = 3;
+constexpr std::size_t kPartHeader = kPartHeaderBytes;
+
+std::string part_header(std::uint32_t campaign_crc, std::int64_t session, int rank) {
+  std::string h(kPartMagic, sizeof kPartMagic);
+  util::put(h, kVersion);
+  util::put(h, campaign_crc);
+  util::put(h, session);
+  util::put(h, static_cast<std::int32_t>(rank));
+  util::put(h, util::calc_crc32(h));
+  return h;
+}
 constexpr std::uint32_t kMaxPayload = std::uint32_t{1} << 26;  // 64 MiB: a record is a few kB
 
 [[noreturn]] void fail_errno(const std::string& what, const std::string& path) {
@@ -130,6 +146,22 @@ class Journal::Reader {
                                        path_));
     skip(head + len + 4);
   }
+  // A part's header. Throws unless it is `expected` (part_header()).
+  void read_part_header(const std::string& expected) {
+    if (!need(kPartHeader) || std::memcmp(view(sizeof kPartMagic).data(), kPartMagic, sizeof kPartMagic) != 0)
+      throw std::runtime_error(fmt::format("{} is not a truss-campaign part journal", path_));
+    const std::string_view h = view(kPartHeader);
+    if (util::get_at<std::uint32_t>(h.data() + kPartHeader - 4) != util::calc_crc32(h.substr(0, kPartHeader - 4)))
+      throw std::runtime_error(fmt::format("{}: damaged part journal header", path_));
+    if (util::get_at<std::uint32_t>(h.data() + 8) != kVersion)
+      throw std::runtime_error(fmt::format("{}: unreadable part journal header (version {}, this program writes {})",
+                                           path_, util::get_at<std::uint32_t>(h.data() + 8), kVersion));
+    if (h != expected)
+      throw JournalRefused(fmt::format("{} is not a part of this campaign's journal (another campaign, session or "
+                                       "rank); finish it with the same campaign file and --set options, or start "
+                                       "over with --force", path_));
+    skip(kPartHeader);
+  }
   std::int64_t frames = 0, records = 0;  // good ones read so far
 
  private:
@@ -180,6 +212,49 @@ Journal Journal::create(const std::string& path, const std::string& campaign_tex
   return j;
 }
 
+std::string part_journal_path(const std::string& output, std::int64_t session, int rank) {
+  return fmt::format("{}.journal.{}.{}", output, session, rank);
+}
+
+std::vector<std::string> remove_part_journals(const std::string& output) {
+  const fs::path p(output);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  const std::string prefix = p.filename().string() + ".journal.";
+  std::vector<std::string> removed;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() <= prefix.size() || name.rfind(prefix, 0) != 0) continue;
+    const std::string rest = name.substr(prefix.size());  // SESSION.RANK, digits only
+    const auto dot = rest.find('.');
+    if (dot == std::string::npos || dot == 0 || dot + 1 == rest.size() ||
+        rest.find_first_not_of("0123456789.") != std::string::npos || rest.find('.', dot + 1) != std::string::npos)
+      continue;
+    if (fs::remove(e.path(), ec)) removed.push_back(e.path().string());
+  }
+  return removed;
+}
+
+Journal Journal::create_part(const std::string& path, std::uint32_t campaign_crc, std::int64_t session, int rank) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  if (fd < 0) fail_errno("cannot create journal", path);
+  Journal j(path, fd);
+  j.buffer_ = part_header(campaign_crc, session, rank);
+  j.flush();
+  return j;
+}
+
+Journal Journal::open_part(const std::string& path, std::uint32_t campaign_crc, std::int64_t session, int rank) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) fail_errno("cannot open journal", path);
+  Journal j(path, fd);
+  const off_t size = ::lseek(fd, 0, SEEK_END);
+  if (size < 0 || ::lseek(fd, 0, SEEK_SET) < 0) fail_errno("cannot seek journal", path);
+  j.reader_ = std::make_unique<Reader>(fd, j.path_, static_cast<std::size_t>(size));
+  j.reader_->read_part_header(part_header(campaign_crc, session, rank));
+  return j;
+}
+
 Journal Journal::open_existing(const std::string& path, const std::string& campaign_text) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
   if (fd < 0) fail_errno("cannot open journal", path);
@@ -203,11 +278,17 @@ bool Journal::next_frame(FrameKind& kind, std::string_view& payload, std::size_t
   return true;
 }
 
-JournalScan Journal::finish_reading() {
+JournalScan Journal::finish_reading(std::size_t cut) {
   Reader& r = *reader_;
   JournalScan scan;
   scan.frames_kept = r.frames;
   scan.records_kept = r.records;
+  if (cut <= r.offset()) {  // read up to a cut: the file ends there
+    reader_.reset();
+    if (::ftruncate(fd_, static_cast<off_t>(cut)) != 0) fail_errno("cannot truncate journal", path_);
+    if (::lseek(fd_, static_cast<off_t>(cut), SEEK_SET) < 0) fail_errno("cannot seek journal", path_);
+    return scan;
+  }
   const std::size_t good = r.offset();
   scan.damage_offset = good;
   scan.dropped_bytes = r.left();
@@ -254,6 +335,8 @@ void Journal::write_buffer() {
   }
   buffer_.clear();
 }
+
+void Journal::write_out() { write_buffer(); }
 
 void Journal::flush() {
   write_buffer();

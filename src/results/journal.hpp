@@ -1,19 +1,23 @@
-// The journal of a running campaign: an append-only file of frames behind a header holding the
-// resolved campaign text. Rank 0 appends every round plan and every finished run, writes its buffer
-// out a megabyte at a time and syncs it every flush interval. HDF5 1.10 files are not crash-safe
-// while open for writing; a journal is: after kill -9 or a power cut every complete frame is still
-// valid and a torn last frame fails its CRC and is dropped. `truss-campaign --resume` reads it back.
+// The journals of a running campaign: append-only files of frames. Rank 0's journal (RESULTS.h5.
+// journal) holds the resolved campaign text, every session, round plan and heartbeat, and the
+// records of the chunks rank 0 builds; each other rank that builds chunks keeps a part journal of
+// their records (RESULTS.h5.journal.SESSION.RANK), written where the records arrive, so that no rank
+// writes every record. Each is written out a megabyte at a time and synced every flush interval.
+// HDF5 1.10 files are not crash-safe while open for writing; a journal is: after kill -9 or a power
+// cut every complete frame is still valid and a torn last frame fails its CRC and is dropped.
+// `truss-campaign --resume` reads them back (parallel/engine.hpp, Collector::restore).
 //
-// Layout (little-endian): "TRUSSJNL" u32 version, u32 text length, text, u32 CRC-32 of the text;
-// then frames: u8 kind, u32 payload length, u32 CRC-32 of kind + payload, payload. A worker's
-// batch message is its records' frames, sealed where they were computed: rank 0 copies them into
-// the journal as they came.
+// Layout (little-endian): rank 0's: "TRUSSJNL" u32 version, u32 text length, text, u32 CRC-32 of
+// the text; a part: "TRUSSJNP" u32 version, u32 CRC-32 of the campaign text, i64 session, i32 rank,
+// u32 CRC-32 of the header before it. Then frames: u8 kind, u32 payload length, u32 CRC-32 of kind
+// + payload, payload. A record's frame is sealed where the run ran and journaled as it came.
 #pragma once
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace truss::results {
 
@@ -57,22 +61,39 @@ struct JournalRefused : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The size of a part journal's header: a shorter part journal was cut before its header was
+// written out (its rank killed at its first record), and holds no record.
+inline constexpr std::size_t kPartHeaderBytes = 8 + 4 + 4 + 8 + 4 + 4;
+
+// The part journal of `rank` in session `session` of the campaign writing `output`.
+std::string part_journal_path(const std::string& output, std::int64_t session, int rank);
+// Removes every part journal of `output` (OUTPUT.journal.S.R); returns their paths. Call while
+// holding the output's lock.
+std::vector<std::string> remove_part_journals(const std::string& output);
+
 // A journal takes no lock of its own: its campaign holds the output's lock (results/lock_file.hpp,
 // CampaignFile::lock_name) from before the journal is opened until after it is removed.
 class Journal {
  public:
   // Creates a new journal (fails if `path` exists) holding `campaign_text`, synced.
   static Journal create(const std::string& path, const std::string& campaign_text);
+  // Creates a part journal (fails if `path` exists) of `rank` in `session`, synced.
+  static Journal create_part(const std::string& path, std::uint32_t campaign_crc, std::int64_t session, int rank);
   // Opens an existing journal to read its frames (next_frame) and then append. Throws
   // std::runtime_error if the header is unreadable, and JournalRefused if it holds a different
   // campaign text.
   static Journal open_existing(const std::string& path, const std::string& campaign_text);
+  // The same for a part journal: JournalRefused unless it is the part of `rank` in `session` of
+  // the campaign whose text has CRC-32 `campaign_crc`.
+  static Journal open_part(const std::string& path, std::uint32_t campaign_crc, std::int64_t session, int rank);
   // The next good frame of an existing journal (its payload valid until the next call; `offset`
   // its byte offset in the file), or false at the end or at the first bad frame.
   bool next_frame(FrameKind& kind, std::string_view& payload, std::size_t& offset);
-  // After next_frame has returned false: scans what follows the last good frame, cuts it off and
-  // leaves the journal ready for appending. Until then the file is as it was.
-  JournalScan finish_reading();
+  // After next_frame has returned false (or once the frames before `cut` are read): scans what
+  // follows the last good frame, cuts the file at the first bad frame or at `cut` (a byte offset
+  // of a frame, whichever comes first) and leaves the journal ready for appending. Until then the
+  // file is as it was.
+  JournalScan finish_reading(std::size_t cut = SIZE_MAX);
 
   Journal(Journal&&) noexcept;
   Journal& operator=(Journal&&) = delete;
@@ -84,6 +105,7 @@ class Journal {
   void append(FrameKind kind, std::string_view payload);
   void append_frame(std::string_view sealed_frame);
   static constexpr std::size_t kWriteThrough = std::size_t{1} << 20;
+  void write_out();         // writes the buffer out (not synced): it survives the process
   void flush();             // writes the buffer out and fdatasyncs: on disk from now on
   void close_and_remove();  // after the results file is in place (nothing written or synced first)
   const std::string& path() const { return path_; }

@@ -7,7 +7,6 @@
 #include <fmt/format.h>
 #include <hdf5_hl.h>
 
-#include "util/bytes.hpp"
 
 namespace truss::results {
 
@@ -17,27 +16,10 @@ using campaign::RecordLayout;
 using campaign::Scale;
 using campaign::ValueType;
 
-// A chunk of runs in memory, until every row has arrived and the chunk is written: each record's
-// fields scattered on arrival into the chunk's column blocks, one per field (field f's block at
-// chunk_runs x f.offset, its row i at i x f.bytes()), so that a dataset chunk is one contiguous
-// block when it is written (gathering a field from whole records at write time would read one cache
-// line of a record per value).
-struct ResultStore::Chunk {
-  std::int64_t index = 0, filled = 0;
-  std::unique_ptr<char[]> cols;  // chunk_runs x fixed_bytes, by field
-  std::vector<std::string> message;
-  std::vector<std::int64_t> session;
-  std::vector<std::uint8_t> use;  // ok runs (status 0): they feed the statistics
-};
-
-// One per-run dataset: a record field (`field` >= 0), /runs/message (kMessage) or /timing/session
-// (kSession). `stats`: the first of its output columns' statistics in col_, or -1.
+// One per-run dataset (ds_: the fields', /runs/message, /timing/session: the file's order).
 struct ResultStore::Dataset {
-  static constexpr int kMessage = -1, kSession = -2;
   Handle ds;
-  int field = kMessage;
-  std::size_t elem = 8, width = 1;
-  int stats = -1;
+  std::size_t width = 1;
 };
 
 namespace {
@@ -74,47 +56,34 @@ Handle make_scale(hid_t loc, const std::string& name, std::int64_t first, std::i
 
 }  // namespace
 
-std::string StoreOptions::validate() const {
-  if (chunk_runs < 1) return fmt::format("chunk_runs: must be >= 1, got {}", chunk_runs);
-  if (deflate_level < 0 || deflate_level > 9)
-    return fmt::format("deflate_level: must be 0 to 9, got {}", deflate_level);
-  return {};
-}
-
-ResultStore::ResultStore(hid_t file, const campaign::RecordLayout& layout, const StoreOptions& opts)
-    : L_(layout), chunk_(opts.chunk_runs), deflate_(opts.deflate_level) {
+ResultStore::ResultStore(hid_t file, PlacementState& placement, const campaign::RecordLayout& layout,
+                         const StoreOptions& opts)
+    : L_(layout), placement_(placement), cols_(layout), chunk_(opts.chunk_runs) {
   if (const std::string e = opts.validate(); !e.empty()) throw std::invalid_argument("result store: " + e);
-  create_datasets(file);
+  col_.resize(cols_.n_stats);
+  create_datasets(file, opts.deflate_level);
 }
 
 ResultStore::~ResultStore() = default;
 
-// Every field's dataset in its group, then the message and the session; dimension scales, so that
-// netCDF-4 readers (xarray) see named dimensions: /runs/run_index on the rows of every per-run
-// dataset, /bay (1..n_bays_max) and /frame (0..n_bays_max) on the columns of the per-bay and
-// per-frame ones. Statistics: one ColumnStats per output column (per bay for per-bay outputs).
-void ResultStore::create_datasets(hid_t file) {
+// Every field's dataset in its group, then the message and the session (the file's order); dimension
+// scales, so that netCDF-4 readers (xarray) see named dimensions: /runs/run_index on the rows of
+// every per-run dataset, /bay (1..n_bays_max) and /frame (0..n_bays_max) on the columns of the
+// per-bay and per-frame ones.
+void ResultStore::create_datasets(hid_t file, int deflate) {
   for (const char* g : {"runs", "runs/bays", "runs/inputs", "timing"}) groups_.push_back(create_group(file, g));
   const Handle status_type = status_enum_type(), str_type = string_type();
   const auto& fields = L_.fields();
-  for (std::size_t f = 0; f < fields.size(); ++f) {
-    const Field& fd = fields[f];
+  for (const Field& fd : fields) {
     const hid_t type = fd.type == ValueType::status ? status_type.get()
                        : fd.type == ValueType::i64  ? H5T_STD_I64LE
                                                     : H5T_IEEE_F64LE;
-    Dataset d{make_dataset(groups_[static_cast<std::size_t>(fd.group)].get(), fd.name, type, fd.units,
-                           fd.scale != Scale::none, fd.width, chunk_, deflate_),
-              static_cast<int>(f), campaign::value_bytes(fd.type), static_cast<std::size_t>(fd.width)};
-    if (fd.statistics) {
-      d.stats = static_cast<int>(col_.size());
-      col_.resize(col_.size() + d.width);
-    }
-    ds_.push_back(std::move(d));
+    ds_.push_back({make_dataset(groups_[static_cast<std::size_t>(fd.group)].get(), fd.name, type, fd.units,
+                                fd.scale != Scale::none, fd.width, chunk_, deflate),
+                   static_cast<std::size_t>(fd.width)});
   }
-  ds_.push_back({make_dataset(groups_[0].get(), "message", str_type.get(), "1", false, 1, chunk_, deflate_),
-                 Dataset::kMessage});
-  ds_.push_back({make_dataset(groups_[3].get(), "session", H5T_STD_I64LE, "1", false, 1, chunk_, deflate_),
-                 Dataset::kSession});
+  ds_.push_back({make_dataset(groups_[0].get(), "message", str_type.get(), "1", false, 1, chunk_, deflate), 1});
+  ds_.push_back({make_dataset(groups_[3].get(), "session", H5T_STD_I64LE, "1", false, 1, chunk_, deflate), 1});
   const hid_t run = ds_[RecordLayout::kRun].ds.get();
   check(H5DSset_scale(run, "run_index"), "make /runs/run_index a dimension scale");
   const Handle bay = make_scale(file, "bay", 1, L_.n_bays_max());
@@ -132,6 +101,10 @@ void ResultStore::create_datasets(hid_t file) {
   }
 }
 
+// The dataset of chunk column k (ChunkColumns order: the fields, then the session) in ds_ (the
+// fields, the message, the session).
+std::size_t ResultStore::dataset_of(std::size_t k) const { return k < L_.fields().size() ? k : k + 1; }
+
 void ResultStore::extend(std::int64_t n_runs) {
   if (n_runs <= n_) return;
   for (const Dataset& d : ds_) {
@@ -139,110 +112,81 @@ void ResultStore::extend(std::int64_t n_runs) {
     check(H5Dset_extent(d.ds.get(), dims), fmt::format("extend the per-run datasets to {} runs", n_runs));
   }
   n_ = n_runs;
-  done_.resize(static_cast<std::size_t>(n_), 0);
 }
 
-ResultStore::Chunk& ResultStore::chunk_for(std::int64_t run) {
-  const std::int64_t k = run / chunk_;
-  if (const auto it = open_.find(k); it != open_.end()) return *it->second;
-  auto c = std::make_unique<Chunk>();
-  c->index = k;
-  c->cols = std::make_unique_for_overwrite<char[]>(static_cast<std::size_t>(chunk_) * L_.fixed_bytes());
-  c->message.resize(static_cast<std::size_t>(chunk_));
-  c->session.resize(static_cast<std::size_t>(chunk_));
-  c->use.resize(static_cast<std::size_t>(chunk_));
-  Chunk& ref = *c;
-  open_.emplace(k, std::move(c));
-  peak_chunks_ = std::max(peak_chunks_, open_.size());
-  return ref;
+void ResultStore::seed(const SeedSample& s) {
+  if (seeded_) return;
+  if (s.values.size() != col_.size())
+    throw std::runtime_error(fmt::format("a seed sample of {} columns for {} statistics columns", s.values.size(),
+                                         col_.size()));
+  for (std::size_t k = 0; k < col_.size(); ++k)
+    col_[k].seed(reinterpret_cast<const char*>(s.values[k].data()), s.use.size(), 1, s.use.data());
+  seeded_ = true;
 }
 
-void ResultStore::add(const campaign::RecordView& rec, std::int64_t session) {
-  const std::int64_t run = rec.run();
-  if (run < 0 || run >= n_) throw std::runtime_error(fmt::format("run index {} out of range", run));
-  if (done_[static_cast<std::size_t>(run)]) throw std::runtime_error(fmt::format("run {} received twice", run));
-  done_[static_cast<std::size_t>(run)] = 1;
-  ++n_done_;
-  ++status_counts_[static_cast<std::size_t>(rec.status())];
-  Chunk& c = chunk_for(run);
-  const auto i = static_cast<std::size_t>(run - c.index * chunk_);
-  const char* src = rec.bytes().data();
-  char* cols = c.cols.get();
-  const auto rows = static_cast<std::size_t>(chunk_);
-  for (const campaign::Field& f : L_.fields()) {
-    const std::size_t bytes = f.bytes();
-    char* dst = cols + rows * f.offset + i * bytes;
-    std::memcpy(dst, src + f.offset, bytes);
+std::vector<statistics::Windows> ResultStore::windows() const {
+  std::vector<statistics::Windows> w;
+  w.reserve(col_.size());
+  for (const auto& c : col_) w.push_back(c.windows());
+  return w;
+}
+
+std::vector<ChunkAddress> ResultStore::place(const ChunkReport& r) {
+  const std::int64_t n_chunks = (n_ + chunk_ - 1) / chunk_;
+  if (r.index < 0 || r.index >= n_chunks || r.rows != std::min(chunk_, n_ - r.index * chunk_))
+    throw std::runtime_error(fmt::format("a report of chunk {} with {} rows, of {} runs in chunks of {}", r.index,
+                                         r.rows, n_, chunk_));
+  if (r.sizes.size() != cols_.columns.size() || r.masks.size() != r.sizes.size() || r.summaries.size() != col_.size())
+    throw std::runtime_error(fmt::format("chunk {}: a report of {} datasets and {} summaries", r.index,
+                                         r.sizes.size(), r.summaries.size()));
+  if (!seeded_) throw std::runtime_error(fmt::format("chunk {}: statistics before the first windows", r.index));
+  placed_.resize(static_cast<std::size_t>(n_chunks), 0);
+  if (placed_[static_cast<std::size_t>(r.index)])
+    throw std::runtime_error(fmt::format("chunk {} placed twice", r.index));
+  placed_[static_cast<std::size_t>(r.index)] = 1;
+  ++n_placed_;
+  std::vector<ChunkAddress> at;
+  const hsize_t offset[2] = {static_cast<hsize_t>(r.index * chunk_), 0};
+  for (std::size_t k = 0; k < cols_.columns.size(); ++k) {
+    Placement p(placement_);
+    check(H5Dwrite_chunk(ds_[dataset_of(k)].ds.get(), H5P_DEFAULT, r.masks[k], offset, r.sizes[k], Placement::kBytes),
+          fmt::format("place chunk {} of dataset {}", r.index, k));
+    at.push_back(p.address());
+    if (at.back().size != r.sizes[k])
+      throw std::runtime_error(
+          fmt::format("chunk {}: HDF5 placed {} bytes of {}", r.index, at.back().size, r.sizes[k]));
   }
-  c.message[i].assign(rec.message());
-  c.session[i] = session;
-  c.use[i] = rec.bytes()[L_.fields()[RecordLayout::kStatus].offset] == 0;
-  if (++c.filled == chunk_) complete_.push_back(c.index);
+  write_messages(r);
+  for (std::size_t k = 0; k < col_.size(); ++k) col_[k].add(r.index, r.summaries[k]);
+  return at;
 }
 
-void ResultStore::write_next() {
-  const auto it = open_.find(complete_.front());
-  write_dataset(*it->second, ds_[next_dataset_], chunk_);
-  if (++next_dataset_ < ds_.size()) return;
-  next_dataset_ = 0;
-  complete_.pop_front();
-  open_.erase(it);
-}
-
-void ResultStore::finish() {
-  while (write_pending()) write_next();
-  if (n_done_ != n_)
-    throw std::runtime_error(fmt::format("internal: {} of {} runs stored at the end", n_done_, n_));
-  for (const auto& [k, c] : open_)  // the last chunk, partial
-    for (const Dataset& d : ds_) write_dataset(*c, d, n_ - k * chunk_);
-  open_.clear();
-}
-
-// Rows [0, rows) of chunk c's dataset d (the rest of the chunk, past the last run, is zeroed):
-// its column block filtered and written as one HDF5 chunk; the statistics of its output columns
-// merged.
-void ResultStore::write_dataset(Chunk& c, const Dataset& d, std::int64_t rows) {
-  const auto r = static_cast<std::size_t>(rows);
-  const std::string what = fmt::format("chunk {} of {}", c.index,
-                                       d.field >= 0 ? L_.fields()[static_cast<std::size_t>(d.field)].name
-                                                    : d.field == Dataset::kMessage ? "message" : "session");
-  if (d.field == Dataset::kMessage) {  // variable-length strings: through HDF5's own filters
-    // A chunk with no message (every run ok, as most are) is left unwritten: HDF5 reads it as empty
-    // strings (NULL in C), the vlen fill value.
-    if (std::all_of(c.message.begin(), c.message.begin() + static_cast<std::ptrdiff_t>(r),
-                    [](const std::string& m) { return m.empty(); }))
-      return;
-    std::vector<const char*> msg(r);
-    for (std::size_t i = 0; i < r; ++i) msg[i] = c.message[i].c_str();
-    Handle fspace(H5Dget_space(d.ds.get()), H5Sclose, "space of " + what);
-    const hsize_t start = static_cast<hsize_t>(c.index * chunk_), count = r;
-    check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, &start, nullptr, &count, nullptr), "select " + what);
-    Handle mspace(H5Screate_simple(1, &count, nullptr), H5Sclose, "memory space of " + what);
-    const Handle type = string_type();
-    check(H5Dwrite(d.ds.get(), type.get(), mspace.get(), fspace.get(), H5P_DEFAULT, msg.data()), "write " + what);
-    return;
+// The chunk's non-empty messages, through HDF5's own filters (variable-length strings live in the
+// global heap); a chunk without one is left unwritten, which HDF5 reads as empty strings (NULL in
+// C), the variable-length fill value.
+void ResultStore::write_messages(const ChunkReport& r) {
+  if (r.messages.empty()) return;
+  const Dataset& d = ds_[L_.fields().size()];
+  std::vector<hsize_t> rows;
+  std::vector<const char*> text;
+  for (const auto& [row, m] : r.messages) {
+    if (row < 0 || row >= r.rows) throw std::runtime_error(fmt::format("chunk {}: a message of row {}", r.index, row));
+    rows.push_back(static_cast<hsize_t>(r.index * chunk_ + row));
+    text.push_back(m.c_str());
   }
-  const std::size_t bytes = d.width * d.elem, n = static_cast<std::size_t>(chunk_);
-  char* block = d.field == Dataset::kSession
-                    ? reinterpret_cast<char*>(c.session.data())
-                    : c.cols.get() + n * L_.fields()[static_cast<std::size_t>(d.field)].offset;
-  std::memset(block + r * bytes, 0, (n - r) * bytes);  // the rows past the last run of a partial chunk
-  const std::uint32_t mask = codec_.encode({block, n * bytes}, d.elem, deflate_, encoded_);
-  const hsize_t offset[2] = {static_cast<hsize_t>(c.index * chunk_), 0};
-  check(H5Dwrite_chunk(d.ds.get(), H5P_DEFAULT, mask, offset, encoded_.size(), encoded_.data()), "write " + what);
-  if (d.stats >= 0) merge_stats(d, block, c.index, c.use, rows);
+  const std::string what = fmt::format("the messages of chunk {}", r.index);
+  Handle fspace(H5Dget_space(d.ds.get()), H5Sclose, "space of " + what);
+  check(H5Sselect_elements(fspace.get(), H5S_SELECT_SET, rows.size(), rows.data()), "select " + what);
+  const hsize_t count = rows.size();
+  Handle mspace(H5Screate_simple(1, &count, nullptr), H5Sclose, "memory space of " + what);
+  const Handle type = string_type();
+  check(H5Dwrite(d.ds.get(), type.get(), mspace.get(), fspace.get(), H5P_DEFAULT, text.data()), "write " + what);
 }
 
-void ResultStore::merge_stats(const Dataset& d, const char* block, std::int64_t chunk,
-                              const std::vector<std::uint8_t>& use, std::int64_t rows) {
-  const auto r = static_cast<std::size_t>(rows);
-  for (std::size_t b = 0; b < d.width; ++b) {
-    statistics::ColumnStats& col = col_[static_cast<std::size_t>(d.stats) + b];
-    const char* values = block + 8 * b;
-    if (!col.seeded()) col.seed(values, r, d.width, use.data());
-    statistics::calc_chunk_summary(values, r, d.width, use.data(), col.windows(), summary_);
-    col.add(chunk, summary_);
-  }
+void ResultStore::finish() const {
+  const std::int64_t n_chunks = (n_ + chunk_ - 1) / chunk_;
+  if (n_placed_ != n_chunks)
+    throw std::runtime_error(fmt::format("internal: {} of {} chunks placed at the end", n_placed_, n_chunks));
 }
 
 StreamedStats ResultStore::calc_stats() const {
@@ -256,16 +200,16 @@ StreamedStats ResultStore::calc_stats() const {
     resolved.push_back(ok);
     return st;
   };
-  for (const Dataset& d : ds_) {
-    if (d.stats < 0) continue;
-    const auto k = static_cast<std::size_t>(d.stats);
-    if (L_.fields()[static_cast<std::size_t>(d.field)].scale == Scale::none) {
+  for (const ChunkColumn& c : cols_.columns) {
+    if (c.stats < 0) continue;
+    const auto k = static_cast<std::size_t>(c.stats);
+    if (L_.fields()[static_cast<std::size_t>(c.field)].scale == Scale::none) {
       s.f64.push_back(one(k, s.f64_resolved));
       continue;
     }
     auto& st = s.bays.emplace_back();
     auto& ok = s.bays_resolved.emplace_back();
-    for (std::size_t b = 0; b < d.width; ++b) st.push_back(one(k + b, ok));
+    for (std::size_t b = 0; b < c.width; ++b) st.push_back(one(k + b, ok));
   }
   for (const auto& c : col_) s.kept_values += c.kept_values();
   return s;

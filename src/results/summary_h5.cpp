@@ -183,8 +183,8 @@ void write_timing_attributes(hid_t file, const ScheduleSummary& s, std::int64_t 
   const std::pair<const char*, double> seconds[] = {
       {"schedule_wall_s", s.schedule_wall_s},       {"rank0_compute_s", s.rank0_compute_s},
       {"rank0_poll_s", s.rank0_poll_s},             {"rank0_mpi_s", s.rank0_mpi_s},
-      {"rank0_result_s", s.rank0_result_s},         {"rank0_journal_s", s.rank0_journal_s},
-      {"rank0_write_s", s.rank0_write_s},           {"rank0_tick_s", s.rank0_tick_s},
+      {"rank0_result_s", s.rank0_result_s},         {"rank0_write_s", s.rank0_write_s},
+      {"rank0_tick_s", s.rank0_tick_s},
       {"rank0_idle_s", s.rank0_idle_s},             {"rank0_handle_cpu_s", s.rank0_handle_cpu_s},
       {"rank0_compute_cpu_s", s.rank0_compute_cpu_s}};
   for (const auto& [name, v] : seconds) write_double_attribute(g.get(), name, v);

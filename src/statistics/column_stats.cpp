@@ -18,7 +18,6 @@ constexpr double kSigmas = 6.0;        // half-width of a window in binomial sta
 // values); most of the merging and narrowing happens while they are that wide, so margin and slack
 // are small (a miss costs a read-back at the end, never a wrong number).
 constexpr std::int64_t kMargin = 16;   // ... plus this many ranks (small N, ties)
-constexpr std::size_t kSeedValues = 2048;  // values of the first chunk that set the first windows
 constexpr std::size_t kSlack = 256;    // narrow only past 3 w + kSlack kept values: amortised O(1) a value
 
 double target_p(std::size_t t) { return kStatPercentiles[t] / 100.0; }
@@ -210,7 +209,7 @@ void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride,
   seeded_ = true;
   // Every step-th row, at most about kSeedValues of them: the windows' half-width is in ranks of
   // this sample, so a smaller sample only makes the first windows wider.
-  const std::size_t step = (rows + kSeedValues - 1) / kSeedValues;
+  const std::size_t step = calc_seed_step(rows);
   std::vector<double> x;
   x.reserve(kSeedValues);
   unsigned zeros = 0;  // bit 0: +0.0 seen, bit 1: -0.0 seen

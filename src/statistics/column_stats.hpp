@@ -73,6 +73,11 @@ ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_
 // The same into s, whose vectors' room is used again (rank 0 makes one summary per column and chunk).
 void calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                         const Windows& w, ChunkSummary& s);
+// The first windows come from every step-th row of a chunk, at most kSeedValues values: seed()
+// of those rows alone (stride 1, rows <= kSeedValues) gives the same windows as of the whole chunk.
+inline constexpr std::size_t kSeedValues = 2048;
+inline std::size_t calc_seed_step(std::size_t rows) { return (rows + kSeedValues - 1) / kSeedValues; }
+
 class ColumnStats {
  public:
   const Windows& windows() const { return win_; }

@@ -144,7 +144,7 @@ def disk_full(args, d):
         out = os.path.join(full, "r.h5")
         p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=4", "--set", "output.history_runs=[0]",
                              "--set", "output.history_step_s=0.0001", "--progress", "none"])
-        left = [f for f in os.listdir(full) if f != "r.h5.journal"]
+        left = [f for f in os.listdir(full) if not f.startswith("r.h5.journal")]  # rank 0's and the parts
         check(p.returncode == 3 and "No space left on device" in p.stderr and not left,
               f"disk full on rank 0: exit {p.returncode} (3 expected), '{first_line(p)}', left {left}")
     finally:
@@ -182,8 +182,9 @@ def disk_full_resume(args, d):
         out = os.path.join(disk, "r.h5")
         proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, camp, "-o", out, *synthetic],
                                 env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        while proc.poll() is None and (not os.path.exists(out + ".journal")
-                                       or os.path.getsize(out + ".journal") < 0.4 * journal):
+        def journals_size():  # rank 0's journal and the parts of the ranks that build chunks
+            return sum(os.path.getsize(os.path.join(disk, f)) for f in os.listdir(disk) if f.startswith("r.h5.journal"))
+        while proc.poll() is None and journals_size() < 0.4 * journal:
             time.sleep(0.005)
         with open(os.path.join(disk, "filler"), "wb") as f:  # every free byte
             try:
@@ -194,13 +195,16 @@ def disk_full_resume(args, d):
                 pass
         err = proc.communicate(timeout=300)[1]
         left = sorted(os.listdir(disk))
-        # Which write meets the full disk first decides how the session ends: the journal's (rank 0
-        # ends in order and lets go of its lock) or the results file's (the job is aborted and the
-        # lock file stays, held by no one). Either way the journal stays and no temporary file does.
+        # Which write meets the full disk first decides how the session ends: rank 0's (it ends in
+        # order and lets go of its lock) or a chunk owner's, journal or chunk bytes (that rank aborts
+        # the job; rank 0, stopped by mpirun's SIGTERM, lets its lock go, or is killed first and the
+        # lock file stays, held by no one, taken over by the next session). Either way the journals
+        # (rank 0's and the part journal of rank 1, which owns every chunk on 2 ranks) stay and no
+        # temporary file does.
         check(proc.returncode != 0 and "No space left on device" in err
-              and left in (["filler", "r.h5.journal"], [".r.h5.lock", "filler", "r.h5.journal"]),
+              and [f for f in left if f != ".r.h5.lock"] == ["filler", "r.h5.journal", "r.h5.journal.0.1"],
               f"disk full mid-run: exit {proc.returncode}, '{err.strip().splitlines()[0][:120]}', left {left} (the "
-              f"journal, perhaps the lock file of the aborted session: no temporary file)")
+              f"journals, perhaps the lock file of the aborted session: no temporary file)")
         os.remove(os.path.join(disk, "filler"))
         stale = os.path.join(disk, ".r.h5.tmp.999999")
         open(stale, "wb").write(b"\0" * 2**20)

@@ -35,7 +35,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_campaign_mpi import ENV, check, datasets, fresh, same_values  # noqa: E402
-from test_journal_faults import kill_job, poll_journal_frames  # noqa: E402
+from test_journal_faults import kill_job, all_journal_frames  # noqa: E402
 
 TABLE1 = "campaigns/table1_dispersed.toml"
 N0 = 200
@@ -135,15 +135,14 @@ def killed_in_round1(args, out, cost):
     proc = subprocess.Popen(["mpirun", "--oversubscribe", "-np", "2", args.driver, *synthetic(args, out, cost),
                              *method_sets()],
                             env=ENV, start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    journal, t0, seen = out + ".journal", time.time(), (0, 0)
+    t0, seen = time.time(), (0, 0)
     while time.time() - t0 < 120 and proc.poll() is None:
-        if os.path.exists(journal):
-            frames = poll_journal_frames(journal)
-            plans = [pl for _, k, pl in frames if k == b"P"]
-            in_round1 = sum(1 for _, k, pl in frames if k == b"R" and int.from_bytes(pl[8:16], "little") == 1)
-            seen = (len(plans), in_round1)
-            if len(plans) == 2 and in_round1 >= 100:
-                break
+        frames = all_journal_frames(out)  # rank 0's journal (the plans) and rank 1's part (the records)
+        plans = [pl for _, k, pl in frames if k == b"P"]
+        in_round1 = sum(1 for _, k, pl in frames if k == b"R" and int.from_bytes(pl[8:16], "little") == 1)
+        seen = (len(plans), in_round1)
+        if len(plans) == 2 and in_round1 >= 100:
+            break
         time.sleep(0.01)
     kill_job(proc)
     return seen

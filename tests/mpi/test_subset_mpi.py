@@ -39,7 +39,7 @@ from scipy.stats import binom, norm
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_campaign_mpi import ENV, check, datasets, fresh, same_values  # noqa: E402
-from test_journal_faults import kill_job, poll_journal_frames  # noqa: E402
+from test_journal_faults import all_journal_frames, kill_job  # noqa: E402
 
 CAMPAIGN = "campaigns/free_rail_miss_rare.toml"
 N, NC = 100, 10
@@ -176,15 +176,14 @@ def check_stop(args, d):
 def killed_mid_level(args, out):
     proc = subprocess.Popen(command(args, out, 2), env=ENV, start_new_session=True, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
-    journal, t0, seen = out + ".journal", time.time(), (0, 0)
+    t0, seen = time.time(), (0, 0)
     while time.time() - t0 < 300 and proc.poll() is None:
-        if os.path.exists(journal):
-            frames = poll_journal_frames(journal)
-            plans = sum(1 for _, k, _ in frames if k == b"P")
-            in_last = sum(1 for _, k, pl in frames if k == b"R" and int.from_bytes(pl[8:16], "little") == plans - 1)
-            seen = (plans, in_last)
-            if plans >= 4 and in_last >= 2:
-                break
+        frames = all_journal_frames(out)  # rank 0's journal (the plans) and the parts (the records)
+        plans = sum(1 for _, k, _ in frames if k == b"P")
+        in_last = sum(1 for _, k, pl in frames if k == b"R" and int.from_bytes(pl[8:16], "little") == plans - 1)
+        seen = (plans, in_last)
+        if plans >= 4 and in_last >= 2:
+            break
         time.sleep(0.005)
     kill_job(proc)
     return seen

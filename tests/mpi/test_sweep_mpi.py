@@ -62,7 +62,7 @@ from scipy.stats import beta as beta_dist, norm
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from test_campaign_mpi import ENV, check, check_stats, datasets, fresh, same_values  # noqa: E402
-from test_journal_faults import kill_job, poll_journal_frames  # noqa: E402
+from test_journal_faults import all_journal_frames, kill_job  # noqa: E402
 
 SIGMA = 0.001
 Z_TARGET = -norm.ppf(1e-6)
@@ -588,16 +588,15 @@ def kill_mid(args, out, sets):
     for x in sets:
         cmd += ["--set", x]
     proc = subprocess.Popen(cmd, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    journal, t0, plans, refining = out + ".journal", time.time(), 0, False
+    t0, plans, refining = time.time(), 0, False
     while time.time() - t0 < 300 and proc.poll() is None:
-        if os.path.exists(journal):
-            frames = poll_journal_frames(journal)
-            kinds = [k for _, k, _ in frames]
-            plans = kinds.count(b"P")
-            refining = any(k == b"P" and max(plan_values(pl)) >= 4 and b"R" in kinds[i + 1:]
-                           for i, (_, k, pl) in enumerate(frames))
-            if refining:
-                break
+        frames = all_journal_frames(out)  # rank 0's journal (the plans) and the parts (the records)
+        rounds = [pl for _, k, pl in frames if k == b"P"]
+        plans = len(rounds)
+        refinement = {r for r, pl in enumerate(rounds) if max(plan_values(pl)) >= 4}
+        refining = any(k == b"R" and int.from_bytes(pl[8:16], "little") in refinement for _, k, pl in frames)
+        if refining:
+            break
         time.sleep(0.005)
     kill_job(proc)
     return plans, refining
