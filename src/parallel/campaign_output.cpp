@@ -13,7 +13,7 @@
 #include "io/scene_toml.hpp"
 #include "results/resources.hpp"
 #include "util/bytes.hpp"
-#include "util/crc32.hpp"
+#include "util/isal.hpp"
 
 namespace truss::parallel {
 

@@ -14,7 +14,7 @@
 #include "io/scene_toml.hpp"
 #include "parallel/engine.hpp"
 #include "util/bytes.hpp"
-#include "util/crc32.hpp"
+#include "util/isal.hpp"
 
 namespace truss::parallel {
 

@@ -19,7 +19,7 @@
 #include "methods/fixed_design.hpp"
 #include "parallel/engine.hpp"
 #include "parallel/owner.hpp"
-#include "util/crc32.hpp"
+#include "util/isal.hpp"
 
 using namespace truss;
 namespace fs = std::filesystem;
