@@ -1,10 +1,9 @@
 """truss_report.judging.sweep: the verdict of a design sweep. The file's /sweep/allowable holds the
-verdict C++ decided (the design's own value on the safe or the unsafe side of the allowable, or no
-allowable in the swept range); the report overrides it in one place, plateau_override: a PASS
-resting on an estimate that may be biased low (a plateau of the margin) is NOT ASSESSED."""
+verdict truss-campaign decided and its reason (the design's own value on the safe or the unsafe side
+of the allowable; NOT ASSESSED without an allowable or when an estimate it would rest on is
+untrusted: a plateau of the margin, too many unusable runs); the report displays it, it does not
+decide it."""
 from __future__ import annotations
-
-from collections.abc import Sequence
 
 import pandas as pd
 
@@ -28,15 +27,13 @@ def flat_values(s: pd.DataFrame) -> list[int]:
     return [k for k, n in enumerate(s["plateau_levels"]) if biased_low(int(n))]
 
 
-def plateau_override(file_verdict: str, flat: Sequence[int]) -> str:
-    """The report's one override of the file's verdict: a PASS with a value whose estimate may be
-    biased low is NOT_ASSESSED (an estimate below the true p moves the allowable to the unsafe
-    side); a FAIL stays a FAIL. Returns PASS, FAIL or NOT_ASSESSED."""
-    if file_verdict == "PASS" and flat:
-        return NOT_ASSESSED
-    return PASS if file_verdict == "PASS" else FAIL if file_verdict == "FAIL" else NOT_ASSESSED
-
-
 def sweep_verdict(s: pd.DataFrame) -> str:
-    """PASS, FAIL or NOT_ASSESSED of a sweep (its table from sweep_frame)."""
-    return plateau_override(str(s.attrs["allowable"].get("verdict", "")), flat_values(s))
+    """PASS, FAIL or NOT_ASSESSED of a sweep (its table from sweep_frame): the file's."""
+    v = str(s.attrs["allowable"].get("verdict", ""))
+    return PASS if v == "PASS" else FAIL if v == "FAIL" else NOT_ASSESSED
+
+
+def sweep_reason(s: pd.DataFrame) -> str:
+    """The file's reason for its verdict (the allowable's message in a file without one)."""
+    a = s.attrs["allowable"]
+    return str(a.get("reason", "") or a.get("message", ""))

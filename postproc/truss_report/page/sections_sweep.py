@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..judging.sweep import flat_values, sweep_verdict
+from ..judging.sweep import flat_values, sweep_reason, sweep_verdict
 from ..judging.verdict import NOT_ASSESSED, PASS, VERDICT_WORDS
 from .html import esc, fmt, html_page, num, table, unit_text
 from .render import Report
@@ -57,13 +57,8 @@ def verdict_lines(c, s):
     own = f"{fmt(a['own_value'] / factor, 5)} {unit}"
     verdict = sweep_verdict(s)
     flat = flat_values(s)
-    if verdict == NOT_ASSESSED and a.get("verdict", "") == "PASS":
-        head = (f"VERDICT: {VERDICT_WORDS[verdict]} — the estimates at "
-                f"{', '.join(fmt(float(s['value'].iloc[k]) / factor, 4) for k in flat)} {unit} may be biased low "
-                f"(a plateau of the margin), so the allowable may lie on the unsafe side "
-                f"({c.attrs['campaign_name']}, sweep)")
-    elif verdict == NOT_ASSESSED:
-        head = (f"VERDICT: {VERDICT_WORDS[verdict]} — {a['message']} ({c.attrs['campaign_name']}, sweep)")
+    if verdict == NOT_ASSESSED:
+        head = f"VERDICT: {VERDICT_WORDS[verdict]} — {sweep_reason(s)} ({c.attrs['campaign_name']}, sweep)"
     else:
         side = "on the safe side of" if verdict == PASS else "on the unsafe side of"
         head = (f"VERDICT: {VERDICT_WORDS[verdict]} — the design's {own} is {side} the allowable "
@@ -172,7 +167,8 @@ def sweep_report(page, c, s, revision, nominal_html):
     the terminal and its verdict."""
     summary = verdict_lines(c, s)
     v = sweep_verdict(s)
-    verdict = (f"<div class='verdict {v}' data-key='verdict' data-value='{v}'>"
+    verdict = (f"<div class='verdict {v}' data-key='verdict' data-value='{v}' "
+               f"data-reason='{esc(sweep_reason(s))}'>"
                + "<br>".join(esc(x) for x in summary) + "</div>")
     toc = ("<nav><a href='#sweep'>Probability against the design variable</a> · <a href='#allowable'>Allowable</a> · "
            "<a href='#nominal'>Nominal run</a> · <a href='#limits'>Model limits</a> · "

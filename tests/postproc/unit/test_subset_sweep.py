@@ -1,5 +1,5 @@
 """truss_report.judging.subset and .sweep: the lognormal interval, the plateau rule, the design
-point, and the sweep verdict's one override (plateau_override)."""
+point, and the sweep verdict: the file's, never overridden."""
 import math
 
 import numpy as np
@@ -8,7 +8,7 @@ import pytest
 
 from conftest import make_campaign
 from truss_report.judging.subset import count_plateau_levels, design_point, interval
-from truss_report.judging.sweep import plateau_override, sweep_frame, sweep_verdict
+from truss_report.judging.sweep import sweep_frame, sweep_reason, sweep_verdict
 from truss_report.judging.verdict import FAIL, NOT_ASSESSED, PASS
 from truss_report.reading.campaign import Dispersion
 from truss_report.reading.methods import Subset, SweepTable
@@ -26,18 +26,21 @@ def test_plateau_levels():
     assert count_plateau_levels([1.0, 0.5, 0.0]) == 0
 
 
-@pytest.mark.parametrize("stored,flat,want", [("PASS", [], PASS), ("PASS", [2], NOT_ASSESSED),
-                                              ("FAIL", [2], FAIL), ("NOT ASSESSED", [], NOT_ASSESSED)])
-def test_plateau_override(stored, flat, want):
-    assert plateau_override(stored, flat) == want
+@pytest.mark.parametrize("stored,want", [("PASS", PASS), ("FAIL", FAIL), ("NOT ASSESSED", NOT_ASSESSED),
+                                         ("", NOT_ASSESSED)])
+def test_sweep_verdict_is_the_files(stored, want):
+    df = pd.DataFrame({"value": [1.0]})
+    df.attrs.update({"units": {"value": "m"}, "allowable": {"verdict": stored, "reason": "why"}})
+    assert sweep_verdict(sweep_frame(SweepTable(df, [None]))) == want
 
 
-def test_sweep_frame_counts_the_plateaus_of_each_value():
+def test_sweep_frame_counts_the_plateaus_but_keeps_the_files_verdict():
     df = pd.DataFrame({"value": [1.0, 2.0, 3.0]})
-    df.attrs.update({"units": {"value": "m"}, "allowable": {"verdict": "PASS"}})
+    df.attrs.update({"units": {"value": "m"}, "allowable": {"verdict": "PASS", "reason": "the file's reason"}})
     flat = np.array([1.0, 0.999, 0.998, 0.997, 0.996, 0.0])
     s = sweep_frame(SweepTable(df, [None, np.array([1.0, 0.5, 0.0]), flat]))
-    assert s["plateau_levels"].tolist() == [0, 0, 4] and sweep_verdict(s) == NOT_ASSESSED
+    assert s["plateau_levels"].tolist() == [0, 0, 4]
+    assert sweep_verdict(s) == PASS and sweep_reason(s) == "the file's reason"
 
 
 def test_design_point_is_the_sample_of_smallest_z():
