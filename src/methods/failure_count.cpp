@@ -8,6 +8,13 @@
 
 namespace truss::methods {
 
+std::string find_unusable_reason(std::int64_t unusable, std::int64_t runs) {
+  if (!(static_cast<double>(unusable) > kMaxUnusableShare * static_cast<double>(runs))) return {};
+  return fmt::format("{} of {} runs have no usable result (capped by steps or wall time, a solver failure or a NaN "
+                     "margin), more than {:g} %",
+                     unusable, runs, 100.0 * kMaxUnusableShare);
+}
+
 std::vector<double> FailureCount::calc_margins(const campaign::FailureOptions& f, const RoundRecords& r,
                                                std::size_t column) {
   const std::vector<double>& y = r.outputs.at(column);
@@ -25,6 +32,7 @@ std::vector<double> FailureCount::add(const RoundRecords& r, std::size_t column)
   runs_ += static_cast<std::int64_t>(m.size());
   for (double x : m) {
     failures_ += x <= 0.0 ? 1 : 0;
+    unusable_ += std::isnan(x) ? 1 : 0;
     if (std::isfinite(x) && !(x >= nearest_)) nearest_ = x;  // NaN: none yet
   }
   return m;
@@ -35,11 +43,14 @@ FailureEstimate FailureCount::calc_binomial_estimate(double confidence) const {
   e.runs = runs_;
   e.failures = failures_;
   e.nearest_margin = nearest_;
-  e.bounds = sampling::calc_binomial_bounds(failures_, runs_, confidence);
+  e.unusable = unusable_;
+  const std::int64_t usable = runs_ - unusable_;
+  e.bounds = sampling::calc_binomial_bounds(failures_, usable, confidence);
   const double p = e.bounds.p;
-  e.cov = p > 0.0 ? std::sqrt((1.0 - p) / (p * static_cast<double>(runs_))) : std::nan("");
+  e.cov = p > 0.0 ? std::sqrt((1.0 - p) / (p * static_cast<double>(usable))) : std::nan("");
   e.status = runs_ > 0 ? "done" : "not_run";
-  e.message = fmt::format("{} failures in {} runs", failures_, runs_);
+  e.message = fmt::format("{} failures in {} usable runs ({} unusable)", failures_, usable, unusable_);
+  e.untrusted = find_unusable_reason(unusable_, runs_);
   return e;
 }
 

@@ -77,6 +77,8 @@ struct FailureEstimate {
   std::int64_t failures = -1;  // failing runs counted (-1: p is not a count, subset simulation)
   std::string status, message;
   double nearest_margin = std::numeric_limits<double>::quiet_NaN();  // the smallest finite margin of its runs
+  std::int64_t unusable = 0;  // runs without a usable result (capped, solver failure, NaN margin)
+  std::string untrusted;      // empty: the estimate stands; else why it may lie below the true p
 };
 
 class Method {
@@ -112,6 +114,9 @@ class Method {
   virtual std::int64_t run_cap() const { return 0; }
   // Empty when the method's result stands; else why there is none (the campaign then exits 5).
   virtual std::string calc_result_failure() const { return {}; }
+  // Empty unless the method's verdict is NOT ASSESSED (a design sweep); else why (the campaign
+  // then exits 6).
+  virtual std::string calc_not_assessed() const { return {}; }
 };
 
 }  // namespace truss::methods

@@ -112,6 +112,26 @@ std::string SubsetMethodOptions::to_toml() const {
   return "[ensemble.subset]\n" + campaign::write_options(table(), *this) + "\n" + campaign::failure_toml(failure);
 }
 
+int count_plateau_levels(const std::vector<sampling::SubsetLevel>& levels) {
+  int n = 0;
+  for (std::size_t k = 0; k + 1 < levels.size(); ++k) {
+    const double b = levels[k].threshold, next = levels[k + 1].threshold;
+    n += b > 0.0 && b - next < kPlateauShare * b ? 1 : 0;
+  }
+  return n;
+}
+
+std::string find_subset_distrust(const sampling::SubsetSummary& s, std::int64_t unusable, std::int64_t runs) {
+  if (std::string why = find_unusable_reason(unusable, runs); !why.empty()) return why;
+  if (s.status == sampling::SubsetStatus::no_progress || s.status == sampling::SubsetStatus::chains_stuck)
+    return fmt::format("subset simulation ended {}: {}", sampling::to_string(s.status), s.message);
+  if (const int n = count_plateau_levels(s.levels); n >= kPlateauLevels)
+    return fmt::format("{} levels on a plateau of the margin (a threshold moved by less than {:g} % of its distance "
+                       "to failure): the estimate may be biased low",
+                       n, 100.0 * kPlateauShare);
+  return {};
+}
+
 std::optional<FailureEstimate> SubsetMethod::calc_failure_estimate(double confidence) const {
   if (!sim_) return FailureEstimate{};
   const sampling::SubsetSummary s = sim_->calc_summary();
@@ -123,6 +143,12 @@ std::optional<FailureEstimate> SubsetMethod::calc_failure_estimate(double confid
   e.status = sampling::to_string(s.status);
   e.message = s.message;
   e.nearest_margin = margins_.nearest_margin();
+  std::int64_t runs = 0;
+  for (const sampling::SubsetLevel& l : s.levels) {
+    runs += l.runs;
+    e.unusable += l.unusable;
+  }
+  e.untrusted = find_subset_distrust(s, e.unusable, runs);
   return e;
 }
 

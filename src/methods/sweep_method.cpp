@@ -188,8 +188,30 @@ std::vector<SweepMethod::ValueResult> SweepMethod::calc_value_results() const {
   return out;
 }
 
+namespace {
+
+// "at 3.7 mm: why; at 4 mm: why" of the values whose estimates are untrusted, or empty.
+std::string find_untrusted(const std::vector<SweepMethod::ValueResult>& values, const std::string& units) {
+  std::string out;
+  for (const SweepMethod::ValueResult& r : values)
+    if (!r.estimate.untrusted.empty())
+      out += fmt::format("{}at {:.6g} {}: {}", out.empty() ? "" : "; ", r.value, units, r.estimate.untrusted);
+  return out;
+}
+
+}  // namespace
+
 SweepVerdict calc_sweep_verdict(const campaign::CampaignOptions& c, const SweepOptions& opt,
                                 const std::vector<SweepMethod::ValueResult>& values) {
+  const std::string units = campaign::sweep_variable_units(c);
+  SweepVerdict v;
+  v.own_value = campaign::calc_sweep_own_value(c);
+  if (const std::string untrusted = find_untrusted(values, units); !untrusted.empty()) {
+    v.allowable.message = "not read: an estimate it would rest on cannot be trusted (" + untrusted + ")";
+    v.verdict = "NOT ASSESSED";
+    v.reason = "the evidence is untrusted: " + untrusted;
+    return v;
+  }
   std::vector<double> x;
   std::vector<sampling::ProbabilityBounds> b;
   sampling::NearestMargins nearest{{}, campaign::find_run_column_unit(opt.failure_event()->column)};
@@ -198,14 +220,23 @@ SweepVerdict calc_sweep_verdict(const campaign::CampaignOptions& c, const SweepO
     b.push_back(r.estimate.bounds);
     nearest.margin.push_back(r.estimate.nearest_margin);
   }
-  SweepVerdict v;
-  v.allowable = sampling::find_allowable(x, b, opt.target_probability, campaign::sweep_variable_units(c), nearest);
-  v.own_value = campaign::calc_sweep_own_value(c);
+  v.allowable = sampling::find_allowable(x, b, opt.target_probability, units, nearest);
   const sampling::Allowable& a = v.allowable;
-  const bool found = a.status == sampling::AllowableStatus::found;
-  const bool pass = found && (a.safe_side > 0 ? v.own_value >= a.value : v.own_value <= a.value);
-  v.verdict = !found ? "NOT ASSESSED" : pass ? "PASS" : "FAIL";
+  if (a.status != sampling::AllowableStatus::found) {
+    v.verdict = "NOT ASSESSED";
+    v.reason = "no allowable in the swept range: " + a.message;
+    return v;
+  }
+  const bool pass = a.safe_side > 0 ? v.own_value >= a.value : v.own_value <= a.value;
+  v.verdict = pass ? "PASS" : "FAIL";
+  v.reason = fmt::format("the design's own value {:.6g} {} is on the {} side of the allowable {:.6g} {}", v.own_value,
+                         units, pass ? "safe" : "unsafe", a.value, units);
   return v;
+}
+
+std::string SweepMethod::calc_not_assessed() const {
+  const SweepVerdict v = calc_sweep_verdict(ctx_.options, opt_, calc_value_results());
+  return v.verdict == "NOT ASSESSED" ? v.reason : std::string();
 }
 
 }  // namespace truss::methods

@@ -44,6 +44,7 @@ class SweepMethod : public Method {
   void write_results(const ResultsPlace& place) const override;
   bool runs_are_draws() const override { return false; }
   std::string calc_result_text() const override;
+  std::string calc_not_assessed() const override;  // the verdict's reason when NOT ASSESSED
 
   // One value's result (after the last propose()).
   struct ValueResult {
@@ -98,13 +99,16 @@ class SweepMethod : public Method {
   mutable std::shared_ptr<const Decoded> decoded_;
 };
 
-// The allowable of a sweep's values and the verdict on the campaign's own value, decided together:
-// PASS when the own value is on the allowable's safe side, FAIL when not, NOT ASSESSED without an
-// allowable. The file's /sweep/allowable and the terminal say what this says.
+// The allowable of a sweep's values and the verdict on the campaign's own value, decided together,
+// here alone: NOT ASSESSED when a value's estimate is untrusted (FailureEstimate::untrusted: it is
+// not read, so it never feeds an allowable) or the values give no allowable; else PASS when the own
+// value is on the allowable's safe side, FAIL when not. The file's /sweep/allowable (verdict,
+// reason), the terminal and the exit code say what this says; the report displays it.
 struct SweepVerdict {
   sampling::Allowable allowable;
   double own_value = 0.0;  // the design variable in the campaign as written
-  std::string verdict;
+  std::string verdict;     // PASS, FAIL or NOT ASSESSED
+  std::string reason;      // one sentence: why
 };
 SweepVerdict calc_sweep_verdict(const campaign::CampaignOptions& c, const SweepOptions& opt,
                                 const std::vector<SweepMethod::ValueResult>& values);

@@ -1,5 +1,6 @@
 // A design sweep's results (sweep_method.hpp): /sweep with its values' estimates, the allowable and
 // the verdict, each value's method's own results under /sweep/inner/<k>, and the terminal's lines.
+#include <algorithm>
 #include <cmath>
 
 #include <fmt/format.h>
@@ -31,6 +32,7 @@ void write_allowable(hid_t g, const SweepVerdict& v, const std::string& units) {
   write_scalar(h.get(), "upper", units, a.upper);
   write_scalar(h.get(), "own_value", units, v.own_value);
   write_string_attribute(h.get(), "verdict", v.verdict);
+  write_string_attribute(h.get(), "reason", v.reason);
 }
 
 void write_attributes(hid_t g, const campaign::CampaignOptions& c, const SweepOptions& opt) {
@@ -46,20 +48,25 @@ void write_attributes(hid_t g, const campaign::CampaignOptions& c, const SweepOp
   write_int_attribute(g, "refine", axis.refine);
 }
 
+// A probability bound as written: inside [0, 1] (a lognormal interval's top can pass 1); NaN stays.
+double clip_probability(double p) { return std::isnan(p) ? p : std::clamp(p, 0.0, 1.0); }
+
 // One row per value: its estimate, as /sweep's columns.
 void write_values(hid_t g, const std::vector<SweepMethod::ValueResult>& vr, const std::string& units) {
   const std::size_t n = vr.size();
   std::vector<double> value(n), p(n), cov(n), ub(n), lo(n), hi(n);
-  std::vector<std::int64_t> runs(n), failures(n), seed(n), index(n), refinement(n);
-  std::vector<std::string> status(n), message(n);
+  std::vector<std::int64_t> runs(n), failures(n), unusable(n), seed(n), index(n), refinement(n);
+  std::vector<std::string> status(n), message(n), untrusted(n);
   for (std::size_t k = 0; k < n; ++k) {
     const FailureEstimate& e = vr[k].estimate;
     value[k] = vr[k].value;
     p[k] = e.bounds.p;
     cov[k] = e.cov;
-    ub[k] = e.bounds.upper_bound;
-    lo[k] = e.bounds.lower;
-    hi[k] = e.bounds.upper;
+    ub[k] = clip_probability(e.bounds.upper_bound);
+    lo[k] = clip_probability(e.bounds.lower);
+    hi[k] = clip_probability(e.bounds.upper);
+    unusable[k] = e.unusable;
+    untrusted[k] = e.untrusted;
     runs[k] = e.runs;
     failures[k] = e.failures;
     seed[k] = static_cast<std::int64_t>(vr[k].seed);
@@ -76,11 +83,13 @@ void write_values(hid_t g, const std::vector<SweepMethod::ValueResult>& vr, cons
   write_array(g, "upper", "1", hi.data(), n);
   write_array(g, "runs", "1", runs.data(), n);
   write_array(g, "failures", "1", failures.data(), n);
+  write_array(g, "unusable", "1", unusable.data(), n);
   write_array(g, "master_seed", "1", seed.data(), n);
   write_array(g, "index", "1", index.data(), n);
   write_array(g, "refinement", "1", refinement.data(), n);
   write_strings(g, "status", status);
   write_strings(g, "message", message);
+  write_strings(g, "untrusted", untrusted);
 }
 
 // An end of the allowable's interval: its value, or "beyond the swept values" (NaN).
@@ -117,9 +126,10 @@ std::string SweepMethod::calc_result_text() const {
                               name, vr.size(), opt_.inner.name(), opt_.failure_event()->column,
                               opt_.target_probability);
   for (const ValueResult& r : vr)
-    t += fmt::format("[truss-campaign]   {} = {:.6g} {}: p = {:.4g} ({:g} % upper bound {:.4g}), {} runs, {}{}\n",
+    t += fmt::format("[truss-campaign]   {} = {:.6g} {}: p = {:.4g} ({:g} % upper bound {:.4g}), {} runs, {}{}{}\n",
                      name, r.value, units, r.estimate.bounds.p, conf, r.estimate.bounds.upper_bound, r.estimate.runs,
-                     r.estimate.status, r.refinement ? " (refinement)" : "");
+                     r.estimate.status, r.refinement ? " (refinement)" : "",
+                     r.estimate.untrusted.empty() ? "" : ", untrusted: " + r.estimate.untrusted);
   if (opt_.axis.refine > 0) t += fmt::format("[truss-campaign]   {}\n", refine_message_);
   const SweepVerdict v = calc_sweep_verdict(c, opt_, vr);
   const sampling::Allowable& a = v.allowable;
@@ -130,6 +140,7 @@ std::string SweepMethod::calc_result_text() const {
                      interval_end(a.lower), interval_end(a.upper), units, v.own_value, units);
   else
     t += fmt::format("[truss-campaign]   allowable: {}: {}\n", sampling::to_string(a.status), a.message);
+  t += fmt::format("[truss-campaign] VERDICT: {} — {}\n", v.verdict, v.reason);
   return t;
 }
 

@@ -85,7 +85,8 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
   app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
   app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
              "3 I/O or internal error; 4 results written, but most runs are invalid input (the dispersions give "
-             "scenes the model refuses).");
+             "scenes the model refuses); 5 results written, but the method has no result; 6 results written, but "
+             "the sweep's verdict is NOT ASSESSED (the reason printed).");
   try {
     app.parse(argc, argv);
     if (o.output_path.empty() && !o.dry_run) throw CLI::RequiredError("--output");
@@ -164,7 +165,8 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
       std::cerr << "error: " << why << "\n";
       return kExitNoResult;
     }
-    return verdict_ok ? kExitOk : kExitMostlyInvalid;
+    if (!verdict_ok) return kExitMostlyInvalid;
+    return method.calc_not_assessed().empty() ? kExitOk : kExitNotAssessed;
   } catch (const io::InputError& e) {
     std::cerr << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
     return kExitBadInput;

@@ -26,6 +26,7 @@ inline constexpr int kExitBadInput = 2;
 inline constexpr int kExitIoError = 3;
 inline constexpr int kExitMostlyInvalid = 4;  // the file is written, but most runs are invalid input
 inline constexpr int kExitNoResult = 5;       // the file is written, but the method has no result (its reason printed)
+inline constexpr int kExitNotAssessed = 6;    // the file is written, but its verdict is NOT ASSESSED (why printed)
 
 // Collective over comm; returns the exit status (the same on every rank). `methods`: the rows
 // ensemble.method names, by which every rank parses the campaign and makes its method (a test

@@ -55,7 +55,8 @@ def run_campaign(a, name, out, extra):
     cmd = [a.mpiexec, "-np", "2", a.campaign, os.path.join(a.repo, "campaigns", f"{name}.toml"),
            "-o", out, "--force", "--progress", "none", *extra]
     p = subprocess.run(cmd, capture_output=True, text=True, env=env)
-    return check(p.returncode in (0, 1) and os.path.exists(out),
+    # 6: a sweep whose verdict is NOT ASSESSED (a few runs per value give no allowable).
+    return check(p.returncode in (0, 1, 6) and os.path.exists(out),
                  f"{name}: campaign written ({p.stderr.strip()[-300:]})")
 
 
@@ -175,8 +176,8 @@ def check_no_offset_axes(a):
 
 
 def check_plateau(a):
-    """Levels on a plateau of the margin (judging.subset.count_plateau_levels) and their effect on a
-    sweep's verdict. The thresholds are those of a free-stack tolerance sweep at a diagonal-length
+    """Levels on a plateau of the margin (judging.subset.count_plateau_levels), and a sweep's verdict
+    as the file stores it whatever its plateaus. The thresholds are those of a free-stack tolerance sweep at a diagonal-length
     standard deviation of 3.7 mm (the first seven moves are 0.1-0.22 % of the threshold, by hand) and
     of the rare-failure campaign (one such move)."""
     sys.path.insert(0, os.path.join(a.repo, "postproc"))
@@ -190,15 +191,16 @@ def check_plateau(a):
                                            f"(got {count_plateau_levels(flat)})")
     check(count_plateau_levels([0.10584856, 0.10547424, 0.01141385, 0.00216291, 0.0]) == 1,
           "1 plateau level in the rare-failure campaign's thresholds")
-    # A sweep of two values on the allowable's safe side (below 0.0041 m), each bound below the target,
-    # so that the file's verdict is supported by its numbers and only the plateaus can change it.
-    for verdict, plateaus, want in (("PASS", [0, 7], NOT_ASSESSED), ("PASS", [1, 2], PASS), ("FAIL", [7, 0], FAIL)):
+    # truss-campaign owns the verdict (it reads the plateaus); the report shows the file's, checked
+    # against its numbers: two values on the allowable's safe side (below 0.0041 m), each bound
+    # below the target, so the stored verdict is supported whatever the plateaus.
+    for verdict, plateaus, want in (("PASS", [0, 7], PASS), ("PASS", [1, 2], PASS), ("FAIL", [7, 0], FAIL)):
         s = pd.DataFrame({"value": [0.0037, 0.004], "p": [1e-5, 5e-5], "upper_bound": [2e-5, 9e-5],
                           "runs": [100, 100], "no_result": [0, 0], "plateau_levels": plateaus})
         own = 0.0039 if verdict == "PASS" else 0.0042
         s.attrs.update(target_probability=1e-4, allowable={"status": "found", "verdict": verdict, "value": 0.0041,
                                                            "own_value": own, "safe_side": "below"})
-        check(sweep_verdict(s) == want, f"a {verdict} with plateau levels {plateaus}: {want}")
+        check(sweep_verdict(s) == want, f"a stored {verdict} with plateau levels {plateaus}: {want}")
 
 
 def main():

@@ -11,8 +11,11 @@
 #include <map>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "campaign/design_axis.hpp"
 #include "campaign_fixtures.hpp"
+#include "methods/failure_count.hpp"
 #include "methods/stop_method.hpp"
 #include "methods/sweep_method.hpp"
 #include "methods/toy_failure.hpp"
@@ -118,6 +121,23 @@ TEST_CASE("a toy method with a [failure] event sweeps end to end; each value is 
   CHECK(verdict.allowable.safe_side > 0);
   CHECK(verdict.own_value == ctx.options.base.drive.stall_torque_Nm);
   CHECK(verdict.verdict == (verdict.own_value >= verdict.allowable.value ? "PASS" : "FAIL"));
+  CHECK_THAT(verdict.reason, Catch::Contains(verdict.verdict == "PASS" ? "on the safe side" : "on the unsafe side"));
+  // One untrusted value and the allowable is not read: NOT ASSESSED, its reason naming the value.
+  std::vector<methods::SweepMethod::ValueResult> one_untrusted = values;
+  one_untrusted[1].estimate.untrusted = "3 of 100 runs have no usable result";
+  const methods::SweepVerdict not_read = methods::calc_sweep_verdict(
+      ctx.options, ctx.options.ensemble.method.as<methods::SweepOptions>(), one_untrusted);
+  CHECK(not_read.verdict == "NOT ASSESSED");
+  CHECK(std::isnan(not_read.allowable.value));
+  CHECK_THAT(not_read.reason, Catch::Contains(fmt::format("at {:.6g} ", one_untrusted[1].value)) &&
+                                  Catch::Contains("3 of 100 runs have no usable result"));
+}
+
+TEST_CASE("an estimate is untrusted past 1 % unusable runs", "[sweep][toy]") {
+  CHECK(methods::find_unusable_reason(0, 100).empty());
+  CHECK(methods::find_unusable_reason(1, 100).empty());  // 1 % exactly: stands
+  CHECK_THAT(methods::find_unusable_reason(2, 100), Catch::Contains("2 of 100 runs have no usable result"));
+  CHECK_THAT(methods::find_unusable_reason(1, 99), Catch::Contains("more than 1 %"));
 }
 
 TEST_CASE("can be swept = has a [failure] event, refused when the file is read", "[sweep][toy]") {
@@ -148,9 +168,11 @@ TEST_CASE("can be swept = has a [failure] event, refused when the file is read",
 }
 
 TEST_CASE("the built-in methods with a [failure] event count the runs that fail it", "[sweep][failure]") {
-  // 100 runs: 10 with a margin at or below 0 (each ok), 5 others that stalled with a positive margin
-  // (they cannot say: safe). Monte Carlo's p is 10 / 100 = 0.1, the stop rule's share the same; a
-  // stop rule without [failure] counts the 5 runs that are not ok instead.
+  // 100 runs: 10 with a margin at or below 0 (one of them stalled: it shows the failure), 5 that
+  // stalled (runs 7, 27, 47, 67, 87), the 4 with a positive margin unusable (they cannot say: never
+  // safe). Monte Carlo's p is 10 / 96 over the usable runs, and 4 % unusable is past 1 %: untrusted.
+  // The stop rule's own share stays 10 / 100; a stop rule without [failure] counts the 5 runs that
+  // are not ok instead.
   methods::RoundRecords r{0, {}, {{}}};
   for (int i = 0; i < 100; ++i) {
     r.status.push_back(static_cast<std::int8_t>(i % 20 == 7 ? sim::RunStatus::stall : sim::RunStatus::ok));
@@ -176,7 +198,9 @@ TEST_CASE("the built-in methods with a [failure] event count the runs that fail 
     if (e) {
       CHECK(e->runs == 100);
       CHECK(e->failures == 10);
-      CHECK(e->bounds.p == 0.1);
+      CHECK(e->bounds.p == 10.0 / 96.0);
+      CHECK(e->unusable == 4);
+      CHECK_THAT(e->untrusted, Catch::Contains("4 of 100 runs have no usable result"));
       CHECK(e->nearest_margin == -0.001 * 9);  // the smallest margin, as the runs gave it
     }
     if (text.find("[ensemble.stop]") != std::string::npos) {

@@ -1,17 +1,13 @@
 """truss_report.judging.sweep: the verdict of a design sweep. The file's /sweep/allowable holds the
-verdict C++ decided (the design's own value on the safe or the unsafe side of the allowable, or no
-allowable in the swept range); the report checks it against the evidence the file holds before
-showing it, and a verdict without that evidence is NOT ASSESSED:
+verdict truss-campaign decided and its reason (the design's own value on the safe or the unsafe side
+of the allowable; NOT ASSESSED without an allowable or when an estimate it would rest on is
+untrusted: a plateau of the margin, more than 1 % of a value's runs without a usable result). The
+report displays it; it does not decide it. It checks it: a PASS or a FAIL the numbers of the file do
+not support (a file not written by truss-campaign, or damaged) is shown NOT ASSESSED with why:
   - a PASS or a FAIL needs an allowable that was found and is a number, the design's own value as a
     number, an estimate at some design value, and the side the file's verdict names must be the side
     the own value lies on (safe_side "above": own >= allowable passes); every value swept on the
-    allowable's safe side has its upper bound at or below the target (the allowable's definition);
-  - a PASS needs every design value's runs to have given results: past NO_RESULT_SHARE of a value's
-    runs without one (a run capped by its step or wall-time limit, a solver or accuracy failure, bad
-    input, an ok run without a margin), those runs would count as safe, and the estimate may lie
-    below p;
-  - a PASS resting on an estimate that may be biased low (a plateau of the margin) is NOT ASSESSED.
-A FAIL stays a FAIL under the last two: runs counted as safe and a low estimate only move p down.
+    allowable's safe side has its upper bound at or below the target (the allowable's definition).
 Probabilities (p and its bounds) are clipped to [0, 1]: a lognormal interval's top can pass 1."""
 from __future__ import annotations
 
@@ -64,18 +60,13 @@ def flat_values(s: pd.DataFrame) -> list[int]:
     return [k for k, n in enumerate(s["plateau_levels"]) if biased_low(int(n))]
 
 
-def unresolved_values(s: pd.DataFrame) -> list[int]:
-    """Rows with more than NO_RESULT_SHARE of their runs without a result."""
-    return [k for k, (bad, n) in enumerate(zip(s["no_result"], s["runs"])) if bad > NO_RESULT_SHARE * max(int(n), 1)]
-
-
 @dataclass
 class SweepJudgement:
     """The report's verdict of a sweep, the file's, and why they differ: each reason a code and the
     rows it concerns: "not_found" (a verdict without an allowable: status not "found"),
     "allowable_nan", "own_nan", "no_estimate" (every p NaN), "wrong_side" (the verdict names the side
     the own value is not on), "safe_side_above_target" (rows on the safe side whose upper bound
-    exceeds the target), "no_result" (rows past NO_RESULT_SHARE), "plateau" (rows biased low)."""
+    exceeds the target)."""
     verdict: str
     file_verdict: str
     reasons: list[tuple[str, list[int]]] = field(default_factory=list)
@@ -110,15 +101,15 @@ def judge_sweep(s: pd.DataFrame) -> SweepJudgement:
     if file_verdict == "NOT ASSESSED":
         return SweepJudgement(NOT_ASSESSED, file_verdict)
     reasons = evidence_reasons(s)
-    if reasons:
-        return SweepJudgement(NOT_ASSESSED, file_verdict, reasons)
-    if file_verdict == "PASS":
-        reasons = [(what, rows) for what, rows in (("no_result", unresolved_values(s)), ("plateau", flat_values(s)))
-                   if rows]
-    verdict = NOT_ASSESSED if reasons else FILE_VERDICTS[file_verdict]
-    return SweepJudgement(verdict, file_verdict, reasons)
+    return SweepJudgement(NOT_ASSESSED if reasons else FILE_VERDICTS[file_verdict], file_verdict, reasons)
 
 
 def sweep_verdict(s: pd.DataFrame) -> str:
     """PASS, FAIL or NOT_ASSESSED of a sweep (its table from sweep_frame)."""
     return judge_sweep(s).verdict
+
+
+def sweep_reason(s: pd.DataFrame) -> str:
+    """The file's reason for its verdict (the allowable's message in a file without one)."""
+    a = s.attrs["allowable"]
+    return str(a.get("reason", "") or a.get("message", ""))

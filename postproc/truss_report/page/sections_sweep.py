@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ..judging.sweep import NO_RESULT_SHARE, flat_values, judge_sweep
+from ..judging.sweep import NO_RESULT_SHARE, flat_values, judge_sweep, sweep_reason
 from ..judging.verdict import NOT_ASSESSED, PASS, VERDICT_WORDS
 from .html import esc, html_page, num, table
 from .numbers import DASH, P_LEAST, fmt, fmt_at, fmt_p, message_text, p_digits, readable_unit, resolution, unit_text
@@ -95,7 +95,7 @@ def verdict_lines(c, s):
         head = (f"VERDICT: {VERDICT_WORDS[j.verdict]} — "
                 + "; ".join(reason_text(s, what, rows) for what, rows in j.reasons) + f" ({name}, sweep)")
     elif j.verdict == NOT_ASSESSED:
-        head = f"VERDICT: {VERDICT_WORDS[j.verdict]} — {message_text(a['message'])} ({name}, sweep)"
+        head = f"VERDICT: {VERDICT_WORDS[j.verdict]} — {message_text(sweep_reason(s))} ({name}, sweep)"
     else:
         side = "on the safe side of" if j.verdict == PASS else "on the unsafe side of"
         head = (f"VERDICT: {VERDICT_WORDS[j.verdict]} — the design's {design_text(s, a['own_value'])} is {side} the "
@@ -218,7 +218,8 @@ def sweep_report(page, c, s, revision, nominal_html):
     """The report of a design sweep (s: its table, judging.sweep.sweep_frame), with its lines for
     the terminal and its verdict."""
     summary, v = verdict_lines(c, s)
-    verdict = (f"<div class='verdict {v}' data-key='verdict' data-value='{v}'>"
+    verdict = (f"<div class='verdict {v}' data-key='verdict' data-value='{v}' "
+               f"data-reason='{esc(sweep_reason(s))}'>"
                + "<br>".join(esc(x) for x in summary) + "</div>")
     toc = ("<nav><a href='#sweep'>Probability against the design variable</a> · <a href='#allowable'>Allowable</a> · "
            "<a href='#nominal'>Nominal run</a> · <a href='#limits'>Model limits</a> · "

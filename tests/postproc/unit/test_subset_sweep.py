@@ -1,5 +1,6 @@
 """truss_report.judging.subset and .sweep: the lognormal interval, the plateau rule, the design
-point, and the sweep's verdict checked against the numbers of its file (judge_sweep)."""
+point, and the sweep verdict: the file's, never overridden by a rule of the report, but checked
+against the numbers of its file (judge_sweep)."""
 import math
 
 import numpy as np
@@ -8,7 +9,7 @@ import pytest
 
 from conftest import make_campaign
 from truss_report.judging.subset import count_plateau_levels, design_point, interval
-from truss_report.judging.sweep import judge_sweep, no_result_counts, sweep_frame, sweep_verdict
+from truss_report.judging.sweep import judge_sweep, no_result_counts, sweep_frame, sweep_reason, sweep_verdict
 from truss_report.judging.verdict import FAIL, NOT_ASSESSED, PASS
 from truss_report.reading.campaign import Dispersion
 from truss_report.reading.methods import Subset, SweepRuns, SweepTable
@@ -66,9 +67,8 @@ def test_runs_without_a_result_never_count_as_safe():
     margin[250] = np.nan                                          # an ok run at 16 without a margin: 1 %
     runs = SweepRuns(value, status, names, margin)
     assert no_result_counts([12.0, 14.0, 16.0], runs) == [0, 2, 1]
-    j = judge_sweep(sweep(runs=runs))
-    assert j.verdict == NOT_ASSESSED and j.reasons == [("no_result", [1])]
-    assert judge_sweep(sweep("FAIL", own=13.0, runs=runs)).verdict == FAIL    # counted as safe: p only rises
+    # truss-campaign decides on them (it writes NOT ASSESSED); a stored PASS the report shows as stored.
+    assert judge_sweep(sweep(runs=runs)).verdict == PASS
     assert no_result_counts([12.0], None) == [-1]
 
 
@@ -80,10 +80,16 @@ def test_probabilities_are_clipped():
 def test_plateau_rows():
     flat = np.array([1.0, 0.999, 0.998, 0.997, 0.996, 0.0])
     s = sweep(thresholds=[None, np.array([1.0, 0.5, 0.0]), flat])
-    assert s["plateau_levels"].tolist() == [0, 0, 4] and sweep_verdict(s) == NOT_ASSESSED
-    assert judge_sweep(s).reasons == [("plateau", [2])]
+    assert s["plateau_levels"].tolist() == [0, 0, 4] and sweep_verdict(s) == PASS   # the file's
     assert judge_sweep(sweep("FAIL", own=13.0, thresholds=[None, None, flat])).verdict == FAIL
     assert judge_sweep(sweep("NOT ASSESSED")).verdict == NOT_ASSESSED
+
+
+def test_sweep_verdict_and_reason_are_the_files():
+    s = sweep("NOT ASSESSED")
+    s.attrs["allowable"]["reason"] = "the file's reason"
+    assert sweep_verdict(s) == NOT_ASSESSED and sweep_reason(s) == "the file's reason"
+    assert sweep_verdict(sweep()) == PASS and sweep_verdict(sweep("FAIL", own=13.0)) == FAIL
 
 
 def test_design_point_is_the_sample_of_smallest_z():
