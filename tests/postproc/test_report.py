@@ -279,8 +279,9 @@ def expected_campaign(path):
                          "motor.n_stall"}
 
         # Section 4, velocity drive: peak torque against the scene's motor at the prescribed speed,
-        # T_s (1 - omega / omega_0) with omega = 2 pi v / h (per run when dispersed).
-        if text(at["drive_mode"]) == "velocity":
+        # T_s (1 - omega / omega_0) with omega = 2 pi v / h (per run when dispersed); only for a
+        # campaign that declares its motor (root attribute motor_declared_by not empty).
+        if text(at["drive_mode"]) == "velocity" and text(at.get("motor_declared_by", "-")) != "":
             def drive(key):
                 name = f"runs/inputs/drive.{key}"
                 return f[name][()] if name in f else np.full(n, float(scene["drive"][key]))
@@ -509,6 +510,28 @@ def column_scale(E, key):
     return max([abs(v) for v in vals if isinstance(v, float) and math.isfinite(v)], default=0.0)
 
 
+def check_structure(name, parsed):
+    """Each margin of safety on the page is allowable / (FoS x design load) - 1 of its row's numbers
+    (ECSS-E-ST-32-10C; the rows' values are tested in tests/postproc/unit/test_structure.py)."""
+    v = {}
+    for key, value, _vis in parsed.values:
+        if key.startswith("structure."):
+            try:
+                v[key] = float(value)
+            except (TypeError, ValueError):
+                pass      # a status cell
+    bad = []
+    for key, mos in v.items():
+        if not key.endswith(".mos") or ".bay" in key:
+            continue
+        row = key[:-len(".mos")]
+        a, f, d = (v.get(f"{row}.{k}", math.nan) for k in ("allowable", "factor", "design_load"))
+        want = a / (f * d) - 1.0 if d > 0 else math.nan
+        if not (math.isnan(want) and math.isnan(mos)) and not abs(mos - want) <= 1e-12 * max(1.0, abs(want)):
+            bad.append(f"{row}: MoS {mos}, allowable / (FoS x load) - 1 = {want}")
+    check(not bad, f"{name}: every margin of safety follows from its row" + (f" ({bad[:3]})" if bad else ""))
+
+
 def check_numbers(name, parsed, E, required):
     seen = {}
     bad, unknown = [], []
@@ -519,6 +542,8 @@ def check_numbers(name, parsed, E, required):
             continue      # checked against the grouped runs by check_failure_groups
         if key.startswith(("design.", "verdict", "mech.", "nominal.", "revision", "document")):
             continue      # the top of the report: tests/postproc/test_design_loads.py
+        if key.startswith("structure."):
+            continue      # check_structure below
         if key == "sha256":   # the document block's SHA-256 of the results file
             if vis.strip() != E["_sha256"]:
                 bad.append(f"sha256: report {vis.strip()!r}, the file's {E['_sha256']!r}")
@@ -530,6 +555,7 @@ def check_numbers(name, parsed, E, required):
         elif isinstance(E[key], float) and math.isnan(E[key]) and ".ci_" in key \
                 and "n too small" not in vis:
             bad.append(f"{key}: NaN bound not shown as 'n too small' ({vis!r})")
+    check_structure(name, parsed)
     check(not unknown, f"{name}: every data-key is known to the test"
           + (f" (unknown: {unknown[:5]})" if unknown else f" ({len(parsed.values)} numbers)"))
     check(not bad, f"{name}: every number equals its independent value"

@@ -97,6 +97,19 @@ const std::map<std::string, Setter>& keys() {
       {"motorisation.detent_factor", accepted()},
       {"motorisation.hysteresis_factor", accepted()},
       {"motorisation.harness_factor", accepted()},
+      // Structural allowables and factors: arithmetic on the design loads, not dynamics.
+      {"structure.yield_factor", accepted()},
+      {"structure.ultimate_factor", accepted()},
+      {"structure.pin_force_yield_allowable_N", accepted()},
+      {"structure.pin_force_ultimate_allowable_N", accepted()},
+      {"structure.diagonal_tension_yield_allowable_N", accepted()},
+      {"structure.diagonal_tension_ultimate_allowable_N", accepted()},
+      {"structure.latch_energy_yield_allowable_J", accepted()},
+      {"structure.latch_energy_ultimate_allowable_J", accepted()},
+      {"structure.screw_force_yield_allowable_N", accepted()},
+      {"structure.screw_force_ultimate_allowable_N", accepted()},
+      {"structure.drive_force_yield_allowable_N", accepted()},
+      {"structure.drive_force_ultimate_allowable_N", accepted()},
       {"stack.mode", [](MastScene& s, const toml::node& v, const std::string& w) {
          const std::string m = as_string(v, w);
          if (m != "held" && m != "free") fail(w, "expected \"held\" or \"free\"");

@@ -92,6 +92,10 @@ def evidence_reasons(s: pd.DataFrame) -> list[tuple[str, list[int]]]:
     high = [int(k) for k in np.nonzero(safe & (ub > target))[0]]
     if high:
         res.append(("safe_side_above_target", high))
+    if a["verdict"] == "PASS":   # truss-campaign never passes on values past NO_RESULT_SHARE
+        rows = [k for k, (bad, n) in enumerate(zip(s["no_result"], s["runs"])) if bad > NO_RESULT_SHARE * max(int(n), 1)]
+        if rows:
+            res.append(("no_result", rows))
     return res
 
 
