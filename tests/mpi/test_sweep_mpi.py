@@ -530,8 +530,13 @@ def check_allowable_and_report(args, path, d):
     html = open(os.path.join(out, "report.html"), encoding="utf-8").read()
     m = re.search(r'data-key="sweep.allowable" data-value="([^"]+)"', html)
     check(m and float(m.group(1)) == a["value"], "the report's allowable is /sweep/allowable/value")
-    want = f"drive.stall_torque_Nm ≥ {a['value'] * 1e3:.5g} mN m (95 % upper bound"
-    check("VERDICT: PASS" in p.stdout and want in p.stdout, f"the verdict says PASS and '{want}'")
+    # The allowable as the report's number rule shows it: its digits, rounded, in mN m.
+    m = re.search(r"drive\.stall_torque_Nm ≥ ([0-9.]+) mN m \(95 % upper bound", p.stdout)
+    shown = m.group(1) if m else ""
+    decimals = len(shown.split(".")[1]) if "." in shown else 0
+    check("VERDICT: PASS" in p.stdout and m is not None
+          and abs(float(shown) - a["value"] * 1e3) <= 0.5 * 10.0 ** -decimals * (1 + 1e-9),
+          f"the verdict says PASS and 'drive.stall_torque_Nm ≥ {shown} mN m' ({a['value'] * 1e3:.9g} mN m rounded)")
     check(os.path.exists(os.path.join(out, "sweep.png")), "the sweep figure is drawn")
     # The values the refinement placed: marked in the table, the bracket said in a sentence.
     placed = int(s["refinement"].sum())
