@@ -64,7 +64,7 @@ def case_ctrl_c(args):
     lines = [ln for ln in err.splitlines() if "interrupted" in ln]
     check(len(lines) == 1, f"one line about the interruption ({len(lines)}): {lines}; stderr: {err[-1500:]}")
     m = re.match(r"\[truss-campaign\] interrupted \(SIGTERM\) after (\d+) of (\d+) runs: their records are kept in the "
-                 r"journal (\S+) \(one still on its way to its chunk's rank is computed again\); resume with: (.*)$",
+                 r"journal (\S+) \(those still on their way to their chunk's rank, at most a batch per rank, are computed again\); resume with: (.*)$",
                  lines[0])
     check(m is not None and int(m.group(2)) == 4000 and 0 < int(m.group(1)) < 4000 and m.group(3) == out + ".journal",
           f"it says what was kept and where: {lines[0][:160]}")
@@ -80,8 +80,11 @@ def case_ctrl_c(args):
     p = subprocess.run(cmd, env=ENV, capture_output=True, text=True, timeout=600)
     check(p.returncode == 0, f"the printed command finishes the campaign ({p.stderr.strip()[-200:]})")
     restored = re.search(r"resuming: (\d+) of 4000 runs restored", p.stderr)
-    check(restored and 0 < int(restored.group(1)) <= int(m.group(1)),
-          f"it restored runs the line counted ({restored.group(1) if restored else '?'} of {m.group(1)})")
+    # The line counts the runs rank 0 had heard of; the chunk owners' part journals may hold more
+    # (written before rank 0 heard of them), and the records still on their way, at most a batch
+    # (engine.hpp max_batch, 32) per rank, are computed again.
+    check(restored and int(m.group(1)) - 32 * 2 <= int(restored.group(1)) <= 4000,
+          f"it restored at least the runs the line counted ({restored.group(1) if restored else '?'} of {m.group(1)})")
     same, why = same_values(datasets(ref), datasets(out))
     check(same and chunks(ref) == chunks(out), f"the file equals the uninterrupted one, value and chunk for chunk {why}")
     check(sorted(os.listdir(d)) == ["c.h5", "ref.h5"], f"nothing else left ({sorted(os.listdir(d))})")
