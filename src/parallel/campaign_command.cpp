@@ -316,7 +316,8 @@ std::string resume_command(int argc, char** argv, int size) {
   const int sig = interrupt_signal();
   if (r0.collector) {
     std::fprintf(stderr, "[truss-campaign] interrupted (%s) after %lld of %lld runs: their records are kept in the "
-                 "journal %s (those still on their way to their chunk's rank, at most a batch per rank, are computed again); resume with: %s\n",
+                 "journal %s (those still on their way to their chunk's rank, at most a batch per rank, are "
+                 "computed again); resume with: %s\n",
                  sig == SIGINT ? "SIGINT" : "SIGTERM", static_cast<long long>(r0.collector->n_computed()),
                  static_cast<long long>(r0.collector->store().n_runs()), r0.journal->path().c_str(),
                  resume_command(argc, argv, size).c_str());
