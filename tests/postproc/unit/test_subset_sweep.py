@@ -67,8 +67,11 @@ def test_runs_without_a_result_never_count_as_safe():
     margin[250] = np.nan                                          # an ok run at 16 without a margin: 1 %
     runs = SweepRuns(value, status, names, margin)
     assert no_result_counts([12.0, 14.0, 16.0], runs) == [0, 2, 1]
-    # truss-campaign decides on them (it writes NOT ASSESSED); a stored PASS the report shows as stored.
-    assert judge_sweep(sweep(runs=runs)).verdict == PASS
+    # truss-campaign decides on them (it writes NOT ASSESSED); a stored PASS past the share is a
+    # file truss-campaign never writes, so the report's check refuses it; a stored FAIL stands.
+    j = judge_sweep(sweep(runs=runs))
+    assert j.verdict == NOT_ASSESSED and j.reasons == [("no_result", [1])]
+    assert judge_sweep(sweep("FAIL", own=13.0, runs=runs)).verdict == FAIL
     assert no_result_counts([12.0], None) == [-1]
 
 
