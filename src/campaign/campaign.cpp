@@ -304,8 +304,9 @@ std::vector<io::SceneSetting> apply_sets(const std::vector<std::string>& overrid
 // The root's tables: the campaign's own, read here; the method catalog's, read by its rows.
 void read_root(const TomlSource& c, const toml::table& root, CampaignOptions& o) {
   for (const auto& [k, v] : root) {
+    const std::string_view name = k.str();  // clang: a lambda cannot capture a structured binding
     const auto own = std::find_if(root_tables().begin(), root_tables().end(),
-                                  [&](const RootTable& r) { return k.str() == r.name; });
+                                  [&](const RootTable& r) { return name == r.name; });
     if (own != root_tables().end()) {
       if (!own->array && !v.as_table()) c.fail(&v, fmt::format("'{}' must be a table", k.str()));
       own->read(c, v, o);
