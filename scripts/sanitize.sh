@@ -6,8 +6,9 @@
 #   FUZZ_SECONDS=600 scripts/sanitize.sh fuzz   # fuzzers only, longer
 # Which tests: every ctest test that runs compiled code of ours, in two passes:
 #   1. in-process tests and truss-sim (SAN_TESTS), with LeakSanitizer on;
-#   2. truss-campaign under mpirun (SAN_MPI_TESTS: the report and OpenTURNS fixture campaigns
-#      and every tests/mpi case but one), with leak detection off: Open MPI's components are
+#   2. everything that starts MPI (SAN_MPI_TESTS: engine_collector, a singleton MPI_Init, and
+#      truss-campaign under mpirun: the report and OpenTURNS fixture campaigns and every
+#      tests/mpi case but one), with leak detection off: Open MPI's components are
 #      dlclose()d at MPI_Finalize and their never-freed start-up blocks show as leaks in
 #      "<unknown module>" frames that no suppression can name.
 # Left out (docs/reliability.md): the Python-only tests that read files the fixtures above wrote
@@ -23,8 +24,8 @@ source scripts/progress.sh
 ROOT=$(pwd)
 BUILD=${SAN_BUILD_DIR:-build-san}
 FUZZ_SECONDS=${FUZZ_SECONDS:-30}
-SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|free_stack|free_contacts|free_retract|integrators|truss_tests_io|statistics_units|campaign_files|engine_collector|util_units|truss_tests_sampling|cli_bad_input|stress_reduced|end_to_end_figures|postproc_frame_heights|report_fixture_run)$'}
-SAN_MPI_TESTS=${SAN_MPI_TESTS:-'^(report_fixture_(table1_dispersed|motor_torque|free_rail_miss|retract)|openturns_fixture_.*|mpi_(ranks|resume|failures|saltelli|bad_input|paths|hostile|journal|faults|layout|rounds_rounds|rounds_resume))$'}
+SAN_TESTS=${SAN_TESTS:-'^(model_numeric_regression|stages_units|free_stack|free_contacts|free_retract|integrators|truss_tests_io|statistics_units|campaign_files|util_units|truss_tests_sampling|cli_bad_input|stress_reduced|end_to_end_figures|postproc_frame_heights|report_fixture_run)$'}
+SAN_MPI_TESTS=${SAN_MPI_TESTS:-'^(engine_collector|report_fixture_(table1_dispersed|motor_torque|free_rail_miss|retract)|openturns_fixture_.*|mpi_(ranks|resume|failures|saltelli|bad_input|paths|hostile|journal|faults|layout|rounds_rounds|rounds_resume))$'}
 what=${1:-all}
 t0=$(date +%s)
 
