@@ -235,7 +235,7 @@ int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& c
   int status = kExitOk;
   SessionSetup setup;
   if (rank == 0) {
-    try {
+    status = run_rank0_step(r0, [&] {
       prepare_output(o, campaign_text, ctx, method, r0);
       setup.output = o.output_path;
       setup.temporary = r0.file->temporary_path();
@@ -243,21 +243,11 @@ int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& c
       engine.attach(*owner, r0.collector.get());
       setup = restore_output(o, campaign_text, r0, *owner, engine);
       owner->set_session(setup.session);
-    } catch (const io::InputError& e) {
-      std::cerr << e.what() << '\n';
-      status = kExitBadInput;
-    } catch (const std::exception& e) {
-      std::cerr << "error: " << e.what() << '\n';
-      status = kExitIoError;
-    }
-    if (status != kExitOk) r0.drop();
+    });
   }
   if ((status = broadcast_int_idle(comm, status)) != kExitOk) return status;
   std::string bytes = rank == 0 ? setup.to_bytes() : std::string();
-  auto len = static_cast<long long>(bytes.size());
-  MPI_Bcast(&len, 1, MPI_LONG_LONG, 0, comm);
-  bytes.resize(static_cast<std::size_t>(len));
-  MPI_Bcast(bytes.data(), static_cast<int>(len), MPI_BYTE, 0, comm);
+  broadcast_string(comm, bytes);
   if (rank != 0) {
     setup = SessionSetup::from_bytes(bytes);
     std::vector<std::size_t> observed;

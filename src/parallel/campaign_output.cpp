@@ -89,6 +89,8 @@ std::string read_file(const std::string& path) {
   return s.str();
 }
 
+}  // namespace
+
 void broadcast_string(MPI_Comm comm, std::string& s) {
   auto len = static_cast<long long>(s.size());
   MPI_Request r;
@@ -99,7 +101,20 @@ void broadcast_string(MPI_Comm comm, std::string& s) {
   wait_idle(&r);
 }
 
-}  // namespace
+int run_rank0_step(Rank0& r0, const std::function<void()>& step) {
+  int status = kExitOk;
+  try {
+    step();
+  } catch (const io::InputError& e) {
+    std::cerr << e.what() << '\n';
+    status = kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << '\n';
+    status = kExitIoError;
+  }
+  if (status != kExitOk) r0.drop();
+  return status;
+}
 
 int check_output_all(MPI_Comm comm, const CommandOptions& o, const campaign::CampaignContext& ctx, Rank0& r0) {
   int rank = 0, size = 1;
@@ -108,18 +123,11 @@ int check_output_all(MPI_Comm comm, const CommandOptions& o, const campaign::Cam
   int status = kExitOk;
   std::string lock_path, lock_content;
   if (rank == 0) {
-    try {
+    status = run_rank0_step(r0, [&] {
       lock_and_check_output(o, ctx, r0);
       lock_path = fs::absolute(r0.lock->path()).string();
       lock_content = read_file(lock_path);
-    } catch (const io::InputError& e) {
-      std::cerr << e.what() << '\n';
-      status = kExitBadInput;
-    } catch (const std::exception& e) {
-      std::cerr << "error: " << e.what() << '\n';
-      status = kExitIoError;
-    }
-    if (status != kExitOk) r0.drop();
+    });
   }
   status = broadcast_int_idle(comm, status);
   if (status != kExitOk || size == 1) return status;

@@ -5,6 +5,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -56,6 +57,14 @@ struct SessionSetup {
   std::string to_bytes() const;
   static SessionSetup from_bytes(std::string_view bytes);
 };
+
+// Rank 0: runs `step` and returns kExitOk, or, when it throws, prints the error once (an
+// io::InputError as it is: kExitBadInput; any other exception as "error: ...": kExitIoError) and
+// drops r0: nothing written.
+int run_rank0_step(Rank0& r0, const std::function<void()>& step);
+
+// Collective: rank 0's `s` on every rank (a wait that does not spin, engine.hpp's wait_idle).
+void broadcast_string(MPI_Comm comm, std::string& s);
 
 // Collective: rank 0's lock and checks of the output (lock_and_check_output), then every other
 // rank's check that it sees the output's directory (its lock file, holding rank 0's PID and host):
