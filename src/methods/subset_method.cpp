@@ -112,24 +112,9 @@ std::string SubsetMethodOptions::to_toml() const {
   return "[ensemble.subset]\n" + campaign::write_options(table(), *this) + "\n" + campaign::failure_toml(failure);
 }
 
-int count_plateau_levels(const std::vector<sampling::SubsetLevel>& levels) {
-  int n = 0;
-  for (std::size_t k = 0; k + 1 < levels.size(); ++k) {
-    const double b = levels[k].threshold, next = levels[k + 1].threshold;
-    n += b > 0.0 && b - next < kPlateauShare * b ? 1 : 0;
-  }
-  return n;
-}
-
 std::string find_subset_distrust(const sampling::SubsetSummary& s, std::int64_t unusable, std::int64_t runs) {
   if (std::string why = find_unusable_reason(unusable, runs); !why.empty()) return why;
-  if (s.status == sampling::SubsetStatus::no_progress || s.status == sampling::SubsetStatus::chains_stuck)
-    return fmt::format("subset simulation ended {}: {}", sampling::to_string(s.status), s.message);
-  if (const int n = count_plateau_levels(s.levels); n >= kPlateauLevels)
-    return fmt::format("{} levels on a plateau of the margin (a threshold moved by less than {:g} % of its distance "
-                       "to failure): the estimate may be biased low",
-                       n, 100.0 * kPlateauShare);
-  return {};
+  return sampling::find_untrusted_reason(s);
 }
 
 std::optional<FailureEstimate> SubsetMethod::calc_failure_estimate(double confidence) const {

@@ -25,16 +25,9 @@
 
 namespace truss::methods {
 
-// The plateau rule: a level whose threshold b_k moved less than kPlateauShare of its distance to
-// failure (b_k - b_{k+1} < kPlateauShare b_k) is on a plateau of the margin. There the levels select
-// on inputs that move the margin a little everywhere and each still multiplies p by about p0, so
-// from kPlateauLevels such levels on the estimate may lie far below the true p, beyond its CoV.
-inline constexpr double kPlateauShare = 0.01;
-inline constexpr int kPlateauLevels = 3;
-int count_plateau_levels(const std::vector<sampling::SubsetLevel>& levels);
 // Why a subset simulation's estimate cannot feed an allowable, or empty: too many unusable runs
-// (find_unusable_reason), it ended no_progress or chains_stuck, or kPlateauLevels or more plateau
-// levels.
+// (find_unusable_reason), or sampling::find_untrusted_reason (no progress, no estimate, a plateau of
+// the margin).
 std::string find_subset_distrust(const sampling::SubsetSummary& s, std::int64_t unusable, std::int64_t runs);
 
 // [ensemble.subset]: the settings of subset simulation a campaign file gives (sampling::SubsetOptions

@@ -211,9 +211,10 @@ struct SubsetSummary {
   static constexpr int kPlateauLevels = 3;  // from this many on, the estimate is not trusted
 };
 
-// Why an estimate must not feed an allowable ("" when it may): no estimate (chains_stuck), the
-// level cap or no progress (the last level's share, not the failure's), kPlateauLevels or more
-// plateau levels.
+// Why an estimate must not feed an allowable ("" when it may): not finished, no estimate
+// (chains_stuck), no progress (the last level's share, not the failure's), kPlateauLevels or more
+// plateau levels. A level cap stands: the failure lies beyond the last threshold, so the last
+// level's share bounds p from above (P(F) <= P(g <= b_L)), the safe side of p <= p_target.
 std::string find_untrusted_reason(const SubsetSummary& s);
 
 // A failing sample of the last level: its evaluation ordinal (the run ordinal: rounds number
