@@ -3,9 +3,9 @@
 // standard normal dimensions), values x = 4 to 5.25 in steps of 0.25, target 1e-6 (true crossing
 // x* = 4.7534; p falls as x grows: the allowable is a least value). Each value's p by subset
 // simulation with its own seed, as a sweep runs it:
-//   walk, guessed side   modified Metropolis, cov_bound, the walk from the end guessed safe
-//                        (find_allowable: the campaign's sweep today);
-//   walk, declared side  adaptive conditional sampling, cov_interval, the walk on the declared side;
+//   walk, MM             modified Metropolis, cov_bound, the walk on the declared side
+//                        (find_allowable_on_side);
+//   walk, aCS            adaptive conditional sampling, cov_interval, the walk on the declared side;
 //   monotone fit         the same estimates through the isotonic fit (calc_monotone_fit), values the
 //                        trust rule flags left out.
 // Prints per way: sweeps without an allowable, allowables on the unsafe side of x* (below it),
@@ -80,15 +80,15 @@ int main(int argc, char** argv) {
       e.untrusted = find_untrusted_reason(acs);
       est.push_back(e);
     }
-    today.add(find_allowable(x, b_today, target), truth, runs_today);
+    today.add(find_allowable_on_side(x, b_today, +1, target), truth, runs_today);
     walk.add(find_allowable_on_side(x, b_new, +1, target), truth, runs_new);
     fit.add(calc_monotone_fit(est, +1, target, 0.95).allowable, truth, runs_new);
   }
   std::printf("N = %lld, %d seeds, true crossing %.4f\n\n", static_cast<long long>(n), seeds, truth);
   std::printf("| way | no allowable | on the unsafe side | mean distance | interval holds x* | runs a sweep |\n");
   std::printf("|---|---:|---:|---:|---:|---:|\n");
-  today.print("walk, guessed side (modified Metropolis, cov_bound)", seeds);
-  walk.print("walk, declared side (aCS, cov_interval)", seeds);
+  today.print("walk (modified Metropolis, cov_bound)", seeds);
+  walk.print("walk (aCS, cov_interval)", seeds);
   fit.print("monotone fit (aCS, cov_interval)", seeds);
   return 0;
 }

@@ -9,6 +9,7 @@
 #include "io/h5_util.hpp"
 #include "methods/failure_count.hpp"
 #include "methods/method_table.hpp"
+#include "sampling/monotone_fit.hpp"
 #include "util/bytes.hpp"
 
 namespace truss::methods {
@@ -199,6 +200,23 @@ std::string find_untrusted(const std::vector<SweepMethod::ValueResult>& values, 
   return out;
 }
 
+// A value's estimate as the monotone fit reads it: a count (Monte Carlo, stop) is binomial over its
+// usable runs; subset simulation's is lognormal with its CoV (the interval's, cov_bound).
+sampling::SweepEstimate to_sweep_estimate(const SweepMethod::ValueResult& r) {
+  sampling::SweepEstimate e;
+  e.x = r.value;
+  e.untrusted = r.estimate.untrusted;
+  if (r.estimate.failures >= 0) {
+    e.kind = sampling::EstimateKind::binomial;
+    e.failures = r.estimate.failures;
+    e.runs = r.estimate.runs - r.estimate.unusable;
+  } else {
+    e.p = r.estimate.bounds.p;
+    e.cov = r.estimate.cov;
+  }
+  return e;
+}
+
 }  // namespace
 
 SweepVerdict calc_sweep_verdict(const campaign::CampaignOptions& c, const SweepOptions& opt,
@@ -212,19 +230,15 @@ SweepVerdict calc_sweep_verdict(const campaign::CampaignOptions& c, const SweepO
     v.reason = "the evidence is untrusted: " + untrusted;
     return v;
   }
-  std::vector<double> x;
-  std::vector<sampling::ProbabilityBounds> b;
-  sampling::NearestMargins nearest{{}, campaign::find_run_column_unit(opt.failure_event()->column)};
-  for (const SweepMethod::ValueResult& r : values) {
-    x.push_back(r.value);
-    b.push_back(r.estimate.bounds);
-    nearest.margin.push_back(r.estimate.nearest_margin);
-  }
-  v.allowable = sampling::find_allowable(x, b, opt.target_probability, units, nearest);
+  std::vector<sampling::SweepEstimate> est;
+  for (const SweepMethod::ValueResult& r : values) est.push_back(to_sweep_estimate(r));
+  v.allowable = sampling::calc_monotone_fit(est, opt.calc_safe_side(), opt.target_probability, opt.confidence, units)
+                    .allowable;
   const sampling::Allowable& a = v.allowable;
   if (a.status != sampling::AllowableStatus::found) {
     v.verdict = "NOT ASSESSED";
-    v.reason = "no allowable in the swept range: " + a.message;
+    const bool contradicted = a.status == sampling::AllowableStatus::contradicts_safe_side;
+    v.reason = (contradicted ? "" : "no allowable in the swept range: ") + a.message;
     return v;
   }
   const bool pass = a.safe_side > 0 ? v.own_value >= a.value : v.own_value <= a.value;

@@ -36,6 +36,18 @@ campaign::OptionRow<S> variable_row(std::string_view key, SweepVariable v, std::
   return r;
 }
 
+// safe_side: "above" (+1) or "below" (-1); written when given.
+campaign::OptionRow<S> safe_side_row() {
+  campaign::OptionRow<S> r{{"safe_side", campaign::OptionKind::choice, "", {},
+                            "where p falls: above (larger values are safer; the allowable is a least value) or "
+                            "below; a key sweep must give it, a spread sweep's is below",
+                            {"above", "below"}}};
+  r.set_int = [](S& s, std::int64_t i) { s.declared_side = i == 0 ? +1 : -1; };
+  r.get_int = [](const S& s) -> std::int64_t { return s.declared_side > 0 ? 0 : 1; };
+  r.written = [](const S& s) { return s.declared_side != 0; };
+  return r;
+}
+
 // The rules between the keys, once each is read: key or spread; values, or from, to and count.
 void check_sweep_keys(const campaign::TomlSource& c, const toml::table& t, SweepOptions& s) {
   const toml::node *key = t.get("key"), *spread = t.get("spread"), *values = t.get("values"), *from = t.get("from"),
@@ -44,6 +56,11 @@ void check_sweep_keys(const campaign::TomlSource& c, const toml::table& t, Sweep
     c.fail(key ? key : spread ? spread : &t,
            "sweep: give either key = \"<scene key>\" (its nominal value is swept) or spread = \"<dispersed key>\" "
            "(that dispersion's std or half-width is swept)");
+  if (key && !t.get("safe_side"))
+    c.fail(key, fmt::format("sweep.safe_side: a sweep of {}'s nominal value must say on which side the failure "
+                            "probability falls (it is not guessed from the estimates): safe_side = \"above\" "
+                            "(larger values are safer: the allowable is a least value) or \"below\"",
+                            s.axis.key));
   if (values && (from || to || count))
     c.fail(from ? from : to ? to : count, "sweep: give values = [...] or from, to and count, not both");
   if (values) return;
@@ -79,6 +96,7 @@ const campaign::OptionTable<S>& SweepOptions::table() {
                                      "the failure probability the allowable keeps, e.g. 1e-6")),
           TRUSS_OPTION_REAL(S, "confidence", confidence, "1", campaign::open_range(0.5, 1),
                             "of the one-sided upper bound on p"),
+          safe_side_row(),
           written_if(TRUSS_OPTION_INT(S, "refine", axis.refine, "1", campaign::closed_range(0, kMaxRefine),
                                       "then this many more values inside the bracket of the allowable"),
                      &refines),
@@ -106,6 +124,11 @@ std::string SweepOptions::validate(const campaign::CampaignOptions& c) const {
            "\"rail_margin_m\", or column = \"peak_drive_torque_Nm\", above = 0.02, unit = \"N m\")";
   if (c.dispersions.empty()) return "sweep: a failure probability needs at least one [[dispersion]]";
   return inner.options().validate(campaign::calc_campaign_at(c, 0));
+}
+
+int SweepOptions::calc_safe_side() const {
+  if (declared_side != 0) return declared_side;
+  return is_spread(*this) ? -1 : 0;
 }
 
 std::string SweepOptions::to_toml() const {

@@ -11,6 +11,9 @@
 //   from = 0.012, to = 0.020, count = 5   # evenly spaced, from < to
 //   target_probability = 1e-6         # in (0, 1)
 //   confidence = 0.95                 # of the one-sided upper bound on p (default 0.95)
+//   safe_side = "above"               # where p falls: "above" (larger values are safer: the
+//                                     # allowable is a least value) or "below"; a key sweep must
+//                                     # declare it; a spread sweep's is "below" (less scatter)
 //   refine = 3                        # after the values: this many more, evenly inside the bracket
 //                                     # of the allowable (default 0: none)
 //
@@ -33,6 +36,7 @@ struct SweepOptions : campaign::MethodOptionsOf<SweepOptions> {
   campaign::DesignAxis axis;
   double target_probability = 0.0;  // the allowable keeps the upper bound on p at or below this
   double confidence = 0.95;         // of that one-sided upper bound
+  int declared_side = 0;            // safe_side: +1 above, -1 below, 0 not given
   // from, to and count as the file gives them (values = evenly spaced; the resolved TOML lists values).
   struct Grid {
     double from = std::numeric_limits<double>::quiet_NaN(), to = std::numeric_limits<double>::quiet_NaN();
@@ -42,6 +46,9 @@ struct SweepOptions : campaign::MethodOptionsOf<SweepOptions> {
   // Its keys' ranges; a method with a [failure] event at each value and a dispersion to draw; the
   // inner method's own rules on the campaign at the first value (the axis is checked by the campaign).
   std::string validate(const campaign::CampaignOptions& c) const override;
+  // Where p falls, never read from the estimates: the declared side, else "below" for a spread
+  // (less scatter is safer); a key sweep without safe_side is refused when the file is read.
+  int calc_safe_side() const;
   std::string to_toml() const override;  // the inner method's tables, then [sweep]
   std::string chosen_runs() const override { return inner.options().chosen_runs(); }
   std::int64_t calc_n_runs(const campaign::CampaignOptions& c) const override { return inner.options().calc_n_runs(c); }

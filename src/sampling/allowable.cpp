@@ -69,51 +69,6 @@ Crossing cross(const std::vector<double>& x, const std::vector<double>& y, const
   return c;
 }
 
-// The safe side (allowable.hpp) from the usable ends `first` and `last`, and when the estimates
-// there are equal, a sentence on how it was found, or why it is unknown (side 0).
-struct SafeSide {
-  int side = 0;
-  std::string why;
-};
-
-SafeSide find_safe_side(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, std::size_t first,
-                        std::size_t last, const NearestMargins& nearest, const std::string& unit) {
-  SafeSide r;
-  if (b[first].p != b[last].p) {
-    r.side = b[last].upper_bound < b[first].upper_bound ? +1 : -1;
-    return r;
-  }
-  const bool known = nearest.margin.size() == x.size();
-  const double m_first = known ? nearest.margin[first] : std::nan("");
-  const double m_last = known ? nearest.margin[last] : std::nan("");
-  const std::string mu = nearest.margin_units.empty() ? std::string() : " " + nearest.margin_units;
-  if (std::isfinite(m_first) && std::isfinite(m_last) && m_first != m_last) {
-    r.side = m_last > m_first ? +1 : -1;
-    const std::size_t near = r.side > 0 ? first : last, far = r.side > 0 ? last : first;
-    r.why = fmt::format(" (p = {:g} at both ends; the runs at {:g}{} came nearer to failure, smallest margin {:.4g}{} "
-                        "against {:.4g}{} at {:g}{})",
-                        b[first].p, x[near], unit, nearest.margin[near], mu, nearest.margin[far], mu, x[far], unit);
-    return r;
-  }
-  r.why = fmt::format("p = {:g} at both ends ({:g}{} and {:g}{}), and {}", b[first].p, x[first], unit, x[last], unit,
-                      std::isfinite(m_first) && std::isfinite(m_last)
-                          ? fmt::format("their runs came equally near to failure (smallest margin {:.4g}{})",
-                                        m_first, mu)
-                          : std::string("the runs' nearest approach to failure is not known at both"));
-  return r;
-}
-
-// The message when the safe side is unknown: where the upper bounds lie against the target.
-std::string direction_unknown_text(const std::vector<double>& ub, const std::vector<int>& usable, double target,
-                                   const std::string& why) {
-  std::size_t at_or_below = 0;
-  for (int i : usable) at_or_below += ub[static_cast<std::size_t>(i)] <= target ? 1 : 0;
-  const std::string where = at_or_below == usable.size() ? "every value's upper bound on p is at or below the target"
-                            : at_or_below == 0          ? "no value's upper bound on p is at or below the target"
-                                                        : "the upper bounds on p cross the target";
-  return fmt::format("{}, but the direction in which p falls is unknown: {}; sweep a wider range", where, why);
-}
-
 std::vector<int> find_usable(const std::vector<ProbabilityBounds>& b) {
   std::vector<int> usable;
   for (std::size_t i = 0; i < b.size(); ++i)
@@ -122,28 +77,6 @@ std::vector<int> find_usable(const std::vector<ProbabilityBounds>& b) {
 }
 
 }  // namespace
-
-Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target,
-                         const std::string& units, const NearestMargins& nearest) {
-  if (x.size() != b.size()) throw std::invalid_argument("find_allowable: one bounds per value");
-  Allowable r;
-  const std::vector<int> usable = find_usable(b);
-  if (usable.size() < 2) {
-    r.message = fmt::format("{} of {} values have an estimate with bounds: no allowable", usable.size(), x.size());
-    return r;
-  }
-  const auto first = static_cast<std::size_t>(usable.front()), last = static_cast<std::size_t>(usable.back());
-  const std::string unit = units.empty() ? std::string() : " " + units;
-  const SafeSide side = find_safe_side(x, b, first, last, nearest, unit);
-  if (side.side == 0) {
-    std::vector<double> ub;
-    for (const ProbabilityBounds& v : b) ub.push_back(v.upper_bound);
-    r.status = AllowableStatus::direction_unknown;
-    r.message = direction_unknown_text(ub, usable, target, side.why);
-    return r;
-  }
-  return find_allowable_on_side(x, b, side.side, target, units, side.why);
-}
 
 Allowable find_allowable_on_side(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b,
                                  int safe_side, double target, const std::string& units, const std::string& note) {

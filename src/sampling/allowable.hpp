@@ -10,14 +10,9 @@
 //                      bound is the two-sided (2c - 1) interval's top (each tail 1 - c), the
 //                      two-sided interval the exact one at c.
 // The allowable, with the values x_1 < ... < x_m and their bounds:
-//   safe side     where p falls. When the estimates at the two ends (of the values with bounds)
-//                 differ: above when the one-sided upper bound at the largest value is below the one
-//                 at the smallest, else below. When they are equal (no failure at either end, say),
-//                 the estimates do not tell, and the runs' nearest approach to failure does: the
-//                 smallest margin any of a value's runs reached (its unit: that of the [failure]
-//                 margin); the end whose runs came nearer to failure (the smaller margin) is the
-//                 unsafe one. When that is unknown or equal too, the direction is unknown
-//                 (safe_side 0, status direction_unknown): nothing is guessed.
+//   safe side     where p falls: declared by the caller (a sweep's safe_side), never read from the
+//                 estimates, whose ends are the noisiest (monotone_fit.hpp reads them through a
+//                 monotone fit on that side).
 //   allowable     from the safe end, the first value whose one-sided upper bound exceeds the target
 //                 T and its safe neighbour (upper bound <= T) bracket it; between them the upper
 //                 bound is interpolated linearly in ln p, and the allowable is where it equals T:
@@ -59,16 +54,14 @@ ProbabilityBounds calc_lognormal_bounds(double p, double cov, double confidence)
 ProbabilityBounds calc_binomial_bounds(std::int64_t k, std::int64_t n, double confidence);
 
 // contradicts_safe_side: the estimates rise towards the declared safe side (monotone_fit.hpp).
-enum class AllowableStatus { found, beyond_safe_end, beyond_unsafe_end, unusable, direction_unknown,
-                             contradicts_safe_side };
+enum class AllowableStatus { found, beyond_safe_end, beyond_unsafe_end, unusable, contradicts_safe_side };
 inline constexpr const char* kAllowableStatusNames[] = {"found", "beyond_safe_end", "beyond_unsafe_end", "unusable",
-                                                        "direction_unknown", "contradicts_safe_side"};
+                                                        "contradicts_safe_side"};
 inline const char* to_string(AllowableStatus s) { return kAllowableStatusNames[static_cast<int>(s)]; }
 
 struct Allowable {
   AllowableStatus status = AllowableStatus::unusable;
-  int safe_side = 0;  // +1: p falls as the value grows (the allowable is a least value); -1: a greatest value;
-                      // 0: unknown
+  int safe_side = 0;  // +1: p falls as the value grows (the allowable is a least value); -1: a greatest value
   double value = std::numeric_limits<double>::quiet_NaN();     // the crossing of the upper bound
   double estimate = std::numeric_limits<double>::quiet_NaN();  // the crossing of p^
   double lower = std::numeric_limits<double>::quiet_NaN();     // the interval, ascending (NaN: open)
@@ -77,19 +70,8 @@ struct Allowable {
   std::string message;  // one sentence: what was found, or which way to extend the sweep
 };
 
-// The runs' nearest approach to failure at each value: the smallest margin any of its runs reached
-// (NaN: none known), in margin_units; it only serves to find the safe side when the estimates
-// cannot (see above).
-struct NearestMargins {
-  std::vector<double> margin;  // one per value, or empty: unknown
-  std::string margin_units;
-};
-
-// x ascending, one bounds per value; target in (0, 1); units: x's unit, for the message.
-Allowable find_allowable(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b, double target,
-                         const std::string& units = "", const NearestMargins& nearest = {});
-// The same with the safe side given (+1 or -1, never guessed): the walk from the safe end, the
-// crossings and the messages above; `note` ends the message.
+// x ascending, one bounds per value; safe_side +1 or -1; target in (0, 1); units: x's unit, for the
+// message: the walk from the safe end, the crossings and the messages above; `note` ends the message.
 Allowable find_allowable_on_side(const std::vector<double>& x, const std::vector<ProbabilityBounds>& b,
                                  int safe_side, double target, const std::string& units = "",
                                  const std::string& note = "");

@@ -447,8 +447,8 @@ std::string find_untrusted_reason(const SubsetSummary& s) {
   switch (s.status) {
     case SubsetStatus::running: return "not finished";
     case SubsetStatus::chains_stuck: return "no estimate (the Markov chains never moved)";
-    case SubsetStatus::level_cap:  // stands: the last level's share bounds p from above (the safe side)
     case SubsetStatus::no_progress: return "the thresholds stopped decreasing (a flat or mostly unusable margin)";
+    case SubsetStatus::level_cap:  // stands: the last level's share bounds p from above (the safe side)
     case SubsetStatus::converged: break;
   }
   const int plateau = s.calc_plateau_levels();

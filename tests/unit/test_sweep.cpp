@@ -60,7 +60,7 @@ const double kPhi1 = 0.8413447460685429;  // Phi(1)
 }  // namespace
 
 TEST_CASE("a nominal sweep sets the key before the draws; the run records its value", "[sweep]") {
-  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02, 0.04]\n"
+  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nsafe_side = \"above\"\nvalues = [0.01, 0.02, 0.04]\n"
                                   "target_probability = 1e-6\n");
   const DimensionLayout L = calc_layout(c);
   REQUIRE(L.design == L.total - 1);
@@ -102,14 +102,32 @@ TEST_CASE("a spread sweep sets the dispersion's std at each value", "[sweep]") {
 }
 
 TEST_CASE("the resolved campaign reads back to the same sweep", "[sweep]") {
-  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nfrom = 0.01\nto = 0.02\ncount = 4\n"
+  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nsafe_side = \"above\"\nfrom = 0.01\nto = 0.02\ncount = 4\n"
                                   "target_probability = 2e-5\nconfidence = 0.9\n");
   const CampaignOptions back = truss::methods::parse_campaign_text(resolved_campaign_toml(c), "resolved", ".");
   CHECK(axis(back).values == axis(c).values);
   CHECK(axis(back).key == axis(c).key);
   CHECK(sweep_of(back).target_probability == 2e-5);
   CHECK(sweep_of(back).confidence == 0.9);
+  CHECK(sweep_of(back).calc_safe_side() == +1);
   CHECK(resolved_campaign_toml(back) == resolved_campaign_toml(c));
+}
+
+TEST_CASE("the safe side is declared or known, never guessed", "[sweep]") {
+  // A key sweep without safe_side is refused where the key stands (file:line); a spread's is below.
+  try {
+    parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02]\ntarget_probability = 1e-6\n");
+    FAIL("a key sweep without safe_side was accepted");
+  } catch (const std::exception& e) {
+    CHECK_THAT(e.what(), Catch::Contains("sweep.safe_side: a sweep of drive.stall_torque_Nm's nominal value must "
+                                         "say on which side") && Catch::Contains("t:"));
+  }
+  const std::string spread = "[sweep]\nspread = \"drive.stall_torque_Nm\"\nvalues = [0.001, 0.002]\n"
+                             "target_probability = 1e-6\n";
+  CHECK(sweep_of(parse(spread)).calc_safe_side() == -1);
+  CHECK(sweep_of(parse(spread + "safe_side = \"above\"\n")).calc_safe_side() == +1);
+  CHECK(sweep_of(parse(spread + "safe_side = \"below\"\n")).calc_safe_side() == -1);
+  CHECK_THROWS_WITH(parse(spread + "safe_side = \"up\"\n"), Catch::Contains("safe_side"));
 }
 
 TEST_CASE("a Monte Carlo or stop sweep: the method's row reads [failure], the runs cap is per value", "[sweep]") {
@@ -129,7 +147,7 @@ apply = "offset"
 distribution = "normal"
 std = 0.001
 )";
-  const std::string sweep = "[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02, 0.04]\n"
+  const std::string sweep = "[sweep]\nkey = \"drive.stall_torque_Nm\"\nsafe_side = \"above\"\nvalues = [0.01, 0.02, 0.04]\n"
                             "target_probability = 1e-2\n";
   const CampaignOptions c = truss::methods::parse_campaign_text(mc + sweep, "mc.toml", ".");
   REQUIRE(c.ensemble.method.options().failure_event() != nullptr);
@@ -161,7 +179,7 @@ std = 0.001
   CHECK(alone.ensemble.method.options().failure_event()->kind == FailureKind::above);
   CHECK(error_of(mc + "[ensemble.stop]\ntarget = \"probability_half_width\"\nwidth = 0.05\n").empty());
   // A Monte Carlo estimate needs Monte Carlo points.
-  CHECK(error_of(mc + "[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02]\ntarget_probability = 0.1\n",
+  CHECK(error_of(mc + "[sweep]\nkey = \"drive.stall_torque_Nm\"\nsafe_side = \"above\"\nvalues = [0.01, 0.02]\ntarget_probability = 0.1\n",
                  {"ensemble.sampling=sobol"})
             .find("ensemble.sampling: \"sobol\" gives no binomial interval of a probability") != std::string::npos);
   // A percentile stop rule estimates no probability.
@@ -176,7 +194,7 @@ std = 0.001
 
 TEST_CASE("refinement candidates: evenly inside each bracket, keyed after the listed values", "[sweep]") {
   // Values 0.01, 0.02, 0.04 with refine = 3: candidates at quarters of each bracket, by hand.
-  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02, 0.04]\n"
+  const CampaignOptions c = parse("[sweep]\nkey = \"drive.stall_torque_Nm\"\nsafe_side = \"above\"\nvalues = [0.01, 0.02, 0.04]\n"
                                   "target_probability = 1e-6\nrefine = 3\n");
   REQUIRE(axis(c).refine == 3);
   REQUIRE(axis(c).n_values() == 3);
@@ -212,7 +230,7 @@ TEST_CASE("refinement candidates: evenly inside each bracket, keyed after the li
     }
     return std::string();
   };
-  const std::string head = "[sweep]\nkey = \"drive.stall_torque_Nm\"\nvalues = [0.01, 0.02]\ntarget_probability = 1e-6\n";
+  const std::string head = "[sweep]\nkey = \"drive.stall_torque_Nm\"\nsafe_side = \"above\"\nvalues = [0.01, 0.02]\ntarget_probability = 1e-6\n";
   CHECK_THAT(error_of(head + "refine = 21\n"), Catch::Contains("sweep.refine: must lie in [0, 20], got 21"));
   CHECK_THAT(error_of(head + "refine = -1\n"), Catch::Contains("sweep.refine: must lie in [0, 20], got -1"));
   CHECK_THAT(error_of(head + "refine = 1.5\n"), Catch::Contains("sweep.refine"));

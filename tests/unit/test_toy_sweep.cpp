@@ -39,6 +39,7 @@ unit = "Nm"
 key = "drive.stall_torque_Nm"
 values = [0.004, 0.0045, 0.005, 0.0055]
 target_probability = 0.05
+safe_side = "above"
 [[dispersion]]
 key = "drive.stall_torque_Nm"
 apply = "offset"
