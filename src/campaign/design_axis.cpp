@@ -9,14 +9,12 @@
 
 #include "campaign/campaign.hpp"
 #include "campaign/dispersion.hpp"
-#include "sampling/sampling.hpp"
 #include "sim/scene_keys.hpp"
 
 namespace truss::campaign {
 
 namespace {
 
-constexpr std::uint64_t kTagSweep = 0x5357454550ULL;  // "SWEEP": the per-value seeds
 
 // The spread parameter a spread sweep sets, by distribution; nullptr for a discrete table.
 const char* spread_name(DistributionKind k) {
@@ -157,10 +155,6 @@ double DesignAxis::find_value(std::size_t k) const {
   return a + static_cast<double>(j + 1) * (b - a) / static_cast<double>(m + 1);
 }
 
-std::uint64_t calc_sweep_seed(std::uint64_t master_seed, std::size_t k) {
-  return sampling::splitmix_at(master_seed ^ kTagSweep, static_cast<std::uint64_t>(k)) >> 1;
-}
-
 void apply_design_value(const CampaignOptions& c, std::size_t k, CampaignOptions& at) {
   const DesignAxis& a = *find_design_axis(c);
   if (k >= a.n_design_values()) throw std::out_of_range(fmt::format("sweep: no design value {}", k));
@@ -176,7 +170,7 @@ CampaignOptions calc_campaign_at(const CampaignOptions& c, std::size_t k) {
   CampaignOptions at = c;
   apply_design_value(c, k, at);
   at.ensemble.method = *c.ensemble.method.options().inner_method();
-  at.ensemble.master_seed = calc_sweep_seed(c.ensemble.master_seed, k);
+  // The file's master seed at every value: common random numbers (design_axis.hpp).
   return at;
 }
 

@@ -11,8 +11,11 @@
 //
 // Value k is the standalone campaign calc_campaign_at(c, k): the same file without [sweep] (its
 // method the one the sweep runs), the value written into the base scene (key) or the dispersion
-// (spread), and ensemble.master_seed = calc_sweep_seed(master_seed, k). Its runs are that
-// campaign's runs, point for point. A run carries its value as one more sampling dimension, the last
+// (spread), and the file's ensemble.master_seed: every value draws the same random numbers (common
+// random numbers), so neighbouring values differ by the design change, not by noise. Each value's
+// estimate keeps its own distribution (its bounds hold value by value); only their differences
+// lose the noise (the allowable's fixed-sequence reading needs no independence between values).
+// Its runs are that campaign's runs, point for point. A run carries its value as one more sampling dimension, the last
 // of the layout (DimensionLayout::design): u = (k + 0.5) / n_design_values().
 #pragma once
 #include <cstdint>
@@ -62,9 +65,6 @@ inline std::size_t calc_max_design_values(const DesignAxis& a) {
   return a.n_values() + static_cast<std::size_t>(a.refine);
 }
 
-// The master seed of value k's runs: SplitMix64 of (master seed, k), 63 bits (a campaign file's
-// integer).
-std::uint64_t calc_sweep_seed(std::uint64_t master_seed, std::size_t k);
 
 // Design value k of c's axis written into `at` (a copy of c): the base scene's key, or the spread
 // of the swept dispersion.
