@@ -144,9 +144,9 @@ struct SingularEnd {
 // The bound on the stop times of two integrators at rtol (s): max(1e-9 s, 0.1 rtol T_c). A frame-height
 // error e at the stop moves it by e / |dD/dt|: a state held to rtol in a bay opening 2 l gives rtol T_c
 // (3500 rtol s here, dD/dt ~ 1e-4 m/s), the conditioning of the stop, not of an integrator. Measured
-// against the long-double reference, dopri54, dop853 and CVODE stay within 0.03 rtol T_c, and CVODE and
-// dopri54 differ by up to 0.065 rtol T_c (3-bay case, rtol 3.16e-9): 0.1 bounds two integrators' gap.
-// Below rtol ~3e-12 the bound is 1e-9 s; the stop times' rounding floor is 3e-10 s.
+// against the long-double reference (l_0 = 0.48 m), dopri54, dop853 and CVODE stay within 0.03 rtol
+// T_c; CVODE and dopri54 differ by up to 0.065 rtol T_c (3-bay case, rtol 3.16e-9): 0.1 bounds two
+// integrators' gap. Below rtol ~3e-12 the bound is 1e-9 s (at 1e-12 all agree to ~1e-10 s).
 double stop_bound_s(double rtol, double conditioning_s) { return std::max(1e-9, 0.1 * rtol * conditioning_s); }
 
 }  // namespace
