@@ -112,18 +112,38 @@ bool FreePhaseA::are_short_of_straight(const MastParams& mast, int first_bay, in
   return true;
 }
 
-void FreePhaseA::calc_straight_distances(const MastParams& mast, const ContactLayout& layout, int lo, int last_bay,
-                                         const double* ys, int first, double* len) {
-  auto distance = [&](int i) {  // bay i, if it is a moving bay
-    if (i < std::max(lo, 1) || i > last_bay) return std::numeric_limits<double>::infinity();
-    return 2.0 * mast.bay(i).strut_length_m - std::abs(ys[i - first] - ys[i - 1 - first]);
-  };
+namespace {
+
+// Per coordinate (a cluster of frames lo..lo + layout.frames - 1), the smallest of per_bay(i) over
+// the moving bays i in [max(lo, 1), last_bay] it opens: the one below its lowest frame and the one
+// above its highest (+inf where it opens none).
+template <class PerBay>
+void calc_cluster_minima(const ContactLayout& layout, int lo, int last_bay, PerBay per_bay, double* out) {
+  auto bay = [&](int i) { return i < std::max(lo, 1) || i > last_bay ? std::numeric_limits<double>::infinity() : per_bay(i); };
   const int clusters = layout.clusters();
   for (int c = 0; c < clusters; ++c) {
     const int bottom = layout.enabled ? layout.starts[static_cast<std::size_t>(c)] : c;
     const int top = layout.enabled ? (c + 1 < clusters ? layout.starts[static_cast<std::size_t>(c + 1)] : layout.frames) - 1 : c;
-    len[c] = std::min(distance(lo + bottom), distance(lo + top + 1));
+    out[c] = std::min(bay(lo + bottom), bay(lo + top + 1));
   }
+}
+
+}  // namespace
+
+void FreePhaseA::calc_straight_distances(const MastParams& mast, const ContactLayout& layout, int lo, int last_bay,
+                                         const double* ys, int first, double* len) {
+  calc_cluster_minima(layout, lo, last_bay, [&](int i) {
+    return 2.0 * mast.bay(i).strut_length_m - std::abs(ys[i - first] - ys[i - 1 - first]);
+  }, len);
+}
+
+void FreePhaseA::calc_hinge_factors(const MastParams& mast, const ContactLayout& layout, int lo, int last_bay,
+                                    const double* ys, int first, double* f) {
+  calc_cluster_minima(layout, lo, last_bay, [&](int i) {
+    const double D = std::abs(ys[i - first] - ys[i - 1 - first]);
+    return 4.0 * calc_hinge_offset_m(mast.bay(i), D) / D;  // +inf at D = 0
+  }, f);
+  for (int c = 0; c < layout.clusters(); ++c) f[c] = std::min(f[c], 1.0);
 }
 
 bool FreePhaseA::calc_smooth_lengths(const double* q, double* len) const {
@@ -131,6 +151,14 @@ bool FreePhaseA::calc_smooth_lengths(const double* q, double* len) const {
   zero.assign(static_cast<std::size_t>(dof()), 0.0);
   expand_frames(q, zero.data(), ys, vs);
   calc_straight_distances(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), std::max(lo_ - 1, 0), len);
+  return true;
+}
+
+bool FreePhaseA::calc_error_factors(const double* q, double* f) const {
+  std::vector<double>&ys = work_.ys, &vs = work_.vs, &zero = work_.zero;
+  zero.assign(static_cast<std::size_t>(dof()), 0.0);
+  expand_frames(q, zero.data(), ys, vs);
+  calc_hinge_factors(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), std::max(lo_ - 1, 0), f);
   return true;
 }
 

@@ -110,6 +110,12 @@ class FreePhaseA final : public PhaseModel {
   // from the frame heights ys of frames first.. (phases A and B).
   static void calc_straight_distances(const model::MastParams& mast, const ContactLayout& layout, int lo, int last_bay,
                                       const double* ys, int first, double* len);
+  // Per coordinate (PhaseModel::calc_error_factors), the smallest over the bays it opens (as
+  // calc_straight_distances) of min(1, |dD/dx|) = min(1, 4 x / |D|): a height error dy moves the
+  // bay's hinge offset x by dy |D| / (4 x), so a tolerance on x is one on the height times 4 x / |D|.
+  static void calc_hinge_factors(const model::MastParams& mast, const ContactLayout& layout, int lo, int last_bay,
+                                 const double* ys, int first, double* f);
+  bool calc_error_factors(const double* q, double* f) const override;
   // Frames above the driven frame m are locked, rigid with it: y_k = y_{k-1} + 2 l_k, k = m+1..n.
   static void fill_locked_heights(const model::MastParams& mast, int m, double* y);
   // The point's kinetic energy (from the phase's mass matrix diag, sub), and the potential energy,

@@ -175,6 +175,15 @@ bool FreePhaseB::calc_smooth_lengths(const double* q, double* len) const {
   return true;
 }
 
+bool FreePhaseB::calc_error_factors(const double* q, double* f) const {
+  std::vector<double>&ys = work_.ys, &vs = work_.vs, &zero = work_.zero;
+  zero.assign(static_cast<std::size_t>(dof()), 0.0);
+  expand_frames(q, zero.data(), ys, vs);
+  FreePhaseA::calc_hinge_factors(*ctx_.mast, layout_, lo_, ctx_.bay - 1, ys.data(), std::max(lo_ - 1, 0), f);
+  f[dof() - 1] = 1.0;
+  return true;
+}
+
 FreePhaseB::Motion FreePhaseB::solve_motion(const double* q, const double* qdot, double* qddot, PhaseScratch& sys) const {
   const int n = dof();
   FreePhaseWork& w = work_;

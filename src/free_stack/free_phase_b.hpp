@@ -80,6 +80,8 @@ class FreePhaseB final : public PhaseModel {
   // Per cluster of frames lo..m-1, the smallest distance to straight of the bays below m it opens
   // (FreePhaseA::calc_straight_distances); x is regular up to the lock: unlimited.
   bool calc_smooth_lengths(const double* q, double* len) const override;
+  // Per cluster of frames lo..m-1, FreePhaseA::calc_hinge_factors over the bays below m; x: 1.
+  bool calc_error_factors(const double* q, double* f) const override;
 
  private:
   bool assemble(const double* q, const double* qdot, PhaseScratch& sys, std::vector<double>& ys, std::vector<double>& vs,

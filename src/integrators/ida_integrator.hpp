@@ -8,7 +8,9 @@
 // Jacobian, lower + upper + 1 residual evaluations (each O(n)) and an O(N lower (lower + upper))
 // LU, so every step is O(n) for an n-frame phase. A form without an order keeps its own with a full band (a dense Jacobian).
 // The algebraic unknowns are excluded from the local error test (IDASetSuppressAlg): they are
-// fixed by the constraints at each step; consistent initial values of z and of y' for the given y
+// fixed by the constraints at each step; the error weights are IDA's own scaled by the form's error
+// factors (DaeForm::calc_error_factors: a frame height near a straight bay is held to the bay's
+// hinge offset); consistent initial values of z and of y' for the given y
 // come from IDACalcIC (IDA_YA_YDP_INIT) at every start. IDA's root finding locates the events on
 // y (the first size() entries), IDAGetDky gives the dense output of y; the step loop is
 // SundialsIntegrator's (sundials_integrator.hpp). One object serves a run: context and memory are

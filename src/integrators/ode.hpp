@@ -44,6 +44,11 @@ class DaeForm {
   // the scale of the residual's nonlinearity, which a difference-quotient Jacobian must resolve
   // (+inf where nothing limits it). false: none anywhere.
   virtual bool calc_smooth_lengths(const double* /*y*/, double* /*len*/) const { return false; }
+  // For each unknown of w = (y, z) at y, the factor f in (0, 1] that scales its error tolerance: a
+  // DAE solver accepts an error in w_i up to f_i (rtol |w_i| + atol). Below 1 where w_i carries the
+  // configuration only weakly: the state's error then moves the configuration (and the events on
+  // it) by 1 / f_i times what the tolerance says. false: 1 everywhere.
+  virtual bool calc_error_factors(const double* /*y*/, double* /*f*/) const { return false; }
 };
 
 class OdeSystem {

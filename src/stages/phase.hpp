@@ -139,6 +139,10 @@ class PhaseModel {
   // the distance of those bays to straight (IDA's difference-quotient Jacobian resolves it). false:
   // nothing limits any coordinate (the held phases).
   virtual bool calc_smooth_lengths(const double* /*q*/, double* /*len*/) const { return false; }
+  // For each coordinate q_k, the factor in (0, 1] of its error tolerance (DaeForm::calc_error_factors):
+  // a frame height that opens a bay near straight fixes that bay's configuration, its hinge offset
+  // x, only to second order (D = 2 sqrt(l^2 - x^2)), so its error is measured in x. false: 1.
+  virtual bool calc_error_factors(const double* /*q*/, double* /*f*/) const { return false; }
   // Heights of all frames 0..n (m) at q, for the per-frame history; false: not tracked (held
   // stack, whose frames below the deploying bay are at their stowed or lock heights).
   virtual bool calc_frame_heights(const double* /*q*/, double* /*y*/) const { return false; }

@@ -75,6 +75,11 @@ class PhaseOde final : public integrators::OdeSystem, public integrators::DaeFor
     std::fill_n(len, total, std::numeric_limits<double>::infinity());
     return m_.calc_smooth_lengths(y, len);
   }
+  // The coordinates' error factors from the model; velocities, work and multipliers: 1.
+  bool calc_error_factors(const double* y, double* f) const override {
+    std::fill_n(f, 2 * n_ + 1 + std::max(m_.num_multipliers(), 0), 1.0);
+    return m_.calc_error_factors(y, f);
+  }
   void calc_rhs(double, const double* y, double* dy) override {
     const double power = m_.calc_motion(y, y + n_, dy + n_, scratch_);
     std::copy(y + n_, y + 2 * n_, dy);
