@@ -15,9 +15,11 @@ import matplotlib.pyplot as plt  # noqa: E402  (after the backend)
 
 from .argparser import ArgParser  # noqa: E402
 from .judging.campaign import JudgeOptions, judge_campaign  # noqa: E402
+from .judging.mechanism import compute_margins  # noqa: E402
+from .judging.motor_answer import calc_motor_answer, scene_differences, sizing_problem  # noqa: E402
 from .judging.stats import CONFIDENCE  # noqa: E402
 from .judging.sweep import sweep_frame  # noqa: E402
-from .judging.verdict import FAIL, NOT_ASSESSED, PASS  # noqa: E402
+from .judging.verdict import EXIT_STATUS  # noqa: E402
 from .page.render import Page  # noqa: E402
 from .page.run_table import write_run_table  # noqa: E402
 from .page.sections_design import campaign_report, section_nominal  # noqa: E402
@@ -32,11 +34,7 @@ from .reading.methods import read_method_groups  # noqa: E402
 from .reading.run import load_single_run  # noqa: E402
 
 REPORT_NAME = "report.html"
-# Exit status of a written campaign report, by its verdict (postproc/report.py's docstring):
-# 0 PASS (and every report without a verdict: a single run, a subset campaign), 3 FAIL (the
-# evidence violates a requirement), 4 NOT ASSESSED (nothing fails, but the runs cannot decide
-# every requirement). 1 is left to an unexpected error, 2 to bad input.
-EXIT_VERDICT = {PASS: 0, FAIL: 3, NOT_ASSESSED: 4}
+EXIT_VERDICT = EXIT_STATUS     # by the verdict (judging.verdict; postproc/report.py's docstring)
 
 CSV_NAME = "runs.csv"
 PDF_NAME = "report.pdf"
@@ -117,19 +115,63 @@ def read_file(path, kind, sha256):
             raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
 
 
-def render(page, kind, data, subset, sweep, extras, opts):
-    """The Report of what read_file gave: judged, then drawn."""
+def read_other(path, kind, data, subset, sweep):
+    """The file of --compare-with, read and checked against this one: a load report pairs with a
+    motor-sizing sweep of the same mast and a motor-sizing sweep with a load report's campaign
+    (judging.motor_answer). Returns (load-report Campaign, its Extras, sweep Campaign, sweep table);
+    InputError naming the file when they cannot be paired."""
+    if kind != "campaign" or (subset is not None and sweep is None):
+        raise InputError(f"{path}: --compare-with pairs a load report with a motor-sizing sweep; this report "
+                         "(a single run or a subset campaign) states no stall torque")
+    sha256 = file_sha256(path) if os.path.isfile(path) else ""
+    with open_h5(path) as f:
+        other_kind = read_kind(H5(f, path))
+    if other_kind != "campaign":
+        raise InputError(f"{path}: --compare-with needs a campaign file, not a {other_kind.replace('_', ' ')} file")
+    c, o_subset, o_sweep, e = read_file(path, other_kind, sha256)
+    if sweep is not None:
+        if o_sweep is not None or o_subset is not None:
+            raise InputError(f"{path}: --compare-with of a sweep needs a load report's campaign (Monte Carlo or "
+                             "Latin hypercube runs, no [sweep], no subset simulation)")
+        load, load_e, sizing, s = c, e, data, sweep_frame(sweep)
+    else:
+        if o_sweep is None:
+            raise InputError(f"{path}: --compare-with of a load report needs a motor-sizing sweep (a [sweep] of "
+                             "drive.stall_torque_Nm); this file has no /sweep")
+        load, load_e, sizing, s = data, None, c, sweep_frame(o_sweep)
+    problem = sizing_problem(s)
+    if problem:
+        raise InputError(f"{sizing.path}: not a motor-sizing sweep: {problem}")
+    diffs, _ = scene_differences(load, sizing, str(s.attrs["variable"]))
+    if diffs:
+        shown = "; ".join(f"{k} = {a!r} in {os.path.basename(load.path)}, {b!r} in {os.path.basename(sizing.path)}"
+                          for k, a, b in diffs[:4])
+        raise InputError(f"{path}: not the same mast as {data.path}: the base scenes differ in {len(diffs)} "
+                         f"key(s): {shown}")
+    return load, load_e, sizing, s
+
+
+def render(page, kind, data, subset, sweep, extras, opts, other=None):
+    """The Report of what read_file gave: judged, then drawn (other: read_other's, or None)."""
+    replaced = any(v is not None for v in (opts.motorisation_factor, opts.uncertainty_factor, opts.inertia_factor))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         if kind != "campaign":
             return single_run_report(page, data)
         if sweep is not None:  # runs of one campaign per design value: no design loads
-            return sweep_report(page, data, sweep_frame(sweep), opts.revision, section_nominal(page, extras))
+            s, answer = sweep_frame(sweep), None
+            if other is not None:
+                load, load_e = other[0], other[1]
+                m = compute_margins(load, load_e, opts.motorisation_factor, opts.uncertainty_factor,
+                                    opts.inertia_factor, opts.levels[-1], opts.confidence)
+                answer = calc_motor_answer(load, m, data, s, replaced)
+            return sweep_report(page, data, s, opts.revision, section_nominal(page, extras), answer)
         if subset is not None:  # the runs are not draws: no design loads
             return subset_report(page, data, subset, opts.revision, section_nominal(page, extras))
         j = judge_campaign(data, extras, JudgeOptions(opts.levels, opts.confidence, opts.motorisation_factor,
                                                       opts.uncertainty_factor, opts.inertia_factor))
-        return campaign_report(page, data, extras, j, opts)
+        answer = calc_motor_answer(data, j.margins, other[2], other[3], replaced) if other is not None else None
+        return campaign_report(page, data, extras, j, opts, answer)
 
 
 def build(path, outdir, force, opts=None, progress=None):
@@ -148,12 +190,13 @@ def build(path, outdir, force, opts=None, progress=None):
     csv = start_csv(path, staging) if kind == "campaign" and opts.csv else None
     try:
         data, subset, sweep, extras = read_file(path, kind, sha256)
+        other = read_other(opts.compare_with, kind, data, subset, sweep) if opts.compare_with else None
         progress(f"{path}: {kind.replace('_', ' ')}"
                  + (f", {data.n} runs" if kind == "campaign" else "") + ", read and checked"
                  + (f"; writing {CSV_NAME} beside" if csv else ""))
         plt.rcParams.update(FIGURE_STYLE)
         page = Page(staging, plt, progress)
-        report = render(page, kind, data, subset, sweep, extras, opts)
+        report = render(page, kind, data, subset, sweep, extras, opts, other)
         page.finish()
         if csv is not None:
             csv.join()
@@ -199,6 +242,10 @@ def parse_args(argv=None):
     p.add_argument("--inertia-factor", type=float, default=None, metavar="KD",
                    help="factor on the inertial resistance torque T_D, velocity drive (default: the "
                         "scene's motorisation.inertia_factor)")
+    p.add_argument("--compare-with", metavar="OTHER.h5", default=None,
+                   help="the other campaign of the motor answer: for a load report the motor-sizing sweep's file, "
+                        "for a motor-sizing sweep a load report's campaign file, of the same mast; both stall "
+                        "torques are shown with which one governs")
     p.add_argument("--revision", default="draft", help="revision shown in the sign-off block")
     p.add_argument("--csv", action="store_true",
                    help=f"also write DIR/{CSV_NAME}: the run table, one row per run (campaigns)")

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 
 from ..reading.campaign import Campaign
 from ..reading.extras import Extras
+from .bays import BayTable, TorqueChart, calc_bay_table, calc_torque_chart
 from .consistency import Check, consistency_checks
 from .correlations import Correlations, InputColumn, input_columns, rank_correlations
 from .design import DesignLoad, design_loads
@@ -43,6 +44,8 @@ class CampaignJudgement:
     verdict: str
     structure: list[StructuralMargin]       # per load and limit
     structure_bays: list[StructuralMargin]  # per bay, for the loads the file records per bay
+    bay_table: BayTable                     # per-bay design values (lock time, latch energy, ...)
+    torque_chart: TorqueChart | None        # the motorisation chart's torques (velocity drive)
 
     @property
     def failed_checks(self) -> list[str]:
@@ -65,4 +68,5 @@ def judge_campaign(c: Campaign, e: Extras, opts: JudgeOptions) -> CampaignJudgem
     bays = calc_bay_margins(e, c.ok, opts.levels[-1], opts.confidence, declared)
     items += structure_items(structure)
     return CampaignJudgement(loads, m, counted, outputs, lock, checks, columns, correlations, items,
-                             verdict_of(items), structure, bays)
+                             verdict_of(items), structure, bays,
+                             calc_bay_table(e, c.ok, opts.levels[-1], opts.confidence), calc_torque_chart(c, e))

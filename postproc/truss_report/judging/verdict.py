@@ -23,6 +23,10 @@ PHYSICAL_STATUSES = ("rail miss", "stall", "singular configuration")
 RETRACT_NOT_ASSESSED = ("braking", "holding", "back-drive")
 FAIL, NOT_ASSESSED, PASS = "fail", "not_assessed", "pass"
 VERDICT_WORDS = {PASS: "PASS", FAIL: "FAIL", NOT_ASSESSED: "NOT ASSESSED"}
+# Exit status of a written report, by its verdict: 0 PASS (and every report without a verdict: a
+# single run, a subset campaign), 3 FAIL, 4 NOT ASSESSED; 1 is left to an unexpected error, 2 to
+# bad input.
+EXIT_STATUS = {PASS: 0, FAIL: 3, NOT_ASSESSED: 4}
 
 
 @dataclass

@@ -4,7 +4,10 @@ import numpy as np
 
 from ..judging.correlations import top_inputs
 from ..judging.sobol import sobol_agreement
-from ..judging.verdict import VERDICT_WORDS
+from ..judging.motor_answer import LOAD
+from ..judging.verdict import EXIT_STATUS, VERDICT_WORDS
+from .exports import (BAYS_CSV, DESIGN_CSV, MOTOR_CSV, STRUCTURE_CSV, VERDICT_JSON, bays_csv, design_csv,
+                      mechanism_csv, plain, structure_csv, verdict_json)
 from .figures_design import (fig_convergence, fig_envelopes, fig_peak_location, fig_scatter,
                              fig_sobol_convergence, input_axis)
 from .figures_run import fig5
@@ -15,9 +18,11 @@ from .sections_free import section_rail_miss
 from .sections_margins import (section_checks, section_histories, section_margins,
                                section_sensitivity)
 from .numbers import MOST, DisplayUnits, choose_load_units, fmt, message_text
-from .top import (campaign_doc, design_table_html, model_limits_html, signoff_html, terminal_summary,
+from .motor_answer import motor_answer_html, motor_answer_lines, motor_answer_rows
+from .top import (campaign_doc, design_table_html, item_html, model_limits_html, signoff_html, terminal_summary,
                   verdict_html)
-from .top_mechanism import mechanism_html
+from .top_bays import bays_html
+from .top_mechanism import mechanism_html, mechanism_rows
 from .top_structure import structure_html
 
 
@@ -111,8 +116,20 @@ def subsection_scatter(page, c, j, du):
         "over the run's bays of (value − nominal) / nominal, in %"))
 
 
-def campaign_report(page, c, e, j, opts):
-    """The campaign report (j: its CampaignJudgement), with the verdict's lines for the terminal."""
+def write_exports(page, c, j, confidence, du, answer):
+    """The load report's tables as CSV and its verdict as JSON, beside the page (page.exports)."""
+    m = j.margins
+    page.text_file(DESIGN_CSV, design_csv(j.loads, confidence))
+    page.text_file(STRUCTURE_CSV, structure_csv(j.structure, j.structure_bays))
+    page.text_file(MOTOR_CSV, mechanism_csv(mechanism_rows(m, du), m, motor_answer_rows(answer)))
+    page.text_file(BAYS_CSV, bays_csv(j.bay_table))
+    items = [(key, it.kind, plain(text)) for it in j.items for key, text in [item_html(it, m)]]
+    page.text_file(VERDICT_JSON, verdict_json(j.verdict, EXIT_STATUS[j.verdict], "load", c, items, answer))
+
+
+def campaign_report(page, c, e, j, opts, answer=None):
+    """The campaign report (j: its CampaignJudgement; answer: the motor answer with a motor-sizing
+    sweep, judging.motor_answer, or None), with the verdict's lines for the terminal."""
     du = DisplayUnits()    # one unit per quantity, chosen from the design loads
     choose_load_units(du, j.loads)
     body = [section_campaign(page, c, j, du), section_rail_miss(c), section_loads(page, c, e, j, du, opts.confidence),
@@ -124,10 +141,16 @@ def campaign_report(page, c, e, j, opts):
     top = [verdict_html(c, m, j.items, len(j.checks), du),
            design_table_html(j.loads, opts.confidence, c.sampling, du, c.attrs["n_bays_max"]),
            mechanism_html(m, du),
-           structure_html(j.structure, j.structure_bays, opts.levels[-1], opts.confidence, du)]
+           motor_answer_html(answer, LOAD, *du.get("torque", "Nm"), du.at("torque")),
+           structure_html(j.structure, j.structure_bays, opts.levels[-1], opts.confidence, du),
+           bays_html(page, j.torque_chart, j.bay_table, c.direction, du)]
     summary = terminal_summary(c, m, j.loads, j.items, du, opts.confidence)
+    summary += motor_answer_lines(answer, *du.get("torque", "Nm"), du.at("torque"))
+    write_exports(page, c, j, opts.confidence, du, answer)
     rest = [section_nominal(page, e), section_plots(page, c, e, j, du, opts)]
     toc = ("<nav><a href='#design'>Design loads</a> · <a href='#mechanism'>Mechanism margins</a> · "
+           "<a href='#motor-answer'>One motor answer</a> · <a href='#structure'>Structural margins</a> · "
+           "<a href='#bays'>Motorisation chart, per bay</a> · "
            "<a href='#nominal'>Nominal run</a> · <a href='#plots'>Plots</a> · "
            "1. <a href='#campaign'>Campaign</a> · 2. <a href='#loads'>Peak loads</a> · "
            "3. <a href='#locks'>Lock timing</a> · 4. <a href='#margins'>Margins</a> · "

@@ -15,8 +15,11 @@ import math
 import numpy as np
 
 from ..judging.sweep import NO_RESULT_SHARE, flat_values, judge_sweep, sweep_reason
-from ..judging.verdict import NOT_ASSESSED, PASS, VERDICT_WORDS
+from ..judging.motor_answer import SIZING_VARIABLE, SWEEP
+from ..judging.verdict import EXIT_STATUS, NOT_ASSESSED, PASS, VERDICT_WORDS
+from .exports import SWEEP_CSV, VERDICT_JSON, sweep_csv, verdict_json
 from .html import esc, html_page, num, table
+from .motor_answer import motor_answer_html, motor_answer_lines
 from .numbers import DASH, P_LEAST, fmt, fmt_at, fmt_p, message_text, p_digits, readable_unit, resolution, unit_text
 from .render import Report
 from .sections_subset import plateau_warning
@@ -214,17 +217,34 @@ def section_allowable(s):
             + table(["quantity", "value"], rows, "narrow") + "</section>")
 
 
-def sweep_report(page, c, s, revision, nominal_html):
-    """The report of a design sweep (s: its table, judging.sweep.sweep_frame), with its lines for
+def verdict_items(s, v):
+    """(item, status, reason) of the verdict for verdict.json: each reason the report has for not
+    showing the file's verdict, else the file's own reason."""
+    j = judge_sweep(s)
+    if j.reasons:
+        return [(what, v, reason_text(s, what, rows)) for what, rows in j.reasons]
+    return [("allowable", v, message_text(sweep_reason(s)))]
+
+
+def sweep_report(page, c, s, revision, nominal_html, answer=None):
+    """The report of a design sweep (s: its table, judging.sweep.sweep_frame; answer: the motor
+    answer with a load report of the same mast, judging.motor_answer, or None), with its lines for
     the terminal and its verdict."""
-    summary, v = verdict_lines(c, s)
+    lines, v = verdict_lines(c, s)
+    unit, f = design_unit(s)
+    summary = lines + motor_answer_lines(answer, unit, f, allowable_at(s))
+    page.text_file(SWEEP_CSV, sweep_csv(s))
+    page.text_file(VERDICT_JSON, verdict_json(v, EXIT_STATUS[v], "sweep", c, verdict_items(s, v), answer))
     verdict = (f"<div class='verdict {v}' data-key='verdict' data-value='{v}' "
                f"data-reason='{esc(sweep_reason(s))}'>"
-               + "<br>".join(esc(x) for x in summary) + "</div>")
-    toc = ("<nav><a href='#sweep'>Probability against the design variable</a> · <a href='#allowable'>Allowable</a> · "
+               + "<br>".join(esc(x) for x in lines) + "</div>")
+    motor = (motor_answer_html(answer, SWEEP, unit, f, allowable_at(s))
+             if answer is not None or s.attrs["variable"] == SIZING_VARIABLE else "")
+    toc = ("<nav>" + ("<a href='#motor-answer'>One motor answer</a> · " if motor else "")
+           + "<a href='#sweep'>Probability against the design variable</a> · <a href='#allowable'>Allowable</a> · "
            "<a href='#nominal'>Nominal run</a> · <a href='#limits'>Model limits</a> · "
            "<a href='#signoff'>Sign-off</a></nav>")
-    body = [verdict, section_sweep(page, s), section_allowable(s), nominal_html]
+    body = [verdict, motor, section_sweep(page, s), section_allowable(s), nominal_html]
     title = f"Design-sweep report: campaign “{c.attrs['campaign_name']}”"
     doc = campaign_doc(c, f"<b>{VERDICT_WORDS[v]}</b>: {esc(allowable_sentence(s))}")
     return Report(html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
