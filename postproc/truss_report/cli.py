@@ -1,6 +1,5 @@
 """truss_report.cli: the report's command line (postproc/report.py, truss-report): the output
 directory, reading -> judging -> page, the staging directory, the PDF, the exit status."""
-import logging
 import multiprocessing
 import os
 import shutil
@@ -20,6 +19,7 @@ from .judging.motor_answer import calc_motor_answer, scene_differences, sizing_p
 from .judging.stats import CONFIDENCE  # noqa: E402
 from .judging.sweep import sweep_frame  # noqa: E402
 from .judging.verdict import EXIT_STATUS  # noqa: E402
+from .page import pdf  # noqa: E402
 from .page.render import Page  # noqa: E402
 from .page.run_table import write_run_table  # noqa: E402
 from .page.sections_design import campaign_report, section_nominal  # noqa: E402
@@ -89,17 +89,13 @@ def start_csv(path, staging):
 
 
 def write_pdf(staging, progress):
-    """DIR/report.pdf from DIR/report.html (WeasyPrint: A4, page numbers in the footer)."""
-    logging.getLogger("weasyprint").setLevel(logging.ERROR)
-    logging.getLogger("fontTools").setLevel(logging.ERROR)
+    """DIR/report.pdf from DIR/report.html (page.pdf: A4, page numbers, the figures' PNG files)."""
+    progress(f"writing {PDF_NAME}")
     try:
-        import weasyprint   # optional: --no-pdf runs without it
+        pdf.write_pdf(os.path.join(staging, REPORT_NAME), os.path.join(staging, PDF_NAME))
     except ImportError:
         raise InputError("the PDF needs WeasyPrint (Debian: apt-get install weasyprint); "
                          "--no-pdf writes the HTML only") from None
-    progress(f"writing {PDF_NAME}")
-    weasyprint.HTML(filename=os.path.join(staging, REPORT_NAME)).write_pdf(
-        os.path.join(staging, PDF_NAME))
 
 
 def read_file(path, kind, sha256):

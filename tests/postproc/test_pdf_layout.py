@@ -15,7 +15,9 @@ DIR with report.html and report.pdf). For each:
 2. No page holds only a heading: each page has more than one line of text besides its footer.
 3. The number rule (number_format.py) on the HTML's visible text and on the PDF's text: units "N m"
    not "Nm", no "-0", "nan" or "inf", at most five significant digits, torques in one prefix.
-4. No ink outside the page's margins (A4, margins 15 mm top, 12 mm left and right; the footer's
+4. Every figure the HTML shows is in the PDF as that very PNG: an image of the PDF (pdfimages)
+   with the PNG file's size and pixels exactly (both lossless): drawn once, shared by both.
+5. No ink outside the page's margins (A4, margins 15 mm top, 12 mm left and right; the footer's
    bottom margin is left out): each page rendered at 50 dpi in grey (pdftoppm), a strip 1 mm
    inside each margin's edge must be white (every pixel >= 250 of 255). A box wider than the
    text width prints into the right margin or off the page.
@@ -148,6 +150,22 @@ def check_numbers(name, out):
                                                                       if bad else ""))
 
 
+def check_figures(name, out):
+    from PIL import Image
+    with open(os.path.join(out, "report.html"), encoding="utf-8") as fh:
+        shown = sorted(set(re.findall(r"<img [^>]*src=\"([^\"]+)\"", fh.read())))
+    with tempfile.TemporaryDirectory() as tmp:
+        subprocess.run(["pdfimages", "-png", os.path.join(out, "report.pdf"), os.path.join(tmp, "i")], check=True)
+        embedded = [np.asarray(Image.open(p).convert("RGB")) for p in sorted(glob.glob(os.path.join(tmp, "i-*.png")))]
+    missing = []
+    for src in shown:
+        want = np.asarray(Image.open(os.path.join(out, src)).convert("RGB"))
+        if not any(g.shape == want.shape and np.array_equal(g, want) for g in embedded):
+            missing.append(src)
+    check(not missing, f"{name}: all {len(shown)} figures of the HTML in the PDF, pixel for pixel"
+          + (f"; {len(missing)} not, e.g. {missing[:3]}" if missing else ""))
+
+
 def ink_outside(png):
     """The margins (top, left, right) whose strip 1 mm inside the page's edge holds ink."""
     import matplotlib.image as mi
@@ -210,6 +228,7 @@ def main():
     for name, out in todo:
         check_values(name, out)
         check_numbers(name, out)
+        check_figures(name, out)
         check_margins(name, out)
     print(f"{len(FAILS)} failed" if FAILS else "all passed")
     return 1 if FAILS else 0

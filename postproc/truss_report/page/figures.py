@@ -17,7 +17,7 @@ def fig_distribution(plt, x, title, u, est, cis, nominal=float("nan"), confidenc
     edges = np.histogram_bin_edges(x, bins="auto")
     if len(edges) > 81:
         edges = np.linspace(x[0], x[-1], 81)
-    a1.hist(x, bins=edges, color="C0", alpha=0.8)
+    a1.hist(x, bins=edges, color="C0", alpha=0.8, histtype="stepfilled")   # one polygon, not a bar a bin
     a1.set_ylabel("runs")
     surv = 1.0 - np.arange(1, n + 1) / n
     a3.step(x[:-1], surv[:-1], where="post", color="C0")
@@ -154,7 +154,7 @@ def fig_velocity_margin(plt, torque, a_min, a_max, u, at=None):
     """Histogram of the ok runs' peak drive torque (display unit u, resolution 10^at) against the
     smallest torque the scene's motor gives at the prescribed speed (a_min; a_max the largest)."""
     fig, ax = plt.subplots(figsize=(10.0, 4.2))
-    ax.hist(torque, bins=60, color="C0", label=f"peak drive torque, {len(torque)} ok runs")
+    ax.hist(torque, bins=60, color="C0", histtype="stepfilled", label=f"peak drive torque, {len(torque)} ok runs")
     ax.axvline(a_min, color="C3", ls="--", lw=1.2,
                label=f"available at the prescribed speed: {fmt_at(a_min, at)} {u}"
                + (f" (smallest; largest {fmt_at(a_max, at)} {u})" if a_max > a_min else ""))

@@ -133,7 +133,7 @@ def subsection_dispersions(c, units):
         rows.append([f"<code>{esc(d.key)}</code>", num(f"dispersion.{d.key}.factor", d.factor),
                      esc(d.distribution), "<br>".join(parts), esc(shown), esc(d.per), esc(d.apply),
                      num(f"dispersion.{d.key}.nominal", d.nominal, lab, factor=f)])
-    return ("<h3>Dispersions</h3><p>From the attributes of <code>/runs/inputs/&lt;key&gt;</code>. "
+    return ("<h3 id='dispersions'>Dispersions</h3><p>From the attributes of <code>/runs/inputs/&lt;key&gt;</code>. "
             "A draw x is applied as: absolute = x, relative = nominal (1 + x), "
             "offset = nominal + x; "
             "per bay / per frame draws are independent for each bay / frame.</p>"
@@ -154,12 +154,12 @@ def subsection_base_scene(c):
             else:
                 rows.append([f"<code>{esc(k)}</code>", num(f"base_scene.{key}", v)])
         tables.append(table([f"<code>[{esc(tab)}]</code>" if tab else "key", "value"], rows))
-    return ("<h3>Base scene</h3><p>From the root attribute <code>base_scene_toml</code> "
+    return ("<h3 id='base-scene'>Base scene</h3><p>From the root attribute <code>base_scene_toml</code> "
             "(units are in the key names; keys left unset are not listed). The complete "
             "resolved campaign, which <code>truss-campaign</code> reads back, is "
             "<code>campaign_toml</code> below.</p>"
             + "<div class='flex'>" + "".join(tables) + "</div>"
-            + "<details><summary>base_scene_toml</summary><pre>"
+            + "<details><summary>base_scene_toml</summary><pre id='base-scene-toml'>"
             + esc(c.attrs["base_scene_toml"]) + "</pre></details>"
             + "<details><summary>campaign_toml</summary><pre>"
             + esc(c.attrs["campaign_toml"]) + "</pre></details>")

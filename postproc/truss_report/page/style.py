@@ -47,7 +47,8 @@ table.signoff td { min-width: 180px; height: 36px; }
   figure img { max-height: 215mm; width: auto; }   /* a figure, its heading and caption: one page */
   #sweep figure img { max-width: 78%; }
 }
-@page { size: A4; margin: 15mm 12mm 18mm 12mm;
+@page { size: A4; margin: 15mm 12mm 18mm 12mm;   /* the footer in the body's font: no serif font to embed */
+        font-family: "DejaVu Sans", Arial, sans-serif;
         @bottom-left { content: string(doctitle); font-size: 8pt; color: #555; }
         @bottom-right { content: "page " counter(page) " of " counter(pages); font-size: 8pt;
                         color: #555; } }
