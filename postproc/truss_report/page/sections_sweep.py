@@ -64,8 +64,9 @@ def failure_text(s, html=True):
     torque margin of a stall-torque sweep: one prefix per quantity)."""
     at = s.attrs
     col = f"<code>{esc(at['failure_column'])}</code>" if html else at["failure_column"]
-    unit, f = unit_text(at.get("failure_units", "")), 1.0
-    if at.get("failure_units", "") == at["design_units"]:
+    units = at.get("failure_units", "")
+    unit, f = ("" if units == "1" else unit_text(units)), 1.0   # a ratio's margin: no unit after it
+    if units == at["design_units"]:
         unit, f = design_unit(s)
     if at["failure_kind"] == "margin":
         return f"{col} ≤ 0 {unit}".strip()
@@ -240,11 +241,13 @@ def sweep_report(page, c, s, revision, nominal_html, answer=None):
                + "<br>".join(esc(x) for x in lines) + "</div>")
     motor = (motor_answer_html(answer, SWEEP, unit, f, allowable_at(s))
              if answer is not None or s.attrs["variable"] == SIZING_VARIABLE else "")
-    toc = ("<nav>" + ("<a href='#motor-answer'>One motor answer</a> · " if motor else "")
-           + "<a href='#sweep'>Probability against the design variable</a> · <a href='#allowable'>Allowable</a> · "
+    toc = ("<nav><a href='#sweep'>Probability against the design variable</a> · "
+           + ("<a href='#motor-answer'>One motor answer</a> · " if motor else "")
+           + "<a href='#allowable'>Allowable</a> · "
            "<a href='#nominal'>Nominal run</a> · <a href='#limits'>Model limits</a> · "
            "<a href='#signoff'>Sign-off</a></nav>")
-    body = [verdict, motor, section_sweep(page, s), section_allowable(s), nominal_html]
+    # The plot on page 1 with its verdict; the motor answer after it.
+    body = [verdict, section_sweep(page, s), motor, section_allowable(s), nominal_html]
     title = f"Design-sweep report: campaign “{c.attrs['campaign_name']}”"
     doc = campaign_doc(c, f"<b>{VERDICT_WORDS[v]}</b>: {esc(allowable_sentence(s))}")
     return Report(html_page(title, c.path, c.sha256, toc + "\n".join(body) + model_limits_html()
