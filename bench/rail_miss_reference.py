@@ -82,7 +82,7 @@ def print_campaign(path, lstar, subset_sigma):
     with h5py.File(path, "r") as f:
         if "sweep" in f:
             g = f["sweep"]
-            rows = list(zip(g["value"][:], g["p"][:], g["lower"][:], g["upper"][:]))
+            rows = list(zip(g["values"][:], g["p"][:], g["lower"][:], g["upper"][:]))
         else:  # a subset campaign: its interval is lognormal with the bound CoV (docs/campaigns.md)
             g = f["subset"]
             p, cov = float(g["p"][()]), float(g["cov_bound"][()])

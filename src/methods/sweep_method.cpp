@@ -113,10 +113,10 @@ void SweepMethod::queue_refinement() {
   refine_low_ = axis.values[i];
   refine_high_ = axis.values[i + 1];
   for (int j = 0; j < axis.refine; ++j) values_[axis.find_candidate_index(i, j)].queued = true;
-  refine_message_ = fmt::format("refined between {:.6g} and {:.6g} {} (the bracket of the listed values' allowable "
-                                "{:.6g}) with {} values",
-                                refine_low_, refine_high_, campaign::sweep_variable_units(ctx_.options), a.value,
-                                axis.refine);
+  const std::string u = campaign::sweep_variable_units(ctx_.options);
+  refine_message_ = fmt::format("refined between {:.6g} {} and {:.6g} {} (the bracket of the listed values' "
+                                "allowable {:.6g} {}) with {} values",
+                                refine_low_, u, refine_high_, u, a.value, u, axis.refine);
 }
 
 std::vector<std::size_t> SweepMethod::find_run_order() const {

@@ -134,8 +134,8 @@ Allowable find_allowable_on_side(const std::vector<double>& x, const std::vector
   r.value = u.x;
   r.bracket_safe = u.a;
   r.bracket_unsafe = u.b;
-  r.message = fmt::format("the upper bound on p crosses the target between values {} and {}{}{}",
-                          x[static_cast<std::size_t>(u.a)], x[static_cast<std::size_t>(u.b)], unit, note);
+  r.message = fmt::format("the upper bound on p crosses the target between values {}{} and {}{}{}",
+                          x[static_cast<std::size_t>(u.a)], unit, x[static_cast<std::size_t>(u.b)], unit, note);
   return r;
 }
 

@@ -80,12 +80,25 @@ _DECIMAL = re.compile(r"(?<![\w.:])-?\d+\.\d+(?:e[-+]?\d+)?(?![\w.:]*\d)")
 _GLUED_UNIT = re.compile(r"(?<![\w/])([µmk]?N)([ms])(?![\w])")
 
 
+# A quantity in SI in such a text ("0.0337 Nm", "0.0037 m"): a number and a unit PREFIXES knows.
+_SI_QUANTITY = re.compile(r"(?<![\w.])(-?\d+(?:\.\d+)?(?:e[-+]?\d+)?) (N m|Nm|N s|Ns|N|J|m|kg)(?![\w/])")
+
+
+def _readable_quantity(m):
+    """One SI quantity of a message in the prefix its magnitude reads in (0.0337 N m is 33.7 mN m,
+    the prefix the page gives a torque of that size)."""
+    v, unit = float(m.group(1)), m.group(2).replace(" ", "")
+    label, factor = readable_unit(unit, abs(v)) if v != 0.0 else (unit_text(unit), 1.0)
+    return f"{fmt(v / factor, MOST)} {label}"
+
+
 def message_text(text):
     """A message from the file shown by the rule: its numbers to at most MOST significant digits
-    ("t = 2.92057111 s" is "t = 2.9206 s"), its units spelled as the report does ("0.027 N m");
-    the file and failed_runs.csv keep it whole."""
+    ("t = 2.92057111 s" is "t = 2.9206 s"), its quantities in the prefix their size reads in and
+    their units spelled as the report does ("0.027 Nm" is "27 mN m"); the file and failed_runs.csv
+    keep it whole."""
     text = _DECIMAL.sub(lambda m: fmt(float(m.group(0)), MOST), str(text))
-    return _GLUED_UNIT.sub(r"\1 \2", text)
+    return _SI_QUANTITY.sub(_readable_quantity, _GLUED_UNIT.sub(r"\1 \2", text))
 
 
 def decade(x):
