@@ -41,8 +41,12 @@
 
 namespace truss::parallel {
 
+// A batch is remaining / (batches_per_rank * ranks) runs (guided self-scheduling: batches shrink
+// as the round's end nears, so it stays balanced), at least the runs of kMinBatchCpuS of rank 0's
+// measured CPU per run (the end's last batches are not single cheap runs, each a message), at most
+// max_batch and a chunk of the results file.
 struct EngineOptions {
-  int max_batch = 32;             // upper bound on runs per batch: keeps the end of a round balanced
+  int max_batch = 4096;           // upper bound on runs per batch
   int batches_per_rank = 4;       // guided scheduling: batch = remaining / (batches_per_rank * ranks)
   double tick_interval_s = 0.25;  // how often rank 0 looks at the clock (journal syncs, progress)
   double flush_interval_s = 2.0;  // journal syncs
@@ -53,6 +57,12 @@ struct EngineOptions {
 
 // Records a rank may have in flight to their owners before it waits for them to be received.
 inline constexpr std::size_t kMaxSendBytes = std::size_t{32} << 20;
+// A rank sends its computed records to their owners once this many bytes wait (and at a batch's end).
+inline constexpr std::size_t kRecordsMessageBytes = std::size_t{256} << 10;
+// The least work in a batch, in CPU seconds of runs as rank 0 measures them: a batch's message
+// costs rank 0 about as much as a costless run's result used to; a batch of a millisecond's runs
+// keeps the end of a round balanced to about that.
+inline constexpr double kMinBatchCpuS = 1e-3;
 
 // Appends run `run`'s record, as a sealed journal frame (kind run), to `out`: the evaluation of one
 // point of round `plan`, on any rank. Failed runs are records too; an exception aborts the job.
@@ -110,9 +120,9 @@ class Collector {
   std::size_t n_observed() const { return observed_.size(); }
   const std::vector<std::size_t>& observed_fields() const { return observed_; }
 
-  // Runs computed (their statuses, one byte each): what the progress counts, before their
-  // records reach their owners' journals.
-  void add_computed(std::string_view statuses);
+  // `n` runs of status `status` computed (a batch's counts): what the progress counts, before
+  // their records reach their owners' journals.
+  void add_computed(std::int8_t status, std::int64_t n = 1);
   std::int64_t n_computed() const { return n_computed_; }
   const results::StatusCounts& computed_counts() const { return computed_counts_; }
   bool has(std::int64_t run) const {
