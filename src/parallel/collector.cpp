@@ -137,7 +137,6 @@ void Collector::tick(bool sync) {
     util::put(s, std::chrono::duration<double>(now - wall0_).count());
     journal_.append(FrameKind::heartbeat, s);
     journal_.flush();
-    file_.start_writeback();  // the results file's pages go to disk during the run, not in the tail
     last_sync_ = std::chrono::steady_clock::now();
   }
   progress_.update(n_computed_, [&] { return computed_counts_; });

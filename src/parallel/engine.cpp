@@ -145,14 +145,14 @@ Rank0Round::Rank0Round(Node& node, const methods::RoundPlan& plan, Collector& co
   for (std::int64_t i = plan.first_run; i < plan.end_run(); ++i) to_do_ += !collector.has(i);  // --resume: some are in
 }
 
-// Guided batches (EngineOptions): remaining / (batches_per_rank * ranks), at least kMinBatchCpuS
-// of runs (at rank 0's CPU per run so far, every round's; 1 before it has computed one), at most
-// max_batch and a chunk.
+// Guided batches (EngineOptions): remaining / (batches_per_rank * ranks), at least kMinBatchS of
+// runs (at rank 0's wall time per run so far, every round's; 1 before it has computed one), at
+// most max_batch and a chunk.
 std::int64_t Rank0Round::batch_size() const {
   const std::int64_t cap = std::min<std::int64_t>(opts_.max_batch, node_.chunk_runs());
-  const double runs = static_cast<double>(sum_.runs_by_rank0), cpu_s = sum_.rank0_compute_cpu_s;
+  const double runs = static_cast<double>(sum_.runs_by_rank0), wall_s = sum_.rank0_compute_s;
   const std::int64_t least =
-      cpu_s > 0.0 ? static_cast<std::int64_t>(std::min(kMinBatchCpuS * runs / cpu_s, static_cast<double>(cap))) : 1;
+      wall_s > 0.0 ? static_cast<std::int64_t>(std::min(kMinBatchS * runs / wall_s, static_cast<double>(cap))) : 1;
   const std::int64_t guided = (to_do_ - handed_) / (std::int64_t{opts_.batches_per_rank} * node_.size());
   return std::clamp<std::int64_t>(guided, std::max<std::int64_t>(least, 1), cap);
 }

@@ -42,8 +42,8 @@
 namespace truss::parallel {
 
 // A batch is remaining / (batches_per_rank * ranks) runs (guided self-scheduling: batches shrink
-// as the round's end nears, so it stays balanced), at least the runs of kMinBatchCpuS of rank 0's
-// measured CPU per run (the end's last batches are not single cheap runs, each a message), at most
+// as the round's end nears, so it stays balanced), at least kMinBatchS of runs at rank 0's measured
+// wall time per run (the end's last batches are not single cheap runs, each a message), at most
 // max_batch and a chunk of the results file.
 struct EngineOptions {
   int max_batch = 4096;           // upper bound on runs per batch
@@ -59,10 +59,10 @@ struct EngineOptions {
 inline constexpr std::size_t kMaxSendBytes = std::size_t{32} << 20;
 // A rank sends its computed records to their owners once this many bytes wait (and at a batch's end).
 inline constexpr std::size_t kRecordsMessageBytes = std::size_t{256} << 10;
-// The least work in a batch, in CPU seconds of runs as rank 0 measures them: a batch's message
-// costs rank 0 about as much as a costless run's result used to; a batch of a millisecond's runs
-// keeps the end of a round balanced to about that.
-inline constexpr double kMinBatchCpuS = 1e-3;
+// The least work in a batch, in seconds of runs as rank 0 times its own (wall time: a run may wait
+// rather than compute): a batch's messages cost rank 0 about as much as tens of costless runs'
+// results; a batch of a millisecond's runs keeps the end of a round balanced to about that.
+inline constexpr double kMinBatchS = 1e-3;
 
 // Appends run `run`'s record, as a sealed journal frame (kind run), to `out`: the evaluation of one
 // point of round `plan`, on any rank. Failed runs are records too; an exception aborts the job.
@@ -132,8 +132,8 @@ class Collector {
   std::int64_t n_done() const { return n_done_; }  // runs in the journals (round parts, restored)
   const results::StatusCounts& status_counts() const { return status_counts_; }
   const results::ResultStore& store() const { return file_.store(); }
-  // Every flush interval (or now, with `sync`): a heartbeat, the journal synced and the results
-  // file's pages pushed to disk. Progress when due.
+  // Every flush interval (or now, with `sync`): a heartbeat and the journal synced (the owners push
+  // the results file's pages to disk). Progress when due.
   void tick(bool sync);
   // Before the job is aborted (rank 0's fatal error): see CampaignFile::remove_temporary.
   void remove_temporary_file() noexcept { file_.remove_temporary(); }
