@@ -79,13 +79,11 @@ void Collector::count_in(std::int64_t run, std::size_t round, std::int8_t status
   ++status_counts_[static_cast<std::size_t>(status)];
 }
 
-void Collector::add_computed(std::string_view statuses) {
-  for (const char c : statuses) {
-    const auto st = static_cast<std::int8_t>(c);
-    if (st < 0 || st >= sim::kRunStatusCount) throw std::runtime_error(fmt::format("a run with status {}", st));
-    ++computed_counts_[static_cast<std::size_t>(st)];
-  }
-  n_computed_ += static_cast<std::int64_t>(statuses.size());
+void Collector::add_computed(std::int8_t status, std::int64_t n) {
+  if (status < 0 || status >= sim::kRunStatusCount || n < 0)
+    throw std::runtime_error(fmt::format("{} runs with status {}", n, status));
+  computed_counts_[static_cast<std::size_t>(status)] += n;
+  n_computed_ += n;
 }
 
 // A round part's rows: in (the restored ones were counted as the journals were read), and, if
@@ -139,7 +137,6 @@ void Collector::tick(bool sync) {
     util::put(s, std::chrono::duration<double>(now - wall0_).count());
     journal_.append(FrameKind::heartbeat, s);
     journal_.flush();
-    file_.start_writeback();  // the results file's pages go to disk during the run, not in the tail
     last_sync_ = std::chrono::steady_clock::now();
   }
   progress_.update(n_computed_, [&] { return computed_counts_; });

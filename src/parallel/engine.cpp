@@ -23,8 +23,7 @@ using namespace detail;
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr auto kPollInterval = std::chrono::microseconds(2000);
-constexpr std::int64_t kRunsPerPoll = 16;
+constexpr auto kPollInterval = std::chrono::milliseconds(50);  // bounds how late a chunk is placed
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Adds the wall time of its scope to a counter (steady clock).
@@ -84,11 +83,11 @@ class Rank0Round {
              const std::function<bool()>& serve, const EngineOptions& opts, results::ScheduleSummary& sum);
   void run();
   void on_done(int worker) { send_batch(worker); }
-  double compute_cpu_s() const { return compute_cpu_s_; }
 
  private:
+  std::int64_t batch_size() const;
   void send_batch(int w);
-  std::int64_t next_run();  // the next run of the round not in the journals yet
+  std::int64_t take(std::int64_t k, std::string& ranges);  // the round's next k runs not in the journals
   bool poll_due(Clock::time_point last_poll) const;
   void compute_stretch(Clock::time_point last_poll);
   void compute_one();
@@ -101,18 +100,21 @@ class Rank0Round {
   const std::function<bool()>& serve_;
   const EngineOptions& opts_;
   results::ScheduleSummary& sum_;
-  std::int64_t cursor_, to_do_ = 0, handed_ = 0, unsent_ = 0, runs_since_poll_ = 0;
+  std::int64_t cursor_, to_do_ = 0, handed_ = 0, runs_since_poll_ = 0;
   std::vector<std::uint8_t> waiting_;
-  std::string one_;
+  std::string one_, ranges_;
   Clock::time_point last_tick_ = Clock::now();
-  double compute_cpu_s_ = 0.0;
 };
 
 void Rank0Server::handle(int tag, int source, std::string& bytes) {
   ScopeTimer t(sum_.rank0_result_s);
   if (tag == kTagDone) {
     if (!round) throw std::runtime_error(fmt::format("a batch done by rank {} outside a round", source));
-    collector_.add_computed(bytes);
+    util::ByteReader in(bytes, "a batch's status counts");
+    const auto counts = in.get<results::StatusCounts>();
+    in.expect_end();
+    for (std::size_t st = 0; st < counts.size(); ++st)
+      collector_.add_computed(static_cast<std::int8_t>(st), counts[st]);
     round->on_done(source);
   } else if (tag == kTagPart) {
     collector_.add_part(results::read_round_part(bytes, collector_.n_observed()));
@@ -143,53 +145,70 @@ Rank0Round::Rank0Round(Node& node, const methods::RoundPlan& plan, Collector& co
   for (std::int64_t i = plan.first_run; i < plan.end_run(); ++i) to_do_ += !collector.has(i);  // --resume: some are in
 }
 
-std::int64_t Rank0Round::next_run() {
-  while (collector_.has(cursor_)) ++cursor_;
-  ++handed_;
-  return cursor_++;
+// Guided batches (EngineOptions): remaining / (batches_per_rank * ranks), at least kMinBatchS of
+// runs (at rank 0's wall time per run so far, every round's; 1 before it has computed one), at
+// most max_batch and a chunk.
+std::int64_t Rank0Round::batch_size() const {
+  const std::int64_t cap = std::min<std::int64_t>(opts_.max_batch, node_.chunk_runs());
+  const double runs = static_cast<double>(sum_.runs_by_rank0), wall_s = sum_.rank0_compute_s;
+  const std::int64_t least =
+      wall_s > 0.0 ? static_cast<std::int64_t>(std::min(kMinBatchS * runs / wall_s, static_cast<double>(cap))) : 1;
+  const std::int64_t guided = (to_do_ - handed_) / (std::int64_t{opts_.batches_per_rank} * node_.size());
+  return std::clamp<std::int64_t>(guided, std::max<std::int64_t>(least, 1), cap);
 }
 
-// Guided batches: remaining / (batches_per_rank * ranks), at least 1, at most max_batch. A worker
-// that asks when no run is left waits for the end of the round.
+// Appends the ranges; returns the first run of the last one (the run, for k = 1).
+std::int64_t Rank0Round::take(std::int64_t k, std::string& ranges) {
+  handed_ += k;
+  std::int64_t first = 0;
+  while (k > 0) {
+    while (collector_.has(cursor_)) ++cursor_;
+    first = cursor_;
+    while (k > 0 && !collector_.has(cursor_)) {
+      ++cursor_;
+      --k;
+    }
+    util::put(ranges, first);
+    util::put(ranges, cursor_ - first);
+  }
+  return first;
+}
+
+// A worker that asks when no run is left waits for the end of the round.
 void Rank0Round::send_batch(int w) {
-  const std::int64_t remaining = to_do_ - handed_;
-  std::int64_t k = remaining / (std::int64_t{opts_.batches_per_rank} * node_.size());
-  k = std::min(std::clamp<std::int64_t>(k, 1, opts_.max_batch), remaining);
+  const std::int64_t k = std::min(batch_size(), to_do_ - handed_);
   if (k == 0) {
     waiting_[static_cast<std::size_t>(w)] = 1;
     return;
   }
   std::string out;
-  for (std::int64_t i = 0; i < k; ++i) util::put(out, next_run());
+  take(k, out);
   node_.send(w, kTagWork, std::move(out));
 }
 
 // Rank 0 takes runs from the same pool one at a time, so it is never more than one run late in
-// answering a worker; its records go to their owners a batch at a time.
+// answering a worker; its records go to their owners as a worker's do (Node::route).
 void Rank0Round::compute_one() {
-  const std::int64_t run = next_run();
+  ranges_.clear();
+  const std::int64_t run = take(1, ranges_);
   one_.clear();
   try {
     evaluate_(plan_, run, one_);
     node_.route(one_, run);
-    collector_.add_computed({one_.data() + node_.status_at(), 1});
+    collector_.add_computed(static_cast<std::int8_t>(one_[node_.status_at()]));
   } catch (const std::exception& e) {
     abort_rank0(node_.comm(), collector_, "a run", e);
   }
   ++sum_.runs_by_rank0;
-  if (++unsent_ >= opts_.max_batch || handed_ == to_do_) {
-    node_.flush_records();
-    unsent_ = 0;
-  }
+  if (handed_ == to_do_) node_.flush_records();
 }
 
-// Between its runs rank 0 looks at its messages after every kRunsPerPoll of them or kPollInterval,
-// whichever comes first (a worker holds a second batch of runs, so it does not notice; each look
-// costs what a run's result costs in all), and after every run near the end of a round, where the
-// batches are short.
+// Between its runs rank 0 looks at its messages after half a batch of them or kPollInterval,
+// whichever comes first: a worker holds a second batch of runs, so it does not notice (each look
+// costs about what a costless run's result used to cost in all, a yield of the core when
+// oversubscribed).
 bool Rank0Round::poll_due(Clock::time_point last_poll) const {
-  const std::int64_t near_end = std::int64_t{2} * node_.size() * opts_.max_batch;
-  return to_do_ - handed_ < near_end || runs_since_poll_ >= kRunsPerPoll || Clock::now() - last_poll >= kPollInterval;
+  return runs_since_poll_ >= std::max<std::int64_t>(1, batch_size() / 2) || Clock::now() - last_poll >= kPollInterval;
 }
 
 // Runs back to back until a look at the messages is due: the thread's CPU clock (a system call,
@@ -201,7 +220,7 @@ void Rank0Round::compute_stretch(Clock::time_point last_poll) {
     compute_one();
     ++runs_since_poll_;
   } while (handed_ < to_do_ && !node_.flow_blocked() && !poll_due(last_poll));
-  compute_cpu_s_ += thread_cpu_s() - c0;
+  sum_.rank0_compute_cpu_s += thread_cpu_s() - c0;
   sum_.rank0_compute_s += seconds_since(t0);
 }
 
@@ -223,11 +242,11 @@ void Rank0Round::run() {
   for (int w = 1; w < node_.size(); ++w) send_batch(w);
   for (int w = 1; w < node_.size(); ++w)
     if (!waiting_[static_cast<std::size_t>(w)]) send_batch(w);
-  Backoff backoff(200);  // rank 0 idles only at the end of a round, where latency matters
+  Backoff backoff;  // rank 0 idles only at the end of a round: a millisecond late at most
   Clock::time_point last_poll{};
   while (!collector_.round_complete(plan_)) {
     bool progressed = false;
-    if (handed_ == to_do_ || poll_due(last_poll)) {
+    if (handed_ == to_do_ || node_.flow_blocked() || poll_due(last_poll)) {
       last_poll = Clock::now();
       runs_since_poll_ = 0;
       progressed = node_.poll();
@@ -312,7 +331,7 @@ bool Engine::Impl::serve() {
 // After the last round: every chunk built, placed and written; each owner says so once its bytes
 // are synced, and rank 0 waits for all of them.
 void Engine::Impl::drain(bool root) {
-  Backoff backoff(200);
+  Backoff backoff;
   bool finished = false;
   while (!finished || (root && server->finished < node.size())) {
     const bool worked = node.poll() | serve();
@@ -365,7 +384,6 @@ EngineResult Engine::run(const Evaluate& evaluate) {
   const std::function<bool()> serve = [&m] { return m.serve(); };
   const auto t0 = Clock::now();
   const double cpu0 = thread_cpu_s();
-  double compute_cpu = 0.0;
   std::int64_t first = 0;
   const std::int64_t restored = root ? m.collector->n_done() : 0;
   double sched_wall = 0.0;
@@ -382,7 +400,6 @@ EngineResult Engine::run(const Evaluate& evaluate) {
         m.server->round = &round;
         round.run();
         m.server->round = nullptr;
-        compute_cpu += round.compute_cpu_s();
       } else {
         run_worker_round(node, m.work, plan, evaluate, serve);
       }
@@ -404,8 +421,7 @@ EngineResult Engine::run(const Evaluate& evaluate) {
     out.schedule.schedule_wall_s = sched_wall;
     out.schedule.rank0_poll_s = node.poll_s();
     out.schedule.rank0_mpi_s = node.mpi_s();
-    out.schedule.rank0_compute_cpu_s = compute_cpu;
-    out.schedule.rank0_handle_cpu_s = thread_cpu_s() - cpu0 - compute_cpu;
+    out.schedule.rank0_handle_cpu_s = thread_cpu_s() - cpu0 - m.schedule.rank0_compute_cpu_s;
     out.schedule.runs_by_workers = m.collector->n_done() - restored - out.schedule.runs_by_rank0;
   }
   return out;

@@ -41,8 +41,12 @@
 
 namespace truss::parallel {
 
+// A batch is remaining / (batches_per_rank * ranks) runs (guided self-scheduling: batches shrink
+// as the round's end nears, so it stays balanced), at least kMinBatchS of runs at rank 0's measured
+// wall time per run (the end's last batches are not single cheap runs, each a message), at most
+// max_batch and a chunk of the results file.
 struct EngineOptions {
-  int max_batch = 32;             // upper bound on runs per batch: keeps the end of a round balanced
+  int max_batch = 4096;           // upper bound on runs per batch
   int batches_per_rank = 4;       // guided scheduling: batch = remaining / (batches_per_rank * ranks)
   double tick_interval_s = 0.25;  // how often rank 0 looks at the clock (journal syncs, progress)
   double flush_interval_s = 2.0;  // journal syncs
@@ -53,6 +57,12 @@ struct EngineOptions {
 
 // Records a rank may have in flight to their owners before it waits for them to be received.
 inline constexpr std::size_t kMaxSendBytes = std::size_t{32} << 20;
+// A rank sends its computed records to their owners once this many bytes wait (and at a batch's end).
+inline constexpr std::size_t kRecordsMessageBytes = std::size_t{256} << 10;
+// The least work in a batch, in seconds of runs as rank 0 times its own (wall time: a run may wait
+// rather than compute): a batch's messages cost rank 0 about as much as tens of costless runs'
+// results; a batch of a millisecond's runs keeps the end of a round balanced to about that.
+inline constexpr double kMinBatchS = 1e-3;
 
 // Appends run `run`'s record, as a sealed journal frame (kind run), to `out`: the evaluation of one
 // point of round `plan`, on any rank. Failed runs are records too; an exception aborts the job.
@@ -110,9 +120,9 @@ class Collector {
   std::size_t n_observed() const { return observed_.size(); }
   const std::vector<std::size_t>& observed_fields() const { return observed_; }
 
-  // Runs computed (their statuses, one byte each): what the progress counts, before their
-  // records reach their owners' journals.
-  void add_computed(std::string_view statuses);
+  // `n` runs of status `status` computed (a batch's counts): what the progress counts, before
+  // their records reach their owners' journals.
+  void add_computed(std::int8_t status, std::int64_t n = 1);
   std::int64_t n_computed() const { return n_computed_; }
   const results::StatusCounts& computed_counts() const { return computed_counts_; }
   bool has(std::int64_t run) const {
@@ -122,8 +132,8 @@ class Collector {
   std::int64_t n_done() const { return n_done_; }  // runs in the journals (round parts, restored)
   const results::StatusCounts& status_counts() const { return status_counts_; }
   const results::ResultStore& store() const { return file_.store(); }
-  // Every flush interval (or now, with `sync`): a heartbeat, the journal synced and the results
-  // file's pages pushed to disk. Progress when due.
+  // Every flush interval (or now, with `sync`): a heartbeat and the journal synced (the owners push
+  // the results file's pages to disk). Progress when due.
   void tick(bool sync);
   // Before the job is aborted (rank 0's fatal error): see CampaignFile::remove_temporary.
   void remove_temporary_file() noexcept { file_.remove_temporary(); }

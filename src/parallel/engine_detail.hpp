@@ -17,9 +17,9 @@
 
 namespace truss::parallel::detail {
 
-inline constexpr int kTagWork = 11;         // rank 0 -> worker: i64 run indices; none: the round is over
+inline constexpr int kTagWork = 11;         // rank 0 -> worker: runs as (i64 first, i64 count); none: end of round
 inline constexpr int kTagRecords = 12;      // any -> owner: sealed journal frames of its chunks' runs
-inline constexpr int kTagDone = 13;         // worker -> rank 0: a batch is computed (i64 runs)
+inline constexpr int kTagDone = 13;         // worker -> rank 0: a batch is computed (its StatusCounts)
 inline constexpr int kTagPart = 14;         // owner -> rank 0: a round part (results/chunk_messages.hpp)
 inline constexpr int kTagChunk = 15;        // owner -> rank 0: a complete chunk's report
 inline constexpr int kTagAskWindows = 16;   // owner -> rank 0: the statistics windows, please
@@ -62,6 +62,7 @@ class Node {
 
   int rank() const { return rank_; }
   int size() const { return size_; }
+  std::int64_t chunk_runs() const { return chunk_runs_; }
   MPI_Comm comm() const { return comm_; }
   void set_handler(Handler h) { handler_ = std::move(h); }
   void send(int dest, int tag, std::string bytes);
@@ -77,7 +78,8 @@ class Node {
 
   // The owner of chunk k: rank 0 on one rank and for the chunks it restored, else 1 + k mod (P - 1).
   int owner_of(std::int64_t chunk) const;
-  // A computed run's sealed frame, to its chunk's owner (sent by flush_records).
+  // A computed run's sealed frame, to its chunk's owner (sent by flush_records, called here once
+  // kRecordsMessageBytes wait).
   void route(std::string_view frame, std::int64_t run);
   void flush_records();
   bool has_unsent_records() const;
@@ -109,6 +111,7 @@ class Node {
   std::list<In> received_;  // matched, in matching order (a list: the buffers stay put)
   std::deque<std::pair<int, std::string>> local_;
   std::map<int, std::string> unsent_;  // records per owner
+  std::size_t unsent_bytes_ = 0;
   bool records_paused_ = false;
   double poll_s_ = 0.0, mpi_s_ = 0.0;
   bool in_poll_ = false, in_handler_ = false;

@@ -79,6 +79,8 @@ void Node::send(int dest, int tag, std::string bytes) {
 
 void Node::route(std::string_view frame, std::int64_t run) {
   unsent_[owner_of(run / chunk_runs_)].append(frame);
+  unsent_bytes_ += frame.size();
+  if (unsent_bytes_ >= kRecordsMessageBytes) flush_records();
 }
 
 bool Node::has_unsent_records() const { return !unsent_.empty(); }
@@ -86,6 +88,7 @@ bool Node::has_unsent_records() const { return !unsent_.empty(); }
 void Node::flush_records() {
   for (auto& [dest, bytes] : unsent_) send(dest, kTagRecords, std::move(bytes));
   unsent_.clear();
+  unsent_bytes_ = 0;
 }
 
 // In the order they were posted, up to the first still in flight (sends complete about in order:

@@ -217,8 +217,7 @@ void Collector::Restore::replay(results::Journal& j, JournalFile& f) {
     if (kind != FrameKind::run) continue;
     const campaign::RecordView rec(payload, c.L_);
     c.count_in(rec.run(), static_cast<std::size_t>(rec.round()), rec.status());
-    const auto status = static_cast<char>(rec.status());
-    c.add_computed({&status, 1});
+    c.add_computed(rec.status());
     sink.record(payload, session);
     if (++n % 64 == 0) sink.drain();
   }

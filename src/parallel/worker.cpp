@@ -19,7 +19,8 @@ class Worker {
   void run();
 
  private:
-  void compute_batch(const std::string& runs);
+  void compute_batch(const std::string& ranges);
+  void compute_one(std::int64_t run, results::StatusCounts& counts);
   void wait_for_sends();
 
   Node& node_;
@@ -27,7 +28,7 @@ class Worker {
   const methods::RoundPlan& plan_;
   const Evaluate& evaluate_;
   const std::function<bool()>& serve_;
-  std::string frame_, statuses_;
+  std::string frame_;
 };
 
 // While too many of its records are in flight, a rank serves and waits: its owners are behind.
@@ -39,26 +40,40 @@ void Worker::wait_for_sends() {
   }
 }
 
-void Worker::compute_batch(const std::string& runs) {
-  if (runs.size() % 8 != 0)
-    abort_job(node_.comm(), "a work message", std::runtime_error("its size is not a whole number of run indices"));
-  for (std::size_t at = 0; at < runs.size(); at += 8) {
-    wait_for_sends();
-    const auto run = util::get_at<std::int64_t>(runs.data() + at);
-    frame_.clear();
-    try {
-      evaluate_(plan_, run, frame_);
-    } catch (const std::exception& e) {
-      abort_job(node_.comm(), "a run", e);
-    }
-    node_.route(frame_, run);
-    statuses_ += frame_[node_.status_at()];
-    node_.poll();
-    serve_();
+void Worker::compute_one(std::int64_t run, results::StatusCounts& counts) {
+  wait_for_sends();
+  frame_.clear();
+  try {
+    evaluate_(plan_, run, frame_);
+  } catch (const std::exception& e) {
+    abort_job(node_.comm(), "a run", e);
+  }
+  node_.route(frame_, run);
+  const auto status = static_cast<std::int8_t>(frame_[node_.status_at()]);
+  if (status < 0 || status >= sim::kRunStatusCount)
+    abort_job(node_.comm(), "a run", std::runtime_error("its record's status is out of range"));
+  ++counts[static_cast<std::size_t>(status)];
+  node_.poll();
+  serve_();
+}
+
+// A batch: its ranges' runs, their records to their owners, then its status counts to rank 0 (the
+// progress; one message a batch, which also asks for the next).
+void Worker::compute_batch(const std::string& ranges) {
+  if (ranges.size() % 16 != 0)
+    abort_job(node_.comm(), "a work message", std::runtime_error("its size is not a whole number of run ranges"));
+  results::StatusCounts counts{};
+  for (std::size_t at = 0; at < ranges.size(); at += 16) {
+    const auto first = util::get_at<std::int64_t>(ranges.data() + at);
+    const auto n = util::get_at<std::int64_t>(ranges.data() + at + 8);
+    if (n < 1 || !plan_.contains(first) || !plan_.contains(first + n - 1))
+      abort_job(node_.comm(), "a work message", std::runtime_error("a range of runs outside its round"));
+    for (std::int64_t run = first; run < first + n; ++run) compute_one(run, counts);
   }
   node_.flush_records();
-  node_.send(0, kTagDone, std::move(statuses_));  // the batch's statuses, for the progress
-  statuses_.clear();
+  std::string done;
+  util::put(done, counts);
+  node_.send(0, kTagDone, std::move(done));
 }
 
 // Rank 0 sends two batches up front and one more per batch done, so the next batch is normally

@@ -49,14 +49,6 @@ CampaignFile::CampaignFile(const std::string& path, const campaign::CampaignCont
 
 CampaignFile::~CampaignFile() { discard(); }
 
-void CampaignFile::start_writeback() const {
-  // Advisory: a file system without sync_file_range (or any error here) only leaves more for the
-  // final sync.
-  void* handle = nullptr;
-  if (file_ < 0 || H5Fget_vfd_handle(file_, H5P_DEFAULT, &handle) < 0 || handle == nullptr) return;
-  (void)::sync_file_range(*static_cast<int*>(handle), 0, 0, SYNC_FILE_RANGE_WRITE);
-}
-
 void CampaignFile::discard() noexcept {
   store_.reset();
   if (file_ >= 0) H5Fclose(file_);

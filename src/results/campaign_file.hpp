@@ -65,9 +65,6 @@ class CampaignFile {
   // The temporary file being written (.NAME.tmp.PID of rank 0): the ranks write the chunks they
   // built into it at the addresses the store placed them at.
   const std::string& temporary_path() const { return tmp_; }
-  // Starts writing the file's dirty pages to disk without waiting (sync_file_range), so that the
-  // final sync has little left to wait for (called at each journal flush).
-  void start_writeback() const;
   // Every run in: the last chunks written, /stats (from the streamed statistics), /histories,
   // /nominal and the attributes.
   void write_summary(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,

@@ -47,7 +47,10 @@ std::optional<std::size_t> Deflater::deflate(const unsigned char* in, std::size_
   if (level < 1 || level > 3) throw std::invalid_argument(fmt::format("igzip level {} (1 to 3)", level));
   const std::size_t need = level == 2 ? ISAL_DEF_LVL2_DEFAULT : level == 3 ? ISAL_DEF_LVL3_DEFAULT : 0;
   if (level_buf_.size() < need) level_buf_.resize(need);  // level 1 needs none
-  isal_zstream s;
+  // Zeroed, not only initialised: ISA-L's stateless level 1 works in the stream's own buffer and
+  // reads parts of it it never wrote (valgrind), so a stream on a dirty stack gave a chunk of the
+  // same values other bytes on other ranks (82 kB zeroed a call, against a chunk's deflate).
+  isal_zstream s{};
   isal_deflate_stateless_init(&s);
   s.level = static_cast<std::uint32_t>(level);
   s.level_buf = need > 0 ? level_buf_.data() : nullptr;

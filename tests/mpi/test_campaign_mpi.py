@@ -141,6 +141,7 @@ def case_ranks(args):
         check("histories/run_7/t_s" in f and np.all(np.diff(f["histories/run_7/t_s"][:]) > 0),
               "history of run 7 stored, time increasing")
         check_stats(f)
+        check_final_progress(p.stderr, f, "3 ranks")
     check_nominal(args, d, outs[3])
     check("[truss-campaign] campaign" in p.stderr and "design values" in p.stderr and " ok" in p.stderr,
           "start banner, outcomes by status name and end summary with design values on stderr")
@@ -150,6 +151,21 @@ def case_ranks(args):
     check(len(flagged) == 6 and all("from 90 ok runs: too few for a P99.865 (its 95 % bound needs 2218)" in ln
                                     for ln in flagged),
           f"end summary: each P99.865 from 90 runs flagged as too few ({flagged[:1]})")
+
+
+def check_final_progress(stderr, f, what):
+    """The last progress line (rank 0's count of the runs computed, from the workers' status counts
+    per batch and its own runs) against the file's runs: every run counted once, by status name,
+    in the file's status order."""
+    names = [s.decode() for s in f["stats/status_names"][:]]
+    counts = f["stats/status_counts"][:]
+    n = int(f.attrs["n_runs"])
+    want = ", ".join(f"{c} {name}" for name, c in zip(names, counts) if c)
+    lines = [ln for ln in stderr.splitlines() if "runs/s, done in" in ln]
+    m = re.match(r"\[truss-campaign\] (\d+)/(\d+) runs \(100\.0 %\): (.*); \d+ runs/s, done in", lines[-1]) \
+        if lines else None
+    check(m is not None and int(m.group(1)) == n == int(m.group(2)) and m.group(3) == want,
+          f"{what}: the final progress line counts every run by status ({lines[-1:]} against {n}: {want})")
 
 
 def check_nominal(args, d, path):
@@ -344,7 +360,7 @@ def case_failures(args):
     camp = os.path.join(args.repo, "campaigns/motor_torque.toml")
     out = os.path.join(d, "motor.h5")
     p = mpirun(args, 2, [camp, "-o", out, "--set", "ensemble.n_runs=400", "--set", "ensemble.stop=false",
-                         "--progress", "none"])
+                         "--progress", "lines"])
     check(p.returncode == 0, "motor campaign with stalls exits 0 (failed runs are data)")
     with h5py.File(out, "r") as f:
         status = f["runs/status"][:]
@@ -364,6 +380,7 @@ def case_failures(args):
         check(stall_torque[status != 0].max() < stall_torque[status == 0].min(),
               "every stalled run had a weaker motor than every ok run (the stall is physical)")
         check_stats(f)
+        check_final_progress(p.stderr, f, "stalls on 2 ranks")
         i = int(np.flatnonzero(status != 0)[0])
         j = int(np.flatnonzero(status == 0)[0])
     # A wall-time cap far below a motor run's cost: runs are stopped and recorded, the campaign goes on.
