@@ -11,6 +11,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -321,6 +322,11 @@ std::string resume_command(int argc, char** argv, int size) {
     }
     r0.file->remove_temporary();
     r0.lock.reset();
+  } else {
+    // mpirun kills the whole job as soon as one rank has left: the others let rank 0, which
+    // notices the signal within a run of its own or a look at its messages (kPollInterval), say
+    // its line and leave first.
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
   }
   std::_Exit(128 + sig);
 }

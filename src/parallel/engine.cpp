@@ -219,7 +219,7 @@ void Rank0Round::compute_stretch(Clock::time_point last_poll) {
   do {
     compute_one();
     ++runs_since_poll_;
-  } while (handed_ < to_do_ && !node_.flow_blocked() && !poll_due(last_poll));
+  } while (handed_ < to_do_ && !node_.flow_blocked() && !poll_due(last_poll) && !interrupted());
   sum_.rank0_compute_cpu_s += thread_cpu_s() - c0;
   sum_.rank0_compute_s += seconds_since(t0);
 }
