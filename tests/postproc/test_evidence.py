@@ -36,14 +36,7 @@ import h5py
 import numpy as np
 
 PY = "/usr/bin/python3"
-FAILS = []
-
-
-def check(cond, what):
-    print(("ok:   " if cond else "FAIL: ") + what)
-    if not cond:
-        FAILS.append(what)
-    return cond
+from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.path)
 
 
 class Case:

@@ -39,16 +39,9 @@ import numpy as np
 from scipy.stats import binom
 
 PY = "/usr/bin/python3"
-FAILS = []
+from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.path)
 LEVEL, CONF = 0.99, 0.95
 RTOL = 1e-12      # the same float64 values, read back from 17 significant digits or repr
-
-
-def check(cond, what):
-    print(("ok:   " if cond else "FAIL: ") + what)
-    if not cond:
-        FAILS.append(what)
-    return cond
 
 
 def close(a, b):

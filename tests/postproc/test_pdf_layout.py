@@ -40,7 +40,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from number_format import violations  # noqa: E402
 
 PY = "/usr/bin/python3"
-FAILS = []
+from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.path)
 SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],
          "free_rail_miss_rare": ["--set", "ensemble.subset.n_per_level=40", "--set", "ensemble.subset.max_levels=2"],
          "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"],
@@ -48,13 +48,6 @@ SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],
          "tolerance_allocation": ["--set", "ensemble.subset.n_per_level=40", "--set", "ensemble.subset.max_levels=2"]}
 MM = 50 / 25.4            # pixels per mm at 50 dpi
 MARGINS_MM = {"top": 15.0, "left": 12.0, "right": 12.0}
-
-
-def check(cond, what):
-    print(("ok:   " if cond else "FAIL: ") + what)
-    if not cond:
-        FAILS.append(what)
-    return cond
 
 
 def squash(text):

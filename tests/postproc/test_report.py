@@ -46,14 +46,7 @@ ATOL_DIMENSIONLESS = 1e-14
 TORQUE_RTOL = 1e-9      # the report's documented tolerance for "peak torque > stall torque"
 PY = "/usr/bin/python3"
 
-FAILS = []
-
-
-def check(cond, what):
-    print(("ok:   " if cond else "FAIL: ") + what)
-    if not cond:
-        FAILS.append(what)
-    return cond
+from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.path)
 
 
 # --------------------------------------------------------------------------------------------

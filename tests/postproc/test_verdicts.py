@@ -28,7 +28,7 @@ import subprocess
 import sys
 
 PY = "/usr/bin/python3"
-FAILS = []
+from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.path)
 EXIT = {"pass": 0, "fail": 3, "not_assessed": 4}
 BANNER = {"pass": "VERDICT: PASS", "fail": "VERDICT: FAIL", "not_assessed": "VERDICT: NOT ASSESSED"}
 # Few runs per shipped campaign: enough for every section to have data, cheap on 2 cores.
@@ -40,13 +40,6 @@ SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],     # 4 blocks o
          "motor_sizing": ["--set", "ensemble.subset.n_per_level=40", "--set", "ensemble.subset.max_levels=2"],
          "tolerance_allocation": ["--set", "ensemble.subset.n_per_level=40",
                                   "--set", "ensemble.subset.max_levels=2"]}
-
-
-def check(cond, what):
-    print(("ok:   " if cond else "FAIL: ") + what)
-    if not cond:
-        FAILS.append(what)
-    return cond
 
 
 def run_campaign(a, name, out, extra):
