@@ -5,7 +5,7 @@
 #   scripts/test.sh [ctest options]     everything (about 39 min, 51 CPU-minutes, on 2 cores from a fresh clone)
 #   scripts/test.sh --quick             everyday check: build, then the tests labelled quick (the
 #                                       unit, command-line, report and small MPI tests), no
-#                                       sanitizers (under 8 min on 2 cores from a fresh clone)
+#                                       sanitizers (about 8 min, 14 CPU-minutes, on 2 cores from a fresh clone)
 # Progress: a line at least every 10 s during the build, each test as it ends.
 set -euo pipefail
 cd "$(dirname "$0")/.."
