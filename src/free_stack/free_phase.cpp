@@ -146,19 +146,20 @@ void FreePhaseA::calc_hinge_factors(const MastParams& mast, const ContactLayout&
   for (int c = 0; c < layout.clusters(); ++c) f[c] = std::min(f[c], 1.0);
 }
 
-bool FreePhaseA::calc_smooth_lengths(const double* q, double* len) const {
-  std::vector<double>&ys = work_.ys, &vs = work_.vs, &zero = work_.zero;
+const double* FreePhaseA::calc_frame_heights(const double* q) const {
+  std::vector<double>& zero = work_.zero;
   zero.assign(static_cast<std::size_t>(dof()), 0.0);
-  expand_frames(q, zero.data(), ys, vs);
-  calc_straight_distances(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), std::max(lo_ - 1, 0), len);
+  expand_frames(q, zero.data(), work_.ys, work_.vs);
+  return work_.ys.data();
+}
+
+bool FreePhaseA::calc_smooth_lengths(const double* q, double* len) const {
+  calc_straight_distances(*ctx_.mast, layout_, lo_, ctx_.bay, calc_frame_heights(q), std::max(lo_ - 1, 0), len);
   return true;
 }
 
 bool FreePhaseA::calc_error_factors(const double* q, double* f) const {
-  std::vector<double>&ys = work_.ys, &vs = work_.vs, &zero = work_.zero;
-  zero.assign(static_cast<std::size_t>(dof()), 0.0);
-  expand_frames(q, zero.data(), ys, vs);
-  calc_hinge_factors(*ctx_.mast, layout_, lo_, ctx_.bay, ys.data(), std::max(lo_ - 1, 0), f);
+  calc_hinge_factors(*ctx_.mast, layout_, lo_, ctx_.bay, calc_frame_heights(q), std::max(lo_ - 1, 0), f);
   return true;
 }
 

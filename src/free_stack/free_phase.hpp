@@ -148,6 +148,8 @@ class FreePhaseA final : public PhaseModel {
   int rail_touch() const { return ctx_.direction > 0 ? 1 : 0; }  // deployment: the rail is a touch
   // Frame heights and velocities from frame max(lo - 1, 0) to m (the held frame lo - 1 included).
   void expand_frames(const double* q, const double* qdot, std::vector<double>& ys, std::vector<double>& vs) const;
+  // The frames' heights at q (expand_frames at rest; into the work space, valid until its next use).
+  const double* calc_frame_heights(const double* q) const;
 };
 
 }  // namespace truss::stages
