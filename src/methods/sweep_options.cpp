@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "campaign/campaign.hpp"
+#include "methods/importance_sweep.hpp"
 
 namespace truss::methods {
 
@@ -123,6 +124,8 @@ std::string SweepOptions::validate(const campaign::CampaignOptions& c) const {
     return "failure: a sweep estimates the probability of a [failure] event at each value: add [failure] (margin = "
            "\"rail_margin_m\", or column = \"peak_drive_torque_Nm\", above = 0.02, unit = \"N m\")";
   if (c.dispersions.empty()) return "sweep: a failure probability needs at least one [[dispersion]]";
+  if (inner.name() == "importance")
+    if (std::string e = validate_reweighted_sweep(c, *this); !e.empty()) return e;
   return inner.options().validate(campaign::calc_campaign_at(c, 0));
 }
 
