@@ -143,7 +143,8 @@ FailureEstimate to_failure_estimate(const sampling::WeightedEstimate& w, const s
                   ? fmt::format("{}; {} failing of {} final runs, ESS {:.3g}, Pareto k {:.2f}", s.message(),
                                 w.failures, w.runs, w.ess, w.pareto_k)
                   : w.refused;
-  e.untrusted = w.refused.empty() ? find_unusable_reason(unusable, runs) : "refused: " + w.refused;
+  e.untrusted = find_unusable_reason(unusable, runs);  // an unusable run may hide a failure: said first
+  if (e.untrusted.empty() && !w.refused.empty()) e.untrusted = "refused: " + w.refused;
   return e;
 }
 
