@@ -139,11 +139,13 @@ std::string SweepOptions::to_toml() const {
 }
 
 std::int64_t SweepOptions::calc_max_runs(const campaign::CampaignOptions& c) const {
+  if (inner.name() == "importance") return inner.options().calc_max_runs(c);  // one set of runs serves every value
   return inner.options().calc_max_runs(c) * static_cast<std::int64_t>(campaign::calc_max_design_values(axis));
 }
 
 std::string SweepOptions::describe_max_runs(const campaign::CampaignOptions& c) const {
   const std::string d = inner.options().describe_max_runs(c);
+  if (inner.name() == "importance") return d + fmt::format(" for all {} sweep.values", axis.n_values());
   if (axis.refine == 0) return fmt::format("{} at each of the {} sweep.values", d, axis.n_values());
   return fmt::format("{} at each of the {} sweep.values and sweep.refine = {}", d, axis.n_values(), axis.refine);
 }

@@ -131,12 +131,15 @@ std::string calc_sweep_text(const campaign::CampaignOptions& c, const SweepOptio
   using ValueResult = SweepMethod::ValueResult;
   const std::string name = campaign::sweep_variable_name(c), units = campaign::sweep_variable_units(c);
   const double conf = 100.0 * opt.confidence;
-  std::string t = fmt::format("[truss-campaign] sweep of {} ({} values, {} at each) for P({} fails), target {:g}:\n",
-                              name, vr.size(), opt.inner.name(), opt.failure_event()->column,
-                              opt.target_probability);
+  const std::string how = opt.inner.name() == "importance" ? "one set of importance-sampling runs reweighted to each"
+                                                            : opt.inner.name() + " at each";
+  std::string t = fmt::format("[truss-campaign] sweep of {} ({} values, {}) for P({} fails), target {:g}:\n", name,
+                              vr.size(), how, opt.failure_event()->column, opt.target_probability);
   for (const ValueResult& r : vr)
-    t += fmt::format("[truss-campaign]   {} = {:.6g} {}: p = {:.4g} ({:g} % upper bound {:.4g}), {} runs, {}{}{}\n",
-                     name, r.value, units, r.estimate.bounds.p, conf, r.estimate.bounds.upper_bound, r.estimate.runs,
+    t += fmt::format("[truss-campaign]   {} = {:.6g} {}: p = {:.4g} (CoV {:.3g}, {:g} % upper bound {:.4g}), {} runs, "
+                     "{}{}{}\n",
+                     name, r.value, units, r.estimate.bounds.p, r.estimate.cov, conf, r.estimate.bounds.upper_bound,
+                     r.estimate.runs,
                      r.estimate.status, r.refinement ? " (refinement)" : "",
                      r.estimate.untrusted.empty() ? "" : ", untrusted: " + r.estimate.untrusted);
   if (opt.axis.refine > 0) t += fmt::format("[truss-campaign]   {}\n", refine_message);
