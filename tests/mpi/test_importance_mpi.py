@@ -68,7 +68,7 @@ def nominals(args):
         line = line.strip()
         if line.startswith("["):
             table = "" if line.startswith("[[") else line.strip("[]").removeprefix("scene.")
-        elif "=" in line and table:
+        elif "=" in line.split("#")[0] and table:
             k, v = (x.strip() for x in line.split("#")[0].split("=", 1))
             out[f"{table}.{k}"] = v
     return {key: float(out[key]) for key, _, _ in DISPERSIONS}
