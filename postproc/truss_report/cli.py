@@ -105,6 +105,11 @@ def read_file(path, kind, sha256):
         try:
             if kind != "campaign":
                 return load_single_run(h5, sha256), None, None, None
+            if h5.has("importance"):  # runs of an adapted density: their loads are not the design's
+                raise InputError(f"{path}: an importance-sampling campaign's runs are draws of a density moved "
+                                 "to the failure, not of the dispersions, so they give no design loads, and the "
+                                 "report has no page for its estimate: read /importance (p, cov, lower, upper, "
+                                 "ess, refused) or the campaign's terminal lines")
             c = load_campaign(h5, sha256)
             return (c, *read_method_groups(h5), load_extras(h5, c))
         except (OSError, RuntimeError) as e:

@@ -3,6 +3,8 @@
 #include <stdexcept>
 
 #include "methods/fixed_design.hpp"
+#include "methods/importance_method.hpp"
+#include "methods/importance_sweep.hpp"
 #include "methods/stop_method.hpp"
 #include "methods/subset_method.hpp"
 #include "methods/sweep_method.hpp"
@@ -44,6 +46,9 @@ namespace {
 constexpr auto by_name = campaign::MethodSelection::by_name, by_own_table = campaign::MethodSelection::by_own_table,
                wraps = campaign::MethodSelection::wraps;
 std::unique_ptr<Method> make_sweep_method(const campaign::CampaignContext& ctx, const MethodTable& table) {
+  // Importance sampling's runs serve every value by reweighting (importance_sweep.hpp).
+  if (ctx.options.ensemble.method.as<SweepOptions>().inner.name() == "importance")
+    return std::make_unique<ImportanceSweepMethod>(ctx);
   return std::make_unique<SweepMethod>(ctx, table);
 }
 }  // namespace
@@ -54,6 +59,8 @@ const MethodTable& builtin_methods() {
       {{"stop", {"failure"}, by_own_table, &StopOptions::parse, &StopOptions::table_doc}, &make_method_of<StopMethod>},
       {{"subset", {"failure"}, by_name, &SubsetMethodOptions::parse, &SubsetMethodOptions::table_doc},
        &make_method_of<SubsetMethod>},
+      {{"importance", {"failure"}, by_name, &ImportanceMethodOptions::parse, &ImportanceMethodOptions::table_doc},
+       &make_method_of<ImportanceMethod>},
       // A composite: chosen by [sweep], it runs the method ensemble.method names at each value.
       {{"sweep", {}, wraps, &SweepOptions::parse, &SweepOptions::table_doc}, &make_sweep_method},
   });

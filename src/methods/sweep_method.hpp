@@ -26,6 +26,7 @@
 #include <mutex>
 #include <optional>
 
+#include "io/h5_util.hpp"
 #include "methods/method.hpp"
 #include "methods/sweep_options.hpp"
 #include "sampling/allowable.hpp"
@@ -112,5 +113,12 @@ struct SweepVerdict {
 };
 SweepVerdict calc_sweep_verdict(const campaign::CampaignOptions& c, const SweepOptions& opt,
                                 const std::vector<SweepMethod::ValueResult>& values);
+
+// /sweep under `parent`: the axis' attributes, one row per value and the allowable with the verdict
+// (the group, for a method's own additions); and the terminal's lines of the same.
+io::h5::Handle write_sweep_group(hid_t parent, const campaign::CampaignOptions& c, const SweepOptions& opt,
+                                 const std::vector<SweepMethod::ValueResult>& values);
+std::string calc_sweep_text(const campaign::CampaignOptions& c, const SweepOptions& opt,
+                            const std::vector<SweepMethod::ValueResult>& values, const std::string& refine_message);
 
 }  // namespace truss::methods

@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "campaign/campaign.hpp"
+#include "methods/importance_sweep.hpp"
 
 namespace truss::methods {
 
@@ -123,6 +124,8 @@ std::string SweepOptions::validate(const campaign::CampaignOptions& c) const {
     return "failure: a sweep estimates the probability of a [failure] event at each value: add [failure] (margin = "
            "\"rail_margin_m\", or column = \"peak_drive_torque_Nm\", above = 0.02, unit = \"N m\")";
   if (c.dispersions.empty()) return "sweep: a failure probability needs at least one [[dispersion]]";
+  if (inner.name() == "importance")
+    if (std::string e = validate_reweighted_sweep(c, *this); !e.empty()) return e;
   return inner.options().validate(campaign::calc_campaign_at(c, 0));
 }
 
@@ -136,11 +139,13 @@ std::string SweepOptions::to_toml() const {
 }
 
 std::int64_t SweepOptions::calc_max_runs(const campaign::CampaignOptions& c) const {
+  if (inner.name() == "importance") return inner.options().calc_max_runs(c);  // one set of runs serves every value
   return inner.options().calc_max_runs(c) * static_cast<std::int64_t>(campaign::calc_max_design_values(axis));
 }
 
 std::string SweepOptions::describe_max_runs(const campaign::CampaignOptions& c) const {
   const std::string d = inner.options().describe_max_runs(c);
+  if (inner.name() == "importance") return d + fmt::format(" for all {} sweep.values", axis.n_values());
   if (axis.refine == 0) return fmt::format("{} at each of the {} sweep.values", d, axis.n_values());
   return fmt::format("{} at each of the {} sweep.values and sweep.refine = {}", d, axis.n_values(), axis.refine);
 }

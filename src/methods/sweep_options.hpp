@@ -52,7 +52,8 @@ struct SweepOptions : campaign::MethodOptionsOf<SweepOptions> {
   std::string to_toml() const override;  // the inner method's tables, then [sweep]
   std::string chosen_runs() const override { return inner.options().chosen_runs(); }
   std::int64_t calc_n_runs(const campaign::CampaignOptions& c) const override { return inner.options().calc_n_runs(c); }
-  // The inner method's at each value the sweep can run (the listed ones and one bracket's candidates).
+  // The inner method's at each value the sweep can run (the listed ones and one bracket's candidates);
+  // a reweighted sweep's (importance_sweep.hpp) its one set of runs.
   std::int64_t calc_max_runs(const campaign::CampaignOptions& c) const override;
   std::string describe_max_runs(const campaign::CampaignOptions& c) const override;
   const campaign::FailureOptions* failure_event() const override { return inner.options().failure_event(); }

@@ -97,17 +97,22 @@ std::string interval_end(double v) { return std::isfinite(v) ? fmt::format("{:.6
 
 }  // namespace
 
-void SweepMethod::write_results(const ResultsPlace& place) const {
-  const campaign::CampaignOptions& c = ctx_.options;
-  const std::vector<ValueResult> vr = calc_value_results();
+Handle write_sweep_group(hid_t parent, const campaign::CampaignOptions& c, const SweepOptions& opt,
+                         const std::vector<SweepMethod::ValueResult>& vr) {
   const std::string units = campaign::sweep_variable_units(c);
-  Handle g = create_group(place.group, "sweep");
-  write_attributes(g.get(), c, opt_);
+  Handle g = create_group(parent, "sweep");
+  write_attributes(g.get(), c, opt);
+  write_values(g.get(), vr, units);
+  write_allowable(g.get(), calc_sweep_verdict(c, opt, vr), units);
+  return g;
+}
+
+void SweepMethod::write_results(const ResultsPlace& place) const {
+  const std::vector<ValueResult> vr = calc_value_results();
+  Handle g = write_sweep_group(place.group, ctx_.options, opt_, vr);
   write_string_attribute(g.get(), "refine_message", refine_message_);
   write_double_attribute(g.get(), "refine_low", refine_low_);
   write_double_attribute(g.get(), "refine_high", refine_high_);
-  write_values(g.get(), vr, units);
-  write_allowable(g.get(), calc_sweep_verdict(c, opt_, vr), units);
   Handle inner = create_group(g.get(), "inner");
   for (const ValueResult& r : vr) {
     const Value& v = values_[r.index];
@@ -118,25 +123,32 @@ void SweepMethod::write_results(const ResultsPlace& place) const {
 }
 
 std::string SweepMethod::calc_result_text() const {
-  const campaign::CampaignOptions& c = ctx_.options;
+  return calc_sweep_text(ctx_.options, opt_, calc_value_results(), refine_message_);
+}
+
+std::string calc_sweep_text(const campaign::CampaignOptions& c, const SweepOptions& opt,
+                            const std::vector<SweepMethod::ValueResult>& vr, const std::string& refine_message) {
+  using ValueResult = SweepMethod::ValueResult;
   const std::string name = campaign::sweep_variable_name(c), units = campaign::sweep_variable_units(c);
-  const double conf = 100.0 * opt_.confidence;
-  const std::vector<ValueResult> vr = calc_value_results();
-  std::string t = fmt::format("[truss-campaign] sweep of {} ({} values, {} at each) for P({} fails), target {:g}:\n",
-                              name, vr.size(), opt_.inner.name(), opt_.failure_event()->column,
-                              opt_.target_probability);
+  const double conf = 100.0 * opt.confidence;
+  const std::string how = opt.inner.name() == "importance" ? "one set of importance-sampling runs reweighted to each"
+                                                            : opt.inner.name() + " at each";
+  std::string t = fmt::format("[truss-campaign] sweep of {} ({} values, {}) for P({} fails), target {:g}:\n", name,
+                              vr.size(), how, opt.failure_event()->column, opt.target_probability);
   for (const ValueResult& r : vr)
-    t += fmt::format("[truss-campaign]   {} = {:.6g} {}: p = {:.4g} ({:g} % upper bound {:.4g}), {} runs, {}{}{}\n",
-                     name, r.value, units, r.estimate.bounds.p, conf, r.estimate.bounds.upper_bound, r.estimate.runs,
+    t += fmt::format("[truss-campaign]   {} = {:.6g} {}: p = {:.4g} (CoV {:.3g}, {:g} % upper bound {:.4g}), {} runs, "
+                     "{}{}{}\n",
+                     name, r.value, units, r.estimate.bounds.p, r.estimate.cov, conf, r.estimate.bounds.upper_bound,
+                     r.estimate.runs,
                      r.estimate.status, r.refinement ? " (refinement)" : "",
                      r.estimate.untrusted.empty() ? "" : ", untrusted: " + r.estimate.untrusted);
-  if (opt_.axis.refine > 0) t += fmt::format("[truss-campaign]   {}\n", refine_message_);
-  const SweepVerdict v = calc_sweep_verdict(c, opt_, vr);
+  if (opt.axis.refine > 0) t += fmt::format("[truss-campaign]   {}\n", refine_message);
+  const SweepVerdict v = calc_sweep_verdict(c, opt, vr);
   const sampling::Allowable& a = v.allowable;
   if (a.status == sampling::AllowableStatus::found)
     t += fmt::format("[truss-campaign]   allowable: {} {} {:.6g} {} ({:g} % upper bound on p <= {:g}); estimate "
                      "{:.6g}, interval [{}, {}] {}; the campaign's own value {:.6g} {}\n",
-                     name, a.safe_side > 0 ? ">=" : "<=", a.value, units, conf, opt_.target_probability, a.estimate,
+                     name, a.safe_side > 0 ? ">=" : "<=", a.value, units, conf, opt.target_probability, a.estimate,
                      interval_end(a.lower), interval_end(a.upper), units, v.own_value, units);
   else
     t += fmt::format("[truss-campaign]   allowable: {}: {}\n", sampling::to_string(a.status), a.message);

@@ -101,10 +101,11 @@ def main():
     ap.add_argument("--campaign", required=True, help="the truss-campaign program")
     a = ap.parse_args()
     os.makedirs(a.scratch, exist_ok=True)
-    small = ["--set", "ensemble.subset.n_per_level=100", "--set", "ensemble.subset.max_levels=3"]
     one_case(a, "assessed", "motor_sizing",
              ["--set", "ensemble.subset.n_per_level=200", "--set", "ensemble.subset.max_levels=4",
               "--set", "sweep.refine=0", "--set", "sweep.target_probability=1e-3"], False)
+    small = ["--set", "ensemble.importance.n_per_level=100", "--set", "ensemble.importance.max_levels=3",
+             "--set", "ensemble.importance.n_final=100"]
     one_case(a, "capped", "tolerance_allocation", small + ["--set", "run.max_steps=1000"], True)
     one_case(a, "wall", "tolerance_allocation", small + ["--set", "ensemble.max_run_wall_time_s=1e-5"], True)
     print(f"{len(FAILS)} failed" if FAILS else "all passed")

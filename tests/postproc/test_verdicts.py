@@ -38,8 +38,8 @@ SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],     # 4 blocks o
          "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"],
          # design sweeps: a small subset simulation at each value
          "motor_sizing": ["--set", "ensemble.subset.n_per_level=40", "--set", "ensemble.subset.max_levels=2"],
-         "tolerance_allocation": ["--set", "ensemble.subset.n_per_level=40",
-                                  "--set", "ensemble.subset.max_levels=2"]}
+         "tolerance_allocation": ["--set", "ensemble.importance.n_per_level=40",
+                                  "--set", "ensemble.importance.max_levels=2", "--set", "ensemble.importance.n_final=100"]}
 
 
 def run_campaign(a, name, out, extra):

@@ -50,9 +50,9 @@ TEST_CASE("each key of the reference is read by the parser", "[campaign][docs]")
   std::vector<std::string> names;
   for (std::sregex_iterator t(made.begin(), made.end(), table), none; t != none; ++t) names.push_back((*t)[1]);
   CHECK(names == std::vector<std::string>{"campaign", "ensemble", "output", "scene", "failure", "ensemble.design",
-                                          "ensemble.stop", "ensemble.subset", "sweep"});
+                                          "ensemble.stop", "ensemble.subset", "ensemble.importance", "sweep"});
   const std::size_t subset = made.find("**`[ensemble.subset]`**");
-  const std::string rows = made.substr(subset, made.find("**`[sweep]`**") - subset);
+  const std::string rows = made.substr(subset, made.find("**`[ensemble.importance]`**") - subset);
   std::vector<std::string> keys;
   for (std::sregex_iterator r(rows.begin(), rows.end(), row), none; r != none; ++r) keys.push_back((*r)[1]);
   CHECK(keys == std::vector<std::string>{"n_per_level", "p0", "max_levels", "proposal_half_width"});
@@ -61,4 +61,15 @@ TEST_CASE("each key of the reference is read by the parser", "[campaign][docs]")
   const std::string values[] = {"2000", "0.1", "20", "1.0"};
   for (std::size_t i = 0; i < keys.size(); ++i)
     CHECK(campaign::test::campaign_error(base, "k.toml", {"ensemble.subset." + keys[i] + "=" + values[i]}).empty());
+  const std::size_t ce = made.find("**`[ensemble.importance]`**");
+  const std::string ce_rows = made.substr(ce, made.find("**`[sweep]`**") - ce);
+  keys.clear();
+  for (std::sregex_iterator r(ce_rows.begin(), ce_rows.end(), row), none; r != none; ++r) keys.push_back((*r)[1]);
+  CHECK(keys == std::vector<std::string>{"n_per_level", "n_final", "rho", "max_levels"});
+  std::string ce_base = base;
+  ce_base.replace(ce_base.find("subset"), 6, "importance");
+  const std::string ce_values[] = {"1000", "2000", "0.1", "20"};
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    CHECK(campaign::test::campaign_error(ce_base, "k.toml", {"ensemble.importance." + keys[i] + "=" + ce_values[i]})
+              .empty());
 }

@@ -113,9 +113,12 @@ def verdict_lines(c, s):
                      f"of the crossing [{fmt_at(a['lower'] / f, e)}, {fmt_at(a['upper'] / f, e)}] {unit} (—: beyond "
                      "the swept range)")
     refined = int(s["refinement"].sum())
+    # An importance sweep's values share one set of runs (reweighted to each value's law).
+    shared = at["inner_method"] == "importance"
+    how = "one set of importance-sampling runs reweighted to each" if shared else f"{at['inner_method']} at each"
     lines.append(f"  {len(s)} values of {at['variable']}"
-                 f"{f' ({refined} placed by the refinement)' if refined else ''}, {at['inner_method']} at each, "
-                 f"{int(s['runs'].sum())} runs")
+                 f"{f' ({refined} placed by the refinement)' if refined else ''}, {how}, "
+                 f"{int(s['runs'].iloc[0] if shared else s['runs'].sum())} runs")
     flat = flat_values(s)
     if flat:
         lines.append(f"  warning: at {design_text(s, float(s['value'].iloc[flat[0]]))} "
