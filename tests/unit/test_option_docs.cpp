@@ -55,10 +55,11 @@ TEST_CASE("each key of the reference is read by the parser", "[campaign][docs]")
   const std::string rows = made.substr(subset, made.find("**`[sweep]`**") - subset);
   std::vector<std::string> keys;
   for (std::sregex_iterator r(rows.begin(), rows.end(), row), none; r != none; ++r) keys.push_back((*r)[1]);
-  CHECK(keys == std::vector<std::string>{"n_per_level", "p0", "max_levels", "proposal_half_width"});
+  CHECK(keys == std::vector<std::string>{"n_per_level", "p0", "max_levels", "proposal", "proposal_half_width",
+                                         "interval_cov"});
   const std::string base = "[ensemble]\nmethod = \"subset\"\n[failure]\nmargin = \"motor_torque_margin_Nm\"\n"
                            "[[dispersion]]\nkey = \"drive.speed_m_per_s\"\ndistribution = \"normal\"\nstd = 0.05\n";
-  const std::string values[] = {"2000", "0.1", "20", "1.0"};
+  const std::string values[] = {"2000", "0.1", "20", "adaptive_conditional", "1.0", "cov_interval"};
   for (std::size_t i = 0; i < keys.size(); ++i)
     CHECK(campaign::test::campaign_error(base, "k.toml", {"ensemble.subset." + keys[i] + "=" + values[i]}).empty());
 }
