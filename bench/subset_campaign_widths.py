@@ -76,16 +76,22 @@ def main():
     ap.add_argument("--np", type=int, default=2)
     ap.add_argument("--set", action="append", default=[], help="a further --set for every run")
     ap.add_argument("--reference", type=float, help="a reference p the intervals should hold (standalone)")
+    ap.add_argument("--variants", nargs="+", choices=list(VARIANTS), default=list(VARIANTS),
+                    help="the proposals to run (default both)")
     ap.add_argument("--json", help="write the results here")
+    ap.add_argument("--keep", action="store_true", help="keep the results files (else each is removed once read)")
     args = ap.parse_args()
     os.makedirs(args.scratch, exist_ok=True)
     results = []
     for seed in args.seeds:
-        for name, (proposal, rule) in VARIANTS.items():
+        for name in args.variants:
+            proposal, rule = VARIANTS[name]
             out = os.path.join(args.scratch, f"s{seed}_{proposal}.h5")
             r = run_one(args, seed, proposal, rule, out)
             r.update(seed=seed, variant=name)
             results.append(r)
+            if not args.keep:
+                os.remove(out)
             for v in r["values"]:
                 at = "" if v["value"] is None else f" at {v['value']:.6g}"
                 print(f"seed {seed}, {name}{at}: p {v['p']:.3g}, 95 % {v['lo']:.2g} - {v['hi']:.2g} (factor "
@@ -95,7 +101,7 @@ def main():
                 print(f"seed {seed}, {name}: allowable {a['value']:.6g} ({a['lower']:.6g} - {a['upper']:.6g}), "
                       f"{a['status']}, {a['verdict']}, {r['runs']} runs", flush=True)
             print(f"seed {seed}, {name}: CPU {r['cpu_s']:.1f} s", flush=True)
-    for name in VARIANTS:
+    for name in args.variants:
         rows = [v for r in results if r["variant"] == name for v in r["values"]]
         ratios = [v["ratio"] for v in rows]
         line = f"{name}: median interval factor {np.median(ratios):.2f} over {len(rows)} estimates, mean runs " \
