@@ -18,7 +18,6 @@ import math
 import os
 import resource
 import subprocess
-import sys
 
 import h5py
 import numpy as np
@@ -51,8 +50,9 @@ def run_one(args, seed, proposal, rule, out):
     p = subprocess.run(cmd, capture_output=True, text=True)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-    if not os.path.exists(out):
-        sys.exit(f"{' '.join(cmd)}: exit {p.returncode}, no file\n{p.stderr[-2000:]}")
+    if not os.path.exists(out):  # a campaign that did not finish: reported, the others still run
+        print(f"{' '.join(cmd)}: exit {p.returncode}, no file\n{p.stderr[-2000:]}", flush=True)
+        return {"cpu_s": cpu, "values": [], "failed": p.stderr[-2000:]}
     with h5py.File(out, "r") as f:
         if "sweep" not in f:
             return {"cpu_s": cpu, "values": [dict(read_subset(f["subset"]), value=None)]}
@@ -90,7 +90,7 @@ def main():
             r = run_one(args, seed, proposal, rule, out)
             r.update(seed=seed, variant=name)
             results.append(r)
-            if not args.keep:
+            if not args.keep and os.path.exists(out):
                 os.remove(out)
             for v in r["values"]:
                 at = "" if v["value"] is None else f" at {v['value']:.6g}"
@@ -101,6 +101,9 @@ def main():
                 print(f"seed {seed}, {name}: allowable {a['value']:.6g} ({a['lower']:.6g} - {a['upper']:.6g}), "
                       f"{a['status']}, {a['verdict']}, {r['runs']} runs", flush=True)
             print(f"seed {seed}, {name}: CPU {r['cpu_s']:.1f} s", flush=True)
+    failed = [f"seed {r['seed']} ({r['variant']})" for r in results if "failed" in r]
+    if failed:
+        print(f"campaigns that did not finish: {', '.join(failed)}")
     for name in args.variants:
         rows = [v for r in results if r["variant"] == name for v in r["values"]]
         ratios = [v["ratio"] for v in rows]
