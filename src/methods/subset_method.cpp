@@ -58,6 +58,7 @@ sampling::SubsetOptions SubsetMethodOptions::calc_sim_options(const campaign::Ca
   o.p0 = s.p0;
   o.max_levels = s.max_levels;
   o.proposal_half_width = s.proposal_half_width;
+  o.proposal = s.proposal;
   o.seed = c.ensemble.master_seed;
   return o;
 }
@@ -72,6 +73,12 @@ std::string SubsetMethodOptions::describe_max_runs(const campaign::CampaignOptio
                      subset.max_levels, c.ensemble.n_runs);
 }
 
+namespace {
+bool uses_half_width(const SubsetMethodOptions& o) {
+  return o.subset.proposal == sampling::SubsetProposal::modified_metropolis;
+}
+}  // namespace
+
 const campaign::OptionTable<SubsetMethodOptions>& SubsetMethodOptions::table() {
   using S = SubsetMethodOptions;
   static const campaign::OptionTable<S> t{
@@ -82,8 +89,18 @@ const campaign::OptionTable<SubsetMethodOptions>& SubsetMethodOptions::table() {
                             "the share of a level kept as the next one's seeds, in (0, 0.5]"),
           TRUSS_OPTION_INT(S, "max_levels", subset.max_levels, "1", campaign::closed_range(1, 1000),
                            "levels at most: the run cap N + (max_levels - 1) N (1 - p0)"),
-          TRUSS_OPTION_REAL(S, "proposal_half_width", subset.proposal_half_width, "1", campaign::kAnyNumber,
-                            "Markov step: uniform on +- this many standard deviations, in [0.001, 10]"),
+          TRUSS_OPTION_CHOICE(S, "proposal", subset.proposal,
+                              "the Markov step: modified Metropolis (uniform, per dimension) or adaptive "
+                              "conditional sampling (Papaioannou et al. 2015)",
+                              campaign::choice_names(sampling::kSubsetProposalNames)),
+          campaign::written_if(
+              TRUSS_OPTION_REAL(S, "proposal_half_width", subset.proposal_half_width, "1", campaign::kAnyNumber,
+                                "modified Metropolis: uniform on +- this many standard deviations, in [0.001, 10]"),
+              &uses_half_width),
+          TRUSS_OPTION_CHOICE(S, "interval_cov", subset.interval_cov,
+                              "the CoV of the lognormal interval: the full-correlation bound, or the lag-1 CoV "
+                              "blended with it by the surviving lineages",
+                              campaign::choice_names(sampling::kSubsetIntervalCovNames)),
       }};
   return t;
 }
@@ -91,6 +108,11 @@ const campaign::OptionTable<SubsetMethodOptions>& SubsetMethodOptions::table() {
 std::unique_ptr<campaign::MethodOptions> SubsetMethodOptions::parse(const campaign::MethodInput& in) {
   auto o = std::make_unique<SubsetMethodOptions>();
   campaign::read_method_table(in, table(), *o);
+  if (const toml::node* a = in.table != nullptr ? in.table->get("proposal_half_width") : nullptr;
+      a != nullptr && !uses_half_width(*o))
+    in.source.fail(a, fmt::format("{}proposal_half_width: the step of proposal = \"modified_metropolis\"; {} "
+                                  "adapts its own spread: remove it, or set proposal = \"modified_metropolis\"",
+                                  in.prefix, sampling::to_string(o->subset.proposal)));
   campaign::read_failure_event(in, o->failure);
   return o;
 }
@@ -121,8 +143,8 @@ std::optional<FailureEstimate> SubsetMethod::calc_failure_estimate(double confid
   if (!sim_) return FailureEstimate{};
   const sampling::SubsetSummary s = sim_->calc_summary();
   FailureEstimate e;
-  e.cov = s.cov_bound;
-  e.bounds = sampling::calc_lognormal_bounds(s.p, s.cov_bound, confidence);
+  e.cov = s.calc_interval_cov(opt_.subset.interval_cov);
+  e.bounds = sampling::calc_lognormal_bounds(s.p, e.cov, confidence);
   e.bounds.p = s.p;
   e.runs = margins_.runs();
   e.status = sampling::to_string(s.status);
@@ -181,15 +203,21 @@ void SubsetMethod::write_results(const ResultsPlace& place) const {
   write_int_attribute(g.get(), "n_per_level", sim_opt_.n_per_level);
   write_double_attribute(g.get(), "p0", sim_opt_.p0);
   write_int_attribute(g.get(), "max_levels", sim_opt_.max_levels);
+  write_string_attribute(g.get(), "proposal", sampling::to_string(opt_.subset.proposal));
+  write_string_attribute(g.get(), "interval_cov", sampling::to_string(opt_.subset.interval_cov));
+  const double cov = s.calc_interval_cov(opt_.subset.interval_cov);
   write_scalar(g.get(), "p", "1", s.p);
   write_scalar(g.get(), "cov", "1", s.cov);
   write_scalar(g.get(), "cov_lineage", "1", s.cov_lineage);
   write_scalar(g.get(), "cov_bound", "1", s.cov_bound);
+  write_scalar(g.get(), "cov_lag1", "1", s.cov_lag1);
+  write_scalar(g.get(), "cov_interval", "1", s.cov_interval);
   write_scalar(g.get(), "beta", "1", s.beta);
   write_scalar(g.get(), "runs", "1", s.runs);
   write_scalar(g.get(), "lineages", "1", s.lineages);
-  // Crude Monte Carlo runs for an interval as narrow as the estimate's (cov_bound): (1 - p) / (p cov^2).
-  write_scalar(g.get(), "crude_mc_runs", "1", (1.0 - s.p) / (s.p * s.cov_bound * s.cov_bound));
+  write_scalar(g.get(), "lineage_groups", "1", s.lineage_groups);
+  // Crude Monte Carlo runs for an interval as narrow as the estimate's (interval_cov): (1 - p) / (p cov^2).
+  write_scalar(g.get(), "crude_mc_runs", "1", (1.0 - s.p) / (s.p * cov * cov));
   write_levels(g.get(), s, unit.c_str());
   write_failure_samples(g.get(), place, unit);
 }
@@ -211,13 +239,15 @@ std::string SubsetMethod::calc_result_text() const {
                               above ? ">=" : "<=", f.kind == FailureKind::margin ? 0.0 : f.threshold, unit,
                               sampling::to_string(s.status), s.message);
   // With no failing sample (p = 0) there is no CoV to match: say so rather than print inf and NaN.
+  const double cov = s.calc_interval_cov(opt_.subset.interval_cov);
   const std::string crude =
       s.p > 0.0 ? fmt::format("crude Monte Carlo would need {:.3g} runs for an interval as narrow",
-                              (1.0 - s.p) / (s.p * s.cov_bound * s.cov_bound))
+                              (1.0 - s.p) / (s.p * cov * cov))
                 : std::string("no failing sample");
-  t += fmt::format("[truss-campaign]   p = {:.4g}, CoV {:.3g} (the bound the interval uses; lineage {:.3g}, Au & Beck "
-                   "{:.3g}), beta = {:.4g}, {} runs in {} levels ({})\n", s.p, s.cov_bound, s.cov_lineage, s.cov,
-                   s.beta, s.runs, s.levels.size(), crude);
+  t += fmt::format("[truss-campaign]   p = {:.4g}, CoV {:.3g} ({}, the interval's; bound {:.3g}, lineage {:.3g}, Au & "
+                   "Beck {:.3g}), beta = {:.4g}, {} runs in {} levels, {} ({})\n", s.p, cov,
+                   sampling::to_string(opt_.subset.interval_cov), s.cov_bound, s.cov_lineage, s.cov, s.beta, s.runs,
+                   s.levels.size(), sampling::to_string(opt_.subset.proposal), crude);
   for (std::size_t k = 0; k < s.levels.size(); ++k) {
     const std::string acceptance = k == 0 ? std::string("- (independent draws)")
                                           : fmt::format("{:.3g}", s.levels[k].acceptance());

@@ -201,7 +201,7 @@ std::string find_untrusted(const std::vector<SweepMethod::ValueResult>& values, 
 }
 
 // A value's estimate as the monotone fit reads it: a count (Monte Carlo, stop) is binomial over its
-// usable runs; subset simulation's is lognormal with its CoV (the interval's, cov_bound).
+// usable runs; subset simulation's is lognormal with its CoV (the one [ensemble.subset] interval_cov names).
 sampling::SweepEstimate to_sweep_estimate(const SweepMethod::ValueResult& r) {
   sampling::SweepEstimate e;
   e.x = r.value;

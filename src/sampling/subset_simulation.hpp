@@ -115,6 +115,12 @@ enum class SubsetProposal { modified_metropolis, adaptive_conditional };
 inline constexpr const char* kSubsetProposalNames[] = {"modified_metropolis", "adaptive_conditional"};
 inline const char* to_string(SubsetProposal p) { return kSubsetProposalNames[static_cast<int>(p)]; }
 
+// Which CoV a campaign's lognormal interval uses: cov_bound or cov_interval ("bound CoV" and
+// "interval CoV" above; SubsetSummary::calc_interval_cov).
+enum class SubsetIntervalCov { cov_bound, cov_interval };
+inline constexpr const char* kSubsetIntervalCovNames[] = {"cov_bound", "cov_interval"};
+inline const char* to_string(SubsetIntervalCov c) { return kSubsetIntervalCovNames[static_cast<int>(c)]; }
+
 struct SubsetOptions {
   int dims = 0;                      // standard normal dimensions of a point (the campaign's d)
   SubsetProposal proposal = SubsetProposal::modified_metropolis;
@@ -200,6 +206,10 @@ struct SubsetSummary {
   std::int64_t runs = 0;     // evaluations
   std::int64_t rounds = 0;   // rounds completed
   std::vector<SubsetLevel> levels;
+  // The CoV the rule names (cov_bound or cov_interval).
+  double calc_interval_cov(SubsetIntervalCov rule) const {
+    return rule == SubsetIntervalCov::cov_interval ? cov_interval : cov_bound;
+  }
   // Crude Monte Carlo runs for the same CoV: (1 - p) / (p cov^2).
   double calc_crude_runs() const { return (1.0 - p) / (p * cov * cov); }
   // Levels "on a plateau" of the margin: thresholds b_k > 0 with b_k - b_{k+1} < kPlateauShare b_k.

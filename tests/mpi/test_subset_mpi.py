@@ -11,14 +11,17 @@ reaches it.
   smallest rail margin among them (NaN counted as safe), its probability the share at or below it;
   each level's runs are its rounds' rows; the failure samples are runs whose margin is <= 0, with
   their inputs as /runs/inputs holds them.
-- The same datasets on 1 and 2 ranks.
+- Each Markov proposal (modified Metropolis with cov_bound; adaptive conditional sampling with
+  cov_interval, recomputed here from the written lag-1 CoV, bound and lineage groups): the same
+  datasets on 1 and 2 ranks (modified Metropolis) or 1 and 3 (aCS, whose scale adapts to each
+  step's acceptance: plan order, never arrival order).
 - The report (postproc/report.py) of that file: its failure-probability numbers against values
   computed here: p and beta from /subset, the 95 % interval p exp(+-z s), s^2 = ln(1 + cov^2) with z
   from scipy, and the design-point column of the diagonal free length as the failure samples' mean
   standard-normal coordinate recomputed from their inputs ((x - nominal) / std for its offset
   normal dispersion); no design loads (the runs are not draws).
 - kill -9 of the whole job in the middle of level 1 (its fourth round planned, records of it
-  journaled), then --resume on 2 ranks: the same datasets as the uninterrupted campaign.
+  journaled), then --resume on 2 ranks: the same datasets as the uninterrupted campaign (each proposal).
 - Sequential stopping ([ensemble.stop]) on the shipped motor campaign: /stop's rounds are the
   file's rounds, and each round's decision is recomputed here from the rows of the runs up to it:
   the P99.865 of the ok runs' peak torque (numpy's type 7), its one-sided 95 % bound x_(k), k the
@@ -45,15 +48,22 @@ CAMPAIGN = "campaigns/free_rail_miss_rare.toml"
 N, NC = 100, 10
 
 
-def command(args, out, ranks):
+# The two Markov proposals, each with the interval CoV it is paired with, and the rank counts
+# compared on each: modified Metropolis with cov_bound, adaptive conditional sampling with cov_interval.
+PROPOSALS = {"modified_metropolis": ("cov_bound", 2), "adaptive_conditional": ("cov_interval", 3)}
+
+
+def command(args, out, ranks, proposal):
     return ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, os.path.join(args.repo, CAMPAIGN), "-o", out,
             "--set", f"ensemble.subset.n_per_level={N}", "--set", "ensemble.subset.max_levels=3",
+            "--set", f"ensemble.subset.proposal={proposal}",
+            "--set", f"ensemble.subset.interval_cov={PROPOSALS[proposal][0]}",
             "--set", "mast.diagonal_free_length_m=0.483",
             "--progress", "none", "--flush-interval", "0.02"]
 
 
-def run(args, out, ranks, extra=()):
-    return subprocess.run(command(args, out, ranks) + list(extra), env=ENV, capture_output=True, text=True,
+def run(args, out, ranks, proposal, extra=()):
+    return subprocess.run(command(args, out, ranks, proposal) + list(extra), env=ENV, capture_output=True, text=True,
                           timeout=600)
 
 
@@ -102,11 +112,20 @@ def check_report(args, path, outdir):
     html = open(os.path.join(outdir, "report.html"), encoding="utf-8").read()
     with h5py.File(path, "r") as f:
         g = f["subset"]
-        pr, cov = float(g["p"][()]), float(g["cov_bound"][()])
-        # The interval's CoV: the larger of Au & Beck's bound for fully correlated levels (the sum of
-        # the levels' CoVs) and the lineage CoV (docs/campaigns.md "Which CoV to read").
-        want_cov = max(float(np.sum(g["levels/cov"][()])), float(g["cov_lineage"][()]))
-        check(abs(cov / want_cov - 1) < 1e-12, f"cov_bound {cov:.6g} = max(sum of the levels' CoVs, lineage) {want_cov:.6g}")
+        rule = g.attrs["interval_cov"]
+        rule = rule.decode() if isinstance(rule, bytes) else rule
+        pr, cov = float(g["p"][()]), float(g[rule][()])
+        # cov_bound: the larger of Au & Beck's bound for fully correlated levels (the sum of the
+        # levels' CoVs) and the lineage CoV (docs/campaigns.md "Which CoV to read").
+        bound = max(float(np.sum(g["levels/cov"][()])), float(g["cov_lineage"][()]))
+        check(abs(float(g["cov_bound"][()]) / bound - 1) < 1e-12,
+              f"cov_bound = max(sum of the levels' CoVs, lineage) {bound:.6g}")
+        # cov_interval: ln(1 + cov^2) the mean of the lag-1 CoV's (G lineage groups' worth) and the
+        # bound's (two groups' worth).
+        groups, lag1 = float(g["lineage_groups"][()]), float(g["cov_lag1"][()])
+        want = math.sqrt(math.expm1((groups * math.log1p(lag1 ** 2) + 2 * math.log1p(bound ** 2)) / (groups + 2)))
+        check(abs(float(g["cov_interval"][()]) / want - 1) < 1e-12, f"cov_interval = {want:.6g} from the lag-1 CoV "
+              f"{lag1:.4g} and the bound over {groups:.3g} lineage groups")
         x = g["failure_samples/inputs/mast.diagonal_free_length_m"][:]
     s = math.sqrt(math.log(1 + cov * cov))
     z = norm.ppf(0.975)
@@ -173,8 +192,8 @@ def check_stop(args, d):
           f"the report lists the rounds (exit {p.returncode}: its verdict's status {code})")
 
 
-def killed_mid_level(args, out):
-    proc = subprocess.Popen(command(args, out, 2), env=ENV, start_new_session=True, stdout=subprocess.DEVNULL,
+def killed_mid_level(args, out, proposal):
+    proc = subprocess.Popen(command(args, out, 2, proposal), env=ENV, start_new_session=True, stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
     t0, seen = time.time(), (0, 0)
     while time.time() - t0 < 300 and proc.poll() is None:
@@ -189,6 +208,38 @@ def killed_mid_level(args, out):
     return seen
 
 
+def check_proposal(args, d, proposal, many):
+    """One proposal: 1 and `many` ranks give the same file, the rows and the report agree with it, and
+    kill -9 in level 1 then --resume gives it again."""
+    outs = {}
+    for ranks in (many, 1):
+        outs[ranks] = os.path.join(d, f"{proposal}_r{ranks}.h5")
+        p = run(args, outs[ranks], ranks, proposal)
+        check(p.returncode == 0 and "subset simulation of P(rail_margin_m <= 0 m)" in p.stderr,
+              f"{ranks} rank(s): exit 0 and the result printed ({p.stderr.strip()[-300:]})")
+    with h5py.File(outs[1], "r") as f:
+        check(f["subset"].attrs["proposal"] == proposal, f"/subset's proposal is {proposal}")
+    check_against_rows(outs[many])
+    same, why = same_values(datasets(outs[many]), datasets(outs[1]))
+    check(same, f"1 and {many} ranks: the same datasets outside /timing {why}")
+    check_report(args, outs[many], os.path.join(d, f"{proposal}_report"))
+    # The kill is timed by watching the journal: on a loaded machine the job can finish level 1
+    # between two looks, so up to three attempts (a setup step, not the property under test).
+    for attempt in range(3):
+        out = os.path.join(d, f"{proposal}_killed{attempt}.h5")
+        plans, in_last = killed_mid_level(args, out, proposal)
+        if plans >= 4 and in_last >= 2 and not os.path.exists(out):
+            break
+        print(f"  (attempt {attempt + 1}: the job was not caught in level 1: {plans} rounds planned, {in_last} "
+              "records of the last journaled; again)")
+    check(plans >= 4 and in_last >= 2 and not os.path.exists(out),
+          f"killed in level 1: {plans} rounds planned, {in_last} records of the last journaled, no results file")
+    p = run(args, out, 2, proposal, ["--resume"])
+    check(p.returncode == 0, f"--resume finishes ({p.stderr.strip()[-300:]})")
+    same, why = same_values(datasets(outs[many]), datasets(out))
+    check(same, f"the resumed file equals the uninterrupted one, value for value {why}")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--driver", required=True)
@@ -196,31 +247,9 @@ def main():
     ap.add_argument("--scratch", required=True)
     args = ap.parse_args()
     d = fresh(args, "subset")
-    outs = {}
-    for ranks in (2, 1):
-        outs[ranks] = os.path.join(d, f"r{ranks}.h5")
-        p = run(args, outs[ranks], ranks)
-        check(p.returncode == 0 and "subset simulation of P(rail_margin_m <= 0 m)" in p.stderr,
-              f"{ranks} rank(s): exit 0 and the result printed ({p.stderr.strip()[-300:]})")
-    check_against_rows(outs[2])
-    same, why = same_values(datasets(outs[2]), datasets(outs[1]))
-    check(same, f"1 and 2 ranks: the same datasets outside /timing {why}")
-    check_report(args, outs[2], os.path.join(d, "report"))
-    # The kill is timed by watching the journal: on a loaded machine the job can finish level 1
-    # between two looks, so up to three attempts (a setup step, not the property under test).
-    for attempt in range(3):
-        out = os.path.join(d, f"killed{attempt}.h5")
-        plans, in_last = killed_mid_level(args, out)
-        if plans >= 4 and in_last >= 2 and not os.path.exists(out):
-            break
-        print(f"  (attempt {attempt + 1}: the job was not caught in level 1: {plans} rounds planned, {in_last} "
-              "records of the last journaled; again)")
-    check(plans >= 4 and in_last >= 2 and not os.path.exists(out),
-          f"killed in level 1: {plans} rounds planned, {in_last} records of the last journaled, no results file")
-    p = run(args, out, 2, ["--resume"])
-    check(p.returncode == 0, f"--resume finishes ({p.stderr.strip()[-300:]})")
-    same, why = same_values(datasets(outs[2]), datasets(out))
-    check(same, f"the resumed file equals the uninterrupted one, value for value {why}")
+    for proposal, (rule, many) in PROPOSALS.items():
+        print(f"{proposal} with {rule}:")
+        check_proposal(args, d, proposal, many)
     check_stop(args, d)
     print("passed")
 

@@ -11,13 +11,16 @@ p(x) = Phi(-x / sigma) (scipy here, not the code under test), and p(x) = 1e-6 at
 x* = -Phi^-1(1e-6) sigma = 4.7534 mN m. A spread sweep of the same dispersion with x = 5 mN m fixed:
 p(sigma) = Phi(-x / sigma), 1e-6 at sigma* = x / 4.7534.
 
-- reference: 20 master seeds of each sweep: the allowable's interval contains the true crossing in at
-  least 18 of 20; the allowable (the crossing of the one-sided 95 % upper bound) lies on the safe side
-  of the true crossing as often; each value's two-sided 95 % interval holds the true p as often as its
-  confidence says: of the 80 estimates at least 71 (the count is binomial; at a true coverage of 95 %
-  it falls below 71 with probability 0.7 %). The intervals use SubsetSummary::cov_bound; with the
-  lineage CoV alone they held p in 70/80 and 68/80 here (the one-input limit state leaves the failure
-  samples few roots, docs/campaigns.md "Which CoV to read").
+- reference: 20 master seeds of each sweep: the allowable's interval contains the true crossing, and
+  the allowable (the crossing of the one-sided 95 % upper bound) lies on the safe side of it, as
+  often as a 95 % confidence says: in at least 16 of 20 (at a true 95 % the count falls below 16 with
+  probability 0.3 %, below 18 with 7.5 %); each value's two-sided 95 % interval holds the true p as
+  often: of the 80 estimates at least 71 (below 71 with probability 0.7 %). The intervals use the
+  campaign's default, adaptive conditional sampling with SubsetSummary::cov_interval (on seeds 1 to
+  40 the allowable on the safe side in 37 of 40 spread sweeps, the interval holding the crossing in
+  40; modified Metropolis with cov_bound 38 and 39); with the lineage CoV alone they held p in 70/80
+  and 68/80 here (the one-input limit state leaves the failure samples few roots,
+  docs/campaigns.md "Which CoV to read").
   Then Monte Carlo as the inner method at a p where it resolves: each value's failure count and
   Clopper-Pearson bounds recomputed from its rows (scipy's beta quantiles).
 - motor_reference: real runs (tests/mpi/sweep_motor_reference.toml: the motor torque margin of a
@@ -146,9 +149,13 @@ def case_reference(args):
         print(f"  {name}: interval holds the true crossing {truth:.6g} in {inside}/20 seeds ({open_ends} open ends); "
               f"allowable on the safe "
               f"side in {safe}/20; p's interval holds the true p in {covered}/{n_est}")
-        check(inside >= 18, f"{name}: the allowable's interval contains the true crossing in {inside} >= 18 of 20")
-        check(safe >= 18, f"{name}: the allowable lies on the safe side of the true crossing in {safe} >= 18 of 20")
-        # Binomial(80, 0.95) falls 2.2 standard deviations below its mean (under 71) with probability 0.7 %.
+        # Binomial(n, 0.95) more than 2.2 standard deviations below its mean: under 16 of 20 (0.3 %),
+        # under 71 of 80 (0.7 %).
+        least = math.floor(0.95 * 20 - 2.2 * math.sqrt(20 * 0.95 * 0.05))
+        check(inside >= least, f"{name}: the allowable's interval contains the true crossing in {inside} >= {least} "
+              "of 20")
+        check(safe >= least, f"{name}: the allowable lies on the safe side of the true crossing in {safe} >= {least} "
+              "of 20")
         need = math.floor(0.95 * n_est - 2.2 * math.sqrt(n_est * 0.95 * 0.05))
         check(covered >= need, f"{name}: each value's 95 % interval holds the true p in {covered}/{n_est} (>= {need})")
     # Monte Carlo as the inner method, where 20,000 runs resolve p (1e-3 .. 1e-4): k / n and the

@@ -44,7 +44,8 @@ TEST_CASE("docs/campaigns.md lists every campaign key as the option tables defin
 
 TEST_CASE("each key of the reference is read by the parser", "[campaign][docs]") {
   // The reference's rows of [ensemble.subset] and [sweep]: every key named there, set alone by --set,
-  // parses (a key the tables did not hold would be refused as unknown).
+  // parses (a key the tables did not hold would be refused as unknown); the uniform step's
+  // half-width with the proposal it belongs to.
   const std::string made = campaign::make_option_reference(methods::builtin_methods());
   const std::regex table(R"(\*\*`\[([a-z_.]+)\]`\*\*)"), row(R"(\n\| `([a-z_0-9]+)` \|)");
   std::vector<std::string> names;
@@ -55,12 +56,16 @@ TEST_CASE("each key of the reference is read by the parser", "[campaign][docs]")
   const std::string rows = made.substr(subset, made.find("**`[ensemble.importance]`**") - subset);
   std::vector<std::string> keys;
   for (std::sregex_iterator r(rows.begin(), rows.end(), row), none; r != none; ++r) keys.push_back((*r)[1]);
-  CHECK(keys == std::vector<std::string>{"n_per_level", "p0", "max_levels", "proposal_half_width"});
+  CHECK(keys == std::vector<std::string>{"n_per_level", "p0", "max_levels", "proposal", "proposal_half_width",
+                                         "interval_cov"});
   const std::string base = "[ensemble]\nmethod = \"subset\"\n[failure]\nmargin = \"motor_torque_margin_Nm\"\n"
                            "[[dispersion]]\nkey = \"drive.speed_m_per_s\"\ndistribution = \"normal\"\nstd = 0.05\n";
-  const std::string values[] = {"2000", "0.1", "20", "1.0"};
-  for (std::size_t i = 0; i < keys.size(); ++i)
-    CHECK(campaign::test::campaign_error(base, "k.toml", {"ensemble.subset." + keys[i] + "=" + values[i]}).empty());
+  const std::string values[] = {"2000", "0.1", "20", "adaptive_conditional", "1.0", "cov_interval"};
+  for (std::size_t i = 0; i < keys.size(); ++i) {
+    std::vector<std::string> sets{"ensemble.subset." + keys[i] + "=" + values[i]};
+    if (keys[i] == "proposal_half_width") sets.insert(sets.begin(), "ensemble.subset.proposal=modified_metropolis");
+    CHECK(campaign::test::campaign_error(base, "k.toml", sets).empty());
+  }
   const std::size_t ce = made.find("**`[ensemble.importance]`**");
   const std::string ce_rows = made.substr(ce, made.find("**`[sweep]`**") - ce);
   keys.clear();

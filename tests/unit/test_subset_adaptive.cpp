@@ -118,6 +118,32 @@ TEST_CASE("Adaptive conditional sampling by hand: candidates, lambda, lag CoVs",
   CHECK(std::log1p(s.cov_interval * s.cov_interval) == Approx((g * s1 + 2.0 * sb) / (g + 2.0)).epsilon(1e-13));
 }
 
+// The scale after a step is a function of that step's count of kept candidates, never of the order
+// its results come in (on N ranks they arrive in any order; adapting after each result as it comes,
+// as a sequential aCS adapts after each group of chains, makes lambda depend on that order). Two
+// simulations whose first step of level 1 keeps one candidate of two, chain 0's in one and chain
+// 1's in the other, reach the same lambda: 0.6 exp((1/2 - 0.44) / 1) exp((1 - 0.44) / sqrt(2)) after
+// the second step keeps both; adapting per result in the round's order would give
+// exp(0.56 - 0.44 / sqrt(2)) against exp(-0.44 + 0.56 / sqrt(2)) for the first step.
+TEST_CASE("Adaptive conditional sampling: lambda from a step's counts, not its results' order", "[subset][adaptive]") {
+  const SubsetOptions o = make_hand_options();
+  const double want = SubsetOptions::kInitialScale * std::exp((0.5 - SubsetOptions::kTargetAcceptance) / 1.0) *
+                      std::exp((1.0 - SubsetOptions::kTargetAcceptance) / std::sqrt(2.0));
+  std::vector<double> scales;
+  for (const std::vector<double>& first_step : {std::vector<double>{0.5, 7.0}, std::vector<double>{7.0, 1.5}}) {
+    SubsetSimulation sim(o);
+    sim.add_margins(std::vector<double>{3, 1, 4, 2, 5, 6});  // level 0: b_1 = 2
+    REQUIRE(sim.round().level == 1);
+    sim.add_margins(first_step);                   // one of two kept
+    sim.add_margins(std::vector<double>{0.2, 1.2});  // both kept: the level ends
+    const SubsetSummary s = sim.calc_summary();
+    REQUIRE(s.levels.size() == 2);
+    scales.push_back(s.levels[1].scale);
+  }
+  CHECK(scales[0] == Approx(want).epsilon(1e-14));
+  CHECK(scales[1] == scales[0]);
+}
+
 // The adaptation is a function of each round's counts, so of the plan: the state saved after any
 // round and resumed gives the same bytes, and lambda heads for the acceptance of 0.44 (on the
 // linear case in 10 dimensions the later levels' acceptance lies within 0.3 to 0.6).

@@ -95,6 +95,40 @@ TEST_CASE("subset campaign keys: bad input named by file, key and line; the run 
   CHECK(back.ensemble.method.as<methods::SubsetMethodOptions>().failure.column == "motor_torque_margin_Nm");
 }
 
+TEST_CASE("subset campaign keys: the proposal and the interval's CoV, named values only", "[methods][subset]") {
+  const std::string margin = "margin = \"motor_torque_margin_Nm\"", n = "n_per_level = 100\n";
+  // Lines: 5 [ensemble.subset], 6 n_per_level, 7 the key under test.
+  CHECK(error_of(rare_text("", n + "proposal = \"adaptive\"", margin))
+            .find("rare.toml:7: ensemble.subset.proposal: \"adaptive\" is not one of \"modified_metropolis\", "
+                  "\"adaptive_conditional\"") != std::string::npos);
+  CHECK(error_of(rare_text("", n + "interval_cov = \"cov_lineage\"", margin))
+            .find("rare.toml:7: ensemble.subset.interval_cov: \"cov_lineage\" is not one of \"cov_bound\", "
+                  "\"cov_interval\"") != std::string::npos);
+  CHECK(error_of(rare_text("", n, margin), {"ensemble.subset.proposal=mm"})
+            .find("--set ensemble.subset.proposal=mm: ensemble.subset.proposal") != std::string::npos);
+  // The uniform step's half-width belongs to modified Metropolis; aCS adapts its own spread.
+  CHECK(error_of(rare_text("", n + "proposal = \"adaptive_conditional\"\nproposal_half_width = 0.5", margin))
+            .find("rare.toml:8: ensemble.subset.proposal_half_width: the step of proposal = \"modified_metropolis\"") !=
+        std::string::npos);
+  CHECK(error_of(rare_text("", n + "proposal = \"modified_metropolis\"\nproposal_half_width = 0.5", margin)).empty());
+  // Each choice reaches the state machine and the estimate, and the resolved TOML reads back to it.
+  for (const char* proposal : sampling::kSubsetProposalNames)
+    for (const char* rule : sampling::kSubsetIntervalCovNames) {
+      INFO(proposal << " " << rule);
+      const campaign::CampaignOptions o = methods::parse_campaign_text(
+          rare_text("", n + fmt::format("proposal = \"{}\"\ninterval_cov = \"{}\"", proposal, rule), margin),
+          "rare.toml", ".");
+      const auto& m = o.ensemble.method.as<methods::SubsetMethodOptions>();
+      CHECK(sampling::to_string(m.calc_sim_options(o).proposal) == std::string(proposal));
+      CHECK(sampling::to_string(m.subset.interval_cov) == std::string(rule));
+      const campaign::CampaignOptions back =
+          methods::parse_campaign_text(campaign::resolved_campaign_toml(o), "resolved.toml", ".");
+      const auto& b = back.ensemble.method.as<methods::SubsetMethodOptions>();
+      CHECK(b.subset.proposal == m.subset.proposal);
+      CHECK(b.subset.interval_cov == m.subset.interval_cov);
+    }
+}
+
 TEST_CASE("subset campaign keys: a run cap past 64-bit counts is refused naming n_per_level", "[methods][subset]") {
   const std::string margin = "margin = \"motor_torque_margin_Nm\"";
   const std::string base = rare_text("", "n_per_level = 100\np0 = 0.1\nmax_levels = 3", margin);

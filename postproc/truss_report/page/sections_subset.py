@@ -32,6 +32,12 @@ def event_text(s):
     return f"<code>{col}</code> {'≥' if kind == 'above' else '≤'} {esc(margin_text(s.attrs['failure_threshold'], s))}"
 
 
+# What each CoV an interval may use is (docs/campaigns.md "Which CoV to read").
+COV_RULES = {"bound": "the larger of Au & Beck's bound for correlated levels and the lineage estimator",
+             "interval": "the lag-1 estimator blended with the bound by the surviving lineages",
+             "lineage": "the lineage estimator"}
+
+
 def section_probability(s):
     lo, hi = interval(s.p, s.cov_interval)
     d = p_digits(s.p, lo, hi)
@@ -39,8 +45,8 @@ def section_probability(s):
             [f"95 % interval, low (lognormal, {s.cov_interval_name} CoV)", num("subset.p.ci_lo", lo, digits=d)],
             ["95 % interval, high", num("subset.p.ci_hi", hi, digits=d)],
             ["reliability index β = −Φ⁻¹(p)", num("subset.beta", s.beta, digits=LEAST)],
-            ["coefficient of variation of the interval (the larger of Au & Beck's bound for correlated "
-             "levels and the lineage estimator)", num("subset.cov_bound", s.cov_interval, digits=2)],
+            [f"coefficient of variation of the interval ({COV_RULES.get(s.cov_interval_name, s.cov_interval_name)})",
+             num("subset.cov_bound", s.cov_interval, digits=2)],
             ["coefficient of variation (lineage estimator)", num("subset.cov_lineage", s.cov_lineage, digits=2)],
             ["coefficient of variation (Au & Beck)", num("subset.cov", s.cov, digits=2)],
             ["runs used", num("subset.runs", s.runs)],

@@ -37,8 +37,8 @@ class Subset:
     cov_lineage: float
     beta: float
     crude_mc_runs: float
-    cov_interval: float           # the CoV of the interval: cov_bound (lineage in older files)
-    cov_interval_name: str        # "bound" or "lineage"
+    cov_interval: float           # the CoV of the interval: /subset's interval_cov (lineage in older files)
+    cov_interval_name: str        # "bound", "interval" or "lineage"
     runs: int
     lineages: int
     levels: dict[str, Array]      # threshold, probability, acceptance, runs, unusable, ...
@@ -97,16 +97,18 @@ def read_subset(h5: H5) -> Subset | None:
     attrs = _require_attrs(h5, h5.group("subset"), SUBSET_ATTRS)
     if attrs["failure_kind"] != "margin" and "failure_threshold" not in attrs:
         raise h5.error("/subset lacks the attribute failure_threshold")
-    # The CoV of the interval (the larger of Au & Beck's fully correlated bound and the lineage
-    # CoV, docs/campaigns.md "Which CoV to read"); a file without it: the lineage CoV.
-    has_bound = h5.has("subset/cov_bound")
+    # The CoV of the interval: the one the attribute interval_cov names (cov_bound or cov_interval,
+    # docs/campaigns.md "Which CoV to read"); without it cov_bound; a file without that: the lineage CoV.
+    g = h5.group("subset")
+    rule = h5.attr_str(g, "interval_cov", "attribute of /subset:") if "interval_cov" in g.attrs else "cov_bound"
+    has_bound = h5.has(f"subset/{rule}")
     levels = h5.group("subset/levels")
     n_levels = h5.length("subset/levels/threshold")
     scalar = {k: h5.scalar(f"subset/{k}") for k in ("p", "cov", "cov_lineage", "beta", "crude_mc_runs")}
     return Subset(
         attrs, scalar["p"], scalar["cov"], scalar["cov_lineage"], scalar["beta"], scalar["crude_mc_runs"],
-        cov_interval=h5.scalar("subset/cov_bound" if has_bound else "subset/cov_lineage"),
-        cov_interval_name="bound" if has_bound else "lineage",
+        cov_interval=h5.scalar(f"subset/{rule}" if has_bound else "subset/cov_lineage"),
+        cov_interval_name=(rule.removeprefix("cov_") if has_bound else "lineage"),
         runs=int(h5.scalar("subset/runs")), lineages=int(h5.scalar("subset/lineages")),
         levels={k: v.astype(np.float64) for k, v in _columns(h5, "subset/levels", tuple(levels), n_levels).items()},
         level_units=h5.units("subset/levels/threshold"), **read_failure_samples(h5))
