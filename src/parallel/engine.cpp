@@ -76,13 +76,19 @@ class Rank0Server {
 
 // Rank 0 in one round: hands out the round's runs in index order in guided batches, computes one
 // run at a time itself, and between its runs serves the messages (answering a batch done at once
-// with the next batch) and its own chunks, until every record of the round is in.
+// with the next batch) and its own chunks, until every record of the round is in and every batch
+// handed out has said it is done: a worker sends its batch's records before its done message, so
+// the last records can complete the round while that message is still on its way, and it belongs
+// to this round.
 class Rank0Round {
  public:
   Rank0Round(Node& node, const methods::RoundPlan& plan, Collector& collector, const Evaluate& evaluate,
              const std::function<bool()>& serve, const EngineOptions& opts, results::ScheduleSummary& sum);
   void run();
-  void on_done(int worker) { send_batch(worker); }
+  void on_done(int worker) {
+    --batches_out_;
+    send_batch(worker);
+  }
 
  private:
   std::int64_t batch_size() const;
@@ -100,7 +106,7 @@ class Rank0Round {
   const std::function<bool()>& serve_;
   const EngineOptions& opts_;
   results::ScheduleSummary& sum_;
-  std::int64_t cursor_, to_do_ = 0, handed_ = 0, runs_since_poll_ = 0;
+  std::int64_t cursor_, to_do_ = 0, handed_ = 0, runs_since_poll_ = 0, batches_out_ = 0;
   std::vector<std::uint8_t> waiting_;
   std::string one_, ranges_;
   Clock::time_point last_tick_ = Clock::now();
@@ -183,6 +189,7 @@ void Rank0Round::send_batch(int w) {
   }
   std::string out;
   take(k, out);
+  ++batches_out_;
   node_.send(w, kTagWork, std::move(out));
 }
 
@@ -237,14 +244,15 @@ void Rank0Round::maybe_tick() {
 }
 
 // Until every record of the round is in: serve the messages, then rank 0's chunks, else compute
-// a run, else wait a little. Then every worker gets the end of the round.
+// a run, else wait a little; then until every batch done is in. Then every worker gets the end of
+// the round.
 void Rank0Round::run() {
   for (int w = 1; w < node_.size(); ++w) send_batch(w);
   for (int w = 1; w < node_.size(); ++w)
     if (!waiting_[static_cast<std::size_t>(w)]) send_batch(w);
   Backoff backoff;  // rank 0 idles only at the end of a round: a millisecond late at most
   Clock::time_point last_poll{};
-  while (!collector_.round_complete(plan_)) {
+  while (!collector_.round_complete(plan_) || batches_out_ > 0) {
     bool progressed = false;
     if (handed_ == to_do_ || node_.flow_blocked() || poll_due(last_poll)) {
       last_poll = Clock::now();
