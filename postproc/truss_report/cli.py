@@ -88,11 +88,12 @@ def start_csv(path, staging):
     return proc
 
 
-def write_pdf(staging, progress):
-    """DIR/report.pdf from DIR/report.html (page.pdf: A4, page numbers, the figures' PNG files)."""
+def write_pdf(staging, page, progress):
+    """DIR/report.pdf from DIR/report.html (page.pdf: A4, page numbers, the figures' PNG files;
+    laid out while the page's figures are still being drawn)."""
     progress(f"writing {PDF_NAME}")
     try:
-        pdf.write_pdf(os.path.join(staging, REPORT_NAME), os.path.join(staging, PDF_NAME))
+        pdf.write_pdf(os.path.join(staging, REPORT_NAME), os.path.join(staging, PDF_NAME), page.sizes, page.finish)
     except ImportError:
         raise InputError("the PDF needs WeasyPrint (Debian: apt-get install weasyprint); "
                          "--no-pdf writes the HTML only") from None
@@ -198,17 +199,17 @@ def build(path, outdir, force, opts=None, progress=None):
         plt.rcParams.update(FIGURE_STYLE)
         page = Page(staging, plt, progress)
         report = render(page, kind, data, subset, sweep, extras, opts, other)
+        with open(os.path.join(staging, REPORT_NAME), "w", encoding="utf-8") as fh:
+            fh.write(report.html)
+        if opts.pdf:   # laid out while the figures are drawn
+            write_pdf(staging, page, progress)
+            page.files.append(PDF_NAME)
         page.finish()
         if csv is not None:
             csv.join()
             if csv.exitcode != 0:
                 raise RuntimeError(f"writing {CSV_NAME} failed (exit {csv.exitcode})")
             page.files.append(CSV_NAME)
-        with open(os.path.join(staging, REPORT_NAME), "w", encoding="utf-8") as fh:
-            fh.write(report.html)
-        if opts.pdf:
-            write_pdf(staging, progress)
-            page.files.append(PDF_NAME)
         os.makedirs(outdir, exist_ok=True)
         for name in page.files + [REPORT_NAME]:   # report.html last
             os.replace(os.path.join(staging, name), os.path.join(outdir, name))

@@ -86,3 +86,36 @@ def test_png_rows_only_for_8_bit_rgb_not_interlaced():
     assert pdf.png_rows(png(1, 1, 8, 3, 0, rows)) is None      # palette
     assert pdf.png_rows(png(1, 1, 8, 2, 1, rows)) is None      # Adam7
     assert pdf.png_rows(b"GIF89a") is None
+
+
+def late_figure(d, size_change=0):
+    """A page whose figure is drawn only after the layout (written by wait()), as report.py's
+    figures are; returns (write_pdf's arguments, the figure's path)."""
+    import matplotlib.pyplot as plt
+    from truss_report.page.render import FIGURE_DPI
+    fig, ax = plt.subplots(figsize=(3, 2))
+    ax.plot([0, 1, 2], [2, 0, 1], "s-")
+    fig.set_dpi(FIGURE_DPI)
+    w, h = (int(v) for v in fig.bbox.size)
+    (d / "report.html").write_text("<html><body><p>before</p><img src='late%20one.png'><p>after</p></body></html>",
+                                   encoding="utf-8")
+
+    def wait():
+        save_png(fig, str(d / "late one.png"))
+        plt.close(fig)
+    return (str(d / "report.html"), str(d / "report.pdf"), {"late one.png": (w + size_change, h)}, wait), d / "late one.png"
+
+
+def test_figure_drawn_after_the_layout_is_the_pdfs_image(tmp_path):
+    args, png_path = late_figure(tmp_path)
+    pdf.write_pdf(*args)
+    assert idat(png_path) in (tmp_path / "report.pdf").read_bytes()
+    subprocess.run(["pdfimages", "-png", str(tmp_path / "report.pdf"), str(tmp_path / "x")], check=True)
+    got = [np.asarray(Image.open(p).convert("RGB")) for p in glob.glob(str(tmp_path / "x-*.png"))]
+    assert len(got) == 1 and np.array_equal(got[0], np.asarray(Image.open(png_path).convert("RGB")))
+
+
+def test_figure_of_another_size_than_announced_is_refused(tmp_path):
+    args, _ = late_figure(tmp_path, size_change=1)
+    with pytest.raises(RuntimeError, match="late one.png"):
+        pdf.write_pdf(*args)
