@@ -8,6 +8,7 @@ PKGS=(build-essential cmake pkg-config
       libisal-dev         # ISA-L: the results file's chunk compression (20 times zlib's speed, same format), CRC-32
       libboost-dev        # Boost.Math headers: Clopper-Pearson intervals, binomial CDF (src/sampling/stopping.cpp)
       python3-numpy python3-h5py python3-matplotlib python3-scipy python3-pandas
+      python3-ujson       # the report's runs.csv: shortest round-trip number formatting in C
       python3-venv        # the truss-report package installed into a venv (test postproc_install)
       weasyprint          # the report's PDF for signature (postproc/report.py writes report.pdf)
       poppler-utils       # pdftotext: the tests read the PDF's document block (postproc_verdicts)
