@@ -4,6 +4,7 @@ import numpy as np
 
 from ..judging.sobol import sobol_estimates, usable_blocks
 from ..judging.stats import min_runs_for_bound, percentile, quantile_ci
+from .figures import log_minor_ticks
 from .numbers import readable_unit
 
 
@@ -143,6 +144,7 @@ def fig_convergence(plt, series, levels, confidence):
             ax.axvline(need, color="0.4", ls=":", lw=1.0,
                        label=f"runs an upper bound of P{levels[-1]:g} needs ({need})")
         ax.set_xscale("log")
+        log_minor_ticks(ax.xaxis)
         ax.set_xlabel("runs")
         ax.set_ylabel(f"{label} ({lab})")
         ax.grid(True, alpha=0.3)
