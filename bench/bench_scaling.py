@@ -14,8 +14,9 @@ runs that sleep, so that more ranks than cores still measure the scheduler.
 --campaign table1: campaigns/table1_dispersed.toml (the Table-1 velocity runs, about 80 us each);
            --runs: strong, the runs of every campaign (default 100,000); weak, the runs per rank
            (default 20,000).
---campaign sweep:  campaigns/motor_sizing.toml (a design sweep of subset simulations of motor
-           runs over 8 stall torques, its rounds the values' Markov steps side by side); --runs is
+--campaign sweep:  campaigns/motor_sizing.toml run as a design sweep of subset simulations of motor
+           runs over 8 stall torques (28-36 mN m, refine = 3; its rounds the values' Markov steps
+           side by side), not as the file's one reweighted importance campaign; --runs is
            ensemble.subset.n_per_level: strong, the same for every campaign (default 2,000: 95,200
            runs), weak, per rank (default 200).
 --launch:  how a campaign on {ranks} ranks is started; on Slurm "srun --mpi=pmix -n {ranks}" (or
@@ -53,7 +54,11 @@ def size_sets(a, ranks):
     per = ranks if a.mode == "weak" else 1
     if a.campaign == "table1":
         return ["--set", f"ensemble.n_runs={a.runs * per}"]
-    return ["--set", f"ensemble.subset.n_per_level={a.runs * per}"]
+    # the file's sweep as subset simulation at each of its 8 stall torques (its rounds: Markov steps)
+    subset = ["ensemble.method=subset", "ensemble.importance=false", "sweep.from=0.028", "sweep.to=0.036",
+              "sweep.count=5", "sweep.refine=3", "ensemble.subset.max_levels=9",
+              f"ensemble.subset.n_per_level={a.runs * per}"]
+    return [x for kv in subset for x in ("--set", kv)]
 
 
 def run_once(a, driver, ranks, out):

@@ -1,16 +1,21 @@
 #!/usr/bin/python3
-"""Width of subset simulation's 95 % intervals on a shipped campaign, the two Markov proposals side
-by side at the same samples a level: modified Metropolis with cov_bound against adaptive conditional
-sampling with cov_interval, on several master seeds (the same seeds for both).
+"""Width of the rare-failure methods' 95 % intervals on a shipped campaign, side by side on several
+master seeds (the same seeds for each): subset simulation with modified Metropolis and cov_bound, with
+adaptive conditional sampling and cov_interval (the same samples a level), and cross-entropy
+importance sampling (standalone, or a sweep reweighting one set of runs to every value).
 
   subset_campaign_widths.py --driver build/truss-campaign --repo . --scratch DIR \\
       --campaign campaigns/free_rail_miss_rare.toml --seeds 26 1 2 3 [--np 2] [--set KEY=VALUE ...]
+      [--subset-set KEY=VALUE ...] [--importance-set KEY=VALUE ...] [--variants ...]
 
-For a standalone subset campaign one row per seed and proposal: p, the 95 % interval (lognormal,
-p exp(+-1.96 s), s^2 = ln(1 + cov^2), the interval's CoV as /subset's interval_cov names it), the
+Each variant sets ensemble.method (and removes the other method's table), so either kind of
+campaign file serves all three; --subset-set / --importance-set add --set pairs to those variants
+alone (their level sizes; a sweep's refine, which importance refuses). For a standalone campaign one
+row per seed and variant: p, the 95 % interval (subset: lognormal, p exp(+-1.96 s), s^2 =
+ln(1 + cov^2), the CoV /subset's interval_cov names; importance: /importance's lower and upper), the
 ratio of its ends, the runs and the CPU time (user + system of mpirun and its ranks). For a sweep the
-same per design value (/sweep/inner/<k>/subset), and the allowable with its interval. With --reference
-P the share of rows whose interval holds P. Results also as JSON (--json).
+same per design value (/sweep, and /sweep/inner/<k>/subset), and the allowable with its interval.
+With --reference P the share of rows whose interval holds P. Results also as JSON (--json).
 """
 import argparse
 import json
@@ -22,8 +27,12 @@ import subprocess
 import h5py
 import numpy as np
 
-VARIANTS = {"MM + cov_bound": ("modified_metropolis", "cov_bound"),
-            "aCS + cov_interval": ("adaptive_conditional", "cov_interval")}
+SUBSET = ["--set", "ensemble.method=subset", "--set", "ensemble.importance=false"]
+VARIANTS = {"MM + cov_bound": SUBSET + ["--set", "ensemble.subset.proposal=modified_metropolis",
+                                        "--set", "ensemble.subset.interval_cov=cov_bound"],
+            "aCS + cov_interval": SUBSET + ["--set", "ensemble.subset.proposal=adaptive_conditional",
+                                            "--set", "ensemble.subset.interval_cov=cov_interval"],
+            "importance": ["--set", "ensemble.method=importance", "--set", "ensemble.subset=false"]}
 Z = 1.959963984540054  # the standard normal's 97.5 % quantile
 
 
@@ -40,11 +49,25 @@ def read_subset(g):
             "cov_bound": float(g["cov_bound"][()]), "cov_interval": float(g["cov_interval"][()])}
 
 
-def run_one(args, seed, proposal, rule, out):
+def read_importance(g, k=None, runs=None):
+    """A weighted estimate: /importance (k None), or value k of /sweep with its /sweep/importance."""
+    if k is None:
+        p, cov, lo, hi = (float(g[x][()]) for x in ("p", "cov", "lower", "upper"))
+        ess, refused, runs = float(g["ess"][()]), text(g.attrs["refused"]), int(g["runs"][()])
+        h = g
+    else:
+        p, cov, lo, hi = (float(g[x][k]) for x in ("p", "cov", "lower", "upper"))
+        h = g["importance"]
+        ess, refused = float(h["ess"][k]), text(h["refused"][k])
+    return {"p": p, "cov": cov, "lo": lo, "hi": hi, "ratio": hi / lo if lo > 0 else math.nan, "runs": runs,
+            "status": text(h.attrs["status"]) + (f", refused: {refused}" if refused else ""),
+            "levels": int(h["levels/threshold"].size), "ess": ess}
+
+
+def run_one(args, seed, name, out):
     cmd = ["mpirun", "--oversubscribe", "-np", str(args.np), args.driver, os.path.join(args.repo, args.campaign),
-           "-o", out, "--force", "--progress", "none", "--set", f"ensemble.master_seed={seed}",
-           "--set", f"ensemble.subset.proposal={proposal}", "--set", f"ensemble.subset.interval_cov={rule}"]
-    for kv in args.set:
+           "-o", out, "--force", "--progress", "none", "--set", f"ensemble.master_seed={seed}"] + VARIANTS[name]
+    for kv in args.set + (args.importance_set if name == "importance" else args.subset_set):
         cmd += ["--set", kv]
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     p = subprocess.run(cmd, capture_output=True, text=True)
@@ -55,15 +78,19 @@ def run_one(args, seed, proposal, rule, out):
         return {"cpu_s": cpu, "values": [], "failed": p.stderr[-2000:]}
     with h5py.File(out, "r") as f:
         if "sweep" not in f:
-            return {"cpu_s": cpu, "values": [dict(read_subset(f["subset"]), value=None)]}
+            one = read_subset(f["subset"]) if "subset" in f else read_importance(f["importance"])
+            return {"cpu_s": cpu, "values": [dict(one, value=None)]}
         sw = f["sweep"]
         values = []
-        for k, x in zip(sw["index"][:], sw["values"][:]):
-            values.append(dict(read_subset(sw[f"inner/{int(k)}/subset"]), value=float(x)))
+        for i, (k, x) in enumerate(zip(sw["index"][:], sw["values"][:])):
+            one = read_subset(sw[f"inner/{int(k)}/subset"]) if "importance" not in sw else \
+                read_importance(sw, i, int(sw["runs"][i]))
+            values.append(dict(one, value=float(x)))
         a = sw["allowable"]
         allowable = {"value": float(a["value"][()]), "lower": float(a["lower"][()]), "upper": float(a["upper"][()]),
                      "status": text(a.attrs["status"]), "verdict": text(a.attrs["verdict"])}
-        return {"cpu_s": cpu, "values": values, "allowable": allowable, "runs": int(np.sum(sw["runs"][:]))}
+        runs = int(sw["importance/runs"][()]) if "importance" in sw else int(np.sum(sw["runs"][:]))  # shared runs
+        return {"cpu_s": cpu, "values": values, "allowable": allowable, "runs": runs}
 
 
 def main():
@@ -75,9 +102,11 @@ def main():
     ap.add_argument("--seeds", type=int, nargs="+", required=True)
     ap.add_argument("--np", type=int, default=2)
     ap.add_argument("--set", action="append", default=[], help="a further --set for every run")
+    ap.add_argument("--subset-set", action="append", default=[], help="a further --set for the subset variants")
+    ap.add_argument("--importance-set", action="append", default=[], help="a further --set for importance")
     ap.add_argument("--reference", type=float, help="a reference p the intervals should hold (standalone)")
     ap.add_argument("--variants", nargs="+", choices=list(VARIANTS), default=list(VARIANTS),
-                    help="the proposals to run (default both)")
+                    help="the variants to run (default all)")
     ap.add_argument("--json", help="write the results here")
     ap.add_argument("--keep", action="store_true", help="keep the results files (else each is removed once read)")
     args = ap.parse_args()
@@ -85,9 +114,8 @@ def main():
     results = []
     for seed in args.seeds:
         for name in args.variants:
-            proposal, rule = VARIANTS[name]
-            out = os.path.join(args.scratch, f"s{seed}_{proposal}.h5")
-            r = run_one(args, seed, proposal, rule, out)
+            out = os.path.join(args.scratch, f"s{seed}_{name.split()[0]}.h5")
+            r = run_one(args, seed, name, out)
             r.update(seed=seed, variant=name)
             results.append(r)
             if not args.keep and os.path.exists(out):
@@ -106,6 +134,8 @@ def main():
         print(f"campaigns that did not finish: {', '.join(failed)}")
     for name in args.variants:
         rows = [v for r in results if r["variant"] == name for v in r["values"]]
+        if not rows:
+            continue
         ratios = [v["ratio"] for v in rows]
         line = f"{name}: median interval factor {np.median(ratios):.2f} over {len(rows)} estimates, mean runs " \
                f"{np.mean([v['runs'] for v in rows]):.0f}, median CPU " \

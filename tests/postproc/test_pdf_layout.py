@@ -44,7 +44,8 @@ from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.p
 SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],
          "free_rail_miss_rare": ["--set", "ensemble.subset.n_per_level=40", "--set", "ensemble.subset.max_levels=2"],
          "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"],
-         "motor_sizing": ["--set", "ensemble.subset.n_per_level=40", "--set", "ensemble.subset.max_levels=2"],
+         "motor_sizing": ["--set", "ensemble.importance.n_per_level=40", "--set", "ensemble.importance.max_levels=2",
+                          "--set", "ensemble.importance.n_final=100"],
          "tolerance_allocation": ["--set", "ensemble.importance.n_per_level=40", "--set", "ensemble.importance.max_levels=2",
                                   "--set", "ensemble.importance.n_final=100"]}
 MM = 50 / 25.4            # pixels per mm at 50 dpi

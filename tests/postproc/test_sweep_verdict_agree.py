@@ -5,7 +5,7 @@ report page's verdict (data-key='verdict': data-value and data-reason) and exit 
 
   test_sweep_verdict_agree.py --repo SRC --scratch DIR --campaign truss-campaign
 
-- assessed: campaigns/motor_sizing.toml with few runs per level and a target of 1e-3 its values
+- assessed: campaigns/motor_sizing.toml as subset simulation at each value, few runs per level, a target of 1e-3 its values
   reach: every run ok, so no value is untrusted; the verdict PASS or FAIL, exits 0 (report: 0 or 3).
 - capped: campaigns/tolerance_allocation.toml with run.max_steps = 1000 (a free deployment takes
   tens of thousands of steps): every run ends step_limit (/runs/status counted here), so every
@@ -102,7 +102,9 @@ def main():
     a = ap.parse_args()
     os.makedirs(a.scratch, exist_ok=True)
     one_case(a, "assessed", "motor_sizing",
-             ["--set", "ensemble.subset.n_per_level=200", "--set", "ensemble.subset.max_levels=4",
+             ["--set", "ensemble.method=subset", "--set", "ensemble.importance=false",
+              "--set", "ensemble.subset.n_per_level=200", "--set", "ensemble.subset.max_levels=4",
+              "--set", "sweep.from=0.028", "--set", "sweep.to=0.036", "--set", "sweep.count=5",
               "--set", "sweep.refine=0", "--set", "sweep.target_probability=1e-3"], False)
     small = ["--set", "ensemble.importance.n_per_level=100", "--set", "ensemble.importance.max_levels=3",
              "--set", "ensemble.importance.n_final=100"]

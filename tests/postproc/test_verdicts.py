@@ -36,8 +36,9 @@ SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],     # 4 blocks o
          "free_rail_miss_rare": ["--set", "ensemble.subset.n_per_level=40",
                                  "--set", "ensemble.subset.max_levels=2"],
          "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"],
-         # design sweeps: a small subset simulation at each value
-         "motor_sizing": ["--set", "ensemble.subset.n_per_level=40", "--set", "ensemble.subset.max_levels=2"],
+         # design sweeps: one small importance-sampling campaign reweighted to every value
+         "motor_sizing": ["--set", "ensemble.importance.n_per_level=40", "--set", "ensemble.importance.max_levels=2",
+                          "--set", "ensemble.importance.n_final=100"],
          "tolerance_allocation": ["--set", "ensemble.importance.n_per_level=40",
                                   "--set", "ensemble.importance.max_levels=2", "--set", "ensemble.importance.n_final=100"]}
 
