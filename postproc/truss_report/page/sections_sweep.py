@@ -5,8 +5,9 @@ confidence bound on p stays at or below the target) with its interval; the verdi
 allowable with the design's own value: PASS on its safe side, FAIL on its unsafe side, NOT
 ASSESSED when the swept range holds no allowable or the file's numbers do not support its verdict
 (judging.sweep: exit codes as every report: 0, 3, 4). Each value's runs are the runs of one
-standalone campaign (its seed in /sweep/master_seed), so the runs as a whole are not draws of one
-population: no design loads.
+standalone campaign (its seed in /sweep/master_seed), or one set of importance-sampling runs serves
+every value by reweighting; either way the runs are not draws of the design's population: no design
+loads.
 
 The table is truss_report.read_sweep's DataFrame: one row per design value, the sweep's settings
 and the allowable in df.attrs."""
@@ -171,20 +172,31 @@ def sweep_row(s, k, r, unit, f):
             "refinement" if r.refinement else "listed"]
 
 
+def sweep_columns(s):
+    """The indices of sweep_row's cells the table shows: the plateau levels only for subset
+    simulation (no other method has levels that can stall), where each value was placed only when
+    the sweep refined its bracket."""
+    drop = set()
+    if s.attrs["inner_method"] != "subset":
+        drop.add(9)
+    if not s["refinement"].any():
+        drop.add(10)
+    return [i for i in range(11) if i not in drop]
+
+
 def section_sweep(page, s):
     at = s.attrs
     unit, f = design_unit(s)
     conf = fmt(100 * at["confidence"])
-    rows = [sweep_row(s, k, r, unit, f) for k, r in enumerate(s.itertuples())]
+    shown = sweep_columns(s)
+    rows = [[row[i] for i in shown] for row in (sweep_row(s, k, r, unit, f) for k, r in enumerate(s.itertuples()))]
     flat = flat_values(s)
     warn = ""
     if flat:
         warn = (f"<p class='warn'>Biased low? At {', '.join(design_text(s, float(s['value'].iloc[k])) for k in flat)}, "
                 f"{esc(plateau_warning(int(s['plateau_levels'].iloc[flat[0]])))}.</p>")
     return ("<section id='sweep'><h2>Failure probability against the design variable</h2>"
-            f"<p>Failure event: {failure_text(s)}. At each value of <code>{esc(at['variable'])}</code> "
-            f"the campaign ran as a campaign of its own ({esc(at['inner_method'])}; its seed in "
-            f"<code>/sweep/master_seed</code>). The band is each estimate's two-sided {conf} % interval, "
+            f"<p>Failure event: {failure_text(s)}. {runs_text(at)} The band is each estimate's two-sided {conf} % interval, "
             f"the dashed line its one-sided {conf} % upper bound, which the allowable keeps at or below "
             f"the target {fmt(at['target_probability'])}; probabilities are shown within [0, 1], an estimate "
             "of 0 as its upper bound. Runs without a result (capped, failed to solve, or without a margin) "
@@ -193,8 +205,20 @@ def section_sweep(page, s):
             + page.figure(fig_sweep(page.plt, s), "sweep.png",
                           "failure probability against the design value (log axis), target and allowable")
             + refine_html(at) + warn
-            + table(["value", "p", "CoV", f"{conf} % low", f"{conf} % high", f"{conf} % upper bound", "runs",
-                     "runs without a result", "status", "plateau levels", "placed"], rows, "narrow") + "</section>")
+            + table([h for i, h in enumerate(["value", "p", "CoV", f"{conf} % low", f"{conf} % high",
+                                              f"{conf} % upper bound", "runs", "runs without a result", "status",
+                                              "plateau levels", "placed"]) if i in shown], rows, "narrow")
+            + "</section>")
+
+
+def runs_text(at):
+    """Where each value's estimate comes from: runs of its own, or one set of runs reweighted."""
+    if at["inner_method"] == "importance":
+        return ("One set of cross-entropy importance-sampling runs serves every value of <code>"
+                + esc(at["variable"]) + "</code>, reweighted to each value's law (refused where the weights "
+                "degenerate).")
+    return (f"At each value of <code>{esc(at['variable'])}</code> the campaign ran as a campaign of its own "
+            f"({esc(at['inner_method'])}; its seed in <code>/sweep/master_seed</code>).")
 
 
 def refine_html(at):

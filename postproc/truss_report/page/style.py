@@ -45,7 +45,8 @@ table.signoff td { min-width: 180px; height: 36px; }
   table { page-break-inside: auto; } tr { page-break-inside: avoid; }
   h2, h3, h4 { break-after: avoid; page-break-after: avoid; }
   figure img { max-height: 215mm; width: auto; }   /* a figure, its heading and caption: one page */
-  #sweep figure img { max-width: 78%; }
+  #sweep figure img { max-width: 66%; }
+  #sweep table { font-size: 7pt; } #sweep td.num { white-space: nowrap; }
 }
 @page { size: A4; margin: 15mm 12mm 18mm 12mm;   /* the footer in the body's font: no serif font to embed */
         font-family: "DejaVu Sans", Arial, sans-serif;
