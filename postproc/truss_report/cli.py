@@ -93,7 +93,8 @@ def write_pdf(staging, page, progress):
     laid out while the page's figures are still being drawn)."""
     progress(f"writing {PDF_NAME}")
     try:
-        pdf.write_pdf(os.path.join(staging, REPORT_NAME), os.path.join(staging, PDF_NAME), page.sizes, page.finish)
+        pdf.write_pdf(os.path.join(staging, REPORT_NAME), os.path.join(staging, PDF_NAME), page.find_size,
+                      page.finish)
     except ImportError:
         raise InputError("the PDF needs WeasyPrint (Debian: apt-get install weasyprint); "
                          "--no-pdf writes the HTML only") from None

@@ -96,22 +96,22 @@ def png_passthrough(stream_class, directory):
         stream_class._get_png_data = original
 
 
-def write_pdf(html_path, pdf_path, drawing=None, wait=lambda: None):
-    """pdf_path from html_path (ImportError without WeasyPrint). drawing: {file name beside
-    html_path: (width, height) in pixels} of the figures still being drawn; wait() returns once
-    they are drawn (called after the layout, before the PDF is written)."""
+def write_pdf(html_path, pdf_path, find_size=lambda name: None, wait=lambda: None):
+    """pdf_path from html_path (ImportError without WeasyPrint). find_size(name): (width, height)
+    in pixels of a figure beside html_path still being drawn, None for any other file; wait()
+    returns once the figures are drawn (called after the layout, before the PDF is written)."""
     logging.getLogger("weasyprint").setLevel(logging.ERROR)
     logging.getLogger("fontTools").setLevel(logging.ERROR)
     import weasyprint             # optional: --no-pdf runs without it
     from weasyprint.pdf.stream import Stream
     directory = os.path.dirname(os.path.abspath(html_path))
-    drawing = drawing or {}
 
     def fetch(url):
         path = urllib.parse.unquote(url[len("file://"):]) if url.startswith("file://") else ""
-        if os.path.dirname(path) == directory and os.path.basename(path) in drawing:
+        size = find_size(os.path.basename(path)) if os.path.dirname(path) == directory else None
+        if size is not None:
             name = os.path.basename(path)
-            return {"string": placeholder_png(name, drawing[name]), "mime_type": "image/png", "redirected_url": url}
+            return {"string": placeholder_png(name, size), "mime_type": "image/png", "redirected_url": url}
         return weasyprint.default_url_fetcher(url)
 
     with png_passthrough(Stream, directory) as passthrough:

@@ -2,7 +2,9 @@
 the sections go on, saved as PNG into the staging directory."""
 import gc
 import os
+import struct
 import sys
+import traceback
 from contextlib import nullcontext
 from dataclasses import dataclass
 
@@ -92,7 +94,8 @@ class Page:
         self.progress = progress or (lambda what: None)
         self.children = []        # (pid, figure name) of the figures being drawn
         self.max_children = 2
-        self.sizes = {}           # figure name: (width, height) in pixels, known before it is drawn
+        self.sizes = {}           # figure name: (width, height) in pixels (find_size)
+        self.size_pipes = {}      # figure name: the pipe its child tells the size on
         # Fonts and text layout are cached per process: draw once here, so that every forked
         # child starts with them loaded instead of loading them again.
         warm, ax = plt.subplots(figsize=(2, 1))
@@ -101,34 +104,57 @@ class Page:
         warm.savefig(os.devnull, format="png", dpi=FIGURE_DPI)
         plt.close(warm)
 
-    def figure(self, fig, name, caption, cls="wide"):
-        """Saves `fig` as DIR/name and returns its HTML. The layout, drawing and PNG encoding
-        (two thirds of a figure's cost; the figures lay themselves out at draw time) happen in a
-        forked child while this process goes on with the next section: the report's figures
-        then use both cores. finish() waits for them."""
+    def figure(self, make, name, caption, cls="wide"):
+        """Saves the figure `make()` returns as DIR/name and returns its HTML. A forked child
+        builds the figure, tells its size in pixels (find_size), lays it out, draws it and encodes
+        the PNG while this process goes on with the next sections and the PDF's layout: the
+        report's figures use both cores, and this process, the report's longest chain of work,
+        does none of theirs. finish() waits for them."""
         if len(self.files) % 5 == 0:
             self.progress(f"figure {len(self.files) + 1}: {name}")
         while len(self.children) >= self.max_children:
             self._reap(self.children.pop(0))
-        fig.set_dpi(FIGURE_DPI)
-        self.sizes[name] = tuple(int(v) for v in fig.bbox.size)   # Agg's canvas: the size truncated
         sys.stdout.flush()
         sys.stderr.flush()
         gc.freeze()        # the child's collector leaves the parent's objects (and pages) alone
+        size_r, size_w = os.pipe()
         pid = os.fork()
-        if pid == 0:       # child: draw, encode, leave without Python's exit handlers
+        if pid == 0:       # child: build, draw, encode, leave without Python's exit handlers
+            os.close(size_r)
             code = 0
             try:
+                fig = make()
+                fig.set_dpi(FIGURE_DPI)
+                os.write(size_w, struct.pack("<II", *(int(v) for v in fig.bbox.size)))  # Agg truncates
+                os.close(size_w)
                 save_png(fig, os.path.join(self.dir, name))
-            except BaseException as e:   # noqa: BLE001 - reported through the exit status
-                sys.stderr.write(f"error: figure {name}: {e}\n")
+            except BaseException:   # noqa: BLE001 - reported through the exit status
+                sys.stderr.write(f"error: figure {name}:\n{traceback.format_exc()}")
                 code = 1
             os._exit(code)
+        os.close(size_w)
         self.children.append((pid, name))
-        self.plt.close(fig)
+        self.size_pipes[name] = size_r
         self.files.append(name)
         return (f'<figure class="{cls}"><img src="{esc(name)}" alt="{esc(caption)}">'
                 f"<figcaption>{esc(caption)}</figcaption></figure>")
+
+    def find_size(self, name):
+        """(width, height) in pixels of this page's figure `name` (None for another file), told by
+        its child once it has built the figure (RuntimeError if it failed before)."""
+        if name not in self.sizes and name in self.size_pipes:
+            fd = self.size_pipes.pop(name)
+            data = b""
+            while len(data) < 8:
+                chunk = os.read(fd, 8 - len(data))
+                if not chunk:
+                    break
+                data += chunk
+            os.close(fd)
+            if len(data) < 8:
+                raise RuntimeError(f"drawing the figure {name} failed")
+            self.sizes[name] = struct.unpack("<II", data)
+        return self.sizes.get(name)
 
     def text_file(self, name, text):
         """Writes DIR/name (a file the report links to)."""
@@ -143,6 +169,12 @@ class Page:
             raise RuntimeError(f"drawing the figure {name} failed")
 
     def finish(self):
-        """Waits for every figure (RuntimeError if one failed)."""
-        while self.children:
-            self._reap(self.children.pop(0))
+        """Waits for every figure (RuntimeError if one failed), then closes the pipes of the sizes
+        not asked for (a child's 8 bytes fit in its pipe: it never waits on them)."""
+        try:
+            while self.children:
+                self._reap(self.children.pop(0))
+        finally:
+            for fd in self.size_pipes.values():
+                os.close(fd)
+            self.size_pipes.clear()

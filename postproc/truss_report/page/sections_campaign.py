@@ -1,5 +1,7 @@
 """truss_report.page.sections_campaign: the campaign (its runs' outcome, failed runs,
 dispersions, base scene), the peak loads and the lock timing sections of the load report."""
+from functools import partial
+
 import os
 
 import numpy as np
@@ -216,7 +218,7 @@ def output_block(page, c, o, word, nominal, units, confidence):
                 f"({num(f'{key}.count', 0, tag='span')} values from {n_ok} ok runs): nothing to "
                 f"show (the {esc(c.attrs['drive_mode'])} drive mode may not define it).</p>")
     cis, est = o.cis, o.est
-    fig = fig_distribution(page.plt, x / f, word, u, {k: v / f for k, v in est.items()},
+    fig = partial(fig_distribution, page.plt, x / f, word, u, {k: v / f for k, v in est.items()},
                            {k: v.scaled(f) for k, v in cis.items()}, nominal / f, confidence, at)
     parts = [head,
              f"<p>{num(f'{key}.count', len(x), tag='span')} ok runs with a finite value "
@@ -262,7 +264,7 @@ def section_lock_timing(page, c, lock):
     order, dt_text, lt, it = lock.order, lock.interval_text, lock.times, lock.intervals
     nb = c.lock.shape[1]
     bays = np.arange(1, nb + 1)
-    fig = fig_lock_timing(page.plt, bays, lt, it, u, words, dt_text)
+    fig = partial(fig_lock_timing, page.plt, bays, lt, it, u, words, dt_text)
     at = {name: band_resolution(band) for name, band in (("lock", lt), ("interval", it))}
     rows = []
     for j in range(nb):

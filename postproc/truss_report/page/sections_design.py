@@ -1,5 +1,7 @@
 """truss_report.page.sections_design: the nominal run, the engineering plots and the assembly of the
 campaign report (verdict and design loads on top)."""
+from functools import partial
+
 import numpy as np
 
 from ..judging.correlations import top_inputs
@@ -36,7 +38,7 @@ def section_nominal(page, e):
                " Its values are the nominal column of the design-load table and the black lines "
                "of the histograms.</p>")
     if e.nominal_run is not None:
-        out.append(page.figure(fig5(page.plt, e.nominal_run), "nominal_history.png",
+        out.append(page.figure(partial(fig5, page.plt, e.nominal_run), "nominal_history.png",
                                "nominal run: drive force and rail pin force against time, lock "
                                "times dashed"))
     lock = e.nominal_bays["lock_time_s"]
@@ -59,7 +61,7 @@ def section_plots(page, c, e, j, du, opts):
     if fields:
         units = {k: du.get(k, e.units[k], b[c.ok]) for k, _, b in fields}
         out.append("<h3>Per-bay envelopes</h3>" + page.figure(
-            fig_envelopes(page.plt, fields, c.ok, e.nominal_bays if e.nominal is not None else None,
+            partial(fig_envelopes, page.plt, fields, c.ok, e.nominal_bays if e.nominal is not None else None,
                           units, top), "envelopes.png",
             f"per-bay peak loads over the ok runs: P50, P{top:g}, min–max band, nominal"))
     items = [(lab, e.runs[b], e.runs[t], c.outputs[v], v) for lab, b, t, v in
@@ -71,7 +73,7 @@ def section_plots(page, c, e, j, du, opts):
     if items:
         units = {k: du.get(k, c.units[k], v) for _, _, _, v, k in items}
         out.append("<h3>Where the peaks occur</h3>" + page.figure(
-            fig_peak_location(page.plt, items, units), "peak_location.png",
+            partial(fig_peak_location, page.plt, items, units), "peak_location.png",
             "bay and time of each ok run's peak (top: runs per bay; bottom: value against time)"))
     scatter = subsection_scatter(page, c, j, du) if c.dispersions else ""
     if scatter:
@@ -80,14 +82,14 @@ def section_plots(page, c, e, j, du, opts):
               for d in j.loads if d.key in c.outputs and d.key != "deploy_time_s"]
     if series:
         out.append("<h3>Convergence of the percentile estimates</h3>" + page.figure(
-            fig_convergence(page.plt, series, opts.levels, opts.confidence), "convergence.png",
+            partial(fig_convergence, page.plt, series, opts.levels, opts.confidence), "convergence.png",
             f"percentile estimates over the first m runs (run-index order) with their one-sided "
             f"{opts.confidence * 100:g} % bounds"))
     if c.sensitivity is not None:
         G = len(c.sensitivity.factor)
         ss = [(k, c.outputs[k], c.ok) for k in ("peak_drive_force_N", "peak_pin_force_N")]
         out.append("<h3>Convergence of the Sobol' indices</h3>" + page.figure(
-            fig_sobol_convergence(page.plt, ss, G, c.sensitivity.factor, opts.confidence),
+            partial(fig_sobol_convergence, page.plt, ss, G, c.sensitivity.factor, opts.confidence),
             "sobol_convergence.png", "total Sobol' index of each factor against the blocks "
             "used, recomputed here (Jansen), with a percentile-bootstrap interval over blocks"))
         out.append("<p class='small'>Recomputed from all usable blocks, the indices differ from "
@@ -110,7 +112,7 @@ def subsection_scatter(page, c, j, du):
     if not rows:
         return ""
     return ("<h3>Top inputs against each load</h3>" + page.figure(
-        fig_scatter(page.plt, rows, nominal), "scatter_top_inputs.png",
+        partial(fig_scatter, page.plt, rows, nominal), "scatter_top_inputs.png",
         "each load against its three inputs of largest |Spearman ρ| (ok runs), nominal "
         "dashed; an aggregate input (“mean relative deviation over bays”) is the mean "
         "over the run's bays of (value − nominal) / nominal, in %"))

@@ -1,6 +1,8 @@
 """truss_report.page.sections_margins: the margins of the drive against its motor, what drives the
 loads (rank correlations, tornado charts, Sobol' indices), the runs' histories and the
 consistency checks of the file."""
+from functools import partial
+
 import numpy as np
 
 from ..judging.correlations import (correlated_factors, outside_unit_interval, proportional_to,
@@ -55,7 +57,7 @@ def section_margins(page, c, units):
     ok_t, stalled, n_cons, k, lo, hi = x.ok_t, x.stalled, x.n_considered, x.k, x.lo, x.hi
     p = k / n_cons
     nominal = float(c.drive.get("stall_torque_Nm", float("nan")))
-    fig = fig_motor(page.plt, torque / f, stall_t / f, ok_t, stalled, nominal / f, u)
+    fig = partial(fig_motor, page.plt, torque / f, stall_t / f, ok_t, stalled, nominal / f, u)
     rows = [
         ["stall torque of the base scene", num("motor.stall_torque_nominal", nominal, u, factor=f)],
         ["runs considered (ok with a finite peak torque, + stalled)", num("motor.n_considered",
@@ -100,7 +102,7 @@ def section_margins_velocity(page, c, units, head):
     if x is None:
         return head + "<p>No ok run with a finite peak torque: nothing to compare.</p></section>"
     n_cons, k, lo, hi, omega, drive = x.n_considered, x.k, x.lo, x.hi, x.omega, c.drive
-    fig = fig_velocity_margin(page.plt, torque[x.considered] / f, x.avail_min / f, x.avail_max / f, u,
+    fig = partial(fig_velocity_margin, page.plt, torque[x.considered] / f, x.avail_min / f, x.avail_max / f, u,
                               units.at("torque"))
     ratio_at = resolution([x.ratio_min, x.ratio_p50])
     rows = [
@@ -165,7 +167,7 @@ def section_sensitivity(page, c, j):
                         "correlation defined (no finite ok value, or a constant output).</p></div>")
             continue
         n_y = int(np.sum(c.ok & np.isfinite(c.outputs[key])))
-        fig = fig_tornado(page.plt, ranked, aggregate, f"{output_label(key, c.direction)} (n = {n_y})",
+        fig = partial(fig_tornado, page.plt, ranked, aggregate, f"{output_label(key, c.direction)} (n = {n_y})",
                           1.96 / np.sqrt(max(n_y - 1, 1)))
         detail = table(["input", "ρ", "runs"],
                        [[f"<code>{esc(lab)}</code>", num(f"spearman.{key}.{lab}", r, at=rho_at(n)),
@@ -195,7 +197,7 @@ def subsection_sobol(page, c):
              "dispersion moves all its bays together). Indices are dimensionless.</p>",
              out_of_range_note(outs),
              design_correlation_note(c, len(factors)),
-             page.figure(fig_sobol(page.plt, factors, outs), "sobol_indices.png",
+             page.figure(partial(fig_sobol, page.plt, factors, outs), "sobol_indices.png",
                          "first-order and total Sobol' indices with their confidence intervals")]
     cells = []
     for key, o in outs.items():
@@ -251,7 +253,7 @@ def section_histories(page, c):
     if len(c.histories) > len(shown):
         parts.append(f"<p>(the first {len(shown)} of {len(c.histories)} histories)</p>")
     for i in shown:
-        parts.append(page.figure(fig5(page.plt, c.histories[i]), f"history_run_{i}.png",
+        parts.append(page.figure(partial(fig5, page.plt, c.histories[i]), f"history_run_{i}.png",
                                  f"run {i}: drive force and rail pin force against time"))
     parts.append("</section>")
     return "\n".join(parts)

@@ -4,6 +4,8 @@ beta, the coefficients of variation, the runs used and the runs crude Monte Carl
 the same CoV; the threshold of each level; the failure samples' inputs against nominal (which
 inputs drive the failure). The runs of such a campaign are not draws of the dispersions (the
 Markov chains dwell near the failure), so it has no design loads and no run-share probabilities."""
+from functools import partial
+
 import numpy as np
 
 from ..judging.subset import (PLATEAU_SHARE, biased_low, count_plateau_levels, design_point, inputs_at_failure,
@@ -113,7 +115,7 @@ def section_levels(page, s):
             "threshold is the failure itself. The acceptance rate is the share of Markov steps "
             "that moved (0.2–0.8 is healthy; near 0 the chains stall and the CoV understates). "
             "Unusable runs could not give a margin (a stall before the event) and count as safe.</p>"
-            + page.figure(fig_levels(page.plt, s), "subset_levels.png",
+            + page.figure(partial(fig_levels, page.plt, s), "subset_levels.png",
                           "threshold of each level (left) and the probability of reaching it (right)")
             + table(["level", "threshold", "share", "acceptance", "runs", "unusable"], rows, "narrow")
             + "</section>")

@@ -11,6 +11,8 @@ loads.
 
 The table is truss_report.read_sweep's DataFrame: one row per design value, the sweep's settings
 and the allowable in df.attrs."""
+from functools import partial
+
 import math
 
 import numpy as np
@@ -202,7 +204,7 @@ def section_sweep(page, s):
             "of 0 as its upper bound. Runs without a result (capped, failed to solve, or without a margin) "
             f"count as safe in an estimate: past {fmt(100 * NO_RESULT_SHARE)} % of a value's runs its estimate "
             "does not support a PASS.</p>"
-            + page.figure(fig_sweep(page.plt, s), "sweep.png",
+            + page.figure(partial(fig_sweep, page.plt, s), "sweep.png",
                           "failure probability against the design value (log axis), target and allowable")
             + refine_html(at) + warn
             + table([h for i, h in enumerate(["value", "p", "CoV", f"{conf} % low", f"{conf} % high",

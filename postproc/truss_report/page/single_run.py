@@ -1,5 +1,7 @@
 """truss_report.page.single_run: the single-run report: status, summary, per-bay table and the
 paper's Fig. 4 and Fig. 5."""
+from functools import partial
+
 import os
 
 import numpy as np
@@ -61,18 +63,18 @@ def single_run_figures(page, run):
     sel = h["bay"] == bay
     parts = [head]
     if np.any(np.isfinite(h["hinge_x_m"][sel]) & np.isfinite(h["hinge_y_m"][sel])):
-        parts.append(page.figure(fig4(page.plt, run, bay),
+        parts.append(page.figure(partial(fig4, page.plt, run, bay),
                                  f"fig4_hinge_trajectory_bay{bay}.png",
                                  f"hinge trajectory of bay {bay} (paper Fig. 4)", "half"))
     else:
         parts.append(f"<p class='note'>No hinge samples of bay {bay}: no Fig. 4.</p>")
-    parts.append(page.figure(fig5(page.plt, run), "fig5_drive_and_pin_force.png",
+    parts.append(page.figure(partial(fig5, page.plt, run), "fig5_drive_and_pin_force.png",
                              "drive force and rail pin force against time (paper Fig. 5)"))
     if np.any(sel):
-        parts.append(page.figure(fig5_zoom(page.plt, run, bay), f"fig5_bay{bay}_zoom.png",
+        parts.append(page.figure(partial(fig5_zoom, page.plt, run, bay), f"fig5_bay{bay}_zoom.png",
                                  f"the same in the stage of bay {bay}"))
     if "frame_height_m" in h:
-        parts.append(page.figure(fig_frame_heights(page.plt, run), "frame_heights.png",
+        parts.append(page.figure(partial(fig_frame_heights, page.plt, run), "frame_heights.png",
                                  "heights of the frames against time (free stack)"))
     parts.append("</section>")
     return "\n".join(parts)

@@ -1,6 +1,8 @@
 """truss_report.page.top_bays: the motorisation chart (resistive torque per bay against the motor's
 torque after derating and losses) and the per-bay design values (lock time, latch energy, pin
 force, rail-entry impulse: the top level's percentile with its upper bound, per bay)."""
+from functools import partial
+
 import numpy as np
 
 from .figures_motor import fig_motor_torque
@@ -23,7 +25,7 @@ def chart_html(page, chart, level, du):
                 "force the mast's resistance) and the file's per-bay drive force and available torque.</p>")
     lab, f = du.get("torque", "Nm", chart.resist[np.isfinite(chart.resist)])
     return page.figure(
-        fig_motor_torque(page.plt, chart, level, lab, f), "motorisation_chart.png",
+        partial(fig_motor_torque, page.plt, chart, level, lab, f), "motorisation_chart.png",
         f"resistive torque at the screws per bay (the peak drive torque of the bay's stage, F h / 2π, the three "
         f"screws together): P50, P{fmt(level)} and min–max over the ok runs, nominal dashed; green: the motor's "
         "torque at the prescribed speed delivered to the screws after its derating and the drive train's losses, "

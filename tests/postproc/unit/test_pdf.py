@@ -103,7 +103,8 @@ def late_figure(d, size_change=0):
     def wait():
         save_png(fig, str(d / "late one.png"))
         plt.close(fig)
-    return (str(d / "report.html"), str(d / "report.pdf"), {"late one.png": (w + size_change, h)}, wait), d / "late one.png"
+    sizes = {"late one.png": (w + size_change, h)}
+    return (str(d / "report.html"), str(d / "report.pdf"), sizes.get, wait), d / "late one.png"
 
 
 def test_figure_drawn_after_the_layout_is_the_pdfs_image(tmp_path):
