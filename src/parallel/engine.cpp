@@ -70,7 +70,7 @@ class Rank0Server {
   Collector& collector_;
   results::ScheduleSummary& sum_;
   std::vector<int> want_windows_;  // owners waiting for the first windows
-  bool asked_sample_ = false;
+  bool asked_seed_ = false;
   results::ChunkReport report_;    // its summaries' room used again
 };
 
@@ -130,10 +130,10 @@ void Rank0Server::handle(int tag, int source, std::string& bytes) {
   } else if (tag == kTagAskWindows) {
     if (collector_.seeded()) return send_windows(source);
     want_windows_.push_back(source);
-    if (!asked_sample_) node_.send(source, kTagAskSample, {});
-    asked_sample_ = true;
+    if (!asked_seed_) node_.send(source, kTagAskSeed, {});
+    asked_seed_ = true;
   } else if (tag == kTagSeed) {
-    collector_.seed(results::read_seed_sample(bytes));
+    collector_.seed(results::read_chunk_placement(bytes).windows);
     for (int w : want_windows_) send_windows(w);
     want_windows_.clear();
   } else if (tag == kTagFinished) {
@@ -319,7 +319,7 @@ void Engine::Impl::handle(int tag, int source, std::string& bytes) {
   else if (tag == kTagRecords) owner->add_records(bytes);
   else if (tag == kTagPlacement) owner->on_placement(bytes);
   else if (tag == kTagWindows) owner->on_windows(bytes);
-  else if (tag == kTagAskSample) owner->on_sample_ask();
+  else if (tag == kTagAskSeed) owner->on_seed_ask();
   else if (server) server->handle(tag, source, bytes);
   else throw std::runtime_error(fmt::format("rank {} got a message of tag {} from rank {}", node.rank(), tag, source));
 }
