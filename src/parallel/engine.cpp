@@ -24,6 +24,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr auto kPollInterval = std::chrono::milliseconds(50);  // bounds how late a chunk is placed
+// Rank 0 idle (the end of a round, the last chunks) looks at its messages once a millisecond: a
+// look that finds nothing costs it about as much CPU as tens of costless results (the MPI library
+// yields the core when oversubscribed, and each sleep is a context switch), and rank 0's answers
+// at the end wait for nothing faster than that.
+constexpr long kRank0IdleUs = 1000;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Adds the wall time of its scope to a counter (steady clock).
@@ -250,7 +255,7 @@ void Rank0Round::run() {
   for (int w = 1; w < node_.size(); ++w) send_batch(w);
   for (int w = 1; w < node_.size(); ++w)
     if (!waiting_[static_cast<std::size_t>(w)]) send_batch(w);
-  Backoff backoff;  // rank 0 idles only at the end of a round: a millisecond late at most
+  Backoff backoff(kRank0IdleUs, kRank0IdleUs);  // only at the end of a round: a millisecond late at most
   Clock::time_point last_poll{};
   while (!collector_.round_complete(plan_) || batches_out_ > 0) {
     bool progressed = false;
@@ -339,7 +344,7 @@ bool Engine::Impl::serve() {
 // After the last round: every chunk built, placed and written; each owner says so once its bytes
 // are synced, and rank 0 waits for all of them.
 void Engine::Impl::drain(bool root) {
-  Backoff backoff;
+  Backoff backoff = root ? Backoff(kRank0IdleUs, kRank0IdleUs) : Backoff();
   bool finished = false;
   while (!finished || (root && server->finished < node.size())) {
     const bool worked = node.poll() | serve();

@@ -34,15 +34,15 @@ inline constexpr int kTagFinished = 21;     // owner -> rank 0: its chunks writt
 [[noreturn]] void abort_job(MPI_Comm comm, const char* where, const std::exception& e);
 void set_abort_removes(const std::string& temporary);
 
-// Sleeps between polls: 20 us at first, doubling up to max_us; reset() after progress.
+// Sleeps between polls: min_us at first, doubling up to max_us; reset() after progress.
 class Backoff {
  public:
-  explicit Backoff(long max_us = 1000) : max_us_(max_us) {}
+  explicit Backoff(long min_us = 20, long max_us = 1000) : us_(min_us), min_us_(min_us), max_us_(max_us) {}
   void sleep();
-  void reset() { us_ = 20; }
+  void reset() { us_ = min_us_; }
 
  private:
-  long us_ = 20, max_us_;
+  long us_, min_us_, max_us_;
 };
 
 // A rank's messages: nonblocking sends it keeps until they complete (records counted against
