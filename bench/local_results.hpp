@@ -59,7 +59,7 @@ class LocalResults {
       if (!k) return false;
       results::ResultStore& store = file_->store();
       const double c0 = thread_cpu_s();
-      if (!store.seeded()) store.seed(builder_->sample(*k));
+      if (!store.seeded()) store.seed(builder_->first_windows(*k));
       rank0_cpu_s += thread_cpu_s() - c0;
       encoding_ = *k;
       encoded_ = {};

@@ -24,6 +24,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr auto kPollInterval = std::chrono::milliseconds(50);  // bounds how late a chunk is placed
+// Rank 0 idle (the end of a round, the last chunks) looks at its messages once a millisecond: a
+// look that finds nothing costs it about as much CPU as tens of costless results (the MPI library
+// yields the core when oversubscribed, and each sleep is a context switch), and rank 0's answers
+// at the end wait for nothing faster than that.
+constexpr long kRank0IdleUs = 1000;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Adds the wall time of its scope to a counter (steady clock).
@@ -70,7 +75,7 @@ class Rank0Server {
   Collector& collector_;
   results::ScheduleSummary& sum_;
   std::vector<int> want_windows_;  // owners waiting for the first windows
-  bool asked_sample_ = false;
+  bool asked_seed_ = false;
   results::ChunkReport report_;    // its summaries' room used again
 };
 
@@ -130,10 +135,10 @@ void Rank0Server::handle(int tag, int source, std::string& bytes) {
   } else if (tag == kTagAskWindows) {
     if (collector_.seeded()) return send_windows(source);
     want_windows_.push_back(source);
-    if (!asked_sample_) node_.send(source, kTagAskSample, {});
-    asked_sample_ = true;
+    if (!asked_seed_) node_.send(source, kTagAskSeed, {});
+    asked_seed_ = true;
   } else if (tag == kTagSeed) {
-    collector_.seed(results::read_seed_sample(bytes));
+    collector_.seed(results::read_chunk_placement(bytes).windows);
     for (int w : want_windows_) send_windows(w);
     want_windows_.clear();
   } else if (tag == kTagFinished) {
@@ -250,7 +255,7 @@ void Rank0Round::run() {
   for (int w = 1; w < node_.size(); ++w) send_batch(w);
   for (int w = 1; w < node_.size(); ++w)
     if (!waiting_[static_cast<std::size_t>(w)]) send_batch(w);
-  Backoff backoff;  // rank 0 idles only at the end of a round: a millisecond late at most
+  Backoff backoff(kRank0IdleUs, kRank0IdleUs);  // only at the end of a round: a millisecond late at most
   Clock::time_point last_poll{};
   while (!collector_.round_complete(plan_) || batches_out_ > 0) {
     bool progressed = false;
@@ -319,7 +324,7 @@ void Engine::Impl::handle(int tag, int source, std::string& bytes) {
   else if (tag == kTagRecords) owner->add_records(bytes);
   else if (tag == kTagPlacement) owner->on_placement(bytes);
   else if (tag == kTagWindows) owner->on_windows(bytes);
-  else if (tag == kTagAskSample) owner->on_sample_ask();
+  else if (tag == kTagAskSeed) owner->on_seed_ask();
   else if (server) server->handle(tag, source, bytes);
   else throw std::runtime_error(fmt::format("rank {} got a message of tag {} from rank {}", node.rank(), tag, source));
 }
@@ -339,7 +344,7 @@ bool Engine::Impl::serve() {
 // After the last round: every chunk built, placed and written; each owner says so once its bytes
 // are synced, and rank 0 waits for all of them.
 void Engine::Impl::drain(bool root) {
-  Backoff backoff;
+  Backoff backoff = root ? Backoff(kRank0IdleUs, kRank0IdleUs) : Backoff();
   bool finished = false;
   while (!finished || (root && server->finished < node.size())) {
     const bool worked = node.poll() | serve();

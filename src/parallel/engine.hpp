@@ -19,7 +19,7 @@
 //
 // Messages (engine_detail.hpp): a batch of run indices (rank 0 -> worker; none: the round is
 // over), a batch done (worker -> rank 0), records (any rank -> owner: sealed journal frames,
-// results/journal.hpp), round parts, chunk reports, windows requests and seed samples (owner ->
+// results/journal.hpp), round parts, chunk reports, windows requests and first windows (owner ->
 // rank 0), placements and windows (rank 0 -> owner), and an owner's end.
 #pragma once
 #include <mpi.h>
@@ -115,7 +115,7 @@ class Collector {
   void add_part(const results::RoundPart& part);
   results::ChunkPlacement place(const results::ChunkReport& report);
   bool seeded() const { return file_.store().seeded(); }
-  void seed(const results::SeedSample& s) { file_.store().seed(s); }
+  void seed(const std::vector<statistics::Windows>& w) { file_.store().seed(w); }
   results::ChunkPlacement windows() const;  // no chunk, the current windows
   std::size_t n_observed() const { return observed_.size(); }
   const std::vector<std::size_t>& observed_fields() const { return observed_; }

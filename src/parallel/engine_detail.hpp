@@ -23,8 +23,8 @@ inline constexpr int kTagDone = 13;         // worker -> rank 0: a batch is comp
 inline constexpr int kTagPart = 14;         // owner -> rank 0: a round part (results/chunk_messages.hpp)
 inline constexpr int kTagChunk = 15;        // owner -> rank 0: a complete chunk's report
 inline constexpr int kTagAskWindows = 16;   // owner -> rank 0: the statistics windows, please
-inline constexpr int kTagSeed = 17;         // owner -> rank 0: a seed sample
-inline constexpr int kTagAskSample = 18;    // rank 0 -> owner: send a seed sample
+inline constexpr int kTagSeed = 17;         // owner -> rank 0: the first windows (a placement of no chunk)
+inline constexpr int kTagAskSeed = 18;      // rank 0 -> owner: send the first windows
 inline constexpr int kTagPlacement = 19;    // rank 0 -> owner: where a chunk goes, and the windows
 inline constexpr int kTagWindows = 20;      // rank 0 -> owner: the windows (a placement of no chunk)
 inline constexpr int kTagFinished = 21;     // owner -> rank 0: its chunks written and synced
@@ -34,15 +34,15 @@ inline constexpr int kTagFinished = 21;     // owner -> rank 0: its chunks writt
 [[noreturn]] void abort_job(MPI_Comm comm, const char* where, const std::exception& e);
 void set_abort_removes(const std::string& temporary);
 
-// Sleeps between polls: 20 us at first, doubling up to max_us; reset() after progress.
+// Sleeps between polls: min_us at first, doubling up to max_us; reset() after progress.
 class Backoff {
  public:
-  explicit Backoff(long max_us = 1000) : max_us_(max_us) {}
+  explicit Backoff(long min_us = 20, long max_us = 1000) : us_(min_us), min_us_(min_us), max_us_(max_us) {}
   void sleep();
-  void reset() { us_ = 20; }
+  void reset() { us_ = min_us_; }
 
  private:
-  long us_ = 20, max_us_;
+  long us_, min_us_, max_us_;
 };
 
 // A rank's messages: nonblocking sends it keeps until they complete (records counted against

@@ -124,9 +124,12 @@ void ChunkOwner::on_windows(std::string_view bytes) {
   windows_ = results::read_chunk_placement(bytes).windows;
 }
 
-void ChunkOwner::on_sample_ask() {
-  if (to_encode_.empty()) throw std::logic_error("asked for a seed sample without a complete chunk");
-  send_(kTagSeed, results::to_bytes(builder_.sample(to_encode_.front())));
+void ChunkOwner::on_seed_ask() {
+  if (to_encode_.empty()) throw std::logic_error("asked for the first windows without a complete chunk");
+  results::ChunkPlacement p;
+  p.index = -1;
+  p.windows = builder_.first_windows(to_encode_.front());
+  send_(kTagSeed, results::to_bytes(p));
 }
 
 void ChunkOwner::on_placement(std::string_view bytes) {

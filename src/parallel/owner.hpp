@@ -58,7 +58,7 @@ class ChunkOwner {
   void set_session(std::int64_t session) { files_.session = session; }
   void on_placement(std::string_view bytes);
   void on_windows(std::string_view bytes);
-  void on_sample_ask();
+  void on_seed_ask();
   // One unit of work (round parts and reports out, one dataset encoded, the journal's periodic
   // sync); false when there was none.
   bool step();

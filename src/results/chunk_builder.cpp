@@ -230,21 +230,17 @@ std::vector<std::int64_t> ChunkBuilder::open_indices() const {
   return k;
 }
 
-SeedSample ChunkBuilder::sample(std::int64_t chunk) const {
+std::vector<statistics::Windows> ChunkBuilder::first_windows(std::int64_t chunk) const {
   const Chunk& c = *open_.at(chunk);
   const auto rows = static_cast<std::size_t>(rows_of(chunk)), n = static_cast<std::size_t>(chunk_);
-  const std::size_t step = statistics::calc_seed_step(rows);
-  SeedSample s;
-  for (std::size_t i = 0; i < rows; i += step) s.use.push_back(c.use[i]);
+  std::vector<statistics::Windows> w;
   for (const ChunkColumn& col : cols_.columns) {
     if (col.stats < 0) continue;
     const char* block = c.cols.get() + n * L_.fields()[static_cast<std::size_t>(col.field)].offset;
-    for (std::size_t b = 0; b < col.width; ++b) {
-      auto& v = s.values.emplace_back();
-      for (std::size_t i = 0; i < rows; i += step) v.push_back(util::get_at<double>(block + 8 * (i * col.width + b)));
-    }
+    for (std::size_t b = 0; b < col.width; ++b)
+      w.push_back(statistics::calc_first_windows(block + 8 * b, rows, col.width, c.use.data()));
   }
-  return s;
+  return w;
 }
 
 }  // namespace truss::results

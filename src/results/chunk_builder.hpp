@@ -80,14 +80,6 @@ struct EncodedChunk {
   std::vector<std::string> bytes;  // per dataset
 };
 
-// The rows of a chunk that seed rank 0's first statistics windows: every step-th row (at most
-// statistics::kSeedValues of them), whether each is usable (an ok run), and each statistics
-// column's values there ([column][sampled row]).
-struct SeedSample {
-  std::vector<std::uint8_t> use;
-  std::vector<std::vector<double>> values;
-};
-
 class ChunkBuilder {
  public:
   // `observed`: the record fields of the float64 outputs the method reads (round parts carry them).
@@ -115,7 +107,9 @@ class ChunkBuilder {
   // the summaries of its statistics columns against `windows` (one per statistics column); true
   // when every dataset is done, the chunk's messages are in the report and its rows freed.
   bool encode_step(std::int64_t chunk, const std::vector<statistics::Windows>& windows, EncodedChunk& out);
-  SeedSample sample(std::int64_t chunk) const;  // a complete chunk's
+  // Rank 0's first statistics windows (statistics::calc_first_windows), one per statistics column,
+  // from a complete chunk's rows.
+  std::vector<statistics::Windows> first_windows(std::int64_t chunk) const;
   std::size_t open_chunks() const { return open_.size(); }  // in memory: filling, or complete and not encoded
   std::vector<std::int64_t> open_indices() const;
   std::size_t peak_chunks() const { return peak_chunks_; }

@@ -146,29 +146,6 @@ void read_chunk_report(std::string_view bytes, ChunkReport& r) {
   in.expect_end();
 }
 
-std::string to_bytes(const SeedSample& s) {
-  std::string out;
-  put(out, static_cast<std::uint32_t>(s.use.size()));
-  out.append(reinterpret_cast<const char*>(s.use.data()), s.use.size());
-  put(out, static_cast<std::uint32_t>(s.values.size()));
-  for (const auto& v : s.values) put_doubles(out, v);
-  return out;
-}
-
-SeedSample read_seed_sample(std::string_view bytes) {
-  ByteReader in(bytes, "a seed sample");
-  SeedSample s;
-  const std::string_view use = in.get_bytes(get_count(in, 1, "a seed sample"));
-  s.use.assign(use.begin(), use.end());
-  s.values.resize(get_count(in, 4, "a seed sample"));
-  for (auto& v : s.values) {
-    get_doubles(in, v, "a seed sample");
-    if (v.size() != s.use.size()) throw std::runtime_error("a seed sample whose columns differ in length");
-  }
-  in.expect_end();
-  return s;
-}
-
 std::string to_bytes(const ChunkPlacement& p) {
   std::string out;
   put(out, p.index);

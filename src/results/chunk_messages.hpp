@@ -1,6 +1,6 @@
 // The byte images of what a chunk's builder and rank 0 exchange (chunk_builder.hpp): round parts,
-// chunk reports, seed samples (builder -> rank 0) and placements with the current statistics
-// windows (rank 0 -> builder). Little-endian (util/bytes.hpp); the readers throw
+// chunk reports (builder -> rank 0) and placements with the statistics windows (rank 0 -> builder;
+// also the first windows, builder -> rank 0). Little-endian (util/bytes.hpp); the readers throw
 // std::runtime_error for bytes that are not one image of the kind.
 #pragma once
 #include <string>
@@ -22,11 +22,8 @@ std::string to_bytes(const ChunkReport& r);
 // Into `r` (its summaries' room used again).
 void read_chunk_report(std::string_view bytes, ChunkReport& r);
 
-// u32 rows, the use flags, u32 columns, each column's values.
-std::string to_bytes(const SeedSample& s);
-SeedSample read_seed_sample(std::string_view bytes);
-
-// Where a chunk's datasets go and the windows to summarise the next chunks against.
+// Where a chunk's datasets go and the windows to summarise the next chunks against (index -1 and
+// no addresses: windows alone).
 struct ChunkPlacement {
   std::int64_t index = 0;
   std::vector<ChunkAddress> addresses;       // per dataset

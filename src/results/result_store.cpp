@@ -114,13 +114,15 @@ void ResultStore::extend(std::int64_t n_runs) {
   n_ = n_runs;
 }
 
-void ResultStore::seed(const SeedSample& s) {
+void ResultStore::seed(const std::vector<statistics::Windows>& w) {
   if (seeded_) return;
-  if (s.values.size() != col_.size())
-    throw std::runtime_error(fmt::format("a seed sample of {} columns for {} statistics columns", s.values.size(),
-                                         col_.size()));
-  for (std::size_t k = 0; k < col_.size(); ++k)
-    col_[k].seed(reinterpret_cast<const char*>(s.values[k].data()), s.use.size(), 1, s.use.data());
+  if (w.size() != col_.size())
+    throw std::runtime_error(
+        fmt::format("first windows of {} columns for {} statistics columns", w.size(), col_.size()));
+  for (const statistics::Windows& c : w)
+    for (const statistics::Window& x : c)
+      if (!(x.lo <= x.hi)) throw std::runtime_error(fmt::format("a first window [{}, {}]", x.lo, x.hi));
+  for (std::size_t k = 0; k < col_.size(); ++k) col_[k].seed(w[k]);
   seeded_ = true;
 }
 

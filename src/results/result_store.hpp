@@ -3,7 +3,7 @@
 // places the chunk's datasets in the file (HDF5 allocates and indexes them through the placement
 // driver, placement_driver.hpp; the builder writes their bytes there), writes the chunk's messages
 // and merges the summaries of its statistics columns (statistics/column_stats.hpp). The first
-// windows come from the first sample a builder sends. Its work is per chunk, never per run; what it
+// windows come from the first builder with a complete chunk. Its work is per chunk, never per run; what it
 // writes does not depend on which rank built a chunk or when: the file holds the same values, and
 // the same chunk bytes, on any number of ranks and after --resume.
 #pragma once
@@ -51,7 +51,9 @@ class ResultStore {
   std::int64_t chunk_runs() const { return chunk_; }
 
   bool seeded() const { return seeded_; }
-  void seed(const SeedSample& s);  // the first windows of every statistics column (once)
+  // The first windows of every statistics column (once; ChunkBuilder::first_windows). Throws
+  // std::runtime_error for another count or a window whose ends are not ordered.
+  void seed(const std::vector<statistics::Windows>& w);
   std::vector<statistics::Windows> windows() const;
   // A complete chunk of the rows so far: its datasets placed (their addresses, in dataset order),
   // its messages written and its statistics merged. Throws std::runtime_error for a chunk placed

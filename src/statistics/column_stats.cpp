@@ -14,9 +14,9 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kSigmas = 6.0;        // half-width of a window in binomial standard deviations of rank
-// The first windows hold about 40 % of a chunk's values summed over the six targets (2,048 seed
-// values); most of the merging and narrowing happens while they are that wide, so margin and slack
-// are small (a miss costs a read-back at the end, never a wrong number).
+// The first windows hold about 25 % of a chunk's values summed over the six targets (from a chunk
+// of 4,096 values); most of the merging and narrowing happens while they are that wide, so margin
+// and slack are small (a miss costs a read-back at the end, never a wrong number).
 constexpr std::int64_t kMargin = 16;   // ... plus this many ranks (small N, ties)
 constexpr std::size_t kSlack = 256;    // narrow only past 3 w + kSlack kept values: amortised O(1) a value
 
@@ -204,16 +204,11 @@ void calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride
   }
 }
 
-void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use) {
-  if (seeded_ || count_ > 0) return;
-  seeded_ = true;
-  // Every step-th row, at most about kSeedValues of them: the windows' half-width is in ranks of
-  // this sample, so a smaller sample only makes the first windows wider.
-  const std::size_t step = calc_seed_step(rows);
+Windows calc_first_windows(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use) {
   std::vector<double> x;
-  x.reserve(kSeedValues);
+  x.reserve(rows);
   unsigned zeros = 0;  // bit 0: +0.0 seen, bit 1: -0.0 seen
-  for (std::size_t i = 0; i < rows; i += step) {
+  for (std::size_t i = 0; i < rows; ++i) {
     double v;
     std::memcpy(&v, values + 8 * i * stride, 8);
     if (!use[i] || !std::isfinite(v)) continue;
@@ -223,8 +218,9 @@ void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride,
   const bool mixed_zeros = zeros == 3;
   // Each window end's order statistic put in its place (a look-up then, as in sorted values).
   // Sorted instead where +0.0 and -0.0 both occur: which of them lands at a rank depends on the
-  // algorithm, and the windows must come out as before to the bit.
+  // algorithm, and the windows must not.
   const auto n = static_cast<std::int64_t>(x.size());
+  Windows w{};
   if (mixed_zeros) {
     std::sort(x.begin(), x.end());
   } else {
@@ -235,9 +231,16 @@ void ColumnStats::seed(const char* values, std::size_t rows, std::size_t stride,
     }
     std::sort(ranks.begin(), ranks.end());
     ranks.erase(std::unique(ranks.begin(), ranks.end()), ranks.end());
-    WindowValues{win_[0], 0, 0, x}.select(ranks.data(), ranks.size());
+    WindowValues{w[0], 0, 0, x}.select(ranks.data(), ranks.size());
   }
-  for (std::size_t t = 0; t < kStatTargets; ++t) win_[t] = calc_window({win_[t], 0, 0, x}, 0, n, target_p(t), true);
+  for (std::size_t t = 0; t < kStatTargets; ++t) w[t] = calc_window({w[t], 0, 0, x}, 0, n, target_p(t), true);
+  return w;
+}
+
+void ColumnStats::seed(const Windows& w) {
+  if (seeded_ || count_ > 0) return;
+  seeded_ = true;
+  win_ = w;
 }
 
 // k copies of v (of a summary made against a wider window, or of a window being cut) into target

@@ -73,17 +73,20 @@ ChunkSummary calc_chunk_summary(const char* values, std::size_t rows, std::size_
 // The same into s, whose vectors' room is used again (rank 0 makes one summary per column and chunk).
 void calc_chunk_summary(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use,
                         const Windows& w, ChunkSummary& s);
-// The first windows come from every step-th row of a chunk, at most kSeedValues values: seed()
-// of those rows alone (stride 1, rows <= kSeedValues) gives the same windows as of the whole chunk.
-inline constexpr std::size_t kSeedValues = 2048;
-inline std::size_t calc_seed_step(std::size_t rows) { return (rows + kSeedValues - 1) / kSeedValues; }
+// The first windows of a column, from a complete chunk's usable values (all of them: a window's
+// half-width is in ranks of these values, so that the more there are, the narrower the windows the
+// first chunks are summarised against, and the fewer values they keep).
+Windows calc_first_windows(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use);
 
 class ColumnStats {
  public:
   const Windows& windows() const { return win_; }
   bool seeded() const { return seeded_; }
-  // First windows from a chunk's values (before any summary is merged): as if they were kept.
-  void seed(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use);
+  // The first windows (before any summary is merged; ignored after): calc_first_windows.
+  void seed(const Windows& w);
+  void seed(const char* values, std::size_t rows, std::size_t stride, const std::uint8_t* use) {
+    seed(calc_first_windows(values, rows, stride, use));
+  }
   // Merges chunk `chunk`'s summary (made against these windows or older ones). Throws
   // std::runtime_error for a negative chunk index or a chunk merged twice.
   void add(std::int64_t chunk, const ChunkSummary& s);

@@ -123,6 +123,41 @@ TEST_CASE("streamed statistics: small and empty columns", "[campaign][stats]") {
   CHECK(std::isnan(one.stats.std));
 }
 
+TEST_CASE("streamed statistics: the first windows are the order statistics of a whole chunk", "[campaign][stats]") {
+  // The rule of column_stats.hpp from sorted values: for target p among the chunk's n usable values,
+  // r = p (n - 1), w = ceil(6 sqrt(n p (1 - p))) + 16, the window [x_(floor r - w), x_(ceil r + w)],
+  // an end past the values left open. Every row counts (no sample): rows past 2,048 included, a
+  // stride, unused rows, NaN; a chunk with both zeros among ties.
+  std::mt19937_64 rng(31);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const std::size_t rows : {std::size_t{4096}, std::size_t{3000}, std::size_t{40}}) {
+    for (int kind = 0; kind < 2; ++kind) {
+      std::vector<double> v(2 * rows, 1e300);
+      std::vector<std::uint8_t> use(rows);
+      std::vector<double> x;
+      for (std::size_t i = 0; i < rows; ++i) {
+        double a = kind == 0 ? g(rng) : static_cast<double>(static_cast<int>(rng() % 5) - 2) * 0.0;
+        if (i % 97 == 3) a = std::numeric_limits<double>::quiet_NaN();
+        v[2 * i] = i < rows / 2 ? a : a + 10.0;  // the second half apart: a sample would miss it
+        use[i] = rng() % 9 != 0;
+        if (use[i] && std::isfinite(v[2 * i])) x.push_back(v[2 * i]);
+      }
+      std::sort(x.begin(), x.end());
+      const auto n = static_cast<std::int64_t>(x.size());
+      const Windows w = calc_first_windows(reinterpret_cast<const char*>(v.data()), rows, 2, use.data());
+      for (std::size_t t = 0; t < kStatTargets; ++t) {
+        INFO("rows " << rows << ", kind " << kind << ", percentile " << kStatPercentiles[t]);
+        const double p = kStatPercentiles[t] / 100.0, r = p * static_cast<double>(n - 1);
+        const auto half = static_cast<std::int64_t>(std::ceil(6.0 * std::sqrt(static_cast<double>(n) * p * (1.0 - p)))) + 16;
+        const auto lo = static_cast<std::int64_t>(std::floor(r)) - half, hi = static_cast<std::int64_t>(std::ceil(r)) + half;
+        CHECK(w[t].lo == (lo > 0 ? x[static_cast<std::size_t>(lo)] : -inf));
+        CHECK(w[t].hi == (hi < n - 1 ? x[static_cast<std::size_t>(hi)] : inf));
+      }
+    }
+  }
+}
+
 TEST_CASE("streamed statistics: a column that drifts with the run index comes back unresolved, not wrong", "[campaign][stats]") {
   // Sorted values completing in index order: the first chunk's windows hold the lowest values only.
   const std::size_t n = 100000;

@@ -330,7 +330,7 @@ struct Campaign {
     for (auto& b : builders) {
       while (auto p = b->pop_part()) parts.push_back(std::move(*p));
       while (auto k = b->pop_complete()) {
-        if (!store->seeded()) store->seed(b->sample(*k));
+        if (!store->seeded()) store->seed(b->first_windows(*k));
         EncodedChunk e;
         while (!b->encode_step(*k, store->windows(), e)) {
         }
