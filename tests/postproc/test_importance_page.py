@@ -10,7 +10,8 @@ files of the shipped campaigns/free_rail_miss_rare.toml, made small:
   /importance/final_mean; the document block says there is no verdict; the report exits 0;
 - a refused estimate (the nominal 0.49 m, one level of 40 runs, 50 final runs: no final run
   reaches the miss): the page says the estimate is refused, with the file's reason, and not to be
-  used; the report still exits 0 (a page, no verdict).
+  used; the report still exits 0 (a page, no verdict);
+- a /importance without p: exit 2 naming the file and the member, nothing written.
 
   test_importance_page.py --repo SRC --scratch DIR --campaign truss-campaign [--mpiexec mpirun]
 """
@@ -19,6 +20,7 @@ import html as htmllib
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 
@@ -129,6 +131,23 @@ def check_refused(a):
     check("REFUSED" in out, "the terminal lines say refused")
 
 
+def check_malformed(a):
+    """A file whose /importance lacks p: the report's one error line naming the file and the member,
+    exit 2, nothing written."""
+    src = os.path.join(a.scratch, "importance_ok.h5")
+    h5 = os.path.join(a.scratch, "importance_no_p.h5")
+    shutil.copyfile(src, h5)
+    with h5py.File(h5, "r+") as f:
+        del f["importance/p"]
+    out = os.path.join(a.scratch, "importance_no_p")
+    shutil.rmtree(out, ignore_errors=True)
+    p = subprocess.run([PY, os.path.join(a.repo, "postproc", "report.py"), h5, "-o", out, "--no-pdf", "--quiet"],
+                       capture_output=True, text=True, timeout=300)
+    check(p.returncode == 2 and h5 in p.stderr and "/importance/p" in p.stderr and not os.path.exists(out),
+          f"a /importance without p: exit 2 naming the file and the member, nothing written "
+          f"(exit {p.returncode}: {p.stderr.strip()[-200:]})")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repo", required=True)
@@ -139,6 +158,7 @@ def main():
     os.makedirs(a.scratch, exist_ok=True)
     check_standing(a)
     check_refused(a)
+    check_malformed(a)
     print(f"{len(FAILS)} failed" if FAILS else "all passed")
     return 1 if FAILS else 0
 
