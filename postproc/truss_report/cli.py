@@ -23,12 +23,14 @@ from .page import pdf  # noqa: E402
 from .page.render import Page  # noqa: E402
 from .page.run_table import write_run_table  # noqa: E402
 from .page.sections_design import campaign_report, section_nominal  # noqa: E402
+from .page.sections_importance import importance_report  # noqa: E402
 from .page.sections_subset import subset_report  # noqa: E402
 from .page.sections_sweep import sweep_report  # noqa: E402
 from .page.single_run import single_run_report  # noqa: E402
 from .reading.campaign import load_campaign  # noqa: E402
 from .reading.extras import load_extras  # noqa: E402
 from .reading.frame import read_campaign  # noqa: E402
+from .reading.importance import Importance, read_importance  # noqa: E402
 from .reading.h5file import EXIT_INPUT_ERROR, H5, InputError, file_sha256, open_h5, read_kind  # noqa: E402
 from .reading.methods import read_method_groups  # noqa: E402
 from .reading.run import load_single_run  # noqa: E402
@@ -101,19 +103,17 @@ def write_pdf(staging, page, progress):
 
 
 def read_file(path, kind, sha256):
-    """Everything the report shows, read and checked (InputError on a damaged file)."""
+    """Everything the report shows, read and checked (InputError on a damaged file): (Campaign or
+    single run, the rare-event estimate (/importance's or /subset's, or None), /sweep, Extras)."""
     with open_h5(path) as f:
         h5 = H5(f, path)
         try:
             if kind != "campaign":
                 return load_single_run(h5, sha256), None, None, None
-            if h5.has("importance"):  # runs of an adapted density: their loads are not the design's
-                raise InputError(f"{path}: an importance-sampling campaign's runs are draws of a density moved "
-                                 "to the failure, not of the dispersions, so they give no design loads, and the "
-                                 "report has no page for its estimate: read /importance (p, cov, lower, upper, "
-                                 "ess, refused) or the campaign's terminal lines")
             c = load_campaign(h5, sha256)
-            return (c, *read_method_groups(h5), load_extras(h5, c))
+            importance = read_importance(h5)   # a standalone importance campaign: its estimate is the report
+            subset, sweep = read_method_groups(h5)
+            return c, importance or subset, sweep, load_extras(h5, c)
         except (OSError, RuntimeError) as e:
             raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
 
@@ -125,7 +125,7 @@ def read_other(path, kind, data, subset, sweep):
     InputError naming the file when they cannot be paired."""
     if kind != "campaign" or (subset is not None and sweep is None):
         raise InputError(f"{path}: --compare-with pairs a load report with a motor-sizing sweep; this report "
-                         "(a single run or a subset campaign) states no stall torque")
+                         "(a single run, a subset or an importance-sampling campaign) states no stall torque")
     sha256 = file_sha256(path) if os.path.isfile(path) else ""
     with open_h5(path) as f:
         other_kind = read_kind(H5(f, path))
@@ -135,7 +135,7 @@ def read_other(path, kind, data, subset, sweep):
     if sweep is not None:
         if o_sweep is not None or o_subset is not None:
             raise InputError(f"{path}: --compare-with of a sweep needs a load report's campaign (Monte Carlo or "
-                             "Latin hypercube runs, no [sweep], no subset simulation)")
+                             "Latin hypercube runs, no [sweep], no subset or importance sampling)")
         load, load_e, sizing, s = c, e, data, sweep_frame(sweep)
     else:
         if o_sweep is None:
@@ -169,6 +169,8 @@ def render(page, kind, data, subset, sweep, extras, opts, other=None):
                                     opts.inertia_factor, opts.levels[-1], opts.confidence)
                 answer = calc_motor_answer(load, m, data, s, replaced)
             return sweep_report(page, data, s, opts.revision, section_nominal(page, extras), answer)
+        if isinstance(subset, Importance):  # draws of a density moved to the failure: no design loads
+            return importance_report(data, subset, opts.revision, section_nominal(page, extras))
         if subset is not None:  # the runs are not draws: no design loads
             return subset_report(page, data, subset, opts.revision, section_nominal(page, extras))
         j = judge_campaign(data, extras, JudgeOptions(opts.levels, opts.confidence, opts.motorisation_factor,

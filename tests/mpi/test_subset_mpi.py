@@ -55,6 +55,8 @@ PROPOSALS = {"modified_metropolis": ("cov_bound", 2), "adaptive_conditional": ("
 
 def command(args, out, ranks, proposal):
     return ["mpirun", "--oversubscribe", "-np", str(ranks), args.driver, os.path.join(args.repo, CAMPAIGN), "-o", out,
+            # the shipped file estimates by importance sampling: this test keeps it on subset simulation
+            "--set", "ensemble.method=subset", "--set", "ensemble.importance=false", "--set", "ensemble.subset.p0=0.1",
             "--set", f"ensemble.subset.n_per_level={N}", "--set", "ensemble.subset.max_levels=3",
             "--set", f"ensemble.subset.proposal={proposal}",
             "--set", f"ensemble.subset.interval_cov={PROPOSALS[proposal][0]}",

@@ -33,8 +33,9 @@ EXIT = {"pass": 0, "fail": 3, "not_assessed": 4}
 BANNER = {"pass": "VERDICT: PASS", "fail": "VERDICT: FAIL", "not_assessed": "VERDICT: NOT ASSESSED"}
 # Few runs per shipped campaign: enough for every section to have data, cheap on 2 cores.
 SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],     # 4 blocks of 8 + 2
-         "free_rail_miss_rare": ["--set", "ensemble.subset.n_per_level=40",
-                                 "--set", "ensemble.subset.max_levels=2"],
+         # importance sampling, the free length lowered so that a few hundred runs reach the miss
+         "free_rail_miss_rare": ["--set", "mast.diagonal_free_length_m=0.483", "--set", "ensemble.importance.n_per_level=100",
+                                 "--set", "ensemble.importance.max_levels=3", "--set", "ensemble.importance.n_final=200"],
          "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"],
          # design sweeps: one small importance-sampling campaign reweighted to every value
          "motor_sizing": ["--set", "ensemble.importance.n_per_level=40", "--set", "ensemble.importance.max_levels=2",
