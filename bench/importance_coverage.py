@@ -5,7 +5,7 @@ a sweep, on analytic cases whose p is exact (tests/numeric/importance_cases.hpp)
 state, one set of runs for all the sweep's laws.
 
   importance_coverage.py --tool build/tests/truss_importance_analytic [--seeds 200] [--jobs 2]
-                         [--cache DIR]
+                         [--cache DIR] [--cases TEXT]
 
 Per case and law: the share of seeds whose two-sided lognormal interval holds the exact p, the same
 for the one-sided 95 % upper bound, the median ratio of the interval's ends, the spread sd(ln p^),
@@ -36,7 +36,13 @@ CASES = [
     ("nominal, one input, p 1e-5", 4.2649, False, 10, [-1.0, -0.5, 0.0, 0.5], [1.0], False),
     ("spread, every input, p 1e-5, d 2", 4.2649, True, 2, [0.0], [0.85, 1.0, 1.15], False),
     ("spread, every input, p 1e-5, d 10", 4.2649, True, 10, [0.0], [0.85, 1.0, 1.15], False),
+    ("spread, every input, p 1e-5, d 10, mixture", 4.2649, True, 10, [0.0], [0.85, 1.0, 1.15], True),
     ("spread, every input, p 1e-5, d 30", 4.2649, True, 30, [0.0], [0.85, 1.0, 1.15], False),
+    # A sweep as the campaign runs it: the runs at the widest spread (1.15, here the unit law) and
+    # the density adapted to the mixture of the values' laws (methods/importance_sweep.hpp).
+    ("widest spread's runs, every input, d 2", 3.70861, True, 2, [0.0], [0.73913, 0.86957, 1.0], True),
+    ("widest spread's runs, every input, d 10", 3.70861, True, 10, [0.0], [0.73913, 0.86957, 1.0], True),
+    ("widest spread's runs, every input, d 30", 3.70861, True, 30, [0.0], [0.73913, 0.86957, 1.0], True),
     ("spread, every input, p 1e-5, d 100", 4.2649, True, 100, [0.0], [0.85, 1.0, 1.15], False),
 ]
 
@@ -99,6 +105,7 @@ def main():
     ap.add_argument("--n", type=int, default=1000)
     ap.add_argument("--n-final", type=int, default=2000)
     ap.add_argument("--cache", default="")
+    ap.add_argument("--cases", default="", help="only the cases whose name holds this text")
     args = ap.parse_args()
     if args.cache:
         os.makedirs(args.cache, exist_ok=True)
@@ -108,7 +115,8 @@ def main():
           f"binomial floor {100 * floor:.1f} %; coverage among the estimates not refused")
     with ThreadPoolExecutor(args.jobs) as pool:
         jobs = [(c, [pool.submit(run, args.tool, c, s, min(chunk, args.seeds + 1 - s), args.n, args.n_final,
-                                 args.cache) for s in range(1, args.seeds + 1, chunk)]) for c in CASES]
+                                 args.cache) for s in range(1, args.seeds + 1, chunk)]) for c in CASES
+                if args.cases in c[0]]
         for c, futs in jobs:
             runs = [r for f in futs for r in f.result()]
             mean_runs = sum(r["runs"] for r in runs) / len(runs)
