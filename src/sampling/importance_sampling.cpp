@@ -166,7 +166,7 @@ void CrossEntropySampler::take_level(std::span<const double> margins, std::span<
   } else if (no_progress) {
     status_ = ImportanceStatus::no_progress;
     message_ = fmt::format("level {}: {}: the final runs use the last density", t - 1,
-                           lv.moved == 0 ? "the density is the law's own (no mean component 3 standard errors off 0)"
+                           lv.moved == 0 ? "the density did not move (no mean component by 3 standard errors)"
                                          : fmt::format("the threshold does not decrease ({:.6g})", lv.threshold));
   } else if (t >= opt_.max_levels) {
     status_ = ImportanceStatus::level_cap;
@@ -179,9 +179,8 @@ void CrossEntropySampler::take_level(std::span<const double> margins, std::span<
   plan(t, true);
 }
 
-// mu <- the cross-entropy mean of the elites, component by component where it lies significantly
-// off the law's mean 0, else 0 (see the header); returns the components set off 0, and the
-// weights' ESS in `ess`.
+// mu <- the cross-entropy mean of the elites, component by component where it moved significantly
+// (see the header); returns the components moved, and the weights' ESS in `ess`.
 int CrossEntropySampler::update_mean(const std::vector<std::size_t>& elite, std::span<const double> log_ratio,
                                      double& ess) {
   const auto d = static_cast<std::size_t>(opt_.dims);
@@ -208,10 +207,10 @@ int CrossEntropySampler::update_mean(const std::vector<std::size_t>& elite, std:
     for (std::size_t i = 0; i < elite.size(); ++i) mu += w[i] * z[i * d + j];
     mu /= sw;
     for (std::size_t i = 0; i < elite.size(); ++i) var += w[i] * w[i] * (z[i * d + j] - mu) * (z[i * d + j] - mu);
-    const bool significant = std::abs(mu) > ImportanceOptions::kSignificance * std::sqrt(var) / sw;
-    mean_[j] = significant ? mu : 0.0;
-    mean_var_[j] = significant ? var / (sw * sw) : 0.0;
-    moved += significant ? 1 : 0;
+    if (std::abs(mu - mean_[j]) <= ImportanceOptions::kSignificance * std::sqrt(var) / sw) continue;
+    mean_[j] = mu;
+    mean_var_[j] = var / (sw * sw);
+    ++moved;
   }
   return moved;
 }

@@ -19,17 +19,13 @@
 //   update       W_i = 1{margin_i <= gamma_t} f(z_i) / h_t(z_i), f the law the estimate is for
 //                (phi, or phi times the caller's ratio: a mixture of the laws a sweep serves, so
 //                the density covers all of them); the cross-entropy mean mu^ = sum W z / sum W.
-//                Each component of mu is set to mu^_j where mu^_j lies more than kSignificance (3)
-//                standard errors off the law's mean 0, se_j^2 = sum_i (W_i / sum W)^2 (z_ij - mu^_j)^2,
-//                else to 0: of the hundred-odd dimensions of a campaign most do not lead to the
-//                failure, and the elites' mean moves in each of them by noise of about
+//                Each component of mu moves to mu^_j only where mu^_j differs from it by more than
+//                kSignificance (3) standard errors, se_j^2 = sum_i (W_i / sum W)^2 (z_ij - mu^_j)^2,
+//                else keeps its value: of the hundred-odd dimensions of a campaign most do not lead
+//                to the failure, and the elites' mean moves in each of them by noise of about
 //                1 / sqrt(ESS); every such shift multiplies the weights' second moment by
 //                exp(shift^2), and over 99 dimensions the weights degenerate (measured: one input
-//                of 100 deciding, p = 1e-7: sd(ln p^) 6.7 with the plain mean, 0.06 filtered). The
-//                test is against 0, not against the component's current value: a component kept
-//                while its new mean lies within 3 standard errors of the old one lags behind the
-//                failure region where many inputs share it (ten inputs of equal weight: intervals
-//                holding p in 92.5 % of seeds that way, 95.0-95.2 % this way; 2,000 seeds).
+//                of 100 deciding, p = 1e-7: sd(ln p^) 6.7 with the plain mean, 0.06 filtered).
 //                The covariance stays I: a full covariance estimated from a tail's elites
 //                collapses within a few levels (its weights' ESS falls to 1), and a density of
 //                unit covariance does not degenerate with the dimension.
@@ -38,7 +34,7 @@
 //                (no_progress) the final round is drawn from the last density all the same: its
 //                estimate is unbiased whatever the density, and the estimate's own rule refuses it
 //                where the weights degenerate (reweighting.hpp).
-//   refusal      the mean's noise: the standard errors of the components the last update set off 0,
+//   refusal      the mean's noise: each component's standard error when it last moved, summed as
 //                E = sum_j se_j^2; a Gaussian shift off by delta multiplies the weights' second
 //                moment by about exp(|delta|^2), so E is what the density's own noise costs. Above
 //                kMaxMeanNoise (0.3: the second moment 1.35 times) the sampler refuses every law
@@ -105,8 +101,8 @@ struct ImportanceLevel {
   std::int64_t runs = 0, unusable = 0;
   double elite_ess = 0.0;       // Kish's effective size of the update weights W
   double shift = 0.0;           // |mu| of the density the level drew from
-  int moved = 0;                // mean components the update set off 0
-  double mean_noise = 0.0;      // sum_j se_j^2 of the updated mean (the components set off 0)
+  int moved = 0;                // mean components the update moved
+  double mean_noise = 0.0;      // sum_j se_j^2 of the updated mean (each component's at its last move)
 };
 
 enum class ImportanceStatus { running, converged, level_cap, no_progress };
@@ -146,7 +142,7 @@ class CrossEntropySampler {
   ImportanceRound round_, final_;
   std::int64_t evaluations_ = 0, rounds_ = 0;
   std::vector<double> mean_;      // the next round's density
-  std::vector<double> mean_var_;  // per component: se^2 of its value (0 where it is 0)
+  std::vector<double> mean_var_;  // per component: se^2 of its value (0 where never moved)
   std::vector<ImportanceLevel> levels_;
   std::vector<double> final_margins_;
 };
