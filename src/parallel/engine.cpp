@@ -230,6 +230,7 @@ void Rank0Round::compute_stretch(Clock::time_point last_poll) {
   const double c0 = thread_cpu_s();
   do {
     compute_one();
+    node_.progress_records();
     ++runs_since_poll_;
   } while (handed_ < to_do_ && !node_.flow_blocked() && !poll_due(last_poll) && !interrupted());
   sum_.rank0_compute_cpu_s += thread_cpu_s() - c0;

@@ -83,6 +83,10 @@ class Node {
   void route(std::string_view frame, std::int64_t run);
   void flush_records();
   bool has_unsent_records() const;
+  // Rank 0 between its own runs: while records it sent are in flight, the sends are tested
+  // (MPI_Test), so that moving their bytes (over TCP the sender's writes) is paid with the runs
+  // that made them, not in the next look at the messages. True if any completed.
+  bool progress_records() { return record_bytes_ > 0 && test_sends(); }
 
  private:
   struct Out {
