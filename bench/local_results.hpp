@@ -1,8 +1,8 @@
 // Benchmarks only: a campaign's result path on one process, without MPI: a record's frame into a
 // journal, its row into its chunk (results/chunk_builder.hpp), each complete chunk encoded one
 // dataset at a time (step(), between runs, as an owner does), placed by rank 0's store and its
-// bytes written where the store placed them. The owner's part and rank 0's part (placement,
-// statistics) are timed apart in thread CPU time.
+// bytes written where the store placed them. The owner's part and the central part (rank 0's
+// placement, the statistics rank's merge) are timed apart in thread CPU time.
 #pragma once
 #include <fcntl.h>
 #include <time.h>
@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "results/campaign_file.hpp"
+#include "results/chunk_stats.hpp"
 #include "results/journal.hpp"
 
 namespace truss::bench {
@@ -29,7 +30,7 @@ inline double thread_cpu_s() {
 class LocalResults {
  public:
   LocalResults(const std::string& out, const campaign::CampaignContext& ctx, std::int64_t n, int level)
-      : out_(out), ctx_(ctx) {
+      : out_(out), ctx_(ctx), stats_(ctx.record) {
     std::filesystem::remove(out + ".journal");
     journal_ = std::make_unique<results::Journal>(results::Journal::create(out + ".journal", "bench"));
     const results::StoreOptions opts{results::find_chunk_runs(n), level};
@@ -57,16 +58,16 @@ class LocalResults {
     if (!encoding_) {
       const auto k = builder_->pop_complete();
       if (!k) return false;
-      results::ResultStore& store = file_->store();
       const double c0 = thread_cpu_s();
-      if (!store.seeded()) store.seed(builder_->first_windows(*k));
+      if (!stats_.seeded()) stats_.seed(builder_->first_windows(*k));
       rank0_cpu_s += thread_cpu_s() - c0;
       encoding_ = *k;
       encoded_ = {};
     }
-    if (!builder_->encode_step(*encoding_, file_->store().windows(), encoded_)) return true;
+    if (!builder_->encode_step(*encoding_, stats_.windows(), encoded_)) return true;
     const double c0 = thread_cpu_s();
     const std::vector<results::ChunkAddress> at = file_->store().place(encoded_.report);
+    stats_.merge(encoded_.report.index, encoded_.report.summaries);
     rank0_cpu_s += thread_cpu_s() - c0;
     for (std::size_t d = 0; d < at.size(); ++d)
       if (::pwrite(fd_, encoded_.bytes[d].data(), encoded_.bytes[d].size(), static_cast<off_t>(at[d].offset)) !=
@@ -81,12 +82,12 @@ class LocalResults {
     while (step()) {
     }
     journal_->flush();
-    file_->write_summary({}, sim::RunResult{}, results::CampaignFileInfo{});
+    file_->write_summary(stats_.calc_stats(builder_->n_chunks()), {}, sim::RunResult{}, results::CampaignFileInfo{});
     file_->commit(true);
     journal_->close_and_remove();
     std::filesystem::remove(out_);
   }
-  double rank0_cpu_s = 0.0;  // rank 0's part (placement, statistics), thread CPU
+  double rank0_cpu_s = 0.0;  // rank 0's part and the statistics rank's (placement, statistics), thread CPU
 
  private:
   std::string out_;
@@ -94,6 +95,7 @@ class LocalResults {
   std::unique_ptr<results::Journal> journal_;
   std::unique_ptr<results::CampaignFile> file_;
   std::unique_ptr<results::ChunkBuilder> builder_;
+  results::ChunkStats stats_;
   std::optional<std::int64_t> encoding_;
   results::EncodedChunk encoded_;
   int fd_ = -1;

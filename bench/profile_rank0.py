@@ -2,10 +2,11 @@
 """Where rank 0's per-result time goes (not a test; docs/benchmarks.md).
 
 Runs the Table-1 campaign on 2 ranks with rank 0 under `perf record --call-graph dwarf` and
-splits rank 0's samples: runs (inside append_run_record, its own runs' CRC included) and the
-per-result path (everything else under run_engine: receiving, journalling, storing, writing the
-chunks), the last broken down by the function run_engine's round called (and the one that
-called), and by leaf function.
+splits rank 0's samples: runs (inside append_run_record, its own runs' CRC included), its own
+records on their way to their owners (sent and tested between its runs, counted with its runs),
+and the per-result path (everything else under the round loop: receiving, scheduling, placing the
+chunks), the last broken down by the function the round's loop called (and the one that called),
+and by leaf function.
 
   bench/profile_rank0.py BUILD_DIR [--runs 100000] [--mca single-copy-off|tcp|cma] [--freq 1000]
 """
@@ -20,6 +21,11 @@ MCA = {"single-copy-off": ["--mca", "btl_vader_single_copy_mechanism", "none"],
        "tcp": ["--mca", "btl", "self,tcp"], "cma": []}
 COMPUTE = ("append_run_record", "seal_frame", "calc_uniforms")
 # Frames of the simulation: a deep solver stack is cut by perf's 8 kB copy before append_run_record.
+# Rank 0's round loop: Rank0Round::run, or with its callers inlined (LTO) the engine's run.
+LOOP = ("Rank0Round::run", "Engine::run")
+# Called by the loop itself between rank 0's runs (Node::poll's calls are the per-result path): its
+# records gathered and sent, and their sends tested (Node::progress_records).
+OWN_RECORDS = ("Node::route", "Node::flush_records", "Node::test_sends", "Node::progress_records")
 SIMULATION = ("truss::stages::", "truss::model::", "truss::sim::", "truss::numerics::", "truss::integrators::")
 
 
@@ -35,9 +41,12 @@ def split(script):
         stack = " | ".join(frames)
         if any(k in stack for k in COMPUTE) or any(k in stack for k in SIMULATION):
             cat["runs"] += 1
-        elif "Rank0Round::run" in stack:
+        elif any(m in stack for m in LOOP):
+            i = max(k for k, f in enumerate(frames) if any(m in f for m in LOOP))
+            if i > 0 and any(m in frames[i - 1] for m in OWN_RECORDS):
+                cat["rank 0's own records to their owners (with its runs)"] += 1
+                continue
             cat["per-result path"] += 1
-            i = max(k for k, f in enumerate(frames) if "Rank0Round::run" in f)
             callee[frames[i - 1][:70] if i > 0 else "Rank0Round::run"] += 1
             two[" > ".join(f[:50] for f in frames[max(0, i - 2):i][::-1]) or "Rank0Round::run"] += 1
             leaf[frames[0][:70]] += 1

@@ -139,7 +139,8 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     const results::ResultStore& store = r0.file->store();
     const std::int64_t n_runs = store.n_runs(), chunk_runs = store.chunk_runs();
     const results::StatusCounts counts = r0.collector->status_counts();
-    r0.file->write_summary(histories, nominal, info);  // the store is gone after this
+    if (!r0.collector->stats()) throw std::logic_error("the campaign ended without its statistics");
+    r0.file->write_summary(*r0.collector->stats(), histories, nominal, info);  // the store is gone after this
     method.write_results({r0.file->handle(), r0.file->handle(), n_runs, {}});
     r0.file->commit(o.force);
     r0.journal->close_and_remove();
@@ -225,14 +226,19 @@ std::optional<int> load_campaign(MPI_Comm comm, bool root, const CommandOptions&
 int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& campaign_text,
                     const campaign::CampaignContext& ctx, methods::Method& method, Rank0& r0, Engine& engine,
                     std::unique_ptr<ChunkOwner>& owner) {
-  int rank = 0;
+  int rank = 0, size = 1;
   MPI_Comm_rank(comm, &rank);
+  MPI_Comm_size(comm, &size);
   const results::StoreOptions store{results::find_chunk_runs(ctx.options.ensemble.n_runs), o.compression};
   auto make_owner = [&](const SessionSetup& s, results::Journal* journal, const std::vector<std::size_t>& observed) {
-    owner = std::make_unique<ChunkOwner>(ctx.record, store, observed,
-                                         OwnerFiles{rank, s.session, s.output, s.temporary, s.campaign_crc, journal},
-                                         engine.sender(), o.engine.flush_interval_s);
+    owner = std::make_unique<ChunkOwner>(
+        ctx.record, store, observed,
+        OwnerFiles{rank, s.session, s.output, s.temporary, s.campaign_crc, journal, s.stats_rank}, engine.sender(),
+        o.engine.flush_interval_s);
   };
+  // The statistics are merged off rank 0 (engine.hpp), but where rank 0 restores chunks alone
+  // before the other ranks join (--resume), by rank 0.
+  const int stats_rank = size > 1 && !o.resume ? 1 : 0;
   int status = kExitOk;
   SessionSetup setup;
   if (rank == 0) {
@@ -240,9 +246,11 @@ int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& c
       prepare_output(o, campaign_text, ctx, method, r0);
       setup.output = o.output_path;
       setup.temporary = r0.file->temporary_path();
+      setup.stats_rank = stats_rank;
       make_owner(setup, r0.journal.get(), r0.collector->observed_fields());
-      engine.attach(*owner, r0.collector.get());
+      engine.attach(*owner, r0.collector.get(), stats_rank);
       setup = restore_output(o, campaign_text, r0, *owner, engine);
+      setup.stats_rank = stats_rank;
       owner->set_session(setup.session);
     });
   }
@@ -255,7 +263,7 @@ int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& c
     for (const std::string& name : method.observed_outputs())
       observed.push_back(static_cast<std::size_t>(ctx.record.find_output(name)));
     make_owner(setup, nullptr, observed);
-    engine.attach(*owner, nullptr);
+    engine.attach(*owner, nullptr, setup.stats_rank);
   }
   engine.set_rank0_chunks(setup.rank0_chunks);
   detail::set_abort_removes(setup.temporary);

@@ -200,6 +200,7 @@ std::string SessionSetup::to_bytes() const {
   }
   util::put(out, static_cast<std::uint64_t>(rank0_chunks.size()));
   for (std::int64_t k : rank0_chunks) util::put(out, k);
+  util::put(out, static_cast<std::int32_t>(stats_rank));
   return out;
 }
 
@@ -211,6 +212,7 @@ SessionSetup SessionSetup::from_bytes(std::string_view bytes) {
   for (std::string* p : {&s.output, &s.temporary}) p->assign(in.get_bytes(in.get<std::uint64_t>()));
   s.rank0_chunks.resize(in.get<std::uint64_t>());
   for (std::int64_t& k : s.rank0_chunks) k = in.get<std::int64_t>();
+  s.stats_rank = in.get<std::int32_t>();
   in.expect_end();
   return s;
 }

@@ -119,14 +119,6 @@ results::ChunkPlacement Collector::place(const results::ChunkReport& report) {
   results::ChunkPlacement p;
   p.index = report.index;
   p.addresses = file_.store().place(report);
-  p.windows = file_.store().windows();
-  return p;
-}
-
-results::ChunkPlacement Collector::windows() const {
-  results::ChunkPlacement p;
-  p.index = -1;
-  p.windows = file_.store().windows();
   return p;
 }
 

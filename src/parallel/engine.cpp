@@ -14,6 +14,7 @@
 #include "parallel/engine_detail.hpp"
 #include "parallel/interrupt.hpp"
 #include "parallel/owner.hpp"
+#include "results/chunk_stats.hpp"
 #include "util/bytes.hpp"
 
 namespace truss::parallel {
@@ -70,14 +71,64 @@ class Rank0Server {
   int finished = 0;  // owners that have written and synced every chunk they own
 
  private:
-  void send_windows(int dest) { node_.send(dest, kTagWindows, results::to_bytes(collector_.windows())); }
   Node& node_;
   Collector& collector_;
   results::ScheduleSummary& sum_;
-  std::vector<int> want_windows_;  // owners waiting for the first windows
-  bool asked_seed_ = false;
-  results::ChunkReport report_;    // its summaries' room used again
+  results::ChunkReport report_;
 };
+
+// The statistics rank's side (results/chunk_stats.hpp): the owners' chunk summaries merged; the
+// windows they summarise against, the first from the first owner with a complete chunk, then after
+// each merge the current ones back to that chunk's owner; once every chunk is merged, the streamed
+// statistics to rank 0. It is rank 1 on more than one rank (rank 0 keeps to the schedule and the
+// chunks' placement), rank 0 on one rank and in a session that restored chunks before the others
+// joined (results/chunk_stats.hpp: the statistics are the same wherever they are merged).
+class StatsServer {
+ public:
+  StatsServer(Node& node, const campaign::RecordLayout& layout) : node_(node), stats_(layout) {}
+  void handle(int tag, int source, std::string& bytes);
+  static bool handles(int tag) { return tag == kTagAskWindows || tag == kTagSeed || tag == kTagSummary; }
+  // The statistics to rank 0 once the campaign's n_chunks are all merged: true when it sends them.
+  bool send_if_complete(std::int64_t n_chunks);
+  bool sent() const { return sent_; }
+
+ private:
+  void send_windows(int dest) {
+    results::ChunkPlacement p;
+    p.index = -1;
+    p.windows = stats_.windows();
+    node_.send(dest, kTagWindows, results::to_bytes(p));
+  }
+  Node& node_;
+  results::ChunkStats stats_;
+  std::vector<int> want_windows_;  // owners waiting for the first windows
+  bool asked_seed_ = false, sent_ = false;
+  results::ChunkReport summary_;   // its summaries' room used again
+};
+
+void StatsServer::handle(int tag, int source, std::string& bytes) {
+  if (tag == kTagSummary) {
+    results::read_chunk_report(bytes, summary_);
+    stats_.merge(summary_.index, summary_.summaries);
+    send_windows(source);
+  } else if (tag == kTagAskWindows) {
+    if (stats_.seeded()) return send_windows(source);
+    want_windows_.push_back(source);
+    if (!asked_seed_) node_.send(source, kTagAskSeed, {});
+    asked_seed_ = true;
+  } else if (tag == kTagSeed) {
+    stats_.seed(results::read_chunk_placement(bytes).windows);
+    for (int w : want_windows_) send_windows(w);
+    want_windows_.clear();
+  }
+}
+
+bool StatsServer::send_if_complete(std::int64_t n_chunks) {
+  if (sent_ || stats_.merged() != n_chunks) return false;
+  node_.send(0, kTagStats, results::to_bytes(stats_.calc_stats(n_chunks)));
+  sent_ = true;
+  return true;
+}
 
 // Rank 0 in one round: hands out the round's runs in index order in guided batches, computes one
 // run at a time itself, and between its runs serves the messages (answering a batch done at once
@@ -132,15 +183,8 @@ void Rank0Server::handle(int tag, int source, std::string& bytes) {
   } else if (tag == kTagChunk) {
     results::read_chunk_report(bytes, report_);
     node_.send(source, kTagPlacement, results::to_bytes(collector_.place(report_)));
-  } else if (tag == kTagAskWindows) {
-    if (collector_.seeded()) return send_windows(source);
-    want_windows_.push_back(source);
-    if (!asked_seed_) node_.send(source, kTagAskSeed, {});
-    asked_seed_ = true;
-  } else if (tag == kTagSeed) {
-    collector_.seed(results::read_chunk_placement(bytes).windows);
-    for (int w : want_windows_) send_windows(w);
-    want_windows_.clear();
+  } else if (tag == kTagStats) {
+    collector_.set_stats(results::read_streamed_stats(bytes));
   } else if (tag == kTagFinished) {
     ++finished;
   } else {
@@ -230,6 +274,7 @@ void Rank0Round::compute_stretch(Clock::time_point last_poll) {
   const double c0 = thread_cpu_s();
   do {
     compute_one();
+    node_.progress_records();
     ++runs_since_poll_;
   } while (handed_ < to_do_ && !node_.flow_blocked() && !poll_due(last_poll) && !interrupted());
   sum_.rank0_compute_cpu_s += thread_cpu_s() - c0;
@@ -309,12 +354,16 @@ struct Engine::Impl {
       : node(comm, chunk_runs, status_offset), opts(o) {}
   void handle(int tag, int source, std::string& bytes);
   bool serve();  // the rank's chunks: up to a millisecond of their work
+  // The statistics rank, every round ended (its owner knows the campaign's chunks): the statistics
+  // to rank 0 once all are merged; true when it sends them.
+  bool send_stats() { return stats && owner->ended() && stats->send_if_complete(owner->n_chunks()); }
   void drain(bool root);
   Node node;
   EngineOptions opts;
   ChunkOwner* owner = nullptr;
   Collector* collector = nullptr;
   std::unique_ptr<Rank0Server> server;
+  std::unique_ptr<StatsServer> stats;  // on the statistics rank
   WorkQueue work;
   results::ScheduleSummary schedule;
 };
@@ -325,7 +374,10 @@ void Engine::Impl::handle(int tag, int source, std::string& bytes) {
   else if (tag == kTagPlacement) owner->on_placement(bytes);
   else if (tag == kTagWindows) owner->on_windows(bytes);
   else if (tag == kTagAskSeed) owner->on_seed_ask();
-  else if (server) server->handle(tag, source, bytes);
+  else if (stats && StatsServer::handles(tag)) {
+    ScopeTimer t(schedule.rank0_result_s);  // (rank 0's figure, when it is the statistics rank)
+    stats->handle(tag, source, bytes);
+  } else if (server) server->handle(tag, source, bytes);
   else throw std::runtime_error(fmt::format("rank {} got a message of tag {} from rank {}", node.rank(), tag, source));
 }
 
@@ -346,8 +398,9 @@ bool Engine::Impl::serve() {
 void Engine::Impl::drain(bool root) {
   Backoff backoff = root ? Backoff(kRank0IdleUs, kRank0IdleUs) : Backoff();
   bool finished = false;
-  while (!finished || (root && server->finished < node.size())) {
-    const bool worked = node.poll() | serve();
+  while (!finished || (stats && !stats->sent()) ||
+         (root && (server->finished < node.size() || !collector->stats()))) {
+    const bool worked = node.poll() | serve() | send_stats();
     if (!finished && owner->done()) {
       owner->finish();
       node.send(0, kTagFinished, {});
@@ -366,23 +419,26 @@ Engine::Engine(MPI_Comm comm, std::int64_t chunk_runs, std::size_t status_offset
 
 Engine::~Engine() = default;
 
-std::function<void(int, std::string)> Engine::sender() {
+std::function<void(int, int, std::string)> Engine::sender() {
   Node* node = &impl_->node;
-  return [node](int tag, std::string bytes) { node->send(0, tag, std::move(bytes)); };
+  return [node](int dest, int tag, std::string bytes) { node->send(dest, tag, std::move(bytes)); };
 }
 
-void Engine::attach(ChunkOwner& owner, Collector* collector) {
+void Engine::attach(ChunkOwner& owner, Collector* collector, int stats_rank) {
   Impl& m = *impl_;
   if ((m.node.rank() == 0) != (collector != nullptr)) throw std::invalid_argument("engine: the collector is rank 0's");
+  if (stats_rank < 0 || stats_rank >= m.node.size())
+    throw std::invalid_argument(fmt::format("engine: statistics rank {} of {} ranks", stats_rank, m.node.size()));
   m.owner = &owner;
   m.collector = collector;
   if (collector) m.server = std::make_unique<Rank0Server>(m.node, *collector, m.schedule);
+  if (m.node.rank() == stats_rank) m.stats = std::make_unique<StatsServer>(m.node, owner.layout());
   m.node.set_handler([&m](int tag, int source, std::string& bytes) { m.handle(tag, source, bytes); });
 }
 
 void Engine::serve_local() {
   Impl& m = *impl_;
-  while (m.node.poll_local() | m.serve()) {
+  while (m.node.poll_local() | m.serve() | m.send_stats()) {
   }
 }
 

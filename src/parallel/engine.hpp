@@ -8,7 +8,8 @@
 // No rank handles every result. A run's record goes from the rank that computed it to the owner of
 // its chunk of the results file (owner.hpp), which journals it, builds and encodes the chunk and
 // writes its bytes where rank 0 placed them. Rank 0 works per batch (the schedule) and per chunk
-// (round parts: the records a method reads; chunk reports: placement, statistics, messages).
+// (round parts: the records a method reads; chunk reports: placement, messages); the chunks'
+// statistics summaries go to the statistics rank (rank 1 on more than one rank), which merges them.
 //
 // Progress without single-copy transports: no rank ever makes a blocking call for a message whose
 // sender may be computing. Every rank matches its messages with MPI_Improbe, posts MPI_Imrecv for
@@ -19,8 +20,10 @@
 //
 // Messages (engine_detail.hpp): a batch of run indices (rank 0 -> worker; none: the round is
 // over), a batch done (worker -> rank 0), records (any rank -> owner: sealed journal frames,
-// results/journal.hpp), round parts, chunk reports, windows requests and first windows (owner ->
-// rank 0), placements and windows (rank 0 -> owner), and an owner's end.
+// results/journal.hpp), round parts and chunk reports (owner -> rank 0), placements (rank 0 ->
+// owner), statistics summaries, windows requests and first windows (owner -> statistics rank),
+// windows (statistics rank -> owner), an owner's end, and the streamed statistics (statistics rank
+// -> rank 0).
 #pragma once
 #include <mpi.h>
 
@@ -29,6 +32,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -114,9 +118,9 @@ class Collector {
   // The owners' messages.
   void add_part(const results::RoundPart& part);
   results::ChunkPlacement place(const results::ChunkReport& report);
-  bool seeded() const { return file_.store().seeded(); }
-  void seed(const std::vector<statistics::Windows>& w) { file_.store().seed(w); }
-  results::ChunkPlacement windows() const;  // no chunk, the current windows
+  // The statistics rank's streamed statistics, once every chunk is merged (the end of the campaign).
+  void set_stats(results::StreamedStats s) { stats_ = std::move(s); }
+  const std::optional<results::StreamedStats>& stats() const { return stats_; }
   std::size_t n_observed() const { return observed_.size(); }
   const std::vector<std::size_t>& observed_fields() const { return observed_; }
 
@@ -157,6 +161,7 @@ class Collector {
   bool reads_records_ = false;                             // method_.reads_records(): keep records_
   std::map<std::int64_t, methods::RoundRecords> records_;  // by round, for the method
   std::vector<bool> done_;                                 // by run: in a journal
+  std::optional<results::StreamedStats> stats_;
   std::vector<std::int64_t> round_done_;                   // by round: runs in
   std::int64_t n_done_ = 0, n_computed_ = 0;
   results::StatusCounts status_counts_{}, computed_counts_{};
@@ -180,9 +185,10 @@ class Engine {
   ~Engine();
   Engine(const Engine&) = delete;
   Engine& operator=(const Engine&) = delete;
-  // What the rank's owner sends rank 0 goes through this.
-  std::function<void(int tag, std::string bytes)> sender();
-  void attach(ChunkOwner& owner, Collector* collector);
+  // What the rank's owner sends goes through this.
+  std::function<void(int dest, int tag, std::string bytes)> sender();
+  // `stats_rank`: the rank that merges the chunks' statistics (the same on every rank).
+  void attach(ChunkOwner& owner, Collector* collector, int stats_rank);
   // Rank 0 alone: its own messages and chunks handled until none is left.
   void serve_local();
   // The chunks rank 0 owns whatever the rank count (those it restored), the same on every rank.

@@ -21,13 +21,16 @@ inline constexpr int kTagWork = 11;         // rank 0 -> worker: runs as (i64 fi
 inline constexpr int kTagRecords = 12;      // any -> owner: sealed journal frames of its chunks' runs
 inline constexpr int kTagDone = 13;         // worker -> rank 0: a batch is computed (its StatusCounts)
 inline constexpr int kTagPart = 14;         // owner -> rank 0: a round part (results/chunk_messages.hpp)
-inline constexpr int kTagChunk = 15;        // owner -> rank 0: a complete chunk's report
-inline constexpr int kTagAskWindows = 16;   // owner -> rank 0: the statistics windows, please
-inline constexpr int kTagSeed = 17;         // owner -> rank 0: the first windows (a placement of no chunk)
-inline constexpr int kTagAskSeed = 18;      // rank 0 -> owner: send the first windows
-inline constexpr int kTagPlacement = 19;    // rank 0 -> owner: where a chunk goes, and the windows
-inline constexpr int kTagWindows = 20;      // rank 0 -> owner: the windows (a placement of no chunk)
+inline constexpr int kTagChunk = 15;        // owner -> rank 0: a complete chunk's report (no summaries)
+inline constexpr int kTagAskWindows = 16;   // owner -> statistics rank: the statistics windows, please
+inline constexpr int kTagSeed = 17;         // owner -> statistics rank: the first windows (a placement of no chunk)
+inline constexpr int kTagAskSeed = 18;      // statistics rank -> owner: send the first windows
+inline constexpr int kTagPlacement = 19;    // rank 0 -> owner: where a chunk goes
+inline constexpr int kTagWindows = 20;      // statistics rank -> owner: the windows (a placement of no chunk)
 inline constexpr int kTagFinished = 21;     // owner -> rank 0: its chunks written and synced
+inline constexpr int kTagSummary = 22;      // owner -> statistics rank: a complete chunk's statistics summaries
+inline constexpr int kTagStats = 23;        // statistics rank -> rank 0: the streamed statistics, every chunk merged
+inline constexpr int kTagLast = kTagStats;
 
 // A fatal error on any rank: the results file's temporary name removed (set_abort_removes; the
 // journals keep every finished run for --resume), the job aborted (exit 3).
@@ -83,6 +86,10 @@ class Node {
   void route(std::string_view frame, std::int64_t run);
   void flush_records();
   bool has_unsent_records() const;
+  // Rank 0 between its own runs: while records it sent are in flight, the sends are tested
+  // (MPI_Test), so that moving their bytes (over TCP the sender's writes) is paid with the runs
+  // that made them, not in the next look at the messages. True if any completed.
+  bool progress_records() { return record_bytes_ > 0 && test_sends(); }
 
  private:
   struct Out {

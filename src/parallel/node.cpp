@@ -111,7 +111,7 @@ bool Node::test_sends() {
 bool Node::match() {
   if (!records_paused_) return match_one(MPI_ANY_TAG);
   bool any = false;
-  for (int tag = kTagWork; tag <= kTagFinished; ++tag)
+  for (int tag = kTagWork; tag <= kTagLast; ++tag)
     if (tag != kTagRecords) any |= match_one(tag);
   return any;
 }

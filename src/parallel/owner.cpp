@@ -81,7 +81,7 @@ bool ChunkOwner::send_parts() {
       if (part_ || files_.rank == 0) (part_ ? *part_ : *files_.journal).write_out();
       written = true;
     }
-    send_(kTagPart, results::to_bytes(*p));
+    send_(0, kTagPart, results::to_bytes(*p));
   }
   return written;
 }
@@ -89,9 +89,9 @@ bool ChunkOwner::send_parts() {
 bool ChunkOwner::start_encoding() {
   while (auto k = builder_.pop_complete()) to_encode_.push_back(*k);
   if (encoding_ || to_encode_.empty()) return false;
-  if (windows_.empty()) {  // the statistics' first windows come from rank 0
+  if (windows_.empty()) {  // the first windows come from the statistics rank
     if (asked_windows_) return false;
-    send_(kTagAskWindows, {});
+    send_(files_.stats_rank, kTagAskWindows, {});
     asked_windows_ = true;
     return true;
   }
@@ -113,7 +113,14 @@ bool ChunkOwner::step() {
   }
   if (!encoding_) return sent;
   if (builder_.encode_step(*encoding_, windows_, encoded_)) {
-    send_(kTagChunk, results::to_bytes(encoded_.report));
+    results::ChunkReport& r = encoded_.report;
+    results::ChunkReport summaries;  // the statistics rank's part of the report
+    summaries.index = r.index;
+    summaries.rows = r.rows;
+    summaries.summaries = std::move(r.summaries);
+    r.summaries.clear();
+    send_(files_.stats_rank, kTagSummary, results::to_bytes(summaries));
+    send_(0, kTagChunk, results::to_bytes(r));
     placing_.emplace(*encoding_, std::move(encoded_));
     encoding_.reset();
   }
@@ -129,13 +136,11 @@ void ChunkOwner::on_seed_ask() {
   results::ChunkPlacement p;
   p.index = -1;
   p.windows = builder_.first_windows(to_encode_.front());
-  send_(kTagSeed, results::to_bytes(p));
+  send_(files_.stats_rank, kTagSeed, results::to_bytes(p));
 }
 
 void ChunkOwner::on_placement(std::string_view bytes) {
-  results::ChunkPlacement p = results::read_chunk_placement(bytes);
-  write_chunk(p);
-  windows_ = std::move(p.windows);
+  write_chunk(results::read_chunk_placement(bytes));
 }
 
 void ChunkOwner::write_chunk(const results::ChunkPlacement& p) {

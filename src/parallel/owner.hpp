@@ -36,11 +36,12 @@ struct OwnerFiles {
   std::string temporary;       // the results file being written (CampaignFile::temporary_path)
   std::uint32_t campaign_crc = 0;
   results::Journal* journal = nullptr;  // rank 0: its own journal; others: a part journal made at the first record
+  int stats_rank = 0;                   // where the chunks' statistics summaries go (engine.hpp)
 };
 
 class ChunkOwner {
  public:
-  using Send = std::function<void(int tag, std::string bytes)>;  // to rank 0
+  using Send = std::function<void(int dest, int tag, std::string bytes)>;
   ChunkOwner(const campaign::RecordLayout& layout, const results::StoreOptions& opts, std::vector<std::size_t> observed,
              OwnerFiles files, Send send, double flush_interval_s);
   ~ChunkOwner();
@@ -65,6 +66,7 @@ class ChunkOwner {
   // Rounds ended and every chunk it owns written: the results file synced and closed, the journal
   // synced (then rank 0 may commit).
   bool done() const;
+  bool ended() const { return ended_; }  // end_rounds() called
   void finish();
   // SIGINT/SIGTERM: the journal's buffer written out (what it holds survives the process).
   void write_out_journal();
@@ -74,6 +76,8 @@ class ChunkOwner {
   bool behind() const { return to_encode_.size() + (encoding_ ? 1 : 0) > kMaxBacklog; }
   static constexpr std::size_t kMaxBacklog = 2;
   std::size_t peak_chunks() const { return builder_.peak_chunks(); }
+  const campaign::RecordLayout& layout() const { return builder_.layout(); }
+  std::int64_t n_chunks() const { return builder_.n_chunks(); }  // of the rounds planned so far
 
  private:
   void journal(std::string_view frames);

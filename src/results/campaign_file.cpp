@@ -1,5 +1,6 @@
 #include "results/campaign_file.hpp"
 
+#include <utility>
 #include <fcntl.h>
 #include <fmt/format.h>
 #include <unistd.h>
@@ -65,15 +66,15 @@ void CampaignFile::remove_temporary() noexcept {
   tmp_.clear();
 }
 
-void CampaignFile::write_summary(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,
+void CampaignFile::write_summary(StreamedStats streamed,
+                                 const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,
                                  const sim::RunResult& nominal, const CampaignFileInfo& info) {
   store_->finish();
-  const StreamedStats streamed = store_->calc_stats();
   const std::int64_t n_runs = store_->n_runs(), chunk_rows = store_->chunk_runs();
   store_.reset();  // closes the per-run datasets
   write_root_attributes(file_, ctx_, n_runs, info);
   write_input_attributes(file_, ctx_.options);
-  const std::int64_t read_back = write_stats(file_, ctx_.record, streamed, chunk_rows);
+  const std::int64_t read_back = write_stats(file_, ctx_.record, std::move(streamed), chunk_rows);
   write_histories(file_, ctx_.options.output.history_step_s, histories);
   write_timing_attributes(file_, info.schedule, read_back);
   write_nominal_group(file_, nominal, ctx_.dims.n_bays_max);

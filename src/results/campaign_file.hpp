@@ -65,9 +65,9 @@ class CampaignFile {
   // The temporary file being written (.NAME.tmp.PID of rank 0): the ranks write the chunks they
   // built into it at the addresses the store placed them at.
   const std::string& temporary_path() const { return tmp_; }
-  // Every run in: the last chunks written, /stats (from the streamed statistics), /histories,
-  // /nominal and the attributes.
-  void write_summary(const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,
+  // Every run in: the last chunks written, /stats (from the streamed statistics of the statistics
+  // rank, chunk_stats.hpp), /histories, /nominal and the attributes.
+  void write_summary(StreamedStats streamed, const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,
                      const sim::RunResult& nominal, const CampaignFileInfo& info);
   hid_t handle() const { return file_; }
   void commit(bool force);

@@ -100,6 +100,7 @@ class ChunkBuilder {
   void add(const campaign::RecordView& rec, std::int64_t session);
   void check(const campaign::RecordView& rec) const;
   std::int64_t rounds() const { return static_cast<std::int64_t>(rounds_.size()); }
+  std::int64_t n_chunks() const { return (planned_ + chunk_ - 1) / chunk_; }  // of the rows planned
 
   std::optional<RoundPart> pop_part();         // oldest first
   std::optional<std::int64_t> pop_complete();  // a chunk whose rows are all in, oldest first

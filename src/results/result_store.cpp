@@ -60,7 +60,6 @@ ResultStore::ResultStore(hid_t file, PlacementState& placement, const campaign::
                          const StoreOptions& opts)
     : L_(layout), placement_(placement), cols_(layout), chunk_(opts.chunk_runs) {
   if (const std::string e = opts.validate(); !e.empty()) throw std::invalid_argument("result store: " + e);
-  col_.resize(cols_.n_stats);
   create_datasets(file, opts.deflate_level);
 }
 
@@ -114,34 +113,13 @@ void ResultStore::extend(std::int64_t n_runs) {
   n_ = n_runs;
 }
 
-void ResultStore::seed(const std::vector<statistics::Windows>& w) {
-  if (seeded_) return;
-  if (w.size() != col_.size())
-    throw std::runtime_error(
-        fmt::format("first windows of {} columns for {} statistics columns", w.size(), col_.size()));
-  for (const statistics::Windows& c : w)
-    for (const statistics::Window& x : c)
-      if (!(x.lo <= x.hi)) throw std::runtime_error(fmt::format("a first window [{}, {}]", x.lo, x.hi));
-  for (std::size_t k = 0; k < col_.size(); ++k) col_[k].seed(w[k]);
-  seeded_ = true;
-}
-
-std::vector<statistics::Windows> ResultStore::windows() const {
-  std::vector<statistics::Windows> w;
-  w.reserve(col_.size());
-  for (const auto& c : col_) w.push_back(c.windows());
-  return w;
-}
-
 std::vector<ChunkAddress> ResultStore::place(const ChunkReport& r) {
   const std::int64_t n_chunks = (n_ + chunk_ - 1) / chunk_;
   if (r.index < 0 || r.index >= n_chunks || r.rows != std::min(chunk_, n_ - r.index * chunk_))
     throw std::runtime_error(fmt::format("a report of chunk {} with {} rows, of {} runs in chunks of {}", r.index,
                                          r.rows, n_, chunk_));
-  if (r.sizes.size() != cols_.columns.size() || r.masks.size() != r.sizes.size() || r.summaries.size() != col_.size())
-    throw std::runtime_error(fmt::format("chunk {}: a report of {} datasets and {} summaries", r.index,
-                                         r.sizes.size(), r.summaries.size()));
-  if (!seeded_) throw std::runtime_error(fmt::format("chunk {}: statistics before the first windows", r.index));
+  if (r.sizes.size() != cols_.columns.size() || r.masks.size() != r.sizes.size())
+    throw std::runtime_error(fmt::format("chunk {}: a report of {} datasets", r.index, r.sizes.size()));
   placed_.resize(static_cast<std::size_t>(n_chunks), 0);
   if (placed_[static_cast<std::size_t>(r.index)])
     throw std::runtime_error(fmt::format("chunk {} placed twice", r.index));
@@ -159,7 +137,6 @@ std::vector<ChunkAddress> ResultStore::place(const ChunkReport& r) {
           fmt::format("chunk {}: HDF5 placed {} bytes of {}", r.index, at.back().size, r.sizes[k]));
   }
   write_messages(r);
-  for (std::size_t k = 0; k < col_.size(); ++k) col_[k].add(r.index, r.summaries[k]);
   return at;
 }
 
@@ -189,32 +166,6 @@ void ResultStore::finish() const {
   const std::int64_t n_chunks = (n_ + chunk_ - 1) / chunk_;
   if (n_placed_ != n_chunks)
     throw std::runtime_error(fmt::format("internal: {} of {} chunks placed at the end", n_placed_, n_chunks));
-}
-
-StreamedStats ResultStore::calc_stats() const {
-  const std::int64_t n_chunks = (n_ + chunk_ - 1) / chunk_;
-  StreamedStats s;
-  auto one = [&](std::size_t k, std::vector<std::uint8_t>& resolved) {
-    if (!col_[k].complete(n_chunks))
-      throw std::runtime_error(fmt::format("internal: the statistics of column {} miss a chunk", k));
-    bool ok = true;
-    const statistics::Stats st = col_[k].calc_stats(ok);
-    resolved.push_back(ok);
-    return st;
-  };
-  for (const ChunkColumn& c : cols_.columns) {
-    if (c.stats < 0) continue;
-    const auto k = static_cast<std::size_t>(c.stats);
-    if (L_.fields()[static_cast<std::size_t>(c.field)].scale == Scale::none) {
-      s.f64.push_back(one(k, s.f64_resolved));
-      continue;
-    }
-    auto& st = s.bays.emplace_back();
-    auto& ok = s.bays_resolved.emplace_back();
-    for (std::size_t b = 0; b < c.width; ++b) st.push_back(one(k + b, ok));
-  }
-  for (const auto& c : col_) s.kept_values += c.kept_values();
-  return s;
 }
 
 }  // namespace truss::results

@@ -2,8 +2,8 @@
 // adds rounds adds rows), and for each complete chunk that a builder reports (chunk_builder.hpp) it
 // places the chunk's datasets in the file (HDF5 allocates and indexes them through the placement
 // driver, placement_driver.hpp; the builder writes their bytes there), writes the chunk's messages
-// and merges the summaries of its statistics columns (statistics/column_stats.hpp). The first
-// windows come from the first builder with a complete chunk. Its work is per chunk, never per run; what it
+// (the summaries of its statistics columns go to the statistics rank, chunk_stats.hpp). Its work is
+// per chunk, never per run; what it
 // writes does not depend on which rank built a chunk or when: the file holds the same values, and
 // the same chunk bytes, on any number of ranks and after --resume.
 #pragma once
@@ -17,22 +17,12 @@
 #include "campaign/record.hpp"
 #include "io/h5_util.hpp"
 #include "results/chunk_builder.hpp"
+#include "results/chunk_stats.hpp"
 #include "results/placement_driver.hpp"
 #include "statistics/column_stats.hpp"
 #include "statistics/stats.hpp"
 
 namespace truss::results {
-
-// The statistics of the output columns, from the chunks as they were placed: per float64 output
-// and per bay of each per-bay output, in RecordLayout order. `resolved` 0: a percentile's order
-// statistics were not kept (its percentiles are NaN): compute them from the stored column.
-struct StreamedStats {
-  std::vector<statistics::Stats> f64;
-  std::vector<std::uint8_t> f64_resolved;
-  std::vector<std::vector<statistics::Stats>> bays;  // [field][bay - 1]
-  std::vector<std::vector<std::uint8_t>> bays_resolved;
-  std::size_t kept_values = 0;  // values held for the percentiles, all columns
-};
 
 using StatusCounts = std::array<std::int64_t, sim::kRunStatusCount>;  // runs per RunStatus value
 
@@ -50,19 +40,13 @@ class ResultStore {
   std::int64_t n_runs() const { return n_; }
   std::int64_t chunk_runs() const { return chunk_; }
 
-  bool seeded() const { return seeded_; }
-  // The first windows of every statistics column (once; ChunkBuilder::first_windows). Throws
-  // std::runtime_error for another count or a window whose ends are not ordered.
-  void seed(const std::vector<statistics::Windows>& w);
-  std::vector<statistics::Windows> windows() const;
-  // A complete chunk of the rows so far: its datasets placed (their addresses, in dataset order),
-  // its messages written and its statistics merged. Throws std::runtime_error for a chunk placed
-  // twice or out of range, a report of another row count or shape, or statistics before a seed.
+  // A complete chunk of the rows so far: its datasets placed (their addresses, in dataset order)
+  // and its messages written (its statistics are the statistics rank's: chunk_stats.hpp). Throws
+  // std::runtime_error for a chunk placed twice or out of range, a report of another row count or shape.
   std::vector<ChunkAddress> place(const ChunkReport& r);
   std::int64_t chunks_placed() const { return n_placed_; }
   // Throws std::runtime_error unless every chunk of the n_runs rows is placed.
   void finish() const;
-  StreamedStats calc_stats() const;  // after finish
 
  private:
   struct Dataset;
@@ -78,8 +62,6 @@ class ResultStore {
   std::vector<io::h5::Handle> groups_;
   std::vector<std::uint8_t> placed_;  // by chunk
   std::int64_t n_placed_ = 0;
-  bool seeded_ = false;
-  std::vector<statistics::ColumnStats> col_;  // one per statistics column
 };
 
 // Reading the finished /runs back (statistics, sensitivity): a 1-D float64 column; columns

@@ -76,7 +76,7 @@ struct Session {
         ctx.record, store, collector->observed_fields(),
         parallel::OwnerFiles{0, 0, out, file->temporary_path(), util::calc_crc32(kText), journal.get()},
         engine->sender(), 2.0);
-    engine->attach(*owner, collector.get());
+    engine->attach(*owner, collector.get(), 0);
   }
   parallel::RestoreSummary restore() {
     const parallel::RestoreSummary s = collector->restore(
@@ -100,7 +100,8 @@ struct Session {
     engine->serve_local();
     REQUIRE(owner->done());
     owner->finish();
-    file->write_summary({}, sim::RunResult{}, results::CampaignFileInfo{});
+    REQUIRE(collector->stats());  // every chunk merged: the statistics rank (rank 0 here) sent them
+    file->write_summary(*collector->stats(), {}, sim::RunResult{}, results::CampaignFileInfo{});
     file->commit(false);
     journal->close_and_remove();
     results::remove_part_journals(out);

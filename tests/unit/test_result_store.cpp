@@ -285,6 +285,7 @@ struct Campaign {
   int fd = -1;
   std::int64_t chunk;
   const RecordLayout& L;
+  ChunkStats stats{L};  // the statistics rank's, here in the same process
   Campaign(const std::string& name, const RecordLayout& layout, const StoreOptions& opts, int n_builders,
            std::vector<std::size_t> observed = {}, std::size_t metadata_cache = 0)
       : path((fs::temp_directory_path() / name).string()), chunk(opts.chunk_runs), L(layout) {
@@ -330,11 +331,12 @@ struct Campaign {
     for (auto& b : builders) {
       while (auto p = b->pop_part()) parts.push_back(std::move(*p));
       while (auto k = b->pop_complete()) {
-        if (!store->seeded()) store->seed(b->first_windows(*k));
+        if (!stats.seeded()) stats.seed(b->first_windows(*k));
         EncodedChunk e;
-        while (!b->encode_step(*k, store->windows(), e)) {
+        while (!b->encode_step(*k, stats.windows(), e)) {
         }
         const std::vector<ChunkAddress> at = store->place(e.report);
+        stats.merge(e.report.index, e.report.summaries);
         for (std::size_t d = 0; d < at.size(); ++d)
           REQUIRE(::pwrite(fd, e.bytes[d].data(), e.bytes[d].size(), static_cast<off_t>(at[d].offset)) ==
                   static_cast<ssize_t>(e.bytes[d].size()));
@@ -346,7 +348,7 @@ struct Campaign {
     for (auto& b : builders) b->end_rounds();
     pump();
     store->finish();
-    StreamedStats s = store->calc_stats();
+    StreamedStats s = stats.calc_stats((store->n_runs() + chunk - 1) / chunk);
     store.reset();
     H5Fclose(file);
     file = -1;
@@ -521,7 +523,7 @@ TEST_CASE("result store: a chunk is placed once; the end needs every chunk", "[c
   for (std::int64_t r = 0; r < 16; ++r) again.add(RecordView(test::distinct_record(L, r), L), 0);
   EncodedChunk e;
   const std::int64_t k = again.pop_complete().value();
-  while (!again.encode_step(k, c.store->windows(), e)) {
+  while (!again.encode_step(k, c.stats.windows(), e)) {
   }
   CHECK_THROWS_WITH(c.store->place(e.report), Catch::Contains("chunk 0 placed twice"));
   e.report.index = 1;
@@ -533,6 +535,58 @@ TEST_CASE("result store: a chunk is placed once; the end needs every chunk", "[c
 // out whenever its metadata cache makes room, also while a chunk is being placed: with a metadata
 // cache of 64 kB, 3,000 runs in chunks of 16, every seventh run a stall with its message, each
 // chunk's bytes are where the store placed them and every message reads back.
+// The statistics rank's side: the chunks' summaries merged once each, after the first windows, and
+// the statistics to rank 0 as bytes that read back bit for bit (NaN, -0.0 and the unresolved flags
+// included), since rank 0 writes /stats from them.
+TEST_CASE("statistics rank: summaries merged once each; the statistics travel bit for bit", "[campaign][store]") {
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", 40));
+  const RecordLayout& L = ctx.record;
+  Campaign c("truss_test_store_stats_rank.h5", L, StoreOptions{16, 1}, 2);
+  c.round(0, 0, 40);
+  for (std::int64_t r = 0; r < 40; ++r) c.add(test::distinct_record(L, r), 0);
+  CHECK(c.stats.merged() == 2);  // chunks 0 and 1; chunk 2 (8 rows) completes at the end
+  // A summary of chunk 0 again, another count of summaries, or the statistics of 4 chunks: refused.
+  ChunkBuilder again(L, StoreOptions{16, 1}, {});
+  again.add_round(0, 0, 40);
+  for (std::int64_t r = 0; r < 16; ++r) again.add(RecordView(test::distinct_record(L, r), L), 0);
+  EncodedChunk e;
+  const std::int64_t k = again.pop_complete().value();
+  while (!again.encode_step(k, c.stats.windows(), e)) {
+  }
+  CHECK_THROWS_WITH(c.stats.merge(0, e.report.summaries), Catch::Contains("chunk 0 merged twice"));
+  e.report.summaries.pop_back();
+  CHECK_THROWS_WITH(c.stats.merge(3, e.report.summaries), Catch::Contains("summaries for"));
+  CHECK_THROWS_WITH(c.stats.calc_stats(4), Catch::Contains("miss a chunk"));
+  ChunkStats fresh(L);
+  CHECK_THROWS_WITH(fresh.merge(0, e.report.summaries), Catch::Contains("before the first windows"));
+
+  StreamedStats s = c.close();
+  REQUIRE(!s.f64.empty());
+  REQUIRE(!s.bays.empty());
+  s.f64[0].mean = -0.0;  // values whose bits a careless copy would change
+  s.f64[0].percentiles[2] = std::numeric_limits<double>::quiet_NaN();
+  s.f64_resolved[0] = 0;
+  s.bays.back().back().std = -std::numeric_limits<double>::infinity();
+  const std::string bytes = to_bytes(s);
+  const StreamedStats back = read_streamed_stats(bytes);
+  CHECK(to_bytes(back) == bytes);
+  CHECK(std::signbit(back.f64[0].mean));
+  CHECK(std::isnan(back.f64[0].percentiles[2]));
+  CHECK(back.f64_resolved == s.f64_resolved);
+  CHECK(back.bays_resolved == s.bays_resolved);
+  CHECK(back.kept_values == s.kept_values);
+  REQUIRE(back.bays.size() == s.bays.size());
+  for (std::size_t f = 0; f < s.bays.size(); ++f) {
+    REQUIRE(back.bays[f].size() == s.bays[f].size());
+    for (std::size_t b = 0; b < s.bays[f].size(); ++b) {
+      CHECK(back.bays[f][b].count == s.bays[f][b].count);
+      CHECK(std::memcmp(&back.bays[f][b].max, &s.bays[f][b].max, 8) == 0);
+    }
+  }
+  CHECK_THROWS_AS(read_streamed_stats(bytes.substr(0, bytes.size() - 1)), std::runtime_error);
+  CHECK_THROWS_AS(read_streamed_stats(bytes + "x"), std::runtime_error);
+}
+
 TEST_CASE("result store: placing chunks while HDF5 writes its global heap", "[campaign][store]") {
   const CampaignContext ctx(test::small_campaign("latin_hypercube", 3000));
   const RecordLayout& L = ctx.record;
