@@ -17,15 +17,10 @@ import logging
 import os
 import struct
 import urllib.parse
-import zlib
 
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
-RGB, NOT_INTERLACED = 2, 0       # IHDR colour type and interlace method
+from .png import NOT_INTERLACED, PNG_SIGNATURE, RGB, png_chunk
+
 FIGURE_KEY = "truss-report-figure"   # the placeholder's tEXt keyword: the figure's file name
-
-
-def png_chunk(kind, body):
-    return struct.pack(">I", len(body)) + kind + body + struct.pack(">I", zlib.crc32(kind + body))
 
 
 def placeholder_png(name, size):
