@@ -120,3 +120,25 @@ def test_figure_of_another_size_than_announced_is_refused(tmp_path):
     args, _ = late_figure(tmp_path, size_change=1)
     with pytest.raises(RuntimeError, match="late one.png"):
         pdf.write_pdf(*args)
+
+
+def test_collector_paused_for_the_pdf_and_back_after(tmp_path, monkeypatch):
+    """The cyclic collector is off while WeasyPrint lays the PDF out and writes it, on again
+    afterwards (and still off if it was off)."""
+    import gc
+    import weasyprint
+    (tmp_path / "r.html").write_text("<html><body><h1>t</h1><p>x</p></body></html>", encoding="utf-8")
+    seen = []
+    render, write = weasyprint.HTML.render, weasyprint.document.Document.write_pdf
+    monkeypatch.setattr(weasyprint.HTML, "render", lambda *a, **k: seen.append(gc.isenabled()) or render(*a, **k))
+    monkeypatch.setattr(weasyprint.document.Document, "write_pdf",
+                        lambda *a, **k: seen.append(gc.isenabled()) or write(*a, **k))
+    pdf.write_pdf(str(tmp_path / "r.html"), str(tmp_path / "r.pdf"))
+    assert seen == [False, False] and gc.isenabled()
+    gc.disable()
+    try:
+        pdf.write_pdf(str(tmp_path / "r.html"), str(tmp_path / "r2.pdf"))
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+    assert (tmp_path / "r.pdf").read_bytes().startswith(b"%PDF")
