@@ -121,7 +121,6 @@ class Page:
         pid = os.fork()
         if pid == 0:       # child: build, draw, encode, leave without Python's exit handlers
             os.close(size_r)
-            gc.disable()   # it leaves once the figure is saved: cycles need no collecting (4 % of its CPU)
             code = 0
             try:
                 fig = make()

@@ -44,17 +44,3 @@ def test_sizes_never_asked_for(tmp_path):
         page.figure(make_ok, f"f{i}.png", "x")
     page.finish()
     assert all((tmp_path / f"f{i}.png").stat().st_size > 1000 for i in range(3))
-
-
-def test_children_draw_without_the_cyclic_collector(tmp_path):
-    """A figure's process leaves once the figure is saved: it runs with the collector off, and
-    the report's own process keeps it on."""
-    import gc
-
-    def make():
-        (tmp_path / "gc.txt").write_text(str(gc.isenabled()))
-        return make_ok()
-    page = Page(str(tmp_path), plt)
-    page.figure(make, "g.png", "x")
-    page.finish()
-    assert (tmp_path / "gc.txt").read_text() == "False" and gc.isenabled()
