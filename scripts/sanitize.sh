@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CI stage: the tests under AddressSanitizer + UndefinedBehaviorSanitizer, and the two
 # libFuzzer targets for a bounded time. Builds with clang in build-san/ (-DTRUSS_SANITIZE=ON
-# -DTRUSS_FUZZ=ON); every sanitizer report is fatal (halt_on_error, -fno-sanitize-recover).
+# -DTRUSS_FUZZ=ON, a unity build: cmake/unity.cmake); every sanitizer report is fatal
+# (halt_on_error, -fno-sanitize-recover).
 #   scripts/sanitize.sh            # sanitized tests, then each fuzzer for FUZZ_SECONDS (60)
 #   FUZZ_SECONDS=600 scripts/sanitize.sh fuzz   # fuzzers only, longer
 # Which tests: every ctest test that runs compiled code of ours, in two passes:
@@ -33,7 +34,7 @@ export ASAN_OPTIONS=halt_on_error=1:abort_on_error=1:detect_leaks=1:strict_strin
 export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
 
 watch_step build sanitize-configure "$BUILD.log" cmake -S . -B "$BUILD" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTRUSS_SANITIZE=ON -DTRUSS_FUZZ=ON
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DTRUSS_SANITIZE=ON -DTRUSS_FUZZ=ON -DCMAKE_UNITY_BUILD=ON
 targets=(fuzz_scene fuzz_campaign)
 if [ "$what" != fuzz ]; then
   targets+=(truss_tests_model truss_tests_stages truss_tests_free truss_tests_integrators truss_tests_io
