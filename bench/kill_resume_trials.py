@@ -11,8 +11,9 @@ The campaign is campaigns/table1_dispersed.toml with the motor drive (runs that 
 shared memory or TCP (`--mca btl self,tcp` on odd trials), is killed (mpirun and every rank, SIGKILL)
 after a delay drawn uniformly in 5-95 % of the uninterrupted campaign's wall time (the seeded
 generator: the same delays for the same --seed), and resumes on (3, 2, 2, 8)[k % 4] ranks over the
-other transport. A kill after the last run (the file already written) counts as "finished", not as
-a trial of the resume. Exit 1 on any difference.
+other transport. A kill after the last run (the file already written), or in the start-up before
+the journal exists (--resume then refuses, exit 2, as it should), is not a trial of the resume.
+Exit 1 on any difference.
 """
 import argparse
 import os
@@ -80,6 +81,9 @@ def main():
         where = f"trial {k}: {ranks} ranks {'TCP' if tcp else 'shm'}, killed at {delay:.2f} s"
         if finished or os.path.exists(out):
             print(f"{where}: finished before the kill")
+            continue
+        if not os.path.exists(out + ".journal"):  # killed in the start-up: nothing to resume from
+            print(f"{where}: killed before its journal was made")
             continue
         p = subprocess.run(launch(args, again, not tcp, ["-o", out, *sets, "--resume"]), env=ENV,
                            capture_output=True, text=True)
