@@ -19,13 +19,12 @@ import argparse
 import os
 import random
 import shutil
-import signal
 import subprocess
 import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "mpi"))
-from test_campaign_mpi import ENV, alive, chunks, datasets, descendants, same_values  # noqa: E402
+from test_campaign_mpi import ENV, chunks, datasets, kill_job, same_values  # noqa: E402
 
 CAMPAIGN = "campaigns/table1_dispersed.toml"
 
@@ -34,18 +33,6 @@ def launch(args, ranks, tcp, extra):
     mca = ["--mca", "btl", "self,tcp"] if tcp else []
     return ["mpirun", "--oversubscribe", *mca, "-np", str(ranks), args.driver,
             os.path.join(args.repo, CAMPAIGN), *extra]
-
-
-def kill_job(proc):
-    job = [proc.pid] + descendants(proc.pid)
-    for pid in job:
-        try:
-            os.kill(pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    proc.wait()
-    while any(alive(pid) for pid in job[1:]):
-        time.sleep(0.01)
 
 
 def main():

@@ -10,13 +10,12 @@ Prints one line per measurement; docs/benchmarks.md records the numbers.
 import argparse
 import os
 import re
-import signal
 import subprocess
 import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "mpi"))
-from test_campaign_mpi import ENV, alive, datasets, descendants, same_values  # noqa: E402
+from test_campaign_mpi import ENV, datasets, kill_job, same_values  # noqa: E402
 
 
 def command(a, out, extra=()):
@@ -61,15 +60,7 @@ def main():
     t0 = time.time()
     while proc.poll() is None and not (os.path.exists(journal) and os.path.getsize(journal) > target):
         time.sleep(0.2)
-    job = [proc.pid] + descendants(proc.pid)
-    for pid in job:
-        try:
-            os.kill(pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    proc.wait()
-    while any(alive(x) for x in job):
-        time.sleep(0.05)
+    kill_job(proc)
     print(f"killed: kill -9 of the job after {time.time() - t0:.1f} s, journal {os.path.getsize(journal) / 1e6:.1f} MB, "
           f"temporary files {[f for f in os.listdir(a.dir) if '.tmp.' in f]}")
     t0 = time.time()

@@ -104,6 +104,20 @@ def alive(pid):
         return False
 
 
+def kill_job(proc):
+    """kill -9 of a whole job: mpirun and every rank (Open MPI puts the ranks in their own process
+    groups, and a SIGKILLed mpirun cannot take them down); returns once none is alive."""
+    job = [proc.pid] + descendants(proc.pid)
+    for pid in job:
+        try:
+            os.kill(pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    proc.wait()
+    while any(alive(pid) for pid in job[1:]):
+        time.sleep(0.01)
+
+
 def fresh(args, name):
     d = os.path.join(args.scratch, name)
     shutil.rmtree(d, ignore_errors=True)
@@ -290,17 +304,7 @@ def case_resume(args):
         time.sleep(0.01)
     running = proc.poll() is None
     t_kill = time.time() - t0
-    # kill -9 of the whole job: mpirun and every rank (Open MPI puts the ranks in their own
-    # process groups, and a SIGKILLed mpirun cannot take them down).
-    job = [proc.pid] + descendants(proc.pid)
-    for pid in job:
-        try:
-            os.kill(pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
-    proc.wait()
-    while any(alive(pid) for pid in job[1:]):
-        time.sleep(0.01)
+    kill_job(proc)
     check(not os.path.exists(out), "killed job left no results file")
     check(os.path.exists(journal) and os.path.exists(part), "killed job left its journal and rank 1's part")
     # Rank 0's journal grows while runs are still being computed, by the periodic flush: rank 0
