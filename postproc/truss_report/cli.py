@@ -20,7 +20,7 @@ from .judging.stats import CONFIDENCE  # noqa: E402
 from .judging.sweep import sweep_frame  # noqa: E402
 from .judging.verdict import EXIT_STATUS  # noqa: E402
 from .page import pdf  # noqa: E402
-from .page.render import Page  # noqa: E402
+from .page.render import Page, find_background_niceness  # noqa: E402
 from .page.run_table import write_run_table  # noqa: E402
 from .page.sections_design import campaign_report, section_nominal  # noqa: E402
 from .page.sections_importance import importance_report  # noqa: E402
@@ -70,9 +70,10 @@ class Progress:
             sys.stderr.flush()
 
 
-def _write_csv(path, out):
-    """Child process: the run table as CSV (exit 1 on any error, said on stderr)."""
+def _write_csv(path, out, niceness):
+    """Child process: the run table as CSV at `niceness` (exit 1 on any error, said on stderr)."""
     try:
+        os.nice(niceness)
         write_run_table(read_campaign(path, columns="all"), out)
     except Exception as e:       # noqa: BLE001 - reported by the parent as a failed CSV
         sys.stderr.write(f"error: {out}: {e}\n")
@@ -80,12 +81,12 @@ def _write_csv(path, out):
     os._exit(0)
 
 
-def start_csv(path, staging):
+def start_csv(path, staging, niceness):
     """Writes DIR/runs.csv in a child process while this one draws the report (formatting six
     million numbers is the report's largest single cost). Forked before this process opens the
     HDF5 file (the child opens its own)."""
     proc = multiprocessing.get_context("fork").Process(
-        target=_write_csv, args=(path, os.path.join(staging, CSV_NAME)), daemon=True)
+        target=_write_csv, args=(path, os.path.join(staging, CSV_NAME), niceness), daemon=True)
     proc.start()
     return proc
 
@@ -192,7 +193,10 @@ def build(path, outdir, force, opts=None, progress=None):
     parent = os.path.dirname(os.path.abspath(outdir))
     os.makedirs(parent, exist_ok=True)
     staging = tempfile.mkdtemp(prefix=f".{os.path.basename(outdir)}.", dir=parent)
-    csv = start_csv(path, staging) if kind == "campaign" and opts.csv else None
+    # The children yield to a main chain of its own length, the PDF's (before the first child:
+    # the machine's load, not the report's).
+    niceness = find_background_niceness() if opts.pdf else 0
+    csv = start_csv(path, staging, niceness) if kind == "campaign" and opts.csv else None
     try:
         data, subset, sweep, extras = read_file(path, kind, sha256)
         other = read_other(opts.compare_with, kind, data, subset, sweep) if opts.compare_with else None
@@ -200,7 +204,7 @@ def build(path, outdir, force, opts=None, progress=None):
                  + (f", {data.n} runs" if kind == "campaign" else "") + ", read and checked"
                  + (f"; writing {CSV_NAME} beside" if csv else ""))
         plt.rcParams.update(FIGURE_STYLE)
-        page = Page(staging, plt, progress)
+        page = Page(staging, plt, progress, niceness)
         report = render(page, kind, data, subset, sweep, extras, opts, other)
         with open(os.path.join(staging, REPORT_NAME), "w", encoding="utf-8") as fh:
             fh.write(report.html)

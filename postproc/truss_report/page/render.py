@@ -76,6 +76,22 @@ def save_png(fig, path):
         fh.write(encode_rgb(np.asarray(fig.canvas.buffer_rgba())))
 
 
+def find_background_niceness():
+    """The niceness the report's children (its figures, the run table) take: 10 when fewer tasks
+    are runnable as the report starts than the cores it may use (/proc/loadavg's count, this
+    process included), else 0. At 10 they run on what the report's main chain leaves of the
+    cores: that chain (the sections, then the PDF's layout and writing, which the report's end
+    waits for) keeps a core instead of sharing it with them (docs/benchmarks.md, "The report").
+    Beside other programs' work a lower priority would starve them behind it, so on a busy
+    machine every process of the report keeps its priority."""
+    try:
+        with open("/proc/loadavg", encoding="ascii") as fh:
+            running = int(fh.read().split()[3].split("/")[0])
+    except (OSError, ValueError, IndexError):
+        return 0
+    return 10 if running < len(os.sched_getaffinity(0)) else 0
+
+
 @dataclass
 class Report:
     """A rendered report: the page's HTML, the lines for the terminal, and the verdict ("pass",
@@ -88,12 +104,14 @@ class Report:
 class Page:
     """The report being built: its figures, saved into the staging directory."""
 
-    def __init__(self, outdir, plt, progress=None):
-        self.dir, self.plt = outdir, plt
+    def __init__(self, outdir, plt, progress=None, niceness=0):
+        self.dir, self.plt, self.niceness = outdir, plt, niceness   # the children's (find_background_niceness)
         self.files = []
         self.progress = progress or (lambda what: None)
         self.children = []        # (pid, figure name) of the figures being drawn
-        self.max_children = 2
+        # Figures drawn at once: one a core; with the children yielding to this process, a few
+        # more, so that it reaches the PDF's layout sooner instead of waiting for a free one.
+        self.max_children = 6 if niceness > 0 else 2
         self.sizes = {}           # figure name: (width, height) in pixels (find_size)
         self.size_pipes = {}      # figure name: the pipe its child tells the size on
         # Fonts and text layout are cached per process: draw once here, so that every forked
@@ -123,6 +141,7 @@ class Page:
             os.close(size_r)
             code = 0
             try:
+                os.nice(self.niceness)
                 fig = make()
                 fig.set_dpi(FIGURE_DPI)
                 os.write(size_w, struct.pack("<II", *(int(v) for v in fig.bbox.size)))  # Agg truncates
