@@ -17,8 +17,9 @@
 # consumer (packaging: it compiles another project), and mpi_transports, whose efficiency floors
 # are timings that the sanitizers' ~10x cost invalidates (its byte identity over TCP and without
 # single-copy is the scheduler code mpi_ranks runs here). TRUSS_SANITIZED=1 tells the tests
-# that scale a campaign for timing reasons to use fewer runs (mpi_resume 2,000 instead of 5,000;
-# the free-stack fixture 60 instead of 300, in tests/CMakeLists.txt).
+# that scale a campaign for timing reasons to use fewer runs (mpi_resume 1,500 instead of 4,000
+# motor runs, 100,000 instead of 200,000 closed-form ones; the free-stack fixture 60 instead of
+# 300, in tests/CMakeLists.txt).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/progress.sh
