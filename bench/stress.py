@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Stress grid of single runs (issue 10): does any run lie at the edges?
+"""Stress grid of single runs: does any run lie at the edges?
 
 Runs truss-sim over a seeded grid around Table 1: one-key sweeps over wide physical ranges, every
 numeric key at 1e-9 and 1e9 of its value, and random combinations (log-uniform in several keys at

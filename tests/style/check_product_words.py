@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Fails on words about how the project was made, in what its users read.
 
-The documentation, the report (postproc/), the READMEs, the Python package and the strings of
+The documentation, the report (postproc/), the READMEs, the Python package, the benchmarks a user
+runs (bench/*.py) and the strings of
 the programs (string literals in src/ and python/*.cpp) speak of the product as it is: no issue
 numbers, no history ("since ...", "earlier measurements"), no tools the project was built with
 ("reference search", "code corpus"). Each hit is printed as FILE:LINE: the word and why.
@@ -32,7 +33,7 @@ PATTERNS = [(re.compile(p, re.IGNORECASE), why) for p, why in PATTERNS]
 # Whole files (documentation, report, Python package) and string literals only (C++ sources).
 WHOLE = (re.compile(r"^docs/.*\.md$"), re.compile(r"^postproc/.*\.(py|sh|toml|cfg)$"),
          re.compile(r"(^|/)README\.md$"), re.compile(r"^python/truss_deploy/.*\.py$"),
-         re.compile(r"^scripts/run_main\.sh$"))
+         re.compile(r"^scripts/run_main\.sh$"), re.compile(r"^bench/.*\.(py|sh)$"))
 STRINGS = (re.compile(r"^src/.*\.(cpp|hpp|h)$"), re.compile(r"^python/[^/]*\.(cpp|hpp)$"))
 LITERAL = re.compile(r'"(?:[^"\\\n]|\\.)*"')
 
@@ -72,7 +73,7 @@ def main():
     for b in bad:
         print(b)
     print(f"{len(bad)} word(s) about how the project was made" if bad else
-          "no word about how the project was made in docs/, postproc/, READMEs, python/, "
+          "no word about how the project was made in docs/, postproc/, READMEs, python/, bench/, "
           "the strings of src/")
     return 1 if bad else 0
 
