@@ -81,7 +81,7 @@ def find_background_niceness():
     are runnable as the report starts than the cores it may use (/proc/loadavg's count, this
     process included), else 0. At 10 they run on what the report's main chain leaves of the
     cores: that chain (the sections, then the PDF's layout and writing, which the report's end
-    waits for) keeps a core instead of sharing it with them (docs/benchmarks.md, "The report").
+    waits for) keeps a core instead of sharing it with them (docs/benchmarks.md, "Report").
     Beside other programs' work a lower priority would starve them behind it, so on a busy
     machine every process of the report keeps its priority."""
     try:
