@@ -5,7 +5,7 @@ a sweep, on analytic cases whose p is exact (tests/numeric/importance_cases.hpp)
 state, one set of runs for all the sweep's laws.
 
   importance_coverage.py --tool build/tests/truss_importance_analytic [--seeds 200] [--jobs 2]
-                         [--cache DIR] [--cases TEXT]
+                         [--cache DIR] [--cases TEXT] [--final-mixture]
 
 Per case and law: the share of seeds whose two-sided lognormal interval holds the exact p, the same
 for the one-sided 95 % upper bound, the median ratio of the interval's ends, the spread sd(ln p^),
@@ -47,9 +47,10 @@ CASES = [
 ]
 
 
-def run(tool, case, seed, count, n, n_final, cache):
+def run(tool, case, seed, count, n, n_final, cache, final_mixture):
     name, beta, all_dims, dims, means, stds, mixture = case
-    key = f"{name}_{n}_{n_final}_{seed}_{count}".replace(" ", "_").replace(",", "")
+    final_mixture = final_mixture and len(stds) > 1  # a spread sweep's final density (law_mixture.hpp)
+    key = f"{name}_{n}_{n_final}_{seed}_{count}{'_fm' if final_mixture else ''}".replace(" ", "_").replace(",", "")
     path = os.path.join(cache, key + ".jsonl") if cache else None
     if path and os.path.exists(path):
         with open(path) as f:
@@ -61,6 +62,8 @@ def run(tool, case, seed, count, n, n_final, cache):
         cmd.append("--all-dims")
     if mixture:
         cmd.append("--adapt-mixture")
+    if final_mixture:
+        cmd.append("--final-mixture")
     out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
     if path:
         with open(path, "w") as f:
@@ -106,6 +109,9 @@ def main():
     ap.add_argument("--n-final", type=int, default=2000)
     ap.add_argument("--cache", default="")
     ap.add_argument("--cases", default="", help="only the cases whose name holds this text")
+    ap.add_argument("--final-mixture", action="store_true",
+                    help="a spread sweep's final runs from the mixture of its laws at the mean, as campaigns draw "
+                         "them (else from N(mu, I))")
     args = ap.parse_args()
     if args.cache:
         os.makedirs(args.cache, exist_ok=True)
@@ -115,7 +121,7 @@ def main():
           f"binomial floor {100 * floor:.1f} %; coverage among the estimates not refused")
     with ThreadPoolExecutor(args.jobs) as pool:
         jobs = [(c, [pool.submit(run, args.tool, c, s, min(chunk, args.seeds + 1 - s), args.n, args.n_final,
-                                 args.cache) for s in range(1, args.seeds + 1, chunk)]) for c in CASES
+                                 args.cache, args.final_mixture) for s in range(1, args.seeds + 1, chunk)]) for c in CASES
                 if args.cases in c[0]]
         for c, futs in jobs:
             runs = [r for f in futs for r in f.result()]

@@ -57,7 +57,7 @@ void ImportanceMethod::calc_uniforms(const RoundPlan& plan, std::int64_t run, do
           sampling::ImportanceRound::decode(plan.state, sim_opt_.dims));
     r = decoded_;
   }
-  sampling::calc_round_uniforms(sim_opt_, *r, run - plan.first_run, u);
+  sampling::calc_round_uniforms(sim_opt_, *r, run - plan.first_run, u, deviation_);
 }
 
 sampling::ImportanceOptions ImportanceMethodOptions::calc_sim_options(const campaign::CampaignOptions& c) const {
@@ -124,7 +124,7 @@ std::string ImportanceMethodOptions::to_toml() const {
 sampling::WeightedEstimate ImportanceMethod::calc_estimate(double confidence) const {
   if (!sim_ || !sim_->done()) return {};
   sampling::WeightedEstimate w =
-      sampling::calc_weighted_estimate(sim_->final_margins(), sim_->calc_final_log_weights(), confidence);
+      sampling::calc_weighted_estimate(sim_->final_margins(), sim_->calc_final_log_weights(deviation_), confidence);
   if (w.refused.empty()) w.refused = sim_->find_refusal();
   if (!w.refused.empty()) w.bounds = {};
   return w;

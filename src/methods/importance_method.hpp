@@ -11,8 +11,10 @@
 // in run-index order (the engine's records), never in arrival order.
 //
 // A composite that reweights the runs to other laws (importance_sweep.hpp) gives the density a
-// target to adapt to (set_adaptation_ratio: ln f / phi of a run's point, the mixture of its laws)
-// and reads the final runs (sampler()). The results: /importance (docs/hdf5-schema.md).
+// target to adapt to (set_adaptation_ratio: ln f / phi of a run's point, the mixture of its laws),
+// may draw the final runs from another deviation density (set_final_deviation: the mixture of a
+// spread sweep's laws, sampling/law_mixture.hpp) and reads the final runs (sampler()). The
+// results: /importance (docs/hdf5-schema.md).
 // [ensemble.importance]: ImportanceMethodOptions::table().
 #pragma once
 #include <functional>
@@ -78,6 +80,8 @@ class ImportanceMethod : public Method {
   // ln f / phi of a point (its campaign uniforms) for the density to adapt to (see above); before
   // the first propose().
   void set_adaptation_ratio(std::function<double(const double* u)> ratio) { ratio_ = std::move(ratio); }
+  // The final round's deviation density (nullptr: N(0, I)); it must outlive the method.
+  void set_final_deviation(const sampling::Deviation* g) { deviation_ = g; }
   const sampling::CrossEntropySampler& sampler() const { return *sim_; }
   std::int64_t unusable() const { return margins_.unusable(); }
   // The estimate under the campaign's own law (the final runs' weights), refused with the
@@ -92,6 +96,7 @@ class ImportanceMethod : public Method {
   std::optional<sampling::CrossEntropySampler> sim_;
   FailureCount margins_;
   std::function<double(const double* u)> ratio_;
+  const sampling::Deviation* deviation_ = nullptr;
   mutable std::mutex mutex_;
   mutable std::shared_ptr<const sampling::ImportanceRound> decoded_;
 };

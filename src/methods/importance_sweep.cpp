@@ -10,16 +10,6 @@
 
 namespace truss::methods {
 
-std::vector<double> SweepLaws::calc_log_ratios(const double* u) const {
-  std::vector<double> r(laws.size(), 0.0);
-  for (int j = 0; j < count; ++j) {
-    const double d = base_dist.calc_quantile(u[offset + j]);
-    const double base_log = base_law.calc_log_density(d);
-    for (std::size_t k = 0; k < laws.size(); ++k) r[k] += laws[k].calc_log_density(d) - base_log;
-  }
-  return r;
-}
-
 namespace {
 
 // The one dispersion of the swept key (-1: none or several), and the field the message names.
@@ -76,15 +66,16 @@ std::string find_sweep_laws(const campaign::CampaignOptions& c, const SweepOptio
         return field + fmt::format("a relative draw of \"{}\" needs nominal values above 0, got {}", a.key, v);
   // The base: the widest spread (the last value), or the middle nominal.
   laws.base = spread ? a.n_values() - 1 : a.n_values() / 2;
+  laws.spread = spread;
   const campaign::DimensionLayout L = campaign::calc_layout(campaign::calc_campaign_at(c, laws.base));
-  laws.offset = L.offset[di];
-  laws.count = L.count[di];
-  laws.base_dist = L.distributions[di];
-  laws.base_law = {laws.base_dist, 1.0, 0.0};
-  laws.laws.clear();
+  sampling::SweptBlock& b = laws.block;
+  b.offset = L.offset[di];
+  b.count = L.count[di];
+  b.base = {L.distributions[di], 1.0, 0.0};
+  b.laws.clear();
   for (std::size_t k = 0; k < a.n_values(); ++k) {
-    laws.laws.push_back(make_value_law(c, opt, di, k, laws.base));
-    if (const std::string r = sampling::find_reweighting_refusal(laws.base_law, laws.laws.back()); !r.empty())
+    b.laws.push_back(make_value_law(c, opt, di, k, laws.base));
+    if (const std::string r = sampling::find_reweighting_refusal(b.base, b.laws.back()); !r.empty())
       return field + fmt::format("the runs at {:.6g} cannot be reweighted to {:.6g}: {}", a.values[laws.base],
                                  a.values[k], r);
   }
@@ -103,8 +94,13 @@ ImportanceSweepMethod::ImportanceSweepMethod(const campaign::CampaignContext& ct
   base_ctx_ = std::make_unique<campaign::CampaignContext>(campaign::calc_campaign_at(ctx.options, laws_.base));
   method_ = std::make_unique<ImportanceMethod>(*base_ctx_);
   // The density adapts to the mixture of the values' laws: ln (1/K) sum_k f_k / f_b.
+  if (laws_.spread) {
+    mixture_ = std::make_unique<sampling::LawMixture>(laws_.block, dims_);
+    method_->set_final_deviation(mixture_.get());
+  }
   method_->set_adaptation_ratio([this](const double* u) {
-    const std::vector<double> r = laws_.calc_log_ratios(u);
+    std::vector<double> r(laws_.block.laws.size());
+    laws_.block.calc_log_ratios(u, r);
     const double top = *std::max_element(r.begin(), r.end());
     if (!std::isfinite(top)) return top;
     double s = 0.0;
@@ -120,15 +116,15 @@ void ImportanceSweepMethod::calc_uniforms(const RoundPlan& plan, std::int64_t ru
 
 std::vector<sampling::WeightedEstimate> ImportanceSweepMethod::calc_weighted_estimates() const {
   const sampling::CrossEntropySampler& s = method_->sampler();
-  std::vector<sampling::WeightedEstimate> out(laws_.laws.size());
+  std::vector<sampling::WeightedEstimate> out(laws_.block.laws.size());
   if (!s.done()) return out;
-  const std::vector<double> base_w = s.calc_final_log_weights();
+  const std::vector<double> base_w = s.calc_final_log_weights(mixture_.get());
   const sampling::ImportanceOptions& o = s.options();
   std::vector<std::vector<double>> log_w(out.size(), base_w);
-  std::vector<double> u(static_cast<std::size_t>(o.dims));
+  std::vector<double> u(static_cast<std::size_t>(o.dims)), r(out.size());
   for (std::size_t i = 0; i < base_w.size(); ++i) {
-    sampling::calc_round_uniforms(o, s.final_round(), static_cast<std::int64_t>(i), u.data());
-    const std::vector<double> r = laws_.calc_log_ratios(u.data());
+    sampling::calc_round_uniforms(o, s.final_round(), static_cast<std::int64_t>(i), u.data(), mixture_.get());
+    laws_.block.calc_log_ratios(u.data(), r);
     for (std::size_t k = 0; k < out.size(); ++k) log_w[k][i] += r[k];
   }
   const std::string density = s.find_refusal();

@@ -6,6 +6,9 @@
 //             value b's campaign (calc_campaign_at(c, b); b the widest spread, or the middle nominal),
 //             its density adapted to the mixture of the values' laws, f_mix = (1/K) sum_k f_k: the
 //             adaptation's ratio ln f_mix / f_b of a run's swept draws. Every run carries value b.
+//             A spread sweep's final runs are drawn from the mixture of the values' laws carried to
+//             the adapted mean (law_mixture.hpp), so each value's weights are those of a density of
+//             its own spread; a nominal sweep's from N(mu, I).
 //   estimate  value k's: the final runs' ln w = ln phi / h + sum_j [ln f_k(d_j) - ln f_b(d_j)], d_j the
 //             swept dispersion's draws of the run (all its dimensions), by calc_weighted_estimate:
 //             its p, CoV, interval, ESS and Pareto k, refused (the reason said, the value untrusted
@@ -20,20 +23,17 @@
 #include <memory>
 
 #include "methods/importance_method.hpp"
+#include "sampling/law_mixture.hpp"
 #include "methods/sweep_method.hpp"
 
 namespace truss::methods {
 
-// The swept draws' laws: the dimensions of the swept dispersion, its law at the base value and at
-// each listed value (in the draw's coordinate of the base, reweighting.hpp: DrawLaw).
+// The swept draws' laws: the base value b and the swept dispersion's block of dimensions, its law
+// at b and at each listed value (in the draw's coordinate of the base, reweighting.hpp: DrawLaw).
 struct SweepLaws {
   std::size_t base = 0;  // b
-  int offset = 0, count = 0;
-  sampling::Distribution base_dist;  // the draws' quantile function at b
-  sampling::DrawLaw base_law;
-  std::vector<sampling::DrawLaw> laws;  // one per listed value
-  // sum_j [ln f_k(d_j) - ln f_b(d_j)] of a run's uniforms u, for each value k.
-  std::vector<double> calc_log_ratios(const double* u) const;
+  sampling::SweptBlock block;
+  bool spread = false;   // the values change a spread: the final density is their mixture
 };
 
 // The laws of a sweep's values, or why the sweep cannot be reweighted ("sweep.<field>: reason").
@@ -63,6 +63,7 @@ class ImportanceSweepMethod : public Method {
   const campaign::CampaignContext& ctx_;
   const SweepOptions& opt_;
   SweepLaws laws_;
+  std::unique_ptr<sampling::LawMixture> mixture_;  // the final density's deviation (spread sweeps)
   std::unique_ptr<campaign::CampaignContext> base_ctx_;
   std::unique_ptr<ImportanceMethod> method_;
   int dims_ = 0;

@@ -295,6 +295,27 @@ double Distribution::calc_quantile(double u) const {
   return kNaN;
 }
 
+double Distribution::calc_normal_score(double x) const {
+  switch (kind) {
+    case DistributionKind::normal:
+      return (x - mean) / std;
+    case DistributionKind::truncated_normal: {
+      const double alpha = (lower - mean) / std, beta = (upper - mean) / std, t = (x - mean) / std;
+      const double mass = truncated_mass(alpha, beta);
+      // As calc_quantile: the lower tail's probability left of the mode, the upper tail's right of it.
+      if (t <= 0.0) return normal_quantile(std::clamp((normal_cdf(t) - normal_cdf(alpha)) / mass, 0.0, 1.0));
+      return -normal_quantile(std::clamp((normal_cdf(-t) - normal_cdf(-beta)) / mass, 0.0, 1.0));
+    }
+    case DistributionKind::uniform:
+      return normal_quantile(std::clamp((x - lower) / (upper - lower), 0.0, 1.0));
+    case DistributionKind::lognormal:
+      return x > 0.0 ? (std::log(x) - mu) / sigma : -kInf;
+    case DistributionKind::discrete:
+      return kNaN;
+  }
+  return kNaN;
+}
+
 double Distribution::calc_log_density(double x) const {
   constexpr double kHalfLog2Pi = 0.91893853320467274178;  // ln sqrt(2 pi)
   switch (kind) {

@@ -20,18 +20,26 @@ constexpr std::uint32_t kRoundTag = 0x31525349;  // "ISR1"
 
 double order_key(double margin) { return std::isnan(margin) ? kInf : margin; }
 
-// z of point k, z = mu + n with n the keyed standard normals; returns ln phi(z) - ln h(z) =
-// |mu|^2 / 2 - mu.z.
-double calc_point(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* z) {
+// z of point k, z = mu + n with n the keyed standard normals (carried by g in the final round);
+// returns ln phi(z) - ln h(z) = |mu|^2 / 2 - mu.z - ln g(n) / phi(n).
+double calc_point(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* z,
+                  const Deviation* g) {
   if (k < 0 || k >= r.n_points) throw std::out_of_range(fmt::format("point {} of a round of {}", k, r.n_points));
   const std::uint64_t state = counter_run_state(o.seed, r.first_evaluation + k, kTagImportance);
+  const auto d = static_cast<std::size_t>(o.dims);
+  for (std::size_t j = 0; j < d; ++j) z[j] = normal_quantile(to_open_unit(splitmix_at(state, j)));
+  double log_g = 0.0;
+  if (g != nullptr && r.final) {
+    g->transport(to_open_unit(splitmix_at(state, d)), z);
+    log_g = g->calc_log_ratio(z);
+  }
   double mm = 0.0, mz = 0.0;
-  for (std::size_t j = 0; j < static_cast<std::size_t>(o.dims); ++j) {
-    z[j] = r.mean[j] + normal_quantile(to_open_unit(splitmix_at(state, j)));
+  for (std::size_t j = 0; j < d; ++j) {
+    z[j] += r.mean[j];
     mm += r.mean[j] * r.mean[j];
     mz += r.mean[j] * z[j];
   }
-  return 0.5 * mm - mz;
+  return 0.5 * mm - mz - log_g;
 }
 
 }  // namespace
@@ -86,18 +94,21 @@ ImportanceRound ImportanceRound::decode(std::string_view bytes, int dims) {
   return s;
 }
 
-void calc_round_normals(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* z) {
-  calc_point(o, r, k, z);
+void calc_round_normals(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* z,
+                        const Deviation* g) {
+  calc_point(o, r, k, z, g);
 }
 
-void calc_round_uniforms(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* u) {
-  calc_point(o, r, k, u);
+void calc_round_uniforms(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* u,
+                         const Deviation* g) {
+  calc_point(o, r, k, u, g);
   for (int j = 0; j < o.dims; ++j) u[j] = std::clamp(normal_cdf(u[j]), 0x1p-54, 1.0 - 0x1p-53);
 }
 
-double calc_round_log_weight(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k) {
+double calc_round_log_weight(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k,
+                             const Deviation* g) {
   std::vector<double> z(static_cast<std::size_t>(o.dims));
-  return calc_point(o, r, k, z.data());
+  return calc_point(o, r, k, z.data(), g);
 }
 
 CrossEntropySampler::CrossEntropySampler(const ImportanceOptions& o) : opt_(o) {
@@ -187,7 +198,7 @@ int CrossEntropySampler::update_mean(const std::vector<std::size_t>& elite, std:
   std::vector<double> z(elite.size() * d), w(elite.size());
   for (std::size_t i = 0; i < elite.size(); ++i) {
     const auto k = static_cast<std::int64_t>(elite[i]);
-    w[i] = calc_point(opt_, round_, k, z.data() + i * d) + (log_ratio.empty() ? 0.0 : log_ratio[elite[i]]);
+    w[i] = calc_point(opt_, round_, k, z.data() + i * d, nullptr) + (log_ratio.empty() ? 0.0 : log_ratio[elite[i]]);
   }
   const double top = *std::max_element(w.begin(), w.end());
   if (!std::isfinite(top)) {  // every elite has weight 0 under the law (or a ratio that is not a number)
@@ -224,10 +235,10 @@ std::string CrossEntropySampler::find_refusal() const {
                      "simulation", noise, ImportanceOptions::kMaxMeanNoise);
 }
 
-std::vector<double> CrossEntropySampler::calc_final_log_weights() const {
+std::vector<double> CrossEntropySampler::calc_final_log_weights(const Deviation* g) const {
   std::vector<double> w(final_margins_.size());
   std::vector<double> z(static_cast<std::size_t>(opt_.dims));
-  for (std::size_t k = 0; k < w.size(); ++k) w[k] = calc_point(opt_, final_, static_cast<std::int64_t>(k), z.data());
+  for (std::size_t k = 0; k < w.size(); ++k) w[k] = calc_point(opt_, final_, static_cast<std::int64_t>(k), z.data(), g);
   return w;
 }
 

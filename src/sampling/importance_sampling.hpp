@@ -48,9 +48,15 @@
 //                add their log ratio to ln w). The adaptation's runs do not enter it: the final
 //                runs are independent draws of one fixed density, so the estimate is unbiased and
 //                its sample variance honest.
+//   final density  N(mu, I), or, given a Deviation g (law_mixture.hpp: a reweighted spread sweep), the
+//                density h(z) = g(z - mu) of the final round alone: its point k is z = mu + n with
+//                n = g's transport of the keyed normals and of one more keyed uniform (number
+//                dims of the point's stream), and ln phi(z) - ln h(z) = |mu|^2 / 2 - mu.z -
+//                ln g(n) / phi(n). The adaptation's levels always draw from N(mu, I).
 // Random numbers: point k of a round is z = mu + n, n_j = Phi^-1(counter_uniform(seed, e, j,
 // kTagImportance)), e = the round's first evaluation + k (the run ordinal): a pure function of the
-// round's plan (its bytes: mu) and the index, on any rank and after a resume.
+// round's plan (its bytes: mu), the index and the Deviation (fixed by the campaign's options), on any
+// rank and after a resume.
 #pragma once
 
 #include <cstdint>
@@ -77,6 +83,17 @@ struct ImportanceOptions {
   std::int64_t max_evaluations() const { return max_levels * n_per_level + n_final; }
 };
 
+// A density g of the final round's deviation n = z - mu other than the standard normal phi.
+class Deviation {
+ public:
+  virtual ~Deviation() = default;
+  // n of a point from its keyed standard normals (in place, all dims) and its own keyed uniform
+  // `pick` in (0, 1) (a mixture's choice of component).
+  virtual void transport(double pick, double* n) const = 0;
+  // ln g(n) - ln phi(n).
+  virtual double calc_log_ratio(const double* n) const = 0;
+};
+
 // The points of one round: the density they are drawn from.
 struct ImportanceRound {
   std::int64_t index = 0;
@@ -90,10 +107,14 @@ struct ImportanceRound {
 };
 
 // Point k of a round (z, and u = Phi(z) clamped inside (0, 1)); throws std::out_of_range for a bad k.
-void calc_round_normals(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* z);
-void calc_round_uniforms(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* u);
+// `g`: the final round's deviation density (nullptr: N(0, I); ignored for the levels' rounds).
+void calc_round_normals(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* z,
+                        const Deviation* g = nullptr);
+void calc_round_uniforms(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* u,
+                         const Deviation* g = nullptr);
 // ln phi(z) - ln h(z) of point k of a round.
-double calc_round_log_weight(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k);
+double calc_round_log_weight(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k,
+                             const Deviation* g = nullptr);
 
 struct ImportanceLevel {
   double threshold = 0.0;       // gamma_t
@@ -126,7 +147,7 @@ class CrossEntropySampler {
   // The final round (when done): its plan, margins and ln phi / h per point.
   const ImportanceRound& final_round() const { return final_; }
   const std::vector<double>& final_margins() const { return final_margins_; }
-  std::vector<double> calc_final_log_weights() const;
+  std::vector<double> calc_final_log_weights(const Deviation* g = nullptr) const;
   const ImportanceOptions& options() const { return opt_; }
   // Why no law's estimate may stand on these runs ("" when they may; see "refusal").
   std::string find_refusal() const;

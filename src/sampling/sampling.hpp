@@ -175,6 +175,9 @@ struct Distribution {
   // Inverse CDF: the value x with F(x) = u, for u in (0, 1). For discrete,
   // the smallest value whose cumulative (normalised) weight is >= u.
   double calc_quantile(double u) const;
+  // The normal score of x: Phi^-1(F(x)), the point of the standard normal space whose quantile is x
+  // (the inverse of calc_quantile(Phi(z)); computed from the tail x lies in); NaN for discrete.
+  double calc_normal_score(double x) const;
   // x[i] = calc_quantile(u[i]) for i < count, the same bits, in bulk (a per-bay dispersion's draws):
   // the kind is looked at once, and the normal quantile's central region is computed for all i
   // side by side, which the core overlaps (and vectorises) where one call at a time waits on its

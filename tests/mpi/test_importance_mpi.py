@@ -10,8 +10,11 @@ made small (100 runs a cross-entropy level, at most 3 levels, 300 final runs: at
 - Each value's p recomputed here from the file's rows alone: the final runs are the last n_final
   rows; a run's standard normal point is its inputs' (x - nominal) / std for the offset normal draws
   and (x / nominal - 1) / std for the relative ones (nominal: a run's value at a zero draw is not
-  stored, so the nominals are read from the resolved campaign via --dry-run); its weight
-  exp(|mu|^2 / 2 - mu.z) (mu = /sweep/importance/final_mean) times the normal density ratio of its
+  stored, so the nominals are read from the resolved campaign via --dry-run). The final runs are
+  drawn from the mixture of the values' laws at the mean mu = /sweep/importance/final_mean: the
+  density q(z) = phi(z - mu) (1/K) sum_m (1 / c_m) exp(-n^2 (1 / c_m^2 - 1) / 2), n = z_0 - mu_0 the
+  free length's deviation, c_m = the value's std over the base's (component m draws n from
+  N(0, c_m^2)); a run's weight for value k is phi(z) / q(z) times the normal density ratio of its
   free-length draw at the value's std to the base's; p = mean of the failing runs' weights.
   A wrong likelihood ratio in the method fails this.
 - The same datasets on 1 and 3 ranks (the adaptation reads the margins in run order, never in the
@@ -94,7 +97,10 @@ def check_against_rows(args, path):
         z.append((v - nom[key]) / std if how == "offset" else (v / nom[key] - 1.0) / std)
     z = np.array(z).T
     check(z.shape[1] == mu.size, f"{mu.size} sampling dimensions, one per dispersion")
-    log_w = 0.5 * mu @ mu - z @ mu
+    n = z[:, 0] - mu[0]
+    c = values / base
+    mixture = np.mean([np.exp(-n * n * (1.0 / cm**2 - 1.0) / 2.0) / cm for cm in c], axis=0)
+    log_w = 0.5 * mu @ mu - z @ mu - np.log(mixture)
     d = x["mast.diagonal_free_length_m"][rows] - nom["mast.diagonal_free_length_m"]
     m = margin[rows]
     fails = m <= 0  # a run fails when its margin says so, whatever its status (NaN: cannot say)

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "sampling/importance_sampling.hpp"
+#include "sampling/law_mixture.hpp"
 #include "sampling/reweighting.hpp"
 #include "sampling/sampling.hpp"
 
@@ -48,10 +49,21 @@ struct SweepCase {
   }
 };
 
+// The engine's block of the swept dimensions for these laws (law_mixture.hpp), the base N(0, 1).
+inline sampling::SweptBlock make_swept_block(const SweepCase& c, const std::vector<SweptLaw>& laws, int d) {
+  sampling::SweptBlock b;
+  b.offset = 0;
+  b.count = c.all_dims ? d : 1;
+  b.base = {sampling::Distribution::normal(0.0, 1.0)};
+  for (const SweptLaw& v : laws) b.laws.push_back({sampling::Distribution::normal(v.mean, v.std)});
+  return b;
+}
+
 // Runs the sampler to its end; the cross-entropy levels adapt to the mixture of the laws `adapt`
-// (empty: the campaign's own law).
+// (empty: the campaign's own law); the final round's deviation density g (nullptr: N(0, I)).
 inline sampling::CrossEntropySampler run_importance(const sampling::ImportanceOptions& o, const SweepCase& c,
-                                                    const std::vector<SweptLaw>& adapt = {}) {
+                                                    const std::vector<SweptLaw>& adapt = {},
+                                                    const sampling::Deviation* g = nullptr) {
   sampling::CrossEntropySampler s(o);
   std::vector<double> z(static_cast<std::size_t>(o.dims)), margins, ratio;
   while (!s.done()) {
@@ -59,7 +71,7 @@ inline sampling::CrossEntropySampler run_importance(const sampling::ImportanceOp
     margins.resize(static_cast<std::size_t>(r.n_points));
     ratio.assign(adapt.empty() ? 0 : margins.size(), 0.0);
     for (std::int64_t k = 0; k < r.n_points; ++k) {
-      sampling::calc_round_normals(o, r, k, z.data());
+      sampling::calc_round_normals(o, r, k, z.data(), g);
       margins[static_cast<std::size_t>(k)] = c.calc_margin(z.data(), o.dims);
       if (adapt.empty()) continue;
       double mix = 0.0;  // ln of the mixture's mean ratio
@@ -73,11 +85,11 @@ inline sampling::CrossEntropySampler run_importance(const sampling::ImportanceOp
 
 // The estimate for law v from the sampler's final runs.
 inline sampling::WeightedEstimate calc_swept_estimate(const sampling::CrossEntropySampler& s, const SweepCase& c,
-                                                      const SweptLaw& v) {
+                                                      const SweptLaw& v, const sampling::Deviation* g = nullptr) {
   const sampling::ImportanceOptions& o = s.options();
-  std::vector<double> log_w = s.calc_final_log_weights(), z(static_cast<std::size_t>(o.dims));
+  std::vector<double> log_w = s.calc_final_log_weights(g), z(static_cast<std::size_t>(o.dims));
   for (std::size_t k = 0; k < log_w.size(); ++k) {
-    sampling::calc_round_normals(o, s.final_round(), static_cast<std::int64_t>(k), z.data());
+    sampling::calc_round_normals(o, s.final_round(), static_cast<std::int64_t>(k), z.data(), g);
     log_w[k] += c.calc_log_ratio(z.data(), o.dims, v);
   }
   return sampling::calc_weighted_estimate(s.final_margins(), log_w, 0.95);
