@@ -94,19 +94,12 @@ ImportanceSweepMethod::ImportanceSweepMethod(const campaign::CampaignContext& ct
   base_ctx_ = std::make_unique<campaign::CampaignContext>(campaign::calc_campaign_at(ctx.options, laws_.base));
   method_ = std::make_unique<ImportanceMethod>(*base_ctx_);
   // The density adapts to the mixture of the values' laws: ln (1/K) sum_k f_k / f_b.
+  method_->set_adaptation_ratio([this](const double* u) { return laws_.block.calc_log_mixture_ratio(u); });
+  // A spread sweep's final runs: the same laws, carried to the adapted mean (law_mixture.hpp).
   if (laws_.spread) {
     mixture_ = std::make_unique<sampling::LawMixture>(laws_.block, dims_);
     method_->set_final_deviation(mixture_.get());
   }
-  method_->set_adaptation_ratio([this](const double* u) {
-    std::vector<double> r(laws_.block.laws.size());
-    laws_.block.calc_log_ratios(u, r);
-    const double top = *std::max_element(r.begin(), r.end());
-    if (!std::isfinite(top)) return top;
-    double s = 0.0;
-    for (double x : r) s += std::exp(x - top);
-    return top + std::log(s / static_cast<double>(r.size()));
-  });
 }
 
 void ImportanceSweepMethod::calc_uniforms(const RoundPlan& plan, std::int64_t run, double* u) const {

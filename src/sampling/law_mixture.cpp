@@ -19,6 +19,16 @@ void SweptBlock::calc_log_ratios(const double* u, std::span<double> out) const {
   }
 }
 
+double SweptBlock::calc_log_mixture_ratio(const double* u) const {
+  std::vector<double> r(laws.size());
+  calc_log_ratios(u, r);
+  const double top = *std::max_element(r.begin(), r.end());
+  if (!std::isfinite(top)) return top;
+  double s = 0.0;
+  for (double x : r) s += std::exp(x - top);
+  return top + std::log(s / static_cast<double>(r.size()));
+}
+
 std::size_t LawMixture::find_component(double pick) const {
   const std::size_t K = block_.laws.size();
   return std::min(K - 1, static_cast<std::size_t>(pick * static_cast<double>(K)));
@@ -34,15 +44,10 @@ void LawMixture::transport(double pick, double* n) const {
 }
 
 double LawMixture::calc_log_ratio(const double* n) const {
-  std::vector<double> u(static_cast<std::size_t>(dims_), 0.5), r(block_.laws.size());
+  std::vector<double> u(static_cast<std::size_t>(dims_), 0.5);
   for (int j = block_.offset; j < block_.offset + block_.count; ++j)
     u[static_cast<std::size_t>(j)] = std::clamp(normal_cdf(n[j]), 0x1p-54, 1.0 - 0x1p-53);
-  block_.calc_log_ratios(u.data(), r);
-  const double top = *std::max_element(r.begin(), r.end());
-  if (!std::isfinite(top)) return top;
-  double s = 0.0;
-  for (double x : r) s += std::exp(x - top);
-  return top + std::log(s / static_cast<double>(r.size()));
+  return block_.calc_log_mixture_ratio(u.data());
 }
 
 }  // namespace truss::sampling

@@ -39,6 +39,8 @@ struct SweptBlock {
   std::vector<DrawLaw> laws;  // one per value
   // R_k at the uniforms u = Phi(z) of a point (all its dims), for each value k, into out (laws.size()).
   void calc_log_ratios(const double* u, std::span<double> out) const;
+  // ln (1/K) sum_k exp(R_k): the ratio of the laws' equal mixture to the base at u.
+  double calc_log_mixture_ratio(const double* u) const;
 };
 
 class LawMixture final : public Deviation {
