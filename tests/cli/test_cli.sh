@@ -82,11 +82,11 @@ expect_in rail_free.err "rail geometry: bay 1 starts already past its rail entry
 if cmp -s rail_free.err rail_held.err; then ok "rail_free: the held stack's message"; else bad "rail_free: messages differ"; fi
 nothing_written rail_free
 
-# free stack: retraction runs (issue 9), here with stack contacts
+# free stack: retraction runs, here with stack contacts
 scene free_retract.toml '[mast]\nn_bays = 3\n[stack]\nmode = "free"\ncontacts = true\n[run]\ndirection = "retract"\n'
 run free_retract 0 free_retract.toml --json
 
-# stack contacts (issue 9): on a held stack, an unknown contact law, a non-boolean value
+# stack contacts: on a held stack, an unknown contact law, a non-boolean value
 scene contacts_held.toml '[stack]\nmode = "held"\ncontacts = true\n'
 run contacts_held 2 contacts_held.toml -o contacts_held.h5
 expect_in contacts_held.err "contacts_held.toml:3: stack.contacts" "contacts_held: message names key and line"
@@ -175,7 +175,7 @@ fi
 stray=$(find . -maxdepth 1 -name '.*.tmp.*' | head -5)
 if [ -z "$stray" ]; then ok "no temporary files left"; else bad "temporary files left: $stray"; fi
 
-# --- hostile input (issue 13) ------------------------------------------------------------------
+# --- hostile input ------------------------------------------------------------------
 touch "$WORK/.start"  # nothing_written: only files newer than this count
 sleep 1
 run huge_mass 2 "$TABLE1" --set mast.strut_mass_kg=1e308 --set run.max_wall_time_s=5 --set run.output_step_s=0 -o huge_mass.h5

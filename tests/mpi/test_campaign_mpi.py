@@ -413,7 +413,7 @@ def case_failures(args):
         check(f["stats/deploy_time_s/count"][()] == 400 - n_stall, "statistics count the ok runs only")
         last = [ln for ln in p.stderr.splitlines() if "wrote" in ln][-1]
         check(f"{n_stall} stall" in last and "failed" not in last,
-              "the final line counts the stalls by name, not as 'failed' (issue 12)")
+              "the final line counts the stalls by name, not as 'failed'")
         stall_torque = f["runs/inputs/drive.stall_torque_Nm"][:]
         speed = f["runs/inputs/drive.no_load_speed_rad_per_s"][:]
         check(stall_torque[status != 0].max() < stall_torque[status == 0].min(),

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""truss-campaign against hostile input and a failing machine (issue 13): resource limits before
+"""truss-campaign against hostile input and a failing machine: resource limits before
 any work, messages that name the --set or the campaign line, one campaign at a time on an output,
 a full disk while rank 0 writes the results, and the per-run wall-time cap.
 

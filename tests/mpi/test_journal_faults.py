@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The campaign journal under damage and kill -9 (issue 13 items 4-6 and the fault-injection test).
+"""The campaign journal under damage and kill -9.
 
   test_journal_faults.py --case journal|faults --driver truss-campaign --repo SRC --scratch DIR
 

@@ -1,4 +1,4 @@
-// Stack contacts of the free stack (docs/model.md §2 "free", issue 9 item 3): the cluster reduction,
+// Stack contacts of the free stack (docs/model.md §2 "free"): the cluster reduction,
 // contact forces and landing impact against dense constrained solves (Eigen, a second method);
 // resting lower frames against the held stack and a contact force computed here from docs/model.md §3;
 // the energy ledger with landings at tight tolerance; no overlap with contacts on.
@@ -210,7 +210,7 @@ TEST_CASE("contacts: energy ledger with landings closes at tight tolerance in ev
   }
 }
 
-// ---- Free-stack retraction (docs/model.md §2: the reverse of deployment; issue 9) ----
+// ---- Free-stack retraction (docs/model.md §2: the reverse of deployment) ----
 
 namespace {
 sim::RunResult run_mode(sim::SceneOptions s, model::DriveMode mode) {

@@ -1,4 +1,4 @@
-// The free stack's second solver (issue 9 item 5): SUNDIALS IDA on the residual form of the free
+// The free stack's second solver: SUNDIALS IDA on the residual form of the free
 // phases against the direct method (the bordered tridiagonal solve of eqs. 19-20 integrated by the
 // own Dormand-Prince pair). The two share the assembly of M, r and the constraint rows
 // (free_phase*.cpp) but nothing after it: IDA solves the residual's Newton systems with a banded LU

@@ -1,4 +1,4 @@
-// The free stack run end to end (docs/model.md §2 "free"; issue 9): the n-frame impact laws against a
+// The free stack run end to end (docs/model.md §2 "free"): the n-frame impact laws against a
 // dense KKT solve (Eigen, a second method), a one-bay free stack against the held stack (whose
 // phases are written in other coordinates and whose impacts use the two-frame laws), the energy
 // ledger at tight tolerance in every drive mode, and the stopping rules' event functions.

@@ -321,7 +321,7 @@ TEST_CASE("velocity-mode retraction starts from rest without a latch impact", "[
       if (br.bay == 1) CHECK(br.latch_energy_J == 0.0);                // unlocked from rest
       else CHECK(br.latch_energy_J > 0.0);                             // unlocked while moving
     }
-    // Unlock impulse per pin (issue 12): the hinge's radial speed jumps from 0 to x' = v tan(beta);
+    // Unlock impulse per pin: the hinge's radial speed jumps from 0 to x' = v tan(beta);
     // its momentum 2 g(0) x' comes from the rail alone, whose row in (y_m, x) at x = 0 is (1, c), so
     // c Lambda = 2 g(0) v tan(beta), and one pin takes |Lambda| / (3 sin beta). The same for the
     // first bay (the ramp from rest) and for the later ones (a moving mast, velocity kept).
@@ -340,7 +340,7 @@ TEST_CASE("velocity-mode retraction starts from rest without a latch impact", "[
 
 TEST_CASE("static drive force is dU/dy_m along the path (finite differences of the potential)", "[numeric][margins]") {
   // PhasePoint::static_drive_force_N, the force that holds the mast at rest (the resistive part of
-  // the drive force, issue 12), against central differences of the phase's own potential energy
+  // the drive force), against central differences of the phase's own potential energy
   // along its path: open, U(y) of bay m; on the rail, U(x) of bays m and m-1 over Y(x). Error
   // O(h^2 U''') ~ 1e-10 relative with h = 1e-5 m, rounding eps U / h ~ 1e-11: 1e-7 relative.
   const model::MastParams mast = make_uneven_mast(5);

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Cross-check of campaign files against OpenTURNS (issue 12 item 9), on the same data.
+"""Cross-check of campaign files against OpenTURNS, on the same data.
 
     test_openturns.py --saltelli S.h5 [--lhs L.h5 ...] [--sobol Q.h5 ...]
 

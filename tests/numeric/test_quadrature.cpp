@@ -1,6 +1,6 @@
 // Adaptive Gauss-Kronrod (numerics/gauss_kronrod.hpp): exact for polynomials up to degree 22 on
-// one piece, and bounded work when the integrand is not finite (issue 13 item 2: a NaN error
-// estimate used to bisect to depth 30, about 1e9 evaluations).
+// one piece, and bounded work when the integrand is not finite (a NaN error estimate must not
+// bisect to depth 30, about 1e9 evaluations).
 #include <catch2/catch.hpp>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Runs that never lie at the edges (issue 10): stiff drives through the automatic integrator
+// Runs that never lie at the edges: stiff drives through the automatic integrator
 // choice, degenerate rail geometry refused with its keys and range, solver failures named as such,
 // the accuracy check on the energy balance, sane tolerances, bounded histories and the wall-time
 // cap in closed form, and the creep stall of a time-stepped phase.
@@ -139,7 +139,7 @@ TEST_CASE("DOP853's stiffness test fires on a stiff problem, never on the oscill
   }
 }
 
-TEST_CASE("stiff drives of issue 10 item 5 end ok with the automatic choice", "[robust][stiff]") {
+TEST_CASE("stiff drives end ok with the automatic choice", "[robust][stiff]") {
   // A strong motor on stiff diagonals (K = 1e4 N/m, stall torque 10 N m): dopri54 needs ~7e5 steps.
   SceneOptions s = table1(DriveMode::motor, 5);
   s.mast.diagonal_stiffness_N_per_m = 1e4;

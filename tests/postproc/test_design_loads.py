@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Test of the top of the campaign report (issue 12): verdict, design-load table, ECSS margins,
+"""Test of the top of the campaign report: verdict, design-load table, ECSS margins,
 the pandas reader and the run table CSV, against values recomputed here from the HDF5 file; the
 loads' labels and definitions for the campaign's direction (deploy or retract).
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Frame heights of a free-stack run (issue 9 item 6): /history/frame_height_m and its figure.
+"""Frame heights of a free-stack run: /history/frame_height_m and its figure.
 
 Usage: test_frame_heights.py --sim TRUSS_SIM --root REPO_ROOT --scratch DIR
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# postproc/ installs as a Python package (issue 12 item 7): into a fresh venv that sees Debian's
+# postproc/ installs as a Python package: into a fresh venv that sees Debian's
 # numpy/scipy/h5py/matplotlib/pandas, without network; then the `truss-report` entry point runs
 # and `truss_report.read_campaign` imports from outside the source tree.
 #   test_install.sh REPO SCRATCH

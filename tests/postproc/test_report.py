@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Test of postproc/report.py (the statistical load report, issue 4).
+"""Test of postproc/report.py (the statistical load report).
 
 Usage:
     test_report.py --repo REPO_ROOT --scratch DIR [--campaign-h5 PATH ...] [--run-h5 PATH ...]

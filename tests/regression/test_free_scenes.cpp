@@ -1,4 +1,4 @@
-// The shipped free-stack scenes (campaigns/scenes/paper_free*.toml; docs/model.md §2 "free", issue 9):
+// The shipped free-stack scenes (campaigns/scenes/paper_free*.toml; docs/model.md §2 "free"):
 // Table 1's free stack misses the rail (its diagonals, taut from D = 0.27 m, pull the free lower
 // frame up), the slack one deploys with a small drive force before rail entry and a larger one
 // after. The closest approach is checked against the time history (an independent sampling of

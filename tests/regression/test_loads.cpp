@@ -1,5 +1,5 @@
-// The loads of one run pinned to values derived by hand, independently of the code under test
-// (issue 10, "tests that must also get stronger"): the drive torque of the screw, the pin force
+// The loads of one run pinned to values derived by hand, independently of the code under test:
+// the drive torque of the screw, the pin force
 // on the rail, the diagonal tension at the lock and the blanket's mass at the start of a run
 // with panels. Each check names the derivation it relies on.
 #include <catch2/catch.hpp>

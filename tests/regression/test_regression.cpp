@@ -124,7 +124,7 @@ TEST_CASE("retraction ends in the stowed stack, in every drive mode", "[regressi
       d.run.direction = Direction::deploy;
       CHECK(r.deploy_time_s == Approx(simulate(d).deploy_time_s).epsilon(1e-12));  // time reverse
       // unlocking a moving mast costs the latch energy again (docs/model.md §2); the first unlock,
-      // from rest, costs nothing (issue 10 item 7)
+      // from rest, costs nothing
       const RunResult rd = simulate(d);
       CHECK(r.bays[0].latch_energy_J == 0.0);
       for (std::size_t i = 1; i < r.bays.size(); ++i)

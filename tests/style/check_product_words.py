@@ -2,7 +2,7 @@
 """Fails on words about how the project was made, in what its users read.
 
 The documentation, the report (postproc/), the READMEs, the Python package, the benchmarks a user
-runs (bench/*.py) and the strings of
+runs (bench/*.py), the tests a user reads to trust a number (tests/) and the strings of
 the programs (string literals in src/ and python/*.cpp) speak of the product as it is: no issue
 numbers, no history ("since ...", "earlier measurements"), no tools the project was built with
 ("reference search", "code corpus"). Each hit is printed as FILE:LINE: the word and why.
@@ -33,7 +33,9 @@ PATTERNS = [(re.compile(p, re.IGNORECASE), why) for p, why in PATTERNS]
 # Whole files (documentation, report, Python package) and string literals only (C++ sources).
 WHOLE = (re.compile(r"^docs/.*\.md$"), re.compile(r"^postproc/.*\.(py|sh|toml|cfg)$"),
          re.compile(r"(^|/)README\.md$"), re.compile(r"^python/truss_deploy/.*\.py$"),
-         re.compile(r"^scripts/run_main\.sh$"), re.compile(r"^bench/.*\.(py|sh)$"))
+         re.compile(r"^scripts/run_main\.sh$"), re.compile(r"^bench/.*\.(py|sh)$"),
+         re.compile(r"^tests/.*\.(py|sh|cpp|hpp|txt|cmake)$"))
+SELF = "tests/style/check_product_words.py"  # names the words it looks for
 STRINGS = (re.compile(r"^src/.*\.(cpp|hpp|h)$"), re.compile(r"^python/[^/]*\.(cpp|hpp)$"))
 LITERAL = re.compile(r'"(?:[^"\\\n]|\\.)*"')
 
@@ -63,7 +65,7 @@ def main():
     for rel in tracked(root):
         whole = any(rx.search(rel) for rx in WHOLE)
         strings = any(rx.search(rel) for rx in STRINGS)
-        if not (whole or strings):
+        if not (whole or strings) or rel == SELF:
             continue
         try:
             text = open(os.path.join(root, rel), encoding="utf-8").read()
@@ -74,7 +76,7 @@ def main():
         print(b)
     print(f"{len(bad)} word(s) about how the project was made" if bad else
           "no word about how the project was made in docs/, postproc/, READMEs, python/, bench/, "
-          "the strings of src/")
+          "tests/, the strings of src/")
     return 1 if bad else 0
 
 

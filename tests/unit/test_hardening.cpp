@@ -1,5 +1,5 @@
-// Hostile input (issue 13): every numeric scene key's hard range enforced in files, --set and
-// campaign draws; plausibility warnings from the typical ranges (issue 12 item 10); geometry
+// Hostile input: every numeric scene key's hard range enforced in files, --set and
+// campaign draws; plausibility warnings from the typical ranges; geometry
 // errors naming the keys involved and their origins; bounded input files; campaign messages that
 // name the --set or the campaign line; the resource check before any work.
 #include <catch2/catch.hpp>

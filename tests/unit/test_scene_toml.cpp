@@ -328,7 +328,7 @@ TEST_CASE("bad enumeration values list the allowed values", "[scene][errors]") {
   CHECK_THAT(parse_error("[stack]\nmode = \"loose\"\n"), Contains("\"held\", \"free\""));
   CHECK_THAT(parse_error("[run]\ndirection = \"up\"\n"), Contains("\"deploy\", \"retract\""));
   CHECK_THAT(parse_error("[run]\nintegrator = \"rk4\"\n"), Contains("\"dopri54\", \"cvode\""));
-  // Stack contacts: TOML booleans only; the contact law by name (issue 9).
+  // Stack contacts: TOML booleans only; the contact law by name.
   CHECK_THAT(parse_error("[stack]\nmode = \"free\"\ncontacts = \"yes\"\n"), StartsWith("error: scene.toml:3: stack.contacts: expected true or false"));
   CHECK_THAT(parse_error("[stack]\nmode = \"free\"\ncontacts = true\ncontact_law = \"elastic\"\n"),
              StartsWith("error: scene.toml:4: stack.contact_law: unknown value \"elastic\""));
