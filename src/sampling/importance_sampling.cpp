@@ -102,7 +102,7 @@ void calc_round_normals(const ImportanceOptions& o, const ImportanceRound& r, st
 void calc_round_uniforms(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k, double* u,
                          const Deviation* g) {
   calc_point(o, r, k, u, g);
-  for (int j = 0; j < o.dims; ++j) u[j] = std::clamp(normal_cdf(u[j]), 0x1p-54, 1.0 - 0x1p-53);
+  for (int j = 0; j < o.dims; ++j) u[j] = calc_open_normal_cdf(u[j]);
 }
 
 double calc_round_log_weight(const ImportanceOptions& o, const ImportanceRound& r, std::int64_t k,

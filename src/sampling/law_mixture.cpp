@@ -38,7 +38,7 @@ std::size_t LawMixture::find_component(double pick) const {
 void LawMixture::transport(double pick, double* n) const {
   const DrawLaw& law = block_.laws[find_component(pick)];
   for (int j = block_.offset; j < block_.offset + block_.count; ++j) {
-    const double u = std::clamp(normal_cdf(n[j]), 0x1p-54, 1.0 - 0x1p-53);
+    const double u = calc_open_normal_cdf(n[j]);
     n[j] = block_.base.dist.calc_normal_score(law.scale * law.dist.calc_quantile(u) + law.shift);
   }
 }
@@ -46,7 +46,7 @@ void LawMixture::transport(double pick, double* n) const {
 double LawMixture::calc_log_ratio(const double* n) const {
   std::vector<double> u(static_cast<std::size_t>(dims_), 0.5);
   for (int j = block_.offset; j < block_.offset + block_.count; ++j)
-    u[static_cast<std::size_t>(j)] = std::clamp(normal_cdf(n[j]), 0x1p-54, 1.0 - 0x1p-53);
+    u[static_cast<std::size_t>(j)] = calc_open_normal_cdf(n[j]);
   return block_.calc_log_mixture_ratio(u.data());
 }
 

@@ -46,6 +46,7 @@
 // machines with FMA.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <string>
@@ -126,6 +127,10 @@ double normal_cdf(double x);
 // Phi^-1(p) by Wichura's AS 241 (PPND16), relative accuracy ~1e-16 for
 // 1e-300 < min(p, 1-p). Returns -inf at 0, +inf at 1, NaN outside [0, 1].
 double normal_quantile(double p);
+
+// Phi(z) kept inside the open interval the quantile functions take, [2^-54, 1 - 2^-53] (the ends of
+// to_open_unit): a point of the standard normal space as the uniforms a run's draws read.
+inline double calc_open_normal_cdf(double z) { return std::clamp(normal_cdf(z), 0x1p-54, 1.0 - 0x1p-53); }
 
 // ---------------------------------------------------------------------------
 // Distributions

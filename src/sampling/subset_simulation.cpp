@@ -117,7 +117,7 @@ void calc_round_uniforms(const SubsetOptions& o, const SubsetRound& r, std::int6
   }
   // Phi(z) kept strictly inside (0, 1) like the keyed uniforms (|z| > 8.3 rounds to an end).
   for (int j = 0; j < o.dims; ++j)
-    u[j] = std::clamp(normal_cdf(r.z[static_cast<std::size_t>(k * o.dims + j)]), 0x1p-54, 1.0 - 0x1p-53);
+    u[j] = calc_open_normal_cdf(r.z[static_cast<std::size_t>(k * o.dims + j)]);
 }
 
 SubsetSimulation::SubsetSimulation(const SubsetOptions& o) : opt_(o) {
