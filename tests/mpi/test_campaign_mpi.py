@@ -64,6 +64,17 @@ def chunks(path, skip=("timing",)):
     return out
 
 
+def inflated_comparison(ma, ba, mb, bb):
+    """Whether two deflated chunks (filter masks ma, mb: 0 = every filter applied) inflate to the
+    same bytes: 'equal', 'differ', or why they were not compared."""
+    if ma or mb:
+        return "not compared (a filter skipped)"
+    try:
+        return "equal" if zlib.decompress(ba) == zlib.decompress(bb) else "differ"
+    except zlib.error as e:
+        return f"not compared (a chunk does not inflate: {e})"
+
+
 def chunk_difference(a, b):
     """'' when the chunk maps a and b (of chunks()) are equal, else the first difference: the
     dataset, the chunk's offset, its filter masks and stored sizes, and whether the inflated bytes
@@ -75,11 +86,9 @@ def chunk_difference(a, b):
             return f"{name}: {len(a[name])} chunks against {len(b[name])}"
         for (oa, (ma, ba)), (ob, (mb, bb)) in zip(a[name], b[name]):
             if (oa, ma, ba) != (ob, mb, bb):
-                inflated = (zlib.decompress(ba) == zlib.decompress(bb)) if ma == mb == 0 else None
                 first = next((i for i, (x, y) in enumerate(zip(ba, bb)) if x != y), min(len(ba), len(bb)))
                 return (f"{name} chunk at {oa} / {ob}: masks {ma} / {mb}, {len(ba)} / {len(bb)} bytes stored, "
-                        f"first differing byte {first}, inflated bytes "
-                        f"{'equal' if inflated else 'differ' if inflated is False else 'not compared'}")
+                        f"first differing byte {first}, inflated bytes {inflated_comparison(ma, ba, mb, bb)}")
     return ""
 
 
