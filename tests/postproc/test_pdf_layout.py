@@ -2,12 +2,11 @@
 """The signed PDF holds what the HTML holds, and nothing is printed outside the page's margins.
 
 Usage:
-    test_pdf_layout.py --scratch DIR [--repo REPO --campaign TRUSS_CAMPAIGN [--mpiexec MPIEXEC]]
-                       [--h5 RESULTS.h5 ...] [--report DIR ...]
+    test_pdf_layout.py --scratch DIR [--repo REPO --shipped DIR] [--h5 RESULTS.h5 ...] [--report DIR ...]
 
-Reports to check: every shipped campaign (campaigns/*.toml) run small on 2 ranks (--campaign),
-the given results files (--h5: their reports are built here) and reports already built (--report
-DIR with report.html and report.pdf). For each:
+Reports to check: every shipped campaign's (campaigns/*.toml run small on 2 ranks, reported by
+shipped_reports.py into --shipped DIR), those of the given results files (--h5: built here) and
+reports already built (--report DIR with report.html and report.pdf). For each:
 1. Every value the HTML carries, the text of each element with a data-key and of each table cell,
    appears in the PDF's text (pdftotext -raw; both compared without whitespace and in Unicode
    NFKC form, so that a cell wrapped over lines still matches): a table clipped at the page's
@@ -41,15 +40,7 @@ from number_format import violations  # noqa: E402
 
 PY = "/usr/bin/python3"
 from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.path)
-SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],
-         # importance sampling, the free length lowered so that a few hundred runs reach the miss
-         "free_rail_miss_rare": ["--set", "mast.diagonal_free_length_m=0.483", "--set", "ensemble.importance.n_per_level=100",
-                                 "--set", "ensemble.importance.max_levels=3", "--set", "ensemble.importance.n_final=200"],
-         "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"],
-         "motor_sizing": ["--set", "ensemble.importance.n_per_level=40", "--set", "ensemble.importance.max_levels=2",
-                          "--set", "ensemble.importance.n_final=100"],
-         "tolerance_allocation": ["--set", "ensemble.importance.n_per_level=40", "--set", "ensemble.importance.max_levels=2",
-                                  "--set", "ensemble.importance.n_final=100"]}
+from shipped_reports import report_dirs  # noqa: E402
 MM = 50 / 25.4            # pixels per mm at 50 dpi
 MARGINS_MM = {"top": 15.0, "left": 12.0, "right": 12.0}
 
@@ -194,30 +185,18 @@ def report(h5, out):
                  f"{os.path.basename(h5)}: report and PDF written (exit {p.returncode}) {p.stderr.strip()[-300:]}")
 
 
-def shipped(a):
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1")
-    for toml in sorted(glob.glob(os.path.join(a.repo, "campaigns", "*.toml"))):
-        name = os.path.basename(toml)[:-5]
-        h5 = os.path.join(a.scratch, f"{name}.h5")
-        p = subprocess.run([a.mpiexec, "-np", "2", a.campaign, toml, "-o", h5, "--force", "--progress", "none",
-                            *SMALL.get(name, ["--set", "ensemble.n_runs=20"])], capture_output=True, text=True, env=env)
-        if check(os.path.exists(h5), f"{name}: campaign written (exit {p.returncode})"):
-            yield name, h5
-
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--scratch", required=True)
     ap.add_argument("--repo")
-    ap.add_argument("--campaign", help="the truss-campaign program: run every shipped campaign small")
-    ap.add_argument("--mpiexec", default="mpirun")
+    ap.add_argument("--shipped", help="the reports of the shipped campaigns (shipped_reports.py); needs --repo")
     ap.add_argument("--h5", nargs="*", default=[])
     ap.add_argument("--report", nargs="*", default=[])
     a = ap.parse_args()
     os.makedirs(a.scratch, exist_ok=True)
     todo = [(os.path.basename(d.rstrip("/")), d) for d in a.report]
-    files = [(os.path.basename(h)[:-3], h) for h in a.h5] + (list(shipped(a)) if a.campaign else [])
+    todo += report_dirs(a.repo, a.shipped) if a.shipped else []
+    files = [(os.path.basename(h)[:-3], h) for h in a.h5]
     for name, h5 in files:
         out = os.path.join(a.scratch, f"report_{name}")
         if report(h5, out):

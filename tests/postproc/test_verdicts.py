@@ -2,7 +2,7 @@
 """The report's three verdicts, its PDF and its page without "NaN", on small real campaigns.
 
 Usage:
-    test_verdicts.py --repo REPO_ROOT --scratch DIR --campaign TRUSS_CAMPAIGN [--mpiexec MPIEXEC]
+    test_verdicts.py --repo REPO_ROOT --scratch DIR --campaign TRUSS_CAMPAIGN --shipped DIR [--mpiexec MPIEXEC]
 
 1. Three verdicts from one small campaign (Table 1 dispersed, 60 runs): judged at the P90 level
    (a bound needs 29 runs) it passes; with a required motorisation factor of 1000 (the ECSS
@@ -13,12 +13,11 @@ Usage:
    name, its SHA-256 as hashlib computes it here from the file, the verdict), the ECSS citation
    and the line asking to confirm the factors, and "page 1 of N" on the first page.
 3. No "NaN" in the text of the report of any shipped campaign (campaigns/*.toml, each with a few
-   runs), and no "Nm" written as a unit.
+   runs: the reports shipped_reports.py built in --shipped DIR), and no "Nm" written as a unit.
 4. The report's figure style puts no offset on an axis (data spread 2e-6 around 145).
 Prints one line per check; exit 0 when all pass, 1 otherwise.
 """
 import argparse
-import glob
 import hashlib
 import html
 import os
@@ -29,19 +28,9 @@ import sys
 
 PY = "/usr/bin/python3"
 from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.path)
+from shipped_reports import report_dirs  # noqa: E402
 EXIT = {"pass": 0, "fail": 3, "not_assessed": 4}
 BANNER = {"pass": "VERDICT: PASS", "fail": "VERDICT: FAIL", "not_assessed": "VERDICT: NOT ASSESSED"}
-# Few runs per shipped campaign: enough for every section to have data, cheap on 2 cores.
-SMALL = {"table1_sensitivity": ["--set", "ensemble.n_runs=40"],     # 4 blocks of 8 + 2
-         # importance sampling, the free length lowered so that a few hundred runs reach the miss
-         "free_rail_miss_rare": ["--set", "mast.diagonal_free_length_m=0.483", "--set", "ensemble.importance.n_per_level=100",
-                                 "--set", "ensemble.importance.max_levels=3", "--set", "ensemble.importance.n_final=200"],
-         "motor_torque": ["--set", "ensemble.n_runs=16", "--set", "ensemble.stop=false"],
-         # design sweeps: one small importance-sampling campaign reweighted to every value
-         "motor_sizing": ["--set", "ensemble.importance.n_per_level=40", "--set", "ensemble.importance.max_levels=2",
-                          "--set", "ensemble.importance.n_final=100"],
-         "tolerance_allocation": ["--set", "ensemble.importance.n_per_level=40",
-                                  "--set", "ensemble.importance.max_levels=2", "--set", "ensemble.importance.n_final=100"]}
 
 
 def run_campaign(a, name, out, extra):
@@ -133,16 +122,7 @@ def check_pdf(a, h5, out):
 
 
 def check_no_nan(a):
-    for toml in sorted(glob.glob(os.path.join(a.repo, "campaigns", "*.toml"))):
-        name = os.path.basename(toml)[:-5]
-        h5 = os.path.join(a.scratch, f"shipped_{name}.h5")
-        if not run_campaign(a, name, h5, SMALL.get(name, ["--set", "ensemble.n_runs=20"])):
-            continue
-        out = os.path.join(a.scratch, f"shipped_{name}")
-        p = report(a, h5, out, "--no-pdf")
-        if not check(p.returncode in EXIT.values(), f"{name}: report, exit {p.returncode} "
-                     f"({p.stderr.strip()[-300:]})"):
-            continue
+    for name, out in report_dirs(a.repo, a.shipped):
         text = page_text(os.path.join(out, "report.html"))
         nan = [m.start() for m in re.finditer(r"\bNaN\b|\bnan\b", text)]
         check(not nan, f"{name}: no NaN on the page"
@@ -204,6 +184,7 @@ def main():
     ap.add_argument("--scratch", required=True)
     ap.add_argument("--campaign", required=True, help="the truss-campaign program")
     ap.add_argument("--mpiexec", default="mpirun")
+    ap.add_argument("--shipped", required=True, help="the reports of the shipped campaigns (shipped_reports.py)")
     a = ap.parse_args()
     shutil.rmtree(a.scratch, ignore_errors=True)
     os.makedirs(a.scratch)
