@@ -24,7 +24,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "mpi"))
-from test_campaign_mpi import ENV, chunk_difference, chunks, datasets, kill_job, same_values  # noqa: E402
+from test_campaign_mpi import ENV, chunk_difference, chunks, datasets, kill_job, reencoding, same_values  # noqa: E402
 
 CAMPAIGN = "campaigns/table1_dispersed.toml"
 
@@ -43,6 +43,7 @@ def main():
     ap.add_argument("--trials", type=int, default=10)
     ap.add_argument("--runs", type=int, default=4000)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--reencode", help="truss_reencode_chunks: on a chunk difference, which file's chunk the codec writes")
     args = ap.parse_args()
     shutil.rmtree(args.scratch, ignore_errors=True)
     os.makedirs(args.scratch)
@@ -78,6 +79,8 @@ def main():
         same, why = (False, f"exit {p.returncode}: {p.stderr.strip()[-300:]}") if p.returncode != 0 else \
             same_values(ref_values, datasets(out))
         why = why or chunk_difference(ref_chunks, chunks(out))
+        if why and args.reencode:
+            why += f"; re-encoded in a fresh process: {reencoding(args.reencode, ref, out) or 'both files re-encode to their bytes'}"
         bad += bool(why)
         print(f"{where}; resumed on {again} ranks {'shm' if tcp else 'TCP'}: "
               f"{'DIFFERS ' + why if why else 'identical'} ({restored[:90]})")

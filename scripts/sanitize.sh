@@ -40,7 +40,7 @@ targets=(fuzz_scene fuzz_campaign)
 if [ "$what" != fuzz ]; then
   targets+=(truss_tests_model truss_tests_stages truss_tests_free truss_tests_integrators truss_tests_io
             truss_tests_statistics truss_tests_campaign truss_tests_engine truss_tests_util truss_tests_sampling
-            truss-sim truss-campaign truss_campaign_two_round)
+            truss-sim truss-campaign truss_campaign_two_round truss_reencode_chunks)
 fi
 watch_step build sanitize-build "$BUILD.log" cmake --build "$BUILD" -j"$(nproc)" --target "${targets[@]}"
 t_build=$(date +%s)

@@ -92,6 +92,33 @@ def chunk_difference(a, b):
     return ""
 
 
+def cpu_model():
+    with open("/proc/cpuinfo") as fh:
+        return next((line.split(":", 1)[1].strip() for line in fh if line.startswith("model name")), "unknown CPU")
+
+
+def reencoding(tool, *paths):
+    """'' when every deflated chunk of each file encodes again, in a fresh process
+    (truss_reencode_chunks), to the bytes the file stores; else, per file, what differs, and the CPU.
+    Of two files with equal values and a differing chunk, it names the one whose chunk is not what
+    the codec writes."""
+    said = []
+    for path in paths:
+        p = subprocess.run([tool, path], capture_output=True, text=True)
+        if p.returncode != 0:
+            said.append(f"{os.path.basename(path)}: {' / '.join(p.stdout.strip().splitlines()[-3:]) or p.stderr.strip()}")
+    return f"{'; '.join(said)} (CPU: {cpu_model()})" if said else ""
+
+
+def file_difference(ref, out, tool=None):
+    """'' when the files' chunks are equal (chunk_difference), else the difference and, given the
+    re-encoding tool, which file's chunks re-encode to their stored bytes."""
+    diff = chunk_difference(chunks(ref), chunks(out))
+    if diff and tool:
+        diff += f"; re-encoded in a fresh process: {reencoding(tool, ref, out) or 'both files re-encode to their bytes'}"
+    return diff
+
+
 def same_values(a, b):
     if set(a) != set(b):
         return False, f"dataset sets differ: {sorted(set(a) ^ set(b))}"
@@ -366,8 +393,10 @@ def case_resume(args):
     check("torn last record dropped" in p.stderr, "the torn record was detected and dropped")
     same, why = same_values(datasets(ref), datasets(out))
     check(same, f"resumed file equals the uninterrupted one, value for value {why}")
-    diff = chunk_difference(chunks(ref), chunks(out))
+    diff = file_difference(ref, out, args.reencode)
     check(not diff, f"and chunk for chunk: the same compressed bytes {diff}")
+    bad = reencoding(args.reencode, ref, out)
+    check(not bad, f"every chunk of both files encoded again in another process gives its stored bytes {bad}")
     with h5py.File(out, "r") as f:
         sess = f["timing/session"][:]
         restored = np.count_nonzero(sess == 0)
@@ -704,6 +733,7 @@ def main():
     ap.add_argument("--case", required=True, choices=["ranks", "resume", "failures", "saltelli", "bad_input", "transports", "paths"])
     ap.add_argument("--driver", required=True)
     ap.add_argument("--sim", required=True)
+    ap.add_argument("--reencode", required=True, help="the truss_reencode_chunks program")
     ap.add_argument("--repo", required=True)
     ap.add_argument("--scratch", required=True)
     args = ap.parse_args()

@@ -24,7 +24,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from test_campaign_mpi import ENV, alive, check, chunk_difference, chunks, datasets, descendants, fresh, same_values  # noqa: E402
+from test_campaign_mpi import ENV, alive, check, datasets, descendants, file_difference, fresh, same_values  # noqa: E402
 from test_journal_faults import all_journal_frames  # noqa: E402
 
 TABLE1 = "campaigns/table1_dispersed.toml"
@@ -87,7 +87,7 @@ def case_ctrl_c(args):
     check(restored and int(m.group(1)) - 500 * 2 <= int(restored.group(1)) <= 4000,
           f"it restored at least the runs the line counted ({restored.group(1) if restored else '?'} of {m.group(1)})")
     same, why = same_values(datasets(ref), datasets(out))
-    why = why or chunk_difference(chunks(ref), chunks(out))
+    why = why or file_difference(ref, out, args.reencode)
     check(not why, f"the file equals the uninterrupted one, value and chunk for chunk {why}")
     check(sorted(os.listdir(d)) == ["c.h5", "ref.h5"], f"nothing else left ({sorted(os.listdir(d))})")
 
@@ -137,6 +137,7 @@ def main():
     ap.add_argument("--driver", required=True)
     ap.add_argument("--repo", required=True)
     ap.add_argument("--build", required=True)
+    ap.add_argument("--reencode", required=True, help="the truss_reencode_chunks program")
     ap.add_argument("--scratch", required=True)
     args = ap.parse_args()
     print(f"case {args.case}:")
