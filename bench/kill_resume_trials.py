@@ -24,7 +24,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "mpi"))
-from test_campaign_mpi import ENV, chunk_difference, chunks, datasets, kill_job, reencoding, same_values  # noqa: E402
+from test_campaign_mpi import ENV, datasets, file_difference, kill_job, same_values  # noqa: E402
 
 CAMPAIGN = "campaigns/table1_dispersed.toml"
 
@@ -52,7 +52,7 @@ def main():
     t0 = time.time()
     subprocess.run(launch(args, 2, False, ["-o", ref, *sets]), env=ENV, check=True, capture_output=True)
     t_ref = time.time() - t0
-    ref_values, ref_chunks = datasets(ref), chunks(ref)
+    ref_values = datasets(ref)
     print(f"uninterrupted: {args.runs} runs on 2 ranks in {t_ref:.2f} s")
     rng = random.Random(args.seed)
     bad = 0
@@ -78,9 +78,7 @@ def main():
         restored = next((ln.strip() for ln in p.stderr.splitlines() if "restored" in ln), "")
         same, why = (False, f"exit {p.returncode}: {p.stderr.strip()[-300:]}") if p.returncode != 0 else \
             same_values(ref_values, datasets(out))
-        why = why or chunk_difference(ref_chunks, chunks(out))
-        if why and args.reencode:
-            why += f"; re-encoded in a fresh process: {reencoding(args.reencode, ref, out) or 'both files re-encode to their bytes'}"
+        why = why or file_difference(ref, out, args.reencode)
         bad += bool(why)
         print(f"{where}; resumed on {again} ranks {'shm' if tcp else 'TCP'}: "
               f"{'DIFFERS ' + why if why else 'identical'} ({restored[:90]})")
