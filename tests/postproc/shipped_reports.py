@@ -52,15 +52,20 @@ def report_dirs(repo, scratch):
     return out
 
 
-def build(a, name):
+def run_campaign(a, name, out, extra):
+    """campaigns/<name>.toml run on 2 ranks into `out` with the options `extra`; checked written."""
     env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
                OMPI_MCA_rmaps_base_oversubscribe="1")
+    cmd = [a.mpiexec, "-np", "2", a.campaign, os.path.join(a.repo, "campaigns", f"{name}.toml"),
+           "-o", out, "--force", "--progress", "none", *extra]
+    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
+    return check(p.returncode in CAMPAIGN_EXITS and os.path.exists(out),
+                 f"{name}: campaign written (exit {p.returncode}) {p.stderr.strip()[-300:]}")
+
+
+def build(a, name):
     h5 = os.path.join(a.scratch, f"{name}.h5")
-    p = subprocess.run([a.mpiexec, "-np", "2", a.campaign, os.path.join(a.repo, "campaigns", f"{name}.toml"),
-                        "-o", h5, "--force", "--progress", "none", *SMALL.get(name, ["--set", "ensemble.n_runs=20"])],
-                       capture_output=True, text=True, env=env)
-    if not check(p.returncode in CAMPAIGN_EXITS and os.path.exists(h5),
-                 f"{name}: campaign written (exit {p.returncode}) {p.stderr.strip()[-300:]}"):
+    if not run_campaign(a, name, h5, SMALL.get(name, ["--set", "ensemble.n_runs=20"])):
         return
     out = os.path.join(a.scratch, f"report_{name}")
     p = subprocess.run([PY, os.path.join(a.repo, "postproc", "report.py"), h5, "-o", out, "--force", "--quiet"],

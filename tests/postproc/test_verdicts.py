@@ -28,20 +28,9 @@ import sys
 
 PY = "/usr/bin/python3"
 from checks import FAILS, check  # noqa: E402  (this script's folder is on sys.path)
-from shipped_reports import report_dirs  # noqa: E402
+from shipped_reports import report_dirs, run_campaign  # noqa: E402
 EXIT = {"pass": 0, "fail": 3, "not_assessed": 4}
 BANNER = {"pass": "VERDICT: PASS", "fail": "VERDICT: FAIL", "not_assessed": "VERDICT: NOT ASSESSED"}
-
-
-def run_campaign(a, name, out, extra):
-    env = dict(os.environ, OMPI_ALLOW_RUN_AS_ROOT="1", OMPI_ALLOW_RUN_AS_ROOT_CONFIRM="1",
-               OMPI_MCA_rmaps_base_oversubscribe="1")
-    cmd = [a.mpiexec, "-np", "2", a.campaign, os.path.join(a.repo, "campaigns", f"{name}.toml"),
-           "-o", out, "--force", "--progress", "none", *extra]
-    p = subprocess.run(cmd, capture_output=True, text=True, env=env)
-    # 6: a sweep whose verdict is NOT ASSESSED (a few runs per value give no allowable).
-    return check(p.returncode in (0, 1, 6) and os.path.exists(out),
-                 f"{name}: campaign written ({p.stderr.strip()[-300:]})")
 
 
 def report(a, h5, out, *opts):
