@@ -6,6 +6,7 @@
 // file is still written, a failed run is data); 2 bad input (command line, scene, existing output
 // file), nothing written; 3 the output file could not be written, or an internal error.
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 
 #include <csignal>
 #include <exception>
@@ -13,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "io/build_info.hpp"
 #include "io/h5_output.hpp"
 #include "io/json_summary.hpp"
 #include "io/scene_toml.hpp"
@@ -48,8 +50,8 @@ int main(int argc, char** argv) {
       ->take_all();
   app.add_flag("--json", json, "Print the run summary as JSON on stdout");
   app.add_flag("--force", force, "Overwrite the output file if it exists");
-  app.set_version_flag("--version", std::string("truss-sim ") + TRUSS_VERSION + " (" +
-                                        TRUSS_GIT_REV + ")");
+  app.set_version_flag("--version", fmt::format("truss-sim {} ({})", truss::io::get_software_version(),
+                                                truss::io::get_git_revision()));
   app.footer(
       "Exit status: 0 ok; 1 the run failed physically (stall, rail miss, ...; the output file is "
       "still written); 2 bad input, nothing written; 3 output could not be written or internal "

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "io/build_info.hpp"
 #include "io/h5_util.hpp"
 #include "io/json_summary.hpp"
 #include "io/scene_toml.hpp"
@@ -66,8 +67,8 @@ void write_contents(hid_t file, const sim::RunResult& r, const std::string& scen
   write_int_attribute(file, "schema_version", kSchemaVersion);
   write_string_attribute(file, "kind", "single_run");
   write_string_attribute(file, "scene_toml", scene_toml);
-  write_string_attribute(file, "software_version", TRUSS_VERSION);
-  write_string_attribute(file, "git_revision", TRUSS_GIT_REV);
+  write_string_attribute(file, "software_version", std::string(get_software_version()));
+  write_string_attribute(file, "git_revision", std::string(get_git_revision()));
   write_string_attribute(file, "created_utc", utc_now_iso8601());
 
   {

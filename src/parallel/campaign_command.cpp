@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "campaign/motor_declared.hpp"
+#include "io/build_info.hpp"
 #include "io/h5_output.hpp"
 #include "io/h5_util.hpp"
 #include "io/scene_toml.hpp"
@@ -83,7 +84,8 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
                  "them uncompressed (largest file, least work for rank 0)")->check(CLI::Range(0, 9));
   // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
   app.add_option("--synthetic-run-cost-s", o.synthetic_run_cost_s, "")->check(CLI::Range(0.0, 60.0))->group("");
-  app.set_version_flag("--version", std::string("truss-campaign ") + TRUSS_VERSION + " (" + TRUSS_GIT_REV + ")");
+  app.set_version_flag("--version",
+                     fmt::format("truss-campaign {} ({})", io::get_software_version(), io::get_git_revision()));
   app.footer("Exit status: 0 results written (failed runs are data in them); 2 bad input, nothing written; "
              "3 I/O or internal error; 4 results written, but most runs are invalid input (the dispersions give "
              "scenes the model refuses); 5 results written, but the method has no result; 6 results written, but "

@@ -7,6 +7,7 @@
 
 #include <fmt/format.h>
 
+#include "io/build_info.hpp"
 #include "io/h5_util.hpp"
 #include "sim/scene.hpp"
 
@@ -137,8 +138,8 @@ void write_root_attributes(hid_t file, const CampaignContext& ctx, std::int64_t 
   write_string_attribute(file, "direction", sim::to_string(c.base.run.direction));
   write_string_attribute(file, "drive_mode", sim::to_string(c.base.drive.mode));
   write_string_attribute(file, "motor_declared_by", info.motor_declared_by);
-  write_string_attribute(file, "software_version", TRUSS_VERSION);
-  write_string_attribute(file, "git_revision", TRUSS_GIT_REV);
+  write_string_attribute(file, "software_version", std::string(io::get_software_version()));
+  write_string_attribute(file, "git_revision", std::string(io::get_git_revision()));
   write_int_attribute(file, "n_ranks", info.n_ranks);
   write_int_attribute(file, "n_sessions", info.n_sessions);
   write_string_attribute(file, "start_utc", info.start_utc);
