@@ -53,22 +53,29 @@ if [ "$what" != fuzz ]; then
   t_inproc=$(date +%s)
   echo "[sanitize] in-process and truss-sim tests (leaks checked): $((t_inproc - t_build)) s"
   ASAN_OPTIONS=${ASAN_OPTIONS/detect_leaks=1/detect_leaks=0} watch_step stream sanitize-ctest-mpi "$BUILD/ctest.log" \
-    ctest --test-dir "$BUILD" --output-on-failure --timeout 900 -R "$SAN_MPI_TESTS"
+    ctest --test-dir "$BUILD" --output-on-failure --timeout 900 -j"$(nproc)" -R "$SAN_MPI_TESTS"
 fi
 t_tests=$(date +%s)
 echo "[sanitize] tests under ASan+UBSan: $((t_tests - t_build)) s"
 
 # Fuzzers: the committed corpus is the seed; new inputs go to a scratch copy (CI does not change
 # the tree). The campaign fuzzer runs in campaigns/ so that the seeds' scene.file paths resolve.
-for target in scene campaign; do
-  work="$BUILD/fuzz_$target"
+# Each fuzzer is one process: the two run side by side, one core each.
+fuzz_one() {
+  local target=$1 work="$BUILD/fuzz_$1" runs
   rm -rf "$work" && mkdir -p "$work/corpus" "$work/artifacts"
   cp "$ROOT/tests/fuzz/corpus/$target/"* "$work/corpus/"
   (cd "$ROOT/campaigns" && watch_step build "fuzz_$target" "$ROOT/$work/log" "$ROOT/$BUILD/tests/fuzz/fuzz_$target" \
       -max_total_time="$FUZZ_SECONDS" -max_len=4096 -timeout=10 \
       -rss_limit_mb=2048 -dict="$ROOT/tests/fuzz/toml.dict" -artifact_prefix="$ROOT/$work/artifacts/" -print_final_stats=1 \
-      "$ROOT/$work/corpus") || { tail -60 "$work/log"; echo "[sanitize] fuzz_$target FAILED"; exit 1; }
+      "$ROOT/$work/corpus") || { tail -60 "$work/log"; echo "[sanitize] fuzz_$target FAILED"; return 1; }
   runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$work/log" | grep -o '[0-9]*$' || echo "?")
   echo "[sanitize] fuzz_$target: $runs inputs in ${FUZZ_SECONDS} s, corpus $(ls "$work/corpus" | wc -l) files, no finding"
-done
+}
+fuzz_one scene & scene_pid=$!
+fuzz_one campaign & campaign_pid=$!
+fuzz_rc=0
+wait "$scene_pid" || fuzz_rc=1
+wait "$campaign_pid" || fuzz_rc=1
+[ "$fuzz_rc" -eq 0 ] || exit 1
 echo "[sanitize] total: $(( $(date +%s) - t0 )) s"

@@ -17,7 +17,7 @@ echo "[test] checking the Debian packages (scripts/install-deps.sh)"
 scripts/install-deps.sh
 watch_step build configure build.log cmake -S . -B build -DCMAKE_BUILD_TYPE=Release ${CMAKE_ARGS:-}
 watch_step build build build.log cmake --build build -j"$(nproc)"
-# -j: tests that need both cores (the MPI tests, timing floors) say so with PROCESSORS 2 and run alone.
+# -j: tests that need both cores (real runs on 2 ranks, timing floors) say so with PROCESSORS 2 and run alone.
 labels=(); [ "$quick" = 1 ] && labels=(-L quick)
 watch_step stream ctest build/ctest.log ctest --test-dir build --output-on-failure --timeout 900 -j"$(nproc)" \
   "${labels[@]}" "$@"
