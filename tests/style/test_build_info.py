@@ -11,14 +11,8 @@ import shutil
 import subprocess
 import sys
 
-FAILS = []
-
-
-def check(ok, what):
-    print(("ok   " if ok else "FAIL ") + what)
-    if not ok:
-        FAILS.append(what)
-    return ok
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "postproc"))
+from checks import FAILS, check  # noqa: E402
 
 
 def git(repo, *args):
