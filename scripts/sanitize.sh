@@ -3,8 +3,9 @@
 # libFuzzer targets for a bounded time. Builds with clang in build-san/ (-DTRUSS_SANITIZE=ON
 # -DTRUSS_FUZZ=ON, a unity build: cmake/unity.cmake); every sanitizer report is fatal
 # (halt_on_error, -fno-sanitize-recover).
-#   scripts/sanitize.sh            # sanitized tests, then each fuzzer for FUZZ_SECONDS (60)
+#   scripts/sanitize.sh            # sanitized tests, then each fuzzer for FUZZ_SECONDS (30)
 #   FUZZ_SECONDS=600 scripts/sanitize.sh fuzz   # fuzzers only, longer
+#   scripts/sanitize.sh build      # the build only (scripts/test.sh runs it beside the ctest run)
 # Which tests: every ctest test that runs compiled code of ours, in two passes:
 #   1. in-process tests and truss-sim (SAN_TESTS), with LeakSanitizer on;
 #   2. everything that starts MPI (SAN_MPI_TESTS: engine_collector, a singleton MPI_Init, and
@@ -45,6 +46,7 @@ fi
 watch_step build sanitize-build "$BUILD.log" cmake --build "$BUILD" -j"$(nproc)" --target "${targets[@]}"
 t_build=$(date +%s)
 echo "[sanitize] build: $((t_build - t0)) s"
+[ "$what" = build ] && exit 0
 
 if [ "$what" != fuzz ]; then
   export TRUSS_SANITIZED=1
