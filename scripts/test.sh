@@ -2,7 +2,7 @@
 # Installs what the project needs (Debian 12), builds it in build/, and runs every test with ctest;
 # then the sanitizer and fuzzing stage (scripts/sanitize.sh: tests under ASan+UBSan in build-san/,
 # each libFuzzer target for FUZZ_SECONDS, 30 by default). SKIP_SANITIZE=1 skips that stage. CI runs this (.ci/run).
-#   scripts/test.sh [ctest options]     everything (about 33 min on 2 cores from a fresh clone, as fast as the VM is)
+#   scripts/test.sh [ctest options]     everything (about 27 min on 2 cores from a fresh clone)
 #   scripts/test.sh --quick             everyday check: build, then the tests labelled quick (the
 #                                       unit, command-line, report and small MPI tests), no
 #                                       sanitizers (about 8 min, 14 CPU-minutes, on 2 cores from a fresh clone)
@@ -33,9 +33,10 @@ watch_step stream ctest build/ctest.log ctest --test-dir build --output-on-failu
   "${labels[@]}" "$@" || ctest_rc=$?
 [ "$ctest_rc" -eq 0 ] || exit "$ctest_rc"
 if [ "$sanitize" = 1 ]; then
+  t_wait=$SECONDS
   while kill -0 "$san_build" 2> /dev/null; do
-    echo "[test] the sanitizer build, after the tests: $(build_status build-san.log)"
-    sleep 10
+    [ $(((SECONDS - t_wait) % 10)) -eq 0 ] && echo "[test] the sanitizer build, after the tests: $(build_status build-san.log)"
+    sleep 1
   done
   wait "$san_build" || { cat build-san.bg.log; echo "[test] the sanitizer build FAILED"; exit 1; }
   trap - EXIT

@@ -119,12 +119,12 @@ def read_file(path, kind, sha256):
             raise InputError(f"{path}: damaged or unreadable HDF5 file ({e})") from None
 
 
-def read_other(path, kind, data, subset, sweep):
+def read_other(path, kind, data, rare, sweep):
     """The file of --compare-with, read and checked against this one: a load report pairs with a
     motor-sizing sweep of the same mast and a motor-sizing sweep with a load report's campaign
     (judging.motor_answer). Returns (load-report Campaign, its Extras, sweep Campaign, sweep table);
     InputError naming the file when they cannot be paired."""
-    if kind != "campaign" or (subset is not None and sweep is None):
+    if kind != "campaign" or (rare is not None and sweep is None):
         raise InputError(f"{path}: --compare-with pairs a load report with a motor-sizing sweep; this report "
                          "(a single run, a subset or an importance-sampling campaign) states no stall torque")
     sha256 = file_sha256(path) if os.path.isfile(path) else ""
@@ -132,9 +132,9 @@ def read_other(path, kind, data, subset, sweep):
         other_kind = read_kind(H5(f, path))
     if other_kind != "campaign":
         raise InputError(f"{path}: --compare-with needs a campaign file, not a {other_kind.replace('_', ' ')} file")
-    c, o_subset, o_sweep, e = read_file(path, other_kind, sha256)
+    c, o_rare, o_sweep, e = read_file(path, other_kind, sha256)
     if sweep is not None:
-        if o_sweep is not None or o_subset is not None:
+        if o_sweep is not None or o_rare is not None:
             raise InputError(f"{path}: --compare-with of a sweep needs a load report's campaign (Monte Carlo or "
                              "Latin hypercube runs, no [sweep], no subset or importance sampling)")
         load, load_e, sizing, s = c, e, data, sweep_frame(sweep)
@@ -155,8 +155,9 @@ def read_other(path, kind, data, subset, sweep):
     return load, load_e, sizing, s
 
 
-def render(page, kind, data, subset, sweep, extras, opts, other=None):
-    """The Report of what read_file gave: judged, then drawn (other: read_other's, or None)."""
+def render(page, kind, data, rare, sweep, extras, opts, other=None):
+    """The Report of what read_file gave: judged, then drawn (rare: the rare-event estimate, an
+    Importance or a subset simulation's; other: read_other's, or None)."""
     replaced = any(v is not None for v in (opts.motorisation_factor, opts.uncertainty_factor, opts.inertia_factor))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
@@ -170,10 +171,10 @@ def render(page, kind, data, subset, sweep, extras, opts, other=None):
                                     opts.inertia_factor, opts.levels[-1], opts.confidence)
                 answer = calc_motor_answer(load, m, data, s, replaced)
             return sweep_report(page, data, s, opts.revision, section_nominal(page, extras), answer)
-        if isinstance(subset, Importance):  # draws of a density moved to the failure: no design loads
-            return importance_report(data, subset, opts.revision, section_nominal(page, extras))
-        if subset is not None:  # the runs are not draws: no design loads
-            return subset_report(page, data, subset, opts.revision, section_nominal(page, extras))
+        if isinstance(rare, Importance):  # draws of a density moved to the failure: no design loads
+            return importance_report(data, rare, opts.revision, section_nominal(page, extras))
+        if rare is not None:  # subset simulation's levels: the runs are not draws, no design loads
+            return subset_report(page, data, rare, opts.revision, section_nominal(page, extras))
         j = judge_campaign(data, extras, JudgeOptions(opts.levels, opts.confidence, opts.motorisation_factor,
                                                       opts.uncertainty_factor, opts.inertia_factor))
         answer = calc_motor_answer(data, j.margins, other[2], other[3], replaced) if other is not None else None
@@ -198,14 +199,14 @@ def build(path, outdir, force, opts=None, progress=None):
     niceness = find_background_niceness() if opts.pdf else 0
     csv = start_csv(path, staging, niceness) if kind == "campaign" and opts.csv else None
     try:
-        data, subset, sweep, extras = read_file(path, kind, sha256)
-        other = read_other(opts.compare_with, kind, data, subset, sweep) if opts.compare_with else None
+        data, rare, sweep, extras = read_file(path, kind, sha256)
+        other = read_other(opts.compare_with, kind, data, rare, sweep) if opts.compare_with else None
         progress(f"{path}: {kind.replace('_', ' ')}"
                  + (f", {data.n} runs" if kind == "campaign" else "") + ", read and checked"
                  + (f"; writing {CSV_NAME} beside" if csv else ""))
         plt.rcParams.update(FIGURE_STYLE)
         page = Page(staging, plt, progress, niceness)
-        report = render(page, kind, data, subset, sweep, extras, opts, other)
+        report = render(page, kind, data, rare, sweep, extras, opts, other)
         with open(os.path.join(staging, REPORT_NAME), "w", encoding="utf-8") as fh:
             fh.write(report.html)
         if opts.pdf:   # laid out while the figures are drawn
