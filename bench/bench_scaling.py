@@ -69,7 +69,7 @@ def run_once(a, driver, ranks, out):
     if a.synthetic_run_cost_s is not None:
         cmd += ["--synthetic-run-cost-s", str(a.synthetic_run_cost_s)]
     p = subprocess.run(cmd, env=ENV, capture_output=True, text=True)
-    if p.returncode not in (0, 4, 5):  # 4, 5: the file is written (most runs invalid, no result)
+    if p.returncode not in (0, 4, 5, 6):  # 4-6: the file is written (most runs invalid, no result, NOT ASSESSED)
         sys.exit(f"error: {' '.join(cmd)} exited {p.returncode}:\n{p.stderr[-2000:]}")
     with h5py.File(out, "r") as f:
         t = f["timing"]
