@@ -28,10 +28,8 @@ if [ "$sanitize" = 1 ]; then
 fi
 # -j: tests that need both cores (real runs on 2 ranks, timing floors) say so with PROCESSORS 2 and run alone.
 labels=(); [ "$quick" = 1 ] && labels=(-L quick)
-ctest_rc=0
 watch_step stream ctest build/ctest.log ctest --test-dir build --output-on-failure --timeout 900 -j"$(nproc)" \
-  "${labels[@]}" "$@" || ctest_rc=$?
-[ "$ctest_rc" -eq 0 ] || exit "$ctest_rc"
+  "${labels[@]}" "$@"
 if [ "$sanitize" = 1 ]; then
   t_wait=$SECONDS
   while kill -0 "$san_build" 2> /dev/null; do
