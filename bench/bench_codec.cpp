@@ -5,6 +5,9 @@
 //   zlib:  compress2 at level 1 of the same chunk shuffled (the call inside HDF5's own deflate
 //          filter; its shuffle not timed).
 // Chunks whose elements are all equal are skipped (the codec encodes those once per value).
+// And the way back, as the end of a campaign reads columns (read_columns.cpp), each codec stream:
+//   decode: results::ChunkCodec::decode (ISA-L's inflate, then the unshuffle);
+//   zlib:   uncompress (HDF5's deflate filter reading it) then the same unshuffle as H5Zshuffle.c.
 // Thread CPU time, medians of REPEATS passes, per run of the file.
 // Usage: bench_codec FILE.h5 [REPEATS]
 #include <hdf5.h>
@@ -77,6 +80,13 @@ std::string shuffled(const std::string& raw) {
   return s;
 }
 
+void unshuffle(const std::string& s, std::string& raw) {
+  const std::size_t n = s.size() / 8;
+  raw.resize(s.size());
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < 8; ++j) raw[8 * i + j] = s[j * n + i];
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -120,6 +130,40 @@ int main(int argc, char** argv) {
     t_codec.push_back(t1 - t0);
     t_zlib.push_back(t2 - t1);
   }
+  // The way back: every chunk's codec stream, decoded by each reader (checked against the chunk).
+  std::vector<std::string> streams;
+  std::vector<std::uint32_t> masks;
+  for (const std::string& c : chunks) {
+    masks.push_back(codec.encode(c, 8, 1, out));
+    streams.push_back(out);
+  }
+  std::vector<double> t_decode, t_inflate;
+  std::string back, inflated;
+  truss::results::ChunkCodec decoder;
+  for (int r = 0; r < repeats; ++r) {
+    const double t0 = cpu_s();
+    for (std::size_t k = 0; k < streams.size(); ++k) {
+      decoder.decode(streams[k], masks[k], true, 8, chunks[k].size(), back);
+      if (r == 0 && back != chunks[k]) return 1;
+    }
+    const double t1 = cpu_s();
+    for (std::size_t k = 0; k < streams.size(); ++k) {
+      if (masks[k] != 0) {  // stored shuffled only (the codec's one other form)
+        unshuffle(streams[k], back);
+        continue;
+      }
+      inflated.resize(chunks[k].size());
+      uLongf len = inflated.size();
+      if (uncompress(reinterpret_cast<Bytef*>(inflated.data()), &len, reinterpret_cast<const Bytef*>(streams[k].data()),
+                     streams[k].size()) != Z_OK)
+        return 1;
+      unshuffle(inflated, back);
+      if (r == 0 && back != chunks[k]) return 1;
+    }
+    const double t2 = cpu_s();
+    t_decode.push_back(t1 - t0);
+    t_inflate.push_back(t2 - t1);
+  }
   const auto median = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
@@ -129,5 +173,7 @@ int main(int argc, char** argv) {
   std::printf("codec (level 1): %.2f us a run, %.0f bytes a run\n", 1e6 * median(t_codec) / n, z_codec / n);
   std::printf("zlib  (level 1): %.2f us a run, %.0f bytes a run\n", 1e6 * median(t_zlib) / n, z_zlib / n);
   std::printf("speed ratio zlib/codec: %.1f\n", median(t_zlib) / median(t_codec));
+  std::printf("read back: decode %.2f us a run, zlib + unshuffle %.2f us a run, ratio %.2f\n",
+              1e6 * median(t_decode) / n, 1e6 * median(t_inflate) / n, median(t_inflate) / median(t_decode));
   return 0;
 }

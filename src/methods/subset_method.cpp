@@ -270,32 +270,6 @@ std::string SubsetMethod::progress_stage() const {
 
 // The failing points of the last level with their inputs as /runs/inputs has them (rows x width),
 // each with the base scene's value as its attribute `nominal` (the design-point table).
-namespace {
-
-// The rows `rows` of a /runs dataset of `width` values a row (1-D when width is 1), rows x width in
-// the rows' order: only the chunks that hold them are read.
-std::vector<double> read_rows(hid_t file, const std::string& path, const std::vector<std::int64_t>& rows,
-                              std::size_t width) {
-  std::vector<double> out(rows.size() * width);
-  if (rows.empty()) return out;
-  Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
-  Handle fspace(H5Dget_space(ds.get()), H5Sclose, "space of " + path);
-  const bool two_d = H5Sget_simple_extent_ndims(fspace.get()) == 2;
-  std::vector<hsize_t> coords;
-  for (std::int64_t r : rows)
-    for (std::size_t j = 0; j < width; ++j) {
-      coords.push_back(static_cast<hsize_t>(r));
-      if (two_d) coords.push_back(j);
-    }
-  check(H5Sselect_elements(fspace.get(), H5S_SELECT_SET, out.size(), coords.data()), "select rows of " + path);
-  const hsize_t count[1] = {out.size()};
-  Handle mspace(H5Screate_simple(1, count, nullptr), H5Sclose, "memory space of " + path);
-  check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, out.data()), "read " + path);
-  return out;
-}
-
-}  // namespace
-
 void SubsetMethod::write_failure_samples(hid_t group, const ResultsPlace& place, const std::string& unit) const {
   const hid_t file = place.file;
   const std::vector<sampling::SubsetSample> fs = sim_->calc_failure_samples();
@@ -316,7 +290,7 @@ void SubsetMethod::write_failure_samples(hid_t group, const ResultsPlace& place,
     if (f.group != campaign::Group::inputs) continue;
     const auto w = static_cast<std::size_t>(f.width);
     const std::string path = std::string(campaign::group_path(f.group)) + "/" + f.name;
-    const std::vector<double> rows = read_rows(file, path, run, w);
+    const std::vector<double> rows = results::read_f64_rows(file, path, run);
     write_array(in.get(), f.name, f.units.c_str(), rows.data(), n, f.scale == campaign::Scale::none ? 0 : w);
     const sim::SceneKey* key = sim::find_scene_key(f.name);
     Handle ds(H5Dopen2(in.get(), f.name.c_str(), H5P_DEFAULT), H5Dclose, "open " + f.name);

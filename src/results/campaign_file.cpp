@@ -70,11 +70,11 @@ void CampaignFile::write_summary(StreamedStats streamed,
                                  const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories,
                                  const sim::RunResult& nominal, const CampaignFileInfo& info) {
   store_->finish();
-  const std::int64_t n_runs = store_->n_runs(), chunk_rows = store_->chunk_runs();
+  const std::int64_t n_runs = store_->n_runs();
   store_.reset();  // closes the per-run datasets
   write_root_attributes(file_, ctx_, n_runs, info);
   write_input_attributes(file_, ctx_.options);
-  const std::int64_t read_back = write_stats(file_, ctx_.record, std::move(streamed), chunk_rows);
+  const std::int64_t read_back = write_stats(file_, ctx_.record, std::move(streamed));
   write_histories(file_, ctx_.options.output.history_step_s, histories);
   write_timing_attributes(file_, info.schedule, read_back);
   write_nominal_group(file_, nominal, ctx_.dims.n_bays_max);

@@ -29,6 +29,30 @@ void shuffle(const unsigned char* src, std::size_t nbytes, std::size_t es, unsig
   std::copy(src + n * es, src + nbytes, dst + n * es);
 }
 
+// shuffle's inverse: byte j * n + i goes back to byte j of element i. Elements of 8 bytes (every
+// float64 and int64 column) with the size known to the compiler: each element then gathers its 8
+// bytes from the 8 planes in one unrolled pass.
+template <std::size_t Es>
+void unshuffle_fixed(const unsigned char* src, std::size_t n, unsigned char* dst) {
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t j = 0; j < Es; ++j) dst[i * Es + j] = src[j * n + i];
+}
+
+void unshuffle(const unsigned char* src, std::size_t nbytes, std::size_t es, unsigned char* dst) {
+  const std::size_t n = nbytes / es;
+  if (es <= 1 || n <= 1) {
+    std::copy_n(src, nbytes, dst);
+    return;
+  }
+  if (es == 8) {
+    unshuffle_fixed<8>(src, n, dst);
+  } else {
+    for (std::size_t i = 0; i < n; ++i)
+      for (std::size_t j = 0; j < es; ++j) dst[i * es + j] = src[j * n + i];
+  }
+  std::copy(src + n * es, src + nbytes, dst + n * es);
+}
+
 // H5Z_DEFLATE_SIZE_ADJUST of HDF5 1.10: the output buffer H5Z_filter_deflate gives compress2.
 std::size_t hdf5_deflate_buffer(std::size_t nbytes) {
   return static_cast<std::size_t>(std::ceil(static_cast<double>(nbytes) * static_cast<double>(1.001f)) + 12.0);
@@ -108,6 +132,30 @@ std::uint32_t ChunkCodec::encode(std::string_view raw, std::size_t elem_size, in
     constants_.push_back({level, elem_size, raw.size(), std::string(element), out, mask});
   }
   return mask;
+}
+
+void ChunkCodec::decode(std::string_view stored, std::uint32_t mask, bool filtered, std::size_t elem_size,
+                        std::size_t raw_size, std::string& raw) {
+  raw.resize(raw_size);
+  auto* out = reinterpret_cast<unsigned char*>(raw.data());
+  const auto* in = reinterpret_cast<const unsigned char*>(stored.data());
+  if (!filtered || (mask & kShuffleSkipped && mask & kDeflateSkipped)) {
+    if (stored.size() != raw_size)
+      throw std::runtime_error(fmt::format("a stored chunk of {} bytes for {} bytes", stored.size(), raw_size));
+    std::copy_n(in, raw_size, out);
+    return;
+  }
+  if (!(mask & kDeflateSkipped)) {
+    shuffled_.resize(raw_size);
+    if (!util::inflate_zlib(in, stored.size(), reinterpret_cast<unsigned char*>(shuffled_.data()), raw_size))
+      throw std::runtime_error(fmt::format("a stored chunk of {} bytes is not a zlib stream of {} bytes",
+                                           stored.size(), raw_size));
+    in = reinterpret_cast<const unsigned char*>(shuffled_.data());
+  } else if (stored.size() != raw_size) {
+    throw std::runtime_error(fmt::format("a shuffled chunk of {} bytes for {} bytes", stored.size(), raw_size));
+  }
+  if (mask & kShuffleSkipped) std::copy_n(in, raw_size, out);
+  else unshuffle(in, raw_size, std::max<std::size_t>(elem_size, 1), out);
 }
 
 }  // namespace truss::results

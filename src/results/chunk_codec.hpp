@@ -33,6 +33,12 @@ class ChunkCodec {
   // exceed HDF5's output buffer (nbytes * 1.001 + 12, H5Z_DEFLATE_SIZE_ADJUST) is stored shuffled
   // only, with kDeflateSkipped.
   std::uint32_t encode(std::string_view raw, std::size_t elem_size, int level, std::string& out);
+  // The inverse, for reading a finished file back: the raw_size bytes of a chunk stored as `stored`
+  // with filter mask `mask` by a dataset whose pipeline is shuffle + deflate (filtered) or empty,
+  // into raw. Any writer's chunk of such a dataset decodes (ISA-L inflates every zlib stream).
+  // Throws std::runtime_error when `stored` is not such a chunk.
+  void decode(std::string_view stored, std::uint32_t mask, bool filtered, std::size_t elem_size, std::size_t raw_size,
+              std::string& raw);
 
  private:
   std::uint32_t encode_filtered(std::string_view raw, std::size_t elem_size, int level, std::string& out);
@@ -44,7 +50,7 @@ class ChunkCodec {
     std::string element, encoded;
     std::uint32_t mask;
   };
-  std::string shuffled_;                   // the chunk after the shuffle filter
+  std::string shuffled_;                   // the chunk after the shuffle filter (encode, decode)
   util::Deflater deflater_;                // ISA-L's igzip with its work space
   std::vector<Constant> constants_;        // at most kMaxConstants, the few constant columns
   static constexpr std::size_t kMaxConstants = 64;

@@ -1,41 +1,120 @@
 // Reading the finished /runs back (result_store.hpp): columns for the Sobol' indices and the
-// statistics a streamed window could not resolve.
+// statistics a streamed window could not resolve, rows for subset simulation's failure samples;
+// chunk by chunk through the results' codec.
 #include <algorithm>
+#include <numeric>
+#include <stdexcept>
 
+#include <fmt/format.h>
+
+#include "results/chunk_codec.hpp"
 #include "results/result_store.hpp"
 
 namespace truss::results {
 
 using namespace io::h5;
 
+namespace {
+
+// A float64 dataset of /runs read chunk by chunk as stored (H5Dread_chunk) and decoded by the
+// results' own codec (ChunkCodec::decode: ISA-L's inflate, about twice as fast as HDF5's zlib
+// filter on these chunks, docs/benchmarks.md "The end of a sweep"). Its pipeline is shuffle +
+// deflate or empty, as the store creates it.
+class ChunkReader {
+ public:
+  ChunkReader(hid_t file, const std::string& path)
+      : path_(path), ds_(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path) {
+    Handle dcpl(H5Dget_create_plist(ds_.get()), H5Pclose, "creation list of " + path);
+    Handle space(H5Dget_space(ds_.get()), H5Sclose, "space of " + path);
+    const int rank = H5Sget_simple_extent_ndims(space.get());
+    hsize_t dims[2] = {0, 1}, chunk[2] = {0, 1};
+    Handle type(H5Dget_type(ds_.get()), H5Tclose, "type of " + path);
+    H5Sget_simple_extent_dims(space.get(), dims, nullptr);
+    if (rank < 1 || rank > 2 || H5Pget_chunk(dcpl.get(), rank, chunk) != rank || chunk[1] != dims[1] ||
+        H5Tequal(type.get(), H5T_NATIVE_DOUBLE) <= 0)
+      throw std::runtime_error(path + ": not a float64 dataset in chunks of whole rows");
+    n_rows_ = static_cast<std::int64_t>(dims[0]);
+    chunk_rows_ = static_cast<std::int64_t>(chunk[0]);
+    width_ = static_cast<std::int64_t>(chunk[1]);
+    const int nf = H5Pget_nfilters(dcpl.get());
+    auto filter = [&](unsigned k) {
+      unsigned flags = 0;
+      std::size_t n_values = 0;  // the filter's parameters are not read
+      return H5Pget_filter2(dcpl.get(), k, &flags, &n_values, nullptr, 0, nullptr, nullptr);
+    };
+    filtered_ = nf == 2;
+    if (!(nf == 0 || (filtered_ && filter(0) == H5Z_FILTER_SHUFFLE && filter(1) == H5Z_FILTER_DEFLATE)))
+      throw std::runtime_error(path + ": a filter pipeline other than shuffle + deflate");
+  }
+  std::int64_t n_rows() const { return n_rows_; }
+  std::int64_t chunk_rows() const { return chunk_rows_; }
+  std::int64_t width() const { return width_; }
+  // The chunk whose first row is `first`, chunk_rows x width doubles.
+  const double* read(std::int64_t first) {
+    const hsize_t offset[2] = {static_cast<hsize_t>(first), 0};
+    hsize_t nbytes = 0;
+    check(H5Dget_chunk_storage_size(ds_.get(), offset, &nbytes), "size of a chunk of " + path_);
+    if (nbytes == 0) throw std::runtime_error(fmt::format("{}: the chunk at row {} is not stored", path_, first));
+    stored_.resize(nbytes);
+    std::uint32_t mask = 0;
+    check(H5Dread_chunk(ds_.get(), H5P_DEFAULT, offset, &mask, stored_.data()), "read a chunk of " + path_);
+    const auto raw_bytes = static_cast<std::size_t>(chunk_rows_ * width_) * sizeof(double);
+    codec_.decode(stored_, mask, filtered_, sizeof(double), raw_bytes, raw_);
+    return reinterpret_cast<const double*>(raw_.data());
+  }
+
+ private:
+  std::string path_;
+  Handle ds_;
+  std::int64_t n_rows_ = 0, chunk_rows_ = 0, width_ = 1;
+  bool filtered_ = false;
+  std::string stored_, raw_;
+  ChunkCodec codec_;
+};
+
+}  // namespace
+
 std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n) {
-  std::vector<double> v(static_cast<std::size_t>(n));
-  if (n == 0) return v;
-  Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
-  check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), "read " + path);
-  return v;
+  return std::move(read_f64_columns(file, path, n, 0, 1).front());
 }
 
 std::vector<std::vector<double>> read_f64_columns(hid_t file, const std::string& path, std::int64_t n,
-                                                  std::int64_t width, std::int64_t col0, std::int64_t cols,
-                                                  std::int64_t block_rows) {
+                                                  std::int64_t col0, std::int64_t cols) {
   std::vector<std::vector<double>> out(static_cast<std::size_t>(cols),
                                        std::vector<double>(static_cast<std::size_t>(n)));
   if (n == 0) return out;
-  Handle ds(H5Dopen2(file, path.c_str(), H5P_DEFAULT), H5Dclose, "open " + path);
-  Handle fspace(H5Dget_space(ds.get()), H5Sclose, "space of " + path);
-  std::vector<double> buf(static_cast<std::size_t>(block_rows * width));
-  for (std::int64_t first = 0; first < n; first += block_rows) {
-    const std::int64_t rows = std::min(block_rows, n - first);
-    const hsize_t start[2] = {static_cast<hsize_t>(first), 0};
-    const hsize_t count[2] = {static_cast<hsize_t>(rows), static_cast<hsize_t>(width)};
-    check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), "select " + path);
-    Handle mspace(H5Screate_simple(2, count, nullptr), H5Sclose, "memory space of " + path);
-    check(H5Dread(ds.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, buf.data()), "read " + path);
+  ChunkReader reader(file, path);
+  const std::int64_t width = reader.width();
+  if (col0 < 0 || cols < 1 || col0 + cols > width || n > reader.n_rows())
+    throw std::out_of_range(fmt::format("{}: columns {} to {} of {}, {} rows of {}", path, col0, col0 + cols - 1, width,
+                                        n, reader.n_rows()));
+  for (std::int64_t first = 0; first < n; first += reader.chunk_rows()) {
+    const double* chunk = reader.read(first);
+    const std::int64_t rows = std::min(reader.chunk_rows(), n - first);
     for (std::int64_t i = 0; i < rows; ++i)
       for (std::int64_t j = 0; j < cols; ++j)
-        out[static_cast<std::size_t>(j)][static_cast<std::size_t>(first + i)] =
-            buf[static_cast<std::size_t>(i * width + col0 + j)];
+        out[static_cast<std::size_t>(j)][static_cast<std::size_t>(first + i)] = chunk[i * width + col0 + j];
+  }
+  return out;
+}
+
+std::vector<double> read_f64_rows(hid_t file, const std::string& path, const std::vector<std::int64_t>& rows) {
+  ChunkReader reader(file, path);
+  const std::int64_t width = reader.width();
+  std::vector<double> out(rows.size() * static_cast<std::size_t>(width));
+  // The rows in row order (each chunk decoded once), each copied to its place in `rows`' order.
+  std::vector<std::size_t> order(rows.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return rows[a] < rows[b]; });
+  std::int64_t first = -1;
+  const double* chunk = nullptr;
+  for (const std::size_t k : order) {
+    const std::int64_t r = rows[k];
+    if (r < 0 || r >= reader.n_rows())
+      throw std::out_of_range(fmt::format("{}: row {} of {}", path, r, reader.n_rows()));
+    const std::int64_t at = r - r % reader.chunk_rows();
+    if (at != first) chunk = reader.read(first = at);
+    std::copy_n(chunk + (r - at) * width, width, out.data() + k * static_cast<std::size_t>(width));
   }
   return out;
 }

@@ -64,13 +64,17 @@ class ResultStore {
   std::int64_t n_placed_ = 0;
 };
 
-// Reading the finished /runs back (statistics, sensitivity): a 1-D float64 column; columns
-// col0 .. col0 + cols - 1 of an n x width dataset, read in blocks of block_rows whole rows (whole
-// chunks: each is decompressed once per call); the run statuses.
+// Reading the finished /runs back (statistics, sensitivity, failure samples): a 1-D float64
+// column; columns col0 .. col0 + cols - 1 of the first n rows of a float64 dataset (each chunk
+// decoded once per call); the run statuses. Throws std::runtime_error for a dataset the store did
+// not write so (a chunk missing, other filters, a damaged chunk), std::out_of_range for rows or
+// columns it does not have.
 std::vector<double> read_f64_column(hid_t file, const std::string& path, std::int64_t n);
 std::vector<std::vector<double>> read_f64_columns(hid_t file, const std::string& path, std::int64_t n,
-                                                  std::int64_t width, std::int64_t col0, std::int64_t cols,
-                                                  std::int64_t block_rows);
+                                                  std::int64_t col0, std::int64_t cols);
+// Rows `rows` (any order, repeats allowed) of a float64 dataset, rows.size() x width in that order:
+// only the chunks that hold them are decoded, each once.
+std::vector<double> read_f64_rows(hid_t file, const std::string& path, const std::vector<std::int64_t>& rows);
 std::vector<std::int8_t> read_status(hid_t file, std::int64_t n);
 // The message of one run (/runs/message[run]).
 std::string read_message(hid_t file, std::int64_t run);

@@ -69,7 +69,7 @@ void write_stats_attributes(hid_t stats, const std::vector<std::int8_t>& status)
 
 }  // namespace
 
-std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats streamed, std::int64_t chunk_rows) {
+std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats streamed) {
   Handle rows(H5Dopen2(file, "runs/status", H5P_DEFAULT), H5Dclose, "open /runs/status");
   Handle space(H5Dget_space(rows.get()), H5Sclose, "space of /runs/status");
   const auto n = static_cast<std::int64_t>(H5Sget_simple_extent_npoints(space.get()));
@@ -101,7 +101,7 @@ std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats s
       const std::int64_t cols = std::min<std::int64_t>(group, f.width - b0);
       const auto first = resolved.begin() + b0;
       if (std::all_of(first, first + cols, [](std::uint8_t r) { return r != 0; })) continue;
-      const std::vector<std::vector<double>> columns = read_f64_columns(file, path, n, f.width, b0, cols, chunk_rows);
+      const std::vector<std::vector<double>> columns = read_f64_columns(file, path, n, b0, cols);
       for (std::int64_t i = 0; i < cols; ++i)
         if (!resolved[static_cast<std::size_t>(b0 + i)])
           resolve(streamed.bays[j][static_cast<std::size_t>(b0 + i)], columns[static_cast<std::size_t>(i)]);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <memory>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -67,6 +68,22 @@ std::optional<std::size_t> Deflater::deflate(const unsigned char* in, std::size_
   if (r == STATELESS_OVERFLOW) return std::nullopt;
   if (r != COMP_OK) throw std::runtime_error(fmt::format("ISA-L deflate (level {}): error {}", level, r));
   return s.total_out;
+}
+
+bool inflate_zlib(const unsigned char* in, std::size_t n_in, unsigned char* out, std::size_t n_out) {
+  if (n_in > UINT32_MAX || n_out > UINT32_MAX) return false;
+  // ISA-L's inflate state holds its decoding tables (about 20 kB): on the heap, once a thread.
+  thread_local const std::unique_ptr<inflate_state> state = std::make_unique<inflate_state>();
+  inflate_state& st = *state;
+  isal_inflate_init(&st);
+  st.next_in = const_cast<unsigned char*>(in);  // not written: ISA-L's struct is not const-correct
+  st.avail_in = static_cast<std::uint32_t>(n_in);
+  st.next_out = out;
+  st.avail_out = static_cast<std::uint32_t>(n_out);
+  st.crc_flag = ISAL_ZLIB;  // parses the header, checks the Adler-32 at the end
+  const int r = isal_inflate_stateless(&st);
+  clear_upper_vector_state();
+  return r == ISAL_DECOMP_OK && st.total_out == n_out && st.avail_in == 0;
 }
 
 }  // namespace truss::util

@@ -1,11 +1,12 @@
-// Every ISA-L kernel the project calls, behind one door: CRC-32 (every journal frame), Adler-32 and
-// raw DEFLATE (the results file's chunks). Each function clears the vector state ISA-L's AVX2 /
-// AVX-512 kernels leave behind before it returns, so no caller has to remember it: those kernels
-// return with the upper halves of the YMM/ZMM registers dirty, and the model's scalar SSE2 code
-// that follows pays for that state on every instruction until it is cleared (VZEROUPPER where the
-// CPU has AVX; the cost: docs/benchmarks.md, "The vector state after ISA-L's kernels"). Clearing
-// leaves every register value a caller can hold across a call unchanged (the x86-64 ABI saves no
-// vector register across calls, and VZEROUPPER keeps the low 128 bits).
+// Every ISA-L kernel the project calls, behind one door: CRC-32 (every journal frame), Adler-32,
+// raw DEFLATE (the results file's chunks) and the zlib inflate that reads them back. Each function
+// clears the vector state ISA-L's AVX2 / AVX-512 kernels leave behind before it returns, so no
+// caller has to remember it: those kernels return with the upper halves of the YMM/ZMM registers
+// dirty, and the model's scalar SSE2 code that follows pays for that state on every instruction
+// until it is cleared (VZEROUPPER where the CPU has AVX; the cost: docs/benchmarks.md, "The vector
+// state after ISA-L's kernels"). Clearing leaves every register value a caller can hold across a
+// call unchanged (the x86-64 ABI saves no vector register across calls, and VZEROUPPER keeps the
+// low 128 bits).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -35,5 +36,10 @@ class Deflater {
  private:
   std::vector<unsigned char> level_buf_;
 };
+
+// One zlib stream (RFC 1950: header, DEFLATE data, Adler-32) inflated by ISA-L into exactly
+// out[0, n_out): true when the stream is whole, its checksum right and it holds n_out bytes, false
+// for anything else (a damaged or foreign stream, a size that does not match).
+bool inflate_zlib(const unsigned char* in, std::size_t n_in, unsigned char* out, std::size_t n_out);
 
 }  // namespace truss::util

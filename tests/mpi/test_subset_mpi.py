@@ -96,9 +96,13 @@ def check_against_rows(path):
         fm = g["failure_samples/margin"][:]
         check(idx.size > 0 and np.array_equal(margin[idx], fm) and (fm <= 0).all()
               and (status[idx] == 1).all(), f"{idx.size} failure samples: rail misses, their margins <= 0")
-        x = f["runs/inputs/mast.diagonal_free_length_m"][:]
-        check(np.array_equal(g["failure_samples/inputs/mast.diagonal_free_length_m"][:], x[idx]),
-              "the failure samples' inputs are their rows of /runs/inputs")
+        # Every input, per run and per bay, against HDF5's own read of /runs/inputs (its filters).
+        names = list(f["runs/inputs"])
+        check(sorted(g["failure_samples/inputs"]) == sorted(names)
+              and all(g[f"failure_samples/inputs/{k}"][()].tobytes() == f[f"runs/inputs/{k}"][()][idx].tobytes()
+                      for k in names),
+              f"the failure samples' inputs are their rows of /runs/inputs ({len(names)} datasets, "
+              f"{sum(f[f'runs/inputs/{k}'].ndim == 2 for k in names)} per bay)")
 
 
 def report_value(html, key):

@@ -71,16 +71,35 @@ std::string hdf5_filtered_chunk(const std::string& raw, hid_t type, std::size_t 
   return stored;
 }
 
-// HDF5 reading `stored` (mask) back through its own filter pipeline (H5Dwrite_chunk, then
-// H5Dread): the values a reader of the file sees.
+// HDF5 reading `stored` (mask) back through its own filter pipeline (H5Dwrite_chunk, the file
+// closed, then H5Dread): the values a reader of the file sees. (Read before the file is closed,
+// HDF5 1.10 applies the filters to a dataset's single chunk as if its mask were 0.)
 std::string hdf5_read_back(const std::string& stored, std::uint32_t mask, hid_t type, std::size_t es, std::size_t raw_bytes,
                            int level) {
   std::string back(raw_bytes, '\0');
-  with_one_chunk_dataset(type, raw_bytes / es, level, [&](hid_t, hid_t ds) {
+  const std::string path = (fs::temp_directory_path() / "truss_test_chunk_read_back.h5").string();
+  {
+    const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hsize_t n = raw_bytes / es;
+    const hid_t space = H5Screate_simple(1, &n, nullptr);
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 1, &n);
+    H5Pset_shuffle(dcpl);
+    H5Pset_deflate(dcpl, static_cast<unsigned>(level));
+    const hid_t ds = H5Dcreate2(file, "x", type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
     const hsize_t offset = 0;
-    REQUIRE(H5Dwrite_chunk(ds, H5P_DEFAULT, mask, &offset, stored.size(), stored.data()) >= 0);
-    REQUIRE(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, back.data()) >= 0);
-  });
+    CHECK(H5Dwrite_chunk(ds, H5P_DEFAULT, mask, &offset, stored.size(), stored.data()) >= 0);
+    H5Dclose(ds);
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    H5Fclose(file);
+  }
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  const hid_t ds = H5Dopen2(file, "x", H5P_DEFAULT);
+  CHECK(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, back.data()) >= 0);
+  H5Dclose(ds);
+  H5Fclose(file);
+  fs::remove(path);
   return back;
 }
 
@@ -216,6 +235,68 @@ TEST_CASE("chunk codec: constant chunks, each its own stream", "[campaign][codec
       }
 }
 
+// Reading a finished file back (read_columns.cpp) decodes the stored chunks itself: every chunk
+// HDF5 reads must decode to what HDF5's own pipeline (zlib's inflate, its unshuffle) reads from the
+// same stored bytes and mask -- zlib's streams and the codec's, each filter skipped or not, the
+// unfiltered pipeline -- and a damaged stream is refused, not decoded to other values.
+TEST_CASE("chunk codec: decode reads every chunk as HDF5's own pipeline does", "[campaign][codec]") {
+  ChunkCodec codec, decoder;
+  std::string raw_status(4096, '\0');
+  for (std::size_t i = 0; i < raw_status.size(); ++i) raw_status[i] = static_cast<char>(i % 97 == 0 ? 3 : 0);
+  struct Case {
+    std::string raw;
+    hid_t type;
+    std::size_t es;
+  };
+  const Case cases[] = {{random_doubles(4096, true, 11), H5T_NATIVE_DOUBLE, 8},
+                        {random_doubles(2050 * 30, false, 12), H5T_NATIVE_DOUBLE, 8},
+                        {random_doubles(1, true, 13), H5T_NATIVE_DOUBLE, 8},  // one element: shuffle is a copy
+                        {raw_status, H5T_NATIVE_INT8, 1}};
+  std::string out;
+  for (const Case& c : cases)
+    for (int level : {1, 6}) {
+      INFO(c.raw.size() << " bytes, level " << level);
+      std::uint32_t zlib_mask = 99;
+      const std::string by_zlib = hdf5_filtered_chunk(c.raw, c.type, c.es, level, zlib_mask);
+      std::string mine;
+      const std::uint32_t mine_mask = codec.encode(c.raw, c.es, level, mine);
+      std::string shuffled, deflated_only;
+      // Stored forms with a filter skipped: the shuffled bytes (deflate skipped), and the raw bytes
+      // deflated without a shuffle (shuffle skipped: a zlib stream of raw, from zlib's compress2).
+      std::vector<unsigned char> sh(c.raw.size());
+      for (std::size_t i = 0; i < c.raw.size() / c.es; ++i)
+        for (std::size_t j = 0; j < c.es; ++j) sh[j * (c.raw.size() / c.es) + i] = static_cast<unsigned char>(c.raw[i * c.es + j]);
+      shuffled.assign(sh.begin(), sh.end());
+      uLongf len = compressBound(c.raw.size());
+      deflated_only.assign(len, '\0');
+      REQUIRE(compress2(reinterpret_cast<Bytef*>(deflated_only.data()), &len, reinterpret_cast<const Bytef*>(c.raw.data()),
+                        c.raw.size(), level) == Z_OK);
+      deflated_only.resize(len);
+      const std::pair<std::string, std::uint32_t> stored[] = {{by_zlib, zlib_mask}, {mine, mine_mask},
+                                                              {shuffled, kDeflateSkipped},
+                                                              {deflated_only, kShuffleSkipped},
+                                                              {c.raw, kShuffleSkipped | kDeflateSkipped}};
+      for (const auto& [bytes, mask] : stored) {
+        INFO("mask " << mask);
+        const std::string hdf5 = hdf5_read_back(bytes, mask, c.type, c.es, c.raw.size(), level);
+        REQUIRE(hdf5 == c.raw);  // the reference reads the raw chunk back
+        decoder.decode(bytes, mask, true, c.es, c.raw.size(), out);
+        CHECK(out == hdf5);
+      }
+      // A damaged stream: a byte of the DEFLATE data changed (the Adler-32 catches what inflates),
+      // the stream cut short, a size other than the chunk's.
+      std::string bad = mine;
+      bad[bad.size() / 2] = static_cast<char>(bad[bad.size() / 2] ^ 0x5a);
+      CHECK_THROWS_AS(decoder.decode(bad, mine_mask, true, c.es, c.raw.size(), out), std::runtime_error);
+      CHECK_THROWS_AS(decoder.decode(mine.substr(0, mine.size() - 5), mine_mask, true, c.es, c.raw.size(), out),
+                      std::runtime_error);
+      CHECK_THROWS_AS(decoder.decode(mine, mine_mask, true, c.es, c.raw.size() + c.es, out), std::runtime_error);
+    }
+  decoder.decode(cases[0].raw, 0, false, 8, cases[0].raw.size(), out);  // no filter: the raw bytes
+  CHECK(out == cases[0].raw);
+  CHECK_THROWS_AS(decoder.decode(cases[0].raw, 0, false, 8, cases[0].raw.size() - 8, out), std::runtime_error);
+}
+
 namespace {
 
 // A results file read back: every dataset, through HDF5's own filters.
@@ -230,6 +311,13 @@ struct StoreFile {
     std::vector<std::int64_t> v(static_cast<std::size_t>(n));
     const hid_t d = H5Dopen2(file, ds.c_str(), H5P_DEFAULT);
     REQUIRE(H5Dread(d, H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0);
+    H5Dclose(d);
+    return v;
+  }
+  std::vector<double> f64(const std::string& ds, std::int64_t values) const {
+    std::vector<double> v(static_cast<std::size_t>(values));
+    const hid_t d = H5Dopen2(file, ds.c_str(), H5P_DEFAULT);
+    REQUIRE(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0);
     H5Dclose(d);
     return v;
   }
@@ -380,12 +468,27 @@ void check_file(const StoreFile& f, const RecordLayout& L, std::int64_t n, std::
       for (std::int64_t r = 0; r < n; ++r) CHECK(v[static_cast<std::size_t>(r)] == r * 100 + static_cast<std::int64_t>(k));
       continue;
     }
-    const auto cols = read_f64_columns(f.file, path, n, fd.width, 0, fd.width, 7);
-    for (int j = 0; j < fd.width; ++j, ++cell)
+    // Read back as the statistics do (the codec's decoder) and as HDF5 reads it (its filters);
+    // rows out of order and repeated, as the failure samples read them.
+    const auto cols = read_f64_columns(f.file, path, n, 0, fd.width);
+    const auto by_hdf5 = f.f64(path, n * fd.width);
+    std::vector<std::int64_t> picked;
+    for (std::int64_t r = n - 1; r >= 0; r -= 3) picked.push_back(r);
+    picked.push_back(n - 1);
+    picked.push_back(0);
+    const auto rows = read_f64_rows(f.file, path, picked);
+    REQUIRE(rows.size() == picked.size() * static_cast<std::size_t>(fd.width));
+    for (int j = 0; j < fd.width; ++j, ++cell) {
       for (std::int64_t r = 0; r < n; ++r) {
         INFO(path << " column " << j << " run " << r);
         CHECK(cols[static_cast<std::size_t>(j)][static_cast<std::size_t>(r)] == test::cell_value(r, cell));
+        CHECK(by_hdf5[static_cast<std::size_t>(r * fd.width + j)] == test::cell_value(r, cell));
       }
+      for (std::size_t k = 0; k < picked.size(); ++k)
+        CHECK(rows[k * static_cast<std::size_t>(fd.width) + static_cast<std::size_t>(j)] == test::cell_value(picked[k], cell));
+    }
+    CHECK_THROWS_AS(read_f64_rows(f.file, path, {n}), std::out_of_range);
+    CHECK_THROWS_AS(read_f64_columns(f.file, path, n, fd.width, 1), std::out_of_range);
   }
 }
 
