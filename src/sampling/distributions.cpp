@@ -74,7 +74,9 @@ void normal_quantiles_central(const double* p, double* z, std::size_t count) {
   }
 }
 
-// z[i] = normal_quantile(p[i]) for i < count (p and z may be the same array).
+}  // namespace
+
+// The central region in one vectorised pass, the tails one at a time (sampling.hpp).
 void normal_quantiles(const double* p, double* z, std::size_t count) {
   constexpr std::size_t kChunk = 64;
   double central[kChunk];
@@ -93,9 +95,6 @@ void normal_quantiles(const double* p, double* z, std::size_t count) {
     std::copy(central, central + m, z + i0);
   }
 }
-
-}  // namespace
-
 
 // ===========================================================================
 // Standard normal

@@ -127,6 +127,9 @@ double normal_cdf(double x);
 // Phi^-1(p) by Wichura's AS 241 (PPND16), relative accuracy ~1e-16 for
 // 1e-300 < min(p, 1-p). Returns -inf at 0, +inf at 1, NaN outside [0, 1].
 double normal_quantile(double p);
+// z[i] = normal_quantile(p[i]) for i < count, bit for bit (p and z may be the same array): the
+// central region |p - 0.5| <= 0.425 in one vectorised pass, the tails one at a time.
+void normal_quantiles(const double* p, double* z, std::size_t count);
 
 // Phi(z) kept inside the open interval the quantile functions take, [2^-54, 1 - 2^-53] (the ends of
 // to_open_unit): a point of the standard normal space as the uniforms a run's draws read.

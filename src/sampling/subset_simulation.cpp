@@ -48,16 +48,24 @@ bool calc_candidate(const SubsetOptions& o, int level, int step, std::int64_t ch
   return moved;
 }
 
-// Conditional sampling (Papaioannou et al. 2015, sec. 5) for chain c at (level, step) from z: the
-// whole candidate v_j = rho_j z_j + sigma_j n_j, with sigma the step's proposal spread.
+// The step's proposal of conditional sampling (Papaioannou et al. 2015, sec. 5): each dimension's
+// spread sigma_j and rho_j = sqrt(1 - sigma_j^2), the same for every chain of the step.
+struct ConditionalStep {
+  std::vector<double> sigma, rho;
+};
+
+// Conditional sampling for chain c at (level, step) from z: the whole candidate
+// v_j = rho_j z_j + sigma_j n_j, the normals n_j keyed by (chain, level, step, j) and found in one
+// batch (normal_quantiles: normal_quantile's bits). `n` is work space of dims values.
 bool calc_conditional_candidate(const SubsetOptions& o, int level, int step, std::int64_t chain, const double* z,
-                                const std::vector<double>& sigma, double* xi) {
+                                const ConditionalStep& p, double* n, double* xi) {
   const std::uint64_t propose = counter_run_state(o.seed, chain, subset_stream(level, step, kStreamPropose));
+  for (int j = 0; j < o.dims; ++j) n[j] = to_open_unit(splitmix_at(propose, static_cast<std::uint64_t>(j)));
+  normal_quantiles(n, n, static_cast<std::size_t>(o.dims));
   bool moved = false;
   for (int j = 0; j < o.dims; ++j) {
-    const double n = normal_quantile(to_open_unit(splitmix_at(propose, static_cast<std::uint64_t>(j))));
-    const double s = sigma[static_cast<std::size_t>(j)];
-    xi[j] = std::sqrt(1.0 - s * s) * z[j] + s * n;
+    const auto k = static_cast<std::size_t>(j);
+    xi[j] = p.rho[k] * z[j] + p.sigma[k] * n[j];
     moved = moved || xi[j] != z[j];
   }
   return moved;
@@ -101,7 +109,7 @@ void calc_round_normals(const SubsetOptions& o, const SubsetRound& r, std::int64
   if (k < 0 || k >= r.n_points) throw std::out_of_range(fmt::format("point {} of a round of {}", k, r.n_points));
   if (r.step == 0) {
     calc_round_uniforms(o, r, k, z);
-    for (int j = 0; j < o.dims; ++j) z[j] = normal_quantile(z[j]);
+    normal_quantiles(z, z, static_cast<std::size_t>(o.dims));
     return;
   }
   std::copy_n(r.z.data() + k * o.dims, o.dims, z);
@@ -236,14 +244,19 @@ void SubsetSimulation::plan_step(int step) {
   r.level = static_cast<int>(levels_.size()) - 1;
   r.step = step;
   r.threshold = domain_;
-  std::vector<double> xi(static_cast<std::size_t>(opt_.dims)), sigma;
+  std::vector<double> xi(static_cast<std::size_t>(opt_.dims)), n(xi.size());
   const bool adaptive = opt_.proposal == SubsetProposal::adaptive_conditional;
+  ConditionalStep p;
   if (adaptive)
-    for (double s0 : spread0_) sigma.push_back(std::min(1.0, scale_ * s0));
+    for (double s0 : spread0_) {
+      const double s = std::min(1.0, scale_ * s0);
+      p.sigma.push_back(s);
+      p.rho.push_back(std::sqrt(1.0 - s * s));
+    }
   for (std::int64_t c = 0; c < opt_.n_chains(); ++c) {
     if (chain_length(c) <= step) continue;
     const double* z = z_.data() + head_[static_cast<std::size_t>(c)] * opt_.dims;
-    const bool moved = adaptive ? calc_conditional_candidate(opt_, r.level, step, c, z, sigma, xi.data())
+    const bool moved = adaptive ? calc_conditional_candidate(opt_, r.level, step, c, z, p, n.data(), xi.data())
                                 : calc_candidate(opt_, r.level, step, c, z, xi.data());
     if (!moved) continue;
     r.chains.push_back(c);
