@@ -18,6 +18,7 @@
 #include <numeric>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <isa-l/igzip_lib.h>
@@ -35,11 +36,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A file holding a 1-D dataset "x" of n elements of `type` in one chunk, shuffled and deflated at
-// `level`; f(dataset) runs on it, then everything is closed and the file removed.
+// A file `name` in the temporary folder holding a 1-D dataset "x" of n elements of `type` in one
+// chunk, shuffled and deflated at `level`; f(file, dataset) runs on it, then everything is closed.
+// Returns the file's path.
 template <class F>
-void with_one_chunk_dataset(hid_t type, hsize_t n, int level, F&& f) {
-  const std::string path = (fs::temp_directory_path() / "truss_test_chunk_codec.h5").string();
+std::string write_one_chunk_dataset(const char* name, hid_t type, hsize_t n, int level, F&& f) {
+  const std::string path = (fs::temp_directory_path() / name).string();
   const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
   const hid_t space = H5Screate_simple(1, &n, nullptr);
   const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
@@ -52,7 +54,13 @@ void with_one_chunk_dataset(hid_t type, hsize_t n, int level, F&& f) {
   H5Pclose(dcpl);
   H5Sclose(space);
   H5Fclose(file);
-  fs::remove(path);
+  return path;
+}
+
+// The same, the file removed after f.
+template <class F>
+void with_one_chunk_dataset(hid_t type, hsize_t n, int level, F&& f) {
+  fs::remove(write_one_chunk_dataset("truss_test_chunk_codec.h5", type, n, level, std::forward<F>(f)));
 }
 
 // The chunk HDF5 stores for `raw` (n elements of `type`) when H5Dwrite filters it: read back raw
@@ -77,23 +85,12 @@ std::string hdf5_filtered_chunk(const std::string& raw, hid_t type, std::size_t 
 std::string hdf5_read_back(const std::string& stored, std::uint32_t mask, hid_t type, std::size_t es, std::size_t raw_bytes,
                            int level) {
   std::string back(raw_bytes, '\0');
-  const std::string path = (fs::temp_directory_path() / "truss_test_chunk_read_back.h5").string();
-  {
-    const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    const hsize_t n = raw_bytes / es;
-    const hid_t space = H5Screate_simple(1, &n, nullptr);
-    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
-    H5Pset_chunk(dcpl, 1, &n);
-    H5Pset_shuffle(dcpl);
-    H5Pset_deflate(dcpl, static_cast<unsigned>(level));
-    const hid_t ds = H5Dcreate2(file, "x", type, space, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-    const hsize_t offset = 0;
-    CHECK(H5Dwrite_chunk(ds, H5P_DEFAULT, mask, &offset, stored.size(), stored.data()) >= 0);
-    H5Dclose(ds);
-    H5Pclose(dcpl);
-    H5Sclose(space);
-    H5Fclose(file);
-  }
+  const std::string path = write_one_chunk_dataset("truss_test_chunk_read_back.h5", type, raw_bytes / es, level,
+                                                   [&](hid_t, hid_t ds) {
+                                                     const hsize_t offset = 0;
+                                                     CHECK(H5Dwrite_chunk(ds, H5P_DEFAULT, mask, &offset, stored.size(),
+                                                                          stored.data()) >= 0);
+                                                   });
   const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
   const hid_t ds = H5Dopen2(file, "x", H5P_DEFAULT);
   CHECK(H5Dread(ds, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, back.data()) >= 0);
