@@ -6,12 +6,17 @@ namespace truss::methods {
 
 std::string RoundPlan::to_bytes() const {
   std::string b;
-  util::put(b, round);
-  util::put(b, first_run);
-  util::put(b, n_runs);
-  util::put(b, static_cast<std::uint32_t>(state.size()));
-  b += state;
+  b.reserve(3 * sizeof(std::int64_t) + sizeof(std::uint32_t) + state.size());
+  append_bytes(b);
   return b;
+}
+
+void RoundPlan::append_bytes(std::string& out) const {
+  util::put(out, round);
+  util::put(out, first_run);
+  util::put(out, n_runs);
+  util::put(out, static_cast<std::uint32_t>(state.size()));
+  out += state;
 }
 
 RoundPlan RoundPlan::from_bytes(std::string_view bytes) {

@@ -39,6 +39,7 @@ struct RoundPlan {
   bool operator==(const RoundPlan&) const = default;
   // Little-endian: i64 round, i64 first_run, i64 n_runs, u32 state length, state.
   std::string to_bytes() const;
+  void append_bytes(std::string& out) const;  // to_bytes() appended to `out`
   static RoundPlan from_bytes(std::string_view bytes);  // throws std::runtime_error for bytes that are not one
 };
 

@@ -71,14 +71,16 @@ Proposal SweepMethod::gather() {
     Slice s{static_cast<std::uint32_t>(k), {v.round, v.runs, v.next.n_runs, std::move(v.next.state)}, total};
     v.runs += s.plan.n_runs;
     total += s.plan.n_runs;
-    const std::string plan = s.plan.to_bytes();
     util::put(state, s.value);
-    util::put(state, static_cast<std::uint32_t>(plan.size()));
-    state += plan;
+    const std::size_t length_at = state.size();
+    util::put(state, std::uint32_t{0});
+    s.plan.append_bytes(state);  // in place: a round of motor runs holds hundreds of kB of points
+    const auto length = static_cast<std::uint32_t>(state.size() - length_at - sizeof(std::uint32_t));
+    util::put_at(state.data() + length_at, length);
     last_.push_back(std::move(s));
   }
   if (total == 0) return {};
-  return {total, state};
+  return {total, std::move(state)};
 }
 
 Proposal SweepMethod::propose(std::int64_t round, const RoundRecords& previous) {

@@ -120,7 +120,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
     std::vector<double> u(static_cast<std::size_t>(ctx.dims.total));
     for (std::int64_t run : c.output.history_runs)
-      for (const methods::RoundPlan& plan : done.plans)
+      for (const methods::RoundPlan& plan : r0.collector->plans())
         if (plan.contains(run)) {
           method.calc_uniforms(plan, run, u.data());
           histories.emplace_back(run, campaign::calc_run_with_history(ctx, u.data(), c.output.history_step_s));
@@ -132,7 +132,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     info.motor_declared_by = campaign::find_motor_declared_by(c);
     info.n_ranks = size;
     info.n_sessions = static_cast<int>(st.session) + 1;
-    info.n_rounds = static_cast<std::int64_t>(done.plans.size());
+    info.n_rounds = done.n_rounds;
     info.start_utc = io::h5::utc_iso8601(st.first_start);
     info.end_utc = io::h5::utc_now_iso8601();
     info.wall_time_s = st.previous_wall_s + seconds_since(wall0);

@@ -50,13 +50,16 @@ void Collector::start_session(double unix_start, int n_ranks) {
   journal_.flush();
 }
 
-methods::RoundPlan Collector::plan_round(std::int64_t round, std::int64_t first_run) {
+std::string Collector::plan_round(std::int64_t round, std::int64_t first_run) {
   const bool journaled = round < static_cast<std::int64_t>(n_journaled_);  // restore() proposed it again
-  const methods::RoundPlan plan = journaled ? plans_[static_cast<std::size_t>(round)] : propose(round, first_run);
+  if (!journaled && round != static_cast<std::int64_t>(plans_.size()))
+    throw std::logic_error(fmt::format("round {} planned after {} rounds", round, plans_.size()));
+  if (!journaled) plans_.push_back(propose(round, first_run));
+  const methods::RoundPlan& plan = plans_[static_cast<std::size_t>(round)];
+  std::string bytes = plan.to_bytes();
   if (!journaled) {
-    journal_.append(FrameKind::plan, plan.to_bytes());
+    journal_.append(FrameKind::plan, bytes);
     journal_.write_out();  // before any rank journals a record of it
-    plans_.push_back(plan);
   }
   if (plan.n_runs > 0) {
     file_.store().extend(plan.end_run());
@@ -65,7 +68,7 @@ methods::RoundPlan Collector::plan_round(std::int64_t round, std::int64_t first_
     progress_.set_total(plan.end_run());
     progress_.set_stage(method_.progress_stage(), method_.run_cap());
   }
-  return plan;
+  return bytes;
 }
 
 void Collector::count_in(std::int64_t run, std::size_t round, std::int8_t status) {

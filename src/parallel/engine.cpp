@@ -324,11 +324,10 @@ void Rank0Round::run() {
   for (int w = 1; w < node_.size(); ++w) node_.send(w, kTagWork, {});  // the end of the round: no runs
 }
 
-// Round r's plan from rank 0 to every rank (its size, then its bytes), serving the rank's messages
-// and chunks while it travels.
-methods::RoundPlan broadcast_plan(Node& node, const methods::RoundPlan& plan, const std::function<bool()>& serve) {
-  const bool root = node.rank() == 0;
-  std::string bytes = root ? plan.to_bytes() : std::string();
+// Round r's plan from rank 0 to every rank (its size, then its bytes: `bytes` on rank 0, the
+// journal's frame), serving the rank's messages and chunks while it travels; every rank, rank 0
+// too, runs the plan decoded from those bytes.
+methods::RoundPlan broadcast_plan(Node& node, std::string bytes, const std::function<bool()>& serve) {
   long long n = static_cast<long long>(bytes.size());
   MPI_Request r;
   MPI_Ibcast(&n, 1, MPI_LONG_LONG, 0, node.comm(), &r);
@@ -336,7 +335,7 @@ methods::RoundPlan broadcast_plan(Node& node, const methods::RoundPlan& plan, co
   bytes.resize(static_cast<std::size_t>(n));
   MPI_Ibcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, node.comm(), &r);
   wait_serving(&r, node, serve);
-  return root ? plan : methods::RoundPlan::from_bytes(bytes);
+  return methods::RoundPlan::from_bytes(bytes);
 }
 
 }  // namespace
@@ -458,11 +457,10 @@ EngineResult Engine::run(const Evaluate& evaluate) {
   double sched_wall = 0.0;
   try {
     for (std::int64_t r = 0;; ++r) {
-      methods::RoundPlan plan;
-      if (root) plan = m.collector->plan_round(r, first);
-      plan = broadcast_plan(node, plan, serve);
+      const methods::RoundPlan plan =
+          broadcast_plan(node, root ? m.collector->plan_round(r, first) : std::string(), serve);
       if (plan.n_runs == 0) break;
-      out.plans.push_back(plan);
+      ++out.n_rounds;
       m.owner->add_round(plan);
       if (root) {
         Rank0Round round(node, plan, *m.collector, evaluate, serve, m.opts, m.schedule);

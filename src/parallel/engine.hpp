@@ -110,10 +110,11 @@ class Collector {
   RestoreSummary restore(const std::string& campaign_text, const RestoreSink& sink);
   // Journals this session's start and syncs the journal.
   void start_session(double unix_start, int n_ranks);
-  // Round r's plan: the method's proposal from round r - 1's records (or the journaled plan that
-  // restore() checked), journaled and written out (it survives rank 0 before any rank computes a
-  // run of it), and the results file extended to its runs.
-  methods::RoundPlan plan_round(std::int64_t round, std::int64_t first_run);
+  // Round r's plan (rounds in order): the method's proposal from round r - 1's records (or the
+  // journaled plan that restore() checked), journaled and written out (it survives rank 0 before any
+  // rank computes a run of it), and the results file extended to its runs. Returns its bytes
+  // (RoundPlan::to_bytes), the journal's frame, which the engine sends to every rank as they are.
+  std::string plan_round(std::int64_t round, std::int64_t first_run);
 
   // The owners' messages.
   void add_part(const results::RoundPart& part);
@@ -174,7 +175,7 @@ class ChunkOwner;
 // written. Every rank makes one and attaches its chunks' owner (rank 0 also its collector) before
 // any message is handled; rank 0 may serve its own chunks alone before the session (--resume).
 struct EngineResult {
-  std::vector<methods::RoundPlan> plans;     // every round's (on every rank)
+  std::int64_t n_rounds = 0;                 // rounds with runs (rank 0 keeps their plans: Collector::plans)
   results::ScheduleSummary schedule;         // rank 0's (to the last record in)
   double last_chunks_s = 0.0;                // then, every chunk written (wall; part of the campaign's tail)
 };

@@ -104,13 +104,19 @@ void ResultStore::create_datasets(hid_t file, int deflate) {
 // fields, the message, the session).
 std::size_t ResultStore::dataset_of(std::size_t k) const { return k < L_.fields().size() ? k : k + 1; }
 
-void ResultStore::extend(std::int64_t n_runs) {
-  if (n_runs <= n_) return;
+void ResultStore::extend(std::int64_t n_runs) { n_ = std::max(n_, n_runs); }
+
+// The datasets' rows in the file follow the planned runs lazily: to all of them, once a chunk needs
+// rows past the file's (a call per dataset, each a metadata update: once per chunk at most instead
+// of once per round of a method with many short rounds). They never shrink: HDF5 rewrites a partial
+// chunk through its own filters when a dataset shrinks.
+void ResultStore::extend_file_to(std::int64_t rows) {
+  if (rows <= file_rows_) return;
   for (const Dataset& d : ds_) {
-    const hsize_t dims[2] = {static_cast<hsize_t>(n_runs), d.width};
-    check(H5Dset_extent(d.ds.get(), dims), fmt::format("extend the per-run datasets to {} runs", n_runs));
+    const hsize_t dims[2] = {static_cast<hsize_t>(n_), d.width};
+    check(H5Dset_extent(d.ds.get(), dims), fmt::format("extend the per-run datasets to {} runs", n_));
   }
-  n_ = n_runs;
+  file_rows_ = n_;
 }
 
 std::vector<ChunkAddress> ResultStore::place(const ChunkReport& r) {
@@ -125,6 +131,7 @@ std::vector<ChunkAddress> ResultStore::place(const ChunkReport& r) {
     throw std::runtime_error(fmt::format("chunk {} placed twice", r.index));
   placed_[static_cast<std::size_t>(r.index)] = 1;
   ++n_placed_;
+  extend_file_to(r.index * chunk_ + r.rows);
   std::vector<ChunkAddress> at;
   const hsize_t offset[2] = {static_cast<hsize_t>(r.index * chunk_), 0};
   for (std::size_t k = 0; k < cols_.columns.size(); ++k) {
@@ -164,8 +171,9 @@ void ResultStore::write_messages(const ChunkReport& r) {
 
 void ResultStore::finish() const {
   const std::int64_t n_chunks = (n_ + chunk_ - 1) / chunk_;
-  if (n_placed_ != n_chunks)
-    throw std::runtime_error(fmt::format("internal: {} of {} chunks placed at the end", n_placed_, n_chunks));
+  if (n_placed_ != n_chunks || file_rows_ != n_)
+    throw std::runtime_error(fmt::format("internal: {} of {} chunks placed at the end, {} of {} rows in the file",
+                                         n_placed_, n_chunks, file_rows_, n_));
 }
 
 }  // namespace truss::results

@@ -36,7 +36,7 @@ class ResultStore {
   ResultStore(const ResultStore&) = delete;
   ResultStore& operator=(const ResultStore&) = delete;
 
-  void extend(std::int64_t n_runs);  // rows 0 .. n_runs - 1 (never fewer than before)
+  void extend(std::int64_t n_runs);  // rows 0 .. n_runs - 1 (never fewer than before); in the file by place()
   std::int64_t n_runs() const { return n_; }
   std::int64_t chunk_runs() const { return chunk_; }
 
@@ -53,11 +53,13 @@ class ResultStore {
   void create_datasets(hid_t file, int deflate);
   std::size_t dataset_of(std::size_t column) const;
   void write_messages(const ChunkReport& r);
+  void extend_file_to(std::int64_t rows);
 
   const campaign::RecordLayout& L_;
   PlacementState& placement_;
   ChunkColumns cols_;
   std::int64_t n_ = 0, chunk_;
+  std::int64_t file_rows_ = 0;  // the datasets' rows in the file (<= n_)
   std::vector<Dataset> ds_;  // cols_'s datasets, then /runs/message
   std::vector<io::h5::Handle> groups_;
   std::vector<std::uint8_t> placed_;  // by chunk
