@@ -23,14 +23,12 @@ using namespace detail;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 constexpr auto kPollInterval = std::chrono::milliseconds(50);  // bounds how late a chunk is placed
 // Rank 0 idle (the end of a round, the last chunks) looks at its messages once a millisecond: a
 // look that finds nothing costs it about as much CPU as tens of costless results (the MPI library
 // yields the core when oversubscribed, and each sleep is a context switch), and rank 0's answers
 // at the end wait for nothing faster than that.
 constexpr long kRank0IdleUs = 1000;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // Adds the wall time of its scope to a counter (steady clock).
 class ScopeTimer {
@@ -150,6 +148,7 @@ class Rank0Round {
   std::int64_t batch_size() const;
   void send_batch(int w);
   std::int64_t take(std::int64_t k, std::string& ranges);  // the round's next k runs not in the journals
+  void announce_drained();
   bool poll_due(Clock::time_point last_poll) const;
   void compute_stretch(Clock::time_point last_poll);
   void compute_one();
@@ -215,6 +214,7 @@ std::int64_t Rank0Round::batch_size() const {
 // Appends the ranges; returns the first run of the last one (the run, for k = 1).
 std::int64_t Rank0Round::take(std::int64_t k, std::string& ranges) {
   handed_ += k;
+  if (handed_ == to_do_) announce_drained();
   std::int64_t first = 0;
   while (k > 0) {
     while (collector_.has(cursor_)) ++cursor_;
@@ -227,6 +227,15 @@ std::int64_t Rank0Round::take(std::int64_t k, std::string& ranges) {
     util::put(ranges, cursor_ - first);
   }
   return first;
+}
+
+// The round's last runs are handed out: each worker that may still hold some is told, so that it
+// runs them before its chunks' work (which may wait, while the round waits for its last run).
+void Rank0Round::announce_drained() {
+  std::string round;
+  util::put(round, plan_.round);
+  for (int w = 1; w < node_.size(); ++w)
+    if (!waiting_[static_cast<std::size_t>(w)]) node_.send(w, kTagDrained, std::string(round));
 }
 
 // A worker that asks when no run is left waits for the end of the round.
@@ -352,7 +361,7 @@ struct Engine::Impl {
   Impl(MPI_Comm comm, std::int64_t chunk_runs, std::size_t status_offset, const EngineOptions& o)
       : node(comm, chunk_runs, status_offset), opts(o) {}
   void handle(int tag, int source, std::string& bytes);
-  bool serve();  // the rank's chunks: up to a millisecond of their work
+  bool serve(double budget_s = kServeSliceS);  // the rank's chunks: steps until budget_s has passed
   // The statistics rank, every round ended (its owner knows the campaign's chunks): the statistics
   // to rank 0 once all are merged; true when it sends them.
   bool send_stats() { return stats && owner->ended() && stats->send_if_complete(owner->n_chunks()); }
@@ -369,6 +378,11 @@ struct Engine::Impl {
 
 void Engine::Impl::handle(int tag, int source, std::string& bytes) {
   if (tag == kTagWork) work.push(std::move(bytes));
+  else if (tag == kTagDrained) {
+    util::ByteReader in(bytes, "a drained round's notice");
+    work.set_drained(in.get<std::int64_t>());
+    in.expect_end();
+  }
   else if (tag == kTagRecords) owner->add_records(bytes);
   else if (tag == kTagPlacement) owner->on_placement(bytes);
   else if (tag == kTagWindows) owner->on_windows(bytes);
@@ -380,12 +394,12 @@ void Engine::Impl::handle(int tag, int source, std::string& bytes) {
   else throw std::runtime_error(fmt::format("rank {} got a message of tag {} from rank {}", node.rank(), tag, source));
 }
 
-bool Engine::Impl::serve() {
+bool Engine::Impl::serve(double budget_s) {
   const auto t0 = Clock::now();
   bool any = false;
   while (owner->step()) {
     any = true;
-    if (seconds_since(t0) > 1e-3) break;
+    if (seconds_since(t0) > budget_s) break;
   }
   node.pause_records(owner->behind());
   if (any) schedule.rank0_write_s += seconds_since(t0);  // rank 0's: its own chunks' work
@@ -450,6 +464,7 @@ EngineResult Engine::run(const Evaluate& evaluate) {
   m.schedule = {};
   EngineResult out;
   const std::function<bool()> serve = [&m] { return m.serve(); };
+  const std::function<bool(double)> serve_for = [&m](double budget_s) { return m.serve(budget_s); };
   const auto t0 = Clock::now();
   const double cpu0 = thread_cpu_s();
   std::int64_t first = 0;
@@ -468,7 +483,7 @@ EngineResult Engine::run(const Evaluate& evaluate) {
         round.run();
         m.server->round = nullptr;
       } else {
-        run_worker_round(node, m.work, plan, evaluate, serve);
+        run_worker_round(node, m.work, plan, evaluate, serve_for);
       }
       first = plan.end_run();
     }

@@ -3,6 +3,8 @@
 #pragma once
 #include <mpi.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <deque>
 #include <exception>
@@ -17,6 +19,9 @@
 
 namespace truss::parallel::detail {
 
+using Clock = std::chrono::steady_clock;
+inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
 inline constexpr int kTagWork = 11;         // rank 0 -> worker: runs as (i64 first, i64 count); none: end of round
 inline constexpr int kTagRecords = 12;      // any -> owner: sealed journal frames of its chunks' runs
 inline constexpr int kTagDone = 13;         // worker -> rank 0: a batch is computed (its StatusCounts)
@@ -30,7 +35,8 @@ inline constexpr int kTagWindows = 20;      // statistics rank -> owner: the win
 inline constexpr int kTagFinished = 21;     // owner -> rank 0: its chunks written and synced
 inline constexpr int kTagSummary = 22;      // owner -> statistics rank: a complete chunk's statistics summaries
 inline constexpr int kTagStats = 23;        // statistics rank -> rank 0: the streamed statistics, every chunk merged
-inline constexpr int kTagLast = kTagStats;
+inline constexpr int kTagDrained = 24;      // rank 0 -> worker: i64 round, whose last runs are handed out
+inline constexpr int kTagLast = kTagDrained;
 
 // A fatal error on any rank: the results file's temporary name removed (set_abort_removes; the
 // journals keep every finished run for --resume), the job aborted (exit 3).
@@ -128,13 +134,20 @@ class Node {
 // true if there was one).
 void wait_serving(MPI_Request* req, Node& node, const std::function<bool()>& serve);
 
+// The rank's chunk work in one call when nothing paces it: steps until this much wall time has
+// passed (at least one step).
+inline constexpr double kServeSliceS = 1e-3;
+
 // A worker's part of round `plan`: batches in (node's work queue), their records to their owners,
-// until the round is over. `serve`: the rank's owner work between runs.
+// until the round is over. `serve(budget_s)`: the rank's owner work, steps until budget_s has passed
+// (at least one), true if there was any.
 class WorkQueue;
 void run_worker_round(Node& node, WorkQueue& work, const methods::RoundPlan& plan, const Evaluate& evaluate,
-                      const std::function<bool()>& serve);
+                      const std::function<bool(double)>& serve);
 
-// The batches rank 0 sent a worker, in order; an empty one ends a round.
+// The batches rank 0 sent a worker, in order; an empty one ends a round. And the last round whose
+// runs rank 0 has all handed out (kTagDrained; by round, since with records paused the rank
+// matches its messages tag by tag, so the notice may come after the round's end).
 class WorkQueue {
  public:
   void push(std::string&& batch) { batches_.push_back(std::move(batch)); }
@@ -144,9 +157,12 @@ class WorkQueue {
     batches_.pop_front();
     return b;
   }
+  void set_drained(std::int64_t round) { drained_round_ = std::max(drained_round_, round); }
+  bool drained(std::int64_t round) const { return drained_round_ >= round; }
 
  private:
   std::deque<std::string> batches_;
+  std::int64_t drained_round_ = -1;
 };
 
 }  // namespace truss::parallel::detail

@@ -15,10 +15,6 @@
 namespace truss::parallel::detail {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-}
-
-namespace {
 std::string& abort_removes() {
   static std::string path;  // the session's temporary results file, once every rank knows it
   return path;
