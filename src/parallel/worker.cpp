@@ -11,6 +11,11 @@ namespace truss::parallel::detail {
 
 namespace {
 
+// A rank encoding a chunk runs at a third of its speed at worst. On 2 ranks the one owner of every
+// chunk spends about 45 % of its time on Table-1 chunks: with a share of one, not two, its last
+// chunks were left for the end of the campaign (docs/benchmarks.md, "A sweep's rounds").
+constexpr double kChunkTimePerRunTime = 2.0;
+
 class Worker {
  public:
   Worker(Node& node, WorkQueue& work, const methods::RoundPlan& plan, const Evaluate& evaluate,
@@ -42,13 +47,13 @@ void Worker::wait_for_sends() {
 }
 
 // A round ends with its slowest rank's last run, and a worker holds up to two batches sized by rank
-// 0's pace. So the rank's chunks get, after each run, as much wall time as the runs took (credit
-// carried over: one step of their work may outlast a run), and none once rank 0 has said that the
-// round's runs are all handed out: then it runs what it holds back to back and does the chunks'
-// work once it holds none. (With a fixed millisecond after each run, a rank encoding a chunk, about
-// 30 ms of work for 2,000 motor runs, ran its runs at a tenth of their speed, and a sweep's rounds
-// waited tens of milliseconds for it.) A chunk's work is a small share of its runs', so the chunks
-// keep up at half the rank's time; a rank whose owners fall behind serves them in wait_for_sends.
+// 0's pace. So the rank's chunks get, after each run, at most kChunkTimePerRunTime times the wall
+// time the run took (credit carried over: one step of their work may outlast a run), and none once
+// rank 0 has said that the round's runs are all handed out: then it runs what it holds back to back
+// and does the chunks' work once it holds none. (With a fixed millisecond after each run, a rank
+// encoding a chunk, about 30 ms of work for 2,000 motor runs, ran its runs at a tenth of their
+// speed, and a sweep's rounds waited tens of milliseconds for it.) A rank whose owners fall behind
+// serves them in wait_for_sends.
 void Worker::compute_one(std::int64_t run, results::StatusCounts& counts) {
   wait_for_sends();
   const auto t0 = Clock::now();
@@ -65,7 +70,7 @@ void Worker::compute_one(std::int64_t run, results::StatusCounts& counts) {
   ++counts[static_cast<std::size_t>(status)];
   node_.poll();
   if (work_.drained(plan_.round)) return;
-  chunk_credit_s_ = std::min(chunk_credit_s_ + seconds_since(t0), kServeSliceS);
+  chunk_credit_s_ = std::min(chunk_credit_s_ + kChunkTimePerRunTime * seconds_since(t0), kServeSliceS);
   if (chunk_credit_s_ <= 0.0) return;
   const auto t1 = Clock::now();
   serve_(chunk_credit_s_);
