@@ -12,7 +12,7 @@ namespace truss::parallel::detail {
 namespace {
 
 // A rank encoding a chunk runs at a third of its speed at worst. On 2 ranks the one owner of every
-// chunk spends about 45 % of its time on Table-1 chunks: with a share of one, not two, its last
+// chunk spends about a third of its time on Table-1 chunks: with a share of one, not two, its last
 // chunks were left for the end of the campaign (docs/benchmarks.md, "A sweep's rounds").
 constexpr double kChunkTimePerRunTime = 2.0;
 
