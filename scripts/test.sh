@@ -2,7 +2,7 @@
 # Installs what the project needs (Debian 12), builds it in build/, and runs every test with ctest;
 # then the sanitizer and fuzzing stage (scripts/sanitize.sh: tests under ASan+UBSan in build-san/,
 # each libFuzzer target for FUZZ_SECONDS, 30 by default). SKIP_SANITIZE=1 skips that stage. CI runs this (.ci/run).
-#   scripts/test.sh [ctest options]     everything (23-30 min on 2 cores from a fresh clone)
+#   scripts/test.sh [ctest options]     everything (20-30 min on 2 cores from a fresh clone)
 #   scripts/test.sh --quick             everyday check: build, then the tests labelled quick (the
 #                                       unit, command-line, report and small MPI tests), no
 #                                       sanitizers (about 8 min, 14 CPU-minutes, on 2 cores from a fresh clone)

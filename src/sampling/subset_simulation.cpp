@@ -330,9 +330,8 @@ void SubsetSimulation::finish_level() {
 
 void SubsetSimulation::start_level(double threshold, const std::vector<std::int64_t>& seeds) {
   std::vector<Sample> samples;
-  std::vector<double>& z = z_spare_;  // the level before last's points: their pages are mapped already
+  std::vector<double> z;
   samples.reserve(static_cast<std::size_t>(opt_.n_per_level));
-  z.clear();
   z.reserve(static_cast<std::size_t>(opt_.n_per_level * opt_.dims));
   head_.assign(seeds.size(), 0);
   for (std::size_t c = 0; c < seeds.size(); ++c) {
@@ -345,7 +344,7 @@ void SubsetSimulation::start_level(double threshold, const std::vector<std::int6
   std::vector<std::int64_t>& parent = parents_.emplace_back(seeds.size());
   for (std::size_t c = 0; c < seeds.size(); ++c) parent[c] = samples_[static_cast<std::size_t>(seeds[c])].chain;
   samples_ = std::move(samples);
-  z_.swap(z_spare_);
+  z_ = std::move(z);
   domain_ = threshold;
   if (opt_.proposal == SubsetProposal::adaptive_conditional) calc_seed_spread();
   levels_.emplace_back();

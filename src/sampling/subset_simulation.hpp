@@ -289,7 +289,6 @@ class SubsetSimulation {
   double domain_ = std::numeric_limits<double>::infinity();  // threshold of the level being sampled
   std::vector<Sample> samples_;       // the level being sampled, in order of creation
   std::vector<double> z_;             // their points, samples_.size() x dims
-  std::vector<double> z_spare_;       // work space of start_level (the next level's points), not state
   std::vector<std::int64_t> head_;    // per chain: its latest sample
   std::vector<SubsetLevel> levels_;   // finished levels, and the current one last
   std::vector<double> lineage_;       // per root: sum over its finished-level samples of (I - P_k) / (N P_k)
