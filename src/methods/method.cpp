@@ -1,15 +1,9 @@
 #include "methods/method.hpp"
 
 #include "util/bytes.hpp"
+#include "util/isal.hpp"
 
 namespace truss::methods {
-
-std::string RoundPlan::to_bytes() const {
-  std::string b;
-  b.reserve(3 * sizeof(std::int64_t) + sizeof(std::uint32_t) + state.size());
-  append_bytes(b);
-  return b;
-}
 
 void RoundPlan::append_bytes(std::string& out) const {
   util::put(out, round);
@@ -28,6 +22,33 @@ RoundPlan RoundPlan::from_bytes(std::string_view bytes) {
   p.state = r.get_bytes(r.get<std::uint32_t>());
   r.expect_end();
   return p;
+}
+
+PlanDigest PlanDigest::of(const RoundPlan& plan) {
+  return {plan.round, plan.first_run, plan.n_runs, static_cast<std::uint32_t>(plan.state.size()),
+          util::calc_crc32(plan.state)};
+}
+
+std::string PlanDigest::to_bytes() const {
+  std::string b;
+  util::put(b, round);
+  util::put(b, first_run);
+  util::put(b, n_runs);
+  util::put(b, state_bytes);
+  util::put(b, state_crc32);
+  return b;
+}
+
+PlanDigest PlanDigest::from_bytes(std::string_view bytes) {
+  util::ByteReader r(bytes, "a round plan's digest");
+  PlanDigest d;
+  d.round = r.get<std::int64_t>();
+  d.first_run = r.get<std::int64_t>();
+  d.n_runs = r.get<std::int64_t>();
+  d.state_bytes = r.get<std::uint32_t>();
+  d.state_crc32 = r.get<std::uint32_t>();
+  r.expect_end();
+  return d;
 }
 
 void Method::write_results(const ResultsPlace&) const {}

@@ -38,9 +38,27 @@ struct RoundPlan {
   bool contains(std::int64_t run) const { return run >= first_run && run < end_run(); }
   bool operator==(const RoundPlan&) const = default;
   // Little-endian: i64 round, i64 first_run, i64 n_runs, u32 state length, state.
-  std::string to_bytes() const;
-  void append_bytes(std::string& out) const;  // to_bytes() appended to `out`
+  static constexpr std::size_t kHeaderBytes = 3 * sizeof(std::int64_t) + sizeof(std::uint32_t);
+  void append_bytes(std::string& out) const;  // appended to `out`
   static RoundPlan from_bytes(std::string_view bytes);  // throws std::runtime_error for bytes that are not one
+};
+
+// What the journal keeps of a round's plan: its runs, and its state's length and CRC-32 (zlib's).
+// --resume has the method propose every journaled round again and compares digests, so the state
+// itself (up to hundreds of bytes a run: a subset simulation's points) is neither written nor kept.
+struct PlanDigest {
+  std::int64_t round = 0;
+  std::int64_t first_run = 0;
+  std::int64_t n_runs = 0;
+  std::uint32_t state_bytes = 0;
+  std::uint32_t state_crc32 = 0;
+  static PlanDigest of(const RoundPlan& plan);
+  std::int64_t end_run() const { return first_run + n_runs; }
+  bool contains(std::int64_t run) const { return run >= first_run && run < end_run(); }
+  bool operator==(const PlanDigest&) const = default;
+  // Little-endian: i64 round, i64 first_run, i64 n_runs, u32 state length, u32 state CRC-32.
+  std::string to_bytes() const;
+  static PlanDigest from_bytes(std::string_view bytes);  // throws std::runtime_error unless 36 such bytes
 };
 
 // A finished round's records as a method reads them, in run-index order: run first_run + i has

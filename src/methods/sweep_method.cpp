@@ -60,6 +60,9 @@ void SweepMethod::start_queued() {
 Proposal SweepMethod::gather() {
   last_.clear();
   std::string state;
+  std::size_t bytes = 0;  // at most: a round of motor runs holds hundreds of kB of points
+  for (const Value& v : values_) bytes += 2 * sizeof(std::uint32_t) + RoundPlan::kHeaderBytes + v.next.state.size();
+  state.reserve(bytes);
   std::int64_t total = 0;
   for (std::size_t k = 0; k < values_.size(); ++k) {
     Value& v = values_[k];
@@ -74,7 +77,7 @@ Proposal SweepMethod::gather() {
     util::put(state, s.value);
     const std::size_t length_at = state.size();
     util::put(state, std::uint32_t{0});
-    s.plan.append_bytes(state);  // in place: a round of motor runs holds hundreds of kB of points
+    s.plan.append_bytes(state);
     const auto length = static_cast<std::uint32_t>(state.size() - length_at - sizeof(std::uint32_t));
     util::put_at(state.data() + length_at, length);
     last_.push_back(std::move(s));

@@ -120,7 +120,7 @@ int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx,
     std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
     std::vector<double> u(static_cast<std::size_t>(ctx.dims.total));
     for (std::int64_t run : c.output.history_runs)
-      for (const methods::RoundPlan& plan : r0.collector->plans())
+      for (const methods::RoundPlan& plan : r0.collector->kept_plans())
         if (plan.contains(run)) {
           method.calc_uniforms(plan, run, u.data());
           histories.emplace_back(run, campaign::calc_run_with_history(ctx, u.data(), c.output.history_step_s));

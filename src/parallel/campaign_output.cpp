@@ -165,6 +165,7 @@ void prepare_output(const CommandOptions& o, const std::string& campaign_text, c
   EngineOptions engine = o.engine;
   engine.max_runs = campaign::calc_max_runs(ctx.options);
   r0.collector = std::make_unique<Collector>(ctx.record, method, *r0.journal, *r0.file, *r0.progress, engine);
+  r0.collector->keep_plans_of(ctx.options.output.history_runs);
 }
 
 SessionSetup restore_output(const CommandOptions& o, const std::string& campaign_text, Rank0& r0, ChunkOwner& owner,

@@ -50,15 +50,16 @@ void Collector::start_session(double unix_start, int n_ranks) {
   journal_.flush();
 }
 
-std::string Collector::plan_round(std::int64_t round, std::int64_t first_run) {
+methods::RoundPlan Collector::plan_round(std::int64_t round, std::int64_t first_run) {
   const bool journaled = round < static_cast<std::int64_t>(n_journaled_);  // restore() proposed it again
   if (!journaled && round != static_cast<std::int64_t>(plans_.size()))
     throw std::logic_error(fmt::format("round {} planned after {} rounds", round, plans_.size()));
-  if (!journaled) plans_.push_back(propose(round, first_run));
-  const methods::RoundPlan& plan = plans_[static_cast<std::size_t>(round)];
-  std::string bytes = plan.to_bytes();
+  methods::RoundPlan plan =
+      journaled ? std::move(restored_[static_cast<std::size_t>(round)]) : propose(round, first_run);
   if (!journaled) {
-    journal_.append(FrameKind::plan, bytes);
+    plans_.push_back(methods::PlanDigest::of(plan));
+    keep_if_asked(plan);
+    journal_.append(FrameKind::plan, plans_.back().to_bytes());
     journal_.write_out();  // before any rank journals a record of it
   }
   if (plan.n_runs > 0) {
@@ -68,7 +69,12 @@ std::string Collector::plan_round(std::int64_t round, std::int64_t first_run) {
     progress_.set_total(plan.end_run());
     progress_.set_stage(method_.progress_stage(), method_.run_cap());
   }
-  return bytes;
+  return plan;
+}
+
+void Collector::keep_if_asked(const methods::RoundPlan& plan) {
+  if (std::any_of(kept_runs_.begin(), kept_runs_.end(), [&](std::int64_t run) { return plan.contains(run); }))
+    kept_plans_.push_back(plan);
 }
 
 void Collector::count_in(std::int64_t run, std::size_t round, std::int8_t status) {

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdint>
 #include <ctime>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 
@@ -333,18 +335,25 @@ void Rank0Round::run() {
   for (int w = 1; w < node_.size(); ++w) node_.send(w, kTagWork, {});  // the end of the round: no runs
 }
 
-// Round r's plan from rank 0 to every rank (its size, then its bytes: `bytes` on rank 0, the
-// journal's frame), serving the rank's messages and chunks while it travels; every rank, rank 0
-// too, runs the plan decoded from those bytes.
-methods::RoundPlan broadcast_plan(Node& node, std::string bytes, const std::function<bool()>& serve) {
-  long long n = static_cast<long long>(bytes.size());
+// Round r's plan from rank 0 to every rank, serving the rank's messages and chunks while it travels:
+// its round, first run, run count and state length, then its state, sent from and received into
+// `plan` (rank 0 sends its own, the others receive it).
+void broadcast_plan(Node& node, methods::RoundPlan& plan, const std::function<bool()>& serve) {
+  const bool root = node.rank() == 0;
+  std::int64_t head[4] = {plan.round, plan.first_run, plan.n_runs, static_cast<std::int64_t>(plan.state.size())};
+  if (root && head[3] > std::numeric_limits<int>::max())  // one broadcast's count is an int
+    throw std::runtime_error(fmt::format("round {}: a plan of {} bytes (at most {})", plan.round, head[3],
+                                         std::numeric_limits<int>::max()));
   MPI_Request r;
-  MPI_Ibcast(&n, 1, MPI_LONG_LONG, 0, node.comm(), &r);
+  MPI_Ibcast(head, 4, MPI_INT64_T, 0, node.comm(), &r);
   wait_serving(&r, node, serve);
-  bytes.resize(static_cast<std::size_t>(n));
-  MPI_Ibcast(bytes.data(), static_cast<int>(n), MPI_BYTE, 0, node.comm(), &r);
+  if (!root) {
+    if (head[2] < 0 || head[3] < 0 || head[3] > std::numeric_limits<int>::max())
+      throw std::runtime_error(fmt::format("round {}: a plan of {} runs and {} bytes", head[0], head[2], head[3]));
+    plan = {head[0], head[1], head[2], std::string(static_cast<std::size_t>(head[3]), '\0')};
+  }
+  MPI_Ibcast(plan.state.data(), static_cast<int>(head[3]), MPI_BYTE, 0, node.comm(), &r);
   wait_serving(&r, node, serve);
-  return methods::RoundPlan::from_bytes(bytes);
 }
 
 }  // namespace
@@ -472,8 +481,8 @@ EngineResult Engine::run(const Evaluate& evaluate) {
   double sched_wall = 0.0;
   try {
     for (std::int64_t r = 0;; ++r) {
-      const methods::RoundPlan plan =
-          broadcast_plan(node, root ? m.collector->plan_round(r, first) : std::string(), serve);
+      methods::RoundPlan plan = root ? m.collector->plan_round(r, first) : methods::RoundPlan{};
+      broadcast_plan(node, plan, serve);
       if (plan.n_runs == 0) break;
       ++out.n_rounds;
       m.owner->add_round(plan);

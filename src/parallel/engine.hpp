@@ -111,10 +111,14 @@ class Collector {
   // Journals this session's start and syncs the journal.
   void start_session(double unix_start, int n_ranks);
   // Round r's plan (rounds in order): the method's proposal from round r - 1's records (or the
-  // journaled plan that restore() checked), journaled and written out (it survives rank 0 before any
-  // rank computes a run of it), and the results file extended to its runs. Returns its bytes
-  // (RoundPlan::to_bytes), the journal's frame, which the engine sends to every rank as they are.
-  std::string plan_round(std::int64_t round, std::int64_t first_run);
+  // journaled round that restore() proposed again), its digest journaled and written out (it
+  // survives rank 0 before any rank computes a run of it), and the results file extended to its
+  // runs. Returns the plan, which the engine sends to every rank.
+  methods::RoundPlan plan_round(std::int64_t round, std::int64_t first_run);
+  // Keep the whole plans of the rounds that hold these runs (kept_plans(), in round order): the
+  // runs whose histories the file holds. Other plans are sent and dropped.
+  void keep_plans_of(std::vector<std::int64_t> runs) { kept_runs_ = std::move(runs); }
+  const std::vector<methods::RoundPlan>& kept_plans() const { return kept_plans_; }
 
   // The owners' messages.
   void add_part(const results::RoundPart& part);
@@ -143,12 +147,13 @@ class Collector {
   // Before the job is aborted (rank 0's fatal error): see CampaignFile::remove_temporary.
   void remove_temporary_file() noexcept { file_.remove_temporary(); }
   const SessionState& session() const { return st_; }
-  const std::vector<methods::RoundPlan>& plans() const { return plans_; }  // journaled or planned so far
+  const std::vector<methods::PlanDigest>& plans() const { return plans_; }  // journaled or planned so far
 
  private:
   struct Restore;
   methods::RoundPlan propose(std::int64_t round, std::int64_t first_run);  // round - 1's records to the method
   void count_in(std::int64_t run, std::size_t round, std::int8_t status);  // once per run
+  void keep_if_asked(const methods::RoundPlan& plan);
   const campaign::RecordLayout& L_;
   methods::Method& method_;
   results::Journal& journal_;
@@ -156,8 +161,11 @@ class Collector {
   Progress& progress_;
   EngineOptions opts_;
   SessionState st_;
-  std::vector<methods::RoundPlan> plans_;  // every round's, from the journal (the first n_journaled_) and new
+  std::vector<methods::PlanDigest> plans_;  // every round's, from the journal (the first n_journaled_) and new
   std::size_t n_journaled_ = 0;
+  std::vector<methods::RoundPlan> restored_;  // the journaled rounds proposed again, until plan_round sends them
+  std::vector<std::int64_t> kept_runs_;
+  std::vector<methods::RoundPlan> kept_plans_;
   std::vector<std::size_t> observed_;                      // the record fields of method_.observed_outputs()
   bool reads_records_ = false;                             // method_.reads_records(): keep records_
   std::map<std::int64_t, methods::RoundRecords> records_;  // by round, for the method

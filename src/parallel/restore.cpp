@@ -103,13 +103,13 @@ void Collector::Restore::frame_main(FrameKind kind, const FrameCheck& check) {
 }
 
 void Collector::Restore::plan(const FrameCheck& check) {
-  methods::RoundPlan p;
+  methods::PlanDigest p;
   try {
-    p = methods::RoundPlan::from_bytes(check.payload);
+    p = methods::PlanDigest::from_bytes(check.payload);
   } catch (const std::exception& e) {
     check.refuse(e.what());
   }
-  std::vector<methods::RoundPlan>& plans = c.plans_;
+  std::vector<methods::PlanDigest>& plans = c.plans_;
   const std::int64_t first = plans.empty() ? 0 : plans.back().end_run();
   // Before anything is allocated for its runs: a plan within the campaign's cap (first <= the cap
   // by the earlier plans' check, so the difference does not overflow).
@@ -243,10 +243,10 @@ RestoreSummary Collector::restore(const std::string& campaign_text, const Restor
   RestoreSummary sum;
   const std::size_t last = r.find_last_round();
   r.cut(last, sum);
-  for (const methods::RoundPlan& p : plans_) {
+  for (const methods::PlanDigest& p : plans_) {
     file_.store().extend(p.end_run());
     done_.resize(static_cast<std::size_t>(p.end_run()), false);
-    if (p.n_runs > 0) sink.round(p);
+    if (p.n_runs > 0) sink.round({p.round, p.first_run, p.n_runs, {}});
   }
   round_done_.assign(plans_.size(), 0);
   n_journaled_ = plans_.size();
@@ -257,8 +257,9 @@ RestoreSummary Collector::restore(const std::string& campaign_text, const Restor
     r.replay(parts.emplace_back(results::Journal::open_part(f.path, r.crc, f.session, f.rank)), f);
   }
   for (std::size_t k = 0; k < n_journaled_; ++k) {  // a journaled round follows a round that is complete
-    const methods::RoundPlan p = propose(static_cast<std::int64_t>(k), plans_[k].first_run);
-    if (!(p == plans_[k]))
+    methods::RoundPlan& p = restored_.emplace_back(propose(static_cast<std::int64_t>(k), plans_[k].first_run));
+    keep_if_asked(p);
+    if (!(methods::PlanDigest::of(p) == plans_[k]))
       throw io::InputError(fmt::format("error: --resume: {}: round {} of the journal is not the round the method "
                                        "proposes now from the same records (another program?); start over with "
                                        "--force", journal_.path(), k));

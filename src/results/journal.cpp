@@ -22,7 +22,7 @@ constexpr char kMagic[8] = {'T', 'R', 'U', 'S', 'S', 'J', 'N', 'L'};
 constexpr char kPartMagic[8] = {'T', 'R', 'U', 'S', 'S', 'J', 'N', 'P'};
 // 3: records also in part journals (the ranks that build chunks); 2: round plans ('P' frames) and
 // the record with its round (campaign/record.hpp).
-constexpr std::uint32_t kVersion = 3;
+constexpr std::uint32_t kVersion = 4;
 constexpr std::size_t kPartHeader = kPartHeaderBytes;
 
 std::string part_header(std::uint32_t campaign_crc, std::int64_t session, int rank) {

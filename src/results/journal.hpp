@@ -23,7 +23,7 @@ namespace truss::results {
 
 enum class FrameKind : std::uint8_t {
   run = 'R',       // a run's record (campaign/record.hpp)
-  plan = 'P',      // a round's plan (methods/method.hpp, RoundPlan), before any record of the round
+  plan = 'P',      // a round's plan's digest (methods/method.hpp, PlanDigest), before any record of the round
   session = 'S',   // an invocation started: f64 unix time, i32 rank count
   heartbeat = 'H'  // f64 wall time of the current invocation so far (s)
 };

@@ -51,12 +51,12 @@ def parse_journal(blob):
     version, u32 CRC-32 of the campaign text, i64 session, i32 rank, u32 CRC-32 of those bytes)."""
     if blob[:8] == b"TRUSSJNP":
         version, = struct.unpack_from("<I", blob, 8)
-        assert version == 3 and struct.unpack_from("<I", blob, 28)[0] == zlib.crc32(blob[:28])
+        assert version == 4 and struct.unpack_from("<I", blob, 28)[0] == zlib.crc32(blob[:28])
         at = 32
     else:
         assert blob[:8] == b"TRUSSJNL"
         version, n = struct.unpack_from("<II", blob, 8)
-        assert version == 3
+        assert version == 4
         text = blob[16:16 + n]
         (crc,) = struct.unpack_from("<I", blob, 16 + n)
         assert crc == zlib.crc32(text)
@@ -201,9 +201,9 @@ def case_journal(args):
             "a wall time of nan s")
     plan = next(pl for _, k, pl in frames if k == b"P")
     refused("before_session", header + frame(b"P", plan), "a record before the first session record")
-    # A round plan (i64 round, i64 first_run, i64 n_runs, u32 state length, state) of 2^62 runs after
+    # A round plan's digest (i64 round, i64 first_run, i64 n_runs, u32 state length, u32 CRC) of 2^62 runs after
     # round 0's N_RUNS: refused before anything is allocated for its runs.
-    huge = struct.pack("<qqqI", 1, N_RUNS, 2 ** 62, 0)
+    huge = struct.pack("<qqqII", 1, N_RUNS, 2 ** 62, 0, 0)
     refused("huge_plan", blob + frame(b"P", huge),
             f"round 1 plans {2 ** 62} runs from run {N_RUNS}, past the campaign's cap of {N_RUNS} runs")
 

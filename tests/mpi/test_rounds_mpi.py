@@ -53,9 +53,14 @@ def run(args, ranks, extra, target=None, env_target=None, **kw):
     return subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=300, **kw)
 
 
+# Runs whose histories the file holds (at most n_runs: round 0's, the round a resume restores below).
+HISTORY_RUNS = (7, 150)
+
+
 def synthetic(args, out, cost=0.0):
     return [os.path.join(args.repo, TABLE1), "-o", out, "--set", f"ensemble.n_runs={N0}", "--progress", "none",
-            "--synthetic-run-cost-s", str(cost), "--flush-interval", "0.02"]
+            "--synthetic-run-cost-s", str(cost), "--flush-interval", "0.02",
+            "--set", f"output.history_runs=[{HISTORY_RUNS[0]}, {HISTORY_RUNS[1]}]"]
 
 
 def expected_round1(y, status, n0, rel):
@@ -164,6 +169,8 @@ def case_resume(args):
     same, why = same_values(datasets(ref), datasets(out))
     check(same, f"the resumed file equals the uninterrupted one, value for value {why}")
     with h5py.File(out, "r") as f:
+        check(all(f"histories/run_{r}/t_s" in f for r in HISTORY_RUNS),
+              f"the histories of runs {HISTORY_RUNS}, runs of the restored round")
         session = f["timing/session"][:]
         check(f.attrs["n_sessions"] == 2 and session[:N0].max() == 0 and (session[N0:] == 1).any(),
               "round 0 restored from the journal, the rest of round 1 computed after the resume")

@@ -586,21 +586,16 @@ def check_other_verdicts(args, d):
               f"{name}: report exit {p.returncode} (want {code}), 'VERDICT: {verdict}', no NaN on the page")
 
 
-def plan_values(payload):
-    """The design value indices of a journaled sweep round (methods/method.hpp RoundPlan: i64 round,
-    i64 first_run, i64 n_runs, u32 state length, state; the sweep's state: per value u32 index,
-    u32 length, that value's method's own round plan)."""
-    (n,) = struct.unpack_from("<I", payload, 24)
-    state, at, out = payload[28:28 + n], 0, []
-    while at < len(state):
-        k, size = struct.unpack_from("<II", state, at)
-        out.append(k)
-        at += 8 + size
-    return out
+def refinement_runs(ref):
+    """The run indices of the refinement's values in an uninterrupted file (the same plans, so the
+    same indices, in any session): the runs whose design value /sweep flags as placed by it."""
+    with h5py.File(ref, "r") as f:
+        placed = f["sweep/values"][()][f["sweep/refinement"][()].astype(bool)]
+        return set(int(r) for r in np.flatnonzero(np.isin(f["runs/sweep_value"][()], placed)))
 
 
-def kill_mid(args, out, sets):
-    """Kill -9 of the whole job once a refinement round (a value index >= the 4 listed) has records."""
+def kill_mid(args, out, sets, refining_runs):
+    """Kill -9 of the whole job once a run of the refinement (`refining_runs`) has its record."""
     cmd = ["mpirun", "--oversubscribe", "-np", "2", args.driver, campaign_path(args), "-o", out,
            "--synthetic-run-cost-s", "0.001", "--progress", "none", "--flush-interval", "0.02"]
     for x in sets:
@@ -609,10 +604,8 @@ def kill_mid(args, out, sets):
     t0, plans, refining = time.time(), 0, False
     while time.time() - t0 < 300 and proc.poll() is None:
         frames = all_journal_frames(out)  # rank 0's journal (the plans) and the parts (the records)
-        rounds = [pl for _, k, pl in frames if k == b"P"]
-        plans = len(rounds)
-        refinement = {r for r, pl in enumerate(rounds) if max(plan_values(pl)) >= 4}
-        refining = any(k == b"R" and int.from_bytes(pl[8:16], "little") in refinement for _, k, pl in frames)
+        plans = sum(1 for _, k, _ in frames if k == b"P")
+        refining = any(k == b"R" and int.from_bytes(pl[0:8], "little") in refining_runs for _, k, pl in frames)
         if refining:
             break
         time.sleep(0.005)
@@ -627,7 +620,9 @@ def case_resume(args):
     p = run(args, ref, cost="0.001", sets=sets)
     check(p.returncode == 0, f"uninterrupted: exit 0 ({p.stderr.strip()[-300:]})")
     out = os.path.join(d, "killed.h5")
-    plans, refining = kill_mid(args, out, sets)
+    runs = refinement_runs(ref)
+    check(len(runs) > 0, f"the uninterrupted sweep refines ({len(runs)} runs of placed values)")
+    plans, refining = kill_mid(args, out, sets, runs)
     check(refining and not os.path.exists(out) and os.path.exists(out + ".journal"),
           f"kill -9 after {plans} rounds planned, in the refinement: no results file, the journal kept")
     p = run(args, out, cost="0.001", sets=sets, extra=["--resume"])

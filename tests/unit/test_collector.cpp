@@ -87,7 +87,7 @@ struct Session {
     return s;
   }
   methods::RoundPlan plan(std::int64_t round, std::int64_t first) {
-    const methods::RoundPlan p = methods::RoundPlan::from_bytes(collector->plan_round(round, first));
+    const methods::RoundPlan p = collector->plan_round(round, first);
     if (p.n_runs > 0) owner->add_round(p);
     return p;
   }
@@ -178,7 +178,7 @@ TEST_CASE("collector: a cut session resumed from its journals, memory bounded, p
     CHECK(plan.n_runs == 3000);
     for (std::int64_t r = 2000; r < 3000; ++r) s.add(frame(L, r, 0));
     CHECK(s.collector->round_complete(plan));
-    CHECK(methods::RoundPlan::from_bytes(s.collector->plan_round(1, 3000)).n_runs == 0);
+    CHECK(s.collector->plan_round(1, 3000).n_runs == 0);
     s.finish();
   }
   const hid_t f = H5Fopen(out.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -240,7 +240,7 @@ TEST_CASE("collector: a round that misses records ends the restored rounds", "[e
     for (std::int64_t r = 0; r < 300; ++r) s.add(frame(L, r, 0));  // rank 0's share of round 0
     // Rank 1's share, 300..599, reached rank 0 as round parts (so round 1 was planned), but its
     // part journal kept 300..549 only; round 1's first records were journaled by rank 1 too.
-    REQUIRE(methods::RoundPlan::from_bytes(s.collector->plan_round(1, 600)).n_runs == 600);
+    REQUIRE(s.collector->plan_round(1, 600).n_runs == 600);
     s.collector->tick(true);
   }
   {

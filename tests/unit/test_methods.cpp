@@ -19,7 +19,8 @@ using campaign::test::small_campaign;
 
 TEST_CASE("a round plan's bytes read back to it; bytes that are not one are refused", "[methods]") {
   const RoundPlan p{3, 1200, 400, std::string("\0state\xff", 7)};
-  const std::string b = p.to_bytes();
+  std::string b;
+  p.append_bytes(b);
   CHECK(b.size() == 8 * 3 + 4 + 7);
   CHECK(RoundPlan::from_bytes(b) == p);
   CHECK(p.contains(1200));
@@ -28,6 +29,29 @@ TEST_CASE("a round plan's bytes read back to it; bytes that are not one are refu
   CHECK_FALSE(p.contains(1199));
   CHECK_THROWS_AS(RoundPlan::from_bytes(std::string_view(b).substr(0, b.size() - 1)), std::runtime_error);
   CHECK_THROWS_AS(RoundPlan::from_bytes(b + "x"), std::runtime_error);
+}
+
+// The journal's digest of a plan: its runs, the state's length and its CRC-32, the bytes as Python
+// writes them (struct.pack("<qqqII", 3, 1200, 400, 7, zlib.crc32(b"\0state\xff"))); a state that
+// differs in one byte has another digest.
+TEST_CASE("a round plan's digest: its bytes, and another state's digest differs", "[methods]") {
+  const RoundPlan p{3, 1200, 400, std::string("\0state\xff", 7)};
+  const PlanDigest d = PlanDigest::of(p);
+  CHECK(d.state_bytes == 7);
+  CHECK(d.state_crc32 == 0xf962c69bu);
+  const std::string b = d.to_bytes();
+  const std::string hex = "0300000000000000b0040000000000009001000000000000070000009bc662f9";
+  std::string expected;
+  for (std::size_t i = 0; i < hex.size(); i += 2) expected += static_cast<char>(std::stoi(hex.substr(i, 2), nullptr, 16));
+  CHECK(b == expected);
+  CHECK(PlanDigest::from_bytes(b) == d);
+  CHECK(d.contains(1599));
+  CHECK_FALSE(d.contains(1600));
+  RoundPlan q = p;
+  q.state[3] = 'A';
+  CHECK_FALSE(PlanDigest::of(q) == d);
+  CHECK_THROWS_AS(PlanDigest::from_bytes(std::string_view(b).substr(0, b.size() - 1)), std::runtime_error);
+  CHECK_THROWS_AS(PlanDigest::from_bytes(b + "x"), std::runtime_error);
 }
 
 TEST_CASE("a one-shot design: one round of n_runs runs, its plan's points, then done", "[methods]") {
