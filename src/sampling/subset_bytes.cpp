@@ -45,6 +45,7 @@ std::string SubsetRound::encode() const {
   w.put(threshold);
   w.put(n_points);
   if (step > 0) {
+    w.out.reserve(w.out.size() + 2 * sizeof(std::uint64_t) + 8 * (chains.size() + z.size()));  // i64s, doubles
     w.put_all(chains);
     w.put_all(z);
   }

@@ -177,28 +177,31 @@ void SubsetSimulation::take_step(std::span<const double> margins) {
   SubsetLevel& level = levels_.back();
   const int step = round_.step;
   std::size_t p = 0;  // next point of the round (round_.chains ascending)
-  std::vector<double> z(static_cast<std::size_t>(opt_.dims));
+  const auto d = static_cast<std::size_t>(opt_.dims);
   const std::int64_t runs_before = level.runs, moved_before = level.moved;
   for (std::int64_t c = 0; c < opt_.n_chains(); ++c) {
     if (chain_length(c) <= step) continue;
     const auto head = static_cast<std::size_t>(head_[static_cast<std::size_t>(c)]);
     Sample s = samples_[head];
     s.step = step;
-    std::copy_n(z_.data() + head * static_cast<std::size_t>(opt_.dims), opt_.dims, z.data());
+    const double* candidate = nullptr;
     if (p < round_.chains.size() && round_.chains[p] == c) {
       ++level.runs;
       level.unusable += std::isnan(margins[p]) ? 1 : 0;
       if (margins[p] <= domain_) {  // NaN: not in the domain
         s.margin = margins[p];
         s.evaluation = round_.first_evaluation + static_cast<std::int64_t>(p);
-        std::copy_n(round_.z.data() + p * static_cast<std::size_t>(opt_.dims), opt_.dims, z.data());
+        candidate = round_.z.data() + p * d;
         ++level.moved;
       }
       ++p;
     }
     ++level.steps;
     head_[static_cast<std::size_t>(c)] = static_cast<std::int64_t>(samples_.size());
-    push_sample(s, z.data());
+    samples_.push_back(s);
+    const std::size_t at = z_.size();
+    z_.resize(at + d);  // then the state: the candidate kept, or the head's state repeated
+    std::copy_n(candidate ? candidate : z_.data() + head * d, d, z_.data() + at);
   }
   adapt_scale(step, level.runs - runs_before, level.moved - moved_before);
 }

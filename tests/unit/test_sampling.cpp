@@ -299,11 +299,13 @@ TEST_CASE("normal quantile: reference values (AS241 accuracy)", "[sampling][norm
 
 // The batch form must give normal_quantile's bits on every entry: the subset simulation's
 // candidates (computed by rank 0 in batches) are the same points as before and on every CPU. Both
-// regions, their boundary |p - 0.5| = 0.425, the ends, outside (0, 1), NaN, over batches longer
-// than its blocks of 64 and in place.
+// regions, their boundary |p - 0.5| = 0.425, the tail's two regions and theirs (r = 5, p = e^-25),
+// the ends, outside (0, 1), NaN, over batches longer than its blocks of 64 and in place.
 TEST_CASE("normal quantiles: the batch gives normal_quantile's bits", "[sampling][normal]") {
   std::vector<double> p = {0.5, 0.075, 0.925, std::nextafter(0.075, 0.0), std::nextafter(0.925, 1.0), 0.0, 1.0,
-                           -0.1, 1.1, std::nan(""), 1e-300, 0x1p-54, 1.0 - 0x1p-53};
+                           -0.1, 1.1, std::nan(""), 1e-300, 0x1p-54, 1.0 - 0x1p-53, std::exp(-25.0),
+                           std::nextafter(std::exp(-25.0), 0.0), std::nextafter(std::exp(-25.0), 1.0),
+                           1.0 - std::exp(-25.0), 1e-12, 1.0 - 1e-12, std::numeric_limits<double>::denorm_min()};
   for (int i = 0; i < 1000; ++i) p.push_back(counter_uniform(7, i, 3));
   std::vector<double> z(p.size()), in_place = p;
   normal_quantiles(p.data(), z.data(), p.size());
