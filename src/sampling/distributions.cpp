@@ -74,48 +74,24 @@ void normal_quantiles_central(const double* p, double* z, std::size_t count) {
   }
 }
 
-// z[i] = normal_quantile's tail value for r[i] = sqrt(-log(min(p, 1 - p))) and q[i] = p - 0.5,
-// the same operations in the same order; both regions (r <= 5, beyond) are computed and one kept,
-// so that the loop has no branch and vectorises.
-TRUSS_SAMPLING_CLONES
-void normal_quantiles_tail(const double* r, const double* q, double* z, std::size_t count) {
-  for (std::size_t i = 0; i < count; ++i) {
-    const double near = horner8(kAs241C, r[i] - 1.6) / horner8(kAs241D, r[i] - 1.6);
-    const double far = horner8(kAs241E, r[i] - 5.0) / horner8(kAs241F, r[i] - 5.0);
-    const double v = r[i] <= 5.0 ? near : far;
-    z[i] = q[i] < 0.0 ? -v : v;
-  }
-}
-
 }  // namespace
 
-// The central region in one vectorised pass; the tails' logarithms one at a time (glibc's log: its
-// bits), their rational functions in a second vectorised pass (sampling.hpp).
+// The central region in one vectorised pass, the tails one at a time (sampling.hpp).
 void normal_quantiles(const double* p, double* z, std::size_t count) {
   constexpr std::size_t kChunk = 64;
-  double central[kChunk], r[kChunk], q[kChunk], tail[kChunk];
-  std::size_t tails[kChunk], odd[kChunk];
+  double central[kChunk];
+  std::size_t tails[kChunk];
   for (std::size_t i0 = 0; i0 < count; i0 += kChunk) {
     const std::size_t m = std::min(kChunk, count - i0);
     normal_quantiles_central(p + i0, central, m);
-    // The tails (about 15 % of the draws, at random), and apart anything not inside (0, 1), listed
-    // without a branch: no misprediction between them.
-    std::size_t n_tails = 0, n_odd = 0;
+    // The tails (about 15 % of the draws, at random), and anything outside (0, 1), listed without
+    // a branch and then computed one at a time: no misprediction between them.
+    std::size_t n_tails = 0;
     for (std::size_t i = 0; i < m; ++i) {
-      const double x = p[i0 + i];
-      const bool inside = x > 0.0 && x < 1.0, is_tail = !(std::fabs(x - 0.5) <= 0.425);
-      tails[n_tails] = odd[n_odd] = i;
-      n_tails += inside && is_tail;
-      n_odd += !inside;
+      tails[n_tails] = i;
+      n_tails += !(std::fabs(p[i0 + i] - 0.5) <= 0.425);
     }
-    for (std::size_t t = 0; t < n_tails; ++t) {
-      const double x = p[i0 + tails[t]];
-      q[t] = x - 0.5;
-      r[t] = std::sqrt(-std::log(q[t] < 0.0 ? x : 1.0 - x));
-    }
-    normal_quantiles_tail(r, q, tail, n_tails);
-    for (std::size_t t = 0; t < n_tails; ++t) central[tails[t]] = tail[t];
-    for (std::size_t t = 0; t < n_odd; ++t) central[odd[t]] = normal_quantile(p[i0 + odd[t]]);
+    for (std::size_t t = 0; t < n_tails; ++t) central[tails[t]] = normal_quantile(p[i0 + tails[t]]);
     std::copy(central, central + m, z + i0);
   }
 }
