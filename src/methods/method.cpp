@@ -5,10 +5,27 @@
 
 namespace truss::methods {
 
+namespace {
+
+// The head of a plan and of its digest: i64 round, i64 first_run, i64 n_runs.
+template <class Plan>
+void put_runs(std::string& out, const Plan& p) {
+  util::put(out, p.round);
+  util::put(out, p.first_run);
+  util::put(out, p.n_runs);
+}
+
+template <class Plan>
+void get_runs(util::ByteReader& r, Plan& p) {
+  p.round = r.get<std::int64_t>();
+  p.first_run = r.get<std::int64_t>();
+  p.n_runs = r.get<std::int64_t>();
+}
+
+}  // namespace
+
 void RoundPlan::append_bytes(std::string& out) const {
-  util::put(out, round);
-  util::put(out, first_run);
-  util::put(out, n_runs);
+  put_runs(out, *this);
   util::put(out, static_cast<std::uint32_t>(state.size()));
   out += state;
 }
@@ -16,9 +33,7 @@ void RoundPlan::append_bytes(std::string& out) const {
 RoundPlan RoundPlan::from_bytes(std::string_view bytes) {
   util::ByteReader r(bytes, "a round plan");
   RoundPlan p;
-  p.round = r.get<std::int64_t>();
-  p.first_run = r.get<std::int64_t>();
-  p.n_runs = r.get<std::int64_t>();
+  get_runs(r, p);
   p.state = r.get_bytes(r.get<std::uint32_t>());
   r.expect_end();
   return p;
@@ -31,9 +46,7 @@ PlanDigest PlanDigest::of(const RoundPlan& plan) {
 
 std::string PlanDigest::to_bytes() const {
   std::string b;
-  util::put(b, round);
-  util::put(b, first_run);
-  util::put(b, n_runs);
+  put_runs(b, *this);
   util::put(b, state_bytes);
   util::put(b, state_crc32);
   return b;
@@ -42,9 +55,7 @@ std::string PlanDigest::to_bytes() const {
 PlanDigest PlanDigest::from_bytes(std::string_view bytes) {
   util::ByteReader r(bytes, "a round plan's digest");
   PlanDigest d;
-  d.round = r.get<std::int64_t>();
-  d.first_run = r.get<std::int64_t>();
-  d.n_runs = r.get<std::int64_t>();
+  get_runs(r, d);
   d.state_bytes = r.get<std::uint32_t>();
   d.state_crc32 = r.get<std::uint32_t>();
   r.expect_end();
