@@ -27,8 +27,8 @@
 namespace truss::methods {
 
 // One round: its runs and the state (the method's own bytes, opaque to the engine) from which any
-// rank computes any of their points. The engine journals it before the round's first record and
-// sends it to every rank.
+// rank computes any of their points. The engine journals its digest (PlanDigest) before the round's
+// first record and sends it to every rank.
 struct RoundPlan {
   std::int64_t round = 0;
   std::int64_t first_run = 0;

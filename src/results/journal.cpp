@@ -20,8 +20,8 @@ namespace {
 
 constexpr char kMagic[8] = {'T', 'R', 'U', 'S', 'S', 'J', 'N', 'L'};
 constexpr char kPartMagic[8] = {'T', 'R', 'U', 'S', 'S', 'J', 'N', 'P'};
-// 3: records also in part journals (the ranks that build chunks); 2: round plans ('P' frames) and
-// the record with its round (campaign/record.hpp).
+// 4: a round plan's digest, not its state ('P' frames); 3: records also in part journals (the ranks
+// that build chunks); 2: round plans ('P' frames) and the record with its round (campaign/record.hpp).
 constexpr std::uint32_t kVersion = 4;
 constexpr std::size_t kPartHeader = kPartHeaderBytes;
 
