@@ -9,7 +9,8 @@ runs that sleep, so that more ranks than cores still measure the scheduler.
                          [--synthetic-run-cost-s C] [--scratch DIR] [-- extra truss-campaign options]
 
 --driver:  one build, or several (NAME=PATH each) compared side by side: their campaigns interleaved
-           in each repeat, one table with a row per build and rank count.
+           in each repeat, one table with a row per build and rank count. PATH may carry the build's
+           own options: "s4=build/truss-campaign --statistics-ranks 4".
 
 --campaign table1: campaigns/table1_dispersed.toml (the Table-1 velocity runs, about 80 us each);
            --runs: strong, the runs of every campaign (default 100,000); weak, the runs per rank
@@ -32,7 +33,10 @@ For each rank count, the medians over the repeats of:
                   its inverse, the results absorbed a second of rank 0's CPU;
   a run c         rank 0's CPU per run it computed, rank0_compute_cpu_s / runs_by_rank0;
   h / c, P sat    rank 0's share, and the rank count at which it would be busy all the time with
-                  results alone, 1 + c / h (docs/benchmarks.md, "Efficiency model").
+                  results alone, 1 + c / h (docs/benchmarks.md, "Efficiency model");
+  statistics      the statistics ranks S (/timing statistics_ranks; --statistics-ranks after `--`), the
+                  largest one's CPU merging per result (stats_merge_cpu_s / n: h_s; rank 0's, inside h,
+                  on one rank), and the rank count at which it would be busy merging alone, 1 + c / h_s.
 """
 import argparse
 import os
@@ -64,8 +68,9 @@ def size_sets(a, ranks):
 def run_once(a, driver, ranks, out):
     if os.path.exists(out):
         os.remove(out)
-    cmd = [*shlex.split(a.launch.format(ranks=ranks)), driver, os.path.join(REPO, CAMPAIGNS[a.campaign]), "-o", out,
-           "--progress", "none", *size_sets(a, ranks), *a.extra]
+    program, *own = shlex.split(driver)
+    cmd = [*shlex.split(a.launch.format(ranks=ranks)), program, os.path.join(REPO, CAMPAIGNS[a.campaign]), "-o", out,
+           "--progress", "none", *size_sets(a, ranks), *own, *a.extra]
     if a.synthetic_run_cost_s is not None:
         cmd += ["--synthetic-run-cost-s", str(a.synthetic_run_cost_s)]
     p = subprocess.run(cmd, env=ENV, capture_output=True, text=True)
@@ -81,6 +86,8 @@ def run_once(a, driver, ranks, out):
             "busy": float(t["run_wall_time_s"][:].sum()) / (ranks * wall),
             "h": float(t.attrs["rank0_handle_cpu_s"]) / n,
             "c": float(t.attrs["rank0_compute_cpu_s"]) / max(1, int(t.attrs["runs_by_rank0"])),
+            "S": float(t.attrs.get("statistics_ranks", float("nan"))),
+            "hs": float(t.attrs.get("stats_merge_cpu_s", float("nan"))) / n,
         }
 
 
@@ -116,8 +123,9 @@ def main():
           f"{f', runs sleeping {a.synthetic_run_cost_s} s' if a.synthetic_run_cost_s is not None else ''}; "
           f"medians of {a.repeats}\n")
     print("| build | ranks | runs | wall (s) | efficiency | busy | rank 0 per result, CPU (us) | results a second of "
-          "rank 0's CPU | a run on rank 0, CPU (us) | h / c | P at which rank 0 saturates |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "rank 0's CPU | a run on rank 0, CPU (us) | h / c | P at which rank 0 saturates | statistics ranks | "
+          "a statistics rank's merge per result, CPU (us) | P at which it saturates |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for b in builds:
         for P in ranks:
             m, m0 = med[(b, P)], med[(b, p0)]
@@ -125,7 +133,8 @@ def main():
             hc = m["h"] / m["c"] if m["c"] > 0 else float("nan")
             print(f"| {b} | {P} | {m['n']:.0f} | {m['wall']:.3f} | {eff:.3f} | {m['busy']:.3f} | {m['h'] * 1e6:.2f} "
                   f"| {1 / m['h'] if m['h'] > 0 else float('inf'):,.0f} | {m['c'] * 1e6:.1f} | {hc * 100:.2f} % "
-                  f"| {1 + 1 / hc if hc > 0 else float('inf'):.0f} |")
+                  f"| {1 + 1 / hc if hc > 0 else float('inf'):.0f} | {m['S']:.0f} | {m['hs'] * 1e6:.2f} "
+                  f"| {1 + m['c'] / m['hs'] if m['hs'] > 0 else float('inf'):.0f} |")
 
 if __name__ == "__main__":
     main()

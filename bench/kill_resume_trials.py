@@ -7,8 +7,9 @@ transport: each resumed file must equal an uninterrupted one value for value and
                         [--runs 4000] [--seed 1]
 
 The campaign is campaigns/table1_dispersed.toml with the motor drive (runs that integrate, about
-1.3 ms each) and `--flush-interval 0.01`. Trial k starts on ranks[k % 4] of (2, 3, 8, 2) over
-shared memory or TCP (`--mca btl self,tcp` on odd trials), is killed (mpirun and every rank, SIGKILL)
+1.3 ms each) and `--flush-interval 0.01`. Trial k starts on ranks[k % 4] of (2, 3, 8, 2) with
+(1, 2, 3, 1)[k % 4] statistics ranks (`--statistics-ranks`) over shared memory or TCP (`--mca btl
+self,tcp` on odd trials), is killed (mpirun and every rank, SIGKILL)
 after a delay drawn uniformly in 5-95 % of the uninterrupted campaign's wall time (the seeded
 generator: the same delays for the same --seed), and resumes on (3, 2, 2, 8)[k % 4] ranks over the
 other transport. A kill after the last run (the file already written), or in the start-up before
@@ -57,16 +58,17 @@ def main():
     rng = random.Random(args.seed)
     bad = 0
     for k in range(args.trials):
-        ranks, again = (2, 3, 8, 2)[k % 4], (3, 2, 2, 8)[k % 4]
+        ranks, again, merging = (2, 3, 8, 2)[k % 4], (3, 2, 2, 8)[k % 4], (1, 2, 3, 1)[k % 4]
         tcp = k % 2 == 1
         out = os.path.join(args.scratch, f"trial{k}.h5")
         delay = rng.uniform(0.05, 0.95) * t_ref
-        proc = subprocess.Popen(launch(args, ranks, tcp, ["-o", out, *sets, "--flush-interval", "0.01"]), env=ENV,
+        proc = subprocess.Popen(launch(args, ranks, tcp, ["-o", out, *sets, "--flush-interval", "0.01",
+                                                          "--statistics-ranks", str(merging)]), env=ENV,
                                 start_new_session=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         time.sleep(delay)
         finished = proc.poll() is not None
         kill_job(proc)
-        where = f"trial {k}: {ranks} ranks {'TCP' if tcp else 'shm'}, killed at {delay:.2f} s"
+        where = f"trial {k}: {ranks} ranks ({merging} merging) {'TCP' if tcp else 'shm'}, killed at {delay:.2f} s"
         if finished or os.path.exists(out):
             print(f"{where}: finished before the kill")
             continue

@@ -59,7 +59,7 @@ ProgressMode progress_mode(const std::string& s) {
 
 // The command line (identical on every rank). Returns an exit status when the command is done
 // (--help, --version, a parse error), nothing when the campaign is to run.
-std::optional<int> parse_command(int argc, char** argv, bool root, CommandOptions& o) {
+std::optional<int> parse_command(int argc, char** argv, bool root, int size, CommandOptions& o) {
   CLI::App app{"Runs an uncertainty campaign of folding truss mast deployments over MPI ranks.", "truss-campaign"};
   app.add_option("campaign", o.campaign_path, "Campaign file (TOML), e.g. campaigns/table1_dispersed.toml")
       ->required();
@@ -80,6 +80,10 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
       ->check(CLI::Range(0.01, 1e6));
   app.add_option("--max-batch", o.engine.max_batch, "Largest batch of runs handed to a rank at once")
       ->check(CLI::Range(1, 100000));
+  app.add_option("--statistics-ranks", o.engine.statistics_ranks,
+                 fmt::format("Ranks that merge the statistics, each a share of the columns (ranks 1 to N; 0: one per {} "
+                             "ranks; rank 0 alone on one rank and when resuming)", kRanksPerStatisticsRank))
+      ->check(CLI::Range(0, 1 << 20));
   app.add_option("--compression", o.compression, "zlib level (0-9) of the results file's per-run datasets; 0 stores "
                  "them uncompressed (largest file, least work for rank 0)")->check(CLI::Range(0, 9));
   // Bench only, hidden (empty group): see parallel/synthetic_run.hpp and docs/benchmarks.md.
@@ -93,6 +97,10 @@ std::optional<int> parse_command(int argc, char** argv, bool root, CommandOption
   try {
     app.parse(argc, argv);
     if (o.output_path.empty() && !o.dry_run) throw CLI::RequiredError("--output");
+    if (o.engine.statistics_ranks > std::max(1, size - 1))
+      throw CLI::ValidationError("--statistics-ranks", fmt::format("{} statistics ranks on {} rank{}: at most {} (ranks 1 "
+                                 "to {})", o.engine.statistics_ranks, size, size > 1 ? "s" : "", std::max(1, size - 1),
+                                 std::max(1, size - 1)));
   } catch (const CLI::ParseError& e) {
     int rc = 0;
     if (root) {
@@ -235,12 +243,13 @@ int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& c
   auto make_owner = [&](const SessionSetup& s, results::Journal* journal, const std::vector<std::size_t>& observed) {
     owner = std::make_unique<ChunkOwner>(
         ctx.record, store, observed,
-        OwnerFiles{rank, s.session, s.output, s.temporary, s.campaign_crc, journal, s.stats_rank}, engine.sender(),
+        OwnerFiles{rank, s.session, s.output, s.temporary, s.campaign_crc, journal, s.stats}, engine.sender(),
         o.engine.flush_interval_s);
   };
   // The statistics are merged off rank 0 (engine.hpp), but where rank 0 restores chunks alone
   // before the other ranks join (--resume), by rank 0.
-  const int stats_rank = size > 1 && !o.resume ? 1 : 0;
+  const results::StatsRanks stats = find_stats_ranks(o.engine.statistics_ranks, size, o.resume,
+                                                     results::ChunkColumns(ctx.record).n_stats);
   int status = kExitOk;
   SessionSetup setup;
   if (rank == 0) {
@@ -248,11 +257,11 @@ int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& c
       prepare_output(o, campaign_text, ctx, method, r0);
       setup.output = o.output_path;
       setup.temporary = r0.file->temporary_path();
-      setup.stats_rank = stats_rank;
+      setup.stats = stats;
       make_owner(setup, r0.journal.get(), r0.collector->observed_fields());
-      engine.attach(*owner, r0.collector.get(), stats_rank);
+      engine.attach(*owner, r0.collector.get(), stats);
       setup = restore_output(o, campaign_text, r0, *owner, engine);
-      setup.stats_rank = stats_rank;
+      setup.stats = stats;
       owner->set_session(setup.session);
     });
   }
@@ -265,7 +274,7 @@ int prepare_session(MPI_Comm comm, const CommandOptions& o, const std::string& c
     for (const std::string& name : method.observed_outputs())
       observed.push_back(static_cast<std::size_t>(ctx.record.find_output(name)));
     make_owner(setup, nullptr, observed);
-    engine.attach(*owner, nullptr, setup.stats_rank);
+    engine.attach(*owner, nullptr, setup.stats);
   }
   engine.set_rank0_chunks(setup.rank0_chunks);
   detail::set_abort_removes(setup.temporary);
@@ -355,7 +364,7 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm, const methods::Me
   const double t_start = unix_now();
   const auto wall0 = std::chrono::steady_clock::now();
   CommandOptions o;
-  if (auto rc = parse_command(argc, argv, root, o)) return *rc;
+  if (auto rc = parse_command(argc, argv, root, size, o)) return *rc;
   std::optional<campaign::CampaignContext> ctx;
   std::string campaign_text;
   if (auto rc = load_campaign(comm, root, o, methods, ctx, campaign_text)) return *rc;

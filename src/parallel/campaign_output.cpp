@@ -201,7 +201,8 @@ std::string SessionSetup::to_bytes() const {
   }
   util::put(out, static_cast<std::uint64_t>(rank0_chunks.size()));
   for (std::int64_t k : rank0_chunks) util::put(out, k);
-  util::put(out, static_cast<std::int32_t>(stats_rank));
+  util::put(out, static_cast<std::int32_t>(stats.first));
+  util::put(out, static_cast<std::int32_t>(stats.count));
   return out;
 }
 
@@ -213,7 +214,8 @@ SessionSetup SessionSetup::from_bytes(std::string_view bytes) {
   for (std::string* p : {&s.output, &s.temporary}) p->assign(in.get_bytes(in.get<std::uint64_t>()));
   s.rank0_chunks.resize(in.get<std::uint64_t>());
   for (std::int64_t& k : s.rank0_chunks) k = in.get<std::int64_t>();
-  s.stats_rank = in.get<std::int32_t>();
+  s.stats.first = in.get<std::int32_t>();
+  s.stats.count = in.get<std::int32_t>();
   in.expect_end();
   return s;
 }

@@ -54,7 +54,7 @@ struct SessionSetup {
   std::string output, temporary;           // absolute paths
   std::uint32_t campaign_crc = 0;
   std::vector<std::int64_t> rank0_chunks;  // the chunks rank 0 restored and keeps
-  int stats_rank = 0;                      // the rank that merges the statistics (engine.hpp)
+  results::StatsRanks stats;               // the ranks that merge the statistics (engine.hpp)
   std::string to_bytes() const;
   static SessionSetup from_bytes(std::string_view bytes);
 };

@@ -64,8 +64,9 @@ class Rank0Round;
 // handed to the round being scheduled.
 class Rank0Server {
  public:
-  Rank0Server(Node& node, Collector& collector, results::ScheduleSummary& sum)
-      : node_(node), collector_(collector), sum_(sum) {}
+  Rank0Server(Node& node, Collector& collector, results::ScheduleSummary& sum, const campaign::RecordLayout& layout,
+              int stats_ranks)
+      : node_(node), collector_(collector), sum_(sum), layout_(layout), stats_ranks_(stats_ranks) {}
   void handle(int tag, int source, std::string& bytes);
   Rank0Round* round = nullptr;
   int finished = 0;  // owners that have written and synced every chunk they own
@@ -75,20 +76,25 @@ class Rank0Server {
   Collector& collector_;
   results::ScheduleSummary& sum_;
   results::ChunkReport report_;
+  const campaign::RecordLayout& layout_;
+  int stats_ranks_;
+  std::vector<results::StatsPart> stats_parts_;  // until every statistics rank's is in
 };
 
-// The statistics rank's side (results/chunk_stats.hpp): the owners' chunk summaries merged; the
-// windows they summarise against, the first from the first owner with a complete chunk, then after
-// each merge the current ones back to that chunk's owner; once every chunk is merged, the streamed
-// statistics to rank 0. It is rank 1 on more than one rank (rank 0 keeps to the schedule and the
-// chunks' placement), rank 0 on one rank and in a session that restored chunks before the others
-// joined (results/chunk_stats.hpp: the statistics are the same wherever they are merged).
+// A statistics rank's side (results/chunk_stats.hpp): the owners' summaries of its columns
+// merged; the windows they summarise against, the first from the first owner that asks for them,
+// then after each merge the current ones back to that chunk's owner; once every chunk is merged,
+// its columns' statistics to rank 0. Ranks 1 .. S on more than one rank (rank 0 keeps to the
+// schedule and the chunks' placement), rank 0 alone on one rank and in a session that restored
+// chunks before the others joined (results/chunk_stats.hpp: the statistics are the same wherever
+// and in how many parts they are merged).
 class StatsServer {
  public:
-  StatsServer(Node& node, const campaign::RecordLayout& layout) : node_(node), stats_(layout) {}
+  StatsServer(Node& node, const campaign::RecordLayout& layout, results::ColumnRange columns)
+      : node_(node), stats_(layout, columns) {}
   void handle(int tag, int source, std::string& bytes);
   static bool handles(int tag) { return tag == kTagAskWindows || tag == kTagSeed || tag == kTagSummary; }
-  // The statistics to rank 0 once the campaign's n_chunks are all merged: true when it sends them.
+  // Its statistics to rank 0 once the campaign's n_chunks are all merged: true when it sends them.
   bool send_if_complete(std::int64_t n_chunks);
   bool sent() const { return sent_; }
 
@@ -104,28 +110,36 @@ class StatsServer {
   std::vector<int> want_windows_;  // owners waiting for the first windows
   bool asked_seed_ = false, sent_ = false;
   results::ChunkReport summary_;   // its summaries' room used again
+  double merge_cpu_s_ = 0.0;       // thread CPU in handle()
 };
 
 void StatsServer::handle(int tag, int source, std::string& bytes) {
+  const double cpu0 = thread_cpu_s();
   if (tag == kTagSummary) {
     results::read_chunk_report(bytes, summary_);
     stats_.merge(summary_.index, summary_.summaries);
     send_windows(source);
   } else if (tag == kTagAskWindows) {
-    if (stats_.seeded()) return send_windows(source);
-    want_windows_.push_back(source);
-    if (!asked_seed_) node_.send(source, kTagAskSeed, {});
-    asked_seed_ = true;
+    if (stats_.seeded()) {
+      send_windows(source);
+    } else {
+      want_windows_.push_back(source);
+      if (!asked_seed_) node_.send(source, kTagAskSeed, {});
+      asked_seed_ = true;
+    }
   } else if (tag == kTagSeed) {
     stats_.seed(results::read_chunk_placement(bytes).windows);
     for (int w : want_windows_) send_windows(w);
     want_windows_.clear();
   }
+  merge_cpu_s_ += thread_cpu_s() - cpu0;
 }
 
 bool StatsServer::send_if_complete(std::int64_t n_chunks) {
   if (sent_ || stats_.merged() != n_chunks) return false;
-  node_.send(0, kTagStats, results::to_bytes(stats_.calc_stats(n_chunks)));
+  results::StatsPart part = stats_.calc_part(n_chunks);
+  part.merge_cpu_s = merge_cpu_s_;
+  node_.send(0, kTagStats, results::to_bytes(part));
   sent_ = true;
   return true;
 }
@@ -185,7 +199,10 @@ void Rank0Server::handle(int tag, int source, std::string& bytes) {
     results::read_chunk_report(bytes, report_);
     node_.send(source, kTagPlacement, results::to_bytes(collector_.place(report_)));
   } else if (tag == kTagStats) {
-    collector_.set_stats(results::read_streamed_stats(bytes));
+    stats_parts_.push_back(results::read_stats_part(bytes));
+    sum_.stats_merge_cpu_s = std::max(sum_.stats_merge_cpu_s, stats_parts_.back().merge_cpu_s);
+    if (static_cast<int>(stats_parts_.size()) == stats_ranks_)
+      collector_.set_stats(results::assemble_streamed_stats(layout_, std::move(stats_parts_)));
   } else if (tag == kTagFinished) {
     ++finished;
   } else {
@@ -363,7 +380,15 @@ std::string EngineOptions::validate() const {
   if (batches_per_rank < 1) return fmt::format("batches_per_rank: must be >= 1, got {}", batches_per_rank);
   if (!(tick_interval_s > 0.0)) return fmt::format("tick_interval_s: must be positive, got {}", tick_interval_s);
   if (!(flush_interval_s > 0.0)) return fmt::format("flush_interval_s: must be positive, got {}", flush_interval_s);
+  if (statistics_ranks < 0) return fmt::format("statistics_ranks: must be >= 0, got {}", statistics_ranks);
   return {};
+}
+
+results::StatsRanks find_stats_ranks(int asked, int size, bool restores, std::size_t n_stats) {
+  if (size <= 1 || restores) return {0, 1};
+  const int wanted = asked > 0 ? asked : (size - 1 + kRanksPerStatisticsRank - 1) / kRanksPerStatisticsRank;
+  const auto columns = static_cast<int>(std::min<std::size_t>(std::max<std::size_t>(n_stats, 1), 1 << 30));
+  return {1, std::min({wanted, size - 1, columns})};
 }
 
 struct Engine::Impl {
@@ -380,7 +405,8 @@ struct Engine::Impl {
   ChunkOwner* owner = nullptr;
   Collector* collector = nullptr;
   std::unique_ptr<Rank0Server> server;
-  std::unique_ptr<StatsServer> stats;  // on the statistics rank
+  std::unique_ptr<StatsServer> stats;  // on a statistics rank
+  int stats_ranks = 1;
   WorkQueue work;
   results::ScheduleSummary schedule;
 };
@@ -394,8 +420,8 @@ void Engine::Impl::handle(int tag, int source, std::string& bytes) {
   }
   else if (tag == kTagRecords) owner->add_records(bytes);
   else if (tag == kTagPlacement) owner->on_placement(bytes);
-  else if (tag == kTagWindows) owner->on_windows(bytes);
-  else if (tag == kTagAskSeed) owner->on_seed_ask();
+  else if (tag == kTagWindows) owner->on_windows(source, bytes);
+  else if (tag == kTagAskSeed) owner->on_seed_ask(source);
   else if (stats && StatsServer::handles(tag)) {
     ScopeTimer t(schedule.rank0_result_s);  // (rank 0's figure, when it is the statistics rank)
     stats->handle(tag, source, bytes);
@@ -446,15 +472,21 @@ std::function<void(int, int, std::string)> Engine::sender() {
   return [node](int dest, int tag, std::string bytes) { node->send(dest, tag, std::move(bytes)); };
 }
 
-void Engine::attach(ChunkOwner& owner, Collector* collector, int stats_rank) {
+void Engine::attach(ChunkOwner& owner, Collector* collector, results::StatsRanks stats) {
   Impl& m = *impl_;
   if ((m.node.rank() == 0) != (collector != nullptr)) throw std::invalid_argument("engine: the collector is rank 0's");
-  if (stats_rank < 0 || stats_rank >= m.node.size())
-    throw std::invalid_argument(fmt::format("engine: statistics rank {} of {} ranks", stats_rank, m.node.size()));
+  const std::size_t n_stats = owner.n_statistics_columns();
+  if (stats.first < 0 || stats.count < 1 || stats.first + stats.count > m.node.size() ||
+      static_cast<std::size_t>(stats.count) > std::max<std::size_t>(n_stats, 1))
+    throw std::invalid_argument(fmt::format("engine: statistics ranks {} to {} of {} ranks ({} columns)", stats.first,
+                                            stats.first + stats.count - 1, m.node.size(), n_stats));
   m.owner = &owner;
   m.collector = collector;
-  if (collector) m.server = std::make_unique<Rank0Server>(m.node, *collector, m.schedule);
-  if (m.node.rank() == stats_rank) m.stats = std::make_unique<StatsServer>(m.node, owner.layout());
+  m.stats_ranks = stats.count;
+  if (collector)
+    m.server = std::make_unique<Rank0Server>(m.node, *collector, m.schedule, owner.layout(), stats.count);
+  if (stats.holds(m.node.rank()))
+    m.stats = std::make_unique<StatsServer>(m.node, owner.layout(), stats.find_columns(m.node.rank(), n_stats));
   m.node.set_handler([&m](int tag, int source, std::string& bytes) { m.handle(tag, source, bytes); });
 }
 
@@ -471,6 +503,7 @@ EngineResult Engine::run(const Evaluate& evaluate) {
   Node& node = m.node;
   const bool root = node.rank() == 0;
   m.schedule = {};
+  m.schedule.statistics_ranks = m.stats_ranks;
   EngineResult out;
   const std::function<bool()> serve = [&m] { return m.serve(); };
   const std::function<bool(double)> serve_for = [&m](double budget_s) { return m.serve(budget_s); };

@@ -9,7 +9,8 @@
 // its chunk of the results file (owner.hpp), which journals it, builds and encodes the chunk and
 // writes its bytes where rank 0 placed them. Rank 0 works per batch (the schedule) and per chunk
 // (round parts: the records a method reads; chunk reports: placement, messages); the chunks'
-// statistics summaries go to the statistics rank (rank 1 on more than one rank), which merges them.
+// statistics summaries go to the statistics ranks (ranks 1 .. S on more than one rank, each merging
+// a range of the columns: results/chunk_stats.hpp StatsRanks).
 //
 // Progress without single-copy transports: no rank ever makes a blocking call for a message whose
 // sender may be computing. Every rank matches its messages with MPI_Improbe, posts MPI_Imrecv for
@@ -21,9 +22,9 @@
 // Messages (engine_detail.hpp): a batch of run indices (rank 0 -> worker; none: the round is
 // over), a batch done (worker -> rank 0), records (any rank -> owner: sealed journal frames,
 // results/journal.hpp), round parts and chunk reports (owner -> rank 0), placements (rank 0 ->
-// owner), statistics summaries, windows requests and first windows (owner -> statistics rank),
-// windows (statistics rank -> owner), an owner's end, and the streamed statistics (statistics rank
-// -> rank 0).
+// owner), statistics summaries, windows requests and first windows (owner -> statistics rank, of
+// its columns), windows (statistics rank -> owner), an owner's end, and each statistics rank's
+// streamed statistics (statistics rank -> rank 0).
 #pragma once
 #include <mpi.h>
 
@@ -41,6 +42,7 @@
 #include "parallel/progress.hpp"
 #include "results/campaign_file.hpp"
 #include "results/chunk_messages.hpp"
+#include "results/chunk_stats.hpp"
 #include "results/journal.hpp"
 
 namespace truss::parallel {
@@ -56,8 +58,20 @@ struct EngineOptions {
   double flush_interval_s = 2.0;  // journal syncs
   // The campaign's cap on runs (campaign::calc_max_runs): a journal's round plan past it is refused.
   std::int64_t max_runs = std::numeric_limits<std::int64_t>::max();
+  // Ranks that merge the statistics (find_stats_ranks); 0: one per kRanksPerStatisticsRank.
+  int statistics_ranks = 0;
   std::string validate() const;
 };
+
+// A statistics rank's merge costs it about 1 us of CPU a Table-1 result (docs/benchmarks.md), its
+// share S ways split; one per 32 ranks keeps it under a quarter of a rank's time for runs of 130 us
+// at any rank count, for 2 S messages a chunk (a summary and the windows back, per statistics rank).
+inline constexpr int kRanksPerStatisticsRank = 32;
+
+// Where the statistics of `n_stats` columns are merged on `size` ranks: rank 0 alone on one rank
+// and when it restores chunks before the others join (--resume); else ranks 1 .. S, S the asked
+// count (0: ceil((size - 1) / kRanksPerStatisticsRank)), at most size - 1 and n_stats.
+results::StatsRanks find_stats_ranks(int asked, int size, bool restores, std::size_t n_stats);
 
 // Records a rank may have in flight to their owners before it waits for them to be received.
 inline constexpr std::size_t kMaxSendBytes = std::size_t{32} << 20;
@@ -196,8 +210,9 @@ class Engine {
   Engine& operator=(const Engine&) = delete;
   // What the rank's owner sends goes through this.
   std::function<void(int dest, int tag, std::string bytes)> sender();
-  // `stats_rank`: the rank that merges the chunks' statistics (the same on every rank).
-  void attach(ChunkOwner& owner, Collector* collector, int stats_rank);
+  // `stats`: the ranks that merge the chunks' statistics, each a range of the columns (the same on
+  // every rank).
+  void attach(ChunkOwner& owner, Collector* collector, results::StatsRanks stats);
   // Rank 0 alone: its own messages and chunks handled until none is left.
   void serve_local();
   // The chunks rank 0 owns whatever the rank count (those it restored), the same on every rank.

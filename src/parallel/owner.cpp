@@ -4,7 +4,9 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <iterator>
 #include <cstring>
 #include <stdexcept>
 
@@ -89,10 +91,11 @@ bool ChunkOwner::send_parts() {
 bool ChunkOwner::start_encoding() {
   while (auto k = builder_.pop_complete()) to_encode_.push_back(*k);
   if (encoding_ || to_encode_.empty()) return false;
-  if (windows_.empty()) {  // the first windows come from the statistics rank
-    if (asked_windows_) return false;
-    send_(files_.stats_rank, kTagAskWindows, {});
-    asked_windows_ = true;
+  if (windows_missing_ != 0) {  // the first windows come from the statistics ranks
+    if (windows_missing_ > 0) return false;
+    windows_.resize(builder_.columns().n_stats);
+    windows_missing_ = files_.stats.count;
+    for (int s = 0; s < files_.stats.count; ++s) send_(files_.stats.first + s, kTagAskWindows, {});
     return true;
   }
   encoding_ = to_encode_.front();
@@ -114,12 +117,18 @@ bool ChunkOwner::step() {
   if (!encoding_) return sent;
   if (builder_.encode_step(*encoding_, windows_, encoded_)) {
     results::ChunkReport& r = encoded_.report;
-    results::ChunkReport summaries;  // the statistics rank's part of the report
-    summaries.index = r.index;
-    summaries.rows = r.rows;
-    summaries.summaries = std::move(r.summaries);
+    // Each statistics rank's part of the report: its columns' summaries.
+    const std::size_t n_stats = r.summaries.size();
+    for (int rank = files_.stats.first; rank < files_.stats.first + files_.stats.count; ++rank) {
+      const results::ColumnRange c = files_.stats.find_columns(rank, n_stats);
+      results::ChunkReport summaries;
+      summaries.index = r.index;
+      summaries.rows = r.rows;
+      summaries.summaries.assign(std::make_move_iterator(r.summaries.begin() + static_cast<std::ptrdiff_t>(c.begin)),
+                                 std::make_move_iterator(r.summaries.begin() + static_cast<std::ptrdiff_t>(c.end)));
+      send_(rank, kTagSummary, results::to_bytes(summaries));
+    }
     r.summaries.clear();
-    send_(files_.stats_rank, kTagSummary, results::to_bytes(summaries));
     send_(0, kTagChunk, results::to_bytes(r));
     placing_.emplace(*encoding_, std::move(encoded_));
     encoding_.reset();
@@ -127,16 +136,21 @@ bool ChunkOwner::step() {
   return true;
 }
 
-void ChunkOwner::on_windows(std::string_view bytes) {
-  windows_ = results::read_chunk_placement(bytes).windows;
+void ChunkOwner::on_windows(int source, std::string_view bytes) {
+  const results::ColumnRange c = files_.stats.find_columns(source, windows_.size());
+  std::vector<statistics::Windows> w = results::read_chunk_placement(bytes).windows;
+  if (!files_.stats.holds(source) || w.size() != c.size())
+    throw std::runtime_error(fmt::format("windows of {} columns from rank {}", w.size(), source));
+  std::copy(w.begin(), w.end(), windows_.begin() + static_cast<std::ptrdiff_t>(c.begin));
+  if (windows_missing_ > 0) --windows_missing_;  // its first: each rank answers the ask once
 }
 
-void ChunkOwner::on_seed_ask() {
+void ChunkOwner::on_seed_ask(int source) {
   if (to_encode_.empty()) throw std::logic_error("asked for the first windows without a complete chunk");
   results::ChunkPlacement p;
   p.index = -1;
-  p.windows = builder_.first_windows(to_encode_.front());
-  send_(files_.stats_rank, kTagSeed, results::to_bytes(p));
+  p.windows = builder_.first_windows(to_encode_.front(), files_.stats.find_columns(source, builder_.columns().n_stats));
+  send_(source, kTagSeed, results::to_bytes(p));
 }
 
 void ChunkOwner::on_placement(std::string_view bytes) {

@@ -24,6 +24,7 @@
 #include "methods/method.hpp"
 #include "results/chunk_builder.hpp"
 #include "results/chunk_messages.hpp"
+#include "results/chunk_stats.hpp"
 #include "results/journal.hpp"
 
 namespace truss::parallel {
@@ -36,7 +37,7 @@ struct OwnerFiles {
   std::string temporary;       // the results file being written (CampaignFile::temporary_path)
   std::uint32_t campaign_crc = 0;
   results::Journal* journal = nullptr;  // rank 0: its own journal; others: a part journal made at the first record
-  int stats_rank = 0;                   // where the chunks' statistics summaries go (engine.hpp)
+  results::StatsRanks stats;            // where the chunks' statistics summaries go (engine.hpp)
 };
 
 class ChunkOwner {
@@ -58,8 +59,9 @@ class ChunkOwner {
   void replay_record(std::string_view record, std::int64_t session);
   void set_session(std::int64_t session) { files_.session = session; }
   void on_placement(std::string_view bytes);
-  void on_windows(std::string_view bytes);
-  void on_seed_ask();
+  // The windows of a statistics rank's columns (`source`), or its ask for the first ones.
+  void on_windows(int source, std::string_view bytes);
+  void on_seed_ask(int source);
   // One unit of work (round parts and reports out, one dataset encoded, the journal's periodic
   // sync); false when there was none.
   bool step();
@@ -77,6 +79,7 @@ class ChunkOwner {
   static constexpr std::size_t kMaxBacklog = 2;
   std::size_t peak_chunks() const { return builder_.peak_chunks(); }
   const campaign::RecordLayout& layout() const { return builder_.layout(); }
+  std::size_t n_statistics_columns() const { return builder_.columns().n_stats; }
   std::int64_t n_chunks() const { return builder_.n_chunks(); }  // of the rounds planned so far
 
  private:
@@ -91,8 +94,8 @@ class ChunkOwner {
   double flush_interval_s_;
   std::unique_ptr<results::Journal> part_;  // a rank other than 0: its part journal
   int data_fd_ = -1;                        // the results file, for the chunks' bytes
-  std::vector<statistics::Windows> windows_;
-  bool asked_windows_ = false;
+  std::vector<statistics::Windows> windows_;  // every statistics column's, each range from its rank
+  int windows_missing_ = -1;                  // statistics ranks yet to send their first (-1: not asked)
   std::vector<std::string> waiting_;  // frames of rounds not planned here yet
   std::optional<std::int64_t> encoding_;                      // the chunk being encoded
   results::EncodedChunk encoded_;

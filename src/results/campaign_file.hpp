@@ -32,6 +32,8 @@ struct ScheduleSummary {
   double rank0_handle_cpu_s = 0;  // rank 0's thread CPU time outside its own runs (all of the above)
   double rank0_compute_cpu_s = 0;  // rank 0's thread CPU time inside its own runs
   std::int64_t runs_by_rank0 = 0, runs_by_workers = 0;
+  int statistics_ranks = 1;        // the ranks that merged the statistics, each a range of the columns
+  double stats_merge_cpu_s = 0;    // the largest of their thread CPU times merging
   double synthetic_run_cost_s = -1;  // >= 0: a bench-only campaign of sleeping runs (no physics)
 };
 

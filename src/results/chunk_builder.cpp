@@ -231,14 +231,21 @@ std::vector<std::int64_t> ChunkBuilder::open_indices() const {
 }
 
 std::vector<statistics::Windows> ChunkBuilder::first_windows(std::int64_t chunk) const {
+  return first_windows(chunk, {0, cols_.n_stats});
+}
+
+std::vector<statistics::Windows> ChunkBuilder::first_windows(std::int64_t chunk, ColumnRange columns) const {
   const Chunk& c = *open_.at(chunk);
   const auto rows = static_cast<std::size_t>(rows_of(chunk)), n = static_cast<std::size_t>(chunk_);
   std::vector<statistics::Windows> w;
   for (const ChunkColumn& col : cols_.columns) {
     if (col.stats < 0) continue;
     const char* block = c.cols.get() + n * L_.fields()[static_cast<std::size_t>(col.field)].offset;
-    for (std::size_t b = 0; b < col.width; ++b)
-      w.push_back(statistics::calc_first_windows(block + 8 * b, rows, col.width, c.use.data()));
+    for (std::size_t b = 0; b < col.width; ++b) {
+      const std::size_t k = static_cast<std::size_t>(col.stats) + b;
+      if (k >= columns.begin && k < columns.end)
+        w.push_back(statistics::calc_first_windows(block + 8 * b, rows, col.width, c.use.data()));
+    }
   }
   return w;
 }

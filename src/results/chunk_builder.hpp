@@ -56,6 +56,12 @@ struct ChunkColumns {
   std::vector<ChunkColumn> columns;
   std::size_t n_stats = 0;
 };
+// A half-open range of the statistics columns.
+struct ColumnRange {
+  std::size_t begin = 0, end = 0;
+  std::size_t size() const { return end - begin; }
+  bool operator==(const ColumnRange&) const = default;
+};
 
 // The rows of one round that one chunk holds, as a method reads them: run first_run + i has
 // status[i] and outputs[k][i] for the k-th observed output.
@@ -108,9 +114,10 @@ class ChunkBuilder {
   // the summaries of its statistics columns against `windows` (one per statistics column); true
   // when every dataset is done, the chunk's messages are in the report and its rows freed.
   bool encode_step(std::int64_t chunk, const std::vector<statistics::Windows>& windows, EncodedChunk& out);
-  // Rank 0's first statistics windows (statistics::calc_first_windows), one per statistics column,
-  // from a complete chunk's rows.
+  // The first statistics windows (statistics::calc_first_windows) of the statistics columns
+  // `columns` (all by default), one per column, from a complete chunk's rows.
   std::vector<statistics::Windows> first_windows(std::int64_t chunk) const;
+  std::vector<statistics::Windows> first_windows(std::int64_t chunk, ColumnRange columns) const;
   std::size_t open_chunks() const { return open_.size(); }  // in memory: filling, or complete and not encoded
   std::vector<std::int64_t> open_indices() const;
   std::size_t peak_chunks() const { return peak_chunks_; }

@@ -1,6 +1,7 @@
 // The merged statistics of the output columns (chunk_stats.hpp).
 #include "results/chunk_stats.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -11,7 +12,14 @@ namespace truss::results {
 
 using campaign::Scale;
 
-ChunkStats::ChunkStats(const campaign::RecordLayout& layout) : L_(layout), cols_(layout) { col_.resize(cols_.n_stats); }
+ChunkStats::ChunkStats(const campaign::RecordLayout& layout) : ChunkStats(layout, {0, ChunkColumns(layout).n_stats}) {}
+
+ChunkStats::ChunkStats(const campaign::RecordLayout& layout, ColumnRange columns) : L_(layout), range_(columns) {
+  if (columns.begin > columns.end || columns.end > ChunkColumns(layout).n_stats)
+    throw std::invalid_argument(fmt::format("statistics columns {} to {} of {}", columns.begin, columns.end,
+                                            ChunkColumns(layout).n_stats));
+  col_.resize(columns.size());
+}
 
 void ChunkStats::seed(const std::vector<statistics::Windows>& w) {
   if (seeded_) return;
@@ -41,28 +49,50 @@ void ChunkStats::merge(std::int64_t index, const std::vector<statistics::ChunkSu
   ++merged_;
 }
 
-StreamedStats ChunkStats::calc_stats(std::int64_t n_chunks) const {
-  StreamedStats s;
-  auto one = [&](std::size_t k, std::vector<std::uint8_t>& resolved) {
+StatsPart ChunkStats::calc_part(std::int64_t n_chunks) const {
+  StatsPart p;
+  p.first = range_.begin;
+  for (std::size_t k = 0; k < col_.size(); ++k) {
     if (!col_[k].complete(n_chunks))
-      throw std::runtime_error(fmt::format("internal: the statistics of column {} miss a chunk", k));
+      throw std::runtime_error(fmt::format("internal: the statistics of column {} miss a chunk", range_.begin + k));
     bool ok = true;
-    const statistics::Stats st = col_[k].calc_stats(ok);
-    resolved.push_back(ok);
-    return st;
-  };
-  for (const ChunkColumn& c : cols_.columns) {
+    p.stats.push_back(col_[k].calc_stats(ok));
+    p.resolved.push_back(ok);
+    p.kept_values += col_[k].kept_values();
+  }
+  return p;
+}
+
+StreamedStats ChunkStats::calc_stats(std::int64_t n_chunks) const { return assemble_streamed_stats(L_, {calc_part(n_chunks)}); }
+
+StreamedStats assemble_streamed_stats(const campaign::RecordLayout& layout, std::vector<StatsPart> parts) {
+  std::sort(parts.begin(), parts.end(), [](const StatsPart& a, const StatsPart& b) { return a.first < b.first; });
+  std::vector<statistics::Stats> all;
+  std::vector<std::uint8_t> resolved;
+  StreamedStats s;
+  for (StatsPart& p : parts) {
+    if (p.first != all.size())
+      throw std::runtime_error(fmt::format("streamed statistics: a part from column {} after {} columns", p.first,
+                                           all.size()));
+    all.insert(all.end(), p.stats.begin(), p.stats.end());
+    resolved.insert(resolved.end(), p.resolved.begin(), p.resolved.end());
+    s.kept_values += p.kept_values;
+  }
+  const ChunkColumns cols(layout);
+  if (all.size() != cols.n_stats)
+    throw std::runtime_error(fmt::format("streamed statistics: {} columns of {}", all.size(), cols.n_stats));
+  for (const ChunkColumn& c : cols.columns) {
     if (c.stats < 0) continue;
     const auto k = static_cast<std::size_t>(c.stats);
-    if (L_.fields()[static_cast<std::size_t>(c.field)].scale == Scale::none) {
-      s.f64.push_back(one(k, s.f64_resolved));
+    if (layout.fields()[static_cast<std::size_t>(c.field)].scale == Scale::none) {
+      s.f64.push_back(all[k]);
+      s.f64_resolved.push_back(resolved[k]);
       continue;
     }
-    auto& st = s.bays.emplace_back();
-    auto& ok = s.bays_resolved.emplace_back();
-    for (std::size_t b = 0; b < c.width; ++b) st.push_back(one(k + b, ok));
+    s.bays.emplace_back(all.begin() + static_cast<std::ptrdiff_t>(k), all.begin() + static_cast<std::ptrdiff_t>(k + c.width));
+    s.bays_resolved.emplace_back(resolved.begin() + static_cast<std::ptrdiff_t>(k),
+                                 resolved.begin() + static_cast<std::ptrdiff_t>(k + c.width));
   }
-  for (const auto& c : col_) s.kept_values += c.kept_values();
   return s;
 }
 
@@ -95,33 +125,26 @@ std::size_t get_count(util::ByteReader& in, std::size_t item_bytes) {
 
 }  // namespace
 
-// u64 kept values, u32 n, n x stats (i64 count, f64 mean, std, min, max, percentiles, u8 resolved),
-// u32 fields, each u32 bays and as many stats.
-std::string to_bytes(const StreamedStats& s) {
+// u64 first column, u64 kept values, f64 merge CPU, u32 n, n x stats (i64 count, f64 mean, std,
+// min, max, percentiles, u8 resolved).
+std::string to_bytes(const StatsPart& s) {
   std::string out;
+  util::put(out, static_cast<std::uint64_t>(s.first));
   util::put(out, static_cast<std::uint64_t>(s.kept_values));
-  util::put(out, static_cast<std::uint32_t>(s.f64.size()));
-  for (std::size_t i = 0; i < s.f64.size(); ++i) put_stats(out, s.f64[i], s.f64_resolved[i]);
-  util::put(out, static_cast<std::uint32_t>(s.bays.size()));
-  for (std::size_t f = 0; f < s.bays.size(); ++f) {
-    util::put(out, static_cast<std::uint32_t>(s.bays[f].size()));
-    for (std::size_t b = 0; b < s.bays[f].size(); ++b) put_stats(out, s.bays[f][b], s.bays_resolved[f][b]);
-  }
+  util::put(out, s.merge_cpu_s);
+  util::put(out, static_cast<std::uint32_t>(s.stats.size()));
+  for (std::size_t i = 0; i < s.stats.size(); ++i) put_stats(out, s.stats[i], s.resolved[i]);
   return out;
 }
 
-StreamedStats read_streamed_stats(std::string_view bytes) {
+StatsPart read_stats_part(std::string_view bytes) {
   util::ByteReader in(bytes, "streamed statistics");
-  StreamedStats s;
+  StatsPart s;
+  s.first = static_cast<std::size_t>(in.get<std::uint64_t>());
   s.kept_values = static_cast<std::size_t>(in.get<std::uint64_t>());
-  s.f64_resolved.resize(get_count(in, kStatsBytes));
-  for (std::uint8_t& ok : s.f64_resolved) s.f64.push_back(get_stats(in, ok));
-  const std::size_t fields = get_count(in, 4);
-  for (std::size_t f = 0; f < fields; ++f) {
-    auto& st = s.bays.emplace_back();
-    auto& ok = s.bays_resolved.emplace_back(get_count(in, kStatsBytes));
-    for (std::uint8_t& r : ok) st.push_back(get_stats(in, r));
-  }
+  s.merge_cpu_s = in.get<double>();
+  s.resolved.resize(get_count(in, kStatsBytes));
+  for (std::uint8_t& ok : s.resolved) s.stats.push_back(get_stats(in, ok));
   in.expect_end();
   return s;
 }

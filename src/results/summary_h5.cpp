@@ -187,10 +187,11 @@ void write_timing_attributes(hid_t file, const ScheduleSummary& s, std::int64_t 
       {"rank0_result_s", s.rank0_result_s},         {"rank0_write_s", s.rank0_write_s},
       {"rank0_tick_s", s.rank0_tick_s},
       {"rank0_idle_s", s.rank0_idle_s},             {"rank0_handle_cpu_s", s.rank0_handle_cpu_s},
-      {"rank0_compute_cpu_s", s.rank0_compute_cpu_s}};
+      {"rank0_compute_cpu_s", s.rank0_compute_cpu_s}, {"stats_merge_cpu_s", s.stats_merge_cpu_s}};
   for (const auto& [name, v] : seconds) write_double_attribute(g.get(), name, v);
   write_int_attribute(g.get(), "runs_by_rank0", s.runs_by_rank0);
   write_int_attribute(g.get(), "runs_by_workers", s.runs_by_workers);
+  write_int_attribute(g.get(), "statistics_ranks", s.statistics_ranks);
   // Columns whose percentiles the end read back from /runs (their order statistics were outside
   // the streamed windows): depends on which chunk was written first, hence here.
   write_int_attribute(g.get(), "stats_columns_read_back", stats_read_back);

@@ -213,6 +213,7 @@ def case_ranks(args):
         check_stats(f)
         check_final_progress(p.stderr, f, "3 ranks")
     check_nominal(args, d, outs[3])
+    check_statistics_ranks(args, d, camp)
     check("[truss-campaign] campaign" in p.stderr and "design values" in p.stderr and " ok" in p.stderr,
           "start banner, outcomes by status name and end summary with design values on stderr")
     # 90 ok runs: every P99.865 of the summary is flagged as standing on too few runs (an upper 95 %
@@ -221,6 +222,29 @@ def case_ranks(args):
     check(len(flagged) == 6 and all("from 90 ok runs: too few for a P99.865 (its 95 % bound needs 2218)" in ln
                                     for ln in flagged),
           f"end summary: each P99.865 from 90 runs flagged as too few ({flagged[:1]})")
+
+
+def check_statistics_ranks(args, d, camp):
+    """The statistics merged by 1, 2 and 3 ranks (--statistics-ranks, each a range of the columns)
+    against one rank merging them all: the same values and stored chunks, /stats equal to numpy's,
+    and /timing says how many merged."""
+    sets = ["--set", "ensemble.n_runs=3000", "--progress", "none"]
+    ref = os.path.join(d, "s_ref.h5")
+    p = mpirun(args, 1, [camp, "-o", ref, *sets])
+    check(p.returncode == 0, f"3,000 runs on 1 rank: exit 0 ({p.stderr.strip()[-200:]})")
+    for n in (1, 2, 3):
+        out = os.path.join(d, f"s{n}.h5")
+        p = mpirun(args, 4, [camp, "-o", out, *sets, "--statistics-ranks", str(n)])
+        check(p.returncode == 0, f"4 ranks, {n} statistics rank(s): exit 0 ({p.stderr.strip()[-200:]})")
+        same, why = same_values(datasets(ref), datasets(out))
+        diff = file_difference(ref, out, args.reencode)
+        check(same and not diff, f"4 ranks, {n} statistics rank(s): the 1-rank file's values and chunks {why}{diff}")
+        with h5py.File(out, "r") as f:
+            t = f["timing"].attrs
+            check(int(t["statistics_ranks"]) == n and float(t["stats_merge_cpu_s"]) > 0,
+                  f"/timing: statistics_ranks {int(t['statistics_ranks'])}, stats_merge_cpu_s {float(t['stats_merge_cpu_s']):.4f}")
+            if n == 3:
+                check_stats(f)
 
 
 def check_final_progress(stderr, f, what):
@@ -620,6 +644,10 @@ def case_bad_input(args):
     check(p.returncode == 2 and "does not exist" in p.stderr, "output directory missing: exit 2")
     p = mpirun(args, 2, [os.path.join(args.repo, TABLE1), "-o", os.path.join(d, "x.h5"), "--resume"])
     check(p.returncode == 2 and "no journal" in p.stderr, "--resume without a journal: exit 2")
+    p = mpirun(args, 3, [os.path.join(args.repo, TABLE1), "-o", os.path.join(d, "x.h5"), "--statistics-ranks", "3"])
+    check(p.returncode == 2 and "--statistics-ranks" in p.stderr and "at most 2" in p.stderr
+          and p.stderr.count("at most 2") == 1,
+          f"--statistics-ranks 3 on 3 ranks: exit 2, said once ({p.stderr.strip()[-160:]})")
     # A file-size limit (ulimit -f) below the journal's size: refused before any run. (Open MPI's
     # PMIx needs PMIX_MCA_gds=hash to start at all under such a limit: docs/campaigns.md.)
     def limit_file_size():

@@ -74,9 +74,9 @@ struct Session {
                                                 parallel::EngineOptions{});
     owner = std::make_unique<parallel::ChunkOwner>(
         ctx.record, store, collector->observed_fields(),
-        parallel::OwnerFiles{0, 0, out, file->temporary_path(), util::calc_crc32(kText), journal.get()},
+        parallel::OwnerFiles{0, 0, out, file->temporary_path(), util::calc_crc32(kText), journal.get(), {}},
         engine->sender(), 2.0);
-    engine->attach(*owner, collector.get(), 0);
+    engine->attach(*owner, collector.get(), {});
   }
   parallel::RestoreSummary restore() {
     const parallel::RestoreSummary s = collector->restore(
@@ -139,6 +139,24 @@ std::vector<std::int64_t> read_sessions(const std::string& out, std::int64_t n) 
 }
 
 }  // namespace
+
+// The statistics ranks by the documented rule: rank 0 alone on one rank and when it restores
+// chunks; else ranks 1 .. S, S = ceil((P - 1) / 32) unless asked, at most P - 1 and the columns.
+TEST_CASE("statistics ranks: where the statistics are merged", "[engine]") {
+  using parallel::find_stats_ranks;
+  auto is = [](results::StatsRanks r, int first, int count) { return r.first == first && r.count == count; };
+  CHECK(is(find_stats_ranks(0, 1, false, 395), 0, 1));
+  CHECK(is(find_stats_ranks(0, 8, true, 395), 0, 1));
+  CHECK(is(find_stats_ranks(3, 8, true, 395), 0, 1));
+  CHECK(is(find_stats_ranks(0, 2, false, 395), 1, 1));
+  CHECK(is(find_stats_ranks(0, 33, false, 395), 1, 1));
+  CHECK(is(find_stats_ranks(0, 34, false, 395), 1, 2));
+  CHECK(is(find_stats_ranks(0, 1001, false, 395), 1, 32));
+  CHECK(is(find_stats_ranks(0, 100000, false, 395), 1, 395));
+  CHECK(is(find_stats_ranks(3, 8, false, 395), 1, 3));
+  CHECK(is(find_stats_ranks(9, 8, false, 395), 1, 7));
+  CHECK(is(find_stats_ranks(5, 8, false, 2), 1, 2));
+}
 
 TEST_CASE("collector: a cut session resumed from its journals, memory bounded, plans checked", "[engine]") {
   const fs::path dir = fs::temp_directory_path() / ("truss_collector_" + std::to_string(::getpid()));

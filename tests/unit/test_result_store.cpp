@@ -371,6 +371,7 @@ struct Campaign {
   std::int64_t chunk;
   const RecordLayout& L;
   ChunkStats stats{L};  // the statistics rank's, here in the same process
+  std::vector<std::unique_ptr<ChunkStats>> shards;  // statistics ranks' ranges of the columns, if any
   Campaign(const std::string& name, const RecordLayout& layout, const StoreOptions& opts, int n_builders,
            std::vector<std::size_t> observed = {}, std::size_t metadata_cache = 0)
       : path((fs::temp_directory_path() / name).string()), chunk(opts.chunk_runs), L(layout) {
@@ -417,10 +418,17 @@ struct Campaign {
       while (auto p = b->pop_part()) parts.push_back(std::move(*p));
       while (auto k = b->pop_complete()) {
         if (!stats.seeded()) stats.seed(b->first_windows(*k));
+        for (auto& sh : shards)
+          if (!sh->seeded()) sh->seed(b->first_windows(*k, sh->columns()));
         EncodedChunk e;
         while (!b->encode_step(*k, stats.windows(), e)) {
         }
         const std::vector<ChunkAddress> at = store->place(e.report);
+        for (auto& sh : shards) {
+          const ColumnRange r = sh->columns();
+          sh->merge(e.report.index, {e.report.summaries.begin() + static_cast<std::ptrdiff_t>(r.begin),
+                                     e.report.summaries.begin() + static_cast<std::ptrdiff_t>(r.end)});
+        }
         stats.merge(e.report.index, e.report.summaries);
         for (std::size_t d = 0; d < at.size(); ++d)
           REQUIRE(::pwrite(fd, e.bytes[d].data(), e.bytes[d].size(), static_cast<off_t>(at[d].offset)) ==
@@ -660,31 +668,104 @@ TEST_CASE("statistics rank: summaries merged once each; the statistics travel bi
   ChunkStats fresh(L);
   CHECK_THROWS_WITH(fresh.merge(0, e.report.summaries), Catch::Contains("before the first windows"));
 
-  StreamedStats s = c.close();
-  REQUIRE(!s.f64.empty());
-  REQUIRE(!s.bays.empty());
-  s.f64[0].mean = -0.0;  // values whose bits a careless copy would change
-  s.f64[0].percentiles[2] = std::numeric_limits<double>::quiet_NaN();
-  s.f64_resolved[0] = 0;
-  s.bays.back().back().std = -std::numeric_limits<double>::infinity();
+  c.close();
+  StatsPart s = c.stats.calc_part(3);
+  REQUIRE(s.stats.size() > 3);
+  s.stats[0].mean = -0.0;  // values whose bits a careless copy would change
+  s.stats[0].percentiles[2] = std::numeric_limits<double>::quiet_NaN();
+  s.resolved[0] = 0;
+  s.stats.back().std = -std::numeric_limits<double>::infinity();
+  s.merge_cpu_s = 0.125;
   const std::string bytes = to_bytes(s);
-  const StreamedStats back = read_streamed_stats(bytes);
+  const StatsPart back = read_stats_part(bytes);
   CHECK(to_bytes(back) == bytes);
-  CHECK(std::signbit(back.f64[0].mean));
-  CHECK(std::isnan(back.f64[0].percentiles[2]));
-  CHECK(back.f64_resolved == s.f64_resolved);
-  CHECK(back.bays_resolved == s.bays_resolved);
+  CHECK(std::signbit(back.stats[0].mean));
+  CHECK(std::isnan(back.stats[0].percentiles[2]));
+  CHECK(back.resolved == s.resolved);
   CHECK(back.kept_values == s.kept_values);
-  REQUIRE(back.bays.size() == s.bays.size());
-  for (std::size_t f = 0; f < s.bays.size(); ++f) {
-    REQUIRE(back.bays[f].size() == s.bays[f].size());
-    for (std::size_t b = 0; b < s.bays[f].size(); ++b) {
-      CHECK(back.bays[f][b].count == s.bays[f][b].count);
-      CHECK(std::memcmp(&back.bays[f][b].max, &s.bays[f][b].max, 8) == 0);
-    }
+  CHECK(back.first == 0);
+  CHECK(back.merge_cpu_s == 0.125);
+  REQUIRE(back.stats.size() == s.stats.size());
+  for (std::size_t k = 0; k < s.stats.size(); ++k) {
+    CHECK(back.stats[k].count == s.stats[k].count);
+    CHECK(std::memcmp(&back.stats[k].max, &s.stats[k].max, 8) == 0);
   }
-  CHECK_THROWS_AS(read_streamed_stats(bytes.substr(0, bytes.size() - 1)), std::runtime_error);
-  CHECK_THROWS_AS(read_streamed_stats(bytes + "x"), std::runtime_error);
+  CHECK_THROWS_AS(read_stats_part(bytes.substr(0, bytes.size() - 1)), std::runtime_error);
+  CHECK_THROWS_AS(read_stats_part(bytes + "x"), std::runtime_error);
+}
+
+// Statistics ranks (engine.hpp): S ranks each merging a contiguous range of the columns, their
+// parts assembled on rank 0, give what one rank merging every column gives, bit for bit.
+TEST_CASE("statistics ranks: ranges of the columns, their parts assembled as one rank's", "[campaign][store]") {
+  // The ranges by hand: 10 columns on 3 ranks from rank 1 are 3, 3 and 4 columns, in order.
+  const StatsRanks three{1, 3};
+  CHECK(three.find_columns(1, 10) == ColumnRange{0, 3});
+  CHECK(three.find_columns(2, 10) == ColumnRange{3, 6});
+  CHECK(three.find_columns(3, 10) == ColumnRange{6, 10});
+  CHECK(!three.holds(0));
+  CHECK(three.holds(3));
+  CHECK(!three.holds(4));
+  for (int count = 1; count <= 9; ++count) {  // every column once, sizes within one of each other
+    const StatsRanks r{1, count};
+    std::size_t next = 0, lo = 100, hi = 0;
+    for (int rank = 1; rank <= count; ++rank) {
+      const ColumnRange c = r.find_columns(rank, 9);
+      CHECK(c.begin == next);
+      next = c.end;
+      lo = std::min(lo, c.size());
+      hi = std::max(hi, c.size());
+    }
+    CHECK(next == 9);
+    CHECK(hi - lo <= 1);
+  }
+
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", 40));
+  const RecordLayout& L = ctx.record;
+  Campaign c("truss_test_store_stats_ranks.h5", L, StoreOptions{16, 1}, 2);
+  const std::size_t n_stats = ChunkColumns(L).n_stats;
+  REQUIRE(n_stats > 3);
+  const StatsRanks ranks{1, 3};
+  for (int rank = 1; rank <= 3; ++rank)
+    c.shards.push_back(std::make_unique<ChunkStats>(L, ranks.find_columns(rank, n_stats)));
+  c.round(0, 0, 40);
+  for (std::int64_t r = 0; r < 40; ++r) c.add(test::distinct_record(L, r), 0);
+  // Each range's windows are the slice of one rank's (a column's statistics are its own).
+  const auto all = c.stats.windows();
+  for (const auto& sh : c.shards) {
+    const auto w = sh->windows();
+    REQUIRE(w.size() == sh->columns().size());
+    for (std::size_t k = 0; k < w.size(); ++k)
+      for (std::size_t t = 0; t < w[k].size(); ++t) {
+        CHECK(w[k][t].lo == all[sh->columns().begin + k][t].lo);
+        CHECK(w[k][t].hi == all[sh->columns().begin + k][t].hi);
+      }
+  }
+  const StreamedStats one = c.close();
+  std::vector<StatsPart> parts;
+  for (int i : {2, 0, 1}) parts.push_back(read_stats_part(to_bytes(c.shards[static_cast<std::size_t>(i)]->calc_part(3))));
+  const StreamedStats assembled = assemble_streamed_stats(L, parts);
+  auto bits = [](const StreamedStats& s) {  // every number's bytes, in order
+    std::string out;
+    auto put = [&](const truss::statistics::Stats& x, std::uint8_t ok) {
+      out.append(reinterpret_cast<const char*>(&x.count), 8);
+      for (double v : {x.mean, x.std, x.min, x.max}) out.append(reinterpret_cast<const char*>(&v), 8);
+      for (double v : x.percentiles) out.append(reinterpret_cast<const char*>(&v), 8);
+      out.push_back(static_cast<char>(ok));
+    };
+    for (std::size_t i = 0; i < s.f64.size(); ++i) put(s.f64[i], s.f64_resolved[i]);
+    for (std::size_t f = 0; f < s.bays.size(); ++f)
+      for (std::size_t b = 0; b < s.bays[f].size(); ++b) put(s.bays[f][b], s.bays_resolved[f][b]);
+    return out;
+  };
+  CHECK(assembled.f64.size() == one.f64.size());
+  CHECK(assembled.bays.size() == one.bays.size());
+  CHECK(bits(assembled) == bits(one));
+  CHECK(assembled.kept_values == one.kept_values);
+  // A part missing (the last; one in the middle), or given twice: refused (parts: ranks 3, 1, 2).
+  CHECK_THROWS_WITH(assemble_streamed_stats(L, {parts[1], parts[2]}), Catch::Contains("columns of"));
+  CHECK_THROWS_WITH(assemble_streamed_stats(L, {parts[0], parts[1]}), Catch::Contains("a part from column"));
+  CHECK_THROWS_WITH(assemble_streamed_stats(L, {parts[0], parts[1], parts[2], parts[0]}), Catch::Contains("a part from column"));
+  CHECK_THROWS_AS(ChunkStats(L, ColumnRange{0, n_stats + 1}), std::invalid_argument);
 }
 
 TEST_CASE("result store: placing chunks while HDF5 writes its global heap", "[campaign][store]") {
