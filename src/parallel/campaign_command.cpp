@@ -81,8 +81,8 @@ std::optional<int> parse_command(int argc, char** argv, bool root, int size, Com
   app.add_option("--max-batch", o.engine.max_batch, "Largest batch of runs handed to a rank at once")
       ->check(CLI::Range(1, 100000));
   app.add_option("--statistics-ranks", o.engine.statistics_ranks,
-                 fmt::format("Ranks that merge the statistics, each a share of the columns (ranks 1 to N; 0: one per {} "
-                             "ranks; rank 0 alone on one rank and when resuming)", kRanksPerStatisticsRank))
+                 fmt::format("Ranks that merge the statistics, each a share of the columns (ranks 1 to N; 0: "
+                             "one per {} ranks; rank 0 alone on one rank and when resuming)", kRanksPerStatisticsRank))
       ->check(CLI::Range(0, 1 << 20));
   app.add_option("--compression", o.compression, "zlib level (0-9) of the results file's per-run datasets; 0 stores "
                  "them uncompressed (largest file, least work for rank 0)")->check(CLI::Range(0, 9));
@@ -97,10 +97,10 @@ std::optional<int> parse_command(int argc, char** argv, bool root, int size, Com
   try {
     app.parse(argc, argv);
     if (o.output_path.empty() && !o.dry_run) throw CLI::RequiredError("--output");
-    if (o.engine.statistics_ranks > std::max(1, size - 1))
-      throw CLI::ValidationError("--statistics-ranks", fmt::format("{} statistics ranks on {} rank{}: at most {} (ranks 1 "
-                                 "to {})", o.engine.statistics_ranks, size, size > 1 ? "s" : "", std::max(1, size - 1),
-                                 std::max(1, size - 1)));
+    if (const int most = std::max(1, size - 1); o.engine.statistics_ranks > most)
+      throw CLI::ValidationError("--statistics-ranks", fmt::format("{} statistics ranks on {} rank{}: at most {}",
+                                                                   o.engine.statistics_ranks, size, size > 1 ? "s" : "",
+                                                                   most));
   } catch (const CLI::ParseError& e) {
     int rc = 0;
     if (root) {

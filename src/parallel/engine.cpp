@@ -21,6 +21,12 @@
 
 namespace truss::parallel {
 
+double detail::thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
 using namespace detail;
 
 namespace {
@@ -44,12 +50,6 @@ class ScopeTimer {
   double& sum_;
   Clock::time_point t0_ = Clock::now();
 };
-
-double thread_cpu_s() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // Rank 0's fatal error: the results file's temporary name removed (the journal keeps every finished
 // run for --resume), then the job aborted.
@@ -80,69 +80,6 @@ class Rank0Server {
   int stats_ranks_;
   std::vector<results::StatsPart> stats_parts_;  // until every statistics rank's is in
 };
-
-// A statistics rank's side (results/chunk_stats.hpp): the owners' summaries of its columns
-// merged; the windows they summarise against, the first from the first owner that asks for them,
-// then after each merge the current ones back to that chunk's owner; once every chunk is merged,
-// its columns' statistics to rank 0. Ranks 1 .. S on more than one rank (rank 0 keeps to the
-// schedule and the chunks' placement), rank 0 alone on one rank and in a session that restored
-// chunks before the others joined (results/chunk_stats.hpp: the statistics are the same wherever
-// and in how many parts they are merged).
-class StatsServer {
- public:
-  StatsServer(Node& node, const campaign::RecordLayout& layout, results::ColumnRange columns)
-      : node_(node), stats_(layout, columns) {}
-  void handle(int tag, int source, std::string& bytes);
-  static bool handles(int tag) { return tag == kTagAskWindows || tag == kTagSeed || tag == kTagSummary; }
-  // Its statistics to rank 0 once the campaign's n_chunks are all merged: true when it sends them.
-  bool send_if_complete(std::int64_t n_chunks);
-  bool sent() const { return sent_; }
-
- private:
-  void send_windows(int dest) {
-    results::ChunkPlacement p;
-    p.index = -1;
-    p.windows = stats_.windows();
-    node_.send(dest, kTagWindows, results::to_bytes(p));
-  }
-  Node& node_;
-  results::ChunkStats stats_;
-  std::vector<int> want_windows_;  // owners waiting for the first windows
-  bool asked_seed_ = false, sent_ = false;
-  results::ChunkReport summary_;   // its summaries' room used again
-  double merge_cpu_s_ = 0.0;       // thread CPU in handle()
-};
-
-void StatsServer::handle(int tag, int source, std::string& bytes) {
-  const double cpu0 = thread_cpu_s();
-  if (tag == kTagSummary) {
-    results::read_chunk_report(bytes, summary_);
-    stats_.merge(summary_.index, summary_.summaries);
-    send_windows(source);
-  } else if (tag == kTagAskWindows) {
-    if (stats_.seeded()) {
-      send_windows(source);
-    } else {
-      want_windows_.push_back(source);
-      if (!asked_seed_) node_.send(source, kTagAskSeed, {});
-      asked_seed_ = true;
-    }
-  } else if (tag == kTagSeed) {
-    stats_.seed(results::read_chunk_placement(bytes).windows);
-    for (int w : want_windows_) send_windows(w);
-    want_windows_.clear();
-  }
-  merge_cpu_s_ += thread_cpu_s() - cpu0;
-}
-
-bool StatsServer::send_if_complete(std::int64_t n_chunks) {
-  if (sent_ || stats_.merged() != n_chunks) return false;
-  results::StatsPart part = stats_.calc_part(n_chunks);
-  part.merge_cpu_s = merge_cpu_s_;
-  node_.send(0, kTagStats, results::to_bytes(part));
-  sent_ = true;
-  return true;
-}
 
 // Rank 0 in one round: hands out the round's runs in index order in guided batches, computes one
 // run at a time itself, and between its runs serves the messages (answering a batch done at once

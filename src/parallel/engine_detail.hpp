@@ -1,5 +1,5 @@
-// Internals shared by the engine's parts: the message tags, a rank's messaging (Node) and the
-// sides of a round's schedule (engine.cpp: rank 0; worker.cpp).
+// Internals shared by the engine's parts: the message tags, a rank's messaging (Node), the sides
+// of a round's schedule (engine.cpp: rank 0; worker.cpp) and a statistics rank's (stats_server.cpp).
 #pragma once
 #include <mpi.h>
 
@@ -16,11 +16,13 @@
 #include <vector>
 
 #include "parallel/engine.hpp"
+#include "results/chunk_stats.hpp"
 
 namespace truss::parallel::detail {
 
 using Clock = std::chrono::steady_clock;
 inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double thread_cpu_s();  // the calling thread's CPU time, s
 
 inline constexpr int kTagWork = 11;         // rank 0 -> worker: runs as (i64 first, i64 count); none: end of round
 inline constexpr int kTagRecords = 12;      // any -> owner: sealed journal frames of its chunks' runs
@@ -28,13 +30,13 @@ inline constexpr int kTagDone = 13;         // worker -> rank 0: a batch is comp
 inline constexpr int kTagPart = 14;         // owner -> rank 0: a round part (results/chunk_messages.hpp)
 inline constexpr int kTagChunk = 15;        // owner -> rank 0: a complete chunk's report (no summaries)
 inline constexpr int kTagAskWindows = 16;   // owner -> statistics rank: the windows of its columns, please
-inline constexpr int kTagSeed = 17;         // owner -> statistics rank: its columns' first windows (a placement of no chunk)
+inline constexpr int kTagSeed = 17;         // owner -> statistics rank: its columns' first windows (placement -1)
 inline constexpr int kTagAskSeed = 18;      // statistics rank -> owner: send the first windows
 inline constexpr int kTagPlacement = 19;    // rank 0 -> owner: where a chunk goes
-inline constexpr int kTagWindows = 20;      // statistics rank -> owner: its columns' windows (a placement of no chunk)
+inline constexpr int kTagWindows = 20;      // statistics rank -> owner: its columns' windows (placement -1)
 inline constexpr int kTagFinished = 21;     // owner -> rank 0: its chunks written and synced
 inline constexpr int kTagSummary = 22;      // owner -> statistics rank: a complete chunk's summaries of its columns
-inline constexpr int kTagStats = 23;        // statistics rank -> rank 0: its columns' statistics (StatsPart), every chunk merged
+inline constexpr int kTagStats = 23;        // statistics rank -> rank 0: its columns' statistics (StatsPart)
 inline constexpr int kTagDrained = 24;      // rank 0 -> worker: i64 round, whose last runs are handed out
 inline constexpr int kTagLast = kTagDrained;
 
@@ -144,6 +146,33 @@ inline constexpr double kServeSliceS = 1e-3;
 class WorkQueue;
 void run_worker_round(Node& node, WorkQueue& work, const methods::RoundPlan& plan, const Evaluate& evaluate,
                       const std::function<bool(double)>& serve);
+
+// A statistics rank's side (results/chunk_stats.hpp): the owners' summaries of its columns
+// merged; the windows they summarise against, the first from the first owner that asks for them,
+// then after each merge the current ones back to that chunk's owner; once every chunk is merged,
+// its columns' statistics to rank 0. Ranks 1 .. S on more than one rank (rank 0 keeps to the
+// schedule and the chunks' placement), rank 0 alone on one rank and in a session that restored
+// chunks before the others joined (results/chunk_stats.hpp: the statistics are the same wherever
+// and in how many parts they are merged).
+class StatsServer {
+ public:
+  StatsServer(Node& node, const campaign::RecordLayout& layout, results::ColumnRange columns)
+      : node_(node), stats_(layout, columns) {}
+  void handle(int tag, int source, std::string& bytes);
+  static bool handles(int tag) { return tag == kTagAskWindows || tag == kTagSeed || tag == kTagSummary; }
+  // Its statistics to rank 0 once the campaign's n_chunks are all merged: true when it sends them.
+  bool send_if_complete(std::int64_t n_chunks);
+  bool sent() const { return sent_; }
+
+ private:
+  void send_windows(int dest);
+  Node& node_;
+  results::ChunkStats stats_;
+  std::vector<int> want_windows_;  // owners waiting for the first windows
+  bool asked_seed_ = false, sent_ = false;
+  results::ChunkReport summary_;   // its summaries' room used again
+  double merge_cpu_s_ = 0.0;       // thread CPU in handle()
+};
 
 // The batches rank 0 sent a worker, in order; an empty one ends a round. And the last round whose
 // runs rank 0 has all handed out (kTagDrained; by round, since with records paused the rank

@@ -63,7 +63,9 @@ StatsPart ChunkStats::calc_part(std::int64_t n_chunks) const {
   return p;
 }
 
-StreamedStats ChunkStats::calc_stats(std::int64_t n_chunks) const { return assemble_streamed_stats(L_, {calc_part(n_chunks)}); }
+StreamedStats ChunkStats::calc_stats(std::int64_t n_chunks) const {
+  return assemble_streamed_stats(L_, {calc_part(n_chunks)});
+}
 
 StreamedStats assemble_streamed_stats(const campaign::RecordLayout& layout, std::vector<StatsPart> parts) {
   std::sort(parts.begin(), parts.end(), [](const StatsPart& a, const StatsPart& b) { return a.first < b.first; });
@@ -89,9 +91,9 @@ StreamedStats assemble_streamed_stats(const campaign::RecordLayout& layout, std:
       s.f64_resolved.push_back(resolved[k]);
       continue;
     }
-    s.bays.emplace_back(all.begin() + static_cast<std::ptrdiff_t>(k), all.begin() + static_cast<std::ptrdiff_t>(k + c.width));
-    s.bays_resolved.emplace_back(resolved.begin() + static_cast<std::ptrdiff_t>(k),
-                                 resolved.begin() + static_cast<std::ptrdiff_t>(k + c.width));
+    const auto from = static_cast<std::ptrdiff_t>(k), to = static_cast<std::ptrdiff_t>(k + c.width);
+    s.bays.emplace_back(all.begin() + from, all.begin() + to);
+    s.bays_resolved.emplace_back(resolved.begin() + from, resolved.begin() + to);
   }
   return s;
 }

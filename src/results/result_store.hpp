@@ -2,7 +2,7 @@
 // adds rounds adds rows), and for each complete chunk that a builder reports (chunk_builder.hpp) it
 // places the chunk's datasets in the file (HDF5 allocates and indexes them through the placement
 // driver, placement_driver.hpp; the builder writes their bytes there), writes the chunk's messages
-// (the summaries of its statistics columns go to the statistics rank, chunk_stats.hpp). Its work is
+// (the summaries of its statistics columns go to the statistics ranks, chunk_stats.hpp). Its work is
 // per chunk, never per run; what it
 // writes does not depend on which rank built a chunk or when: the file holds the same values, and
 // the same chunk bytes, on any number of ranks and after --resume.
@@ -41,7 +41,7 @@ class ResultStore {
   std::int64_t chunk_runs() const { return chunk_; }
 
   // A complete chunk of the rows so far: its datasets placed (their addresses, in dataset order)
-  // and its messages written (its statistics are the statistics rank's: chunk_stats.hpp). Throws
+  // and its messages written (its statistics are the statistics ranks': chunk_stats.hpp). Throws
   // std::runtime_error for a chunk placed twice or out of range, a report of another row count or shape.
   std::vector<ChunkAddress> place(const ChunkReport& r);
   std::int64_t chunks_placed() const { return n_placed_; }
