@@ -23,6 +23,7 @@
 #include "io/h5_util.hpp"
 #include "io/scene_toml.hpp"
 #include "parallel/campaign_output.hpp"
+#include "parallel/stats_read_back.hpp"
 #include "parallel/engine_detail.hpp"
 #include "parallel/interrupt.hpp"
 #include "parallel/owner.hpp"
@@ -115,16 +116,22 @@ std::optional<int> parse_command(int argc, char** argv, bool root, int size, Com
   return std::nullopt;
 }
 
+// Where the campaign's tail began on rank 0 (after the last chunk written): wall and CPU time.
+struct TailStart {
+  std::chrono::steady_clock::time_point wall = std::chrono::steady_clock::now();
+  std::clock_t cpu = std::clock();  // rank 0's CPU time: the tail without the other processes' share
+};
+
 // Rank 0, every run in: histories, the nominal run, statistics, the method's results, the file
 // committed and the journal removed. Returns the exit status.
 int write_results(const CommandOptions& o, const campaign::CampaignContext& ctx, const methods::Method& method,
                   const std::string& campaign_text, Rank0& r0, int size, std::chrono::steady_clock::time_point wall0,
-                  const EngineResult& done, std::int64_t peak_chunks) {
+                  const EngineResult& done, std::int64_t peak_chunks, const TailStart& tail) {
   const SessionState& st = r0.collector->session();
   const campaign::CampaignOptions& c = ctx.options;
   try {
-    const auto t_finish = std::chrono::steady_clock::now();
-    const std::clock_t cpu_finish = std::clock();  // rank 0's CPU time: the tail without the other processes' share
+    const auto t_finish = tail.wall;
+    const std::clock_t cpu_finish = tail.cpu;
     std::vector<std::pair<std::int64_t, sim::RunResult>> histories;
     std::vector<double> u(static_cast<std::size_t>(ctx.dims.total));
     for (std::int64_t run : c.output.history_runs)
@@ -395,12 +402,14 @@ int run_campaign_command(int argc, char** argv, MPI_Comm comm, const methods::Me
   }
   long long peak = static_cast<long long>(owner->peak_chunks()), peak_all = 0;
   MPI_Reduce(&peak, &peak_all, 1, MPI_LONG_LONG, MPI_MAX, 0, comm);
+  const TailStart tail;
+  done.schedule.stats_read_back_ranks = read_back_statistics(comm, ctx->record, root ? &r0 : nullptr);
   int status = kExitOk;
   if (root) {
     try {
       r0.collector->tick(true);
       r0.progress->finish(r0.collector->n_computed(), r0.collector->computed_counts());
-      status = write_results(o, *ctx, *method, campaign_text, r0, size, wall0, done, peak_all);
+      status = write_results(o, *ctx, *method, campaign_text, r0, size, wall0, done, peak_all, tail);
     } catch (const std::exception& e) {
       std::cerr << "error: " << e.what() << " (the journal " << r0.journal->path() << " keeps every run)\n";
       status = kExitIoError;

@@ -34,6 +34,7 @@ struct ScheduleSummary {
   std::int64_t runs_by_rank0 = 0, runs_by_workers = 0;
   int statistics_ranks = 1;        // the ranks that merged the statistics, each a range of the columns
   double stats_merge_cpu_s = 0;    // the largest of their thread CPU times merging
+  int stats_read_back_ranks = 0;   // ranks that read statistics columns back at the end (read_back.hpp)
   double synthetic_run_cost_s = -1;  // >= 0: a bench-only campaign of sleeping runs (no physics)
 };
 

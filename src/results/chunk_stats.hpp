@@ -26,6 +26,7 @@ struct StreamedStats {
   std::vector<std::vector<statistics::Stats>> bays;  // [field][bay - 1]
   std::vector<std::vector<std::uint8_t>> bays_resolved;
   std::size_t kept_values = 0;  // values held for the percentiles, all columns
+  std::int64_t read_back = 0;   // columns resolved from the stored file (read_back.hpp)
 };
 
 // Where the statistics columns are merged: `count` statistics ranks first .. first + count - 1,

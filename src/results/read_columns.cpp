@@ -1,13 +1,20 @@
 // Reading the finished /runs back (result_store.hpp): columns for the Sobol' indices and the
-// statistics a streamed window could not resolve, rows for subset simulation's failure samples;
-// chunk by chunk through the results' codec.
+// statistics a streamed window could not resolve (on rank 0, or by any rank from the stored chunks'
+// places: read_back.hpp), rows for subset simulation's failure samples; chunk by chunk through the
+// results' codec.
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <numeric>
 #include <stdexcept>
 
 #include <fmt/format.h>
 
 #include "results/chunk_codec.hpp"
+#include "results/read_back.hpp"
 #include "results/result_store.hpp"
 
 namespace truss::results {
@@ -49,6 +56,18 @@ class ChunkReader {
   std::int64_t n_rows() const { return n_rows_; }
   std::int64_t chunk_rows() const { return chunk_rows_; }
   std::int64_t width() const { return width_; }
+  bool filtered() const { return filtered_; }
+  // Where the chunk whose first row is `first` is stored (its bytes are read by any process).
+  ReadBackJob::Chunk find_stored(std::int64_t first) const {
+    const hsize_t offset[2] = {static_cast<hsize_t>(first), 0};
+    unsigned mask = 0;
+    haddr_t addr = HADDR_UNDEF;
+    hsize_t nbytes = 0;
+    check(H5Dget_chunk_info_by_coord(ds_.get(), offset, &mask, &addr, &nbytes), "where a chunk of " + path_ + " is");
+    if (addr == HADDR_UNDEF || nbytes == 0)
+      throw std::runtime_error(fmt::format("{}: the chunk at row {} is not stored", path_, first));
+    return {static_cast<std::uint64_t>(addr), static_cast<std::uint64_t>(nbytes), mask};
+  }
   // The chunk whose first row is `first`, chunk_rows x width doubles.
   const double* read(std::int64_t first) {
     const hsize_t offset[2] = {static_cast<hsize_t>(first), 0};
@@ -116,6 +135,83 @@ std::vector<double> read_f64_rows(hid_t file, const std::string& path, const std
     if (at != first) chunk = reader.read(first = at);
     std::copy_n(chunk + (r - at) * width, width, out.data() + k * static_cast<std::size_t>(width));
   }
+  return out;
+}
+
+namespace {
+
+// A dataset's job: its chunks' places and the columns not yet resolved (resolved[c] == 0).
+void add_job(hid_t file, const std::string& path, std::int64_t n, std::int32_t group, std::int64_t first_index,
+             const std::vector<std::uint8_t>& resolved, std::vector<ReadBackJob>& jobs) {
+  if (std::all_of(resolved.begin(), resolved.end(), [](std::uint8_t r) { return r != 0; })) return;
+  ChunkReader reader(file, path);
+  ReadBackJob job;
+  job.path = path;
+  job.rows = n;
+  job.chunk_rows = reader.chunk_rows();
+  job.width = reader.width();
+  job.filtered = reader.filtered();
+  if (n > reader.n_rows() || static_cast<std::int64_t>(resolved.size()) != reader.width())
+    throw std::out_of_range(fmt::format("{}: {} columns of {}, {} rows of {}", path, resolved.size(), reader.width(), n,
+                                        reader.n_rows()));
+  for (std::int64_t first = 0; first < n; first += reader.chunk_rows()) job.chunks.push_back(reader.find_stored(first));
+  for (std::size_t c = 0; c < resolved.size(); ++c)
+    if (!resolved[c])
+      job.columns.push_back({static_cast<std::int64_t>(c), group, first_index + static_cast<std::int64_t>(c)});
+  jobs.push_back(std::move(job));
+}
+
+}  // namespace
+
+std::vector<ReadBackJob> find_read_back(hid_t file, const campaign::RecordLayout& layout, const StreamedStats& s,
+                                        std::int64_t n) {
+  std::vector<ReadBackJob> jobs;
+  if (n == 0) return jobs;
+  std::size_t k = 0, j = 0;  // the k-th float64 output, the j-th per-bay one
+  for (const campaign::Field& f : layout.fields()) {
+    if (!f.statistics) continue;
+    const std::string path = std::string(campaign::group_path(f.group)) + "/" + f.name;
+    if (f.scale == campaign::Scale::none) {
+      add_job(file, path, n, -1, static_cast<std::int64_t>(k), {s.f64_resolved.at(k)}, jobs);
+      ++k;
+    } else {
+      add_job(file, path, n, static_cast<std::int32_t>(j), 0, s.bays_resolved.at(j), jobs);
+      ++j;
+    }
+  }
+  return jobs;
+}
+
+std::vector<ReadBackAnswer> calc_read_back(const std::string& path, const ReadBackJob& job,
+                                           const std::vector<std::uint8_t>& ok) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw std::runtime_error(fmt::format("{}: {}", path, std::strerror(errno)));
+  std::vector<std::vector<double>> cols(job.columns.size(), std::vector<double>(static_cast<std::size_t>(job.rows)));
+  std::string stored, raw;
+  ChunkCodec codec;
+  const auto raw_bytes = static_cast<std::size_t>(job.chunk_rows * job.width) * sizeof(double);
+  try {
+    for (std::size_t c = 0; c < job.chunks.size(); ++c) {
+      const ReadBackJob::Chunk& at = job.chunks[c];
+      stored.resize(at.bytes);
+      if (::pread(fd, stored.data(), at.bytes, static_cast<off_t>(at.offset)) != static_cast<ssize_t>(at.bytes))
+        throw std::runtime_error(fmt::format("{}: a chunk of {} at byte {} cannot be read", path, job.path, at.offset));
+      codec.decode(stored, at.mask, job.filtered, sizeof(double), raw_bytes, raw);
+      const auto* v = reinterpret_cast<const double*>(raw.data());
+      const std::int64_t first = static_cast<std::int64_t>(c) * job.chunk_rows;
+      const std::int64_t rows = std::min(job.chunk_rows, job.rows - first);
+      for (std::size_t j = 0; j < job.columns.size(); ++j)
+        for (std::int64_t i = 0; i < rows; ++i)
+          cols[j][static_cast<std::size_t>(first + i)] = v[i * job.width + job.columns[j].column];
+    }
+  } catch (...) {
+    ::close(fd);
+    throw;
+  }
+  ::close(fd);
+  std::vector<ReadBackAnswer> out;
+  for (std::size_t j = 0; j < job.columns.size(); ++j)
+    out.push_back({job.columns[j].group, job.columns[j].index, statistics::calc_stats(cols[j], ok).percentiles});
   return out;
 }
 

@@ -79,7 +79,7 @@ std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats s
   Handle stats = create_group(file, "stats");
   write_stats_attributes(stats.get(), status);
   Handle bays = create_group(stats.get(), "bays");
-  std::int64_t read_back = 0;
+  std::int64_t read_back = streamed.read_back;  // resolved from the file before (read_back.hpp)
   auto resolve = [&](Stats& st, const std::vector<double>& column) {
     st.percentiles = statistics::calc_stats(column, ok).percentiles;
     ++read_back;
@@ -195,6 +195,7 @@ void write_timing_attributes(hid_t file, const ScheduleSummary& s, std::int64_t 
   // Columns whose percentiles the end read back from /runs (their order statistics were outside
   // the streamed windows): depends on which chunk was written first, hence here.
   write_int_attribute(g.get(), "stats_columns_read_back", stats_read_back);
+  write_int_attribute(g.get(), "stats_read_back_ranks", s.stats_read_back_ranks);
   if (s.synthetic_run_cost_s >= 0) write_double_attribute(g.get(), "synthetic_run_cost_s", s.synthetic_run_cost_s);
 }
 

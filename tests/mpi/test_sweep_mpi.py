@@ -41,7 +41,9 @@ p(sigma) = Phi(-x / sigma), 1e-6 at sigma* = x / 4.7534.
   20 seeds the refined allowable lies on the safe side of the true crossing and its interval holds
   it in at least 18 each. With a target no listed value's bound reaches, nothing is refined and
   /sweep says why.
-- ranks: the same file (every dataset but the timing) on 1 and 3 ranks, with a refinement.
+- ranks: the same file (every dataset but the timing) on 1 and 3 ranks, with a refinement; and a
+  sweep of motor runs whose chains' columns are read back at the end by the 3 ranks, each its share
+  of the datasets: the 1-rank file, /stats equal to numpy's.
 - resume: kill -9 of the whole job during the refinement, --resume: the same file.
 - standalone: value k of the sweep against the campaign without [sweep] at that value
   (--set drive.stall_torque_Nm=x_k, ensemble.master_seed = /sweep/master_seed[k]): /sweep/inner/<k>
@@ -506,6 +508,20 @@ def case_ranks(args):
         check(f.attrs["n_rounds"] > 10 and "sweep" in f and f["sweep/refinement"][:].sum() == 2,
               f"{f.attrs['n_rounds']} rounds, /sweep written, 2 values placed by the refinement")
     check_allowable_and_report(args, outs[3], d)
+    # Motor runs (the simulator): the chains' outputs drift, so some /stats columns are read back.
+    motor = os.path.join(args.repo, "campaigns", "motor_sizing.toml")
+    sets = ["ensemble.method=subset", "ensemble.importance=false", "sweep.from=0.03", "sweep.to=0.034",
+            "sweep.count=2", "sweep.refine=0", "ensemble.subset.max_levels=3", "ensemble.subset.n_per_level=500"]
+    for ranks in (1, 3):
+        outs[ranks] = os.path.join(d, f"motor_r{ranks}.h5")
+        p = run(args, outs[ranks], ranks=ranks, sets=sets, campaign=motor, cost=None)
+        check(p.returncode in (0, 3, 6), f"motor runs, {ranks} ranks: the file written ({p.stderr.strip()[-200:]})")
+    same, why = same_values(datasets(outs[1]), datasets(outs[3]))
+    check(same, f"motor runs: 1 and 3 ranks, the same datasets ({why})")
+    with h5py.File(outs[3], "r") as f:
+        rb, by = int(f["timing"].attrs["stats_columns_read_back"]), int(f["timing"].attrs["stats_read_back_ranks"])
+        check(rb >= 3 and by == 3, f"motor runs, 3 ranks: {rb} columns read back at the end, by {by} ranks")
+        check_stats(f, streamed=False)
 
 
 def crossing(x, y, target):

@@ -28,6 +28,7 @@
 #include "results/chunk_codec.hpp"
 #include "results/chunk_builder.hpp"
 #include "results/placement_driver.hpp"
+#include "results/read_back.hpp"
 #include "results/result_store.hpp"
 
 using namespace truss::campaign;
@@ -766,6 +767,69 @@ TEST_CASE("statistics ranks: ranges of the columns, their parts assembled as one
   CHECK_THROWS_WITH(assemble_streamed_stats(L, {parts[0], parts[1]}), Catch::Contains("a part from column"));
   CHECK_THROWS_WITH(assemble_streamed_stats(L, {parts[0], parts[1], parts[2], parts[0]}), Catch::Contains("a part from column"));
   CHECK_THROWS_AS(ChunkStats(L, ColumnRange{0, n_stats + 1}), std::invalid_argument);
+}
+
+// The read-back of statistics columns by any rank (read_back.hpp): the jobs found from the file's
+// chunk index, the chunks read at those places and decoded by the codec, against HDF5's own filters
+// reading the same dataset (H5Dread) and statistics::calc_stats; the jobs' shares and messages.
+TEST_CASE("statistics read back by the ranks: the stored chunks at their places, as HDF5 reads them",
+          "[campaign][store]") {
+  const CampaignContext ctx(test::small_campaign("latin_hypercube", 40));
+  const RecordLayout& L = ctx.record;
+  const std::int64_t n = 40;
+  Campaign c("truss_test_store_read_back.h5", L, StoreOptions{16, 1}, 2);
+  c.round(0, 0, n);
+  for (std::int64_t r = 0; r < n; ++r) c.add(test::distinct_record(L, r), 0);
+  StreamedStats s = c.close();
+  // Every column unresolved: a job per statistics dataset.
+  for (auto& r : s.f64_resolved) r = 0;
+  for (auto& b : s.bays_resolved) std::fill(b.begin(), b.end(), 0);
+  const StoreFile f(c.path);
+  const std::vector<ReadBackJob> jobs = find_read_back(f.file, L, s, n);
+  REQUIRE(jobs.size() == s.f64.size() + s.bays.size());
+  std::vector<std::uint8_t> ok(static_cast<std::size_t>(n));
+  const auto status = read_status(f.file, n);
+  for (std::size_t i = 0; i < ok.size(); ++i) ok[i] = status[i] == 0;
+  REQUIRE(std::count(ok.begin(), ok.end(), 1) > 10);
+  ReadBackPlan plan{c.path, ok, jobs};
+  const ReadBackPlan back = read_read_back_plan(to_bytes(plan));
+  CHECK(to_bytes(back) == to_bytes(plan));
+  StreamedStats applied = s;
+  std::size_t checked = 0;
+  for (const ReadBackJob& job : back.jobs) {
+    REQUIRE(job.chunks.size() == 3);  // 40 rows in chunks of 16
+    const std::vector<double> all = f.f64(job.path, n * job.width);  // HDF5's filters, not the codec
+    const std::vector<ReadBackAnswer> a = read_read_back_answers(to_bytes(calc_read_back(back.path, job, back.ok)));
+    REQUIRE(a.size() == job.columns.size());
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      std::vector<double> col(static_cast<std::size_t>(n));
+      for (std::int64_t i = 0; i < n; ++i) col[static_cast<std::size_t>(i)] = all[static_cast<std::size_t>(i * job.width + job.columns[k].column)];
+      const auto want = truss::statistics::calc_stats(col, ok).percentiles;
+      CHECK(std::memcmp(a[k].percentiles.data(), want.data(), sizeof(want)) == 0);
+      ++checked;
+    }
+    apply_read_back(applied, a);
+  }
+  CHECK(checked == ChunkColumns(L).n_stats);
+  CHECK(applied.read_back == static_cast<std::int64_t>(checked));
+  CHECK(std::all_of(applied.f64_resolved.begin(), applied.f64_resolved.end(), [](auto r) { return r == 1; }));
+  CHECK(applied.f64[0].mean == s.f64[0].mean);  // the streamed moments stand
+  // Shares: every job once over the ranks, the largest first to the least loaded.
+  for (int size : {1, 2, 3, 7}) {
+    std::vector<int> times(jobs.size(), 0);
+    for (int r = 0; r < size; ++r)
+      for (std::size_t j : find_jobs_of(jobs, r, size)) ++times[j];
+    CHECK(std::all_of(times.begin(), times.end(), [](int t) { return t == 1; }));
+  }
+  std::vector<ReadBackJob> sized(4);
+  for (std::size_t j = 0; j < 4; ++j) sized[j].chunks.assign(1, {0, std::uint64_t{10} * (j + 1), 0});  // 10 20 30 40
+  CHECK(find_jobs_of(sized, 0, 2) == std::vector<std::size_t>{3, 0});  // 40 + 10
+  CHECK(find_jobs_of(sized, 1, 2) == std::vector<std::size_t>{2, 1});  // 30 + 20
+  // A chunk that is not there: refused by name.
+  ReadBackJob bad = jobs[0];
+  bad.chunks[1].offset = std::uint64_t{1} << 40;
+  CHECK_THROWS_WITH(calc_read_back(c.path, bad, ok), Catch::Contains("cannot be read"));
+  CHECK_THROWS_AS(read_read_back_plan(to_bytes(plan).substr(1)), std::runtime_error);
 }
 
 TEST_CASE("result store: placing chunks while HDF5 writes its global heap", "[campaign][store]") {
