@@ -403,6 +403,11 @@ struct Campaign {
     if (file >= 0) H5Fclose(file);
     fs::remove(path);
   }
+  // One round of n runs, each run's distinct record added (session 0).
+  void add_round_of_distinct(std::int64_t n) {
+    round(0, 0, n);
+    for (std::int64_t r = 0; r < n; ++r) add(test::distinct_record(L, r), 0);
+  }
   void round(std::int64_t r, std::int64_t first, std::int64_t n) {
     store->extend(first + n);
     for (auto& b : builders) b->add_round(r, first, n);
@@ -527,8 +532,7 @@ TEST_CASE("result store: a chunk of runs without a message is not written", "[ca
   const RecordLayout& L = ctx.record;
   const std::int64_t n = 40;
   Campaign c("truss_test_store_messages.h5", L, StoreOptions{2, 1}, 2);
-  c.round(0, 0, n);
-  for (std::int64_t r = 0; r < n; ++r) c.add(test::distinct_record(L, r), 0);
+  c.add_round_of_distinct(n);
   c.close();
   std::int64_t with_message = 0, nulls = 0;
   for (std::int64_t k = 0; k < n / 2; ++k) with_message += test::stalls(2 * k) || test::stalls(2 * k + 1);
@@ -651,8 +655,7 @@ TEST_CASE("statistics rank: summaries merged once each; the statistics travel bi
   const CampaignContext ctx(test::small_campaign("latin_hypercube", 40));
   const RecordLayout& L = ctx.record;
   Campaign c("truss_test_store_stats_rank.h5", L, StoreOptions{16, 1}, 2);
-  c.round(0, 0, 40);
-  for (std::int64_t r = 0; r < 40; ++r) c.add(test::distinct_record(L, r), 0);
+  c.add_round_of_distinct(40);
   CHECK(c.stats.merged() == 2);  // chunks 0 and 1; chunk 2 (8 rows) completes at the end
   // A summary of chunk 0 again, another count of summaries, or the statistics of 4 chunks: refused.
   ChunkBuilder again(L, StoreOptions{16, 1}, {});
@@ -728,8 +731,7 @@ TEST_CASE("statistics ranks: ranges of the columns, their parts assembled as one
   const StatsRanks ranks{1, 3};
   for (int rank = 1; rank <= 3; ++rank)
     c.shards.push_back(std::make_unique<ChunkStats>(L, ranks.find_columns(rank, n_stats)));
-  c.round(0, 0, 40);
-  for (std::int64_t r = 0; r < 40; ++r) c.add(test::distinct_record(L, r), 0);
+  c.add_round_of_distinct(40);
   // Each range's windows are the slice of one rank's (a column's statistics are its own).
   const auto all = c.stats.windows();
   for (const auto& sh : c.shards) {
@@ -778,8 +780,7 @@ TEST_CASE("statistics read back by the ranks: the stored chunks at their places,
   const RecordLayout& L = ctx.record;
   const std::int64_t n = 40;
   Campaign c("truss_test_store_read_back.h5", L, StoreOptions{16, 1}, 2);
-  c.round(0, 0, n);
-  for (std::int64_t r = 0; r < n; ++r) c.add(test::distinct_record(L, r), 0);
+  c.add_round_of_distinct(n);
   StreamedStats s = c.close();
   // Every column unresolved: a job per statistics dataset.
   for (auto& r : s.f64_resolved) r = 0;
@@ -837,8 +838,7 @@ TEST_CASE("result store: placing chunks while HDF5 writes its global heap", "[ca
   const RecordLayout& L = ctx.record;
   const std::int64_t n = 3000;
   Campaign c("truss_test_store_heap.h5", L, StoreOptions{16, 1}, 2, {}, 64 << 10);
-  c.round(0, 0, n);
-  for (std::int64_t r = 0; r < n; ++r) c.add(test::distinct_record(L, r), 0);
+  c.add_round_of_distinct(n);
   c.close();
   const StoreFile f(c.path);
   check_file(f, L, n, 0, n);
