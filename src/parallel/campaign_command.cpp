@@ -23,11 +23,11 @@
 #include "io/h5_util.hpp"
 #include "io/scene_toml.hpp"
 #include "parallel/campaign_output.hpp"
-#include "parallel/stats_read_back.hpp"
 #include "parallel/engine_detail.hpp"
 #include "parallel/interrupt.hpp"
 #include "parallel/owner.hpp"
 #include "parallel/progress.hpp"
+#include "parallel/stats_read_back.hpp"
 #include "parallel/synthetic_run.hpp"
 
 namespace truss::parallel {

@@ -137,10 +137,11 @@ bool ChunkOwner::step() {
 }
 
 void ChunkOwner::on_windows(int source, std::string_view bytes) {
-  const results::ColumnRange c = files_.stats.find_columns(source, windows_.size());
   std::vector<statistics::Windows> w = results::read_chunk_placement(bytes).windows;
-  if (!files_.stats.holds(source) || w.size() != c.size())
-    throw std::runtime_error(fmt::format("windows of {} columns from rank {}", w.size(), source));
+  if (!files_.stats.holds(source)) throw std::runtime_error(fmt::format("windows from rank {}", source));
+  const results::ColumnRange c = files_.stats.find_columns(source, windows_.size());
+  if (w.size() != c.size())
+    throw std::runtime_error(fmt::format("windows of {} columns from rank {} for {}", w.size(), source, c.size()));
   std::copy(w.begin(), w.end(), windows_.begin() + static_cast<std::ptrdiff_t>(c.begin));
   if (windows_missing_ > 0) --windows_missing_;  // its first: each rank answers the ask once
 }

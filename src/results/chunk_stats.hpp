@@ -1,9 +1,9 @@
 // The statistics of the output columns, merged from the chunks' summaries on the statistics ranks
-// (engine.hpp), each a range of the columns: each column's ColumnStats (statistics/column_stats.hpp),
-// the windows the owners summarise their chunks against, and at the end the streamed statistics
-// that rank 0 writes to /stats. Its work is per chunk summary, never per run; the result is a function of the
-// chunks' values alone (the windows only decide what is kept): the same on any number of ranks,
-// whichever rank merges, and after --resume.
+// (engine.hpp), each a range of the columns: each column's ColumnStats
+// (statistics/column_stats.hpp), the windows the owners summarise their chunks against, and at the
+// end the streamed statistics that rank 0 writes to /stats. Its work is per chunk summary, never
+// per run; the result is a function of the chunks' values alone (the windows only decide what is
+// kept): the same on any number of ranks, whichever ranks merge, and after --resume.
 #pragma once
 #include <cstdint>
 #include <string>
@@ -30,7 +30,7 @@ struct StreamedStats {
 };
 
 // Where the statistics columns are merged: `count` statistics ranks first .. first + count - 1,
-// rank first + s merging the contiguous columns find_columns(s) (sizes differing by at most one).
+// rank first + s merging the contiguous columns find_columns(first + s, n_stats), sizes within one.
 // The merge's cost is per chunk and column, so S ranks share it S ways (docs/architecture.md).
 struct StatsRanks {
   int first = 0;

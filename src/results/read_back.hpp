@@ -9,6 +9,7 @@
 #pragma once
 #include <hdf5.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -19,6 +20,13 @@
 #include "results/chunk_stats.hpp"
 
 namespace truss::results {
+
+// The columns of `rows` rows read back at once: at most 64 MiB of them (at least one column); more
+// columns take another pass over the dataset's chunks.
+inline std::int64_t find_read_back_group(std::int64_t rows) {
+  constexpr std::int64_t kReadBackBytes = std::int64_t{64} << 20;
+  return std::max<std::int64_t>(1, kReadBackBytes / (8 * std::max<std::int64_t>(rows, 1)));
+}
 
 // One dataset's columns to read back: its stored chunks in row order (file offset, stored bytes,
 // filter mask), its rows, and the columns with where their statistics go (`group` -1: the f64
@@ -52,11 +60,11 @@ struct ReadBackAnswer {
 // Rank 0, every chunk placed: the datasets with columns not resolved in `s`, n rows each.
 std::vector<ReadBackJob> find_read_back(hid_t file, const campaign::RecordLayout& layout, const StreamedStats& s,
                                         std::int64_t n);
-// Any rank: the job's columns from the file at `path` (pread of the stored chunks, ChunkCodec::decode),
-// their statistics over the runs with ok[i] != 0. Throws std::runtime_error when a chunk cannot be
-// read or decoded.
+// Any rank: the job's columns from the file at `path` (pread of the stored chunks,
+// ChunkCodec::decode; `group` columns a pass, 0: find_read_back_group's), their percentiles over the
+// runs with ok[i] != 0. Throws std::runtime_error when a chunk cannot be read or decoded.
 std::vector<ReadBackAnswer> calc_read_back(const std::string& path, const ReadBackJob& job,
-                                           const std::vector<std::uint8_t>& ok);
+                                           const std::vector<std::uint8_t>& ok, std::size_t group = 0);
 // Rank 0: the answers in place (each column resolved, counted in s.read_back).
 void apply_read_back(StreamedStats& s, const std::vector<ReadBackAnswer>& answers);
 

@@ -183,14 +183,15 @@ std::vector<ReadBackJob> find_read_back(hid_t file, const campaign::RecordLayout
 }
 
 std::vector<ReadBackAnswer> calc_read_back(const std::string& path, const ReadBackJob& job,
-                                           const std::vector<std::uint8_t>& ok) {
+                                           const std::vector<std::uint8_t>& ok, std::size_t group) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw std::runtime_error(fmt::format("{}: {}", path, std::strerror(errno)));
-  std::vector<std::vector<double>> cols(job.columns.size(), std::vector<double>(static_cast<std::size_t>(job.rows)));
   std::string stored, raw;
   ChunkCodec codec;
   const auto raw_bytes = static_cast<std::size_t>(job.chunk_rows * job.width) * sizeof(double);
-  try {
+  // Columns [j0, j1) of the job: one pass over the chunks, each decoded once.
+  auto read_columns = [&](std::size_t j0, std::size_t j1) {
+    std::vector<std::vector<double>> cols(j1 - j0, std::vector<double>(static_cast<std::size_t>(job.rows)));
     for (std::size_t c = 0; c < job.chunks.size(); ++c) {
       const ReadBackJob::Chunk& at = job.chunks[c];
       stored.resize(at.bytes);
@@ -200,18 +201,27 @@ std::vector<ReadBackAnswer> calc_read_back(const std::string& path, const ReadBa
       const auto* v = reinterpret_cast<const double*>(raw.data());
       const std::int64_t first = static_cast<std::int64_t>(c) * job.chunk_rows;
       const std::int64_t rows = std::min(job.chunk_rows, job.rows - first);
-      for (std::size_t j = 0; j < job.columns.size(); ++j)
+      for (std::size_t j = j0; j < j1; ++j)
         for (std::int64_t i = 0; i < rows; ++i)
-          cols[j][static_cast<std::size_t>(first + i)] = v[i * job.width + job.columns[j].column];
+          cols[j - j0][static_cast<std::size_t>(first + i)] = v[i * job.width + job.columns[j].column];
+    }
+    return cols;
+  };
+  if (group == 0) group = static_cast<std::size_t>(find_read_back_group(job.rows));
+  std::vector<ReadBackAnswer> out;
+  try {
+    for (std::size_t j0 = 0; j0 < job.columns.size(); j0 += group) {
+      const std::size_t j1 = std::min(job.columns.size(), j0 + group);
+      const std::vector<std::vector<double>> cols = read_columns(j0, j1);
+      for (std::size_t j = j0; j < j1; ++j)
+        out.push_back(
+            {job.columns[j].group, job.columns[j].index, statistics::calc_stats(cols[j - j0], ok).percentiles});
     }
   } catch (...) {
     ::close(fd);
     throw;
   }
   ::close(fd);
-  std::vector<ReadBackAnswer> out;
-  for (std::size_t j = 0; j < job.columns.size(); ++j)
-    out.push_back({job.columns[j].group, job.columns[j].index, statistics::calc_stats(cols[j], ok).percentiles});
   return out;
 }
 

@@ -9,6 +9,7 @@
 
 #include "io/build_info.hpp"
 #include "io/h5_util.hpp"
+#include "results/read_back.hpp"
 #include "sim/scene.hpp"
 
 namespace truss::results {
@@ -18,9 +19,6 @@ using namespace campaign;
 using statistics::Stats;
 
 namespace {
-
-// The most bytes of per-bay columns read back at once for the statistics (at least one column).
-constexpr std::int64_t kReadBackBytes = std::int64_t{64} << 20;
 
 void write_stats_group(hid_t loc, const Field& f, const std::vector<Stats>& s) {
   Handle g = create_group(loc, f.name);
@@ -93,10 +91,10 @@ std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats s
       write_stats_group(stats.get(), f, {streamed.f64[k++]});
       continue;
     }
-    // The bays' columns in groups of at most kReadBackBytes: each group is one pass over the
+    // The bays' columns in groups (find_read_back_group): each group is one pass over the
     // dataset's chunks (each decompressed once per group, not once per bay).
     const std::vector<std::uint8_t>& resolved = streamed.bays_resolved[j];
-    const std::int64_t group = std::max<std::int64_t>(1, kReadBackBytes / (8 * std::max<std::int64_t>(n, 1)));
+    const std::int64_t group = find_read_back_group(n);
     for (std::int64_t b0 = 0; b0 < f.width; b0 += group) {
       const std::int64_t cols = std::min<std::int64_t>(group, f.width - b0);
       const auto first = resolved.begin() + b0;
