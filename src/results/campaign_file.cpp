@@ -74,7 +74,7 @@ void CampaignFile::write_summary(StreamedStats streamed,
   store_.reset();  // closes the per-run datasets
   write_root_attributes(file_, ctx_, n_runs, info);
   write_input_attributes(file_, ctx_.options);
-  const std::int64_t read_back = write_stats(file_, ctx_.record, std::move(streamed));
+  const std::int64_t read_back = write_stats(file_, tmp_, ctx_.record, std::move(streamed));
   write_histories(file_, ctx_.options.output.history_step_s, histories);
   write_timing_attributes(file_, info.schedule, read_back);
   write_nominal_group(file_, nominal, ctx_.dims.n_bays_max);

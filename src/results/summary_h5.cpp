@@ -67,46 +67,26 @@ void write_stats_attributes(hid_t stats, const std::vector<std::int8_t>& status)
 
 }  // namespace
 
-std::int64_t write_stats(hid_t file, const RecordLayout& layout, StreamedStats streamed) {
+std::int64_t write_stats(hid_t file, const std::string& path, const RecordLayout& layout, StreamedStats streamed) {
   Handle rows(H5Dopen2(file, "runs/status", H5P_DEFAULT), H5Dclose, "open /runs/status");
   Handle space(H5Dget_space(rows.get()), H5Sclose, "space of /runs/status");
   const auto n = static_cast<std::int64_t>(H5Sget_simple_extent_npoints(space.get()));
   const std::vector<std::int8_t> status = read_status(file, n);
   std::vector<std::uint8_t> ok(status.size());
   for (std::size_t i = 0; i < status.size(); ++i) ok[i] = status[i] == 0;
+  // The columns no rank read back before (read_back.hpp), read back here the same way.
+  for (const ReadBackJob& job : find_read_back(file, layout, streamed, n))
+    apply_read_back(streamed, calc_read_back(path, job, ok));
   Handle stats = create_group(file, "stats");
   write_stats_attributes(stats.get(), status);
   Handle bays = create_group(stats.get(), "bays");
-  std::int64_t read_back = streamed.read_back;  // resolved from the file before (read_back.hpp)
-  auto resolve = [&](Stats& st, const std::vector<double>& column) {
-    st.percentiles = statistics::calc_stats(column, ok).percentiles;
-    ++read_back;
-  };
   std::size_t k = 0, j = 0;  // the k-th float64 output, the j-th per-bay one
   for (const Field& f : layout.fields()) {
     if (!f.statistics) continue;
-    const std::string path = std::string(group_path(f.group)) + "/" + f.name;
-    if (f.scale == Scale::none) {
-      if (!streamed.f64_resolved[k]) resolve(streamed.f64[k], read_f64_column(file, path, n));
-      write_stats_group(stats.get(), f, {streamed.f64[k++]});
-      continue;
-    }
-    // The bays' columns in groups (find_read_back_group): each group is one pass over the
-    // dataset's chunks (each decompressed once per group, not once per bay).
-    const std::vector<std::uint8_t>& resolved = streamed.bays_resolved[j];
-    const std::int64_t group = find_read_back_group(n);
-    for (std::int64_t b0 = 0; b0 < f.width; b0 += group) {
-      const std::int64_t cols = std::min<std::int64_t>(group, f.width - b0);
-      const auto first = resolved.begin() + b0;
-      if (std::all_of(first, first + cols, [](std::uint8_t r) { return r != 0; })) continue;
-      const std::vector<std::vector<double>> columns = read_f64_columns(file, path, n, b0, cols);
-      for (std::int64_t i = 0; i < cols; ++i)
-        if (!resolved[static_cast<std::size_t>(b0 + i)])
-          resolve(streamed.bays[j][static_cast<std::size_t>(b0 + i)], columns[static_cast<std::size_t>(i)]);
-    }
-    write_stats_group(bays.get(), f, streamed.bays[j++]);
+    if (f.scale == Scale::none) write_stats_group(stats.get(), f, {streamed.f64[k++]});
+    else write_stats_group(bays.get(), f, streamed.bays[j++]);
   }
-  return read_back;
+  return streamed.read_back;
 }
 
 void write_histories(hid_t file, double step_s, const std::vector<std::pair<std::int64_t, sim::RunResult>>& histories) {
